@@ -1,0 +1,76 @@
+"""The ``vidcap`` command line.
+
+Each sub-command lives in its own module under :mod:`vidcap.commands` and exposes
+
+* ``NAME``: the sub-command's name,
+* ``HELP``: a one-line description,
+* ``add_arguments(parser)``: fill an :class:`argparse.ArgumentParser`,
+* ``run(args) -> int``: do the work and return the exit code.
+
+Modules are discovered at start-up, so adding a command never touches this file.
+User errors (:class:`vidcap.errors.VidcapError`) print one line
+``vidcap: error: <file>: <problem>`` and exit 2; ``--debug`` shows the traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+import traceback
+
+from vidcap import __version__
+from vidcap.errors import VidcapError
+
+EXIT_USER_ERROR = 2
+
+
+def _command_modules():
+    import vidcap.commands as pkg
+
+    modules = []
+    for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"vidcap.commands.{info.name}")
+        if getattr(module, "NAME", None) and not getattr(module, "HIDDEN", False):
+            modules.append(module)
+    return sorted(modules, key=lambda m: getattr(m, "ORDER", 100))
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Return the top-level parser with every available sub-command."""
+    parser = argparse.ArgumentParser(
+        prog="vidcap",
+        description="Single-camera video to 3D motion (BVH); joint centres from marker C3D.",
+    )
+    parser.add_argument("--version", action="version", version=f"vidcap {__version__}")
+    parser.add_argument(
+        "--debug", action="store_true", help="show full tracebacks instead of one-line errors"
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for module in _command_modules():
+        p = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
+        module.add_arguments(p)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the ``vidcap`` command; return the process exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "_run", None):
+        parser.print_help()
+        return EXIT_USER_ERROR
+    try:
+        return int(args._run(args) or 0)
+    except VidcapError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"vidcap: error: {exc}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except KeyboardInterrupt:
+        print("vidcap: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,1 @@
+"""Sub-commands of ``vidcap``; each module is discovered by :mod:`vidcap.cli`."""
