@@ -1,0 +1,71 @@
+"""Small file helpers shared by every stage: atomic writes and progress bars."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    A failure inside the ``with`` block removes the temporary file and leaves any
+    existing ``path`` untouched, so an output is either complete or absent.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The final output file.
+    suffix : str, optional
+        Suffix of the temporary file (defaults to ``path``'s own suffix, which lets
+        writers that pick a format from the name, such as FFmpeg, still do so).
+    """
+    final = Path(path)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{final.name}.", suffix=final.suffix if suffix is None else suffix,
+        dir=final.parent,
+    )
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, final)
+    finally:
+        if tmp_path.exists():
+            tmp_path.unlink()
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (UTF-8)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def savez_atomic(path: str | os.PathLike, **arrays) -> None:
+    """``numpy.savez_compressed`` to ``path`` atomically."""
+    with atomic_path(path, suffix=".npz") as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+
+
+def progress(iterable=None, *, total=None, desc: str = "", unit: str = "it", enabled=None):
+    """A tqdm progress bar on stderr, silent when stderr is not a terminal.
+
+    ``enabled`` forces it on or off; set ``VIDCAP_PROGRESS=1`` to force it on.
+    """
+    from tqdm.auto import tqdm
+
+    if enabled is None:
+        enabled = sys.stderr.isatty() or os.environ.get("VIDCAP_PROGRESS") == "1"
+    return tqdm(
+        iterable, total=total, desc=desc, unit=unit, disable=not enabled,
+        file=sys.stderr, dynamic_ncols=True, leave=False,
+    )
