@@ -1,0 +1,346 @@
+"""Read and write Biovision Hierarchy (BVH) motion files.
+
+Files we write: root channels ``Xposition Yposition Zposition Zrotation Xrotation
+Yrotation``, every other joint ``Zrotation Xrotation Yrotation``; angles in degrees,
+lengths in metres, Y up, -Z forward, root OFFSET ``0 0 0``, non-zero End Site
+offsets, rest pose = the skeleton's T-pose, ``Frame Time`` = 1/fps.
+
+The reader takes real files from other tools: any channel order per joint, position
+channels on any joint, and lengths in any unit (``units='auto'`` picks metres,
+centimetres, millimetres, inches or the CMU database's 1/0.45 inch from the
+skeleton's size).
+
+Channel semantics: for ``CHANNELS ... Zrotation Xrotation Yrotation`` the joint's
+local rotation is ``Rz @ Rx @ Ry`` (rotations applied in the listed order to the
+joint's frame, i.e. intrinsic), which is scipy's ``Rotation.from_euler('ZXY', ...)``.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from vidcap.errors import MotionFileError
+from vidcap.fileio import atomic_path
+from vidcap.kinematics import Motion, Skeleton
+
+#: Metres per unit for the units the reader knows.
+UNIT_SCALES = {
+    "m": 1.0,
+    "cm": 0.01,
+    "mm": 0.001,
+    "inch": 0.0254,
+    "cmu": 0.0254 / 0.45,  # CMU mocap database: ASF "length 0.45" => 1 unit = 1/0.45 inch
+}
+
+_ROT_AXES = {"Xrotation": "X", "Yrotation": "Y", "Zrotation": "Z"}
+_POS_AXES = {"Xposition": 0, "Yposition": 1, "Zposition": 2}
+
+
+# --------------------------------------------------------------------------- writing
+def write_bvh(
+    path: str | os.PathLike,
+    motion: Motion,
+    *,
+    rotation_order: str = "ZXY",
+    precision: int = 6,
+) -> None:
+    """Write ``motion`` to a BVH file atomically.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file; written to a temporary file first and renamed, so a failure
+        never leaves a partial file.
+    motion : Motion
+        F frames of a J-joint skeleton (metres, radians inside quaternions).
+    rotation_order : str
+        Euler order of the CHANNELS lines (default ``"ZXY"``: Zrotation Xrotation
+        Yrotation). Angles are unwrapped over time, so there are no 360 degree jumps.
+    precision : int
+        Decimals written for every number.
+    """
+    text = bvh_text(motion, rotation_order=rotation_order, precision=precision)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def euler_degrees(quats: np.ndarray, order: str = "ZXY") -> np.ndarray:
+    """Intrinsic Euler angles (degrees) of quaternions, unwrapped along axis 0.
+
+    Parameters
+    ----------
+    quats : numpy.ndarray, shape (F, ..., 4)
+        Unit quaternions (x, y, z, w).
+    order : str
+        Intrinsic axis order, e.g. ``"ZXY"``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, ..., 3)
+        Angles in degrees in ``order``, continuous over frames.
+    """
+    q = np.asarray(quats, dtype=float)
+    e = Rotation.from_quat(q.reshape(-1, 4)).as_euler(order.upper(), degrees=True)
+    e = e.reshape(q.shape[:-1] + (3,))
+    return np.rad2deg(np.unwrap(np.deg2rad(e), axis=0))
+
+
+def bvh_text(motion: Motion, *, rotation_order: str = "ZXY", precision: int = 6) -> str:
+    """The BVH file contents for ``motion`` (see :func:`write_bvh`)."""
+    order = rotation_order.upper()
+    if sorted(order) != ["X", "Y", "Z"]:
+        raise ValueError(f"rotation_order must be a permutation of XYZ, got {rotation_order!r}")
+    sk = motion.skeleton
+    rot_channels = " ".join(f"{a}rotation" for a in order)
+    fmt = f"{{:.{precision}f}}"
+
+    def vec(v):
+        return " ".join(fmt.format(x + 0.0) for x in v)
+
+    lines = ["HIERARCHY"]
+
+    def emit(j: int, depth: int):
+        pad = "\t" * depth
+        name = sk.joint_names[j]
+        if sk.parents[j] < 0:
+            lines.append(f"{pad}ROOT {name}")
+            offset = np.zeros(3)  # root offset folds into the position channels
+            channels = f"CHANNELS 6 Xposition Yposition Zposition {rot_channels}"
+        else:
+            lines.append(f"{pad}JOINT {name}")
+            offset = sk.offsets[j]
+            channels = f"CHANNELS 3 {rot_channels}"
+        lines.append(f"{pad}{{")
+        lines.append(f"{pad}\tOFFSET {vec(offset)}")
+        lines.append(f"{pad}\t{channels}")
+        kids = sk.children(j)
+        for k in kids:
+            emit(k, depth + 1)
+        if not kids:
+            end = sk.end_sites.get(name)
+            if end is None or not np.linalg.norm(end) > 0:
+                end = _default_end_site(sk, j)
+            lines.append(f"{pad}\tEnd Site")
+            lines.append(f"{pad}\t{{")
+            lines.append(f"{pad}\t\tOFFSET {vec(end)}")
+            lines.append(f"{pad}\t}}")
+        lines.append(f"{pad}}}")
+
+    emit(0, 0)
+    F, J = motion.n_frames, sk.n_joints
+    angles = euler_degrees(motion.rotations, order)  # (F, J, 3)
+    root = motion.root_positions + sk.offsets[0]
+    data = np.concatenate([root, angles.reshape(F, 3 * J)], axis=1)
+    data[np.abs(data) < 0.5 * 10.0**-precision] = 0.0  # no "-0.000000"
+    lines.append("MOTION")
+    lines.append(f"Frames: {F}")
+    lines.append(f"Frame Time: {1.0 / motion.fps:.8f}")
+    buf = io.StringIO()
+    np.savetxt(buf, data, fmt=f"%.{precision}f", delimiter=" ")
+    return "\n".join(lines) + "\n" + buf.getvalue()
+
+
+def _default_end_site(sk: Skeleton, j: int) -> np.ndarray:
+    """A non-zero End Site continuing the bone into joint ``j`` by a quarter of its length."""
+    off = sk.offsets[j]
+    n = np.linalg.norm(off)
+    return off * 0.25 if n > 0 else np.array([0.0, 0.05, 0.0])
+
+
+# --------------------------------------------------------------------------- reading
+_TOKEN = re.compile(r"\S+")
+
+
+def read_bvh(path: str | os.PathLike, *, units: str | float = "auto") -> Motion:
+    """Read a BVH file into a :class:`Motion` in metres.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The BVH file.
+    units : {'auto', 'm', 'cm', 'mm', 'inch', 'cmu'} or float
+        Length unit of the file, or metres per file unit. ``'auto'`` picks the unit
+        that makes the rest skeleton's height closest to 1.7 m.
+
+    Returns
+    -------
+    Motion
+        Joints named as in the file (End Sites are kept as ``end_sites`` of their
+        joint). Position channels on non-root joints are folded into the rotation-
+        only representation by their first frame's value (they are rare and almost
+        always constant).
+
+    Raises
+    ------
+    MotionFileError
+        If the file is missing or malformed; the message names the file and line.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise MotionFileError(f"cannot read BVH file: {exc.strerror or exc}", path) from None
+    return parse_bvh(text, source=path, units=units)
+
+
+def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -> Motion:
+    """Parse BVH ``text``; see :func:`read_bvh`."""
+    head, sep, motion_part = text.partition("MOTION")
+    if not sep or "HIERARCHY" not in head:
+        raise MotionFileError("not a BVH file (no HIERARCHY ... MOTION sections)", source)
+    tokens = _TOKEN.findall(head[head.index("HIERARCHY") + len("HIERARCHY"):])
+    names, parents, offsets, channels, ends = [], [], [], [], {}
+    pos = 0
+
+    def expect(tok):
+        nonlocal pos
+        if pos >= len(tokens) or tokens[pos] != tok:
+            got = tokens[pos] if pos < len(tokens) else "end of hierarchy"
+            raise MotionFileError(f"malformed hierarchy: expected {tok!r}, got {got!r}", source)
+        pos += 1
+
+    def floats(n):
+        nonlocal pos
+        try:
+            vals = [float(t) for t in tokens[pos : pos + n]]
+        except ValueError:
+            raise MotionFileError(
+                f"malformed hierarchy: expected {n} numbers near {tokens[pos]!r}", source
+            ) from None
+        if len(vals) != n:
+            raise MotionFileError("malformed hierarchy: file ends inside an OFFSET", source)
+        pos += n
+        return vals
+
+    def parse_joint(parent: int):
+        nonlocal pos
+        kind = tokens[pos]
+        pos += 1
+        if kind == "End":
+            expect("Site")
+            expect("{")
+            expect("OFFSET")
+            off = floats(3)
+            expect("}")
+            if parent >= 0:
+                ends[names[parent]] = np.array(off)
+            return
+        name = tokens[pos]
+        pos += 1
+        if name in names:
+            raise MotionFileError(f"joint {name!r} appears twice", source)
+        idx = len(names)
+        names.append(name)
+        parents.append(parent)
+        expect("{")
+        expect("OFFSET")
+        offsets.append(floats(3))
+        expect("CHANNELS")
+        try:
+            n = int(tokens[pos])
+        except (ValueError, IndexError):
+            raise MotionFileError(f"malformed CHANNELS line for joint {name!r}", source) from None
+        pos += 1
+        chans = tokens[pos : pos + n]
+        bad = [c for c in chans if c not in _ROT_AXES and c not in _POS_AXES]
+        if len(chans) != n or bad:
+            raise MotionFileError(f"bad channels for joint {name!r}: {bad or chans}", source)
+        channels.append(chans)
+        pos += n
+        while pos < len(tokens) and tokens[pos] in ("JOINT", "End"):
+            parse_joint(idx)
+        expect("}")
+
+    if not tokens or tokens[0] != "ROOT":
+        raise MotionFileError("malformed hierarchy: it must start with ROOT", source)
+    parse_joint(-1)
+
+    n_channels = sum(len(c) for c in channels)
+    m = re.search(r"Frames:\s*(\d+)\s*Frame Time:\s*([0-9.eE+-]+)", motion_part)
+    if not m:
+        raise MotionFileError("MOTION section lacks 'Frames:' and 'Frame Time:'", source)
+    n_frames, frame_time = int(m.group(1)), float(m.group(2))
+    if frame_time <= 0:
+        raise MotionFileError(f"Frame Time must be positive, got {frame_time}", source)
+    try:
+        values = np.array(motion_part[m.end():].split(), dtype=float)
+    except ValueError:
+        raise MotionFileError("MOTION data contains something that is not a number", source)\
+            from None
+    if n_frames == 0 or values.size < n_frames * n_channels:
+        have = values.size // max(n_channels, 1)
+        raise MotionFileError(
+            f"header says {n_frames} frames of {n_channels} channels but the file holds "
+            f"{have} complete frames (truncated?)",
+            source,
+        )
+    data = values[: n_frames * n_channels].reshape(n_frames, n_channels)
+
+    offsets_arr = np.array(offsets, dtype=float)
+    J = len(names)
+    rotations = np.empty((n_frames, J, 4))
+    root_pos = np.zeros((n_frames, 3))
+    col = 0
+    for j, chans in enumerate(channels):
+        cols = np.arange(col, col + len(chans))
+        col += len(chans)
+        rot_idx = [i for i, c in enumerate(chans) if c in _ROT_AXES]
+        pos_idx = [i for i, c in enumerate(chans) if c in _POS_AXES]
+        if rot_idx:
+            order = "".join(_ROT_AXES[chans[i]] for i in rot_idx)
+            angles = data[:, cols[rot_idx]]
+            if len(order) < 3:  # pad missing axes with zero rotation
+                missing = [a for a in "XYZ" if a not in order]
+                order += "".join(missing)
+                angles = np.concatenate([angles, np.zeros((n_frames, len(missing)))], 1)
+            rotations[:, j] = Rotation.from_euler(order, angles, degrees=True).as_quat()
+        else:
+            rotations[:, j] = (0.0, 0.0, 0.0, 1.0)
+        if pos_idx:
+            p = np.zeros((n_frames, 3))
+            for i in pos_idx:
+                p[:, _POS_AXES[chans[i]]] = data[:, cols[i]]
+            if parents[j] < 0:
+                root_pos = p
+            else:
+                offsets_arr[j] = p[0]
+    # The root OFFSET and its position channels add (most readers, Blender included).
+    skeleton = Skeleton(tuple(names), tuple(parents), offsets_arr, ends)
+    motion = Motion(skeleton, root_pos, rotations, 1.0 / frame_time)
+    scale = _resolve_units(units, skeleton, source)
+    if scale != 1.0:
+        motion = Motion(skeleton.scaled(scale), root_pos * scale, rotations, motion.fps)
+    return motion
+
+
+def _skeleton_extent(skeleton: Skeleton) -> float:
+    pts = [skeleton.rest_positions()]
+    rest = pts[0]
+    for name, off in skeleton.end_sites.items():
+        pts.append((rest[skeleton.index(name)] + off)[None])
+    allp = np.concatenate(pts)
+    return float(np.max(np.ptp(allp, axis=0)))
+
+
+def _resolve_units(units, skeleton: Skeleton, source) -> float:
+    if isinstance(units, int | float):
+        return float(units)
+    if units != "auto":
+        try:
+            return UNIT_SCALES[units]
+        except KeyError:
+            raise MotionFileError(
+                f"unknown units {units!r}; use one of {sorted(UNIT_SCALES)} or a number", source
+            ) from None
+    extent = _skeleton_extent(skeleton)
+    if not extent > 0:
+        raise MotionFileError("the skeleton has no size (all offsets are zero)", source)
+    # A T-pose's largest extent is its height or arm span, both ~1.7 m for an adult.
+    best = min(UNIT_SCALES.values(), key=lambda s: abs(np.log(extent * s / 1.7)))
+    return best

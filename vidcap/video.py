@@ -1,0 +1,319 @@
+"""Video input and output through PyAV (FFmpeg).
+
+OpenCV is never used to read or write video here: OpenCV 4.13 and later abort the
+whole Python process on some valid files (the uncompressed Weizmann AVI in
+``../shared/data/video/``). Frames are ``(H, W, 3) uint8`` BGR, as OpenCV's image
+functions expect them.
+
+Every problem a user can cause (missing, empty, truncated, not a video, no video
+stream) raises :class:`vidcap.errors.VideoError` naming the file.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.errors import VideoError
+from vidcap.fileio import atomic_path
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """What a video file holds.
+
+    Attributes
+    ----------
+    path : str
+    n_frames : int
+        Number of decodable video frames.
+    fps : float
+        Average frame rate, frames per second.
+    width, height : int
+        Frame size in pixels.
+    codec : str
+        FFmpeg's name of the video codec.
+    """
+
+    path: str
+    n_frames: int
+    fps: float
+    width: int
+    height: int
+    codec: str
+
+    @property
+    def duration(self) -> float:
+        """Length in seconds."""
+        return self.n_frames / self.fps
+
+
+def _open(path: str | os.PathLike):
+    import av
+
+    p = Path(path)
+    if not p.exists():
+        raise VideoError("no such file", p)
+    if p.is_dir():
+        raise VideoError("is a folder, not a video file", p)
+    if p.stat().st_size == 0:
+        raise VideoError("the file is empty (0 bytes)", p)
+    try:
+        container = av.open(str(p), mode="r")
+    except av.error.FFmpegError as exc:
+        raise VideoError(f"not a readable video ({_ffmpeg_reason(exc)})", p) from None
+    except (OSError, ValueError) as exc:
+        raise VideoError(f"cannot open ({exc})", p) from None
+    if not container.streams.video:
+        kinds = sorted({s.type for s in container.streams}) or ["no streams"]
+        container.close()
+        raise VideoError(f"has no video stream (only {', '.join(kinds)})", p)
+    return container
+
+
+def _ffmpeg_reason(exc) -> str:
+    msg = getattr(exc, "strerror", None) or str(exc)
+    return msg.split(":")[-1].strip() if msg else type(exc).__name__
+
+
+def _fps(stream) -> float:
+    rate = stream.average_rate or stream.guessed_rate or stream.base_rate
+    return float(rate) if rate else 0.0
+
+
+def probe(path: str | os.PathLike, *, count: bool = False) -> VideoInfo:
+    """Read a video's metadata.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Any file FFmpeg can read.
+    count : bool
+        Count the frames by decoding the whole file instead of trusting the
+        container's frame count (slower; also proves the file decodes to the end).
+
+    Returns
+    -------
+    VideoInfo
+
+    Raises
+    ------
+    VideoError
+        The file is missing, empty, not a video, has no video stream or has no
+        decodable frame.
+    """
+    import av
+
+    container = _open(path)
+    try:
+        stream = container.streams.video[0]
+        n = int(stream.frames or 0)
+        fps = _fps(stream)
+        w, h = stream.codec_context.width, stream.codec_context.height
+        codec = stream.codec_context.name
+        if count or n <= 0:
+            n = 0
+            try:
+                for _ in container.decode(stream):
+                    n += 1
+            except av.error.FFmpegError as exc:
+                if n == 0:
+                    raise VideoError(f"no decodable frame ({_ffmpeg_reason(exc)})", path)\
+                        from None
+        if n <= 0:
+            raise VideoError("the video stream has no frames", path)
+        if not fps > 0:
+            fps = 25.0
+    finally:
+        container.close()
+    return VideoInfo(str(path), n, fps, int(w), int(h), codec)
+
+
+def iter_frames(
+    path: str | os.PathLike, *, start: int = 0, stop: int | None = None, step: int = 1
+) -> Iterator[np.ndarray]:
+    """Decode frames one at a time.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The video.
+    start, stop, step : int
+        Which frames (0-based, ``stop`` exclusive), as in ``range``.
+
+    Yields
+    ------
+    numpy.ndarray, shape (H, W, 3), uint8
+        BGR frames.
+
+    Raises
+    ------
+    VideoError
+        On any decoding problem; frames already yielded stay valid. A file that
+        yields no frame at all is an error too.
+    """
+    import av
+
+    if start < 0 or step < 1:
+        raise ValueError("start must be >= 0 and step >= 1")
+    container = _open(path)
+    n = 0
+    try:
+        stream = container.streams.video[0]
+        stream.thread_type = "AUTO"
+        for i, frame in enumerate(container.decode(stream)):
+            if stop is not None and i >= stop:
+                break
+            if i < start or (i - start) % step:
+                continue
+            n += 1
+            yield frame.to_ndarray(format="bgr24")
+    except av.error.FFmpegError as exc:
+        raise VideoError(f"decoding failed after {n} frames ({_ffmpeg_reason(exc)})", path)\
+            from None
+    finally:
+        container.close()
+    if n == 0 and (stop is None or stop > start):
+        raise VideoError("no decodable video frames", path)
+
+
+def iter_chunks(
+    path: str | os.PathLike, *, chunk_size: int = 64, start: int = 0, stop: int | None = None
+) -> Iterator[np.ndarray]:
+    """Decode frames in chunks, so a long video never sits in memory whole.
+
+    Yields
+    ------
+    numpy.ndarray, shape (n, H, W, 3), uint8
+        Up to ``chunk_size`` consecutive BGR frames.
+    """
+    buf: list[np.ndarray] = []
+    for frame in iter_frames(path, start=start, stop=stop):
+        buf.append(frame)
+        if len(buf) == chunk_size:
+            yield np.stack(buf)
+            buf = []
+    if buf:
+        yield np.stack(buf)
+
+
+def read_frames(
+    path: str | os.PathLike, *, start: int = 0, stop: int | None = None, step: int = 1
+) -> np.ndarray:
+    """Decode frames into one array, shape (F, H, W, 3) uint8 BGR."""
+    return np.stack(list(iter_frames(path, start=start, stop=stop, step=step)))
+
+
+class VideoWriter:
+    """Write BGR frames to an H.264 MP4 (or any container FFmpeg knows), atomically.
+
+    The file appears under its final name only when :meth:`close` succeeds (use it
+    as a context manager); an exception inside the ``with`` block leaves nothing.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Output file; H.264 (yuv420p) in the container its suffix names (``.mp4``,
+        ``.mkv``, ``.mov``, ``.avi``).
+    fps : float
+        Frame rate.
+    crf : int
+        H.264 constant rate factor (lower is better quality; 18 is visually lossless).
+    """
+
+    def __init__(self, path: str | os.PathLike, fps: float, *, crf: int = 20):
+        self.path = Path(path)
+        self.fps = fps
+        self.crf = crf
+        self._ctx = atomic_path(self.path)
+        self._tmp = None
+        self._container = None
+        self._stream = None
+        self.n_frames = 0
+
+    def __enter__(self):
+        self._tmp = self._ctx.__enter__()
+        return self
+
+    def _start(self, h: int, w: int):
+        import av
+
+        if self._tmp is None:
+            self.__enter__()
+        self._container = av.open(str(self._tmp), mode="w", format=_format_for(self.path))
+        rate = Fraction(self.fps).limit_denominator(1001)
+        stream = self._container.add_stream("libx264", rate=rate)
+        # yuv420p needs even sizes; pad by one pixel where needed.
+        stream.width, stream.height = w + (w % 2), h + (h % 2)
+        stream.pix_fmt = "yuv420p"
+        stream.options = {"crf": str(self.crf), "preset": "veryfast"}
+        self._stream = stream
+
+    def write(self, frame: np.ndarray) -> None:
+        """Append one (H, W, 3) uint8 BGR frame (or a stack (n, H, W, 3))."""
+        import av
+
+        frame = np.asarray(frame)
+        if frame.ndim == 4:
+            for f in frame:
+                self.write(f)
+            return
+        if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
+            raise ValueError(f"frames must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
+        if self._stream is None:
+            self._start(*frame.shape[:2])
+        h, w = self._stream.height, self._stream.width
+        if frame.shape[:2] != (h, w):
+            if frame.shape[0] > h or frame.shape[1] > w:
+                raise ValueError("all frames must have the size of the first")
+            frame = np.pad(frame, ((0, h - frame.shape[0]), (0, w - frame.shape[1]), (0, 0)),
+                           mode="edge")
+        vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame), format="bgr24")
+        for packet in self._stream.encode(vf):
+            self._container.mux(packet)
+        self.n_frames += 1
+
+    def close(self) -> None:
+        """Flush the encoder and move the file into place."""
+        if self._container is not None:
+            for packet in self._stream.encode():
+                self._container.mux(packet)
+            self._container.close()
+            self._container = None
+        if self._tmp is not None:
+            if self.n_frames == 0:
+                raise ValueError(f"{self.path}: no frames were written")
+            self._ctx.__exit__(None, None, None)
+            self._tmp = None
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+            return False
+        if self._container is not None:
+            try:
+                self._container.close()
+            except Exception:  # noqa: BLE001 - the original error matters more
+                pass
+            self._container = None
+        self._ctx.__exit__(exc_type, exc, tb)
+        self._tmp = None
+        return False
+
+
+def _format_for(path: Path) -> str | None:
+    return {".mp4": "mp4", ".m4v": "mp4", ".mov": "mov", ".mkv": "matroska",
+            ".avi": "avi"}.get(path.suffix.lower())
+
+
+def write_video(path: str | os.PathLike, frames, fps: float, *, crf: int = 20) -> int:
+    """Write an iterable of (H, W, 3) uint8 BGR frames to ``path``; return the count."""
+    with VideoWriter(path, fps, crf=crf) as writer:
+        for frame in frames:
+            writer.write(frame)
+    return writer.n_frames
