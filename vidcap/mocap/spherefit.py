@@ -49,10 +49,12 @@ __all__ = [
 ]
 
 #: Default condition number of C above which the motion is treated as planar.
-#: C's eigenvalues are ≈ r²/2 in the plane of a circle and ≈ σ² across it, so a
-#: hinge has cond(C) ≈ r²/(2σ²) (5·10³ at σ/r = 1 %); a spherical cap of half-angle
-#: θ has cond(C) ≈ 4.5/θ² - 1 (measured: 3.5 at 180°, ≈ 10 at 60°, ≈ 17 at 30°, ≈ 240 at
-#: 8°).  10³ separates the two with wide margins and still treats a 3° cap as a sphere.
+#: C's eigenvalues are ≈ r²/2 in the plane of a circle and ≈ σ² across it, so a noisy
+#: hinge has cond(C) ≈ r²/(2σ²) (measured: 5.7·10³ at σ/r = 1 %, 190 at 5 %); a uniformly
+#: sampled spherical cap of half-angle θ has cond(C) ≈ 12/θ² (measured: 1.0 at 180°, 4.0 at
+#: 90°, 10 at 60°, 43 at 30°, 175 at 15°, 610 at 8°).  10³ keeps caps down to ≈ 6° as
+#: spheres and hinges with σ/r below ≈ 2 % as circles; with :func:`ugdk` the noise is
+#: removed from C and hinges reach cond ≫ 10³ at any σ/r it can handle.
 PLANAR_COND = 1.0e3
 
 _CHUNK_ROWS = 8192  # rows per chunk of the one-pass moment loop (fits L2 with its buffers)
@@ -283,10 +285,12 @@ def _check_count(n: np.ndarray, d: int, errors: str = "raise") -> np.ndarray:
 def _noise_matrix(noise_cov, d: int) -> np.ndarray:
     """Σ̂ as a (..., D, D) array from a scalar variance or a (..., D, D) matrix."""
     s = np.asarray(noise_cov, dtype=float)
-    if s.ndim == 0 or (s.ndim >= 1 and s.shape[-1] != d):
-        return s[..., None, None] * np.eye(d)
-    if s.shape[-2:] != (d, d):
-        raise FitError(f"noise_cov must be a scalar variance or a ({d}, {d}) matrix")
+    if s.ndim == 0:
+        return s * np.eye(d)
+    if s.ndim < 2 or s.shape[-2:] != (d, d):
+        raise FitError(
+            f"noise_cov must be a scalar variance or a ({d}, {d}) matrix, got shape {s.shape}"
+        )
     return s
 
 
@@ -497,7 +501,7 @@ def estimate_noise_trace(points, *, iterations: int = 3) -> np.ndarray | float:
         var = np.nansum(res * res, axis=-1) / np.maximum(k - d - 1, 1)
         trace = d * var
         if it < iterations:
-            fit = ugdk(x, var)
+            fit = ugdk(x, var[..., None, None] * np.eye(d))
     return float(trace) if np.ndim(trace) == 0 else trace
 
 
