@@ -67,7 +67,10 @@ class JointReport:
     flagged : bool
         True when the fit was rejected and the fallback used.
     note : str
-        Why it was flagged, and which fallback.
+        Why it was flagged, and which fallback; or how a hinge centre was placed.
+    axial_std_mm : float
+        Standard deviation (Cramér-Rao, at the fitted centre and the residual noise)
+        of the worst-determined coordinate of the centre, mm.
     """
 
     joint: str
@@ -83,6 +86,7 @@ class JointReport:
     center_local_m: list
     flagged: bool = False
     note: str = ""
+    axial_std_mm: float = float("nan")
 
     def as_dict(self) -> dict:
         """JSON-ready dict (NaN/inf become None)."""
@@ -288,11 +292,15 @@ def _frames_from_points(pts: np.ndarray) -> _SegFrames:
     local = _to_local(np.where(ok[:, None, None], r, 0.0), np.where(ok[:, None], o, 0.0), pts)
     local[~ok] = np.nan
     template = np.stack([_nanmedian_rows(local[:, k]) for k in range(pts.shape[1])])
-    fill = ~ok & (np.isfinite(pts).all(axis=2).sum(axis=1) >= 3)
-    if fill.any() and ok.any():
-        rf, of = kabsch(template, pts[fill])
-        r[fill] = rf
-        o[fill] = of
+    if not ok.any():
+        return _SegFrames(r, o, template)
+    # Every frame with >= 3 points: the least-squares rigid pose of the template (the
+    # seed's construction puts all the noise of three points into the axes; this spreads
+    # it over all points, and fills frames whose primary three points are incomplete).
+    has3 = np.isfinite(pts).all(axis=2).sum(axis=1) >= 3
+    rf, of = kabsch(template, pts[has3])
+    r[has3] = rf
+    o[has3] = of
     return _SegFrames(r, o, template)
 
 
@@ -325,8 +333,27 @@ def _cap_and_residual(sets: list[np.ndarray], center, radius, normal):
     return (np.sqrt(res2 / n) if n else np.nan), (max(caps) if caps else 0.0)
 
 
+def _weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
+    """Direction and standard deviation (m) of the worst-determined centre coordinate.
+
+    Fisher information of the centre with the per-marker radii eliminated:
+    J = σ⁻² Σ_p N_p Cov_p(u) with u the unit directions from the centre (the
+    multi-radius version of the bound in :func:`vidcap.mocap.spherefit.crlb`).
+    """
+    info = np.zeros((3, 3))
+    for y in sets:
+        u = _unit(y - center)
+        u = u[np.isfinite(u).all(axis=1)]
+        if len(u) > 1:
+            info += len(u) * np.cov(u.T, bias=True)
+    w, v = np.linalg.eigh(info / max(sigma, 1e-12) ** 2)
+    std = np.inf if w[0] <= 0 else 1.0 / np.sqrt(w[0])
+    return v[:, 0], float(std)
+
+
 def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_local,
-               frames_used: int, *, noise_mm, min_cap_deg, planar_cond) -> tuple:
+               frames_used: int, *, noise_mm, min_cap_deg, planar_cond, anchor,
+               max_axial_std_mm, hinge_ratio) -> tuple:
     """Fit one joint centre in the parent's frame; returns (v (3,), axis or None, report)."""
     usable = [y for y in sets if len(y) >= 4]
     note = ""
@@ -357,6 +384,30 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
         kind, center, normal = "still", np.full(3, np.nan), None
         rms, cap, cond = np.nan, 0.0, np.inf
     flagged = bool(note)
+    axial_std = np.nan
+    if not flagged and fit is not None:
+        sigma = float(noise_mm) * 1e-3 if noise_mm is not None else float(rms)
+        axis_w, axial_std = _weak_axis(usable, center, sigma)
+        if kind == "hinge":
+            axis_w = normal
+        # out-of-plane spread of the markers (pooled within-marker covariance)
+        pooled = sum(np.cov(y.T, bias=True) * len(y) for y in usable) / sum(map(len, usable))
+        lam, vec = np.linalg.eigh(pooled)
+        thin = np.sqrt(max(lam[0], 0.0)) < hinge_ratio * sigma
+        if thin and kind != "hinge":
+            axis_w = vec[:, 0]
+        if (anchor is not None and np.isfinite(anchor).all()
+                and (kind == "hinge" or thin or axial_std * 1e3 > max_axial_std_mm)):
+            # Motion (nearly) about one axis: the centre's position along that axis is not
+            # observable. Place it at the point of the axis nearest the parent's proximal
+            # joint (for a long bone flexing about an axis across it - knee, elbow, ankle,
+            # wrist - that is where the bone's long axis meets the hinge axis).
+            center = center + ((anchor - center) @ axis_w) * axis_w
+            normal = axis_w
+            kind = "hinge"
+            method += "+axis-rule"
+            note = (f"centre along the hinge axis (std {axial_std * 1e3:.0f} mm from the fit) "
+                    f"placed nearest the {parent} proximal joint")
     if flagged:
         v = fallback_local
         what = (f"centroid of {', '.join(spec.fallback)}" if spec.fallback
@@ -370,6 +421,7 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
         frames_used=int(frames_used), rms_residual_m=float(rms), condition=cond,
         cap_angle_deg=float(cap), axis=None if normal is None else [float(a) for a in normal],
         center_local_m=[float(a) for a in v], flagged=flagged, note=note,
+        axial_std_mm=float(axial_std * 1e3),
     )
     return v, (normal if not flagged else None), report
 
@@ -387,6 +439,9 @@ def solve_joints(
     noise_mm: float | None = None,
     min_cap_deg: float = 10.0,
     planar_cond: float = PLANAR_COND,
+    hinge_rule: bool = True,
+    max_axial_std_mm: float = 2.0,
+    hinge_ratio: float = 3.0,
 ) -> JointSolution:
     """Joint centres of a marker-set skeleton (seed 000 §2.3-2.6).
 
@@ -406,6 +461,20 @@ def solve_joints(
         grows like σ/(r θ²) as the cap angle θ shrinks.
     planar_cond : float, keyword-only
         Condition number above which motion counts as planar (a hinge).
+    hinge_rule : bool, keyword-only
+        For a joint whose parent is a long bone (a non-root segment with this one
+        child), when the motion is planar or the centre's worst coordinate has a
+        Cramér-Rao standard deviation above ``max_axial_std_mm``, place the centre on
+        the fitted axis at the point nearest the parent's proximal joint centre
+        (reported as ``method='mgdk+axis-rule'``).
+    max_axial_std_mm : float, keyword-only
+        See ``hinge_rule``.
+    hinge_ratio : float, keyword-only
+        Motion counts as (nearly) planar for ``hinge_rule`` when the markers' spread
+        across their plane of motion (√ of the smallest eigenvalue of the pooled
+        within-marker covariance) is below ``hinge_ratio`` times the noise (σ from
+        ``noise_mm``, else the RMS radial residual): out-of-plane scatter that noise
+        alone explains.
 
     Returns
     -------
@@ -463,9 +532,18 @@ def solve_joints(
             fb.append(np.nanmean(fy, axis=1) if np.isfinite(fy).any() else fy[:, 0])
         sets_c = [np.concatenate(a) for a in sets]
         fallback_local = _nanmedian_rows(np.concatenate(fb))
+        pspec = ms.segment(s.parent)
+        n_siblings = sum(1 for q in ms.segments if q.parent == s.parent)
+        anchor = None
+        if pspec.parent is not None and n_siblings == 1 and hinge_rule:
+            pf0 = frames[0][s.parent]
+            anchor = _nanmedian_rows(
+                _to_local(pf0.r, pf0.o, centres[0][pspec.joint][:, None])[:, 0])
         v, axis, rep = _fit_joint(s, s.parent, sets_c, fallback_local, used,
                                   noise_mm=noise_mm, min_cap_deg=min_cap_deg,
-                                  planar_cond=planar_cond)
+                                  planar_cond=planar_cond, anchor=anchor,
+                                  max_axial_std_mm=max_axial_std_mm,
+                                  hinge_ratio=hinge_ratio)
         fitted_v[s.joint] = v
         axes[s.joint] = axis
         reports.append(rep)
