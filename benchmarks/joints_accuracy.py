@@ -57,7 +57,8 @@ def bones():
              ("l_knee", "l_ankle", "ltibia", "lfoot"), ("r_knee", "r_ankle", "rtibia", "rfoot"),
              ("l_shoulder", "l_elbow", "lhumerus", "lradius"),
              ("r_shoulder", "r_elbow", "rhumerus", "rradius"),
-             ("l_elbow", "l_wrist", "lradius", "lwrist"), ("r_elbow", "r_wrist", "rradius", "rwrist"),
+             ("l_elbow", "l_wrist", "lradius", "lwrist"),
+             ("r_elbow", "r_wrist", "rradius", "rwrist"),
              ("l_hip", "r_hip", "lfemur", "rfemur")]
     print("\n## 07_01.c3d bone lengths vs 07.asf (mm)")
     print(f"{'bone':22s} {'ours':>7s} {'07.asf':>7s} {'diff':>7s}")
