@@ -1032,7 +1032,7 @@ def finish_frame(
     """Apply lighting gain (3,) and Gaussian noise (sigma, grey levels); return uint8."""
     out = image if gain is None else image * np.asarray(gain, np.float32)
     if noise > 0:
-        out = out + rng.normal(0.0, noise, out.shape).astype(np.float32)
+        out = out + np.float32(noise) * rng.standard_normal(out.shape, dtype=np.float32)
     return np.clip(np.rint(out), 0, 255).astype(np.uint8)
 
 
