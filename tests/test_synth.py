@@ -329,12 +329,17 @@ def test_unmappable_motion(tmp_path, cli):
     "args, text",
     [(["--motion", "dance"], "dance"), (["--motion", "walk", "--range", "5"], "--range"),
      (["--motion", "walk", "--range", "100:120"], "no frames"),
-     (["--motion", "walk", "--fps", "-3"], "--fps")],
+     (["--motion", "walk", "--fps", "-3"], "--fps"),
+     (["--size", "161x120"], "even"), (["--size", "big"], "WIDTHxHEIGHT"),
+     (["--background", "no_such.png"], "no_such.png")],
 )
 def test_bad_options(tmp_path, cli, args, text):
-    res = cli("synth", *args, "--frames", "10", "--size", "64x48", "-o", tmp_path / "x.mp4")
+    if "--size" not in args:
+        args = [*args, "--size", "64x48"]
+    res = cli("synth", *args, "--frames", "10", "-o", tmp_path / "x.mp4")
     assert res.returncode == 2, res.stderr
     assert text in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "x.mp4").exists() and not (tmp_path / "x_truth.npz").exists()
 
 
 def test_asf_needs_amc(shared_data):

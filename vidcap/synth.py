@@ -1262,6 +1262,8 @@ def synth_clip(
         motion = make_motion(motion, body=options.get("body"), rng=rng)
     clip = prepare_clip(motion, rng=rng, **options)
     W, H = clip.camera.size
+    if W % 2 or H % 2:
+        raise UsageError(f"H.264 needs an even image size, got {W}x{H}", out_video)
     masks = np.empty((clip.n_frames, H, W), bool)
     with VideoWriter(out_video, motion.fps, crf=crf) as writer:
         for i, (frame, mask) in enumerate(iter_frames(clip, rng, show_progress=show_progress)):
