@@ -380,3 +380,11 @@ def test_cli_file_motion_with_bvh(tmp_path, cli, shared_data):
     assert all(o.startswith("front") for o in t["orientation"])
     np.testing.assert_allclose(read_bvh(tmp_path / "a.bvh", units="m").positions(),
                                t["joints3d"], atol=1e-5)
+
+
+def test_render_infers_the_body_from_the_motion():
+    from vidcap.synth import prepare_clip
+
+    for h in (1.5, 1.9):
+        m = make_motion("walk", body=BodyModel(height=h), n_frames=2)
+        assert np.isclose(prepare_clip(m, size=(64, 48)).body.height, h)
