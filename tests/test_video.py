@@ -125,3 +125,16 @@ def test_info_on_a_good_clip(tmp_path, cli):
     r = cli("info", out)
     assert r.returncode == 0, r.stderr
     assert "7 frames" in r.stdout and "64x48" in r.stdout
+
+
+def test_outputs_get_ordinary_file_permissions(tmp_path):
+    import os
+
+    from vidcap.fileio import write_text_atomic
+
+    umask = os.umask(0o022)
+    try:
+        write_text_atomic(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(umask)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
