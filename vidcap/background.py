@@ -305,7 +305,8 @@ def _gain_median(frames, gains) -> np.ndarray:
     return np.clip(np.median(norm, axis=0) + 0.5, 0, 255).astype(np.uint8)
 
 
-def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress):
+def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress,
+                 region_stable=0.9):
     """Steps 2-5 at low resolution: per-sample background weights (K, h, w) in [0, 1]."""
     from skimage.segmentation import felzenszwalb
 
@@ -347,29 +348,25 @@ def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progres
         np.maximum(d, np.abs(planes[2] - planes[2, t]), out=d)
         np.less(d, tau, out=agree[t])
 
-    lab_flat = labels.reshape(k, -1)
-    reg_size = np.bincount(lab_flat.ravel(), minlength=n_regions).astype(np.float32)
+    lab_flat = labels.ravel()
+    reg_size = np.maximum(np.bincount(lab_flat, minlength=n_regions), 1).astype(np.float32)
     weights = np.ones((k, h, w), np.float32)
     for _ in range(2):
+        # Per-pixel vote, each sample weighted by its current background weight.
         support = np.einsum("tuhw,uhw->thw", agree, weights, dtype=np.float32)
         best = support.argmax(axis=0)
-        total = weights.sum(axis=0) + 1e-6
-        share = np.take_along_axis(support, best[None], 0)[0] / total
-        confident = share >= 0.5
+        total = weights.sum(axis=0)
+        share = np.take_along_axis(support, best[None], 0)[0] / np.maximum(total, 1e-6)
+        confident = (share >= 0.5) & (total > 0)
         same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
         good = same & confident
-        # Region test: the share of a region's confident pixels that agree.
-        n_conf = np.bincount(lab_flat.ravel(), np.broadcast_to(confident, (k, h, w)).ravel(),
-                             minlength=n_regions)
-        n_good = np.bincount(lab_flat.ravel(), good.ravel(), minlength=n_regions)
-        score = np.where(n_conf >= np.maximum(3, 0.2 * reg_size),
-                         n_good / np.maximum(n_conf, 1), 0.0).astype(np.float32)
-        region_bg = score[labels]  # (k, h, w)
-        # Confident pixels keep their own vote; the rest follow their region.
-        weights = np.where(confident, good * np.maximum(region_bg, 0.5), region_bg)
-        weights = np.where(weights >= 0.5, weights, 0.0).astype(np.float32)
-    # A final consistency pass: among the frames kept, keep those agreeing with the
-    # weighted mode, so a stray frame does not pollute the plate.
+        # Region test (the seed's "regions that do not change"): a region of
+        # sample t is background when nearly all its pixels show their majority
+        # colour. A region holding moving parts (a person) fails, and so do the
+        # pixels it covers, even those it covers in every sample.
+        score = np.bincount(lab_flat, good.ravel(), minlength=n_regions) / reg_size
+        weights = (score >= region_stable)[labels].astype(np.float32)
+    # Among the samples kept, those agreeing with the weighted per-pixel mode.
     support = np.einsum("tuhw,uhw->thw", agree, weights, dtype=np.float32)
     best = support.argmax(axis=0)
     same = np.take_along_axis(agree, best[None, None], 1)[:, 0]
@@ -391,7 +388,9 @@ def _finish_regions(frames, gains, weights_small, idx, name):
     conf = (seen / k).astype(np.float32)
     plate = _robust_plate(frames, gains, wfull)
     if never.any():
-        plate[never] = _gain_median(frames, gains)[never]
+        # Never seen uncovered: guess from the surrounding background, so that
+        # whatever stands there (the person) still differs from the plate.
+        plate = cv2.inpaint(plate, never.astype(np.uint8), 5, cv2.INPAINT_TELEA)
     return _finish(frames, gains, plate, wfull, conf, "felzenszwalb", idx, name,
                    never_seen=never)
 
@@ -428,7 +427,10 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
         np.float32)
     thr = _threshold_from_sigma(sigma, l1[bgw] if bgw.any() else l1.ravel())
     cnt = bgw.sum(axis=0)
-    noise_map = np.where(cnt > 0, (l1 * bgw).sum(axis=0) / np.maximum(cnt, 1), 0.0)
+    # Mean over background samples of the difference, clipped at twice the
+    # threshold so a stray person pixel counted as background cannot inflate it.
+    clipped = np.minimum(l1, 2 * thr) * bgw
+    noise_map = np.where(cnt > 0, clipped.sum(axis=0) / np.maximum(cnt, 1), 0.0)
     noise_map = cv2.dilate(noise_map.astype(np.float32), np.ones((3, 3), np.uint8))
     # Static-scene check: pixels far from the plate in some sample (beyond the
     # threshold), in connected areas large enough to be a person.
