@@ -284,7 +284,7 @@ def estimate_background(
         conf = np.ones(frames.shape[1:3], np.float32)
         model = _finish(frames, gains, plate, weights, conf, "median", idx, name)
         return model
-    weights_small = _region_vote(frames, gains, work_size=work_size,
+    weights_small, _ = _region_vote(frames, gains, work_size=work_size,
                                  segment_scale=segment_scale, min_region=min_region,
                                  progress=progress)
     return _finish_regions(frames, gains, weights_small, idx, name)
@@ -306,7 +306,7 @@ def _gain_median(frames, gains) -> np.ndarray:
 
 
 def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress,
-                 region_stable=0.9):
+                 min_stability=0.5, min_support=0.15):
     """Steps 2-5 at low resolution: per-sample background weights (K, h, w) in [0, 1]."""
     from skimage.segmentation import felzenszwalb
 
@@ -350,27 +350,24 @@ def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progres
 
     lab_flat = labels.ravel()
     reg_size = np.maximum(np.bincount(lab_flat, minlength=n_regions), 1).astype(np.float32)
-    weights = np.ones((k, h, w), np.float32)
-    for _ in range(2):
-        # Per-pixel vote, each sample weighted by its current background weight.
-        support = np.einsum("tuhw,uhw->thw", agree, weights, dtype=np.float32)
-        best = support.argmax(axis=0)
-        total = weights.sum(axis=0)
-        share = np.take_along_axis(support, best[None], 0)[0] / np.maximum(total, 1e-6)
-        confident = (share >= 0.5) & (total > 0)
-        same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
-        good = same & confident
-        # Region test (the seed's "regions that do not change"): a region of
-        # sample t is background when nearly all its pixels show their majority
-        # colour. A region holding moving parts (a person) fails, and so do the
-        # pixels it covers, even those it covers in every sample.
-        score = np.bincount(lab_flat, good.ravel(), minlength=n_regions) / reg_size
-        weights = (score >= region_stable)[labels].astype(np.float32)
-    # Among the samples kept, those agreeing with the weighted per-pixel mode.
-    support = np.einsum("tuhw,uhw->thw", agree, weights, dtype=np.float32)
-    best = support.argmax(axis=0)
-    same = np.take_along_axis(agree, best[None, None], 1)[:, 0]
-    return (weights * same).astype(np.float32)
+    # support[t, p]: share of samples showing at p the region colour sample t shows.
+    support = agree.sum(axis=1, dtype=np.float32) / k
+    # Region stability (the seed's "regions that do not change"): how often, on
+    # average over the region of sample t at p, its pixels show this colour. A
+    # background region reaching beyond the person scores near 1 even where the
+    # person covers it in most frames; a person's region scores the share of the
+    # time it stays put, lowered by its moving parts.
+    stability = (np.bincount(lab_flat, support.ravel(), minlength=n_regions)
+                 / reg_size)[labels]  # (k, h, w)
+    # A colour seen in too few samples is a mixture or a passer-by, however
+    # stable its region: candidates need some support of their own.
+    enough = support >= max(min_support, 2.5 / k)
+    scored = np.where(enough, stability, stability - 2.0)
+    best = scored.argmax(axis=0)
+    level = np.take_along_axis(scored, best[None], 0)[0]
+    same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
+    weights = same & (level >= min_stability)[None]
+    return weights.astype(np.float32), level
 
 
 def _finish_regions(frames, gains, weights_small, idx, name):
@@ -396,16 +393,33 @@ def _finish_regions(frames, gains, weights_small, idx, name):
 
 
 def _robust_plate(frames, gains, weights) -> np.ndarray:
-    """Weighted mean, then re-weighted without outliers, (H, W, 3) uint8."""
+    """Per-pixel median of the background samples, refined by the mean of the
+    samples near it; (H, W, 3) uint8.
+
+    The median over a varying subset is taken with one fixed-rank partition:
+    excluded samples are replaced by 0 or 255 in numbers that put the included
+    samples' median at the middle rank.
+    """
+    k = len(frames)
     x = frames.astype(np.float32) / gains[:, None, None, :]
+    xu = np.clip(x + 0.5, 0, 255).astype(np.uint8)
+    excl = weights <= 0
+    mid = (k - 1) // 2
+    # With m samples included, the first z excluded become 0 and the rest 255, so
+    # that rank ``mid`` falls on the included samples' median.
+    m = k - excl.sum(axis=0)
+    z = mid - (np.maximum(m, 1) - 1) // 2
+    rank = np.cumsum(excl, axis=0, dtype=np.int16)
+    sentinel = np.where(rank <= z, 0, 255).astype(np.uint8)
+    xs = np.where(excl[..., None], sentinel[..., None], xu)
+    med = np.partition(xs, mid, axis=0)[mid].astype(np.float32)
+    dev = np.abs(x - med).sum(axis=-1, keepdims=True)
     w = weights[..., None]
-    tot = np.maximum(w.sum(axis=0), 1e-6)
-    mean = (x * w).sum(axis=0) / tot
-    dev = np.abs(x - mean).sum(axis=-1, keepdims=True)
-    scale = 1.4826 * np.median(dev[weights > 0]) if (weights > 0).any() else 1.0
+    inside = weights > 0
+    scale = 1.4826 * float(np.median(dev[inside])) if inside.any() else 1.0
     w2 = w * (dev <= max(3.0 * scale, 6.0))
     tot2 = w2.sum(axis=0)
-    mean2 = np.where(tot2 > 0, (x * w2).sum(axis=0) / np.maximum(tot2, 1e-6), mean)
+    mean2 = np.where(tot2 > 0, (x * w2).sum(axis=0) / np.maximum(tot2, 1e-6), med)
     return np.clip(mean2 + 0.5, 0, 255).astype(np.uint8)
 
 
