@@ -23,8 +23,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--threshold", type=float, metavar="T",
                         help="foreground threshold on the colour difference summed over "
                              "B, G, R (grey levels, 0-765; default: from the video's noise)")
-    parser.add_argument("--samples", type=int, default=32, metavar="N",
-                        help="frames sampled for the background (default 32)")
+    parser.add_argument("--samples", type=int, default=24, metavar="N",
+                        help="frames sampled for the background (default 24)")
     parser.add_argument("--no-shadows", action="store_true",
                         help="do not suppress shadows")
     parser.add_argument("--plate-out", type=Path, metavar="PNG",
