@@ -263,15 +263,15 @@ def kabsch(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None 
     return r, origin
 
 
-def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | None = None
-                   ) -> float:
-    """Variance of a rigidly attached point predicted by a least-squares (Kabsch) frame.
+def point_covariance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | None = None
+                     ) -> np.ndarray:
+    """Covariance of a rigidly attached point predicted by a least-squares (Kabsch) frame.
 
     For K points with isotropic noise σ² / w_k fitted rigidly, the pose errors are a
     translation with covariance σ² I / Σw and a small rotation with covariance
     σ² Iₘ⁻¹, Iₘ = Σ w_k (|m_k|² I - m_k m_kᵀ) the weighted inertia of the template about
     its weighted centroid. A point v then has covariance
-    σ² (I / Σw + [p]ₓ Iₘ⁻¹ [p]ₓᵀ), p = v - centroid.
+    σ² (I / Σw + [p]ₓ Iₘ⁻¹ [p]ₓᵀ), p = v - centroid, in the frame's own coordinates.
 
     Parameters
     ----------
@@ -283,14 +283,14 @@ def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | No
 
     Returns
     -------
-    float
-        The trace of the point's covariance in units of σ² (inf if undetermined).
+    numpy.ndarray, shape (3, 3)
+        In units of σ² (all inf if undetermined).
     """
     t = np.asarray(template, dtype=float)
     w = np.ones(len(t)) if weights is None else np.asarray(weights, dtype=float)
     ok = np.isfinite(t).all(axis=1) & np.isfinite(w) & (w > 0)
     if ok.sum() < 3 or not np.isfinite(v).all():
-        return float("inf")
+        return np.full((3, 3), np.inf)
     t, w = t[ok], w[ok]
     c = (w[:, None] * t).sum(0) / w.sum()
     m = t - c
@@ -298,13 +298,37 @@ def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | No
     try:
         inv = np.linalg.inv(inertia)
     except np.linalg.LinAlgError:
-        return float("inf")
+        return np.full((3, 3), np.inf)
     p = np.asarray(v, dtype=float) - c
     px = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
-    return float(3.0 / w.sum() + np.trace(px @ inv @ px.T))
+    return np.eye(3) / w.sum() + px @ inv @ px.T
 
 
-def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray) -> dict:
+def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | None = None
+                   ) -> float:
+    """Trace of :func:`point_covariance` (units of σ²; inf if undetermined)."""
+    return float(np.trace(point_covariance(template, v, weights)))
+
+
+def _frame_noise(template: np.ndarray, weights: np.ndarray | None):
+    """Weighted centroid (3,) and inverse inertia (3, 3) of a frame's template."""
+    t = np.asarray(template, dtype=float)
+    w = np.ones(len(t)) if weights is None else np.asarray(weights, dtype=float)
+    ok = np.isfinite(t).all(axis=1) & np.isfinite(w) & (w > 0)
+    if ok.sum() < 3:
+        return None, None
+    t, w = t[ok], w[ok]
+    c = (w[:, None] * t).sum(0) / w.sum()
+    m = t - c
+    inertia = (w * (m * m).sum(1)).sum() * np.eye(3) - np.einsum("k,ki,kj->ij", w, m, m)
+    try:
+        return c, np.linalg.inv(inertia)
+    except np.linalg.LinAlgError:
+        return None, None
+
+
+def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray, *,
+          rot_cov_p=None, rot_cov_c=None, centroid_p=None, centroid_c=None) -> dict:
     """Symmetrical centre of rotation estimation (SCoRE, Ehrig et al. 2006) and the
     hinge axis of SARA (Ehrig et al. 2007), in closed form.
 
@@ -321,6 +345,19 @@ def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray) -> dic
     tp, tc : numpy.ndarray, shape (F, 3)
         Their origins, lab.
 
+    rot_cov_p, rot_cov_c : numpy.ndarray, shape (3, 3), optional, keyword-only
+        Covariance (rad², in the segment's own axes) of each frame's small rotation
+        error, for the noise correction below; with them ``centroid_p/_c`` (3,), the
+        points about which the frames were fitted (their rotation and that point's
+        position are then uncorrelated).
+
+    Noise correction (ours, not in Ehrig et al.): with R̂ = R exp([ε]ₓ), ε ~ (0, Σ),
+    E[R̂] = R (I - K/2), K = tr(Σ) I - Σ, so the normal equations built from noisy
+    frames shrink every rotation by (I - K/2), which biases the centre by O(σ²/θ²)
+    for a range of motion θ. About the centroids (positions independent of the
+    rotation errors) the expected cross term is (I - K_p/2) Σ R_pᵀR_c (I - K_c/2) and
+    the right-hand side's parts are shrunk by (I - K/2): both are un-shrunk here.
+
     Returns
     -------
     dict
@@ -335,14 +372,23 @@ def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray) -> dic
     if n < 10:
         return {"x": None, "n": n}
     rp, tp, rc, tc = rp[ok], tp[ok], rc[ok], tc[ok]
-    cross = np.einsum("fji,fjk->ik", rp, rc)  # Σ R_pᵀ R_c
+    shift = np.zeros(6)
+    dp = dc = np.eye(3)
+    if rot_cov_p is not None and rot_cov_c is not None:
+        tp = tp + np.einsum("fij,j->fi", rp, centroid_p)
+        tc = tc + np.einsum("fij,j->fi", rc, centroid_c)
+        shift = np.concatenate([centroid_p, centroid_c])
+        dp = np.linalg.inv(np.eye(3) - 0.5 * (np.trace(rot_cov_p) * np.eye(3) - rot_cov_p))
+        dc = np.linalg.inv(np.eye(3) - 0.5 * (np.trace(rot_cov_c) * np.eye(3) - rot_cov_c))
+    cross = dp @ np.einsum("fji,fjk->ik", rp, rc) @ dc  # Σ R_pᵀ R_c
     m = np.zeros((6, 6))
     m[:3, :3] = n * np.eye(3)
     m[3:, 3:] = n * np.eye(3)
     m[:3, 3:] = -cross
     m[3:, :3] = -cross.T
     b = tc - tp
-    rhs = np.concatenate([np.einsum("fji,fj->i", rp, b), -np.einsum("fji,fj->i", rc, b)])
+    rhs = np.concatenate([dp @ np.einsum("fji,fj->i", rp, b),
+                          -dc @ np.einsum("fji,fj->i", rc, b)])
     lam, vec = np.linalg.eigh(m)
     coef = vec.T @ rhs
     inv = np.where(lam > 1e-9 * lam[-1], 1.0 / np.maximum(lam, 1e-300), 0.0)
@@ -351,6 +397,7 @@ def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray) -> dic
     res = (np.einsum("fij,j->fi", rp, x_full[:3]) + tp
            - np.einsum("fij,j->fi", rc, x_full[3:]) - tc)
     s2 = float(np.sum(res ** 2) / max(3 * n - 6, 1))
+    x_full, x_min = x_full + shift, x_min + shift
     return {"x": x_full, "x_min": x_min, "null": vec[:, 0], "eig": lam, "s2": s2, "n": n}
 
 
@@ -455,14 +502,22 @@ def _weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
 
 def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_local,
                frames_used: int, *, noise_mm, min_cap_deg, planar_cond, anchor,
-               max_axial_std_mm, hinge_ratio) -> tuple:
-    """Fit one joint centre in the parent's frame; returns (v (3,), axis or None, report)."""
+               max_axial_std_mm, hinge_ratio, frame_cov=None) -> tuple:
+    """Fit one joint centre in the parent's frame; returns (v (3,), axis or None, report).
+
+    ``frame_cov`` (3, 3), in units of σ²: the extra noise the parent's frame adds to a
+    child marker expressed in it (:func:`point_covariance`), added to the marker's
+    own σ² I for UGDK when ``noise_mm`` is given.
+    """
     usable = [y for y in sets if len(y) >= 4]
     note = ""
     fit = None
     if usable:
         try:
-            cov = None if noise_mm is None else (float(noise_mm) * 1e-3) ** 2
+            cov = None
+            if noise_mm is not None:
+                extra = np.zeros((3, 3)) if frame_cov is None else frame_cov
+                cov = (float(noise_mm) * 1e-3) ** 2 * (np.eye(3) + extra)
             fit = mgdk(usable, cov, planar_cond=planar_cond)
         except FitError as exc:
             note = f"fit failed ({exc})"
@@ -553,7 +608,8 @@ def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float):
     lam, null, s2 = sc["eig"], sc["null"], sc["s2"]
     n_p = float(np.linalg.norm(null[:3]))
     # standard deviation of the parent-frame centre along the weakest direction
-    std = float(np.sqrt(s2 / max(lam[0], 1e-300)) * n_p)
+    std = (float(np.sqrt(s2 / lam[0]) * n_p) if lam[0] > 1e-12 * lam[-1]
+           else float("inf"))
     hinge = anchor is not None and np.isfinite(anchor).all() and n_p > 0.3 and (
         rep.kind == "hinge" or std * 1e3 > max_axial_std_mm)
     if hinge:
@@ -593,6 +649,7 @@ def solve_joints(
     max_axial_std_mm: float = 2.0,
     hinge_ratio: float = 3.0,
     score_refine: bool = True,
+    noise_correct: bool = True,
 ) -> JointSolution:
     """Joint centres of a marker-set skeleton (seed 000 §2.3-2.6).
 
@@ -634,6 +691,11 @@ def solve_joints(
         (:func:`point_variance`); the parent's prediction also enters the child's
         least-squares frame as a weighted point (seed 000 §2.5: a solved centre counts
         as a point). MGDK's fit still decides the kind, flags and fallbacks.
+    noise_correct : bool, keyword-only
+        Remove the O(σ²) shrinkage bias of SCoRE due to noisy frames (see
+        :func:`score`), with σ from ``noise_mm`` or else estimated from the child's
+        rigid-fit residuals, and the frames' rotation noise predicted from their
+        templates (:func:`point_covariance`).
 
     Returns
     -------
@@ -698,28 +760,43 @@ def solve_joints(
             pf0 = frames[0][s.parent]
             anchor = _nanmedian_rows(
                 _to_local(pf0.r, pf0.o, centres[0][pspec.joint][:, None])[:, 0])
+        # the noise the parent's frame adds to the child's markers in its coordinates
+        # (mean over the markers of the propagated covariance, units of σ²)
+        pf0 = frames[0][s.parent]
+        covs = [point_covariance(pf0.template, y.mean(axis=0), pf0.weights)
+                for y in sets_c if len(y)]
+        frame_cov = np.mean(covs, axis=0) if covs else None
+        if frame_cov is not None and not np.isfinite(frame_cov).all():
+            frame_cov = None
         v, axis, rep = _fit_joint(s, s.parent, sets_c, fallback_local, used,
                                   noise_mm=noise_mm, min_cap_deg=min_cap_deg,
                                   planar_cond=planar_cond, anchor=anchor,
                                   max_axial_std_mm=max_axial_std_mm,
-                                  hinge_ratio=hinge_ratio)
+                                  hinge_ratio=hinge_ratio, frame_cov=frame_cov)
         # 1b. With >= 3 markers the child has frames of its own: refine symmetrically
         # (SCoRE / SARA) and combine both segments' predictions of the centre per frame.
         raw = ([_frames_from_points(markers_of(t, s.markers)) for t in trials]
                if len(s.markers) >= 3 else None)
         v_child = None
         if raw is not None and not rep.flagged and score_refine:
+            # marker noise: a-priori, else from the child's rigid-fit residuals
+            if noise_mm is not None:
+                sig2_m = (float(noise_mm) * 1e-3) ** 2
+            else:
+                sig2_m = _rigid_residual_var(raw, [markers_of(t, s.markers) for t in trials])
+            pf0 = frames[0][s.parent]
+            cen_p, inv_p = _frame_noise(pf0.template, pf0.weights)
+            cen_c, inv_c = _frame_noise(raw[0].template, None)
+            kw = {}
+            if noise_correct and cen_p is not None and cen_c is not None:
+                kw = dict(rot_cov_p=sig2_m * inv_p, rot_cov_c=sig2_m * inv_c,
+                          centroid_p=cen_p, centroid_c=cen_c)
             sc = score(np.concatenate([frames[ti][s.parent].r for ti in range(len(trials))]),
                        np.concatenate([frames[ti][s.parent].o for ti in range(len(trials))]),
-                       np.concatenate([f.r for f in raw]), np.concatenate([f.o for f in raw]))
+                       np.concatenate([f.r for f in raw]), np.concatenate([f.o for f in raw]),
+                       **kw)
             if sc["x"] is not None:
                 v, v_child, axis, rep = _refine_score(sc, rep, anchor, max_axial_std_mm)
-                # marker noise: a-priori, else from the child's rigid-fit residuals
-                if noise_mm is not None:
-                    sig2_m = (float(noise_mm) * 1e-3) ** 2
-                else:
-                    sig2_m = _rigid_residual_var(
-                        raw, [markers_of(t, s.markers) for t in trials])
         fitted_v[s.joint] = v
         axes[s.joint] = axis
         reports.append(rep)
