@@ -489,12 +489,15 @@ def _weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
     J = σ⁻² Σ_p N_p Cov_p(u) with u the unit directions from the centre (the
     multi-radius version of the bound in :func:`vidcap.mocap.spherefit.crlb`).
     """
-    info = np.zeros((3, 3))
-    for y in sets:
-        u = _unit(y - center)
-        u = u[np.isfinite(u).all(axis=1)]
-        if len(u) > 1:
-            info += len(u) * np.cov(u.T, bias=True)
+    # Σ_p N_p Cov_p(u) = Σ_all u uᵀ - Σ_p N_p ū_p ū_pᵀ, with all markers at once
+    sets = [y for y in sets if len(y) > 1]
+    if not sets:
+        return np.full(3, np.nan), float("inf")
+    lens = np.array([len(y) for y in sets])
+    u = _unit(np.concatenate(sets) - center)
+    u = np.where(np.isfinite(u), u, 0.0)
+    sums = np.add.reduceat(u, np.r_[0, np.cumsum(lens)[:-1]], axis=0)  # (P, 3)
+    info = u.T @ u - np.einsum("pi,pj,p->ij", sums, sums, 1.0 / lens)
     w, v = np.linalg.eigh(info / max(sigma, 1e-12) ** 2)
     std = np.inf if w[0] <= 0 else 1.0 / np.sqrt(w[0])
     return v[:, 0], float(std)
