@@ -38,8 +38,60 @@ RIGID = {"LeftCollar", "RightCollar", "LHipJoint", "RHipJoint",
          "lclavicle", "rclavicle", "lhipjoint", "rhipjoint"}
 
 
+def _place(local_joints, long_bone, per_segment, rng, *, min_width=0.03):
+    """Marker positions (per_segment, 3) in a segment's frame, 5-15 cm from its joints.
+
+    As a marker set would place them: spread over the segment and around it, never
+    (nearly) in a line, since three collinear markers do not define a frame.
+
+    * A long bone (proximal and distal joint): the markers alternate between the
+      proximal and the distal end (10-45 % of the bone from that end), 4-9 cm off
+      the bone axis, at azimuths about 120 degrees apart (±20 degrees) around it.
+    * Other segments (pelvis, thorax): each marker 4-9 cm in a random direction from
+      a different joint of the segment (in random order).
+
+    Every marker is 5-15 cm from the nearest joint of the segment, and a layout is
+    redrawn until the markers' second principal extent (√ of the second eigenvalue
+    of their scatter) is at least ``min_width`` m.
+    """
+    while True:
+        out = []
+        phi0 = rng.uniform(0, 2 * np.pi)
+        order = rng.permutation(len(local_joints))
+        while len(out) < per_segment:
+            i = len(out)
+            if long_bone and len(local_joints) == 2:
+                a, b = local_joints
+                axis = (b - a) / np.linalg.norm(b - a)
+                t = rng.uniform(0.10, 0.45)
+                end = i % 2 if i < 2 else rng.integers(2)
+                along = a + (t if end == 0 else 1 - t) * (b - a)
+                ref = np.eye(3)[int(np.argmin(np.abs(axis)))]
+                e1 = np.cross(axis, ref)
+                e1 /= np.linalg.norm(e1)
+                e2 = np.cross(axis, e1)
+                phi = phi0 + 2 * np.pi * i / per_segment + np.radians(rng.uniform(-20, 20))
+                cand = along + rng.uniform(0.04, 0.09) * (np.cos(phi) * e1 + np.sin(phi) * e2)
+            else:
+                along = local_joints[order[i % len(order)]]
+                off = rng.normal(size=3)
+                cand = along + off / np.linalg.norm(off) * rng.uniform(0.04, 0.09)
+            d = np.linalg.norm(local_joints - cand, axis=1).min()
+            if 0.05 <= d <= 0.15:
+                out.append(cand)
+        out = np.array(out)
+        sv = np.linalg.svd(out - out.mean(0), compute_uv=False)
+        if sv[1] / np.sqrt(len(out)) >= min_width:
+            return out
+
+
 def attach_markers(motion, layout, rng, *, noise_m=0.001, per_segment=3):
     """Markers 5-15 cm from the joints, rigid on each segment of ``motion``.
+
+    Clavicles and hip "joints" are held still (so shoulders and hips are ball joints
+    of the thorax and pelvis); marker layout by :func:`_place`; noise i.i.d. Gaussian
+    per coordinate, ``noise_m`` standard deviation, drawn from ``rng``; every frame of
+    the motion is used.
 
     Returns
     -------
@@ -66,21 +118,13 @@ def attach_markers(motion, layout, rng, *, noise_m=0.001, per_segment=3):
         local_joints = [np.zeros(3)] if parent else []
         local_joints += [world_r[0, b].T @ (world_p[0, sk.index(e)] - world_p[0, b]) for e in ends]
         local_joints = np.array(local_joints)
+        cands = _place(local_joints, bool(parent), per_segment, rng)
         names = []
-        while len(names) < per_segment:
-            if len(local_joints) > 2 or not parent:  # around the segment's joints
-                along = local_joints[rng.integers(len(local_joints))]
-            elif parent:  # along the bone with a sideways offset
-                t = rng.uniform(0.2, 0.8)
-                along = local_joints[0] + t * (local_joints[1] - local_joints[0])
-            off = rng.normal(size=3)
-            cand = along + off / np.linalg.norm(off) * rng.uniform(0.04, 0.09)
-            d = np.linalg.norm(local_joints - cand, axis=1).min()
-            if 0.05 <= d <= 0.15:
-                name = f"{seg.upper()}{len(names)}"
-                names.append(name)
-                labels.append(name)
-                cols.append(world_p[:, b] + world_r[:, b] @ cand)
+        for cand in cands:
+            name = f"{seg.upper()}{len(names)}"
+            names.append(name)
+            labels.append(name)
+            cols.append(world_p[:, b] + world_r[:, b] @ cand)
         toml.append(f"[segments.{seg}]")
         toml.append(f"joint = '{joint}'")
         if parent:

@@ -154,18 +154,32 @@ def test_noise_free_markers_give_exact_centres(motions, which):
         assert rms_mm(fk[:, mo.skeleton.index(j)], want) < 1.0, j
 
 
-@pytest.mark.parametrize("seed", [0, 2])
-def test_one_mm_noise_ball_joints_within_10mm(motions, seed):
-    """Hips and shoulders (3-D motion) meet the 10 mm target with 1 mm noise on 131_01.
+@pytest.mark.parametrize("which", ["131", "07"])
+@pytest.mark.parametrize(("noise_mm", "limit_mm"), [(1.0, 10.0), (5.0, 20.0)])
+def test_noisy_markers_meet_the_acceptance_targets(motions, which, noise_mm, limit_mm):
+    """Issue 4: every hip, knee, shoulder and elbow centre within 10 mm of the truth with
+    1 mm marker noise, and within 20 mm with 5 mm noise given as ``noise_mm=5``."""
+    motion, layout = motions[which]
+    data, ms, truth = attach_markers(motion, layout, np.random.default_rng(7),
+                                     noise_m=noise_mm * 1e-3)
+    sol = solve_joints(data, ms, noise_mm=noise_mm if noise_mm >= 5 else None)
+    for j in LIMB:
+        assert rms_mm(sol.position(j), truth[j]) < limit_mm, j
+    # knees and elbows are hinges here: placed on the SARA axis by the documented rule
+    for j in ["l_knee", "r_knee", "l_elbow", "r_elbow"]:
+        rep = sol.report(j)
+        assert rep.kind == "hinge" and "axis-rule" in rep.method, (j, rep.method)
 
-    Knees and elbows of a walk are near-hinges: their centre along the hinge axis is
-    weakly observable, and they do NOT meet 10 mm here (see benchmarks/RESULTS.md).
-    """
-    motion, layout = motions["131"]
-    data, ms, truth = attach_markers(motion, layout, np.random.default_rng(seed), noise_m=0.001)
-    sol = solve_joints(data, ms)
-    for j in ["l_hip", "r_hip", "l_shoulder", "r_shoulder"]:
-        assert rms_mm(sol.position(j), truth[j]) < 10.0, j
+
+def test_noise_correction_removes_the_score_bias(motions):
+    """Without the noisy-frame correction SCoRE's centres are biased at 5 mm noise."""
+    motion, layout = motions["07"]
+    data, ms, truth = attach_markers(motion, layout, np.random.default_rng(1), noise_m=0.005)
+    on = solve_joints(data, ms, noise_mm=5.0)
+    off = solve_joints(data, ms, noise_mm=5.0, noise_correct=False)
+    err_on = np.mean([rms_mm(on.position(j), truth[j]) for j in LIMB])
+    err_off = np.mean([rms_mm(off.position(j), truth[j]) for j in LIMB])
+    assert err_on < 0.6 * err_off
 
 
 def test_too_little_motion_is_flagged_with_fallback(motions):

@@ -214,7 +214,8 @@ def frame_from_axis(c: np.ndarray, p0: np.ndarray, axis: np.ndarray) -> np.ndarr
     return np.stack([x, y, z], axis=-1)
 
 
-def kabsch(template: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def kabsch(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None = None
+           ) -> tuple[np.ndarray, np.ndarray]:
     """Rigid poses mapping a template onto points with gaps, batched over frames.
 
     Parameters
@@ -223,6 +224,9 @@ def kabsch(template: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.nda
         Local coordinates of K points.
     points : numpy.ndarray, shape (F, K, 3)
         Observed positions; NaN rows are ignored.
+    weights : numpy.ndarray, shape (K,) or (F, K), optional
+        Non-negative weight of each point (inverse variance relative to a marker);
+        default 1.
 
     Returns
     -------
@@ -233,13 +237,19 @@ def kabsch(template: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.nda
     """
     w = np.isfinite(points).all(axis=2) & np.isfinite(template).all(axis=1)  # (F, K)
     cnt = w.sum(axis=1)
+    wf = w.astype(float)
+    if weights is not None:
+        wf = wf * np.broadcast_to(np.asarray(weights, dtype=float), w.shape)
+        wf = np.where(np.isfinite(wf), wf, 0.0)
+        w = wf > 0
+        cnt = w.sum(axis=1)
     x = np.where(w[..., None], points, 0.0)
     t = np.where(np.isfinite(template), template, 0.0)
-    wt = w[..., None].astype(float)
-    den = np.maximum(cnt, 1)[:, None]
+    wt = wf[..., None]
+    den = np.maximum(wf.sum(axis=1), _EPS)[:, None]
     xc = (wt * x).sum(1) / den
     tc = (wt * t[None]).sum(1) / den
-    h = np.einsum("fk,fki,fkj->fij", w.astype(float), t[None] - tc[:, None], x - xc[:, None])
+    h = np.einsum("fk,fki,fkj->fij", wf, t[None] - tc[:, None], x - xc[:, None])
     u, s, vt = np.linalg.svd(h)
     d = np.sign(np.linalg.det(np.einsum("fji,fkj->fik", vt, u)))
     d = np.where(d == 0, 1.0, d)
@@ -251,6 +261,144 @@ def kabsch(template: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.nda
     origin = xc - np.einsum("fij,fj->fi", r, tc)
     origin[~ok] = np.nan
     return r, origin
+
+
+def point_covariance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | None = None
+                     ) -> np.ndarray:
+    """Covariance of a rigidly attached point predicted by a least-squares (Kabsch) frame.
+
+    For K points with isotropic noise σ² / w_k fitted rigidly, the pose errors are a
+    translation with covariance σ² I / Σw and a small rotation with covariance
+    σ² Iₘ⁻¹, Iₘ = Σ w_k (|m_k|² I - m_k m_kᵀ) the weighted inertia of the template about
+    its weighted centroid. A point v then has covariance
+    σ² (I / Σw + [p]ₓ Iₘ⁻¹ [p]ₓᵀ), p = v - centroid, in the frame's own coordinates.
+
+    Parameters
+    ----------
+    template : numpy.ndarray, shape (K, 3)
+        The frame's points in its own coordinates (NaN rows ignored).
+    v : numpy.ndarray, shape (3,)
+        The point, same coordinates.
+    weights : numpy.ndarray, shape (K,), optional
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        In units of σ² (all inf if undetermined).
+    """
+    t = np.asarray(template, dtype=float)
+    w = np.ones(len(t)) if weights is None else np.asarray(weights, dtype=float)
+    ok = np.isfinite(t).all(axis=1) & np.isfinite(w) & (w > 0)
+    if ok.sum() < 3 or not np.isfinite(v).all():
+        return np.full((3, 3), np.inf)
+    t, w = t[ok], w[ok]
+    c = (w[:, None] * t).sum(0) / w.sum()
+    m = t - c
+    inertia = (w * (m * m).sum(1)).sum() * np.eye(3) - np.einsum("k,ki,kj->ij", w, m, m)
+    try:
+        inv = np.linalg.inv(inertia)
+    except np.linalg.LinAlgError:
+        return np.full((3, 3), np.inf)
+    p = np.asarray(v, dtype=float) - c
+    px = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
+    return np.eye(3) / w.sum() + px @ inv @ px.T
+
+
+def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | None = None
+                   ) -> float:
+    """Trace of :func:`point_covariance` (units of σ²; inf if undetermined)."""
+    return float(np.trace(point_covariance(template, v, weights)))
+
+
+def _frame_noise(template: np.ndarray, weights: np.ndarray | None):
+    """Weighted centroid (3,) and inverse inertia (3, 3) of a frame's template."""
+    t = np.asarray(template, dtype=float)
+    w = np.ones(len(t)) if weights is None else np.asarray(weights, dtype=float)
+    ok = np.isfinite(t).all(axis=1) & np.isfinite(w) & (w > 0)
+    if ok.sum() < 3:
+        return None, None
+    t, w = t[ok], w[ok]
+    c = (w[:, None] * t).sum(0) / w.sum()
+    m = t - c
+    inertia = (w * (m * m).sum(1)).sum() * np.eye(3) - np.einsum("k,ki,kj->ij", w, m, m)
+    try:
+        return c, np.linalg.inv(inertia)
+    except np.linalg.LinAlgError:
+        return None, None
+
+
+def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray, *,
+          rot_cov_p=None, rot_cov_c=None, centroid_p=None, centroid_c=None) -> dict:
+    """Symmetrical centre of rotation estimation (SCoRE, Ehrig et al. 2006) and the
+    hinge axis of SARA (Ehrig et al. 2007), in closed form.
+
+    The joint centre is a point fixed in both segments: c_p in the parent's frame
+    and c_c in the child's. Minimise Σ_k |R_pk c_p + t_pk - R_ck c_c - t_ck|², a linear
+    least-squares problem in x = (c_p, c_c): with A_k = [R_pk, -R_ck], b_k = t_ck - t_pk,
+    (Σ A_kᵀ A_k) x = Σ A_kᵀ b_k. For a hinge the normal matrix has a (near) null vector
+    (a_p, a_c): the hinge axis in both frames (SARA); every point of the axis fits.
+
+    Parameters
+    ----------
+    rp, rc : numpy.ndarray, shape (F, 3, 3)
+        Parent and child frames (columns = axes, lab); frames with NaN are skipped.
+    tp, tc : numpy.ndarray, shape (F, 3)
+        Their origins, lab.
+
+    rot_cov_p, rot_cov_c : numpy.ndarray, shape (3, 3), optional, keyword-only
+        Covariance (rad², in the segment's own axes) of each frame's small rotation
+        error, for the noise correction below; with them ``centroid_p/_c`` (3,), the
+        points about which the frames were fitted (their rotation and that point's
+        position are then uncorrelated).
+
+    Noise correction (ours, not in Ehrig et al.): with R̂ = R exp([ε]ₓ), ε ~ (0, Σ),
+    E[R̂] = R (I - K/2), K = tr(Σ) I - Σ, so the normal equations built from noisy
+    frames shrink every rotation by (I - K/2), which biases the centre by O(σ²/θ²)
+    for a range of motion θ. About the centroids (positions independent of the
+    rotation errors) the expected cross term is (I - K_p/2) Σ R_pᵀR_c (I - K_c/2) and
+    the right-hand side's parts are shrunk by (I - K/2): both are un-shrunk here.
+
+    Returns
+    -------
+    dict
+        ``x`` (6,) least-squares solution (the minimum-norm one along the weakest
+        direction), ``null`` (6,) unit eigenvector of the smallest eigenvalue,
+        ``eig`` (6,) eigenvalues ascending, ``s2`` residual variance per coordinate
+        (m²), ``n`` frames used; ``x`` is None when fewer than 10 frames are usable.
+    """
+    ok = (np.isfinite(rp).all(axis=(1, 2)) & np.isfinite(rc).all(axis=(1, 2))
+          & np.isfinite(tp).all(axis=1) & np.isfinite(tc).all(axis=1))
+    n = int(ok.sum())
+    if n < 10:
+        return {"x": None, "n": n}
+    rp, tp, rc, tc = rp[ok], tp[ok], rc[ok], tc[ok]
+    shift = np.zeros(6)
+    dp = dc = np.eye(3)
+    if rot_cov_p is not None and rot_cov_c is not None:
+        tp = tp + np.einsum("fij,j->fi", rp, centroid_p)
+        tc = tc + np.einsum("fij,j->fi", rc, centroid_c)
+        shift = np.concatenate([centroid_p, centroid_c])
+        dp = np.linalg.inv(np.eye(3) - 0.5 * (np.trace(rot_cov_p) * np.eye(3) - rot_cov_p))
+        dc = np.linalg.inv(np.eye(3) - 0.5 * (np.trace(rot_cov_c) * np.eye(3) - rot_cov_c))
+    cross = dp @ np.einsum("fji,fjk->ik", rp, rc) @ dc  # Σ R_pᵀ R_c
+    m = np.zeros((6, 6))
+    m[:3, :3] = n * np.eye(3)
+    m[3:, 3:] = n * np.eye(3)
+    m[:3, 3:] = -cross
+    m[3:, :3] = -cross.T
+    b = tc - tp
+    rhs = np.concatenate([dp @ np.einsum("fji,fj->i", rp, b),
+                          -dc @ np.einsum("fji,fj->i", rc, b)])
+    lam, vec = np.linalg.eigh(m)
+    coef = vec.T @ rhs
+    inv = np.where(lam > 1e-9 * lam[-1], 1.0 / np.maximum(lam, 1e-300), 0.0)
+    x_full = vec @ (coef * inv)
+    x_min = vec[:, 1:] @ (coef[1:] * inv[1:])  # without the weakest direction
+    res = (np.einsum("fij,j->fi", rp, x_full[:3]) + tp
+           - np.einsum("fij,j->fi", rc, x_full[3:]) - tc)
+    s2 = float(np.sum(res ** 2) / max(3 * n - 6, 1))
+    x_full, x_min = x_full + shift, x_min + shift
+    return {"x": x_full, "x_min": x_min, "null": vec[:, 0], "eig": lam, "s2": s2, "n": n}
 
 
 def _to_local(r: np.ndarray, o: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -276,6 +424,7 @@ class _SegFrames:
     r: np.ndarray  # (F, 3, 3)
     o: np.ndarray  # (F, 3)
     template: np.ndarray  # (K, 3)
+    weights: np.ndarray | None = None  # (K,) relative inverse variances, None = all 1
 
     @property
     def valid(self) -> np.ndarray:
@@ -340,12 +489,15 @@ def _weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
     J = σ⁻² Σ_p N_p Cov_p(u) with u the unit directions from the centre (the
     multi-radius version of the bound in :func:`vidcap.mocap.spherefit.crlb`).
     """
-    info = np.zeros((3, 3))
-    for y in sets:
-        u = _unit(y - center)
-        u = u[np.isfinite(u).all(axis=1)]
-        if len(u) > 1:
-            info += len(u) * np.cov(u.T, bias=True)
+    # Σ_p N_p Cov_p(u) = Σ_all u uᵀ - Σ_p N_p ū_p ū_pᵀ, with all markers at once
+    sets = [y for y in sets if len(y) > 1]
+    if not sets:
+        return np.full(3, np.nan), float("inf")
+    lens = np.array([len(y) for y in sets])
+    u = _unit(np.concatenate(sets) - center)
+    u = np.where(np.isfinite(u), u, 0.0)
+    sums = np.add.reduceat(u, np.r_[0, np.cumsum(lens)[:-1]], axis=0)  # (P, 3)
+    info = u.T @ u - np.einsum("pi,pj,p->ij", sums, sums, 1.0 / lens)
     w, v = np.linalg.eigh(info / max(sigma, 1e-12) ** 2)
     std = np.inf if w[0] <= 0 else 1.0 / np.sqrt(w[0])
     return v[:, 0], float(std)
@@ -353,14 +505,22 @@ def _weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
 
 def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_local,
                frames_used: int, *, noise_mm, min_cap_deg, planar_cond, anchor,
-               max_axial_std_mm, hinge_ratio) -> tuple:
-    """Fit one joint centre in the parent's frame; returns (v (3,), axis or None, report)."""
+               max_axial_std_mm, hinge_ratio, frame_cov=None) -> tuple:
+    """Fit one joint centre in the parent's frame; returns (v (3,), axis or None, report).
+
+    ``frame_cov`` (3, 3), in units of σ²: the extra noise the parent's frame adds to a
+    child marker expressed in it (:func:`point_covariance`), added to the marker's
+    own σ² I for UGDK when ``noise_mm`` is given.
+    """
     usable = [y for y in sets if len(y) >= 4]
     note = ""
     fit = None
     if usable:
         try:
-            cov = None if noise_mm is None else (float(noise_mm) * 1e-3) ** 2
+            cov = None
+            if noise_mm is not None:
+                extra = np.zeros((3, 3)) if frame_cov is None else frame_cov
+                cov = (float(noise_mm) * 1e-3) ** 2 * (np.eye(3) + extra)
             fit = mgdk(usable, cov, planar_cond=planar_cond)
         except FitError as exc:
             note = f"fit failed ({exc})"
@@ -426,6 +586,55 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
     return v, (normal if not flagged else None), report
 
 
+def _rigid_residual_var(frames: list[_SegFrames], pts: list[np.ndarray]) -> float:
+    """Per-coordinate marker noise variance (m²) from rigid-fit residuals of K >= 3 points.
+
+    Each frame's least-squares pose uses 6 of its 3K coordinates, so
+    σ̂² = Σ |x - o - R m|² / Σ_frames (3K - 6) (the template's own error neglected).
+    """
+    ss, dof = 0.0, 0
+    for f, x in zip(frames, pts, strict=True):
+        pred = f.o[:, None] + np.einsum("fij,kj->fki", f.r, f.template[: x.shape[1]])
+        res = np.sum((x - pred) ** 2, axis=2)  # (F, K)
+        ok = np.isfinite(res)
+        k = ok.sum(axis=1)
+        use = k >= 3
+        ss += float(res[use][ok[use]].sum())
+        dof += int(np.sum(3 * k[use] - 6))
+    return ss / dof if dof > 0 else 0.0
+
+
+def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float):
+    """The SCoRE/SARA centre in (parent, child) frames and the updated report."""
+    from dataclasses import replace
+
+    lam, null, s2 = sc["eig"], sc["null"], sc["s2"]
+    n_p = float(np.linalg.norm(null[:3]))
+    # standard deviation of the parent-frame centre along the weakest direction
+    std = (float(np.sqrt(s2 / lam[0]) * n_p) if lam[0] > 1e-12 * lam[-1]
+           else float("inf"))
+    hinge = anchor is not None and np.isfinite(anchor).all() and n_p > 0.3 and (
+        rep.kind == "hinge" or std * 1e3 > max_axial_std_mm)
+    if hinge:
+        # SARA: the axis is the null direction; the point on it nearest the parent's
+        # proximal joint (the hinge rule, see solve_joints)
+        x = sc["x_min"]
+        t = float((anchor - x[:3]) @ null[:3]) / n_p ** 2
+        x = x + t * null
+        axis = null[:3] / n_p
+        kind, method = "hinge", "score+sara+axis-rule"
+        note = (f"SARA axis; centre along it (std {std * 1e3:.0f} mm from the fit) placed "
+                f"nearest the {rep.parent_segment} proximal joint")
+    else:
+        x = sc["x"] if lam[0] > 1e-9 * lam[-1] else sc["x_min"]
+        axis = np.asarray(rep.axis, dtype=float) if rep.axis is not None else None
+        kind, method, note = rep.kind, "score", rep.note
+    rep = replace(rep, kind=kind, method=method, note=note, axial_std_mm=std * 1e3,
+                  axis=None if axis is None else [float(a) for a in axis],
+                  center_local_m=[float(a) for a in x[:3]])
+    return x[:3], x[3:], axis, rep
+
+
 # --------------------------------------------------------------------------- solve
 def _lab_up(trial: MarkerData) -> np.ndarray:
     up = getattr(trial, "up", None)
@@ -442,6 +651,8 @@ def solve_joints(
     hinge_rule: bool = True,
     max_axial_std_mm: float = 2.0,
     hinge_ratio: float = 3.0,
+    score_refine: bool = True,
+    noise_correct: bool = True,
 ) -> JointSolution:
     """Joint centres of a marker-set skeleton (seed 000 §2.3-2.6).
 
@@ -475,6 +686,19 @@ def solve_joints(
         within-marker covariance) is below ``hinge_ratio`` times the noise (σ from
         ``noise_mm``, else the RMS radial residual): out-of-plane scatter that noise
         alone explains.
+    score_refine : bool, keyword-only
+        For a child segment with >= 3 markers (frames of its own), replace the MGDK
+        centre by the symmetric two-frame fit (:func:`score`, SCoRE; SARA's axis and
+        the ``hinge_rule`` for hinges), and take each frame's centre as the
+        inverse-variance mean of the parent's and the child's prediction
+        (:func:`point_variance`); the parent's prediction also enters the child's
+        least-squares frame as a weighted point (seed 000 §2.5: a solved centre counts
+        as a point). MGDK's fit still decides the kind, flags and fallbacks.
+    noise_correct : bool, keyword-only
+        Remove the O(σ²) shrinkage bias of SCoRE due to noisy frames (see
+        :func:`score`), with σ from ``noise_mm`` or else estimated from the child's
+        rigid-fit residuals, and the frames' rotation noise predicted from their
+        templates (:func:`point_covariance`).
 
     Returns
     -------
@@ -539,11 +763,43 @@ def solve_joints(
             pf0 = frames[0][s.parent]
             anchor = _nanmedian_rows(
                 _to_local(pf0.r, pf0.o, centres[0][pspec.joint][:, None])[:, 0])
+        # the noise the parent's frame adds to the child's markers in its coordinates
+        # (mean over the markers of the propagated covariance, units of σ²)
+        pf0 = frames[0][s.parent]
+        covs = [point_covariance(pf0.template, y.mean(axis=0), pf0.weights)
+                for y in sets_c if len(y)]
+        frame_cov = np.mean(covs, axis=0) if covs else None
+        if frame_cov is not None and not np.isfinite(frame_cov).all():
+            frame_cov = None
         v, axis, rep = _fit_joint(s, s.parent, sets_c, fallback_local, used,
                                   noise_mm=noise_mm, min_cap_deg=min_cap_deg,
                                   planar_cond=planar_cond, anchor=anchor,
                                   max_axial_std_mm=max_axial_std_mm,
-                                  hinge_ratio=hinge_ratio)
+                                  hinge_ratio=hinge_ratio, frame_cov=frame_cov)
+        # 1b. With >= 3 markers the child has frames of its own: refine symmetrically
+        # (SCoRE / SARA) and combine both segments' predictions of the centre per frame.
+        raw = ([_frames_from_points(markers_of(t, s.markers)) for t in trials]
+               if len(s.markers) >= 3 else None)
+        v_child = None
+        if raw is not None and not rep.flagged and score_refine:
+            # marker noise: a-priori, else from the child's rigid-fit residuals
+            if noise_mm is not None:
+                sig2_m = (float(noise_mm) * 1e-3) ** 2
+            else:
+                sig2_m = _rigid_residual_var(raw, [markers_of(t, s.markers) for t in trials])
+            pf0 = frames[0][s.parent]
+            cen_p, inv_p = _frame_noise(pf0.template, pf0.weights)
+            cen_c, inv_c = _frame_noise(raw[0].template, None)
+            kw = {}
+            if noise_correct and cen_p is not None and cen_c is not None:
+                kw = dict(rot_cov_p=sig2_m * inv_p, rot_cov_c=sig2_m * inv_c,
+                          centroid_p=cen_p, centroid_c=cen_c)
+            sc = score(np.concatenate([frames[ti][s.parent].r for ti in range(len(trials))]),
+                       np.concatenate([frames[ti][s.parent].o for ti in range(len(trials))]),
+                       np.concatenate([f.r for f in raw]), np.concatenate([f.o for f in raw]),
+                       **kw)
+            if sc["x"] is not None:
+                v, v_child, axis, rep = _refine_score(sc, rep, anchor, max_axial_std_mm)
         fitted_v[s.joint] = v
         axes[s.joint] = axis
         reports.append(rep)
@@ -551,10 +807,36 @@ def solve_joints(
         for ti, t in enumerate(trials):
             pf = frames[ti][s.parent]
             c = _to_lab(pf.r, pf.o, v)
-            centres[ti][s.joint] = c
             mk = markers_of(t, s.markers)
+            if v_child is not None:
+                # inverse-variance mean of the parent's and the child's prediction; the
+                # parent's prediction is also a weighted point of the child's frame
+                var_p = point_variance(pf.template, v, pf.weights)
+                cf = raw[ti]
+                var_c = point_variance(cf.template, v_child)
+                # the parent's prediction as a point of the child's frame, weighted by
+                # its variance relative to a marker's; the variance is scaled to the
+                # observed parent/child mismatch (3 s² = σ²(var_p + var_c)), so a joint
+                # that is not a fixed point (a spine standing for several joints)
+                # counts for little
+                sig2_eff = max(3.0 * sc["s2"] / (var_p + var_c), sig2_m)
+                w_pt = 3.0 * sig2_m / max(sig2_eff * var_p, 1e-300) if sig2_m > 0 else 0.0
+                cc = _to_lab(cf.r, cf.o, v_child)
+                wp = np.where(np.isfinite(c).all(1), 1.0 / var_p, 0.0)[:, None]
+                wc = np.where(np.isfinite(cc).all(1), 1.0 / var_c, 0.0)[:, None]
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    both = (np.where(wp > 0, c, 0.0) * wp + np.where(wc > 0, cc, 0.0) * wc) \
+                        / (wp + wc)
+                centres[ti][s.joint] = np.where(wp + wc > 0, both, np.nan)
+                tmpl = np.concatenate([cf.template, v_child[None]])
+                wts = np.concatenate([np.ones(len(cf.template)), [w_pt]])
+                pts = np.concatenate([mk, c[:, None]], axis=1)
+                r2, o2 = kabsch(tmpl, pts, wts)
+                frames[ti][s.name] = _SegFrames(r2, o2, tmpl, wts)
+                continue
+            centres[ti][s.joint] = c
             if len(s.markers) >= 3:
-                frames[ti][s.name] = _frames_from_points(mk)
+                frames[ti][s.name] = raw[ti]
             elif len(s.markers) == 2:
                 frames[ti][s.name] = _frames_from_points(np.concatenate([mk, c[:, None]], 1))
             else:
