@@ -642,6 +642,7 @@ def ugdk(
     planar_cond: float = PLANAR_COND,
     still_tol: float | None = None,
     errors: str = "raise",
+    refine: int = 0,
 ) -> SphereFit:
     """Unbiased GDK: the GDKE with C' = C - Σ̂ (seed 001 Eq. 15-21).
 
@@ -664,6 +665,16 @@ def ugdk(
         N = 10 when σ/r ≥ 5 %); the default 3 leaves N ≥ 100 unchanged.
     planar_cond, still_tol, errors
         As for :func:`gdke`; the condition number is that of the corrected C'.
+    refine : int, keyword-only
+        Number of Gauss-Newton steps on the geometric residuals |x - c| - r taken from
+        the closed-form fit (not in the seed; default 0 = the plain UGDK).  Each step is
+        one more pass over the points and one (D+1)x(D+1) Cholesky solve per set, no
+        iteration or tolerance.  The closed-form fit has the bound's first-order
+        variance but an algebraic fit's second-order excess (measured 1.12x the CRLB at
+        σ/r = 5 %, 60° cap, N = 100); one step removes it (≈ 1.01x, like the
+        Levenberg-Marquardt :func:`mle`).  Applied to spheres only: circles and
+        still fits are returned unrefined.  Not available from
+        :class:`IncrementalGDK`, which keeps no points.
 
     Returns
     -------
@@ -671,10 +682,43 @@ def ugdk(
     """
     mom = _moments(points)
     noise = _noise_matrix(noise_cov, mom.mean.shape[-1])
-    return _fit_from_moments(
+    fit = _fit_from_moments(
         mom, noise, planar_cond=planar_cond, still_tol=still_tol, errors=errors,
         noise_floor=noise_floor,
     )
+    for _ in range(int(refine)):
+        fit = _gauss_newton_step(np.asarray(points, dtype=float), fit)
+    return fit
+
+
+def _gauss_newton_step(x: np.ndarray, fit: SphereFit) -> SphereFit:
+    """One Gauss-Newton step of the geometric fit min Σ (|x - c| - r)² from ``fit`` (spheres).
+
+    With u_i = (x_i - c)/|x_i - c| and residuals e_i = |x_i - c| - r, the Jacobian of
+    e with respect to (c, r) is -[u_i, 1], so the step is
+    (δc, δr) = (Σ a_i a_iᵀ)⁻¹ Σ a_i e_i with a_i = [u_i; 1] (NaN rows contribute nothing).
+    """
+    d = x.shape[-1]
+    sphere = np.asarray(fit.kind) == "sphere"
+    c = np.where(sphere[..., None], fit.center, 0.0)
+    r = np.where(sphere, fit.radius, 0.0)
+    y = x - c[..., None, :]
+    dist = np.sqrt(np.einsum("...ni,...ni->...n", y, y))
+    ok = np.isfinite(dist) & (dist > 0) & sphere[..., None]
+    a = np.ones(dist.shape + (d + 1,))
+    np.divide(y, np.where(ok, dist, 1.0)[..., None], out=a[..., :d])
+    a = np.where(ok[..., None], a, 0.0)
+    e = np.where(ok, dist - r[..., None], 0.0)
+    lhs = np.einsum("...ni,...nj->...ij", a, a)
+    rhs = np.einsum("...ni,...n->...i", a, e)
+    lhs = np.where(sphere[..., None, None], lhs, np.eye(d + 1))  # placeholders, ignored
+    step = _cholesky_solve(lhs.reshape(-1, d + 1, d + 1), rhs.reshape(-1, d + 1))
+    step = np.where(sphere.reshape(-1, 1), step, 0.0).reshape(rhs.shape)
+    center = np.where(sphere[..., None], fit.center + step[..., :d], fit.center)
+    radius = np.where(sphere, np.asarray(fit.radius) + step[..., d], fit.radius)
+    if np.ndim(sphere) == 0:
+        radius = float(radius)
+    return SphereFit(center, radius, fit.kind, fit.normal, fit.condition, fit.n, fit.dropped)
 
 
 def _radial_residuals(x: np.ndarray, fit: SphereFit) -> np.ndarray:
