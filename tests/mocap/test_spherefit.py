@@ -135,6 +135,52 @@ def test_chunked_path_matches_batched_path():
     np.testing.assert_allclose(c.center, d.center, rtol=1e-12)
 
 
+def test_compiled_kernels_match_numpy_paths(monkeypatch):
+    """The numba D = 3 kernels (single one-pass and stacks) equal the pure-numpy paths."""
+    assert sf._kernels() is not None  # numba is a dependency: the fast path must be live
+    rng = np.random.default_rng(81)
+    big = cap(rng, 5 * sf._CHUNK_ROWS + 17, np.radians(50), 0.3, (2e3, -1e3, 5e2))
+    big += rng.normal(scale=0.003, size=big.shape)
+    big[[0, 4000, 40000]] = np.nan  # first row is the provisional centre of both paths
+    stack = cap(rng, 60 * 80, np.radians(100)).reshape(60, 80, 3) + rng.normal(size=(60, 1, 3))
+    stack[7, [0, 11]] = np.nan
+    stack[9, 3:] = np.nan  # too few rows left: NaN fit with errors='nan'
+    fast = gdke(big), gdke(stack, errors="nan")
+    monkeypatch.setattr(sf, "_kernels", lambda: None)
+    slow = gdke(big), gdke(stack, errors="nan")
+    for a, b in zip(fast, slow, strict=True):
+        np.testing.assert_allclose(a.center, b.center, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(a.radius, b.radius, rtol=1e-9)
+        np.testing.assert_array_equal(a.kind, b.kind)
+        np.testing.assert_array_equal(a.n, b.n)
+        np.testing.assert_array_equal(a.dropped, b.dropped)
+    assert fast[0].dropped == 3 and fast[1].kind[9] == "still"
+
+
+def test_closed_form_eigenvalues_match_lapack():
+    rng = np.random.default_rng(82)
+    a = rng.normal(size=(500, 3, 3))
+    mats = [a @ np.swapaxes(a, -1, -2)]  # generic SPD
+    u = np.linalg.qr(rng.normal(size=(200, 3, 3)))[0]
+    # (eigenvalues, tolerance / |A|): isolated eigenvalues to rounding, a repeated pair to
+    # ~sqrt(eps) (documented in _eigvalsh3), in which case the isolated one stays exact
+    cases = [([1.0, 1.0, 1.0], 1e-12), ([0.0, 0.0, 2.0], 1e-7), ([0.0, 1.0, 1.0], 1e-7),
+             ([1e-9, 0.5, 1.0], 1e-12), ([0.0, 0.0, 0.0], 0.0), ([1e-4, 0.3, 0.31], 1e-12)]
+    tols = [1e-12]
+    for w, tol in cases:
+        mats.append(np.einsum("kij,j,klj->kil", u, np.asarray(w), u))
+        tols.append(tol)
+    for m, tol in zip(mats, tols, strict=True):
+        m = 0.5 * (m + np.swapaxes(m, -1, -2))
+        ref = np.linalg.eigvalsh(m)
+        got = sf._eigvalsh3(m)
+        scale = np.abs(ref).max(axis=-1, keepdims=True) + 1e-300
+        assert np.all(np.abs(got - ref) <= max(tol, 1e-12) * scale)
+        assert np.all(np.diff(got, axis=-1) >= 0)
+    circ = sf._eigvalsh3(mats[3])  # circle-like: the isolated smallest is exact
+    assert np.all(np.abs(circ[:, 0] - np.linalg.eigvalsh(mats[3])[:, 0]) <= 1e-14)
+
+
 # ------------------------------------------------------------------ stacks, NaN, errors
 def test_stack_equals_loop():
     rng = np.random.default_rng(4)
@@ -222,6 +268,38 @@ def test_ugdk_removes_gdke_bias_on_a_cap():
     u_err = np.linalg.norm(u, axis=1)
     assert np.mean(g_err) > 5 * bound  # biased far beyond the bound
     assert np.sqrt(np.mean(u_err**2)) < 1.5 * bound  # near the bound (40 trials: ±11 %)
+
+
+def test_ugdk_refine_steps_to_the_geometric_fit():
+    rng = np.random.default_rng(14)
+    # σ/r = 10 %, 60° cap, N = 100: the closed form is ~1.4x the bound, one step ~1.1x
+    sigma, trials, n = 0.1, 300, 100
+    pts = cap(rng, trials * n, np.radians(60)).reshape(trials, n, 3)
+    pts += rng.normal(scale=sigma, size=pts.shape)
+    plain = np.linalg.norm(ugdk(pts, sigma**2).center, axis=-1)
+    one = np.linalg.norm(ugdk(pts, sigma**2, refine=1).center, axis=-1)
+    # RMS ratio ~0.79 measured; 300 trials give a few % Monte Carlo error on each RMS
+    assert np.sqrt(np.mean(one**2)) < 0.9 * np.sqrt(np.mean(plain**2))
+    # iterated steps converge to the Levenberg-Marquardt fit, NaN rows ignored
+    few = pts[:4].copy()
+    few[1, [0, 3]] = np.nan
+    fit = ugdk(few, sigma**2, refine=8)
+    for k in range(4):
+        x = few[k][~np.isnan(few[k]).any(axis=1)]
+        ref = mle(x)  # stops at scipy's ftol, so compare the geometric cost, not 1e-9 digits
+
+        def cost(c, r, x=x):
+            return np.sum((np.linalg.norm(x - c, axis=1) - r) ** 2)
+
+        assert cost(fit.center[k], fit.radius[k]) <= cost(ref.center, ref.radius) * (1 + 1e-9)
+        assert np.linalg.norm(fit.center[k] - ref.center) < 1e-4
+    assert list(fit.n) == [100, 98, 100, 100]
+    # circles (hinges) are returned unrefined
+    t = rng.uniform(0, 2 * np.pi, 80)
+    hinge = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], axis=1) + [0.5, 0.0, 1.0]
+    a, b = ugdk(hinge, 1e-8), ugdk(hinge, 1e-8, refine=1)
+    assert b.kind == "circle"
+    np.testing.assert_array_equal(a.center, b.center)
 
 
 def test_ugdk_accepts_matrix_noise():
