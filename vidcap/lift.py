@@ -297,7 +297,7 @@ def lift(
     vec[..., 1] *= -1.0
     proj = np.linalg.norm(vec, axis=-1)
     ratio = proj / lengths
-    clamped = ratio > 1.0
+    clamped = ratio > 1.0 + 1e-9
     shrink = np.where(clamped, 1.0 / np.maximum(ratio, 1e-12), 1.0)
     vec = vec * shrink[..., None]
     dz = np.sqrt(np.clip(lengths**2 - (proj * shrink) ** 2, 0.0, None)) * sg
