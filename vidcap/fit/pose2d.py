@@ -506,17 +506,20 @@ class _Fitter:
         self.fore[uppers] = np.clip(np.hypot(*vec.T) / self.L[uppers], 1e-3, 1.0)
         return res
 
-    def search_root(self, axis, half_range):
+    def search_root(self, axis, half_range, *, rows=None):
         """Shift the whole model by whole pixels along x (axis 0) or y (axis 1).
 
         Beyond the seed (which fixes the torso from ratios and the silhouette's
         middle). All shifts in ``[-half_range, half_range]`` are scored in one batch
         as a 1-D cross-correlation of the drawn model with the silhouette.
         """
-        self.drawn[:] = True
         n = max(1, int(round(half_range)))
         model = self.model()
-        sil = self.sil if axis == 0 else self.sil.T
+        sil = self.sil
+        if rows is not None:
+            r0, r1 = max(0, int(rows[0])), min(self.h, int(rows[1]))
+            sil, model = sil[r0:r1], model[r0:r1]
+        sil = sil if axis == 0 else sil.T
         mod = model if axis == 0 else model.T
         padded = np.pad(sil, ((0, 0), (n, n)))
         windows = np.lib.stride_tricks.sliding_window_view(padded, sil.shape[1], axis=1)
@@ -551,12 +554,49 @@ class _Fitter:
 
     def fit_torso_head(self, *, warm=False):
         top_rows = (0, self.root[1] + 1)
-        kw = dict(start=self.angles[S["torso"]], interval=np.deg2rad(20)) if warm else {}
-        self.angles[S["head"]] = self.angles[S["torso"]] if not warm else self.angles[S["head"]]
-        self.search_angle(S["torso"], with_segments=(S["head"],), rows=top_rows, **kw)
+        if warm:
+            self.search_torso_about_neck(start=self.angles[S["torso"]],
+                                         interval=np.deg2rad(20), rows=top_rows)
+            neck_y = self.joints()[J["neck"], 1]
+            self.search_angle(S["head"], rows=(0, neck_y + self.R[S["torso"]]),
+                              start=self.angles[S["head"]], interval=np.deg2rad(30))
+            return
+        # The seed: torso with the head attached (Alg. 1) about the pelvis, then the head.
+        self.angles[S["head"]] = self.angles[S["torso"]]
+        self.search_angle(S["torso"], with_segments=(S["head"],), rows=top_rows)
         neck_y = self.joints()[J["neck"], 1]
-        kw = dict(start=self.angles[S["head"]], interval=np.deg2rad(30)) if warm else {}
-        self.search_angle(S["head"], rows=(0, neck_y + self.R[S["torso"]]), **kw)
+        head_rows = (0, neck_y + self.R[S["torso"]])
+        self.search_angle(S["head"], rows=head_rows)
+        # Beyond the seed: the silhouette's middle is pulled by arms and legs, the head
+        # is not. Line the head up with the silhouette (shift the whole model), then
+        # turn the torso about the neck so a leaning torso under an upright head is
+        # found, and look at the head again.
+        self.search_root(0, 0.1 * self.H, rows=(0, neck_y))
+        self.search_torso_about_neck(start=self.angles[S["torso"]], interval=np.deg2rad(40),
+                                     rows=top_rows)
+        self.search_angle(S["head"], rows=head_rows, start=self.angles[S["head"]],
+                          interval=np.deg2rad(20))
+
+    def search_torso_about_neck(self, *, start, interval, rows=None):
+        """Algorithm 1 on the torso angle with the neck held still (beyond the seed)."""
+        seg = S["torso"]
+        self.drawn[seg] = True
+        lo, hi = _LIMITS["torso"]
+        neck = self.joints()[J["neck"]].copy()
+        length = self.L[seg] * self.fore[seg]
+        moving = [d for d in range(10) if self.drawn[d]]
+
+        def make(v, root, ang, fore, spread):
+            ang[:, seg] = v
+            return neck - direction(v) * length, ang, fore, spread
+
+        res = interval_search(self.scorer(self._general_ends(make, moving), moving, rows),
+                              lo, hi, divisions=8, min_step=_ONE_DEGREE, start=start,
+                              interval=interval)
+        self.angles[seg] = res.value
+        self.root = neck - direction(res.value) * length
+        self.scores[seg], self.margins[seg] = res.score, res.margin
+        return res
 
     def contour_arms(self):
         """Algorithms 2-4 on the silhouette left beside the torso and head."""
@@ -564,6 +604,11 @@ class _Fitter:
         body = self.model([S["torso"], S["head"]])
         body = cv2.dilate(body.view(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
         rest = self.sil & ~body
+        # Slivers along the torso's edges (the model is not the silhouette's exact
+        # shape) are not arms: keep only parts at least ~an arm's width across.
+        k = max(2, int(round(1.5 * self.R[S["l_upper_arm"]])))
+        rest = cv2.morphologyEx(rest.view(np.uint8), cv2.MORPH_OPEN,
+                                cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))).astype(bool)
         j = self.joints()
         rest[int(j[J["pelvis"], 1] + 0.5 * self.R[S["torso"]]) :] = False
         ys, xs = np.nonzero(rest)
@@ -588,8 +633,9 @@ class _Fitter:
 
     def contour_lower_legs(self):
         """Algorithm 2 on the lower legs, Algorithm 5 for crossing; returns crossed."""
+        # From the knees (Table 3.1 height above the lowest silhouette row) down.
         bottom = self.norm.bottom
-        top = bottom - 0.8 * self.L[S["l_lower_leg"]]
+        top = bottom - self.L[S["l_lower_leg"]] - (self.R[S["l_lower_leg"]] if self.caps else 0)
         left, right, merged = leg_curves(self.sil, int(round(top)), bottom,
                                          self.R[S["l_lower_leg"]])
 
@@ -634,6 +680,13 @@ class _Fitter:
         self.scores, self.margins = st[4].copy(), st[5].copy()
 
 
+def _knee_bend(f: _Fitter) -> float:
+    """Sum of the image-plane knee bends (radians) of the current pose."""
+    d = f.angles[[S["l_lower_leg"], S["r_lower_leg"]]] - f.angles[[S["l_upper_leg"],
+                                                                   S["r_upper_leg"]]]
+    return float(np.abs(np.angle(np.exp(1j * d))).sum())
+
+
 def _swap_lower_legs(f: _Fitter):
     a, b = S["l_lower_leg"], S["r_lower_leg"]
     f.angles[[a, b]] = f.angles[[b, a]]
@@ -641,7 +694,7 @@ def _swap_lower_legs(f: _Fitter):
 
 def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
                    refine: bool = True, spread: bool = True, verify_crossing: bool = True,
-                   caps: bool = True, warm_threshold: float = 0.55):
+                   caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01):
     """Fit the model to a normalised silhouette; see :func:`fit_pose`.
 
     Returns
@@ -662,6 +715,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         f.drawn[:] = True
         warm = f.similarity() >= warm_threshold
     if warm:
+        f.drawn[:] = True
         f.search_root(0, 0.1 * f.H)
         f.fit_torso_head(warm=True)
         f.fit_upper_legs(warm=True, passes=1)
@@ -679,26 +733,40 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         if crossed:
             _swap_lower_legs(f)  # Algorithm 2: swap the lower legs when crossed
         f.drawn[:] = True
-        f.fit_upper_legs()
-        if crossed and verify_crossing:
-            # Beyond the seed: keep the swap only if it covers the silhouette better.
-            kept, s_kept = f.state(), f.similarity()
-            _swap_lower_legs(f)
+
+        def legs_and_spread():
             f.fit_upper_legs()
-            if f.similarity() < s_kept:
+            if spread:
+                f.search_spread()
+                f.fit_upper_legs(warm=True, passes=1)
+            return f.similarity()
+
+        s_kept = legs_and_spread()
+        if crossed and verify_crossing:
+            # Beyond the seed: keep the swap only if it covers the silhouette better
+            # than the unswapped legs (Algorithm 5 also fires on some bent knees).
+            # An X at the knees looks the same as two legs bent toward each other, so
+            # near-ties go to the straighter legs (smaller image-plane knee bends).
+            kept = f.state()
+            bend_kept = _knee_bend(f)
+            _swap_lower_legs(f)
+            f.spread = kept[3] if not spread else 0.5
+            s_other = legs_and_spread()
+            if s_other < s_kept - tie or (s_other <= s_kept + tie and _knee_bend(f) >= bend_kept):
                 f.set_state(kept)
         if refine:
+            f.drawn[:] = True
             f.search_root(0, 0.05 * f.H)
             f.refine_limbs()
-        if spread:
-            f.search_spread()
+            if spread:
+                f.search_spread(start=f.spread, interval=0.4)
         f.fit_foreshortening()
     return f, crossed, warm
 
 
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
-             caps: bool = True, warm_threshold: float = 0.55) -> FramePose:
+             caps: bool = False, warm_threshold: float = 0.55) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
