@@ -92,6 +92,9 @@ TWO_PI = 2 * np.pi
 _LIMITS = {k: np.deg2rad(v) for k, v in IMAGE_ANGLE_LIMITS_DEG.items()}
 _ONE_DEGREE = np.deg2rad(1.0)
 _THIRTY_DEGREES = np.deg2rad(30.0)
+#: Largest image-plane bend at an elbow or knee (the 150 degree flexion limit of
+#: vidcap.body.FLEXION_LIMITS_DEG): a lower limb does not fold back over its parent.
+_MAX_BEND = np.deg2rad(150.0)
 _REST_DEG = np.array([90, 90, 270, 270, 270, 270, 270, 270, 270, 270], dtype=float)
 
 
@@ -453,11 +456,29 @@ class _Fitter:
         self.margins[together] = res.margin
         return res
 
-    def search_fore(self, seg, *, start=None, interval=None, divisions=5):
-        """Algorithm 6 on segment ``seg`` (its descendants move with its end)."""
+    def search_fore(self, seg, *, start=None, interval=None, divisions=5, unit=False):
+        """Algorithm 6 on segment ``seg`` (its descendants move with its end).
+
+        ``unit``: scale the segment and its child limb segment together (a whole
+        limb's foreshortening, beyond the seed).
+        """
         self.drawn[seg] = True
         moving = [d for d in DESCENDANTS[seg] if self.drawn[d]]
         length = max(self.L[seg], 1.0)
+        if unit:
+            together = list(DESCENDANTS[seg])
+            base = self.fore[together].copy()
+            length = max(float((self.L[together] * base).sum()), 1.0)
+
+            def make(v, root, ang, fore, spread):
+                fore[:, together] = np.minimum(v[:, None] * base, 1.0)
+                return root, ang, fore, spread
+
+            ends = self._general_ends(make, moving)
+            res = interval_search(self.scorer(ends, moving), 1.0 / length, 1.0,
+                                  divisions=divisions, min_step=1.0 / length, prefer=1.0)
+            self.fore[together] = np.minimum(res.value * base, 1.0)
+            return res
         if seg >= 2:
             u = direction(self.angles[seg]) * self.L[seg]
             ends = self._limb_ends(seg, moving, lambda v: v[:, None] * u)
@@ -610,13 +631,15 @@ class _Fitter:
         rest = cv2.morphologyEx(rest.view(np.uint8), cv2.MORPH_OPEN,
                                 cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))).astype(bool)
         j = self.joints()
-        rest[int(j[J["pelvis"], 1] + 0.5 * self.R[S["torso"]]) :] = False
+        rest[max(int(j[J["pelvis"], 1]), 0) :] = False  # below the pelvis: legs
         ys, xs = np.nonzero(rest)
         axis = j[J["neck"]] - j[J["pelvis"]]
         side = axis[0] * (ys - j[J["pelvis"], 1]) - axis[1] * (xs - j[J["pelvis"], 0])
         # side < 0: image-left of an upward torso axis (cross product, y down).
         min_pixels = max(4.0, (2 * self.R[S["l_upper_arm"]]) ** 2)
-        min_dist = max(2, int(round(0.025 * self.H)))
+        # Algorithm 4's minimumCornerDistance is 4 points in the seed; we also ask for
+        # a third of an upper arm, so a handful of noisy points is not a segment.
+        min_dist = max(4, int(round(0.33 * self.L[S["l_upper_arm"]])))
         for s, sel in (("l", side < 0), ("r", side > 0)):
             up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
             hang = np.mod(self.angles[S["torso"]] + np.pi, TWO_PI)
@@ -664,11 +687,42 @@ class _Fitter:
             kw = dict(start=self.fore[seg], interval=0.4) if warm else {}
             self.search_fore(seg, **kw)
 
-    def refine_limbs(self, half_width=_THIRTY_DEGREES):
+    def refine_limbs(self, half_width=_THIRTY_DEGREES, *, whole_arms=False):
+        """Algorithm 1 again on every limb segment against the whole silhouette.
+
+        ``whole_arms``: first search each whole arm (lower arm rigidly attached) within
+        90 degrees of the contour estimate (ties stay there), and its length, to undo
+        a contour curve that went astray (beyond the seed, which avoids Algorithm 1 on
+        the arms for fear of occlusion; the contour estimate is the tie-breaker).
+        """
+        if whole_arms:
+            for s in ("l", "r"):
+                up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+                self.angles[lo] = self.angles[up]  # a straight arm first
+                self.fore[[up, lo]] = 1.0
+                self.search_angle(up, with_segments=(lo,), start=self.angles[up],
+                                  interval=np.pi)
+                self.search_fore(up, unit=True)
         for seg_name in ("upper_leg", "lower_leg", "upper_arm", "lower_arm"):
             for s in ("l", "r"):
                 seg = S[f"{s}_{seg_name}"]
-                self.search_angle(seg, start=self.angles[seg], interval=2 * half_width)
+                lo = hi = None
+                if seg_name.startswith("lower"):
+                    # the projected elbow/knee bend stays within the flexion limit
+                    parent = S[f"{s}_upper_{seg_name.split('_')[1]}"]
+                    lo = self.angles[parent] - _MAX_BEND
+                    hi = self.angles[parent] + _MAX_BEND
+                    if seg_name == "lower_leg":
+                        lim = _LIMITS["l_lower_leg"]
+                        lo, hi = max(lo, lim[0]), min(hi, lim[1])
+                        if hi <= lo:
+                            lo, hi = lim
+                start = self.angles[seg]
+                if lo is not None:
+                    start = lo + np.mod(start - lo, TWO_PI)
+                    start = start if start <= hi else (lo if start - hi > TWO_PI - start + lo
+                                                       else hi)
+                self.search_angle(seg, start=start, interval=2 * half_width, lo=lo, hi=hi)
 
     def state(self):
         return (self.root.copy(), self.angles.copy(), self.fore.copy(), self.spread,
@@ -757,10 +811,12 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         if refine:
             f.drawn[:] = True
             f.search_root(0, 0.05 * f.H)
-            f.refine_limbs()
+            f.refine_limbs(whole_arms=True)
+            # the torso once more with every limb drawn (the arms no longer pull it)
+            f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(16))
             if spread:
                 f.search_spread(start=f.spread, interval=0.4)
-        f.fit_foreshortening()
+        f.fit_foreshortening(warm=refine)
     return f, crossed, warm
 
 

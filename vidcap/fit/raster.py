@@ -325,8 +325,9 @@ def segment_spans(p0, p1, radii, rows, *, caps: bool = True):
     cx = 0.5 * (p0[..., 0, None] + p1[..., 0, None])
     dyc = y - 0.5 * (p0[..., 1, None] + p1[..., 1, None])  # (B, K, R)
     # With X = x - cx: along = X ux + dyc uy in [-L/2, L/2], across = X uy - dyc ux in [-r, r].
-    half_a = np.abs(0.5 * norm / ux)
-    half_c = np.abs(r / uy)
+    # (1e-7 px of slack so pixel centres exactly on an edge count, as in a <= test)
+    half_a = np.abs((0.5 * norm + 1e-7) / ux)
+    half_c = np.abs((r + 1e-7) / uy)
     mid_a = cx - dyc * (uy / ux)
     mid_c = cx + dyc * (ux / uy)
     left = np.maximum(mid_a - half_a, mid_c - half_c)
