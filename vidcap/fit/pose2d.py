@@ -83,7 +83,7 @@ from vidcap.fit.raster import (
     pose_joints,
     segment_spans,
 )
-from vidcap.fit.search import interval_search
+from vidcap.fit.search import interval_search, interval_search_many
 from vidcap.fit.similarity import similarity_from_counts
 
 S = {name: i for i, name in enumerate(SEGMENT_NAMES)}
@@ -262,6 +262,7 @@ class _Fitter:
         self.batches = 0
         self._cache: dict = {}
         self._joints = None
+        self._all_masks = None
 
     # -- pose --------------------------------------------------------------------
     def joints(self) -> np.ndarray:
@@ -290,6 +291,15 @@ class _Fitter:
         return float(similarity_from_counts(a, np.count_nonzero(m), np.count_nonzero(m & self.sil)))
 
     # -- scoring -----------------------------------------------------------------
+    def _all_segment_masks(self, joints: np.ndarray) -> np.ndarray:
+        """Masks of all ten segments at their current places, (10, h, w), one call."""
+        key = joints.tobytes()
+        if self._all_masks is None or self._all_masks[0] != key:
+            m = draw_segments(joints[_PROX][:, None], joints[_DIST][:, None],
+                              self.R[:, None], (self.h, self.w), caps=self.caps)
+            self._all_masks = (key, m)
+        return self._all_masks[1]
+
     def _segment_mask(self, seg: int, joints: np.ndarray) -> np.ndarray:
         """Mask of one segment at its current place (cached until it moves)."""
         p0, p1 = joints[_PROX[seg]], joints[_DIST[seg]]
@@ -496,6 +506,108 @@ class _Fitter:
         self.margins[seg] = res.margin
         return res
 
+    def search_group(self, segs, *, kind="angle", start=None, interval=None, lo=None, hi=None,
+                     divisions=8, min_step=_ONE_DEGREE, prefer=None):
+        """Search one parameter of several limb segments at once (beyond the seed).
+
+        The searches run in lockstep (:func:`interval_search_many`): every
+        iteration scores all segments' candidates in one batch, each against the
+        model without that segment (and its child), counted from row spans. Each
+        segment's search is Algorithm 1 (``kind='angle'``) or Algorithm 6
+        (``kind='fore'``) exactly as alone; only the order differs (each sees the
+        others as they were when the group started).
+
+        Parameters
+        ----------
+        segs : sequence of int
+            Segments other than the torso (a segment moves itself and, for an upper
+            limb, its lower limb).
+        """
+        segs = np.asarray(segs, dtype=int)
+        n = len(segs)
+        self.drawn[:] = True
+        j = self.joints()
+        child = np.array([DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else s for s in segs])
+        pair = np.stack([segs, child], 1)  # (N, 2); a leaf is paired with itself
+        masks = self._all_segment_masks(j)  # (10, h, w)
+        # one base per segment searched: the model without that segment (and child)
+        keep = np.ones((n, 10), dtype=bool)
+        keep[np.arange(n)[:, None], pair] = False
+        base = (keep[:, :, None, None] & masks[None]).any(axis=1)  # (N, h, w)
+        sil = self.sil
+        add = np.zeros((n, self.h, self.w + 1), dtype=np.int32)
+        hit = np.zeros((n, self.h, self.w + 1), dtype=np.int32)
+        np.cumsum(~base, axis=2, out=add[:, :, 1:])
+        np.cumsum(sil & ~base, axis=2, out=hit[:, :, 1:])
+        m_base = np.count_nonzero(base, axis=(1, 2))
+        i_base = np.count_nonzero(base & sil, axis=(1, 2))
+        a = int(self.sil_rows[-1])
+        own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
+        ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
+        is_leaf = (child == segs)[:, None, None]
+        radii = np.repeat(self.R[pair], 1, axis=0)  # (N, 2)
+        length = self.L[segs]
+        if kind == "angle":
+            def vec(v):
+                return direction(v) * (length * self.fore[segs])[:, None, None]
+        else:
+            unit = direction(self.angles[segs]) * length[:, None]
+
+            def vec(v):
+                return v[..., None] * unit[:, None, :]
+        pad = float(self.R.max()) + 1.0
+        q_idx = np.arange(n)[:, None, None, None]
+
+        def score(values):  # values (N, B)
+            self.batches += 1
+            B = values.shape[1]
+            end = own0[:, None] + vec(values)  # (N, B, 2)
+            delta = end - own1[:, None]
+            p0 = np.stack([np.broadcast_to(own0[:, None], end.shape),
+                           np.where(is_leaf, own0[:, None], ch0[:, None] + delta)], 2)
+            p1 = np.stack([end, np.where(is_leaf, end, ch1[:, None] + delta)], 2)
+            y0 = max(int(min(p0[..., 1].min(), p1[..., 1].min()) - pad), 0)
+            y1 = min(int(max(p0[..., 1].max(), p1[..., 1].max()) + pad) + 2, self.h)
+            rows = np.arange(y0, y1)
+            first, last = segment_spans(p0.reshape(n * B, 2, 2), p1.reshape(n * B, 2, 2),
+                                        np.repeat(radii, B, axis=0), rows, caps=self.caps)
+            first = np.clip(first, 0, self.w).reshape(n, B, 2, -1)
+            last = np.clip(last + 1, 0, self.w).reshape(n, B, 2, -1)
+            last = np.maximum(last, first)
+            lo_i = np.maximum(first[:, :, 0], first[:, :, 1])
+            hi_i = np.maximum(np.minimum(last[:, :, 0], last[:, :, 1]), lo_i)
+            first = np.concatenate([first, lo_i[:, :, None]], axis=2)
+            last = np.concatenate([last, hi_i[:, :, None]], axis=2)
+            sign = np.array([1, 1, -1])[None, None, :, None]
+            rr = rows[None, None, None, :]
+            dm = ((add[q_idx, rr, last] - add[q_idx, rr, first]) * sign).sum(axis=(2, 3))
+            di = ((hit[q_idx, rr, last] - hit[q_idx, rr, first]) * sign).sum(axis=(2, 3))
+            return similarity_from_counts(a, m_base[:, None] + dm, i_base[:, None] + di)
+
+        if kind == "angle":
+            lo_a = np.array([_LIMITS[SEGMENT_NAMES[s]][0] for s in segs]) if lo is None else lo
+            hi_a = np.array([_LIMITS[SEGMENT_NAMES[s]][1] for s in segs]) if hi is None else hi
+            st = np.array(self.angles[segs] if start is None else start, dtype=float)
+            full = hi_a - lo_a >= TWO_PI - 1e-9
+            # a full circle is searched as the circle centred on the start (no wrap);
+            # a limited range with the start unwrapped into it
+            st = np.where(full, st, lo_a + np.mod(st - lo_a + np.pi, TWO_PI) - np.pi)
+            lo_a = np.where(full, st - np.pi, lo_a)
+            hi_a = np.where(full, st + np.pi, hi_a)
+            value, best, runner, _ = interval_search_many(
+                score, lo_a, hi_a, divisions=divisions, min_step=min_step, start=st,
+                interval=interval, prefer=prefer)
+            self.angles[segs] = np.mod(value, TWO_PI)
+        else:
+            step = 1.0 / np.maximum(length, 1.0)
+            value, best, runner, _ = interval_search_many(
+                score, step, np.ones(n), divisions=divisions, min_step=float(step.min()),
+                start=self.fore[segs] if start is None else start, interval=interval,
+                prefer=1.0)
+            self.fore[segs] = value
+        self.scores[segs] = best
+        self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)
+
     def search_spread(self, *, start=None, interval=None):
         """Lateral spread of shoulders and hips in [0, 1] (beyond the seed).
 
@@ -598,14 +710,18 @@ class _Fitter:
         self.search_angle(S["head"], rows=head_rows, start=self.angles[S["head"]],
                           interval=np.deg2rad(20))
 
-    def search_torso_about_neck(self, *, start, interval, rows=None):
-        """Algorithm 1 on the torso angle with the neck held still (beyond the seed)."""
+    def search_torso_about_neck(self, *, start, interval, rows=None, alone=False):
+        """Algorithm 1 on the torso angle with the neck held still (beyond the seed).
+
+        ``alone``: score the torso's candidates with the limbs left where they are
+        (they re-attach afterwards); a cheaper approximation for small, warm steps.
+        """
         seg = S["torso"]
         self.drawn[seg] = True
         lo, hi = _LIMITS["torso"]
         neck = self.joints()[J["neck"]].copy()
         length = self.L[seg] * self.fore[seg]
-        moving = [d for d in range(10) if self.drawn[d]]
+        moving = [seg] if alone else [d for d in range(10) if self.drawn[d]]
 
         def make(v, root, ang, fore, spread):
             ang[:, seg] = v
@@ -682,9 +798,9 @@ class _Fitter:
                 self.search_angle(up, rows=rows, **kw)
             warm = True
 
-    def fit_foreshortening(self, *, warm=False):
+    def fit_foreshortening(self, *, warm=False, interval=0.4):
         for seg in range(10):
-            kw = dict(start=self.fore[seg], interval=0.4) if warm else {}
+            kw = dict(start=self.fore[seg], interval=interval) if warm else {}
             self.search_fore(seg, **kw)
 
     def refine_limbs(self, half_width=_THIRTY_DEGREES, *, whole_arms=False):
@@ -769,14 +885,19 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         f.drawn[:] = True
         warm = f.similarity() >= warm_threshold
     if warm:
+        # Tracking: every search starts from the previous frame's pose with a narrow
+        # interval (3 iterations of Algorithm 1, 2 of Algorithm 6); no contour step.
         f.drawn[:] = True
         f.search_root(0, 0.1 * f.H)
-        f.fit_torso_head(warm=True)
-        f.fit_upper_legs(warm=True, passes=1)
-        f.refine_limbs(half_width=np.deg2rad(15))
+        f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(20),
+                                  alone=True)
+        uppers = [S[f"{s}_upper_{p}"] for p in ("arm", "leg") for s in "lr"]
+        leaves = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "lr"]
+        f.search_group(uppers, interval=np.deg2rad(20))
+        f.search_group(leaves, interval=np.deg2rad(20))
         if spread:
-            f.search_spread(start=f.spread, interval=0.4)
-        f.fit_foreshortening(warm=True)
+            f.search_spread(start=f.spread, interval=0.2)
+        f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
     else:
         f.angles = np.deg2rad(_REST_DEG)
         f.fore = np.ones(10)

@@ -296,7 +296,7 @@ def segment_spans(p0, p1, radii, rows, *, caps: bool = True):
     ----------
     p0, p1 : numpy.ndarray, shape (B, K, 2)
         Segment ends ``(x, y)`` in pixels.
-    radii : numpy.ndarray, shape (K,)
+    radii : numpy.ndarray, shape (K,) or (B, K)
         Half-widths in pixels.
     rows : numpy.ndarray of int, shape (R,)
         The rows (pixel y) to scan.
@@ -311,7 +311,8 @@ def segment_spans(p0, p1, radii, rows, *, caps: bool = True):
     """
     p0 = np.asarray(p0, dtype=np.float64)
     p1 = np.asarray(p1, dtype=np.float64)
-    r = np.asarray(radii, dtype=np.float64)[None, :, None]
+    r = np.asarray(radii, dtype=np.float64)
+    r = r[None, :, None] if r.ndim == 1 else r[:, :, None]
     y = np.asarray(rows, dtype=np.float64)[None, None, :]
     v = p1 - p0
     norm = np.sqrt((v * v).sum(-1))[..., None]

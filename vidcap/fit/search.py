@@ -158,4 +158,90 @@ def interval_search(
     return SearchResult(best, best_score, runner, int(values.size), iterations)
 
 
-__all__ = ["SearchResult", "interval_search"]
+def interval_search_many(
+    score: Callable[[np.ndarray], np.ndarray],
+    lo,
+    hi,
+    *,
+    divisions: int = 8,
+    min_step: float,
+    start=None,
+    interval=None,
+    periodic: float | None = None,
+    prefer=None,
+):
+    """Run several independent :func:`interval_search` es in lockstep, one batch each step.
+
+    Parameters
+    ----------
+    score : callable
+        Maps candidates, shape (N, B), to scores, shape (N, B): row ``k`` holds
+        search ``k``'s candidates. Called once per iteration for all N searches.
+    lo, hi, start, interval, prefer : array_like, shape (N,) (or scalars)
+        As in :func:`interval_search`, per search.
+    divisions, min_step, periodic
+        As in :func:`interval_search`, shared (``min_step`` is the smallest one
+        wanted; every search runs the same number of iterations).
+
+    Returns
+    -------
+    value, score, runner_up : numpy.ndarray, shape (N,)
+    iterations : int
+    """
+    shape = np.broadcast_shapes(*(np.shape(x) for x in (lo, hi, start, interval, prefer)
+                                  if x is not None))
+    shape = shape if shape else (1,)
+    lo = np.broadcast_to(np.asarray(lo, dtype=float), shape)
+    hi = np.broadcast_to(np.asarray(hi, dtype=float), shape)
+    if not np.all(hi > lo):
+        raise ValueError("empty search interval")
+    n_search = lo.size
+    wrap = periodic is not None and np.all(hi - lo >= periodic - 1e-12)
+    width = hi - lo if interval is None else np.minimum(np.broadcast_to(interval, lo.shape),
+                                                        hi - lo)
+    width = np.array(width, dtype=float)
+    best = 0.5 * (lo + hi) if start is None else np.array(np.broadcast_to(start, lo.shape),
+                                                          dtype=float)
+    if not wrap:
+        best = np.clip(best, lo, hi)
+    step = width / divisions
+    first_step = step.copy()
+    best_score = np.full(n_search, -np.inf)
+    rows = np.arange(n_search)
+    values, scores = [], []
+    iterations = 0
+    k = np.arange(divisions + 1)
+    while True:
+        begin, end = best - width / 2, best + width / 2
+        if not wrap:
+            begin, end = np.maximum(begin, lo), np.minimum(end, hi)
+        cand = begin[:, None] + step[:, None] * k[None, :]
+        cand = np.minimum(cand, end[:, None] + 1e-9 * step[:, None])  # clipped: repeats
+        if wrap:
+            cand = lo[:, None] + np.mod(cand - lo[:, None], periodic)
+        s = np.asarray(score(cand), dtype=float)
+        iterations += 1
+        values.append(cand)
+        scores.append(s)
+        centre = best if prefer is None else np.broadcast_to(prefer, lo.shape)
+        top = s >= s.max(axis=1, keepdims=True) - 1e-12
+        dist = np.where(top, np.abs(cand - centre[:, None]), np.inf)
+        j = np.argmin(dist, axis=1)
+        better = s[rows, j] > best_score + 1e-12
+        best_score = np.where(better, s[rows, j], best_score)
+        best = np.where(better, cand[rows, j], best)
+        width = 2 * width / divisions
+        step = 2 * step / divisions
+        if not np.any(width > min_step):
+            break
+    values = np.concatenate(values, axis=1)
+    scores = np.concatenate(scores, axis=1)
+    dist = np.abs(values - best[:, None])
+    if wrap:
+        dist = np.minimum(dist, periodic - dist)
+    far = dist > first_step[:, None] * 1.01
+    runner = np.where(far, scores, -np.inf).max(axis=1)
+    return best, best_score, runner, iterations
+
+
+__all__ = ["SearchResult", "interval_search", "interval_search_many"]
