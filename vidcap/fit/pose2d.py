@@ -535,16 +535,18 @@ class _Fitter:
         keep[np.arange(n)[:, None], pair] = False
         base = (keep[:, :, None, None] & masks[None]).any(axis=1)  # (N, h, w)
         sil = self.sil
-        add = np.zeros((n, self.h, self.w + 1), dtype=np.int32)
-        hit = np.zeros((n, self.h, self.w + 1), dtype=np.int32)
-        np.cumsum(~base, axis=2, out=add[:, :, 1:])
-        np.cumsum(sil & ~base, axis=2, out=hit[:, :, 1:])
+        # row prefix sums of pixels a candidate would add to the model (channel 0)
+        # and of those that are silhouette (channel 1), gathered together
+        cum = np.zeros((n, self.h, self.w + 1, 2), dtype=np.int32)
+        np.cumsum(~base, axis=2, out=cum[:, :, 1:, 0])
+        np.cumsum(sil & ~base, axis=2, out=cum[:, :, 1:, 1])
         m_base = np.count_nonzero(base, axis=(1, 2))
         i_base = np.count_nonzero(base & sil, axis=(1, 2))
         a = int(self.sil_rows[-1])
         own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
         is_leaf = (child == segs)[:, None, None]
+        all_leaves = bool(is_leaf.all())
         radii = np.repeat(self.R[pair], 1, axis=0)  # (N, 2)
         length = self.L[segs]
         if kind == "angle":
@@ -569,20 +571,24 @@ class _Fitter:
             y0 = max(int(min(p0[..., 1].min(), p1[..., 1].min()) - pad), 0)
             y1 = min(int(max(p0[..., 1].max(), p1[..., 1].max()) + pad) + 2, self.h)
             rows = np.arange(y0, y1)
-            first, last = segment_spans(p0.reshape(n * B, 2, 2), p1.reshape(n * B, 2, 2),
-                                        np.repeat(radii, B, axis=0), rows, caps=self.caps)
-            first = np.clip(first, 0, self.w).reshape(n, B, 2, -1)
-            last = np.clip(last + 1, 0, self.w).reshape(n, B, 2, -1)
-            last = np.maximum(last, first)
-            lo_i = np.maximum(first[:, :, 0], first[:, :, 1])
-            hi_i = np.maximum(np.minimum(last[:, :, 0], last[:, :, 1]), lo_i)
-            first = np.concatenate([first, lo_i[:, :, None]], axis=2)
-            last = np.concatenate([last, hi_i[:, :, None]], axis=2)
-            sign = np.array([1, 1, -1])[None, None, :, None]
+            k = 1 if all_leaves else 2
+            first, last = segment_spans(p0[:, :, :k].reshape(n * B, k, 2),
+                                        p1[:, :, :k].reshape(n * B, k, 2),
+                                        np.repeat(radii[:, :k], B, axis=0), rows, caps=self.caps)
+            first = np.clip(first, 0, self.w).reshape(n, B, k, -1)
+            last = np.maximum(np.clip(last + 1, 0, self.w).reshape(n, B, k, -1), first)
+            if k == 2:  # union of two spans = both minus their overlap
+                lo_i = np.maximum(first[:, :, 0], first[:, :, 1])
+                hi_i = np.maximum(np.minimum(last[:, :, 0], last[:, :, 1]), lo_i)
+                first = np.concatenate([first, lo_i[:, :, None]], axis=2)
+                last = np.concatenate([last, hi_i[:, :, None]], axis=2)
+                sign = np.array([1, 1, -1])[None, None, :, None, None]
+            else:
+                sign = 1
             rr = rows[None, None, None, :]
-            dm = ((add[q_idx, rr, last] - add[q_idx, rr, first]) * sign).sum(axis=(2, 3))
-            di = ((hit[q_idx, rr, last] - hit[q_idx, rr, first]) * sign).sum(axis=(2, 3))
-            return similarity_from_counts(a, m_base[:, None] + dm, i_base[:, None] + di)
+            d = ((cum[q_idx, rr, last] - cum[q_idx, rr, first]) * sign).sum(axis=(2, 3))
+            return similarity_from_counts(a, m_base[:, None] + d[..., 0],
+                                          i_base[:, None] + d[..., 1])
 
         if kind == "angle":
             lo_a = np.array([_LIMITS[SEGMENT_NAMES[s]][0] for s in segs]) if lo is None else lo
