@@ -949,7 +949,8 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
 
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
-             caps: bool = False, warm_threshold: float = 0.55) -> FramePose:
+             caps: bool = False, warm_threshold: float = 0.55,
+             fallback: float = 0.97) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -973,6 +974,9 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         Draw segments as capsules (true) or rectangles.
     warm_threshold : float
         Similarity of the previous pose needed to warm-start.
+    fallback : float
+        A warm fit whose similarity is below ``fallback`` times the previous
+        frame's is redone from scratch and the better of the two kept.
 
     Returns
     -------
@@ -984,9 +988,14 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         If ``mask`` is empty.
     """
     norm = normalise_mask(mask, height=height)
-    f, crossed, warm = fit_normalised(norm, previous=previous, refine=refine, spread=spread,
-                                      verify_crossing=verify_crossing, caps=caps,
-                                      warm_threshold=warm_threshold)
+    kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps)
+    f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
+                                      **kw)
+    if warm and f.similarity() < fallback * previous.similarity:
+        # the track is slipping: fit this frame from scratch, keep the better fit
+        g, g_crossed, _ = fit_normalised(norm, **kw)
+        if g.similarity() > f.similarity():
+            f, crossed, warm = g, g_crossed, False
     return FramePose(
         joints=norm.to_original(f.joints()),
         angles=np.mod(f.angles, TWO_PI),
