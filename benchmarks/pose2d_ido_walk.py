@@ -3,8 +3,8 @@
 Fits the model to the dataset's own silhouettes (``ido_walk_masks.npz``; the
 silhouette stage is measured elsewhere), prints the similarity S of the fitted model
 per frame (no joint ground truth exists for this clip) and writes a contact sheet:
-every fifth frame with the tracked fit drawn over it, cropped around the walker (image-left limbs in orange,
-image-right limbs in cyan, torso and head in white).
+every fifth frame with the tracked fit drawn over it, cropped around the walker
+(image-left limbs in orange, image-right limbs in cyan, torso and head in white).
 
 Data: Blank, Gorelick et al., "Actions as Space-Time Shapes", ICCV 2005.
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_ido_walk.py [-o docs/pose2d_ido_walk.png]``

@@ -114,7 +114,11 @@ def test_sequence_tracked_and_per_frame(tmp_path):
                                                                            it)[1])
     per = fit_sequence(masks, tracked=False)
     assert seen == [6]
-    assert tracked.warm[[1, 2, 5]].all() and not tracked.warm[[0, 3, 4]].any()
+    # frames after an empty one (or the first) start cold; a warm fit that loses
+    # more than 3 % similarity is redone cold, so not every other frame stays warm
+    assert tracked.warm[[1, 2, 5]].any() and not tracked.warm[[0, 3, 4]].any()
+    strict = fit_sequence(masks, tracked=True, fallback=0.0)
+    assert strict.warm[[1, 2, 5]].all()
     assert not per.warm.any()
     assert np.isnan(tracked.joints2d[3]).all() and tracked.scores[3].sum() == 0
     ok = [0, 1, 2, 4, 5]
