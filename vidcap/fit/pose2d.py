@@ -95,6 +95,11 @@ _THIRTY_DEGREES = np.deg2rad(30.0)
 #: Largest image-plane bend at an elbow or knee (the 150 degree flexion limit of
 #: vidcap.body.FLEXION_LIMITS_DEG): a lower limb does not fold back over its parent.
 _MAX_BEND = np.deg2rad(150.0)
+#: Thigh directions allowed when refining and tracking: Table 3.3's hip limits
+#: (240-300 degrees) keep the seed's first estimate upright, but a knee lifted to
+#: hip height (a high step, a kick) points the thigh nearly horizontal (beyond the
+#: seed).
+_THIGH_WIDE = (np.deg2rad(180.0), np.deg2rad(360.0))
 _REST_DEG = np.array([90, 90, 270, 270, 270, 270, 270, 270, 270, 270], dtype=float)
 
 
@@ -591,8 +596,10 @@ class _Fitter:
                                           i_base[:, None] + d[..., 1])
 
         if kind == "angle":
-            lo_a = np.array([_LIMITS[SEGMENT_NAMES[s]][0] for s in segs]) if lo is None else lo
-            hi_a = np.array([_LIMITS[SEGMENT_NAMES[s]][1] for s in segs]) if hi is None else hi
+            lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]
+                             else _LIMITS[SEGMENT_NAMES[s]] for s in segs])
+            lo_a = lims[:, 0] if lo is None else lo
+            hi_a = lims[:, 1] if hi is None else hi
             st = np.array(self.angles[segs] if start is None else start, dtype=float)
             full = hi_a - lo_a >= TWO_PI - 1e-9
             # a full circle is searched as the circle centred on the start (no wrap);
@@ -829,6 +836,8 @@ class _Fitter:
             for s in ("l", "r"):
                 seg = S[f"{s}_{seg_name}"]
                 lo = hi = None
+                if seg_name == "upper_leg":
+                    lo, hi = _THIGH_WIDE
                 if seg_name.startswith("lower"):
                     # the projected elbow/knee bend stays within the flexion limit
                     parent = S[f"{s}_upper_{seg_name.split('_')[1]}"]
