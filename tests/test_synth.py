@@ -380,3 +380,28 @@ def test_cli_file_motion_with_bvh(tmp_path, cli, shared_data):
     assert all(o.startswith("front") for o in t["orientation"])
     np.testing.assert_allclose(read_bvh(tmp_path / "a.bvh", units="m").positions(),
                                t["joints3d"], atol=1e-5)
+
+
+def test_render_infers_the_body_from_the_motion():
+    from vidcap.synth import prepare_clip
+
+    for h in (1.5, 1.9):
+        m = make_motion("walk", body=BodyModel(height=h), n_frames=2)
+        assert np.isclose(prepare_clip(m, size=(64, 48)).body.height, h)
+
+
+def test_sample_videos_match_their_truth():
+    from pathlib import Path
+
+    from vidcap.video import probe
+
+    root = Path(__file__).resolve().parents[1] / "sample_videos"
+    clips = sorted(root.glob("*.mp4"))
+    assert len(clips) >= 2
+    assert sum(p.stat().st_size for p in root.iterdir()) <= 2 * 1024 * 1024
+    for clip in clips:
+        t = np.load(clip.with_name(clip.stem + "_truth.npz"))
+        info = probe(clip, count=True)
+        assert t["masks"].shape == (info.n_frames, info.height, info.width)
+        assert np.isclose(float(t["fps"]), info.fps)
+        np.testing.assert_allclose(project(t["camera"], t["joints3d"]), t["joints2d"], atol=0.5)

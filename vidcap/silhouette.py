@@ -250,19 +250,22 @@ def silhouette_frame(frame: np.ndarray, p: _Params) -> tuple[FrameSilhouette, np
     fg = cv2.compare(l1, p.tmap, cv2.CMP_GT)
     n_fg = cv2.countNonZero(fg)
     frac = n_fg / fg.size
+    fg = cv2.medianBlur(fg, 3)
     if p.shadows and n_fg:
-        ys, xs = np.nonzero(fg)
-        f = frame[ys, xs].astype(np.float32)
-        b = ref[ys, xs].astype(np.float32) + 1.0
+        # Only inside the (de-specked) foreground's bounding rectangle.
+        x, y, w, h = cv2.boundingRect(fg)
+        f = cv2.split(frame[y:y + h, x:x + w].astype(np.float32))
+        b = cv2.split(ref[y:y + h, x:x + w].astype(np.float32) + 1.0)
         # Shadow: darker by a common factor in every channel (Horprasert et al.
         # 1999 brightness / chromaticity distortion).
-        alpha = (f * b).sum(axis=1) / (b * b).sum(axis=1)
-        cd = np.abs(f - alpha[:, None] * b).sum(axis=1)
+        alpha = (f[0] * b[0] + f[1] * b[1] + f[2] * b[2]) / (
+            b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+        cd = (np.abs(f[0] - alpha * b[0]) + np.abs(f[1] - alpha * b[1])
+              + np.abs(f[2] - alpha * b[2]))
         shadow = ((alpha > p.shadow_alpha[0]) & (alpha < p.shadow_alpha[1])
                   & (cd < p.shadow_cd * p.threshold))
-        if shadow.any():
-            fg[ys[shadow], xs[shadow]] = 0
-    fg = cv2.medianBlur(fg, 3)
+        fg[y:y + h, x:x + w][shadow] = 0
+        fg = cv2.medianBlur(fg, 3)
     fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, p.kernel)
     contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     mask = np.zeros(fg.shape, np.uint8)
@@ -340,12 +343,8 @@ def iter_silhouettes(
         if params is None:
             params = _params_for(background, chunk, threshold, local_factor, shadows,
                                  min_area, other_fraction, close_size)
-        res, gains = [], []
-        for frame in chunk:
-            r, g = silhouette_frame(frame, params)
-            res.append(r)
-            gains.append(g)
-        yield chunk, res, np.array(gains)
+        out = [silhouette_frame(frame, params) for frame in chunk]
+        yield chunk, [r for r, _ in out], np.array([g for _, g in out])
     if params is None:
         raise VidcapError("the video has no frames",
                           None if isinstance(source, np.ndarray) else source)

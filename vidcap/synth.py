@@ -1098,17 +1098,24 @@ def prepare_clip(
 ) -> Clip:
     """Set up camera, background and lighting for ``motion`` (on our skeleton).
 
-    See :func:`make_camera` for the camera options. ``background`` is an image
-    array (resized if needed), an image file, or ``None`` for
+    ``body`` gives the cylinder radii (default: a body as tall as the motion's
+    skeleton). See :func:`make_camera` for the camera options. ``background`` is an
+    image array (resized if needed), an image file, or ``None`` for
     :func:`make_background`. ``rng`` (default ``default_rng(0)``) drives the
-    background texture and the lighting phase.
+    background texture and the lighting phase. ``noise`` is the Gaussian pixel noise
+    sigma (grey levels); ``lighting_drift`` the relative amplitude of a slow global
+    brightness/colour change (:func:`lighting_gains`).
     """
     import cv2
 
-    body = body or BodyModel()
     rng = rng if rng is not None else np.random.default_rng(0)
     if tuple(motion.skeleton.joint_names) != JOINT_NAMES:
         raise UsageError("render needs a motion on our skeleton (use retarget())")
+    if body is None:  # the body whose skeleton the motion uses (its standing height)
+        off = np.linalg.norm(motion.skeleton.offsets, axis=1)
+        J = JOINT_INDEX
+        body = BodyModel(height=float(off[J["neck"]] + off[J["head_top"]] + off[J["l_knee"]]
+                                      + off[J["l_ankle"]]))
     if noise < 0 or lighting_drift < 0:
         raise UsageError("noise and lighting drift must not be negative")
     joints3d = motion.positions()
