@@ -282,7 +282,7 @@ def run(
         annotations = default_path(video)
     if isinstance(annotations, (str, os.PathLike)):
         log(f"annotations: {annotations}")
-        annotations = Annotations.load(annotations, n_frames=None)
+        annotations = Annotations.load(annotations, n_frames=info.n_frames or None)
     ann = annotations or Annotations()
 
     # 1. background plate
