@@ -147,7 +147,7 @@ def main(argv=None):
             truth = truth_arrays(clip, np.zeros((motion.n_frames, 1, 1), bool))
             rows.append((mname, yaw, evaluate(truth, body)))
     head = ("motion", "yaw", "frames", "MPJPE true %", "MPJPE prop %", "signs ok %",
-            "ok where |dZ|>.25l %", "orient ok %", "events", "MPJPE after %", "true changes")
+            "ok where out of plane %", "orient ok %", "events", "MPJPE after %", "true changes")
     print(" | ".join(head))
     print(" | ".join("---" for _ in head))
     for m, yaw, r in rows:

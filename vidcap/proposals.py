@@ -118,7 +118,7 @@ def propose_signs(
     range_weight: float = 1.0,
     midline_weight: float = 1.0,
     lean_weight: float = 0.5,
-    torso_depth: float = 0.8,
+    torso_depth: float = 0.6,
 ) -> SignProposal:
     """Propose a depth sign for every segment and frame.
 
@@ -141,8 +141,9 @@ def propose_signs(
         pointing behind the body; limb crossing the midline or an arm entering the
         torso; torso/head leaning back).
     torso_depth : float
-        Fraction of the torso cylinder's radius an elbow or wrist may not enter
-        (real chests are flatter than the model's cylinder).
+        Front-back half-depth of the torso as a fraction of the model cylinder's
+        radius (real chests are flatter than the cylinder); elbows and wrists may not
+        enter that elliptic section.
 
     Returns
     -------
@@ -184,18 +185,20 @@ def propose_signs(
             l_up, l_lo = L[ks[0]], L[ks[1]]
             lat1 = side * w0 + np.sum(up * lf, -1) * l_up
             lat2 = lat1 + np.sum(lo * lf, -1) * l_lo
-            cross = _relu(-side * lat1) / l_up + _relu(-side * lat2) / l_lo
+            # knees, ankles and elbows stay on their own side (hands may cross in front)
+            cross = _relu(-side * lat1) / l_up
+            if kind == "leg":
+                cross = cross + _relu(-side * lat2) / l_lo
             cost += hinge_weight * fold + range_weight * behind + midline_weight * cross
-            if kind == "arm":  # elbow and wrist may not enter the torso cylinder
-                r = body.radius("torso") * torso_depth
-                sh = side * w0 * lf
-                p1 = sh + up * l_up
+            if kind == "arm":  # elbow and wrist may not enter the torso (elliptic section)
+                r = body.radius("torso")
+                p1 = side * w0 * lf + up * l_up  # relative to the torso axis, shoulder height
                 p2 = p1 + lo * l_lo
                 Lt = L[SEGMENT_INDEX["torso"]]
                 for p in (p1, p2):
-                    inside = (p[..., 1] > -Lt) & (p[..., 1] < 0.0)  # below the shoulders
-                    d = np.hypot(p[..., 0], p[..., 2])
-                    cost += midline_weight * np.where(inside, _relu(r - d) / r, 0.0)
+                    below = (p[..., 1] > -Lt) & (p[..., 1] < 0.0)
+                    e = (np.sum(p * lf, -1) / r) ** 2 + (np.sum(p * f, -1) / (torso_depth * r)) ** 2
+                    cost += midline_weight * np.where(below, _relu(1.0 - e), 0.0)
         if len(ks) == 1:  # one segment: only the states whose (unused) second sign is +1
             cost[:, _STATES[:, 1] < 0] = _BIG
         # user constraints
