@@ -246,7 +246,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params) -> tuple[FrameSilhouette, np
     else:
         ref = p.plate
     diff = cv2.absdiff(frame, ref)
-    l1 = cv2.transform(diff, p.ones)  # saturating uint8 sum over channels
+    b, g_, r = cv2.split(diff)
+    l1 = cv2.add(cv2.add(b, g_), r)  # saturating uint8 sum over channels
     fg = cv2.compare(l1, p.tmap, cv2.CMP_GT)
     n_fg = cv2.countNonZero(fg)
     frac = n_fg / fg.size
