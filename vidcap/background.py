@@ -184,18 +184,28 @@ def sample_frames(
         n = len(source)
         idx = _sample_indices(n, n_samples, rng)
         return np.ascontiguousarray(source[idx]), idx
-    from vidcap.video import iter_chunks, probe
+    from vidcap.video import iter_chunks, iter_frames, probe
 
     info = probe(source)
     idx = _sample_indices(info.n_frames, n_samples, rng)
-    wanted = set(idx.tolist())
     got, got_idx, start = [], [], 0
-    for chunk in iter_chunks(source, chunk_size=chunk_size):
-        for j in range(len(chunk)):
-            if start + j in wanted:
-                got.append(chunk[j].copy())
-                got_idx.append(start + j)
-        start += len(chunk)
+    if len(idx) > 1 and np.all(np.diff(idx) == idx[1] - idx[0]):
+        # Evenly spaced: only the sampled frames are converted to arrays.
+        step = int(idx[1] - idx[0])
+        for j, frame in enumerate(iter_frames(source, start=int(idx[0]), step=step)):
+            if j >= len(idx):
+                break
+            got.append(frame)
+            got_idx.append(int(idx[j]))
+        start = got_idx[-1] + 1 if got_idx else 0
+    else:
+        wanted = set(idx.tolist())
+        for chunk in iter_chunks(source, chunk_size=chunk_size):
+            for j in range(len(chunk)):
+                if start + j in wanted:
+                    got.append(chunk[j].copy())
+                    got_idx.append(start + j)
+            start += len(chunk)
     if start < info.n_frames and len(got) < min(n_samples, start):
         # The container over-stated its frame count: resample what exists.
         return sample_frames(source_frames_cache(source, start), n_samples=n_samples, rng=rng)
@@ -213,11 +223,12 @@ def source_frames_cache(path, n):  # pragma: no cover - rare: wrong frame counts
 def _sample_indices(n: int, k: int, rng) -> np.ndarray:
     if n <= k:
         return np.arange(n)
-    edges = np.linspace(0, n, k + 1)
     if rng is None:
-        idx = ((edges[:-1] + edges[1:]) / 2).astype(int)
-    else:
-        idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
+        # Evenly spaced with a constant stride, centred in the video.
+        step = n // k
+        return (n - step * (k - 1)) // 2 + step * np.arange(k)
+    edges = np.linspace(0, n, k + 1)
+    idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
     return np.unique(np.clip(idx, 0, n - 1))
 
 
