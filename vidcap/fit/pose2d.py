@@ -17,20 +17,40 @@ The order of section 3.1.4, per frame (:func:`fit_pose` with ``previous=None``):
 6. Upper legs with their lower legs as one unit (Algorithm 1, "hip" limits).
 7. Foreshortening of every segment (Algorithm 6).
 
-Beyond the seed (each can be switched off to reproduce it):
+Beyond the seed:
 
+* Segments are drawn as rectangles (``caps=False``, the default) or capsules; the
+  renderer's cylinders seen from the side are rectangles, and rectangles measured
+  better on rendered clips (RESULTS.md).
+* Torso: after the seed's torso+head and head searches, the model is shifted so
+  the head lines up with the silhouette and the torso is searched again turning
+  about the neck (the silhouette's middle is pulled by arms and legs; the head is
+  not), so a leaning torso under an upright head is found.
+* Arms: residual slivers along the torso's edges are removed (an opening about an
+  arm's width) before the contour curves are built; the curves are rings of
+  distance from the shoulder rather than horizontal scan lines, so a raised or
+  horizontal arm gives a curve too.
 * ``spread``: how far the shoulders and hips sit from the torso axis (0 side view,
-  1 front view) is searched like a foreshortening ratio (the seed draws a front-view
-  model only).
+  1 front view) is searched like a foreshortening ratio (the seed draws one view).
 * When Algorithm 5 reports crossed legs, both leg assignments are fitted and the
-  one with the higher similarity is kept (the seed always swaps).
-* ``refine``: one more pass of Algorithm 1 over every limb segment against the
-  whole silhouette, narrowed around the contour estimate, then Algorithm 6 again.
+  better one kept; near-ties go to the straighter legs (the seed always swaps).
+* ``refine`` (default on): the whole model is centred (shift search), each arm is
+  searched whole (lower arm rigid, within 90 degrees of the contour estimate) and
+  its length (Algorithm 6 on the arm as a unit), then every limb segment again
+  with Algorithm 1 against the whole silhouette (+-30 degrees; lower limbs within
+  150 degrees of their parent, thighs over 180-360 degrees rather than Table 3.3's
+  240-300 so high steps fit), the torso once more with every limb drawn, and the
+  final Algorithm 6 pass starts from the current ratios. ``refine=False``
+  (``--no-refine``) runs the seed's order only.
 * Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
-  still well covered by the previous frame's pose starts every search from that
-  pose with narrow intervals and skips the contour analysis; limbs then keep their
-  labels through crossings (no left/right flicker). ``tracked=False`` is the seed's
-  independent per-frame method.
+  still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
+  search from that pose with narrow intervals, skips the contour analysis, and
+  searches the four upper limbs, then the head and four lower limbs, then all
+  ratios in lockstep (one batch per iteration for a whole group,
+  :meth:`_Fitter.search_group`). Limbs then keep their labels through crossings. A
+  warm fit losing more than 3 % of the previous frame's S is redone from scratch
+  and the better kept. ``tracked=False`` (``--per-frame``) fits every frame
+  independently, as the seed does.
 
 Left and right
 --------------
