@@ -892,6 +892,38 @@ def _knee_bend(f: _Fitter) -> float:
     return float(np.abs(np.angle(np.exp(1j * d))).sum())
 
 
+def _segments_cross(a0, a1, b0, b1) -> bool:
+    """Do 2D segments a0-a1 and b0-b1 intersect (proper crossing)?"""
+    def side(p, q, r):
+        return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+
+    return (side(a0, a1, b0) * side(a0, a1, b1) < 0) and (side(b0, b1, a0) * side(b0, b1, a1) < 0)
+
+
+def _untangle_thighs(f: _Fitter, *, tie: float) -> None:
+    """Swap whole legs between the hips when the thighs cross (beyond the seed).
+
+    With the hips apart (spread > 0.3), thighs that cross each other mean the
+    image-left hip was given the image-right leg; the swapped legs (re-searched
+    +-15 degrees) are kept unless they fit worse.
+    """
+    j = f.joints()
+    if f.spread <= 0.3 or not _segments_cross(j[J["l_hip"]], j[J["l_knee"]],
+                                               j[J["r_hip"]], j[J["r_knee"]]):
+        return
+    kept, s_kept = f.state(), f.similarity()
+    legs_l = [S["l_upper_leg"], S["l_lower_leg"]]
+    legs_r = [S["r_upper_leg"], S["r_lower_leg"]]
+    f.angles[legs_l + legs_r] = f.angles[legs_r + legs_l]
+    f.fore[legs_l + legs_r] = f.fore[legs_r + legs_l]
+    for seg in (S["l_upper_leg"], S["r_upper_leg"], S["l_lower_leg"], S["r_lower_leg"]):
+        f.search_angle(seg, start=f.angles[seg], interval=np.deg2rad(30), lo=_THIGH_WIDE[0],
+                       hi=_THIGH_WIDE[1]) if seg in (S["l_upper_leg"], S["r_upper_leg"]) \
+            else f.search_angle(seg, start=f.angles[seg], interval=np.deg2rad(30))
+    if f.similarity() < s_kept - tie:
+        f.set_state(kept)
+
+
 def _swap_lower_legs(f: _Fitter):
     a, b = S["l_lower_leg"], S["r_lower_leg"]
     f.angles[[a, b]] = f.angles[[b, a]]
@@ -933,6 +965,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         if spread:
             f.search_spread(start=f.spread, interval=0.2)
         f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
+        _untangle_thighs(f, tie=tie)
     else:
         f.angles = np.deg2rad(_REST_DEG)
         f.fore = np.ones(10)
@@ -970,6 +1003,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
             f.refine_limbs(whole_arms=True)
             # the torso once more with every limb drawn (the arms no longer pull it)
             f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(16))
+            _untangle_thighs(f, tie=tie)
             if spread:
                 f.search_spread(start=f.spread, interval=0.4)
         f.fit_foreshortening(warm=refine)
