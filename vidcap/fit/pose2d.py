@@ -459,8 +459,12 @@ class _Fitter:
         return ends
 
     def search_angle(self, seg, *, with_segments=(), lo=None, hi=None, rows=None,
-                     start=None, interval=None, min_step=_ONE_DEGREE, divisions=8):
-        """Algorithm 1 on segment ``seg`` (``with_segments`` rotate rigidly with it)."""
+                     start=None, interval=None, min_step=_ONE_DEGREE, divisions=8,
+                     prefer=None):
+        """Algorithm 1 on segment ``seg`` (``with_segments`` rotate rigidly with it).
+
+        ``prefer``: the angle that wins ties (default: the centre of the interval).
+        """
         name = SEGMENT_NAMES[seg]
         lim_lo, lim_hi = _LIMITS[name]
         lo = lim_lo if lo is None else lo
@@ -483,9 +487,11 @@ class _Fitter:
         if start is not None and periodic is None:
             # keep a warm start's interval inside the limits (angles are periodic)
             start = lo + np.mod(start - lo + np.pi, TWO_PI) - np.pi
+        if prefer is not None and periodic is None:
+            prefer = lo + np.mod(prefer - lo + np.pi, TWO_PI) - np.pi
         res = interval_search(self.scorer(ends, moving, rows), lo, hi, divisions=divisions,
                               min_step=min_step, start=start, interval=interval,
-                              periodic=periodic)
+                              periodic=periodic, prefer=prefer)
         self.angles[together] = np.mod(res.value + offsets, TWO_PI)
         self.scores[together] = res.score
         self.margins[together] = res.margin
@@ -627,9 +633,12 @@ class _Fitter:
             st = np.where(full, st, lo_a + np.mod(st - lo_a + np.pi, TWO_PI) - np.pi)
             lo_a = np.where(full, st - np.pi, lo_a)
             hi_a = np.where(full, st + np.pi, hi_a)
+            if prefer is None:  # hidden arms hang down on ties
+                prefer = np.where([SEGMENT_NAMES[s].endswith("arm") for s in segs],
+                                  self._hang(), np.nan)
             value, best, runner, _ = interval_search_many(
                 score, lo_a, hi_a, divisions=divisions, min_step=min_step, start=st,
-                interval=interval, prefer=prefer)
+                interval=interval, prefer=prefer, periodic=TWO_PI)
             self.angles[segs] = np.mod(value, TWO_PI)
         else:
             step = 1.0 / np.maximum(length, 1.0)
@@ -840,7 +849,7 @@ class _Fitter:
         """Algorithm 1 again on every limb segment against the whole silhouette.
 
         ``whole_arms``: first search each whole arm (lower arm rigidly attached) within
-        90 degrees of the contour estimate (ties stay there), and its length, to undo
+        90 degrees of the contour estimate (ties: hanging down), and its length, to undo
         a contour curve that went astray (beyond the seed, which avoids Algorithm 1 on
         the arms for fear of occlusion; the contour estimate is the tie-breaker).
         """
@@ -850,7 +859,7 @@ class _Fitter:
                 self.angles[lo] = self.angles[up]  # a straight arm first
                 self.fore[[up, lo]] = 1.0
                 self.search_angle(up, with_segments=(lo,), start=self.angles[up],
-                                  interval=np.pi)
+                                  interval=np.pi, prefer=self._hang())
                 self.search_fore(up, unit=True)
         for seg_name in ("upper_leg", "lower_leg", "upper_arm", "lower_arm"):
             for s in ("l", "r"):
@@ -873,7 +882,17 @@ class _Fitter:
                     start = lo + np.mod(start - lo, TWO_PI)
                     start = start if start <= hi else (lo if start - hi > TWO_PI - start + lo
                                                        else hi)
-                self.search_angle(seg, start=start, interval=2 * half_width, lo=lo, hi=hi)
+                # a shin may swing far from its contour estimate (a raised foot), so
+                # the lower legs get their whole range; an arm hidden in the torso
+                # covers the same pixels at any angle: ties go to hanging down
+                width = (hi - lo) if seg_name == "lower_leg" else 2 * half_width
+                prefer = self._hang() if seg_name.endswith("arm") else None
+                self.search_angle(seg, start=start, interval=width, lo=lo, hi=hi,
+                                  prefer=prefer)
+
+    def _hang(self) -> float:
+        """The direction of an arm hanging along the torso, radians."""
+        return float(np.mod(self.angles[S["torso"]] + np.pi, TWO_PI))
 
     def state(self):
         return (self.root.copy(), self.angles.copy(), self.fore.copy(), self.spread,
