@@ -650,7 +650,7 @@ class _Fitter:
         self.scores[segs] = best
         self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)
 
-    def search_spread(self, *, start=None, interval=None):
+    def search_spread(self, *, start=None, interval=None, min_step=0.05):
         """Lateral spread of shoulders and hips in [0, 1] (beyond the seed).
 
         Candidates move the shoulders and hips sideways while the elbows and knees
@@ -673,7 +673,7 @@ class _Fitter:
             p0, _ = general(v)
             return p0, np.broadcast_to(fixed_ends, p0.shape)
 
-        res = interval_search(self.scorer(ends, uppers), 0.0, 1.0, divisions=4, min_step=0.05,
+        res = interval_search(self.scorer(ends, uppers), 0.0, 1.0, divisions=4, min_step=min_step,
                               start=start, interval=interval, prefer=0.5)
         self.spread = res.value
         vec = fixed_ends - self.joints()[_PROX[uppers]]
@@ -950,7 +950,8 @@ def _swap_lower_legs(f: _Fitter):
 
 def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
                    refine: bool = True, spread: bool = True, verify_crossing: bool = True,
-                   caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01):
+                   caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01,
+                   warm_step_deg: float = 2.0):
     """Fit the model to a normalised silhouette; see :func:`fit_pose`.
 
     Returns
@@ -972,17 +973,18 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         warm = f.similarity() >= warm_threshold
     if warm:
         # Tracking: every search starts from the previous frame's pose with a narrow
-        # interval (3 iterations of Algorithm 1, 2 of Algorithm 6); no contour step.
+        # interval (2 iterations of Algorithm 1: +-8 degrees in 2 degree steps, then
+        # 0.5; 2 of Algorithm 6); no contour step.
         f.drawn[:] = True
         f.search_root(0, 0.1 * f.H)
-        f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(20),
-                                  alone=True)
+        step = np.deg2rad(warm_step_deg)
+        f.search_torso_about_neck(start=f.angles[S["torso"]], interval=8 * step, alone=True)
         uppers = [S[f"{s}_upper_{p}"] for p in ("arm", "leg") for s in "lr"]
         leaves = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "lr"]
-        f.search_group(uppers, interval=np.deg2rad(20))
-        f.search_group(leaves, interval=np.deg2rad(20))
+        f.search_group(uppers, interval=8 * step)
+        f.search_group(leaves, interval=8 * step)
         if spread:
-            f.search_spread(start=f.spread, interval=0.2)
+            f.search_spread(start=f.spread, interval=0.2, min_step=0.1)
         f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
         _untangle_thighs(f, tie=tie)
     else:
@@ -1032,7 +1034,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
-             fallback: float = 0.97) -> FramePose:
+             fallback: float = 0.97, warm_step_deg: float = 2.0) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -1059,6 +1061,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     fallback : float
         A warm fit whose similarity is below ``fallback`` times the previous
         frame's is redone from scratch and the better of the two kept.
+    warm_step_deg : float
+        First step of a warm angle search in degrees (8 divisions, so the search
+        spans +-4 steps around the previous angle, then refines by a quarter).
+
 
     Returns
     -------
@@ -1070,7 +1076,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         If ``mask`` is empty.
     """
     norm = normalise_mask(mask, height=height)
-    kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps)
+    kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
+              warm_step_deg=warm_step_deg)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
                                       **kw)
     if warm and f.similarity() < fallback * previous.similarity:
