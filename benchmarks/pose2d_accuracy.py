@@ -11,7 +11,8 @@ each limb pair (arms: shoulder/elbow/wrist, legs: hip/knee/ankle) is matched to 
 truth with whichever assignment (as labelled or swapped) is closer in that frame.
 The share of frames where the swap was needed is reported as "swapped".
 
-Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--quick]``
+Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
+[--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0]``
 """
 
 from __future__ import annotations
@@ -92,6 +93,8 @@ def main(argv=None) -> int:
     ap.add_argument("--motions", default="131_01,07_07")
     ap.add_argument("--yaws", default="90,45,0")
     ap.add_argument("--height", type=int, default=80, help="normalised silhouette height")
+    ap.add_argument("--caps", action="store_true", help="draw capsules, not rectangles")
+    ap.add_argument("--no-refine", action="store_true", help="the seed's order only")
     args = ap.parse_args(argv)
 
     from vidcap.synth import render_clip
@@ -108,7 +111,8 @@ def main(argv=None) -> int:
             hpx = body_height_px(tj)[:, None]
             for tracked in (False, True):
                 t0 = time.process_time()
-                pose = fit_sequence(masks, tracked=tracked, height=args.height)
+                pose = fit_sequence(masks, tracked=tracked, height=args.height,
+                                    caps=args.caps, refine=not args.no_refine)
                 dt = (time.process_time() - t0) / len(masks)
                 err, sw = side_agnostic_errors(pose.joints2d, tj)
                 frac = err / hpx
@@ -117,7 +121,9 @@ def main(argv=None) -> int:
                 rows.append((name, f"{yaw:g}", mode, s, sw.mean(0), pose.warm.mean(), dt))
                 per_joint[(name, yaw, mode)] = np.nanmedian(frac, axis=0)
     print(f"2D joint error / body height, {args.frames} frames per clip, 640x480, "
-          f"silhouettes normalised to {args.height} px")
+          f"silhouettes normalised to {args.height} px, "
+          f"{'capsules' if args.caps else 'rectangles'}"
+          f"{', seed order only' if args.no_refine else ''}")
     print(f"{'motion':8} {'yaw':>4} {'mode':9} {'median':>7} {'p90':>7} {'PCK.05':>7} "
           f"{'PCK.1':>7} {'armsw':>6} {'legsw':>6} {'warm':>5} {'ms/fr':>6}")
     for name, yaw, mode, s, sw, warm, dt in rows:

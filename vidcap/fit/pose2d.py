@@ -17,20 +17,40 @@ The order of section 3.1.4, per frame (:func:`fit_pose` with ``previous=None``):
 6. Upper legs with their lower legs as one unit (Algorithm 1, "hip" limits).
 7. Foreshortening of every segment (Algorithm 6).
 
-Beyond the seed (each can be switched off to reproduce it):
+Beyond the seed:
 
+* Segments are drawn as rectangles (``caps=False``, the default) or capsules; the
+  renderer's cylinders seen from the side are rectangles, and rectangles measured
+  better on rendered clips (RESULTS.md).
+* Torso: after the seed's torso+head and head searches, the model is shifted so
+  the head lines up with the silhouette and the torso is searched again turning
+  about the neck (the silhouette's middle is pulled by arms and legs; the head is
+  not), so a leaning torso under an upright head is found.
+* Arms: residual slivers along the torso's edges are removed (an opening about an
+  arm's width) before the contour curves are built; the curves are rings of
+  distance from the shoulder rather than horizontal scan lines, so a raised or
+  horizontal arm gives a curve too.
 * ``spread``: how far the shoulders and hips sit from the torso axis (0 side view,
-  1 front view) is searched like a foreshortening ratio (the seed draws a front-view
-  model only).
+  1 front view) is searched like a foreshortening ratio (the seed draws one view).
 * When Algorithm 5 reports crossed legs, both leg assignments are fitted and the
-  one with the higher similarity is kept (the seed always swaps).
-* ``refine``: one more pass of Algorithm 1 over every limb segment against the
-  whole silhouette, narrowed around the contour estimate, then Algorithm 6 again.
+  better one kept; near-ties go to the straighter legs (the seed always swaps).
+* ``refine`` (default on): the whole model is centred (shift search), each arm is
+  searched whole (lower arm rigid, within 90 degrees of the contour estimate) and
+  its length (Algorithm 6 on the arm as a unit), then every limb segment again
+  with Algorithm 1 against the whole silhouette (+-30 degrees; lower limbs within
+  150 degrees of their parent, thighs over 180-360 degrees rather than Table 3.3's
+  240-300 so high steps fit), the torso once more with every limb drawn, and the
+  final Algorithm 6 pass starts from the current ratios. ``refine=False``
+  (``--no-refine``) runs the seed's order only.
 * Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
-  still well covered by the previous frame's pose starts every search from that
-  pose with narrow intervals and skips the contour analysis; limbs then keep their
-  labels through crossings (no left/right flicker). ``tracked=False`` is the seed's
-  independent per-frame method.
+  still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
+  search from that pose with narrow intervals, skips the contour analysis, and
+  searches the four upper limbs, then the head and four lower limbs, then all
+  ratios in lockstep (one batch per iteration for a whole group,
+  :meth:`_Fitter.search_group`). Limbs then keep their labels through crossings. A
+  warm fit losing more than 3 % of the previous frame's S is redone from scratch
+  and the better kept. ``tracked=False`` (``--per-frame``) fits every frame
+  independently, as the seed does.
 
 Left and right
 --------------
@@ -439,8 +459,12 @@ class _Fitter:
         return ends
 
     def search_angle(self, seg, *, with_segments=(), lo=None, hi=None, rows=None,
-                     start=None, interval=None, min_step=_ONE_DEGREE, divisions=8):
-        """Algorithm 1 on segment ``seg`` (``with_segments`` rotate rigidly with it)."""
+                     start=None, interval=None, min_step=_ONE_DEGREE, divisions=8,
+                     prefer=None):
+        """Algorithm 1 on segment ``seg`` (``with_segments`` rotate rigidly with it).
+
+        ``prefer``: the angle that wins ties (default: the centre of the interval).
+        """
         name = SEGMENT_NAMES[seg]
         lim_lo, lim_hi = _LIMITS[name]
         lo = lim_lo if lo is None else lo
@@ -463,9 +487,11 @@ class _Fitter:
         if start is not None and periodic is None:
             # keep a warm start's interval inside the limits (angles are periodic)
             start = lo + np.mod(start - lo + np.pi, TWO_PI) - np.pi
+        if prefer is not None and periodic is None:
+            prefer = lo + np.mod(prefer - lo + np.pi, TWO_PI) - np.pi
         res = interval_search(self.scorer(ends, moving, rows), lo, hi, divisions=divisions,
                               min_step=min_step, start=start, interval=interval,
-                              periodic=periodic)
+                              periodic=periodic, prefer=prefer)
         self.angles[together] = np.mod(res.value + offsets, TWO_PI)
         self.scores[together] = res.score
         self.margins[together] = res.margin
@@ -607,9 +633,12 @@ class _Fitter:
             st = np.where(full, st, lo_a + np.mod(st - lo_a + np.pi, TWO_PI) - np.pi)
             lo_a = np.where(full, st - np.pi, lo_a)
             hi_a = np.where(full, st + np.pi, hi_a)
+            if prefer is None:  # hidden arms hang down on ties
+                prefer = np.where([SEGMENT_NAMES[s].endswith("arm") for s in segs],
+                                  self._hang(), np.nan)
             value, best, runner, _ = interval_search_many(
                 score, lo_a, hi_a, divisions=divisions, min_step=min_step, start=st,
-                interval=interval, prefer=prefer)
+                interval=interval, prefer=prefer, periodic=TWO_PI)
             self.angles[segs] = np.mod(value, TWO_PI)
         else:
             step = 1.0 / np.maximum(length, 1.0)
@@ -621,7 +650,7 @@ class _Fitter:
         self.scores[segs] = best
         self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)
 
-    def search_spread(self, *, start=None, interval=None):
+    def search_spread(self, *, start=None, interval=None, min_step=0.05):
         """Lateral spread of shoulders and hips in [0, 1] (beyond the seed).
 
         Candidates move the shoulders and hips sideways while the elbows and knees
@@ -644,7 +673,7 @@ class _Fitter:
             p0, _ = general(v)
             return p0, np.broadcast_to(fixed_ends, p0.shape)
 
-        res = interval_search(self.scorer(ends, uppers), 0.0, 1.0, divisions=4, min_step=0.05,
+        res = interval_search(self.scorer(ends, uppers), 0.0, 1.0, divisions=4, min_step=min_step,
                               start=start, interval=interval, prefer=0.5)
         self.spread = res.value
         vec = fixed_ends - self.joints()[_PROX[uppers]]
@@ -820,7 +849,7 @@ class _Fitter:
         """Algorithm 1 again on every limb segment against the whole silhouette.
 
         ``whole_arms``: first search each whole arm (lower arm rigidly attached) within
-        90 degrees of the contour estimate (ties stay there), and its length, to undo
+        90 degrees of the contour estimate (ties: hanging down), and its length, to undo
         a contour curve that went astray (beyond the seed, which avoids Algorithm 1 on
         the arms for fear of occlusion; the contour estimate is the tie-breaker).
         """
@@ -830,7 +859,7 @@ class _Fitter:
                 self.angles[lo] = self.angles[up]  # a straight arm first
                 self.fore[[up, lo]] = 1.0
                 self.search_angle(up, with_segments=(lo,), start=self.angles[up],
-                                  interval=np.pi)
+                                  interval=np.pi, prefer=self._hang())
                 self.search_fore(up, unit=True)
         for seg_name in ("upper_leg", "lower_leg", "upper_arm", "lower_arm"):
             for s in ("l", "r"):
@@ -853,7 +882,17 @@ class _Fitter:
                     start = lo + np.mod(start - lo, TWO_PI)
                     start = start if start <= hi else (lo if start - hi > TWO_PI - start + lo
                                                        else hi)
-                self.search_angle(seg, start=start, interval=2 * half_width, lo=lo, hi=hi)
+                # a shin may swing far from its contour estimate (a raised foot), so
+                # the lower legs get their whole range; an arm hidden in the torso
+                # covers the same pixels at any angle: ties go to hanging down
+                width = (hi - lo) if seg_name == "lower_leg" else 2 * half_width
+                prefer = self._hang() if seg_name.endswith("arm") else None
+                self.search_angle(seg, start=start, interval=width, lo=lo, hi=hi,
+                                  prefer=prefer)
+
+    def _hang(self) -> float:
+        """The direction of an arm hanging along the torso, radians."""
+        return float(np.mod(self.angles[S["torso"]] + np.pi, TWO_PI))
 
     def state(self):
         return (self.root.copy(), self.angles.copy(), self.fore.copy(), self.spread,
@@ -872,6 +911,38 @@ def _knee_bend(f: _Fitter) -> float:
     return float(np.abs(np.angle(np.exp(1j * d))).sum())
 
 
+def _segments_cross(a0, a1, b0, b1) -> bool:
+    """Do 2D segments a0-a1 and b0-b1 intersect (proper crossing)?"""
+    def side(p, q, r):
+        return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+
+    return (side(a0, a1, b0) * side(a0, a1, b1) < 0) and (side(b0, b1, a0) * side(b0, b1, a1) < 0)
+
+
+def _untangle_thighs(f: _Fitter, *, tie: float) -> None:
+    """Swap whole legs between the hips when the thighs cross (beyond the seed).
+
+    With the hips apart (spread > 0.3), thighs that cross each other mean the
+    image-left hip was given the image-right leg; the swapped legs (re-searched
+    +-15 degrees) are kept unless they fit worse.
+    """
+    j = f.joints()
+    if f.spread <= 0.3 or not _segments_cross(j[J["l_hip"]], j[J["l_knee"]],
+                                               j[J["r_hip"]], j[J["r_knee"]]):
+        return
+    kept, s_kept = f.state(), f.similarity()
+    legs_l = [S["l_upper_leg"], S["l_lower_leg"]]
+    legs_r = [S["r_upper_leg"], S["r_lower_leg"]]
+    f.angles[legs_l + legs_r] = f.angles[legs_r + legs_l]
+    f.fore[legs_l + legs_r] = f.fore[legs_r + legs_l]
+    for seg in (S["l_upper_leg"], S["r_upper_leg"], S["l_lower_leg"], S["r_lower_leg"]):
+        f.search_angle(seg, start=f.angles[seg], interval=np.deg2rad(30), lo=_THIGH_WIDE[0],
+                       hi=_THIGH_WIDE[1]) if seg in (S["l_upper_leg"], S["r_upper_leg"]) \
+            else f.search_angle(seg, start=f.angles[seg], interval=np.deg2rad(30))
+    if f.similarity() < s_kept - tie:
+        f.set_state(kept)
+
+
 def _swap_lower_legs(f: _Fitter):
     a, b = S["l_lower_leg"], S["r_lower_leg"]
     f.angles[[a, b]] = f.angles[[b, a]]
@@ -879,7 +950,8 @@ def _swap_lower_legs(f: _Fitter):
 
 def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
                    refine: bool = True, spread: bool = True, verify_crossing: bool = True,
-                   caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01):
+                   caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01,
+                   warm_step_deg: float = 2.0):
     """Fit the model to a normalised silhouette; see :func:`fit_pose`.
 
     Returns
@@ -901,18 +973,20 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         warm = f.similarity() >= warm_threshold
     if warm:
         # Tracking: every search starts from the previous frame's pose with a narrow
-        # interval (3 iterations of Algorithm 1, 2 of Algorithm 6); no contour step.
+        # interval (2 iterations of Algorithm 1: +-8 degrees in 2 degree steps, then
+        # 0.5; 2 of Algorithm 6); no contour step.
         f.drawn[:] = True
         f.search_root(0, 0.1 * f.H)
-        f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(20),
-                                  alone=True)
+        step = np.deg2rad(warm_step_deg)
+        f.search_torso_about_neck(start=f.angles[S["torso"]], interval=8 * step, alone=True)
         uppers = [S[f"{s}_upper_{p}"] for p in ("arm", "leg") for s in "lr"]
         leaves = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "lr"]
-        f.search_group(uppers, interval=np.deg2rad(20))
-        f.search_group(leaves, interval=np.deg2rad(20))
+        f.search_group(uppers, interval=8 * step)
+        f.search_group(leaves, interval=8 * step)
         if spread:
-            f.search_spread(start=f.spread, interval=0.2)
+            f.search_spread(start=f.spread, interval=0.2, min_step=0.1)
         f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
+        _untangle_thighs(f, tie=tie)
     else:
         f.angles = np.deg2rad(_REST_DEG)
         f.fore = np.ones(10)
@@ -950,6 +1024,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
             f.refine_limbs(whole_arms=True)
             # the torso once more with every limb drawn (the arms no longer pull it)
             f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(16))
+            _untangle_thighs(f, tie=tie)
             if spread:
                 f.search_spread(start=f.spread, interval=0.4)
         f.fit_foreshortening(warm=refine)
@@ -959,7 +1034,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
-             fallback: float = 0.97) -> FramePose:
+             fallback: float = 0.97, warm_step_deg: float = 2.0) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -986,6 +1061,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     fallback : float
         A warm fit whose similarity is below ``fallback`` times the previous
         frame's is redone from scratch and the better of the two kept.
+    warm_step_deg : float
+        First step of a warm angle search in degrees (8 divisions, so the search
+        spans +-4 steps around the previous angle, then refines by a quarter).
+
 
     Returns
     -------
@@ -997,7 +1076,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         If ``mask`` is empty.
     """
     norm = normalise_mask(mask, height=height)
-    kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps)
+    kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
+              warm_step_deg=warm_step_deg)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
                                       **kw)
     if warm and f.similarity() < fallback * previous.similarity:

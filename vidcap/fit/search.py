@@ -141,7 +141,10 @@ def interval_search(
         scores.append(s)
         top = s >= s.max() - 1e-12
         centre = best if prefer is None else prefer
-        k = int(np.flatnonzero(top)[np.argmin(np.abs(cand[top] - centre))])
+        gap = np.abs(cand[top] - centre)
+        if periodic is not None:
+            gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
+        k = int(np.flatnonzero(top)[np.argmin(gap)])
         if s[k] > best_score + 1e-12:
             best_score, best = float(s[k]), float(cand[k])
         width = 2 * width / divisions
@@ -178,7 +181,7 @@ def interval_search_many(
         Maps candidates, shape (N, B), to scores, shape (N, B): row ``k`` holds
         search ``k``'s candidates. Called once per iteration for all N searches.
     lo, hi, start, interval, prefer : array_like, shape (N,) (or scalars)
-        As in :func:`interval_search`, per search.
+        As in :func:`interval_search`, per search (a NaN ``prefer``: none).
     divisions, min_step, periodic
         As in :func:`interval_search`, shared (``min_step`` is the smallest one
         wanted; every search runs the same number of iterations).
@@ -223,9 +226,13 @@ def interval_search_many(
         iterations += 1
         values.append(cand)
         scores.append(s)
-        centre = best if prefer is None else np.broadcast_to(prefer, lo.shape)
+        centre = best if prefer is None else np.where(
+            np.isnan(np.broadcast_to(prefer, lo.shape)), best, prefer)  # NaN: no preference
         top = s >= s.max(axis=1, keepdims=True) - 1e-12
-        dist = np.where(top, np.abs(cand - centre[:, None]), np.inf)
+        gap = np.abs(cand - centre[:, None])
+        if periodic is not None:
+            gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
+        dist = np.where(top, gap, np.inf)
         j = np.argmin(dist, axis=1)
         better = s[rows, j] > best_score + 1e-12
         best_score = np.where(better, s[rows, j], best_score)
