@@ -145,3 +145,17 @@ def test_review_frames_are_three_panels_wide(tmp_path, converted):
     third = img[:, 2 * w:]
     assert (third < 100).any(axis=2).sum() > 200
     assert not np.array_equal(img[:, :w], third)
+
+
+def test_second_run_uses_the_stage_cache(converted):
+    from vidcap.pipeline import convert
+
+    out, _, _ = converted
+    cache = out.parent / ".vidcap-cache"
+    files = sorted(p.name for p in cache.iterdir())
+    assert {f.split("-")[0] for f in files} == {"plate", "silhouettes", "pose2d"}
+    again = out.parent / "again.bvh"
+    res = convert(WALK, again, progress=False)
+    assert sorted(p.name for p in cache.iterdir()) == files
+    assert res.timings["pose2d"] < 0.5 and res.timings["plate"] < 0.5
+    assert again.read_text() == out.read_text()

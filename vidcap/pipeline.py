@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d, median_filter
 
 from vidcap.annotations import Annotations, default_path
 from vidcap.body import JOINT_NAMES, SEGMENT_NAMES, BodyModel
@@ -102,6 +103,8 @@ def lift_pose(
     image_sides: bool = True,
     spread=None,
     track=None,
+    smooth_2d: float = 0.0,
+    yaw_window_s: float = 1.0,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -121,6 +124,11 @@ def lift_pose(
         :attr:`vidcap.fit.pose2d.Pose2D.spread`; default from the 2D shoulders/hips.
     track : array_like, shape (F,), optional
         Horizontal image position of the subject (walking direction).
+    smooth_2d : float
+        Gaussian smoothing of the 2D joints over time before lifting, in frames
+        (0 = none): Eq. 2.2 amplifies image noise where a segment is nearly in plane.
+    yaw_window_s : float
+        Running-median window (seconds) of the torso's horizontal foreshortening.
 
     Returns
     -------
@@ -131,13 +139,18 @@ def lift_pose(
     j2 = fill_gaps(joints2d)
     F = len(j2)
     scale = estimate_scale(j2, body)
+    if smooth_2d > 0 and F > 2:
+        j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     if spread is None:
         rho = torso_width_ratio(j2, scale, body)
     else:
         rho = np.asarray(spread, float)
         rho = np.where(np.isfinite(rho), rho, torso_width_ratio(j2, scale, body))
+    # the body turns slowly: a running median over ~1 s removes single-frame misfits
+    rho = median_filter(rho, size=max(1, int(round(yaw_window_s * fps)) | 1), mode="nearest")
     proposed_orient = propose_orientation(j2, scale=scale, fps=fps, body=body,
-                                          sides_known=not image_sides, track=track)
+                                          sides_known=not image_sides, track=track,
+                                          window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
     orient = np.where(user_orient != "", user_orient, proposed_orient).astype(str)
     yaw = yaw_from_orientation(orient, rho)
