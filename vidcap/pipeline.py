@@ -35,7 +35,7 @@ from vidcap.lift import (
     torso_width_ratio,
     yaw_from_orientation,
 )
-from vidcap.motion import build_motion
+from vidcap.motion import build_motion, keyframes_by_confidence
 from vidcap.proposals import propose_orientation, propose_signs
 
 #: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
@@ -250,6 +250,7 @@ def run(
     background: str | os.PathLike | None = None,
     height: float = 1.75,
     smooth_sigma: float = 1.0,
+    keyframe_score: float | None = None,
     cache_dir: str | os.PathLike | None = None,
     progress: bool | None = None,
     log=None,
@@ -267,6 +268,10 @@ def run(
         Subject's height in metres.
     smooth_sigma : float
         Gaussian smoothing of the motion in frames (0 = none).
+    keyframe_score : float, optional
+        Key only the frames whose 2D fit similarity is at least this (plus enough
+        frames to leave no gap over 10 frames) and Slerp between them (seed 004
+        section 3.1.5 keys the poses); default: every frame is a key.
     cache_dir : path, optional
         Stage cache folder (None = no caching).
     progress : bool, optional
@@ -364,7 +369,12 @@ def run(
     _check_events(ann, len(masks), video)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track)
-    mres = build_motion(lifted.joints3d, info.fps, body=body, smooth_sigma=smooth_sigma)
+    keys = None
+    if keyframe_score is not None:
+        keys = keyframes_by_confidence(hit["similarity"], min_score=keyframe_score)
+        log(f"{len(keys)} keyframes of {len(masks)}")
+    mres = build_motion(lifted.joints3d, info.fps, body=body, smooth_sigma=smooth_sigma,
+                        keys=keys)
     timings["lift+motion"] = time.perf_counter() - t0
     return ConvertResult(
         video=str(video), fps=info.fps, masks=masks, bbox=np.asarray(bbox),
