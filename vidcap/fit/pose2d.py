@@ -123,6 +123,15 @@ _THIGH_WIDE = (np.deg2rad(180.0), np.deg2rad(360.0))
 _REST_DEG = np.array([90, 90, 270, 270, 270, 270, 270, 270, 270, 270], dtype=float)
 
 
+def _into_range(angle, lo, hi):
+    """The representative of ``angle`` (mod 2 pi) in ``[lo, hi]``, or the nearer bound."""
+    x = lo + np.mod(np.asarray(angle, dtype=float) - lo, TWO_PI)
+    beyond = x > hi
+    nearer_lo = (lo + TWO_PI - x) < (x - hi)
+    out = np.where(beyond, np.where(nearer_lo, lo, hi), x)
+    return float(out) if np.ndim(out) == 0 else out
+
+
 @dataclass(frozen=True)
 class FramePose:
     """The fitted 2D pose of one frame.
@@ -486,9 +495,9 @@ class _Fitter:
         periodic = TWO_PI if hi - lo >= TWO_PI - 1e-9 else None
         if start is not None and periodic is None:
             # keep a warm start's interval inside the limits (angles are periodic)
-            start = lo + np.mod(start - lo + np.pi, TWO_PI) - np.pi
+            start = _into_range(start, lo, hi)
         if prefer is not None and periodic is None:
-            prefer = lo + np.mod(prefer - lo + np.pi, TWO_PI) - np.pi
+            prefer = _into_range(prefer, lo, hi)
         res = interval_search(self.scorer(ends, moving, rows), lo, hi, divisions=divisions,
                               min_step=min_step, start=start, interval=interval,
                               periodic=periodic, prefer=prefer)
@@ -630,7 +639,7 @@ class _Fitter:
             full = hi_a - lo_a >= TWO_PI - 1e-9
             # a full circle is searched as the circle centred on the start (no wrap);
             # a limited range with the start unwrapped into it
-            st = np.where(full, st, lo_a + np.mod(st - lo_a + np.pi, TWO_PI) - np.pi)
+            st = np.where(full, st, _into_range(st, lo_a, hi_a))
             lo_a = np.where(full, st - np.pi, lo_a)
             hi_a = np.where(full, st + np.pi, hi_a)
             if prefer is None:  # hidden arms hang down on ties
@@ -879,9 +888,7 @@ class _Fitter:
                             lo, hi = lim
                 start = self.angles[seg]
                 if lo is not None:
-                    start = lo + np.mod(start - lo, TWO_PI)
-                    start = start if start <= hi else (lo if start - hi > TWO_PI - start + lo
-                                                       else hi)
+                    start = _into_range(start, lo, hi)
                 # a shin may swing far from its contour estimate (a raised foot), so
                 # the lower legs get their whole range; an arm hidden in the torso
                 # covers the same pixels at any angle: ties go to hanging down
