@@ -1041,7 +1041,8 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
-             fallback: float = 0.97, warm_step_deg: float = 2.0) -> FramePose:
+             fallback: float = 0.97, warm_step_deg: float = 2.0,
+             challenge: bool = False) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -1071,6 +1072,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     warm_step_deg : float
         First step of a warm angle search in degrees (8 divisions, so the search
         spans +-4 steps around the previous angle, then refines by a quarter).
+    challenge : bool
+        Also fit a warm-started frame from scratch and keep the better fit (how a
+        track escapes a wrong but stable pose; :func:`fit_sequence` does this every
+        ``reinit_every`` frames).
 
 
     Returns
@@ -1087,7 +1092,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
               warm_step_deg=warm_step_deg)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
                                       **kw)
-    if warm and f.similarity() < fallback * previous.similarity:
+    if warm and (challenge or f.similarity() < fallback * previous.similarity):
         # the track is slipping: fit this frame from scratch, keep the better fit
         g, g_crossed, _ = fit_normalised(norm, **kw)
         if g.similarity() > f.similarity():
@@ -1107,7 +1112,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
-                 progress=None, **kw) -> Pose2D:
+                 progress=None, reinit_every: int = 10, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -1120,6 +1125,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     progress : callable, optional
         Wraps the frame iterator (e.g. :func:`vidcap.fileio.progress`); called as
         ``progress(iterable, total=F)``.
+    reinit_every : int
+        In tracked mode every this many frames the frame is also fitted from scratch
+        and the better fit kept (0: never).
     **kw
         Passed to :func:`fit_pose` (``height``, ``refine``, ``spread``, ...).
 
@@ -1144,7 +1152,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         if not m.any():
             prev = None
             continue
-        fp = fit_pose(m, previous=prev if tracked else None, **kw)
+        challenge = bool(reinit_every) and k % reinit_every == 0
+        fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
         joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
         scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
         sim[k], warm[k] = fp.similarity, fp.warm
