@@ -26,7 +26,7 @@ from scipy.ndimage import gaussian_filter1d, median_filter
 
 from vidcap.annotations import Annotations, default_path
 from vidcap.body import JOINT_NAMES, SEGMENT_NAMES, BodyModel
-from vidcap.errors import VidcapError
+from vidcap.errors import AnnotationError, VidcapError
 from vidcap.fileio import savez_atomic
 from vidcap.lift import (
     assign_sides,
@@ -239,6 +239,10 @@ class ConvertResult:
             orientation=lr.orientation.astype(str), yaw=lr.yaw, scale=np.float64(lr.scale),
             scores=self.scores, similarity=self.similarity, clamped=lr.clamped,
             margin=np.minimum(lr.margin, 1e6), zeta=lr.zeta, fps=np.float64(self.fps),
+            check_frame=np.array([c["frame"] for c in lr.checks], dtype=int),
+            check_segment=np.array([c["segment"] for c in lr.checks], dtype="U16"),
+            check_sign=np.array([c["sign"] for c in lr.checks], dtype=int),
+            check_priority=np.array([c["priority"] for c in lr.checks], dtype=float),
             bvh_joints3d=self.motion.positions(),
         )
 
@@ -298,9 +302,11 @@ def run(
 
     if annotations is None and default_path(video).exists():
         annotations = default_path(video)
+    ann_source = video
     if isinstance(annotations, (str, os.PathLike)):
         log(f"annotations: {annotations}")
-        annotations = Annotations.load(annotations, n_frames=info.n_frames or None)
+        ann_source = annotations
+        annotations = Annotations.load(annotations)  # frames are checked once decoded
     ann = annotations or Annotations()
 
     # 1. background plate
@@ -366,7 +372,7 @@ def run(
             track = np.interp(t, t[ok], track[ok])
         else:
             track = None
-    _check_events(ann, len(masks), video)
+    _check_events(ann, len(masks), ann_source)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track)
     keys = None
@@ -384,12 +390,13 @@ def run(
     )
 
 
-def _check_events(ann: Annotations, n_frames: int, video) -> None:
+def _check_events(ann: Annotations, n_frames: int, source) -> None:
     late = [e for e in ann.events if e.frame >= n_frames]
     if late:
         e = late[0]
-        raise VidcapError(
-            f"annotation at frame {e.frame} is beyond the video's {n_frames} frames", video)
+        raise AnnotationError(
+            f"{e.type} event at frame {e.frame} is beyond the video's {n_frames} frames "
+            f"(frames count from 0)", source)
 
 
 def convert(
