@@ -62,9 +62,27 @@ def main() -> int:
         f, m = clip(90, 240, 320, rng=rng(0), **kw)
         rows += score(name, f, m)
     try:
-        from vidcap import synth  # noqa: F401  (the synth branch)
+        from vidcap import synth
     except ImportError:
         print("(vidcap.synth not available: its clips are not scored)")
+    else:
+        # vidcap synth clips rendered in memory at the CLI's default 640x480, 90 frames.
+        for name, motion, kw in [
+                ("synth jacks, front (yaw 0)", "jacks", {"yaw_deg": 0}),
+                ("synth jacks, front, drift 0.1", "jacks",
+                 {"yaw_deg": 0, "lighting_drift": 0.1}),
+                ("synth jacks, side (yaw 90)", "jacks", {"yaw_deg": 90}),
+                ("synth walk, side, drift 0.1", "walk", {"yaw_deg": 90, "lighting_drift": 0.1}),
+                ("synth arms, front", "arms", {"yaw_deg": 0})]:
+            mo = synth.make_motion(motion, n_frames=90, rng=rng(0))
+            f, truth = synth.render_clip(mo, rng=rng(0), **kw)
+            rows += score(name, f, truth["masks"])
+        # The committed sample clips (H.264 files and their truth).
+        for stem in ("walk_side", "walk_three_quarter", "arms"):
+            video = ROOT / "sample_videos" / f"{stem}.mp4"
+            if video.exists():
+                truth = np.load(ROOT / "sample_videos" / f"{stem}_truth.npz")["masks"]
+                rows += score(f"sample_videos/{stem}.mp4", video, truth)
     print(f"{'clip':30s} {'method':13s} {'IoU med':>8s} {'IoU p10':>8s} {'secs':>6s}  note")
     for name, method, med, p10, dt, note in rows:
         print(f"{name:30s} {method:13s} {med:8.3f} {p10:8.3f} {dt:6.2f}  {note}")

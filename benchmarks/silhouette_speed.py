@@ -47,7 +47,7 @@ def main() -> int:
     w, h = (int(v) for v in a.size.split("x"))
     frames, masks = clip(a.frames, h, w, rng=np.random.default_rng(0), walk=True)
     with tempfile.TemporaryDirectory() as tmp:
-        video = Path(tmp) / "clip.mkv"
+        video = Path(tmp) / "clip.mp4"
         write_video(video, frames, 25, crf=18)
         n = a.frames
         estimate_background(frames[:4])  # import skimage etc. once, outside the timings

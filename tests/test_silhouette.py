@@ -122,3 +122,19 @@ def test_normalise_reports_clipping():
     mask = np.zeros((100, 300), bool)
     mask[40:60, 10:290] = True    # much wider than tall
     assert normalise_silhouette(mask, height=32).clipped
+
+
+def test_half_resolution_work_scale_keeps_the_outline():
+    """At work_scale 2 the outline is refined at full resolution: the masks agree
+    with the full-resolution ones and with the truth to within a few edge pixels."""
+    frames, masks = clip(12, 240, 320, rng=np.random.default_rng(31), walk=True)
+    bg = estimate_background(frames, n_samples=12)
+    full = extract_silhouettes(frames, bg, work_scale=1)
+    half = extract_silhouettes(frames, bg, work_scale=2)
+    assert half.masks.shape == masks.shape
+    iou_half = (half.masks & masks).sum((1, 2)) / (half.masks | masks).sum((1, 2))
+    iou_full = (full.masks & masks).sum((1, 2)) / (full.masks | masks).sum((1, 2))
+    assert np.median(iou_half) > 0.95
+    assert np.median(iou_half) > np.median(iou_full) - 0.02
+    assert np.abs(half.bbox - full.bbox).max() <= 2
+    assert (half.found == full.found).all()

@@ -184,18 +184,28 @@ def sample_frames(
         n = len(source)
         idx = _sample_indices(n, n_samples, rng)
         return np.ascontiguousarray(source[idx]), idx
-    from vidcap.video import iter_chunks, probe
+    from vidcap.video import iter_chunks, iter_frames, probe
 
     info = probe(source)
     idx = _sample_indices(info.n_frames, n_samples, rng)
-    wanted = set(idx.tolist())
     got, got_idx, start = [], [], 0
-    for chunk in iter_chunks(source, chunk_size=chunk_size):
-        for j in range(len(chunk)):
-            if start + j in wanted:
-                got.append(chunk[j].copy())
-                got_idx.append(start + j)
-        start += len(chunk)
+    if len(idx) > 1 and np.all(np.diff(idx) == idx[1] - idx[0]):
+        # Evenly spaced: only the sampled frames are converted to arrays.
+        step = int(idx[1] - idx[0])
+        for j, frame in enumerate(iter_frames(source, start=int(idx[0]), step=step)):
+            if j >= len(idx):
+                break
+            got.append(frame)
+            got_idx.append(int(idx[j]))
+        start = got_idx[-1] + 1 if got_idx else 0
+    else:
+        wanted = set(idx.tolist())
+        for chunk in iter_chunks(source, chunk_size=chunk_size):
+            for j in range(len(chunk)):
+                if start + j in wanted:
+                    got.append(chunk[j].copy())
+                    got_idx.append(start + j)
+            start += len(chunk)
     if start < info.n_frames and len(got) < min(n_samples, start):
         # The container over-stated its frame count: resample what exists.
         return sample_frames(source_frames_cache(source, start), n_samples=n_samples, rng=rng)
@@ -213,11 +223,12 @@ def source_frames_cache(path, n):  # pragma: no cover - rare: wrong frame counts
 def _sample_indices(n: int, k: int, rng) -> np.ndarray:
     if n <= k:
         return np.arange(n)
-    edges = np.linspace(0, n, k + 1)
     if rng is None:
-        idx = ((edges[:-1] + edges[1:]) / 2).astype(int)
-    else:
-        idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
+        # Evenly spaced with a constant stride, centred in the video.
+        step = n // k
+        return (n - step * (k - 1)) // 2 + step * np.arange(k)
+    edges = np.linspace(0, n, k + 1)
+    idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
     return np.unique(np.clip(idx, 0, n - 1))
 
 
@@ -284,10 +295,10 @@ def estimate_background(
         conf = np.ones(frames.shape[1:3], np.float32)
         model = _finish(frames, gains, plate, weights, conf, "median", idx, name)
         return model
-    weights_small, _ = _region_vote(frames, gains, work_size=work_size,
+    weights_small, holes = _region_vote(frames, gains, work_size=work_size,
                                  segment_scale=segment_scale, min_region=min_region,
                                  progress=progress)
-    return _finish_regions(frames, gains, weights_small, idx, name)
+    return _finish_regions(frames, gains, weights_small, idx, name, holes)
 
 
 def _frame_gains(frames: np.ndarray) -> np.ndarray:
@@ -391,10 +402,106 @@ def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progres
     level = np.take_along_axis(scored, best[None], 0)[0]
     same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
     weights = same & (level >= min_stability)[None]
-    return weights.astype(np.float32), level
+    holes = _footprint_plate(small, means, med, tau, best, agree, weights)
+    return weights.astype(np.float32), holes
 
 
-def _finish_regions(frames, gains, weights_small, idx, name):
+def _footprint_plate(small, means, med, tau, best, agree, weights, *,
+                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15):
+    """Background inside the motion footprint, from the background around it.
+
+    Updates ``weights`` (k, h, w) in place and returns the static body parts
+    (h, w) bool, pixels never seen uncovered.
+
+    The motion footprint is the union over samples of the pixels that differ from
+    the temporal median. Inside it (and inside its holes) the per-pixel vote can
+    pick the person's colour when the person covers a pixel in most frames. The
+    background around the footprint, inpainted across it, is a spatial guess of
+    what lies behind; at a footprint pixel whose voted colour is far from that
+    guess while some sample is close to it, the samples showing that colour are
+    taken instead.
+
+    A person moving their limbs while the torso stays put (jumping jacks, waving)
+    leaves the torso as a *hole* of the footprint: static pixels the frame border
+    cannot reach through static pixels. A hole is a body part that never moved
+    (never seen uncovered) when its colour is far from the guess and
+
+    * it is not most of its footprint component (``max_hole_share`` of the filled
+      component's area): a static object walked around on all sides is usually
+      large next to the paths around it; and
+    * the footprint around it shows the hole's own colour in some samples
+      (``min_evidence`` of its ring pixels): the body part's outline changes while
+      its colour stays (a hop, sleeves, a shifting hem), whereas passers-by around
+      a static object rarely wear its colour.
+    """
+    k, h, w = small.shape[:3]
+    box = np.ones((3, 3), np.uint8)
+    blur = np.stack([cv2.GaussianBlur(x, (3, 3), 0) for x in small])
+    dev = np.abs(blur - np.median(blur, axis=0)[None]).max(axis=-1)  # (k, h, w)
+    moving = (dev > tau).any(axis=0).astype(np.uint8)
+    moving = cv2.morphologyEx(moving, cv2.MORPH_OPEN, box)
+    out = np.zeros((h, w), bool)
+    if not moving.any():
+        return out
+    n, lab = cv2.connectedComponents(1 - moving, connectivity=4)
+    border = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
+    hole_ids = np.setdiff1d(np.arange(1, n), border)
+    is_hole = np.isin(lab, hole_ids)
+    filled = (moving > 0) | is_hole
+    # Spatial guess: the voted plate outside the footprint, inpainted across it.
+    voted = np.take_along_axis(means, best[None, ..., None], 0)[0]
+    region = cv2.dilate(filled.astype(np.uint8), box)
+    guess = cv2.inpaint(np.clip(voted, 0, 255).astype(np.uint8), region, 3,
+                        cv2.INPAINT_TELEA).astype(np.float32)
+    far = 3.0 * tau
+    dist = np.abs(means - guess[None]).max(axis=-1)  # (k, h, w)
+    near_t = dist.argmin(axis=0)
+    near_d = np.take_along_axis(dist, near_t[None], 0)[0]
+    voted_d = np.abs(voted - guess).max(axis=-1)
+    # Switch when some sample is clearly nearer the guess than the voted colour.
+    # and that colour has support of its own (not a passer-by's transient colour).
+    alt = np.take_along_axis(agree, near_t[None, None], 1)[:, 0]  # (k, h, w)
+    switch = (filled & (voted_d > far) & (near_d <= 0.5 * voted_d)
+              & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
+    if switch.any():
+        weights[:, switch] = alt[:, switch]
+    if not len(hole_ids):
+        return out
+    _, comp = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
+    comp_area = np.bincount(comp.ravel())
+    hole_area = np.bincount(lab.ravel(), minlength=n)
+    # Colour of the nearest hole pixel, for every pixel (to compare the ring with).
+    _, near = cv2.distanceTransformWithLabels(
+        (~is_hole).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
+    ys, xs = np.nonzero(is_hole)
+    lut = np.zeros((int(near.max()) + 1, 3), np.float32)
+    lut[near[ys, xs]] = med[ys, xs]
+    near_colour = lut[near]  # (h, w, 3)
+    match = (np.abs(means - near_colour[None]).max(axis=-1) < tau).any(axis=0)
+    unseen = voted_d > far
+    for i in hole_ids:
+        hole = lab == i
+        c = np.bincount(comp[hole]).argmax()
+        if hole_area[i] > max_hole_share * comp_area[c]:
+            continue
+        ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
+            moving > 0)
+        if ring.any() and match[ring].mean() >= min_evidence:
+            out |= hole & unseen
+    if out.any():
+        # Footprint pixels next to a static body part, far from the guess in every
+        # sample, belong to it too (the head and shoulders above a hopping torso).
+        cand = (filled & unseen & ~switch) | out
+        nc, cl = cv2.connectedComponents(cand.astype(np.uint8), connectivity=8)
+        keep = np.zeros(nc, bool)
+        keep[np.unique(cl[out])] = True
+        keep[0] = False
+        out = keep[cl]
+    weights[:, out] = 0
+    return out
+
+
+def _finish_regions(frames, gains, weights_small, idx, name, holes=None):
     k, hh, ww = frames.shape[:3]
     h, w = weights_small.shape[1:]
     # Keep only samples well inside background regions (low resolution edges are
@@ -411,14 +518,39 @@ def _finish_regions(frames, gains, weights_small, idx, name):
     if never.any():
         # Never seen uncovered: guess from the surrounding background, so that
         # whatever stands there (the person) still differs from the plate.
-        plate = cv2.inpaint(plate, never.astype(np.uint8), 5, cv2.INPAINT_TELEA)
+        # Static body parts come from the low-resolution footprint: widen them by
+        # one low-res pixel so that the inpainting starts from background, not
+        # from the person's edge.
+        ring = never.astype(np.uint8)
+        if holes is not None and holes.any():
+            r = int(np.ceil(hh / h)) + 1
+            body = cv2.resize(holes.astype(np.uint8), (ww, hh),
+                              interpolation=cv2.INTER_NEAREST)
+            ring |= cv2.dilate(body, np.ones((2 * r + 1, 2 * r + 1), np.uint8))
+        plate = cv2.inpaint(plate, ring, 5, cv2.INPAINT_TELEA)
     return _finish(frames, gains, plate, wfull, conf, "felzenszwalb", idx, name,
                    never_seen=never)
 
 
-def _robust_plate(frames, gains, weights) -> np.ndarray:
-    """Per-pixel median of the background samples, (H, W, 3) uint8."""
-    return _masked_median(_normalised_u8(frames, gains), weights <= 0)
+def _robust_plate(frames, gains, weights, *, max_samples=9) -> np.ndarray:
+    """Per-pixel median of the background samples, (H, W, 3) uint8.
+
+    At full resolution the median runs over at most ``max_samples`` evenly picked
+    samples (the cost is linear in them); pixels with no background sample among
+    those take the median over all samples.
+    """
+    x = _normalised_u8(frames, gains)
+    excl = weights <= 0
+    k = len(x)
+    if k <= max_samples:
+        return _masked_median(x, excl)
+    sub = np.unique(np.linspace(0, k - 1, max_samples).round().astype(int))
+    plate = _masked_median(x[sub], excl[sub])
+    lost = excl[sub].all(axis=0) & ~excl.all(axis=0)
+    if lost.any():
+        ys, xs = np.nonzero(lost)
+        plate[ys, xs] = _masked_median(x[:, ys, xs][:, None], excl[:, ys, xs][:, None])[0]
+    return plate
 
 
 def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=None):
@@ -440,6 +572,8 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
     sel = resid[bgw]
     if len(sel) < 16:
         sel = resid.reshape(-1, 3)
+    if len(sel) > 200_000:  # plenty for a robust spread; the median is the cost
+        sel = sel[:: len(sel) // 200_000]
     sigma = (1.4826 * np.median(np.abs(sel - np.median(sel, axis=0)), axis=0)).astype(
         np.float32)
     thr = _threshold_from_sigma(sigma, l1[bgw] if bgw.any() else l1.ravel())
