@@ -258,15 +258,20 @@ class Scene:
     follow : bool
         Frame the camera on the current frame's points (for single-frame pictures);
         otherwise on the whole clip (for playing it).
+    view_direction : array_like, shape (3,), optional
+        From where the camera looks at the scene's centre (default: front-right,
+        a little above).
     """
 
     def __init__(self, data: Points3D, *, overlay: Points3D | None = None,
-                 window_size=(800, 600), off_screen=None, plotter=None, follow=False):
+                 window_size=(800, 600), off_screen=None, plotter=None, follow=False,
+                 view_direction=None):
         import pyvista as pv
 
         self.data = data
         self.overlay = overlay
         self.follow = follow
+        self.view_direction = view_direction
         self.frame = 0
         if (off_screen or pv.OFF_SCREEN) and not os.environ.get("DISPLAY"):
             _quiet_vtk()
@@ -334,7 +339,9 @@ class Scene:
         size = float(np.max(hi - lo)) or 1.0
         up = np.zeros(3)
         up[self.data.up] = 1.0
-        if self.data.up == 1:  # Y up, -Z forward: look from front-right, a little above
+        if self.view_direction is not None:
+            direction = np.array(self.view_direction, dtype=float)
+        elif self.data.up == 1:  # Y up, -Z forward: look from front-right, a little above
             direction = np.array([0.7, 0.3, -1.0])
         else:  # Z up: look from +X,-Y, a little above
             direction = np.array([0.7, -1.0, 0.3])

@@ -1,0 +1,348 @@
+"""The state behind the annotate page: one clip, its cached stage results, the
+user's annotations, and the lifted pose, re-lifted after every edit.
+
+The page (:mod:`ui.annotate`) only talks to :class:`AnnotateSession`; the session
+talks to the library through two small seams, so that it can be tested alone:
+
+* :class:`ClipData`, the results of the pipeline's heavy stages (frames,
+  silhouettes, 2D fit, proposals' inputs), built by :func:`load_clip`;
+* a *lifter* (:class:`VidcapLifter`): body yaw from orientation labels, depth-sign
+  proposals with the user's signs as constraints, and lifting to 3D.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.body import JOINT_INDEX, JOINT_NAMES, ORIENTATIONS, SEGMENT_INDEX, SEGMENT_NAMES
+from vidcap.errors import AnnotationError
+
+
+@dataclass
+class ClipData:
+    """The pipeline's results for one clip that the annotate page needs.
+
+    Attributes
+    ----------
+    video : pathlib.Path
+        The video file.
+    fps : float
+        Frames per second.
+    read_frame : callable
+        ``read_frame(i) -> (H, W, 3) uint8`` BGR frame ``i``.
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        Fitted 2D joints in pixels (x right, y down), named by the body's sides.
+    masks : numpy.ndarray of bool, shape (F, H, W), or None
+        Silhouettes.
+    fit_score : numpy.ndarray, shape (F,)
+        Quality of the 2D fit per frame in [0, 1] (the silhouette similarity);
+        frames below :attr:`AnnotateSession.low_fit` are flagged.
+    scale : float
+        Pixels per metre of the subject.
+    width_ratio : numpy.ndarray, shape (F,)
+        Torso width foreshortening per frame (for the yaw from orientation labels).
+    orientation : numpy.ndarray of str, shape (F,)
+        Proposed orientation labels (:data:`vidcap.body.ORIENTATIONS`).
+    """
+
+    video: Path
+    fps: float
+    read_frame: Callable[[int], np.ndarray]
+    joints2d: np.ndarray
+    masks: np.ndarray | None
+    fit_score: np.ndarray
+    scale: float
+    width_ratio: np.ndarray
+    orientation: np.ndarray
+    size: tuple[int, int] = field(default=(0, 0))  # (width, height), filled in post-init
+
+    def __post_init__(self):
+        self.video = Path(self.video)
+        self.joints2d = np.asarray(self.joints2d, dtype=float)
+        F = self.joints2d.shape[0]
+        if self.joints2d.shape != (F, len(JOINT_NAMES), 2):
+            raise ValueError(f"joints2d must be (F, 15, 2), got {self.joints2d.shape}")
+        self.fit_score = np.broadcast_to(np.asarray(self.fit_score, float), (F,)).copy()
+        self.width_ratio = np.broadcast_to(np.asarray(self.width_ratio, float), (F,)).copy()
+        self.orientation = np.broadcast_to(np.asarray(self.orientation).astype(str), (F,)).copy()
+        if self.size == (0, 0):
+            h, w = self.read_frame(0).shape[:2]
+            self.size = (w, h)
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames F."""
+        return self.joints2d.shape[0]
+
+
+class VidcapLifter:
+    """The library's lifting, as the session needs it (``vidcap.lift``, ``vidcap.proposals``).
+
+    Parameters
+    ----------
+    body : vidcap.body.BodyModel, optional
+        The subject's body (default 1.75 m).
+    """
+
+    def __init__(self, body=None):
+        from vidcap.body import BodyModel
+
+        self.body = body or BodyModel()
+
+    def yaw(self, orientation: np.ndarray, width_ratio: np.ndarray) -> np.ndarray:
+        """Body yaw (F,) in radians from labels (F,) and torso foreshortening (F,)."""
+        from vidcap.lift import yaw_from_orientation
+
+        return yaw_from_orientation(orientation, width_ratio)
+
+    def propose(self, joints2d, yaw, fixed, scale):
+        """Depth signs (F, 10), margins (F, 10) and ranked checks with ``fixed`` user signs."""
+        from vidcap.proposals import propose_signs
+
+        p = propose_signs(joints2d, yaw, scale=scale, body=self.body, fixed=fixed)
+        return p.signs, p.margin, p.checks(self.body, limit=200)
+
+    def lift(self, joints2d, signs, yaw, scale) -> np.ndarray:
+        """3D joints (F, 15, 3) in metres (X right, Y up, Z toward the camera)."""
+        from vidcap.lift import lift
+
+        return lift(joints2d, signs, yaw, body=self.body, scale=scale).joints3d
+
+
+def backup_path(path: Path) -> Path:
+    """A free ``.bak`` name beside ``path`` (``x.json.bak``, ``x.json.bak1``, ...)."""
+    for n in range(1000):
+        cand = path.with_name(path.name + (".bak" if n == 0 else f".bak{n}"))
+        if not cand.exists():
+            return cand
+    raise AnnotationError("too many backups beside the annotations file", path)
+
+
+class AnnotateSession:
+    """One clip being annotated: edits, re-lifting and autosave.
+
+    Parameters
+    ----------
+    clip : ClipData
+        The cached stage results.
+    annotations_path : str or path-like
+        The annotations JSON (read if it exists; written after every edit).
+    lifter : VidcapLifter, optional
+        The lifting seam (default: the library's).
+    low_fit : float
+        Fit scores below this mark a frame as needing attention (keyword-only knob).
+    low_margin : float
+        Proposal margins below this mark a segment's sign as doubtful.
+    annotations_cls : type, optional
+        The annotations class (default :class:`vidcap.annotations.Annotations`).
+
+    Attributes
+    ----------
+    load_error : str or None
+        Why the annotations file could not be read. The file is then copied to
+        :attr:`backup` and not written until the user makes an edit.
+    """
+
+    def __init__(self, clip: ClipData, annotations_path, *, lifter=None, low_fit: float = 0.5,
+                 low_margin: float = 0.5, annotations_cls=None):
+        if annotations_cls is None:
+            from vidcap.annotations import Annotations as annotations_cls
+        self.clip = clip
+        self.path = Path(annotations_path)
+        self.lifter = lifter or VidcapLifter()
+        self.low_fit = float(low_fit)
+        self.low_margin = float(low_margin)
+        self.load_error: str | None = None
+        self.backup: Path | None = None
+        self.last_edit_ms = 0.0
+        self.saved = False
+        self._visited: set[tuple[int, str]] = set()
+        self.annotations = annotations_cls()
+        if self.path.exists():
+            try:
+                self.annotations = annotations_cls.load(self.path, clip.n_frames)
+            except AnnotationError as exc:
+                self.load_error = str(exc)
+                self.backup = backup_path(self.path)
+                shutil.copy2(self.path, self.backup)
+        self._recompute()
+
+    # ------------------------------------------------------------------ derived state
+    def _recompute(self) -> None:
+        clip = self.clip
+        F = clip.n_frames
+        self.user_signs, user_orient, self.user_joints = self.annotations.resolve(F)
+        self.user_orient = np.asarray(user_orient).astype(str)
+        self.orientation = np.where(self.user_orient != "", self.user_orient, clip.orientation)
+        self.joints2d = clip.joints2d.copy()
+        have = np.isfinite(self.user_joints).all(axis=-1)
+        self.joints2d[have] = self.user_joints[have]
+        self.yaw = self.lifter.yaw(self.orientation, clip.width_ratio)
+        self.signs, self.margin, self.checks = self.lifter.propose(
+            self.joints2d, self.yaw, self.user_signs, clip.scale)
+        self.signs = np.where(self.user_signs != 0, self.user_signs, self.signs).astype(int)
+        self.joints3d = self.lifter.lift(self.joints2d, self.signs, self.yaw, clip.scale)
+
+    @property
+    def n_frames(self) -> int:
+        """Frames in the clip."""
+        return self.clip.n_frames
+
+    @property
+    def n_user_inputs(self) -> int:
+        """The user's inputs so far (seed 004 section 4.3 counts them)."""
+        return int(self.annotations.n_user_inputs)
+
+    def low_confidence(self, frame: int) -> np.ndarray:
+        """Segments (10,) bool whose sign is doubtful or whose frame fits badly."""
+        doubtful = (self.margin[frame] < self.low_margin) & (self.user_signs[frame] == 0)
+        return doubtful | (self.clip.fit_score[frame] < self.low_fit)
+
+    def frame_info(self, frame: int) -> dict:
+        """What the page shows for ``frame`` (JSON-ready)."""
+        f = self._check_frame(frame)
+        low = self.low_confidence(f)
+        segs = []
+        for k, name in enumerate(SEGMENT_NAMES):
+            segs.append({
+                "name": name,
+                "label": name.replace("_", " "),
+                "sign": int(self.signs[f, k]),
+                "user": bool(self.user_signs[f, k] != 0),
+                "event": self._event_at(f, "depth", name),
+                "low": bool(low[k]),
+                "margin": None if not np.isfinite(self.margin[f, k])
+                else round(float(self.margin[f, k]), 2),
+            })
+        return {
+            "frame": f,
+            "segments": segs,
+            "orientation": str(self.orientation[f]),
+            "orientation_user": bool(self.user_orient[f] != ""),
+            "fit_score": round(float(self.clip.fit_score[f]), 3),
+            "user_joints": [JOINT_NAMES[i] for i in
+                            np.flatnonzero(np.isfinite(self.user_joints[f]).all(-1))],
+        }
+
+    def _event_at(self, frame: int, type_: str, key: str) -> bool:
+        return any(e.frame == frame and e.type == type_ and e.key == key
+                   for e in self.annotations.events)
+
+    def _check_frame(self, frame) -> int:
+        f = int(frame)
+        if not 0 <= f < self.n_frames:
+            raise ValueError(f"frame {frame} is outside 0..{self.n_frames - 1}")
+        return f
+
+    # ------------------------------------------------------------------ edits
+    def _edited(self, t0: float) -> float:
+        self._recompute()
+        self.save()
+        self.last_edit_ms = (time.perf_counter() - t0) * 1000.0
+        return self.last_edit_ms
+
+    def set_depth(self, frame: int, segment: str, sign) -> float:
+        """From ``frame`` on, ``segment`` points toward (+1) / away (-1) / auto (0).
+
+        Returns the time the edit took (re-lift and save), milliseconds.
+        """
+        t0 = time.perf_counter()
+        if segment not in SEGMENT_INDEX:
+            raise ValueError(f"unknown segment {segment!r}")
+        self.annotations.add_depth(self._check_frame(frame), segment, int(sign))
+        return self._edited(t0)
+
+    def flip_depth(self, frame: int, segment: str) -> float:
+        """Set ``segment``'s sign from ``frame`` on to the opposite of what is shown now."""
+        current = int(self.signs[self._check_frame(frame), SEGMENT_INDEX[segment]])
+        return self.set_depth(frame, segment, -1 if current >= 0 else 1)
+
+    def set_orientation(self, frame: int, label: str) -> float:
+        """From ``frame`` on, the body faces ``label``. Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        if label not in ORIENTATIONS:
+            raise ValueError(f"unknown orientation {label!r}")
+        self.annotations.add_orientation(self._check_frame(frame), label)
+        return self._edited(t0)
+
+    def set_joint(self, frame: int, joint: str, u: float, v: float) -> float:
+        """At ``frame``, ``joint`` is at pixel (u, v). Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        if joint not in JOINT_INDEX:
+            raise ValueError(f"unknown joint {joint!r}")
+        w, h = self.clip.size
+        u = float(np.clip(u, 0, w - 1))
+        v = float(np.clip(v, 0, h - 1))
+        self.annotations.add_joint(self._check_frame(frame), joint, round(u, 1), round(v, 1))
+        return self._edited(t0)
+
+    def clear_joint(self, frame: int, joint: str) -> float:
+        """Forget the user's position of ``joint`` at ``frame``. Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        self.annotations.remove(self._check_frame(frame), "joint", joint)
+        return self._edited(t0)
+
+    def nearest_joint(self, frame: int, u: float, v: float, *, radius: float) -> str | None:
+        """Name of the joint nearest pixel (u, v) within ``radius`` pixels, else None."""
+        d = np.linalg.norm(self.joints2d[self._check_frame(frame)] - [u, v], axis=1)
+        i = int(np.argmin(d))
+        return JOINT_NAMES[i] if d[i] <= radius else None
+
+    def save(self) -> None:
+        """Write the annotations atomically. After a load error an empty set is not written,
+        so the user's (malformed) file is never replaced by nothing."""
+        if self.load_error is not None and self.n_user_inputs == 0:
+            return
+        self.annotations.save(self.path)
+        self.saved = True
+
+    # ------------------------------------------------------------------ attention
+    def flagged(self) -> list[dict]:
+        """Frames needing attention, most urgent first: doubtful depth signs (the
+        proposals' ranked checks) and badly fitting frames.
+
+        Each item has ``frame``, ``segment`` (or ``""``) and ``reason``.
+        """
+        out = []
+        for c in self.checks:
+            k = SEGMENT_INDEX[c["segment"]]
+            if self.user_signs[c["frame"], k] == 0:
+                out.append({"frame": int(c["frame"]), "segment": c["segment"],
+                            "reason": f"{c['segment'].replace('_', ' ')}: depth doubtful"})
+        bad = np.flatnonzero(self.clip.fit_score < self.low_fit)
+        for f in bad[np.argsort(self.clip.fit_score[bad], kind="stable")]:
+            out.append({"frame": int(f), "segment": "",
+                        "reason": f"2D fit poor ({self.clip.fit_score[f]:.2f})"})
+        return out
+
+    def next_attention(self, frame: int) -> dict | None:
+        """The most urgent flagged item not yet visited (and not at ``frame``); marks it
+        visited. Cycles once every item has been visited."""
+        items = self.flagged()
+        if not items:
+            return None
+        fresh = [it for it in items if (it["frame"], it["segment"]) not in self._visited
+                 and it["frame"] != frame]
+        if not fresh:
+            self._visited.clear()
+            fresh = [it for it in items if it["frame"] != frame] or items
+        item = fresh[0]
+        self._visited.add((item["frame"], item["segment"]))
+        return item
+
+
+def default_annotations_path(video: str | os.PathLike) -> Path:
+    """``VIDEO_STEM.vidcap.json`` beside the video (as :mod:`vidcap.annotations`)."""
+    try:
+        from vidcap.annotations import default_path
+    except ImportError:  # pragma: no cover - the annotations module is part of the package
+        v = Path(video)
+        return v.with_name(v.stem + ".vidcap.json")
+    return default_path(video)
