@@ -1,0 +1,131 @@
+"""Annotation files: round trip, carrying forward, strict validation, safe saving."""
+
+import json
+
+import numpy as np
+import pytest
+
+from vidcap.annotations import Annotations, default_path
+from vidcap.body import SEGMENT_INDEX
+from vidcap.errors import AnnotationError
+
+
+def _sample():
+    a = Annotations()
+    a.add_orientation(0, "right")
+    a.add_orientation(30, "back_right")
+    a.add_depth(5, "l_lower_arm", "toward")
+    a.add_depth(12, "l_lower_arm", -1)
+    a.add_depth(20, "l_lower_arm", "auto")
+    a.add_depth(3, "torso", +1)
+    a.add_joint(7, "l_wrist", 12.5, 40.0)
+    return a
+
+
+def test_round_trip(tmp_path):
+    a = _sample()
+    p = tmp_path / "clip.vidcap.json"
+    a.save(p)
+    b = Annotations.load(p, n_frames=50)
+    assert a == b and b.n_user_inputs == 7
+    assert json.loads(p.read_text())["version"] == 1
+
+
+def test_resolve_carries_forward():
+    signs, orient, joints = _sample().resolve(40)
+    k = SEGMENT_INDEX["l_lower_arm"]
+    assert signs[:5, k].tolist() == [0] * 5
+    assert set(signs[5:12, k]) == {1} and set(signs[12:20, k]) == {-1}
+    assert set(signs[20:, k]) == {0}
+    assert set(signs[3:, SEGMENT_INDEX["torso"]]) == {1}
+    assert orient[0] == "right" and orient[29] == "right" and orient[30] == "back_right"
+    assert np.isfinite(joints).sum() == 2 and tuple(joints[7, 5]) == (12.5, 40.0)
+
+
+def test_depth_event_ends_where_the_segment_next_enters_the_image_plane():
+    a = Annotations()
+    a.add_depth(2, "head", "away")
+    near = np.zeros((12, 10), bool)
+    near[6:8, SEGMENT_INDEX["head"]] = True
+    signs, _, _ = a.resolve(12, near_plane=near)
+    assert signs[:, SEGMENT_INDEX["head"]].tolist() == [0, 0, -1, -1, -1, -1] + [0] * 6
+
+
+@pytest.mark.parametrize(
+    "doc, message",
+    [
+        ("[1, 2]", "top level must be an object"),
+        ('{"version": 2, "events": []}', "'version' must be 1"),
+        ('{"version": 1}', "'events' must be a list"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "depth", "segment": "l_foot",'
+         ' "value": "toward"}]}', "events[0]: unknown segment 'l_foot'"),
+        ('{"version": 1, "events": [{"frame": 99, "type": "orientation", "value": "left"}]}',
+         "events[0]: frame 99 is out of range"),
+        ('{"version": 1, "events": [{"frame": -1, "type": "orientation", "value": "left"}]}',
+         "'frame' must be a non-negative integer"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "orientation", "value": "up"}]}',
+         "orientation 'up' is not one of"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "depth", "segment": "head",'
+         ' "value": 1}]}', "depth value 1 is not toward, away or auto"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "joint", "joint": "nose",'
+         ' "u": 1, "v": 2}]}', "unknown joint 'nose'"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "joint", "joint": "neck",'
+         ' "u": "a", "v": 2}]}', "'u' and 'v' must be finite numbers"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "spin"}]}', "'type' must be one of"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "orientation"}]}', "lacks ['value']"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "orientation", "value": "left",'
+         ' "x": 1}]}', "unknown key(s) ['x']"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "orientation", "value": "left"},'
+         ' {"frame": 1, "type": "orientation", "value": "right"}]}', "events[1]: a second"),
+        ('{"version": 1, "events": [', "not valid JSON (line 1"),
+    ],
+)
+def test_malformed_files_give_one_line_errors(tmp_path, doc, message):
+    p = tmp_path / "bad.json"
+    p.write_text(doc)
+    with pytest.raises(AnnotationError) as info:
+        Annotations.load(p, n_frames=50)
+    text = str(info.value)
+    assert message in text and str(p) in text and "\n" not in text
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(AnnotationError, match="no such annotations file"):
+        Annotations.load(tmp_path / "none.json")
+
+
+def test_failed_save_keeps_the_users_file(tmp_path, monkeypatch):
+    p = tmp_path / "a.json"
+    _sample().save(p)
+    before = p.read_text()
+    a = _sample()
+    a.add_depth(1, "head", "away")
+    import vidcap.annotations as mod
+
+    def boom(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(mod.json, "dumps", boom)
+    with pytest.raises(OSError):
+        a.save(p)
+    assert p.read_text() == before
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["a.json"]
+
+
+def test_api_rejects_bad_values():
+    a = Annotations()
+    with pytest.raises(ValueError):
+        a.add_depth(0, "l_foot", 1)
+    with pytest.raises(ValueError):
+        a.add_depth(0, "head", 2)
+    with pytest.raises(ValueError):
+        a.add_orientation(-1, "left")
+    with pytest.raises(ValueError):
+        a.add_joint(0, "neck", np.nan, 1)
+    a.add_depth(4, "head", 1)
+    a.add_depth(4, "head", -1)  # replaces
+    assert a.n_user_inputs == 1 and a.remove(4, "depth", "head") and len(a) == 0
+
+
+def test_default_path():
+    assert default_path("/x/walk.mp4").name == "walk.vidcap.json"

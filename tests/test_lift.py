@@ -1,0 +1,143 @@
+"""Lifting (seed 004 Eq. 2.2), proposals and joints->motion on FK-posed ground truth."""
+
+import numpy as np
+import pytest
+
+from tests.posed import posed_clip
+from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, BodyModel, segment_vectors
+from vidcap.lift import (
+    assign_sides,
+    depth_magnitudes,
+    estimate_scale,
+    lift,
+    swap_sides,
+    torso_width_ratio,
+    yaw_from_orientation,
+)
+from vidcap.motion import build_motion, jitter, joints_to_motion, minimal_rotation
+from vidcap.proposals import propose_orientation, propose_signs
+
+
+def _mpjpe(a, b):
+    a = a - a[:, :1]
+    b = b - b[:, :1]
+    return np.linalg.norm(a - b, axis=-1).mean()
+
+
+def test_eq22_exact_with_true_signs_and_scale():
+    j2, j3, signs, _ = posed_clip(90.0, 40)
+    out = lift(j2, signs, np.full(40, np.pi / 2), scale=200.0)
+    assert _mpjpe(out.joints3d, j3) < 1e-6
+    assert not out.clamped.any()
+    # bone lengths are the model's
+    lengths = np.linalg.norm(segment_vectors(out.joints3d), axis=-1)
+    np.testing.assert_allclose(lengths, np.broadcast_to(BodyModel().segment_lengths(), (40, 10)))
+
+
+@pytest.mark.parametrize("yaw", [45.0, -45.0, 135.0, 0.0])
+def test_true_signs_with_estimated_scale_and_orientation(yaw):
+    j2, j3, signs, fps = posed_clip(yaw, 60)
+    s = estimate_scale(j2)
+    assert abs(s / 200.0 - 1) < 0.08
+    orient = propose_orientation(j2, scale=s, fps=fps, sides_known=True)
+    y = yaw_from_orientation(orient, torso_width_ratio(j2, s))
+    assert np.all(np.abs(np.angle(np.exp(1j * (y - np.deg2rad(yaw))))) < np.deg2rad(12))
+    out = lift(j2, signs, y, scale=s)
+    assert _mpjpe(out.joints3d, j3) < 0.05 * 1.75
+
+
+def test_wrong_sign_moves_the_distal_joint_by_twice_dz():
+    j2, j3, signs, _ = posed_clip(45.0, 10)
+    k = SEGMENT_INDEX["l_lower_leg"]
+    flipped = signs.copy()
+    flipped[:, k] *= -1
+    a = lift(j2, signs, np.deg2rad(45.0), scale=200.0).joints3d
+    b = lift(j2, flipped, np.deg2rad(45.0), scale=200.0).joints3d
+    dz, _ = depth_magnitudes(j2, 200.0)
+    ank = JOINT_INDEX["l_ankle"]
+    np.testing.assert_allclose(np.linalg.norm(a[:, ank] - b[:, ank], axis=-1), 2 * dz[:, k])
+
+
+def test_too_long_segments_are_clamped_and_reported():
+    j2, _, signs, _ = posed_clip(90.0, 5)
+    out = lift(j2, signs, np.pi / 2, scale=100.0)  # half the true scale: everything too long
+    assert out.clamped.all()
+    assert np.all(out.excess > 0.5)
+    lengths = np.linalg.norm(segment_vectors(out.joints3d), axis=-1)
+    np.testing.assert_allclose(lengths, np.broadcast_to(BodyModel().segment_lengths(), (5, 10)))
+
+
+def test_yaw_sectors():
+    rho = np.array([1.0, 0.7, 0.7, 0.2, 0.7])
+    y = np.rad2deg(yaw_from_orientation(
+        ["front_right", "front_right", "back_left", "right", "front_left"], rho))
+    np.testing.assert_allclose(y, [0.0, 45.57, -134.43, 90.0, -45.57], atol=0.01)
+    with pytest.raises(ValueError, match="unknown orientation"):
+        yaw_from_orientation(["up"], [1.0])
+
+
+def test_assign_sides_swaps_only_when_facing_the_camera():
+    j2, _, _, _ = posed_clip(0.0, 3)
+    image_named = swap_sides(j2)
+    np.testing.assert_array_equal(assign_sides(image_named, np.zeros(3)), j2)
+    np.testing.assert_array_equal(assign_sides(j2, np.full(3, np.pi)), j2)
+    np.testing.assert_array_equal(assign_sides(j2, np.full(3, np.pi / 2)), j2)
+
+
+@pytest.mark.parametrize("yaw", [45.0, -45.0, 30.0])
+def test_proposed_signs_are_mostly_right_where_they_matter(yaw):
+    j2, j3, signs, fps = posed_clip(yaw, 90, rng=np.random.default_rng(3))
+    s = estimate_scale(j2)
+    y = yaw_from_orientation(propose_orientation(j2, scale=s, fps=fps, sides_known=True),
+                             torso_width_ratio(j2, s))
+    prop = propose_signs(j2, y, scale=s)
+    matters = prop.zeta > 0.25
+    assert matters.sum() > 100
+    assert (prop.signs == signs)[matters].mean() >= 0.9
+    # a deliberately wrong proposal is ranked among the checks; user constraints win
+    fixed = np.zeros_like(signs)
+    fixed[10:20, SEGMENT_INDEX["l_lower_leg"]] = -signs[10:20, SEGMENT_INDEX["l_lower_leg"]]
+    forced = propose_signs(j2, y, scale=s, fixed=fixed)
+    k = SEGMENT_INDEX["l_lower_leg"]
+    np.testing.assert_array_equal(forced.signs[10:20, k], fixed[10:20, k])
+    assert np.isinf(forced.margin[10:20, k]).all()
+    checks = prop.checks(limit=5)
+    assert checks and all(c["priority"] >= checks[-1]["priority"] for c in checks)
+
+
+def test_orientation_follows_walking_direction():
+    j2, _, _, fps = posed_clip(90.0, 60)
+    s = estimate_scale(j2)
+    # the posed walk moves the root; make the track move right then mirror it
+    track = np.linspace(100, 400, 60)
+    assert set(propose_orientation(j2, scale=s, fps=fps, track=track)) == {"right"}
+    assert set(propose_orientation(j2, scale=s, fps=fps, track=track[::-1])) == {"left"}
+
+
+def test_minimal_rotation():
+    rng = np.random.default_rng(1)
+    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    from scipy.spatial.transform import Rotation
+
+    q = minimal_rotation(a, b)
+    out = Rotation.from_quat(q).apply(a / np.linalg.norm(a, axis=1, keepdims=True))
+    np.testing.assert_allclose(out, b / np.linalg.norm(b, axis=1, keepdims=True), atol=1e-12)
+    q = minimal_rotation([0, 1, 0], [0, -1, 0])
+    np.testing.assert_allclose(Rotation.from_quat(q).apply([0, 1, 0]), [0, -1, 0], atol=1e-12)
+
+
+def test_joints_to_motion_reproduces_the_pose_and_smoothing_reduces_jitter():
+    j2, j3, signs, fps = posed_clip(45.0, 60)
+    out = lift(j2, signs, np.deg2rad(45.0), scale=200.0)
+    m = joints_to_motion(out.joints3d, fps)
+    np.testing.assert_allclose(m.positions(), out.joints3d, atol=1e-9)
+    rng = np.random.default_rng(0)
+    noisy = out.joints3d + rng.normal(0, 0.01, out.joints3d.shape)
+    res = build_motion(noisy, fps, smooth_sigma=2.0)
+    assert res.jitter_after < 0.5 * res.jitter_before
+    assert res.jitter_before == pytest.approx(jitter(joints_to_motion(
+        noisy, fps).positions(), fps), rel=0.05)
+    pos = res.motion.positions()
+    assert pos[..., 1].min() >= -1e-9  # feet never below the floor
+    ank = [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
+    assert np.quantile(pos[:, ank, 1].min(1), 0.1) < 0.01  # and on it when lowest

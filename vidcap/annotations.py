@@ -1,0 +1,324 @@
+"""User annotations: sparse change events carried forward (seed 004 sections 3.1.5, 4.3).
+
+The seed's user gives, for a whole clip, only what the image cannot: the depth
+direction of each segment, the body orientation, and the image position of a joint
+hidden by occlusion. These rarely change (section 3.1.5), so the file holds *change
+events* and every value is carried forward to the next event.
+
+File format (JSON, UTF-8)::
+
+    {
+      "version": 1,
+      "events": [
+        {"frame": 0,  "type": "orientation", "value": "right"},
+        {"frame": 12, "type": "depth", "segment": "l_lower_arm", "value": "toward"},
+        {"frame": 40, "type": "depth", "segment": "l_lower_arm", "value": "auto"},
+        {"frame": 30, "type": "joint", "joint": "l_wrist", "u": 123.5, "v": 240.0}
+      ]
+    }
+
+* ``orientation``: from ``frame`` on the body faces ``value`` (one of
+  :data:`vidcap.body.ORIENTATIONS`), until the next orientation event.
+* ``depth``: from ``frame`` on, segment ``segment``'s distal joint is ``toward``
+  (+1) or ``away`` from (-1) the camera; ``auto`` hands the segment back to the
+  automatic proposals. A depth event holds until the next event on that segment
+  or, when the caller supplies where segments lie in the image plane
+  (:meth:`Annotations.resolve` ``near_plane``), until the segment next passes
+  through the image plane, the only place its direction can change.
+* ``joint``: at ``frame`` only, joint ``joint`` is at pixel ``(u, v)`` (x right,
+  y down): the manual fix for occluded joints (section 4.1).
+
+Frames count from 0. Segment and joint names are those of :mod:`vidcap.body`, with
+true (body) sides.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.body import JOINT_INDEX, JOINT_NAMES, ORIENTATIONS, SEGMENT_INDEX, SEGMENT_NAMES
+from vidcap.errors import AnnotationError
+from vidcap.fileio import write_text_atomic
+
+FORMAT_VERSION = 1
+_DEPTH_VALUES = {"toward": 1, "away": -1, "auto": 0}
+_KEYS = {
+    "orientation": {"frame", "type", "value"},
+    "depth": {"frame", "type", "segment", "value"},
+    "joint": {"frame", "type", "joint", "u", "v"},
+}
+
+
+@dataclass(frozen=True)
+class Event:
+    """One annotation event (see the module docstring).
+
+    ``key`` is the segment (depth), joint (joint) or ``""`` (orientation); ``value``
+    is ``+1/-1/0`` (depth), a label (orientation) or ``(u, v)`` pixels (joint).
+    """
+
+    frame: int
+    type: str
+    key: str
+    value: object
+
+    def to_json(self) -> dict:
+        """The event as its JSON object."""
+        if self.type == "orientation":
+            return {"frame": self.frame, "type": "orientation", "value": self.value}
+        if self.type == "depth":
+            word = {1: "toward", -1: "away", 0: "auto"}[self.value]
+            return {"frame": self.frame, "type": "depth", "segment": self.key, "value": word}
+        u, v = self.value
+        return {"frame": self.frame, "type": "joint", "joint": self.key, "u": u, "v": v}
+
+
+def _sign_value(sign) -> int:
+    if isinstance(sign, str):
+        if sign not in _DEPTH_VALUES:
+            raise ValueError(f"depth value must be one of {sorted(_DEPTH_VALUES)}, got {sign!r}")
+        return _DEPTH_VALUES[sign]
+    if sign in (1, -1, 0) and not isinstance(sign, bool):
+        return int(sign)
+    raise ValueError(f"depth sign must be +1, -1, 0 or toward/away/auto, got {sign!r}")
+
+
+class Annotations:
+    """A set of annotation events for one clip.
+
+    Parameters
+    ----------
+    events : iterable of Event, optional
+
+    Examples
+    --------
+    >>> a = Annotations()
+    >>> a.add_orientation(0, "right")
+    >>> a.add_depth(5, "l_lower_arm", +1)
+    >>> signs, orient, joints = a.resolve(8)
+    >>> signs[4:7, 3].tolist(), orient[0], a.n_user_inputs
+    ([0, 1, 1], 'right', 2)
+    """
+
+    def __init__(self, events=()):
+        self._events: dict[tuple[int, str, str], Event] = {}
+        for e in events:
+            self._put(e)
+
+    # ------------------------------------------------------------------ editing
+    def _put(self, e: Event) -> None:
+        self._events[(e.frame, e.type, e.key)] = e
+
+    @staticmethod
+    def _frame(frame) -> int:
+        if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)) or frame < 0:
+            raise ValueError(f"frame must be a non-negative integer, got {frame!r}")
+        return int(frame)
+
+    def add_depth(self, frame: int, segment: str, sign) -> None:
+        """From ``frame`` on, ``segment`` points toward (+1) / away (-1) / auto (0)."""
+        if segment not in SEGMENT_INDEX:
+            raise ValueError(f"unknown segment {segment!r}; expected one of {SEGMENT_NAMES}")
+        self._put(Event(self._frame(frame), "depth", segment, _sign_value(sign)))
+
+    def add_orientation(self, frame: int, label: str) -> None:
+        """From ``frame`` on, the body faces ``label`` (:data:`vidcap.body.ORIENTATIONS`)."""
+        if label not in ORIENTATIONS:
+            raise ValueError(f"unknown orientation {label!r}; expected one of {ORIENTATIONS}")
+        self._put(Event(self._frame(frame), "orientation", "", label))
+
+    def add_joint(self, frame: int, joint: str, u: float, v: float) -> None:
+        """At ``frame``, ``joint`` is at pixel ``(u, v)`` (x right, y down)."""
+        if joint not in JOINT_INDEX:
+            raise ValueError(f"unknown joint {joint!r}; expected one of {JOINT_NAMES}")
+        u, v = float(u), float(v)
+        if not (np.isfinite(u) and np.isfinite(v)):
+            raise ValueError("joint position must be finite pixels")
+        self._put(Event(self._frame(frame), "joint", joint, (u, v)))
+
+    def remove(self, frame: int, type: str, key: str = "") -> bool:
+        """Remove the event at ``frame`` of ``type`` for ``key``; return whether one was."""
+        return self._events.pop((int(frame), type, key), None) is not None
+
+    @property
+    def events(self) -> list[Event]:
+        """All events sorted by frame, then type and key."""
+        return sorted(self._events.values(), key=lambda e: (e.frame, e.type, e.key))
+
+    @property
+    def n_user_inputs(self) -> int:
+        """Number of events (the seed's count of user inputs, section 4.3)."""
+        return len(self._events)
+
+    def __len__(self) -> int:
+        return len(self._events)
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Annotations) and self.events == other.events
+
+    # ------------------------------------------------------------------ resolving
+    def resolve(self, n_frames: int, *, near_plane=None):
+        """Carry the events forward over ``n_frames`` frames.
+
+        Parameters
+        ----------
+        n_frames : int
+            Frames in the clip.
+        near_plane : array_like of bool, shape (F, 10), optional
+            Where each segment lies near the image plane. When given, a depth event
+            also ends where its segment next *enters* the near-plane zone after
+            having been out of it.
+
+        Returns
+        -------
+        signs : numpy.ndarray of int8, shape (F, 10)
+            User depth signs, 0 where the user gave none (use the proposal).
+        orientation : numpy.ndarray of str, shape (F,)
+            User orientation, ``""`` before the first orientation event.
+        joints : numpy.ndarray, shape (F, 15, 2)
+            User joint positions in pixels, NaN where none.
+        """
+        F = int(n_frames)
+        signs = np.zeros((F, len(SEGMENT_NAMES)), dtype=np.int8)
+        orient = np.full(F, "", dtype=object)
+        joints = np.full((F, len(JOINT_NAMES), 2), np.nan)
+        enter = None
+        if near_plane is not None:
+            npl = np.asarray(near_plane, dtype=bool)
+            if npl.shape != signs.shape:
+                raise ValueError(f"near_plane must be ({F}, 10), got {npl.shape}")
+            enter = np.zeros_like(npl)
+            enter[1:] = npl[1:] & ~npl[:-1]
+        evs = [e for e in self.events if e.frame < F]
+        by_seg: dict[str, list[Event]] = {}
+        for e in evs:
+            if e.type == "orientation":
+                orient[e.frame:] = e.value
+            elif e.type == "joint":
+                joints[e.frame, JOINT_INDEX[e.key]] = e.value
+            else:
+                by_seg.setdefault(e.key, []).append(e)
+        for seg, lst in by_seg.items():
+            k = SEGMENT_INDEX[seg]
+            for n, e in enumerate(lst):
+                stop = lst[n + 1].frame if n + 1 < len(lst) else F
+                if enter is not None and e.value != 0:
+                    hits = np.flatnonzero(enter[e.frame + 1:stop, k])
+                    if hits.size:
+                        stop = e.frame + 1 + int(hits[0])
+                signs[e.frame:stop, k] = e.value
+        return signs, orient.astype(str), joints
+
+    # ------------------------------------------------------------------ files
+    def to_json(self) -> dict:
+        """The whole file as a JSON-ready dict."""
+        return {"version": FORMAT_VERSION, "events": [e.to_json() for e in self.events]}
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the file atomically: a failure leaves any existing file untouched."""
+        text = json.dumps(self.to_json(), indent=1) + "\n"
+        write_text_atomic(path, text)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike, n_frames: int | None = None) -> Annotations:
+        """Read and validate an annotations file.
+
+        Parameters
+        ----------
+        path : str or path-like
+        n_frames : int, optional
+            Frames in the clip; events at or beyond it are errors.
+
+        Raises
+        ------
+        vidcap.errors.AnnotationError
+            One line naming the file and the bad entry.
+        """
+        p = Path(path)
+        try:
+            text = p.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise AnnotationError("no such annotations file", p) from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise AnnotationError(f"cannot read: {exc}", p) from None
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise AnnotationError(
+                f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", p
+            ) from None
+        return cls.from_json(data, n_frames=n_frames, source=p)
+
+    @classmethod
+    def from_json(cls, data, *, n_frames: int | None = None, source="<annotations>"):
+        """Validate a decoded JSON document (see :meth:`load`)."""
+        def fail(msg):
+            raise AnnotationError(msg, source)
+
+        if not isinstance(data, dict):
+            fail("the top level must be an object with 'version' and 'events'")
+        extra = set(data) - {"version", "events", "video", "n_frames"}
+        if extra:
+            fail(f"unknown top-level key(s) {sorted(extra)}")
+        if data.get("version") != FORMAT_VERSION:
+            fail(f"'version' must be {FORMAT_VERSION}, got {data.get('version')!r}")
+        events = data.get("events")
+        if not isinstance(events, list):
+            fail("'events' must be a list")
+        out = cls()
+        seen = set()
+        for n, ev in enumerate(events):
+            where = f"events[{n}]"
+            if not isinstance(ev, dict):
+                fail(f"{where}: must be an object, got {type(ev).__name__}")
+            typ = ev.get("type")
+            if typ not in _KEYS:
+                fail(f"{where}: 'type' must be one of {sorted(_KEYS)}, got {typ!r}")
+            missing = _KEYS[typ] - set(ev)
+            if missing:
+                fail(f"{where}: {typ} event lacks {sorted(missing)}")
+            unknown = set(ev) - _KEYS[typ]
+            if unknown:
+                fail(f"{where}: unknown key(s) {sorted(unknown)} in a {typ} event")
+            frame = ev["frame"]
+            if isinstance(frame, bool) or not isinstance(frame, int) or frame < 0:
+                fail(f"{where}: 'frame' must be a non-negative integer, got {frame!r}")
+            if n_frames is not None and frame >= n_frames:
+                fail(f"{where}: frame {frame} is out of range (the clip has {n_frames} frames)")
+            if typ == "orientation":
+                if ev["value"] not in ORIENTATIONS:
+                    fail(f"{where}: orientation {ev['value']!r} is not one of {list(ORIENTATIONS)}")
+                e = Event(frame, typ, "", ev["value"])
+            elif typ == "depth":
+                if ev["segment"] not in SEGMENT_INDEX:
+                    fail(f"{where}: unknown segment {ev['segment']!r}"
+                         f" (expected one of {', '.join(SEGMENT_NAMES)})")
+                if ev["value"] not in _DEPTH_VALUES:
+                    fail(f"{where}: depth value {ev['value']!r} is not toward, away or auto")
+                e = Event(frame, typ, ev["segment"], _DEPTH_VALUES[ev["value"]])
+            else:
+                if ev["joint"] not in JOINT_INDEX:
+                    fail(f"{where}: unknown joint {ev['joint']!r}"
+                         f" (expected one of {', '.join(JOINT_NAMES)})")
+                uv = (ev["u"], ev["v"])
+                if not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                           and np.isfinite(x) for x in uv):
+                    fail(f"{where}: 'u' and 'v' must be finite numbers of pixels, got {uv!r}")
+                e = Event(frame, typ, ev["joint"], (float(uv[0]), float(uv[1])))
+            key = (e.frame, e.type, e.key)
+            if key in seen:
+                fail(f"{where}: a second {typ} event for {e.key or 'the body'} at frame {frame}")
+            seen.add(key)
+            out._put(e)
+        return out
+
+
+def default_path(video: str | os.PathLike) -> Path:
+    """Where annotations for ``video`` live by default: ``VIDEO_STEM.vidcap.json`` beside it."""
+    v = Path(video)
+    return v.with_name(v.stem + ".vidcap.json")

@@ -1,0 +1,344 @@
+"""Scaled orthographic lifting of 2D joints to 3D (seed 004 section 2.3 and 3.1.5).
+
+Under scaled orthographic projection (seed 004 Eq. 2.1) a point (X, Y, Z) maps to
+(u, v) = s (X, Y). For a segment of known length ``l`` whose ends project
+``(du, dv)`` apart, its relative depth is (Eq. 2.2)
+
+    dZ = +/- sqrt(l^2 - (du^2 + dv^2) / s^2),
+
+the sign being the one thing the image does not tell (seed Figure 2.2). Eq. 2.2 as
+printed has no sign; the "+/-" is the seed's own text ("two distinct solutions").
+
+Frames
+------
+Output joints are in a *camera-aligned world*: X = image right, Y = up (image y is
+down, so Y = -v / s), Z = toward the camera (right-handed). A depth sign of +1 means
+the segment's distal joint is nearer the camera than its proximal one (dZ > 0).
+The body's yaw ``psi`` is 0 when it faces the camera and +pi/2 when it faces image
+right (as :func:`vidcap.body.orientation_from_yaw`); its forward direction is
+``(sin psi, 0, cos psi)`` and its left ``(cos psi, 0, -sin psi)``.
+
+The tree is walked from the pelvis: torso and head by Eq. 2.2; shoulders and hips
+are rigid parts of the torso (body model), placed with the torso's axis and the
+body's yaw; each limb segment then hangs from its 3D proximal joint with the image
+vector of its 2D joints and the depth of Eq. 2.2. Where the image length exceeds
+the model length (noise, wrong scale) the depth is clamped to 0, the in-plane vector
+is shortened to the model length, and the frame/segment is reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vidcap.body import (
+    JOINT_INDEX,
+    JOINT_NAMES,
+    ORIENTATIONS,
+    SEGMENT_INDEX,
+    SEGMENT_JOINTS,
+    SEGMENT_NAMES,
+    BodyModel,
+    segment_vectors,
+)
+
+#: Segments walked down the tree after the torso is placed: (segment, proximal joint).
+_TORSO_CHAIN = ("torso", "head")
+_LIMBS = ("l_upper_arm", "l_lower_arm", "r_upper_arm", "r_lower_arm",
+          "l_upper_leg", "l_lower_leg", "r_upper_leg", "r_lower_leg")
+
+#: Indices that swap every ``l_*`` joint with its ``r_*`` twin.
+SWAP_JOINTS = np.array(
+    [JOINT_INDEX[("r_" + n[2:]) if n.startswith("l_") else ("l_" + n[2:]) if n.startswith("r_")
+                 else n] for n in JOINT_NAMES], dtype=np.intp)
+#: Indices that swap every ``l_*`` segment with its ``r_*`` twin.
+SWAP_SEGMENTS = np.array(
+    [SEGMENT_INDEX[("r_" + n[2:]) if n.startswith("l_") else ("l_" + n[2:]) if n.startswith("r_")
+                   else n] for n in SEGMENT_NAMES], dtype=np.intp)
+
+#: Half-width of the six orientation sectors: side labels within 30 degrees of a side view.
+_SIDE_HALF = np.deg2rad(30.0)
+
+
+@dataclass(frozen=True)
+class Lift3D:
+    """Result of :func:`lift`.
+
+    Attributes
+    ----------
+    joints3d : numpy.ndarray, shape (F, 15, 3)
+        Joint positions in metres in the camera-aligned world (X right, Y up, Z toward
+        the camera), pelvis of frame 0 at X = 0, Y = 0 (see :func:`vidcap.motion`
+        for root placement on the floor).
+    scale : float
+        Pixels per metre used.
+    yaw : numpy.ndarray, shape (F,)
+        Body yaw in radians (0 = facing the camera, +pi/2 = facing image right).
+    clamped : numpy.ndarray, shape (F, 10), bool
+        Segments whose image length exceeded the model length (depth set to 0).
+    excess : numpy.ndarray, shape (F, 10)
+        Image length / (scale * model length) - 1 where positive, else 0.
+    """
+
+    joints3d: np.ndarray
+    scale: float
+    yaw: np.ndarray
+    clamped: np.ndarray
+    excess: np.ndarray
+
+
+def _check_joints2d(joints2d) -> np.ndarray:
+    j = np.asarray(joints2d, dtype=float)
+    if j.ndim != 3 or j.shape[1:] != (len(JOINT_NAMES), 2):
+        raise ValueError(f"joints2d must be (F, {len(JOINT_NAMES)}, 2), got {j.shape}")
+    if not np.isfinite(j).all():
+        raise ValueError("joints2d has non-finite values")
+    return j
+
+
+def estimate_scale(joints2d, body: BodyModel | None = None, *, quantile: float = 0.9) -> float:
+    """Scale ``s`` of the orthographic projection from the subject's image height.
+
+    The image "height" of a frame is the length of the chain head + torso + mean leg
+    (upper + lower) in pixels; divided by the same chain of the model in metres it is
+    ``s`` whenever that chain lies in the image plane, and less when it is
+    foreshortened or bent, so a high quantile over frames is taken.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints in pixels.
+    body : BodyModel, optional
+        Subject's body model (default 1.75 m, Table 3.1 ratios).
+    quantile : float
+        Quantile over frames (0-1).
+
+    Returns
+    -------
+    float
+        Pixels per metre.
+    """
+    body = body or BodyModel()
+    j = _check_joints2d(joints2d)
+    px = np.linalg.norm(segment_vectors(j), axis=-1)  # (F, 10)
+    m = body.segment_lengths()
+    i = SEGMENT_INDEX
+    legs = ("l_upper_leg", "l_lower_leg", "r_upper_leg", "r_lower_leg")
+    chain_px = px[:, i["head"]] + px[:, i["torso"]] + 0.5 * sum(px[:, i[s]] for s in legs)
+    chain_m = m[i["head"]] + m[i["torso"]] + 0.5 * sum(m[i[s]] for s in legs)
+    s = float(np.quantile(chain_px / chain_m, quantile))
+    if not s > 0:
+        raise ValueError("cannot estimate the image scale: the figure has no height")
+    return s
+
+
+def depth_magnitudes(joints2d, scale: float, body: BodyModel | None = None):
+    """|dZ| of every segment (Eq. 2.2) and whether it was clamped.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints, pixels.
+    scale : float
+        Pixels per metre.
+    body : BodyModel, optional
+
+    Returns
+    -------
+    dz : numpy.ndarray, shape (F, 10)
+        Absolute relative depth in metres.
+    ratio : numpy.ndarray, shape (F, 10)
+        Image length / (scale * model length): the foreshortening ratio (1 = in the
+        image plane; may exceed 1 where clamped).
+    """
+    body = body or BodyModel()
+    j = _check_joints2d(joints2d)
+    lengths = body.segment_lengths()
+    proj = np.linalg.norm(segment_vectors(j), axis=-1) / scale  # metres in the image plane
+    ratio = proj / lengths
+    dz = np.sqrt(np.clip(lengths**2 - proj**2, 0.0, None))
+    return dz, ratio
+
+
+def torso_width_ratio(joints2d, scale: float, body: BodyModel | None = None) -> np.ndarray:
+    """Horizontal foreshortening of the torso from the image shoulder and hip spans.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,)
+        ``|u_lsh - u_rsh| + |u_lhip - u_rhip|`` over ``scale`` times the model's
+        shoulder + hip spans, clipped to [0, 1]: ``|cos(yaw)|`` for an upright body.
+    """
+    body = body or BodyModel()
+    j = _check_joints2d(joints2d)
+    i = JOINT_INDEX
+    span = (np.abs(j[:, i["l_shoulder"], 0] - j[:, i["r_shoulder"], 0])
+            + np.abs(j[:, i["l_hip"], 0] - j[:, i["r_hip"], 0]))
+    full = 2.0 * (body.shoulder_half_width + body.hip_half_width) * scale
+    return np.clip(span / full, 0.0, 1.0)
+
+
+def yaw_from_orientation(orientation, width_ratio) -> np.ndarray:
+    """Body yaw from the six orientation labels and the torso's horizontal foreshortening.
+
+    ``|cos(yaw)|`` is the torso width ratio; the label gives the quadrant (front: cos
+    > 0, back: cos < 0; right: sin > 0) and bounds the angle to its 60-degree sector.
+    For the pure side labels (``left``, ``right``) the front/back sense is unknown
+    and the yaw is taken as exactly -/+ 90 degrees.
+
+    Parameters
+    ----------
+    orientation : array_like of str, shape (F,)
+        Labels from :data:`vidcap.body.ORIENTATIONS`.
+    width_ratio : array_like, shape (F,)
+        See :func:`torso_width_ratio`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,)
+        Yaw in radians.
+    """
+    labels = np.asarray(orientation).astype(str)
+    rho = np.clip(np.asarray(width_ratio, dtype=float), 0.0, 1.0)
+    bad = sorted(set(labels.ravel()) - set(ORIENTATIONS))
+    if bad:
+        raise ValueError(f"unknown orientation label(s) {bad}; expected one of {ORIENTATIONS}")
+    a = np.clip(np.arccos(rho), 0.0, np.pi / 2 - _SIDE_HALF)  # angle from the camera axis
+    right = np.char.endswith(labels, "right")
+    back = np.char.startswith(labels, "back")
+    side = (labels == "left") | (labels == "right")
+    mag = np.where(back, np.pi - a, a)
+    mag = np.where(side, np.pi / 2, mag)
+    return np.where(right, mag, -mag)
+
+
+def swap_sides(joints2d) -> np.ndarray:
+    """Swap every ``l_*`` joint with its ``r_*`` twin, shape preserved (..., 15, D)."""
+    return np.asarray(joints2d)[..., SWAP_JOINTS, :]
+
+
+def assign_sides(joints2d, yaw) -> np.ndarray:
+    """Rename image-side limbs (``l_*`` = on the image's left) to the body's sides.
+
+    A body facing the camera (cos yaw > 0) shows its left on the image's right, so
+    its image-left limbs are its right ones and are swapped; a body seen from behind
+    keeps the image's naming; in a side view (|yaw| within 30 degrees of 90) the
+    image gives no side and the fitter's (tracked) naming is kept.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image-side named joints.
+    yaw : array_like, shape (F,)
+        Body yaw, radians.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, 15, 2)
+        Body-side named joints.
+    """
+    j = _check_joints2d(joints2d)
+    swap = np.cos(np.asarray(yaw, dtype=float)) > np.sin(_SIDE_HALF)
+    out = j.copy()
+    out[swap] = j[swap][:, SWAP_JOINTS]
+    return out
+
+
+def body_axes(yaw) -> tuple[np.ndarray, np.ndarray]:
+    """Forward and left unit vectors of a body with the given yaw, each (F, 3)."""
+    yaw = np.asarray(yaw, dtype=float)
+    s, c, z = np.sin(yaw), np.cos(yaw), np.zeros_like(yaw)
+    return np.stack([s, z, c], -1), np.stack([c, z, -s], -1)
+
+
+def lift(
+    joints2d,
+    signs,
+    yaw,
+    *,
+    body: BodyModel | None = None,
+    scale: float | None = None,
+) -> Lift3D:
+    """Lift body-side named 2D joints to 3D with depth signs (seed 004 Eq. 2.2).
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints in pixels (x right, y down), named by the body's sides (see
+        :func:`assign_sides` for the image-side naming of the 2D fitter).
+    signs : array_like, shape (F, 10)
+        Depth sign per segment (+1 distal joint nearer the camera, -1 farther; 0 is
+        taken as +1), :data:`vidcap.body.SEGMENT_NAMES` order.
+    yaw : array_like, shape (F,)
+        Body yaw in radians (:func:`yaw_from_orientation`).
+    body : BodyModel, optional
+        Subject's lengths (default 1.75 m).
+    scale : float, optional
+        Pixels per metre; default :func:`estimate_scale`.
+
+    Returns
+    -------
+    Lift3D
+    """
+    body = body or BodyModel()
+    j2 = _check_joints2d(joints2d)
+    F = j2.shape[0]
+    sg = np.asarray(signs)
+    if sg.shape != (F, len(SEGMENT_NAMES)):
+        raise ValueError(f"signs must be (F, 10) = ({F}, 10), got {sg.shape}")
+    sg = np.where(sg < 0, -1.0, 1.0)
+    yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
+    s = estimate_scale(j2, body) if scale is None else float(scale)
+    lengths = body.segment_lengths()
+
+    # image vectors in metres, Y up
+    vec = segment_vectors(j2) / s
+    vec[..., 1] *= -1.0
+    proj = np.linalg.norm(vec, axis=-1)
+    ratio = proj / lengths
+    clamped = ratio > 1.0 + 1e-9
+    shrink = np.where(clamped, 1.0 / np.maximum(ratio, 1e-12), 1.0)
+    vec = vec * shrink[..., None]
+    dz = np.sqrt(np.clip(lengths**2 - (proj * shrink) ** 2, 0.0, None)) * sg
+    seg3 = np.concatenate([vec, dz[..., None]], axis=-1)  # (F, 10, 3)
+
+    J = np.zeros((F, len(JOINT_NAMES), 3))
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    pel = j2[:, ji["pelvis"]] / s
+    J[:, ji["pelvis"], 0] = pel[:, 0] - pel[0, 0]
+    J[:, ji["pelvis"], 1] = -(pel[:, 1] - pel[0, 1])
+    J[:, ji["neck"]] = J[:, ji["pelvis"]] + seg3[:, si["torso"]]
+    J[:, ji["head_top"]] = J[:, ji["neck"]] + seg3[:, si["head"]]
+
+    # rigid torso: lateral axis from the yaw, made perpendicular to the torso axis
+    _, left = body_axes(yaw)
+    axis = seg3[:, si["torso"]] / lengths[si["torso"]]
+    lat = left - np.sum(left * axis, -1, keepdims=True) * axis
+    n = np.linalg.norm(lat, axis=-1, keepdims=True)
+    lat = np.where(n > 1e-9, lat / np.maximum(n, 1e-12), left)
+    sw, hw = body.shoulder_half_width, body.hip_half_width
+    J[:, ji["l_shoulder"]] = J[:, ji["neck"]] + sw * lat
+    J[:, ji["r_shoulder"]] = J[:, ji["neck"]] - sw * lat
+    J[:, ji["l_hip"]] = J[:, ji["pelvis"]] + hw * lat
+    J[:, ji["r_hip"]] = J[:, ji["pelvis"]] - hw * lat
+
+    for name in _LIMBS:  # proximal before distal (upper before lower)
+        k = si[name]
+        p, d = SEGMENT_JOINTS[k]
+        J[:, d] = J[:, p] + seg3[:, k]
+
+    excess = np.clip(ratio - 1.0, 0.0, None)
+    return Lift3D(joints3d=J, scale=s, yaw=np.array(yaw), clamped=clamped, excess=excess)
+
+
+def project(joints3d, scale: float, origin=(0.0, 0.0)) -> np.ndarray:
+    """Scaled orthographic projection (Eq. 2.1) back to pixels, (F, J, 3) -> (F, J, 2).
+
+    ``u = origin_u + s X``, ``v = origin_v - s Y`` (image y down).
+    """
+    p = np.asarray(joints3d, dtype=float)
+    out = np.empty(p.shape[:-1] + (2,))
+    out[..., 0] = origin[0] + scale * p[..., 0]
+    out[..., 1] = origin[1] - scale * p[..., 1]
+    return out

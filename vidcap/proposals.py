@@ -1,0 +1,302 @@
+"""Automatic proposals for what the seed asks the user: depth signs and orientation.
+
+Seed 004 (section 3.1.5, 4.3) leaves every segment's depth direction and the body
+orientation to the user (60 inputs for an 82-frame walk). Here they are proposed
+from three kinds of evidence, and the user only corrects what is wrong:
+
+* **anatomy**: knees fold only backward and elbows only forward
+  (:data:`vidcap.body.FLEXION_DIRECTION`); thighs and upper arms rarely point far
+  behind the body; limbs rarely cross the body's midline; the torso leans forward
+  rather than backward;
+* **walking direction**: the subject faces the way its silhouette moves;
+* **temporal continuity**: a segment can only change its depth direction where it
+  passes through the image plane (foreshortening ratio near 1). A flip between two
+  frames costs in proportion to how far out of the image plane the segment is.
+
+The signs of each limb (upper + lower segment: 4 states) and of the torso and head
+(2 states each) are chosen per frame by dynamic programming (min-sum over the
+frames), which also gives min-marginals: how much worse the best solution with
+the other sign is. That margin ranks the (frame, segment) pairs a user should check.
+User signs enter as hard constraints, so one correction also repairs its
+neighbours.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_NAMES, BodyModel, segment_vectors
+from vidcap.lift import body_axes, depth_magnitudes, torso_width_ratio
+
+_BIG = 1e6
+#: Chains of segments whose signs are chosen jointly: (segments, kind, side).
+_CHAINS = (
+    (("torso",), "torso", 0),
+    (("head",), "head", 0),
+    (("l_upper_arm", "l_lower_arm"), "arm", +1),
+    (("r_upper_arm", "r_lower_arm"), "arm", -1),
+    (("l_upper_leg", "l_lower_leg"), "leg", +1),
+    (("r_upper_leg", "r_lower_leg"), "leg", -1),
+)
+#: Sign of each segment in each of the 4 states of a chain.
+_STATES = np.array([[1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
+
+
+@dataclass(frozen=True)
+class SignProposal:
+    """Result of :func:`propose_signs`.
+
+    Attributes
+    ----------
+    signs : numpy.ndarray of int8, shape (F, 10)
+        Proposed depth signs (+1 distal joint nearer the camera), user constraints
+        included.
+    margin : numpy.ndarray, shape (F, 10)
+        Cost of the best solution with the other sign minus the best cost (>= 0; big =
+        confident, ``inf`` where the user fixed it).
+    zeta : numpy.ndarray, shape (F, 10)
+        |dZ| / length: how far out of the image plane the segment is (0-1); a wrong
+        sign moves the distal joint by ``2 * zeta * length``.
+    """
+
+    signs: np.ndarray
+    margin: np.ndarray
+    zeta: np.ndarray
+
+    def checks(self, body: BodyModel | None = None, *, limit: int = 20, tau: float = 0.2):
+        """Ranked (frame, segment) pairs a user should check, most doubtful first.
+
+        Runs of frames with the same proposed sign count once (at their least
+        confident frame). Priority = expected displacement of the distal joint if
+        the sign is wrong, ``2 zeta l * p_wrong`` with ``p_wrong = 1 / (1 + exp(margin /
+        tau))``.
+
+        Returns
+        -------
+        list of dict
+            Keys ``frame``, ``segment``, ``sign``, ``margin``, ``priority`` (metres),
+            ``run`` (first, last frame of the run).
+        """
+        body = body or BodyModel()
+        L = body.segment_lengths()
+        with np.errstate(over="ignore"):
+            p_wrong = 1.0 / (1.0 + np.exp(np.minimum(self.margin / tau, 700.0)))
+        prio = 2.0 * self.zeta * L * p_wrong
+        out = []
+        F = self.signs.shape[0]
+        for k, name in enumerate(SEGMENT_NAMES):
+            s = self.signs[:, k]
+            starts = np.flatnonzero(np.r_[True, s[1:] != s[:-1]])
+            stops = np.r_[starts[1:], F]
+            for a, b in zip(starts, stops, strict=True):
+                t = a + int(np.argmax(prio[a:b, k]))
+                if prio[t, k] > 1e-6:
+                    out.append({"frame": int(t), "segment": name, "sign": int(s[t]),
+                                "margin": float(self.margin[t, k]),
+                                "priority": float(prio[t, k]), "run": (int(a), int(b - 1))})
+        out.sort(key=lambda d: -d["priority"])
+        return out[:limit]
+
+
+def _relu(x):
+    return np.maximum(x, 0.0)
+
+
+def propose_signs(
+    joints2d,
+    yaw,
+    *,
+    scale: float,
+    body: BodyModel | None = None,
+    fixed=None,
+    flip_cost: float = 3.0,
+    flip_penalty: float = 0.05,
+    hinge_weight: float = 2.0,
+    range_weight: float = 1.0,
+    midline_weight: float = 1.0,
+    lean_weight: float = 0.5,
+) -> SignProposal:
+    """Propose a depth sign for every segment and frame.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints in pixels, named by the body's sides.
+    yaw : array_like, shape (F,)
+        Body yaw in radians (0 = facing the camera, +pi/2 = facing image right).
+    scale : float
+        Pixels per metre.
+    body : BodyModel, optional
+    fixed : array_like of int, shape (F, 10), optional
+        User signs (+1/-1), 0 where free.
+    flip_cost, flip_penalty : float
+        A sign change between frames t-1 and t costs ``flip_cost * min(zeta(t-1),
+        zeta(t)) + flip_penalty``.
+    hinge_weight, range_weight, midline_weight, lean_weight : float
+        Weights of the anatomical costs (knee/elbow fold direction; thigh/upper arm
+        pointing behind the body; limb crossing the midline; torso/head leaning back).
+
+    Returns
+    -------
+    SignProposal
+    """
+    body = body or BodyModel()
+    j2 = np.asarray(joints2d, dtype=float)
+    F = j2.shape[0]
+    yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
+    L = body.segment_lengths()
+    dz, _ = depth_magnitudes(j2, scale, body)
+    zeta = dz / L
+    vec = segment_vectors(j2) / scale
+    vec[..., 1] *= -1.0
+    fwd, left = body_axes(yaw)  # (F, 3)
+    fixed = np.zeros((F, len(SEGMENT_NAMES)), int) if fixed is None else np.asarray(fixed)
+
+    C, S = len(_CHAINS), 4
+    unary = np.zeros((C, F, S))
+    trans = np.zeros((C, max(F - 1, 0), S, S))
+    for c, (segs, kind, side) in enumerate(_CHAINS):
+        ks = [SEGMENT_INDEX[s] for s in segs]
+        sig = _STATES[:, : len(ks)]  # (S, n)
+        # 3D unit vectors of the chain's segments for every state: (F, S, n, 3)
+        v3 = np.concatenate(
+            [np.broadcast_to(vec[:, None, ks, :], (F, S, len(ks), 2)),
+             (sig[None] * dz[:, None, ks])[..., None]], axis=-1) / L[ks][:, None]
+        cost = np.zeros((F, S))
+        f, lf = fwd[:, None, :], left[:, None, :]
+        if kind in ("torso", "head"):
+            cost += lean_weight * _relu(-np.sum(v3[:, :, 0] * f, -1))
+        else:
+            up, lo = v3[:, :, 0], v3[:, :, 1]
+            m = np.sum(np.cross(up, lo) * lf, -1)  # > 0: folds like a knee, < 0: like an elbow
+            fold = _relu(-m) if kind == "leg" else _relu(m)
+            back_limit = np.sin(np.deg2rad(25.0 if kind == "leg" else 45.0))
+            behind = _relu(-np.sum(up * f, -1) - back_limit)
+            w0 = body.hip_half_width if kind == "leg" else body.shoulder_half_width
+            l_up, l_lo = L[ks[0]], L[ks[1]]
+            lat1 = side * w0 + np.sum(up * lf, -1) * l_up
+            lat2 = lat1 + np.sum(lo * lf, -1) * l_lo
+            cross = _relu(-side * lat1) / l_up + _relu(-side * lat2) / l_lo
+            cost += hinge_weight * fold + range_weight * behind + midline_weight * cross
+        if len(ks) == 1:
+            cost[:, 2:] = _BIG
+        # user constraints
+        for n, k in enumerate(ks):
+            fx = fixed[:, k]
+            bad = (fx[:, None] != 0) & (sig[None, :, n] != fx[:, None])
+            cost[bad] += _BIG
+        unary[c] = cost
+        if F > 1:
+            for n, k in enumerate(ks):
+                flip = (sig[:, None, n] != sig[None, :, n]).astype(float)  # (S, S)
+                z = np.minimum(zeta[:-1, k], zeta[1:, k])
+                trans[c] += flip[None] * (flip_cost * z + flip_penalty)[:, None, None]
+
+    # min-sum forward / backward over frames, vectorised over chains and states
+    alpha = np.empty((C, F, S))
+    beta = np.zeros((C, F, S))
+    alpha[:, 0] = unary[:, 0]
+    for t in range(1, F):
+        alpha[:, t] = unary[:, t] + np.min(alpha[:, t - 1, :, None] + trans[:, t - 1], axis=1)
+    for t in range(F - 2, -1, -1):
+        beta[:, t] = np.min(trans[:, t] + (unary[:, t + 1] + beta[:, t + 1])[:, None, :], axis=2)
+    marg = alpha + beta  # (C, F, S)
+
+    signs = np.ones((F, len(SEGMENT_NAMES)), dtype=np.int8)
+    margin = np.zeros((F, len(SEGMENT_NAMES)))
+    for c, (segs, _, _) in enumerate(_CHAINS):
+        valid = np.arange(S) < (2 if len(segs) == 1 else 4)
+        for n, s in enumerate(segs):
+            k = SEGMENT_INDEX[s]
+            plus = np.min(np.where(valid & (_STATES[:, n] > 0), marg[c], np.inf), -1)
+            minus = np.min(np.where(valid & (_STATES[:, n] < 0), marg[c], np.inf), -1)
+            signs[:, k] = np.where(plus <= minus, 1, -1)
+            margin[:, k] = np.abs(plus - minus)
+    margin = np.where(fixed != 0, np.inf, np.minimum(margin, _BIG / 10))
+    return SignProposal(signs=signs, margin=margin, zeta=zeta)
+
+
+def propose_orientation(
+    joints2d,
+    *,
+    scale: float,
+    fps: float,
+    body: BodyModel | None = None,
+    sides_known: bool = False,
+    track=None,
+    min_speed: float = 0.15,
+    window_s: float = 0.5,
+) -> np.ndarray:
+    """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
+
+    * image-right vs image-left (the sign of sin yaw): the direction the subject
+      moves (``track``, e.g. the silhouette's centre), where it moves faster than
+      ``min_speed`` body heights per second; elsewhere the nearest moving frame's;
+      if it never moves, the way the knees point (forward) and the elbows (backward)
+      in the image;
+    * side view vs front/back: the torso's horizontal foreshortening (< 0.5 = within
+      30 degrees of a side view);
+    * front vs back: with body-side named joints (``sides_known``), whether the
+      body's left shoulder/hip appear on the image's right (facing the camera).
+      From a silhouette alone front and back are mirror images (orthographic
+      projection), so without known sides ``front`` is proposed; one orientation
+      event fixes a whole clip.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints, pixels.
+    scale : float
+        Pixels per metre.
+    fps : float
+        Frames per second of the clip.
+    body : BodyModel, optional
+    sides_known : bool
+        Whether ``joints2d`` is named by the body's true sides.
+    track : array_like, shape (F,), optional
+        Horizontal image position of the subject in pixels (default: the pelvis).
+    min_speed : float
+        Walking threshold in body heights per second.
+    window_s : float
+        Median-filter window in seconds for the foreshortening and direction.
+
+    Returns
+    -------
+    numpy.ndarray of str, shape (F,)
+    """
+    body = body or BodyModel()
+    j2 = np.asarray(joints2d, dtype=float)
+    F = j2.shape[0]
+    ji = JOINT_INDEX
+    x = j2[:, ji["pelvis"], 0] if track is None else np.asarray(track, dtype=float)
+    win = max(1, int(round(window_s * fps)) | 1)
+    xs = median_filter(x, size=win, mode="nearest") if F > 2 else x
+    vel = np.gradient(xs) * fps if F > 1 else np.zeros(F)
+    moving = np.abs(vel) > min_speed * body.height * scale
+    if moving.any():
+        idx = np.flatnonzero(moving)
+        nearest = idx[np.clip(np.searchsorted(idx, np.arange(F)), 0, len(idx) - 1)]
+        prev = idx[np.clip(np.searchsorted(idx, np.arange(F)) - 1, 0, len(idx) - 1)]
+        use = np.where(np.abs(prev - np.arange(F)) < np.abs(nearest - np.arange(F)), prev, nearest)
+        right = vel[use] > 0
+    else:
+        def bulge(a, b, c):
+            return j2[:, ji[b], 0] - 0.5 * (j2[:, ji[a], 0] + j2[:, ji[c], 0])
+
+        cue = (bulge("l_hip", "l_knee", "l_ankle") + bulge("r_hip", "r_knee", "r_ankle")
+               - bulge("l_shoulder", "l_elbow", "l_wrist")
+               - bulge("r_shoulder", "r_elbow", "r_wrist"))
+        right = np.full(F, cue.sum() >= 0)
+    rho = median_filter(torso_width_ratio(j2, scale, body), size=win, mode="nearest")
+    if sides_known:
+        d = (j2[:, ji["l_shoulder"], 0] - j2[:, ji["r_shoulder"], 0]
+             + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])
+        front = median_filter(d, size=win, mode="nearest") >= 0
+    else:
+        front = np.ones(F, bool)
+    side = np.where(right, "right", "left")
+    label = np.where(rho < 0.5, side, np.char.add(np.where(front, "front_", "back_"), side))
+    return label.astype(str)
