@@ -1,0 +1,95 @@
+"""Accuracy of marker-derived joint centres (RESULTS.md, "Marker path: joint centres").
+
+Run: /work/venv/bin/python benchmarks/joints_accuracy.py
+
+1. PiG_Motion3_FF.c3d (+ PiG_Calibration3_FF.c3d pooled): hip/knee centres vs the
+   file's own Vicon Plug-in-Gait outputs LFEP/RFEP (hip) and LFEO/RFEO (knee).
+2. 07_01.c3d: bone lengths vs the subject's skeleton ../shared/data/motion/07.asf.
+3. Synthetic truth: markers rigidly on 131_01.bvh / 07_07.amc, 1 mm and 5 mm noise.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests" / "mocap"))
+
+from synthetic import ASF_07, BVH_131, attach_markers  # noqa: E402
+
+from vidcap.asf import read_asf_amc  # noqa: E402
+from vidcap.bvh import read_bvh  # noqa: E402
+from vidcap.mocap.c3d import read_c3d  # noqa: E402
+from vidcap.mocap.skeleton import solve_joints  # noqa: E402
+
+DATA = ROOT.parent / "shared" / "data"
+
+
+def dist_mm(a, b):
+    d = np.linalg.norm(a - b, axis=1) * 1e3
+    return d[np.isfinite(d)]
+
+
+def pig():
+    mot = read_c3d(DATA / "c3d/PiG_Motion3_FF.c3d")
+    cal = read_c3d(DATA / "c3d/PiG_Calibration3_FF.c3d")
+    print("\n## PiG_Motion3_FF: fitted centres vs Vicon PiG outputs (mm, per frame)")
+    print(f"{'pooling':18s} {'joint':8s} {'ref':5s} {'median':>7s} {'p90':>7s} {'kind':6s} "
+          f"{'cap deg':>7s} {'axial sd':>8s}")
+    for label, trials in [("motion only", [mot]), ("motion+static", [mot, cal])]:
+        sol = solve_joints(trials)
+        for j, ref in [("l_hip", "LFEP"), ("r_hip", "RFEP"), ("l_knee", "LFEO"),
+                       ("r_knee", "RFEO")]:
+            d = dist_mm(sol.position(j), mot.marker(ref))
+            r = sol.report(j)
+            print(f"{label:18s} {j:8s} {ref:5s} {np.median(d):7.1f} {np.percentile(d, 90):7.1f} "
+                  f"{r.kind:6s} {r.cap_angle_deg:7.1f} {r.axial_std_mm:8.1f}")
+
+
+def bones():
+    sol = solve_joints(read_c3d(DATA / "c3d/07_01.c3d"))
+    asf = read_asf_amc(DATA / "motion/07.asf", DATA / "motion/07_07.amc").skeleton
+    pairs = [("l_hip", "l_knee", "lfemur", "ltibia"), ("r_hip", "r_knee", "rfemur", "rtibia"),
+             ("l_knee", "l_ankle", "ltibia", "lfoot"), ("r_knee", "r_ankle", "rtibia", "rfoot"),
+             ("l_shoulder", "l_elbow", "lhumerus", "lradius"),
+             ("r_shoulder", "r_elbow", "rhumerus", "rradius"),
+             ("l_elbow", "l_wrist", "lradius", "lwrist"),
+             ("r_elbow", "r_wrist", "rradius", "rwrist"),
+             ("l_hip", "r_hip", "lfemur", "rfemur")]
+    print("\n## 07_01.c3d bone lengths vs 07.asf (mm)")
+    print(f"{'bone':22s} {'ours':>7s} {'07.asf':>7s} {'diff':>7s}")
+    rest = asf.rest_positions()
+    for a, b, ja, jb in pairs:
+        ours = np.median(np.linalg.norm(sol.position(a) - sol.position(b), axis=1)) * 1e3
+        ref = np.linalg.norm(rest[asf.index(ja)] - rest[asf.index(jb)]) * 1e3
+        print(f"{a + '-' + b:22s} {ours:7.0f} {ref:7.0f} {ours - ref:+7.0f}")
+
+
+def synthetic():
+    motions = {"131_01.bvh": (read_bvh(DATA / "motion/131_01.bvh"), BVH_131),
+               "07_07.amc": (read_asf_amc(DATA / "motion/07.asf", DATA / "motion/07_07.amc"),
+                             ASF_07)}
+    joints = ["l_hip", "r_hip", "l_knee", "r_knee", "l_shoulder", "r_shoulder", "l_elbow",
+              "r_elbow"]
+    print("\n## Synthetic truth: RMS joint-centre error (mm), median over 5 marker layouts")
+    print(f"{'motion':11s} {'noise':>5s} " + " ".join(f"{j:>10s}" for j in joints))
+    for name, (m, lay) in motions.items():
+        for noise, nmm in [(0.0, None), (0.001, None), (0.005, 5.0)]:
+            errs = []
+            for seed in range(5):
+                d, ms, truth = attach_markers(m, lay, np.random.default_rng(seed), noise_m=noise)
+                s = solve_joints(d, ms, noise_mm=nmm)
+                errs.append([np.sqrt(np.mean(np.sum((s.position(j) - truth[j]) ** 2, 1))) * 1e3
+                             for j in joints])
+            med = np.median(errs, axis=0)
+            print(f"{name:11s} {noise * 1e3:5.0f} " + " ".join(f"{e:10.1f}" for e in med))
+
+
+if __name__ == "__main__":
+    pig()
+    bones()
+    synthetic()

@@ -1,0 +1,223 @@
+"""C3D reading, marker sets, the joint-centre solver and ``vidcap joints``."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vidcap.errors import C3DError
+from vidcap.mocap.c3d import clean_labels, read_c3d
+from vidcap.mocap.markerset import (
+    MarkerSetError,
+    builtin_markersets,
+    detect_markerset,
+    parse_markerset,
+)
+from vidcap.mocap.skeleton import (
+    frame_from_three,
+    kabsch,
+    lab_to_yup,
+    solution_to_motion,
+    solve_joints,
+)
+
+sys.path.insert(0, str(Path(__file__).parent))
+from synthetic import ASF_07, BVH_131, attach_markers  # noqa: E402
+
+LIMB = ["l_hip", "r_hip", "l_knee", "r_knee", "l_shoulder", "r_shoulder", "l_elbow", "r_elbow"]
+
+
+def rms_mm(a, b):
+    return 1e3 * np.sqrt(np.nanmean(np.sum((a - b) ** 2, axis=1)))
+
+
+# ----------------------------------------------------------------------------- c3d
+def test_clean_labels_prefix_blank_duplicate():
+    labels, dups, pre = clean_labels(["liu:LFWT", " ", "liu:LFWT", "RFWT ", "a:b:C7"])
+    assert labels == ("LFWT", "M002", "LFWT~2", "RFWT", "C7")
+    assert dups == ("LFWT",) and pre == ("liu", "a:b")
+
+
+def test_read_cmu_in_metres(shared_data):
+    d = read_c3d(shared_data("c3d/07_01.c3d"))
+    assert d.positions.shape == (316, 41, 3) and d.fps == 120
+    assert "LFWT" in d.labels and d.prefixes == ("liu",)
+    span = np.nanmax(d.positions[:, :, 2]) - np.nanmin(d.positions[:, :, 2])
+    assert 1.2 < span < 2.2  # a person's height in metres, Z up
+
+
+def test_read_metres_file_and_gaps(shared_data):
+    t = read_c3d(shared_data("c3d/kinematics_tennis_serve.c3d"))
+    assert 0.5 < np.nanmax(np.linalg.norm(np.diff(t.positions, axis=1), axis=2)) < 3.0
+    p = read_c3d(shared_data("c3d/PiG_Motion3_FF.c3d"))
+    assert np.isnan(p.positions).any()  # gaps are NaN, never zeros
+    assert not (p.positions == 0).all(axis=2).any()
+
+
+def test_malformed_c3d_is_one_line_error(shared_data, tmp_path):
+    with pytest.raises(C3DError, match="Dance.c3d: not a readable C3D"):
+        read_c3d(shared_data("c3d/Dance.c3d"))
+    bad = tmp_path / "x.c3d"
+    bad.write_bytes(b"not a c3d")
+    with pytest.raises(C3DError, match="x.c3d"):
+        read_c3d(bad)
+
+
+# ----------------------------------------------------------------------------- marker sets
+def test_builtin_sets_and_detection(shared_data):
+    sets = builtin_markersets()
+    assert {"cmu41", "pig_lower"} <= set(sets)
+    assert detect_markerset(read_c3d(shared_data("c3d/07_01.c3d")).labels).name == "cmu41"
+    assert detect_markerset(read_c3d(shared_data("c3d/PiG_Motion3_FF.c3d")).labels).name \
+        == "pig_lower"
+    with pytest.raises(MarkerSetError, match="no built-in marker set"):
+        detect_markerset(["A", "B", "C"])
+
+
+def test_markerset_errors_and_missing_markers():
+    with pytest.raises(MarkerSetError, match="at least 3"):
+        parse_markerset("[segments.p]\nmarkers=['A','B']")
+    with pytest.raises(MarkerSetError, match="listed before"):
+        parse_markerset("[segments.p]\nmarkers=['A','B','C']\n"
+                        "[segments.t]\nparent='q'\njoint='x'\nmarkers=['D']")
+    ms = parse_markerset("[segments.p]\nmarkers=['A','B','C']\n"
+                         "[segments.t]\nparent='p'\njoint='x'\nmarkers=['D','E']\n"
+                         "[segments.u]\nparent='t'\njoint='y'\nmarkers=['F']")
+    kept, missing = ms.restricted({"A", "B", "C", "E"})
+    assert [s.name for s in kept.segments] == ["p", "t"] and missing == {"t": ["D"], "u": ["F"]}
+
+
+# ----------------------------------------------------------------------------- frames
+def test_frame_from_three_is_a_rotation_and_kabsch_recovers_pose():
+    rng = np.random.default_rng(0)
+    pts = rng.normal(size=(5, 3, 3))
+    m = frame_from_three(pts[:, 0], pts[:, 1], pts[:, 2])
+    assert np.allclose(np.einsum("fji,fjk->fik", m, m), np.eye(3), atol=1e-12)
+    assert np.allclose(np.linalg.det(m), 1.0)
+    from scipy.spatial.transform import Rotation
+
+    r = Rotation.random(7, random_state=1).as_matrix()
+    tmpl = rng.normal(size=(4, 3))
+    o = rng.normal(size=(7, 3))
+    x = o[:, None] + np.einsum("fij,kj->fki", r, tmpl)
+    x[2, 1] = np.nan  # a gap: 3 points left
+    x[3, :2] = np.nan  # too few points
+    rr, oo = kabsch(tmpl, x)
+    ok = np.arange(7) != 3
+    assert np.allclose(rr[ok], r[ok], atol=1e-9) and np.allclose(oo[ok], o[ok], atol=1e-9)
+    assert np.isnan(rr[3]).all()
+
+
+def test_lab_to_yup_z_up():
+    g = lab_to_yup([0, 0, 1])
+    assert np.allclose(g @ [0, 0, 1], [0, 1, 0]) and np.isclose(np.linalg.det(g), 1)
+
+
+# ----------------------------------------------------------------------------- synthetic truth
+@pytest.fixture(scope="module")
+def motions():
+    from vidcap.asf import read_asf_amc
+    from vidcap.bvh import read_bvh
+
+    root = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "motion"
+    if not root.exists():
+        pytest.skip("../shared/data is not here")
+    return {
+        "131": (read_bvh(root / "131_01.bvh"), BVH_131),
+        "07": (read_asf_amc(root / "07.asf", root / "07_07.amc"), ASF_07),
+    }
+
+
+@pytest.mark.parametrize("which", ["131", "07"])
+def test_noise_free_markers_give_exact_centres(motions, which):
+    motion, layout = motions[which]
+    data, ms, truth = attach_markers(motion, layout, np.random.default_rng(3), noise_m=0.0)
+    sol = solve_joints(data, ms)
+    for j in LIMB:
+        assert rms_mm(sol.position(j), truth[j]) < 1.0, j
+    # knees and elbows of these motions are exact hinges: detected, axis reported
+    for j in ["l_knee", "r_elbow"]:
+        rep = sol.report(j)
+        assert rep.kind == "hinge" and rep.axis is not None and not rep.flagged
+    # the BVH skeleton reproduces the centres where the truth is a chain of ball joints
+    # (legs); the source spine is a chain of three joints, which a single "spine" joint
+    # only approximates, so the arms hang from a torso that is a few cm off
+    mo = solution_to_motion(sol)
+    fk = mo.positions()
+    g = lab_to_yup(sol.up)
+    for j in ["l_hip", "r_hip", "l_knee", "r_knee"]:
+        want = sol.position(j) @ g.T
+        assert rms_mm(fk[:, mo.skeleton.index(j)], want) < 1.0, j
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_one_mm_noise_ball_joints_within_10mm(motions, seed):
+    """Hips and shoulders (3-D motion) meet the 10 mm target with 1 mm noise on 131_01.
+
+    Knees and elbows of a walk are near-hinges: their centre along the hinge axis is
+    weakly observable, and they do NOT meet 10 mm here (see benchmarks/RESULTS.md).
+    """
+    motion, layout = motions["131"]
+    data, ms, truth = attach_markers(motion, layout, np.random.default_rng(seed), noise_m=0.001)
+    sol = solve_joints(data, ms)
+    for j in ["l_hip", "r_hip", "l_shoulder", "r_shoulder"]:
+        assert rms_mm(sol.position(j), truth[j]) < 10.0, j
+
+
+def test_too_little_motion_is_flagged_with_fallback(motions):
+    motion, layout = motions["131"]
+    still = motion.frames(0, 1)
+    from vidcap.kinematics import Motion
+
+    frozen = Motion(still.skeleton, np.repeat(still.root_positions, 50, 0)
+                    + np.linspace(0, 1, 50)[:, None], np.repeat(still.rotations, 50, 0), 120)
+    data, ms, truth = attach_markers(frozen, layout, np.random.default_rng(0), noise_m=0.001)
+    sol = solve_joints(data, ms)
+    rep = sol.report("l_knee")
+    assert rep.flagged and rep.method == "fallback" and "fallback" in rep.note
+    assert np.isfinite(sol.position("l_knee")).all()
+
+
+# ----------------------------------------------------------------------------- CLI
+def test_cli_07_01_outputs(cli, shared_data, tmp_path):
+    c3d = shared_data("c3d/07_01.c3d")
+    out = tmp_path / "o.bvh"
+    r = cli("joints", c3d, "-o", out, "--centres", tmp_path / "c.csv",
+            "--report", tmp_path / "r.json", timeout=120)
+    assert r.returncode == 0, r.stderr
+    from vidcap.bvh import read_bvh
+
+    m = read_bvh(out, units="m")
+    assert "l_knee" in m.skeleton.joint_names and m.n_frames == 316
+    lines = (tmp_path / "c.csv").read_text().splitlines()
+    assert lines[0] == "frame,time_s,joint,x_m,y_m,z_m"
+    assert len(lines) == 1 + 316 * len(m.skeleton.joint_names)
+    rep = json.loads((tmp_path / "r.json").read_text())
+    assert rep["markerset"] == "cmu41"
+    assert {j["joint"] for j in rep["joints"]} >= {"l_hip", "l_knee", "l_shoulder"}
+
+
+def test_cli_every_shared_file_converts_or_fails_cleanly(cli, shared_data, tmp_path):
+    folder = shared_data("c3d")
+    files = sorted(folder.glob("*.c3d"))
+    assert len(files) >= 10
+    converted = 0
+    for f in files:
+        r = cli("joints", f, "-o", tmp_path / f"{f.stem}.bvh", timeout=60)
+        assert r.returncode in (0, 2), (f.name, r.stderr)
+        if r.returncode == 2:
+            err = [ln for ln in r.stderr.splitlines() if ln.startswith("vidcap: error:")]
+            assert len(err) == 1 and f.name in err[0] and "Traceback" not in r.stderr
+            assert not (tmp_path / f"{f.stem}.bvh").exists()
+        else:
+            converted += 1
+    assert converted >= 4
+
+
+def test_cli_list_markersets(cli):
+    r = cli("joints", "--list-markersets")
+    assert r.returncode == 0 and "cmu41" in r.stdout and "pig_lower" in r.stdout

@@ -1,0 +1,106 @@
+"""``vidcap joints``: joint centres and a BVH skeleton from C3D marker data."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+
+NAME = "joints"
+HELP = "joint centres (sphere fits) and a BVH skeleton from C3D marker trajectories"
+ORDER = 60
+
+
+def add_arguments(parser) -> None:
+    """Fill the ``vidcap joints`` parser."""
+    parser.add_argument("trial", nargs="?", help="the C3D trial to convert")
+    parser.add_argument("--also", nargs="+", default=[], metavar="OTHER.c3d",
+                        help="more trials of the same subject and marker set, pooled for fitting")
+    parser.add_argument("--markerset", metavar="NAME|FILE",
+                        help="built-in marker set name or a TOML file (default: detect)")
+    parser.add_argument("--noise-mm", type=float, default=None, metavar="MM",
+                        help="marker noise standard deviation in mm: unbiased fits (UGDK)")
+    parser.add_argument("-o", "--output", metavar="OUT.bvh", help="BVH file to write")
+    parser.add_argument("--centres", metavar="OUT.csv",
+                        help="CSV of joint centres in the C3D lab frame (metres)")
+    parser.add_argument("--report", metavar="OUT.json", help="JSON fit-quality report per joint")
+    parser.add_argument("--list-markersets", action="store_true",
+                        help="list the built-in marker sets and exit")
+
+
+def centres_csv(sol) -> str:
+    """CSV text ``frame,time_s,joint,x_m,y_m,z_m``, one row per frame and joint."""
+    F, J = sol.positions.shape[:2]
+    frame = np.repeat(np.arange(F), J)
+    time = frame / sol.fps
+    names = np.tile(np.array(sol.joint_names, dtype=object), F)
+    xyz = sol.positions.reshape(-1, 3)
+    rows = [
+        f"{f},{t:.6f},{n},{x:.6f},{y:.6f},{z:.6f}"
+        for f, t, n, (x, y, z) in zip(frame, time, names, xyz, strict=True)
+    ]
+    return "frame,time_s,joint,x_m,y_m,z_m\n" + "\n".join(rows) + "\n"
+
+
+def report_dict(sol, trials, noise_mm) -> dict:
+    """The ``--report`` JSON content."""
+    return {
+        "markerset": sol.markerset.name,
+        "trials": [t.path for t in trials],
+        "frames": int(sol.positions.shape[0]),
+        "fps": sol.fps,
+        "noise_mm": noise_mm,
+        "missing_markers": sol.missing_markers,
+        "joints": [r.as_dict() for r in sol.reports],
+    }
+
+
+def run(args) -> int:
+    """Run ``vidcap joints``."""
+    from vidcap.errors import UsageError
+    from vidcap.fileio import progress, write_text_atomic
+    from vidcap.mocap.c3d import read_c3d
+    from vidcap.mocap.markerset import builtin_markersets, load_markerset
+
+    if args.list_markersets:
+        for name, ms in builtin_markersets().items():
+            print(f"{name:12s} {len(ms.segment_markers()):3d} markers  {ms.description}")
+        return 0
+    if not args.trial:
+        raise UsageError("give a TRIAL.c3d (or --list-markersets)")
+    if not (args.output or args.centres or args.report):
+        raise UsageError("nothing to write: give -o OUT.bvh, --centres OUT.csv or --report")
+    if args.noise_mm is not None and not args.noise_mm > 0:
+        raise UsageError(f"--noise-mm must be positive, got {args.noise_mm}")
+
+    from vidcap.bvh import write_bvh
+    from vidcap.mocap.skeleton import solution_to_motion, solve_joints
+
+    steps = progress(total=3 + len(args.also), desc="joints", unit="step")
+    trials = []
+    for p in [args.trial, *args.also]:
+        trials.append(read_c3d(p))
+        steps.update()
+    ms = load_markerset(args.markerset) if args.markerset else None
+    sol = solve_joints(trials, ms, noise_mm=args.noise_mm)
+    steps.update()
+    for seg, gone in sol.missing_markers.items():
+        print(f"vidcap: warning: {trials[0].path}: marker set {sol.markerset.name}: segment "
+              f"{seg}: markers absent from the file: {', '.join(gone)}", file=sys.stderr)
+    for r in sol.reports:
+        if r.flagged:
+            print(f"vidcap: warning: joint {r.joint}: {r.note}", file=sys.stderr)
+    if args.output:
+        write_bvh(args.output, solution_to_motion(sol))
+    if args.centres:
+        write_text_atomic(args.centres, centres_csv(sol))
+    if args.report:
+        write_text_atomic(args.report,
+                          json.dumps(report_dict(sol, trials, args.noise_mm), indent=2) + "\n")
+    steps.update()
+    steps.close()
+    n_bad = sum(r.flagged for r in sol.reports)
+    print(f"{trials[0].path}: {sol.markerset.name}, {len(sol.joint_names)} joints, "
+          f"{sol.positions.shape[0]} frames, {n_bad} flagged")
+    return 0

@@ -1,0 +1,306 @@
+"""Marker sets: which marker rides on which segment, and the segment tree.
+
+A marker set is a small TOML file (the built-in ones live in
+``vidcap/mocap/markersets/*.toml``)::
+
+    name = "cmu41"
+    description = "CMU Graphics Lab 41-marker full-body set"
+
+    [segments.pelvis]                 # the first segment is the root (>= 3 markers)
+    joint = "pelvis"                  # the BVH root joint
+    markers = ["LFWT", "RFWT", "LBWT", "RBWT"]
+    origin = ["l_hip", "r_hip"]       # root joint = mean of these child joint centres
+    side = ["l_hip", "r_hip"]         # left-to-right vector -> +X in the T-pose
+
+    [segments.l_upper_leg]
+    parent = "pelvis"
+    joint = "l_hip"                   # joint between parent and this segment
+    markers = ["LTHI", "LKNE"]
+    tip = "l_knee"                    # what the segment points at in the T-pose...
+    rest = "-y"                       # ...and in which direction (x, -x, y, -y, z, -z)
+    fallback = ["LKNE"]               # optional: markers whose centroid stands in for
+                                      # the joint centre when the joint barely moves
+    end = { joint = "l_toe", markers = ["LTOE"] }   # optional extra leaf joint
+
+Joint names follow ``design.md`` (``l_hip``, ``l_knee``...); extra joints
+(``spine``, ``l_toe``...) are allowed. Segments are listed parents first.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from vidcap.errors import VidcapError
+
+_DIRS = {"x": (1, 0, 0), "-x": (-1, 0, 0), "y": (0, 1, 0), "-y": (0, -1, 0),
+         "z": (0, 0, 1), "-z": (0, 0, -1)}
+
+
+class MarkerSetError(VidcapError):
+    """A marker-set TOML file is malformed or does not fit the data."""
+
+
+@dataclass(frozen=True)
+class SegmentSpec:
+    """One rigid segment of a marker set.
+
+    Attributes
+    ----------
+    name : str
+        Segment name.
+    parent : str or None
+        Parent segment (None for the root).
+    joint : str
+        Joint between the parent and this segment (for the root: the root joint).
+    markers : tuple of str
+        Markers rigidly attached to the segment.
+    tip : str or None
+        Joint (child joint or end) the segment points at in the T-pose.
+    rest : tuple of float
+        Unit direction of ``tip`` from ``joint`` in the T-pose (Y up, -Z forward,
+        the body's left is -X).
+    side : tuple of str
+        Two joints whose left-to-right vector becomes +X in the T-pose (optional).
+    fallback : tuple of str
+        Markers whose centroid is the joint centre when the fit fails (optional).
+    end_joint : str or None
+        Name of an extra leaf joint at the centroid of ``end_markers``.
+    end_markers : tuple of str
+    origin : tuple of str
+        Root only: child joints whose mean is the root joint's position.
+    """
+
+    name: str
+    parent: str | None
+    joint: str
+    markers: tuple[str, ...]
+    tip: str | None = None
+    rest: tuple[float, float, float] = (0.0, -1.0, 0.0)
+    side: tuple[str, ...] = ()
+    fallback: tuple[str, ...] = ()
+    end_joint: str | None = None
+    end_markers: tuple[str, ...] = ()
+    origin: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class MarkerSet:
+    """A named marker set: segments in parent-first order (the first is the root)."""
+
+    name: str
+    description: str
+    segments: tuple[SegmentSpec, ...]
+    source: str = ""
+
+    @property
+    def root(self) -> SegmentSpec:
+        """The root segment."""
+        return self.segments[0]
+
+    def segment(self, name: str) -> SegmentSpec:
+        """The segment called ``name``."""
+        for s in self.segments:
+            if s.name == name:
+                return s
+        raise KeyError(name)
+
+    def markers(self) -> tuple[str, ...]:
+        """Every marker the set names (segment and end markers), in order, unique."""
+        out: list[str] = []
+        for s in self.segments:
+            for m in (*s.markers, *s.end_markers, *s.fallback):
+                if m not in out:
+                    out.append(m)
+        return tuple(out)
+
+    def segment_markers(self) -> tuple[str, ...]:
+        """Markers attached to segments (what matters for detection)."""
+        return tuple(m for s in self.segments for m in s.markers)
+
+    def joints(self) -> tuple[str, ...]:
+        """Every joint: one per segment, then the end joints."""
+        return tuple(s.joint for s in self.segments) + tuple(
+            s.end_joint for s in self.segments if s.end_joint
+        )
+
+    def restricted(self, available: set[str]) -> tuple[MarkerSet, dict[str, list[str]]]:
+        """This set without markers absent from the data.
+
+        Segments left without markers are dropped together with their descendants.
+
+        Returns
+        -------
+        markerset : MarkerSet
+        missing : dict of str to list of str
+            Absent markers per segment (only segments that lost some).
+        """
+        missing: dict[str, list[str]] = {}
+        kept: list[SegmentSpec] = []
+        names: set[str] = set()
+        for s in self.segments:
+            gone = [m for m in (*s.markers, *s.end_markers) if m not in available]
+            if gone:
+                missing[s.name] = gone
+            if s.parent is not None and s.parent not in names:
+                continue
+            mk = tuple(m for m in s.markers if m in available)
+            if not mk:
+                continue
+            end = tuple(m for m in s.end_markers if m in available)
+            kept.append(SegmentSpec(
+                s.name, s.parent, s.joint, mk, s.tip, s.rest, s.side,
+                tuple(m for m in s.fallback if m in available),
+                s.end_joint if end else None, end, s.origin,
+            ))
+            names.add(s.name)
+        return MarkerSet(self.name, self.description, tuple(kept), self.source), missing
+
+
+def _strs(value, what, path) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise MarkerSetError(f"{what} must be a list of strings", path)
+    return tuple(v.strip() for v in value)
+
+
+def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
+    """Parse a marker-set TOML document.
+
+    Raises
+    ------
+    MarkerSetError
+        Malformed TOML, unknown parents, duplicate joints, a root with < 3 markers.
+    """
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise MarkerSetError(f"not valid TOML ({exc})", source) from None
+    segs = doc.get("segments")
+    if not isinstance(segs, dict) or not segs:
+        raise MarkerSetError("no [segments.*] tables", source)
+    out: list[SegmentSpec] = []
+    seen_seg: set[str] = set()
+    seen_joint: set[str] = set()
+    for i, (name, t) in enumerate(segs.items()):
+        if not isinstance(t, dict):
+            raise MarkerSetError(f"segments.{name} must be a table", source)
+        parent = t.get("parent")
+        if i == 0 and parent is not None:
+            raise MarkerSetError(f"the first segment ({name}) is the root and has no parent",
+                                 source)
+        if i > 0 and parent not in seen_seg:
+            raise MarkerSetError(
+                f"segments.{name}: parent {parent!r} must be a segment listed before it", source
+            )
+        joint = t.get("joint", name if i == 0 else None)
+        if not isinstance(joint, str) or not joint:
+            raise MarkerSetError(f"segments.{name}: missing joint name", source)
+        markers = _strs(t.get("markers"), f"segments.{name}.markers", source)
+        if not markers:
+            raise MarkerSetError(f"segments.{name}: no markers", source)
+        if i == 0 and len(markers) < 3:
+            raise MarkerSetError(f"root segment {name} needs at least 3 markers", source)
+        rest = str(t.get("rest", "-y")).lower()
+        if rest not in _DIRS:
+            raise MarkerSetError(f"segments.{name}.rest must be one of {sorted(_DIRS)}", source)
+        end = t.get("end") or {}
+        if not isinstance(end, dict):
+            raise MarkerSetError(f"segments.{name}.end must be a table", source)
+        end_joint = end.get("joint")
+        for j in (joint, end_joint):
+            if j is None:
+                continue
+            if j in seen_joint:
+                raise MarkerSetError(f"joint {j!r} is defined twice", source)
+            seen_joint.add(j)
+        out.append(SegmentSpec(
+            name=name, parent=parent, joint=joint, markers=markers,
+            tip=t.get("tip"), rest=tuple(float(v) for v in _DIRS[rest]),
+            side=_strs(t.get("side"), f"segments.{name}.side", source),
+            fallback=_strs(t.get("fallback"), f"segments.{name}.fallback", source),
+            end_joint=end_joint,
+            end_markers=_strs(end.get("markers"), f"segments.{name}.end.markers", source),
+            origin=_strs(t.get("origin"), f"segments.{name}.origin", source),
+        ))
+        seen_seg.add(name)
+    return MarkerSet(str(doc.get("name", Path(source).stem)), str(doc.get("description", "")),
+                     tuple(out), source)
+
+
+def builtin_markersets() -> dict[str, MarkerSet]:
+    """The marker sets shipped with vidcap, by name."""
+    out = {}
+    for f in sorted(resources.files("vidcap.mocap").joinpath("markersets").iterdir(),
+                    key=lambda p: p.name):
+        if f.name.endswith(".toml"):
+            ms = parse_markerset(f.read_text(encoding="utf-8"), source=f.name)
+            out[ms.name] = ms
+    return out
+
+
+def load_markerset(name_or_path: str | os.PathLike) -> MarkerSet:
+    """A built-in marker set by name, or a TOML file by path.
+
+    Raises
+    ------
+    MarkerSetError
+        Unknown name, missing or malformed file.
+    """
+    sets = builtin_markersets()
+    key = str(name_or_path)
+    if key in sets:
+        return sets[key]
+    p = Path(key)
+    if p.suffix.lower() == ".toml" or p.exists():
+        if not p.is_file():
+            raise MarkerSetError("no such marker-set file", p)
+        try:
+            text = p.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise MarkerSetError(f"cannot read ({exc})", p) from None
+        return parse_markerset(text, source=str(p))
+    raise MarkerSetError(
+        f"unknown marker set {key!r}; built-in sets: {', '.join(sets)} (or give a .toml file)"
+    )
+
+
+def detect_markerset(labels, *, path=None) -> MarkerSet:
+    """Pick the built-in marker set that fits the labels.
+
+    A set is a candidate when all its root markers are present and at least 75 % of
+    its segment markers are. The candidate covering the largest share of its markers
+    wins; then the one with more markers. A tie is ambiguous.
+
+    Raises
+    ------
+    MarkerSetError
+        No built-in set fits, or several fit equally well (use ``--markerset``).
+    """
+    have = set(labels)
+    scored = []
+    for ms in builtin_markersets().values():
+        seg = ms.segment_markers()
+        if not all(m in have for m in ms.root.markers):
+            continue
+        share = sum(m in have for m in seg) / len(seg)
+        if share >= 0.75:
+            scored.append((share, sum(m in have for m in seg), ms))
+    if not scored:
+        raise MarkerSetError(
+            "no built-in marker set matches the marker labels; pass --markerset FILE.toml "
+            "(see vidcap joints --list-markersets)", path,
+        )
+    scored.sort(key=lambda s: (s[0], s[1]), reverse=True)
+    if len(scored) > 1 and scored[0][:2] == scored[1][:2]:
+        raise MarkerSetError(
+            f"marker labels fit several marker sets ({scored[0][2].name}, {scored[1][2].name});"
+            " choose one with --markerset", path,
+        )
+    return scored[0][2]
