@@ -882,16 +882,34 @@ _SEGMENT_COLOUR = {
     "l_upper_leg": TROUSERS, "r_upper_leg": TROUSERS,
     "l_lower_leg": TROUSERS, "r_lower_leg": TROUSERS,
 }
-#: Segments drawn as flat-ended cylinders (their end discs project to ellipses); the
-#: limbs are capsules (rounded joints).
-_FLAT_ENDS = frozenset({"torso", "head"})
+#: Which ends of each cylinder are rounded by a sphere of the segment's radius (the
+#: joints inside a limb: shoulders, elbows, hips, knees). The other ends are the flat
+#: discs of a cylinder (their projections are ellipses): torso, head, hands, feet end
+#: at the joint as the seed's cylinder model does.
+_ROUND_ENDS = MappingProxyType(
+    {
+        "torso": (False, False), "head": (False, False),
+        "l_upper_arm": (True, True), "r_upper_arm": (True, True),
+        "l_lower_arm": (True, False), "r_lower_arm": (True, False),
+        "l_upper_leg": (True, True), "r_upper_leg": (True, True),
+        "l_lower_leg": (True, False), "r_lower_leg": (True, False),
+    }
+)
 #: Direction toward the light in camera coordinates (right, down, view): upper left,
 #: in front.
 _LIGHT = _unit(np.array([-0.45, -0.6, -0.65]))
 
 
-def _draw_segment(img, zbuf, a, b, za, zb, r, axis_v, colour, flat):
-    """Z-buffered shaded cylinder/capsule from image points a->b (px) into img (float32)."""
+def _draw_segment(img, zbuf, a, b, za, zb, r, axis_v, colour, round_ends):
+    """Z-buffer one shaded cylinder, a -> b in image pixels, into ``img`` (float32).
+
+    ``za``, ``zb`` are the end depths and ``r`` the radius, all in pixels; ``axis_v``
+    is the cosine between the 3D axis and the view direction (foreshortening of the
+    flat end discs); ``round_ends`` says which ends are spheres instead of discs.
+    The body is exact for an orthographic view (a band of half-width r); the depth
+    and normals are those of a cylinder lying in the image plane, close enough to
+    order overlapping segments and to shade them.
+    """
     H, W = zbuf.shape
     lo = np.floor(np.minimum(a, b) - r - 1).astype(int)
     hi = np.ceil(np.maximum(a, b) + r + 1).astype(int)
@@ -902,47 +920,45 @@ def _draw_segment(img, zbuf, a, b, za, zb, r, axis_v, colour, flat):
     px = np.arange(x0, x1, dtype=np.float32)[None, :] - a[0]
     py = np.arange(y0, y1, dtype=np.float32)[:, None] - a[1]
     ab = (b - a).astype(np.float32)
-    L2 = float(ab @ ab)
-    t_raw = (px * ab[0] + py * ab[1]) / L2 if L2 > 1e-9 else np.zeros_like(px * py)
-    t = np.clip(t_raw, 0.0, 1.0)
-    ex = px - t * ab[0]
-    ey = py - t * ab[1]
-    e2 = ex * ex + ey * ey
+    L = float(np.hypot(ab[0], ab[1]))
+    ux, uy = (float(ab[0]) / L, float(ab[1]) / L) if L > 1e-6 else (1.0, 0.0)
     r2 = r * r
-    if flat:
-        # body: perpendicular distance within the length; ends: projected discs
-        # (ellipses with semi-axes r across and r*|cos| along the projected axis).
-        L = np.sqrt(max(L2, 1e-12))
-        ux, uy = (ab / L) if L2 > 1e-9 else (np.float32(1.0), np.float32(0.0))
-        cos_a = max(abs(float(axis_v)), 1e-3)
-        par = px * ux + py * uy  # along the axis from a, px
-        perp2 = (px * uy - py * ux) ** 2
-        body = (par >= 0) & (par <= L) & (perp2 < r2)
-        cap_a = (par / (r * cos_a)) ** 2 + perp2 / r2 < 1.0
-        cap_b = ((par - L) / (r * cos_a)) ** 2 + perp2 / r2 < 1.0
-        inside = body | cap_a | cap_b
-        e2 = np.where(body, perp2, np.minimum(perp2, r2))
-    else:
-        inside = e2 < r2
-    if not inside.any():
-        return
-    h = np.sqrt(np.clip(1.0 - e2 / r2, 0.0, 1.0))  # how far the surface bulges toward us
-    depth = (za + t * (zb - za)) - h * r
+    par = px * ux + py * uy  # along the axis from a, px
+    perp = px * uy - py * ux  # signed, across the axis
+    perp2 = perp * perp
+    h_cyl = np.sqrt(np.clip(1.0 - perp2 / r2, 0.0, 1.0))
+    # light on a cylinder: normal across the axis in the image, bulging toward us
+    lam_cyl = (perp / r) * (uy * _LIGHT[0] - ux * _LIGHT[1]) - h_cyl * _LIGHT[2]
+    inf = np.float32(np.inf)
+    inside = (par >= 0) & (par <= L) & (perp2 < r2)
+    t = np.clip(par / L, 0.0, 1.0) if L > 1e-6 else np.zeros_like(par)
+    depth = np.where(inside, za + t * (zb - za) - h_cyl * r, inf)
+    lam = lam_cyl
+    cos_a = max(abs(float(axis_v)), 1e-3)
+    for end_par, z_end, rounded in ((0.0, za, round_ends[0]), (L, zb, round_ends[1])):
+        dpar = par - end_par
+        if rounded:  # sphere
+            d2 = dpar * dpar + perp2
+            cap = d2 < r2
+            h = np.sqrt(np.clip(1.0 - d2 / r2, 0.0, 1.0))
+            dz = z_end - h * r
+            nx = (dpar * ux + perp * uy) / r
+            ny = (dpar * uy - perp * ux) / r
+            lam_cap = nx * _LIGHT[0] + ny * _LIGHT[1] - h * _LIGHT[2]
+        else:  # flat disc seen obliquely: an ellipse, shaded as a face toward us
+            cap = (dpar / (r * cos_a)) ** 2 + perp2 / r2 < 1.0
+            dz = np.full_like(par, z_end - 0.5 * r * cos_a)
+            lam_cap = np.full_like(par, 0.55)
+        closer = cap & (dz < depth)
+        depth = np.where(closer, dz, depth)
+        lam = np.where(closer, lam_cap, lam)
     sub_z = zbuf[y0:y1, x0:x1]
-    upd = inside & (depth < sub_z)
+    upd = depth < sub_z
     if not upd.any():
         return
-    # normal in camera coordinates (right, down, view): across the axis, and toward us
-    rinv = 1.0 / r
-    nx, ny = ex * rinv, ey * rinv
-    if flat:  # signed distance across the axis, along the image normal (uy, -ux)
-        d = (px * uy - py * ux) * rinv
-        nx, ny = d * uy, -d * ux
-    lam = np.clip(nx * _LIGHT[0] + ny * _LIGHT[1] - h * _LIGHT[2], 0.0, 1.0)
-    shade = 0.45 + 0.6 * lam
-    col = np.asarray(colour, np.float32)
+    shade = 0.45 + 0.6 * np.clip(lam, 0.0, 1.0)
     sub_img = img[y0:y1, x0:x1]
-    sub_img[upd] = shade[upd][:, None] * col
+    sub_img[upd] = shade[upd][:, None] * np.asarray(colour, np.float32)
     sub_z[upd] = depth[upd]
 
 
@@ -989,7 +1005,7 @@ def render_body(
         # depths in pixels so they compare with the radius in pixels
         _draw_segment(
             img, zbuf, uv[p], uv[d], np.float32(z[p] * s), np.float32(z[d] * s),
-            np.float32(body.radius(name) * s), axis_v, colours[name], name in _FLAT_ENDS,
+            np.float32(body.radius(name) * s), axis_v, colours[name], _ROUND_ENDS[name],
         )
     return img, np.isfinite(zbuf)
 
@@ -1016,7 +1032,7 @@ def finish_frame(
     """Apply lighting gain (3,) and Gaussian noise (sigma, grey levels); return uint8."""
     out = image if gain is None else image * np.asarray(gain, np.float32)
     if noise > 0:
-        out = out + rng.normal(0.0, noise, out.shape).astype(np.float32)
+        out = out + np.float32(noise) * rng.standard_normal(out.shape, dtype=np.float32)
     return np.clip(np.rint(out), 0, 255).astype(np.uint8)
 
 
