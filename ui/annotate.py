@@ -77,7 +77,8 @@ class AnnotateApp:
         j3 = self._floor(session.joints3d)
         self._points3d = Points3D(JOINT_NAMES, j3, np.asarray(SEGMENT_JOINTS), session.clip.fps, 1)
         self.plotter = pv.Plotter(off_screen=True, window_size=[420, 320])
-        self.scene = Scene(self._points3d, plotter=self.plotter, view_direction=(0.6, 0.3, 1.0))
+        self.scene = Scene(self._points3d, plotter=self.plotter, view_direction=(0.6, 0.3, 1.0),
+                           follow=True)
 
         self._init_state()
         self._build_ui()
@@ -385,7 +386,8 @@ class AnnotateApp:
                             html.Td("{{ s.label }}", classes="text-no-wrap")
                             with html.Td():
                                 v3.VIcon("mdi-alert-circle", v_if="s.low", color="error",
-                                         size="small", title="doubtful")
+                                         size="small",
+                                         title=("'doubtful: ' + s.doubt_cm + ' cm if wrong'",))
                             with html.Td(classes="text-no-wrap"):
                                 v3.VBtn("toward", size="x-small", classes="mr-1",
                                         id=("'toward-' + s.name",),

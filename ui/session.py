@@ -102,12 +102,26 @@ class VidcapLifter:
 
         return yaw_from_orientation(orientation, width_ratio)
 
-    def propose(self, joints2d, yaw, fixed, scale):
-        """Depth signs (F, 10), margins (F, 10) and ranked checks with ``fixed`` user signs."""
+    def propose(self, joints2d, yaw, fixed, scale, *, tau: float = 0.2):
+        """Depth-sign proposals with the user's ``fixed`` signs as constraints.
+
+        Returns
+        -------
+        signs : numpy.ndarray of int, shape (F, 10)
+        doubt : numpy.ndarray, shape (F, 10)
+            Expected displacement of each segment's distal joint if its sign is wrong,
+            metres: ``2 zeta l p_wrong`` with ``p_wrong = 1 / (1 + exp(margin / tau))``
+            (as :meth:`vidcap.proposals.SignProposal.checks` ranks them).
+        checks : list of dict
+            The proposals' ranked list of (frame, segment) pairs to check.
+        """
         from vidcap.proposals import propose_signs
 
         p = propose_signs(joints2d, yaw, scale=scale, body=self.body, fixed=fixed)
-        return p.signs, p.margin, p.checks(self.body, limit=200)
+        with np.errstate(over="ignore"):
+            p_wrong = 1.0 / (1.0 + np.exp(np.minimum(p.margin / tau, 700.0)))
+        doubt = 2.0 * p.zeta * self.body.segment_lengths() * p_wrong
+        return p.signs, doubt, p.checks(self.body, limit=200, tau=tau)
 
     def lift(self, joints2d, signs, yaw, scale) -> np.ndarray:
         """3D joints (F, 15, 3) in metres (X right, Y up, Z toward the camera)."""
@@ -138,8 +152,9 @@ class AnnotateSession:
         The lifting seam (default: the library's).
     low_fit : float
         Fit scores below this mark a frame as needing attention (keyword-only knob).
-    low_margin : float
-        Proposal margins below this mark a segment's sign as doubtful.
+    low_doubt : float
+        A segment's sign is marked doubtful when a wrong sign would move its distal
+        joint by more than this (expected value, metres).
     annotations_cls : type, optional
         The annotations class (default :class:`vidcap.annotations.Annotations`).
 
@@ -151,14 +166,14 @@ class AnnotateSession:
     """
 
     def __init__(self, clip: ClipData, annotations_path, *, lifter=None, low_fit: float = 0.5,
-                 low_margin: float = 0.5, annotations_cls=None):
+                 low_doubt: float = 0.05, annotations_cls=None):
         if annotations_cls is None:
             from vidcap.annotations import Annotations as annotations_cls
         self.clip = clip
         self.path = Path(annotations_path)
         self.lifter = lifter or VidcapLifter()
         self.low_fit = float(low_fit)
-        self.low_margin = float(low_margin)
+        self.low_doubt = float(low_doubt)
         self.load_error: str | None = None
         self.backup: Path | None = None
         self.last_edit_ms = 0.0
@@ -185,7 +200,7 @@ class AnnotateSession:
         have = np.isfinite(self.user_joints).all(axis=-1)
         self.joints2d[have] = self.user_joints[have]
         self.yaw = self.lifter.yaw(self.orientation, clip.width_ratio)
-        self.signs, self.margin, self.checks = self.lifter.propose(
+        self.signs, self.doubt, self.checks = self.lifter.propose(
             self.joints2d, self.yaw, self.user_signs, clip.scale)
         self.signs = np.where(self.user_signs != 0, self.user_signs, self.signs).astype(int)
         self.joints3d = self.lifter.lift(self.joints2d, self.signs, self.yaw, clip.scale)
@@ -202,7 +217,7 @@ class AnnotateSession:
 
     def low_confidence(self, frame: int) -> np.ndarray:
         """Segments (10,) bool whose sign is doubtful or whose frame fits badly."""
-        doubtful = (self.margin[frame] < self.low_margin) & (self.user_signs[frame] == 0)
+        doubtful = (self.doubt[frame] > self.low_doubt) & (self.user_signs[frame] == 0)
         return doubtful | (self.clip.fit_score[frame] < self.low_fit)
 
     def frame_info(self, frame: int) -> dict:
@@ -218,8 +233,7 @@ class AnnotateSession:
                 "user": bool(self.user_signs[f, k] != 0),
                 "event": self._event_at(f, "depth", name),
                 "low": bool(low[k]),
-                "margin": None if not np.isfinite(self.margin[f, k])
-                else round(float(self.margin[f, k]), 2),
+                "doubt_cm": round(100.0 * float(self.doubt[f, k]), 1),
             })
         return {
             "frame": f,

@@ -84,40 +84,18 @@ def motion_points(motion) -> Points3D:
 
 
 def read_c3d_points(path: str | os.PathLike) -> Points3D:
-    """The labelled markers of a C3D file, in metres, gaps as NaN.
-
-    A minimal reader for the viewer (``vidcap.mocap.c3d`` is the library's full one).
+    """The markers of a C3D file (:func:`vidcap.mocap.c3d.read_c3d`): metres, gaps as NaN.
 
     Raises
     ------
-    InputFileError
-        If the file is missing or ezc3d cannot parse it.
+    vidcap.errors.C3DError
+        If the file is missing or cannot be parsed.
     """
-    import ezc3d
+    from vidcap.mocap.c3d import read_c3d
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputFileError("no such C3D file", path)
-    try:
-        c3d = ezc3d.c3d(str(path))
-    except Exception as exc:  # ezc3d raises plain RuntimeError/IOError on bad files
-        raise InputFileError(f"cannot read C3D file: {str(exc).strip() or type(exc).__name__}",
-                             path) from None
-    params = c3d["parameters"]["POINT"]
-    labels = tuple(str(s).strip() for s in params["LABELS"]["value"])
-    unit = str(params.get("UNITS", {}).get("value", ["mm"])[0]).strip().lower()
-    scale = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}.get(unit, 1e-3)
-    rate = float(np.ravel(params.get("RATE", {}).get("value", [100.0]))[0] or 100.0)
-    pts = np.asarray(c3d["data"]["points"], dtype=float)  # (4, P, F)
-    if pts.ndim != 3 or pts.shape[1] == 0:
-        raise InputFileError("the C3D file holds no marker points", path)
-    xyz = np.transpose(pts[:3], (2, 1, 0)) * scale  # (F, P, 3)
-    residual = c3d["data"]["meta_points"]["residuals"] if "meta_points" in c3d["data"] else None
-    gap = ~np.isfinite(xyz).all(axis=2) | (np.abs(xyz).sum(axis=2) == 0)
-    if residual is not None:
-        gap |= np.asarray(residual)[0].T < 0
-    xyz[gap] = np.nan
-    return Points3D(labels[: xyz.shape[1]], xyz, np.zeros((0, 2), int), rate, 2)
+    data = read_c3d(path)
+    up = int(np.argmax(np.abs(data.up)))
+    return Points3D(tuple(data.labels), data.positions, np.zeros((0, 2), int), data.fps, up)
 
 
 def read_centres_csv(path: str | os.PathLike) -> Points3D:

@@ -172,7 +172,7 @@ def test_errors(tmp_path, sample_bvh):
         uiview.view(sample_bvh, screenshot=tmp_path / "x.png", frame=9)
     with pytest.raises(UsageError, match=r"\.txt"):
         uiview.view(tmp_path / "notes.txt", screenshot=tmp_path / "x.png")
-    with pytest.raises(InputFileError, match="no such C3D"):
+    with pytest.raises(InputFileError, match="missing.c3d"):
         uiview.view(tmp_path / "missing.c3d", screenshot=tmp_path / "x.png")
     bad = tmp_path / "bad.c3d"
     bad.write_bytes(b"not a c3d file at all" * 10)

@@ -1,6 +1,6 @@
-"""Serve the annotate page on a synthetic clip (test-only data): for the page's own tests.
+"""Serve the annotate page on a sample clip's ground truth (test-only stage results).
 
-    python tests/ui/serve_fake.py --port 8080 --annotations /tmp/a.json
+    python tests/ui/serve_truth.py --port 8080 --annotations /tmp/a.json [--clip walk_side]
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from pathlib import Path
 
 sys.path[:0] = [str(Path(__file__).resolve().parents[2]), str(Path(__file__).parent)]
 
-from fakes import FakeAnnotations, FakeLifter, synthetic_clip  # noqa: E402
+from clips import truth_clip  # noqa: E402
 
 from ui.annotate import serve  # noqa: E402
 from ui.session import AnnotateSession  # noqa: E402
@@ -20,8 +20,8 @@ if __name__ == "__main__":
     p = argparse.ArgumentParser()
     p.add_argument("--port", type=int, default=0)
     p.add_argument("--annotations", required=True)
+    p.add_argument("--clip", default="walk_side")
     a = p.parse_args()
-    session = AnnotateSession(synthetic_clip(), a.annotations, lifter=FakeLifter(),
-                              annotations_cls=FakeAnnotations)
-    sys.argv = sys.argv[:1]
+    session = AnnotateSession(truth_clip(a.clip), a.annotations)
+    sys.argv = sys.argv[:1]  # trame reads sys.argv too
     serve(session, port=a.port, open_browser=False)
