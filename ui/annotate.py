@@ -115,6 +115,8 @@ class AnnotateApp:
         st.review_side_src = ""
         st.fit_score = 0.0
         st.video_name = s.clip.video.name
+        st.joint_names = list(JOINT_NAMES)
+        st.joints_display = []
         st.annotations_path = str(s.path)
 
     def _update_flagged(self) -> None:
@@ -154,6 +156,7 @@ class AnnotateApp:
             st.orientation_user = info["orientation_user"]
             st.fit_score = info["fit_score"]
             st.user_joints = info["user_joints"]
+            st.joints_display = np.round(j2, 1).tolist()  # page pixels, for tests and tools
             st.n_inputs = s.n_user_inputs
         self.scene.set_frame(f)
         self._update_3d_view()

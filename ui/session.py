@@ -294,7 +294,7 @@ class AnnotateSession:
         w, h = self.clip.size
         u = float(np.clip(u, 0, w - 1))
         v = float(np.clip(v, 0, h - 1))
-        self.annotations.add_joint(self._check_frame(frame), joint, round(u, 1), round(v, 1))
+        self.annotations.add_joint(self._check_frame(frame), joint, round(u, 2), round(v, 2))
         return self._edited(t0)
 
     def clear_joint(self, frame: int, joint: str) -> float:
