@@ -465,4 +465,8 @@ def serve(session: AnnotateSession, *, host: str = "127.0.0.1", port: int = 0,
     if session.load_error:
         print(f"vidcap annotate: error: {session.load_error}; your file is kept, a copy is in"
               f" {session.backup}", file=sys.stderr, flush=True)
-    app.start(host=host, port=port, open_browser=open_browser)
+    argv, sys.argv = sys.argv, sys.argv[:1]  # trame parses sys.argv too: give it nothing
+    try:
+        app.start(host=host, port=port, open_browser=open_browser)
+    finally:
+        sys.argv = argv

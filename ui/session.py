@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, ORIENTATIONS, SEGMENT_INDEX, SEGMENT_NAMES
-from vidcap.errors import AnnotationError
+from vidcap.errors import AnnotationError, VidcapError
 
 
 @dataclass
@@ -353,10 +353,24 @@ class AnnotateSession:
 
 
 def default_annotations_path(video: str | os.PathLike) -> Path:
-    """``VIDEO_STEM.vidcap.json`` beside the video (as :mod:`vidcap.annotations`)."""
-    try:
-        from vidcap.annotations import default_path
-    except ImportError:  # pragma: no cover - the annotations module is part of the package
-        v = Path(video)
-        return v.with_name(v.stem + ".vidcap.json")
+    """``VIDEO_STEM.vidcap.json`` beside the video (:func:`vidcap.annotations.default_path`)."""
+    from vidcap.annotations import default_path
+
     return default_path(video)
+
+
+def load_clip(video: str | os.PathLike) -> ClipData:
+    """Run (or load from the cache) the pipeline's heavy stages for ``video``.
+
+    Raises
+    ------
+    vidcap.errors.VidcapError
+        If the video cannot be read, or the pipeline is not part of this build.
+    """
+    try:
+        from vidcap import pipeline  # noqa: F401
+    except ImportError:
+        raise VidcapError("vidcap annotate needs the video pipeline (vidcap.pipeline), which"
+                          " this build does not have yet", video) from None
+    raise VidcapError("the video pipeline's interface is not connected to the annotate page"
+                      " yet", video)

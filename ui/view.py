@@ -24,11 +24,21 @@ CENTRE_COLOUR = (0.85, 0.12, 0.15)
 GRID_COLOUR = (0.62, 0.62, 0.62)
 BACKGROUND = (1.0, 1.0, 1.0)
 
-#: Parents of joints the marker path may add to the body model's 15 (design.md).
-EXTRA_PARENTS = {
-    "spine": "pelvis", "chest": "spine", "head": "neck",
-    "l_toe": "l_ankle", "r_toe": "r_ankle", "l_heel": "l_ankle", "r_heel": "r_ankle",
-    "l_hand": "l_wrist", "r_hand": "r_wrist",
+#: Bones drawn between joint centres (``--centres``): each joint's parent is the first of
+#: its candidates present in the file, so the optional ``spine`` of the marker path slots in
+#: between pelvis and neck, and the shoulders hang from the neck (a clavicle line) rather
+#: than from the pelvis as in the rigid-torso body model.
+CENTRE_PARENTS = {
+    "spine": ("pelvis",), "chest": ("spine", "pelvis"), "neck": ("chest", "spine", "pelvis"),
+    "head_top": ("neck",), "head": ("neck",),
+    "l_shoulder": ("neck", "chest", "spine", "pelvis"),
+    "r_shoulder": ("neck", "chest", "spine", "pelvis"),
+    "l_elbow": ("l_shoulder",), "l_wrist": ("l_elbow",), "r_elbow": ("r_shoulder",),
+    "r_wrist": ("r_elbow",), "l_hip": ("pelvis",), "r_hip": ("pelvis",),
+    "l_knee": ("l_hip",), "l_ankle": ("l_knee",), "r_knee": ("r_hip",), "r_ankle": ("r_knee",),
+    "l_toe": ("l_ankle",), "r_toe": ("r_ankle",), "l_heel": ("l_ankle",),
+    "r_heel": ("r_ankle",), "l_hand": ("l_wrist",), "r_hand": ("r_wrist",),
+    "l_hand_end": ("l_hand", "l_wrist"), "r_hand_end": ("r_hand", "r_wrist"),
 }
 
 
@@ -101,16 +111,13 @@ def read_c3d_points(path: str | os.PathLike) -> Points3D:
 def read_centres_csv(path: str | os.PathLike) -> Points3D:
     """Joint centres from a CSV with header ``frame,time_s,joint,x_m,y_m,z_m``.
 
-    Bones join each joint to its parent in the body model's tree
-    (:data:`vidcap.body.JOINT_PARENT`, plus :data:`EXTRA_PARENTS`) where both are present.
+    Bones join each joint to its parent (:data:`CENTRE_PARENTS`) where both are present.
 
     Raises
     ------
     InputFileError
         If the file is missing, lacks a column, or holds a non-numeric value.
     """
-    from vidcap.body import JOINT_PARENT
-
     path = Path(path)
     need = ["frame", "joint", "x_m", "y_m", "z_m"]
     try:
@@ -133,8 +140,11 @@ def read_centres_csv(path: str | os.PathLike) -> Points3D:
     pos = np.full((frames.max() - f0 + 1, len(names), 3), np.nan)
     index = {n: i for i, n in enumerate(names)}
     pos[frames - f0, [index[r["joint"]] for r in rows]] = xyz
-    parents = {**EXTRA_PARENTS, **{k: v for k, v in JOINT_PARENT.items() if v}}
-    bones = [(index[parents[n]], index[n]) for n in names if parents.get(n) in index]
+    bones = []
+    for n in names:
+        parent = next((p for p in CENTRE_PARENTS.get(n, ()) if p in index), None)
+        if parent is not None:
+            bones.append((index[parent], index[n]))
     fps = 100.0
     if len(times) > 1 and len(set(frames.tolist())) > 1:
         t = np.asarray(times)
@@ -326,7 +336,7 @@ class Scene:
         direction /= np.linalg.norm(direction)
         cam = self.plotter.camera
         cam.focal_point = centre
-        cam.position = centre + direction * size * 2.0
+        cam.position = centre + direction * size * 2.3
         cam.up = up
         self.plotter.reset_camera_clipping_range()
 

@@ -23,5 +23,4 @@ if __name__ == "__main__":
     p.add_argument("--clip", default="walk_side")
     a = p.parse_args()
     session = AnnotateSession(truth_clip(a.clip), a.annotations)
-    sys.argv = sys.argv[:1]  # trame reads sys.argv too
     serve(session, port=a.port, open_browser=False)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import os
+import sys
 from pathlib import Path
 
 import cv2
@@ -200,3 +201,11 @@ def test_real_bvh_screenshot(shared_data, tmp_path):
                       frame=0, window_size=SIZE)
     bone = np.array(uiview.BONE_COLOUR) * 255
     assert (np.abs(img.astype(float) - bone).sum(axis=2) < 90).sum() > 100
+
+
+def test_missing_ui_extra_is_one_clear_line(monkeypatch):
+    from vidcap.commands._ui import require
+
+    monkeypatch.setitem(sys.modules, "trame", None)  # as if the extra were not installed
+    with pytest.raises(UsageError, match=r"trame is not installed.*pip install 'vidcap\[ui\]'"):
+        require("ui.annotate", needs=("trame",))
