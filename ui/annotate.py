@@ -66,6 +66,7 @@ class AnnotateApp:
         from ui.view import Points3D, Scene
 
         self.session = session
+        session.defer_refresh = True  # edits answer at once; re-proposals run in a worker
         self.server = server or get_server(f"vidcap-annotate-{id(self)}", client_type="vue3")
         self.state, self.ctrl = self.server.state, self.server.controller
         w, h = session.clip.size
@@ -262,6 +263,16 @@ class AnnotateApp:
             print(f"vidcap annotate: edit refused: {exc}", file=sys.stderr, flush=True)
             return
         self._after_edit(ms)
+        if self.session.stale:
+            asyncio.ensure_future(self._refresh())
+
+    async def _refresh(self) -> None:
+        """Re-propose the other depth signs in a worker thread, then redraw."""
+        loop = asyncio.get_running_loop()
+        kept = await loop.run_in_executor(None, self.session.refresh)
+        if kept:
+            with self.state:
+                self._after_edit(self.session.last_edit_ms)
 
     def _goto(self, frame: int) -> None:
         self.state.frame = int(np.clip(frame, 0, self.session.n_frames - 1))

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -157,6 +158,12 @@ class AnnotateSession:
         joint by more than this (expected value, metres).
     annotations_cls : type, optional
         The annotations class (default :class:`vidcap.annotations.Annotations`).
+    defer_refresh : bool
+        If True an edit only resolves the events and re-lifts with the current
+        proposals (milliseconds even for long clips) and marks the session
+        :attr:`stale`; the caller then runs :meth:`refresh` (e.g. in a worker thread)
+        to re-propose the other signs with the new constraints. If False (default)
+        every edit does both at once.
 
     Attributes
     ----------
@@ -166,7 +173,7 @@ class AnnotateSession:
     """
 
     def __init__(self, clip: ClipData, annotations_path, *, lifter=None, low_fit: float = 0.5,
-                 low_doubt: float = 0.05, annotations_cls=None):
+                 low_doubt: float = 0.05, annotations_cls=None, defer_refresh: bool = False):
         if annotations_cls is None:
             from vidcap.annotations import Annotations as annotations_cls
         self.clip = clip
@@ -179,6 +186,11 @@ class AnnotateSession:
         self.last_edit_ms = 0.0
         self.saved = False
         self._visited: set[tuple[int, str]] = set()
+        self.defer_refresh = bool(defer_refresh)
+        self.stale = False
+        self._version = 0
+        self._lock = threading.RLock()
+        self._proposed = np.ones((clip.n_frames, len(SEGMENT_NAMES)), int)
         self.annotations = annotations_cls()
         if self.path.exists():
             try:
@@ -190,20 +202,53 @@ class AnnotateSession:
         self._recompute()
 
     # ------------------------------------------------------------------ derived state
-    def _recompute(self) -> None:
+    def _resolve_user(self) -> None:
+        """The user's events over the clip, and the lift with the current proposals (fast:
+        no re-proposal)."""
         clip = self.clip
         F = clip.n_frames
-        self.user_signs, user_orient, self.user_joints = self.annotations.resolve(F)
-        self.user_orient = np.asarray(user_orient).astype(str)
-        self.orientation = np.where(self.user_orient != "", self.user_orient, clip.orientation)
-        self.joints2d = clip.joints2d.copy()
-        have = np.isfinite(self.user_joints).all(axis=-1)
-        self.joints2d[have] = self.user_joints[have]
-        self.yaw = self.lifter.yaw(self.orientation, clip.width_ratio)
-        self.signs, self.doubt, self.checks = self.lifter.propose(
-            self.joints2d, self.yaw, self.user_signs, clip.scale)
-        self.signs = np.where(self.user_signs != 0, self.user_signs, self.signs).astype(int)
-        self.joints3d = self.lifter.lift(self.joints2d, self.signs, self.yaw, clip.scale)
+        user_signs, user_orient, user_joints = self.annotations.resolve(F)
+        user_orient = np.asarray(user_orient).astype(str)
+        orientation = np.where(user_orient != "", user_orient, clip.orientation)
+        joints2d = clip.joints2d.copy()
+        have = np.isfinite(user_joints).all(axis=-1)
+        joints2d[have] = user_joints[have]
+        yaw = self.lifter.yaw(orientation, clip.width_ratio)
+        signs = np.where(user_signs != 0, user_signs, self._proposed).astype(int)
+        joints3d = self.lifter.lift(joints2d, signs, yaw, clip.scale)
+        (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.joints2d,
+         self.yaw, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
+                                                 orientation, joints2d, yaw, signs, joints3d)
+
+    def _recompute(self) -> None:
+        with self._lock:
+            self._resolve_user()
+            self._proposed, self.doubt, self.checks = self.lifter.propose(
+                self.joints2d, self.yaw, self.user_signs, self.clip.scale)
+            self._resolve_user()
+            self.stale = False
+
+    def refresh(self) -> bool:
+        """Re-propose the depth signs with the user's as constraints and re-lift (the slow
+        part of an edit with ``defer_refresh``). Safe to run in a worker thread: the result
+        is dropped if another edit came in meanwhile.
+
+        Returns
+        -------
+        bool
+            Whether the result was kept.
+        """
+        with self._lock:
+            version = self._version
+            joints2d, yaw, fixed = self.joints2d, self.yaw, self.user_signs
+        proposed, doubt, checks = self.lifter.propose(joints2d, yaw, fixed, self.clip.scale)
+        with self._lock:
+            if version != self._version:
+                return False
+            self._proposed, self.doubt, self.checks = proposed, doubt, checks
+            self._resolve_user()
+            self.stale = False
+        return True
 
     @property
     def n_frames(self) -> int:
@@ -257,7 +302,13 @@ class AnnotateSession:
 
     # ------------------------------------------------------------------ edits
     def _edited(self, t0: float) -> float:
-        self._recompute()
+        with self._lock:
+            self._version += 1
+            if self.defer_refresh:
+                self._resolve_user()
+                self.stale = True
+            else:
+                self._recompute()
         self.save()
         self.last_edit_ms = (time.perf_counter() - t0) * 1000.0
         return self.last_edit_ms
@@ -270,7 +321,8 @@ class AnnotateSession:
         t0 = time.perf_counter()
         if segment not in SEGMENT_INDEX:
             raise ValueError(f"unknown segment {segment!r}")
-        self.annotations.add_depth(self._check_frame(frame), segment, int(sign))
+        with self._lock:
+            self.annotations.add_depth(self._check_frame(frame), segment, int(sign))
         return self._edited(t0)
 
     def flip_depth(self, frame: int, segment: str) -> float:
@@ -283,7 +335,8 @@ class AnnotateSession:
         t0 = time.perf_counter()
         if label not in ORIENTATIONS:
             raise ValueError(f"unknown orientation {label!r}")
-        self.annotations.add_orientation(self._check_frame(frame), label)
+        with self._lock:
+            self.annotations.add_orientation(self._check_frame(frame), label)
         return self._edited(t0)
 
     def set_joint(self, frame: int, joint: str, u: float, v: float) -> float:
@@ -294,13 +347,15 @@ class AnnotateSession:
         w, h = self.clip.size
         u = float(np.clip(u, 0, w - 1))
         v = float(np.clip(v, 0, h - 1))
-        self.annotations.add_joint(self._check_frame(frame), joint, round(u, 2), round(v, 2))
+        with self._lock:
+            self.annotations.add_joint(self._check_frame(frame), joint, round(u, 2), round(v, 2))
         return self._edited(t0)
 
     def clear_joint(self, frame: int, joint: str) -> float:
         """Forget the user's position of ``joint`` at ``frame``. Returns milliseconds taken."""
         t0 = time.perf_counter()
-        self.annotations.remove(self._check_frame(frame), "joint", joint)
+        with self._lock:
+            self.annotations.remove(self._check_frame(frame), "joint", joint)
         return self._edited(t0)
 
     def nearest_joint(self, frame: int, u: float, v: float, *, radius: float) -> str | None:

@@ -140,3 +140,34 @@ def test_bad_edits_are_refused(walk_clip, tmp_path):
     with pytest.raises(ValueError):
         s.set_joint(0, "tail", 1, 2)
     assert s.n_user_inputs == 0 and not (tmp_path / "a.json").exists()
+
+
+def test_deferred_refresh_matches_full_edit(walk_clip, tmp_path):
+    full = AnnotateSession(walk_clip, tmp_path / "full.json")
+    lazy = AnnotateSession(walk_clip, tmp_path / "lazy.json", defer_refresh=True)
+    for s in (full, lazy):
+        s.set_depth(8, "r_upper_leg", -1)
+        s.set_orientation(15, "front_right")
+    k = SEGMENT_INDEX["r_upper_leg"]
+    assert lazy.stale and (lazy.signs[8:, k] == -1).all()
+    assert (tmp_path / "lazy.json").read_text() == (tmp_path / "full.json").read_text()
+    assert lazy.refresh() and not lazy.stale
+    np.testing.assert_array_equal(lazy.signs, full.signs)
+    np.testing.assert_allclose(lazy.joints3d, full.joints3d)
+
+
+def test_refresh_dropped_when_an_edit_comes_in(walk_clip, tmp_path):
+    s = AnnotateSession(walk_clip, tmp_path / "a.json", defer_refresh=True)
+    s.set_depth(3, "torso", 1)
+    real = s.lifter.propose
+
+    def propose_then_edit(*args, **kwargs):
+        out = real(*args, **kwargs)
+        s.lifter.propose = real
+        s.set_depth(4, "head", -1)  # the user clicks again while the worker runs
+        return out
+
+    s.lifter.propose = propose_then_edit
+    assert s.refresh() is False and s.stale
+    assert s.refresh() is True and not s.stale
+    assert s.signs[4, SEGMENT_INDEX["head"]] == -1
