@@ -87,10 +87,10 @@ def _wait_state(page, expr: str, timeout: float = 15000):
     page.wait_for_function(f"window.trame && window.trame.state && ({expr})", timeout=timeout)
 
 
-def _screenshot(page, name: str) -> None:
+def _screenshot(page, name: str, *, docs: bool = True) -> None:
     ARTIFACTS.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / name))
-    if os.environ.get("VIDCAP_UPDATE_DOCS"):
+    if docs and os.environ.get("VIDCAP_UPDATE_DOCS"):
         (REPO / "docs").mkdir(exist_ok=True)
         shutil.copy(ARTIFACTS / name, REPO / "docs" / name)
 
@@ -142,11 +142,15 @@ def test_annotate_flip_step_drag(browser, tmp_path):
         _wait_state(page, f"window.trame.state.get('frame') == {target}")
         page.wait_for_selector("#review-side[src^='data:image']")
         _screenshot(page, "annotate_review.png")
+
+        # play advances the frames by itself; pause stops it
+        page.click("#review-btn-play")
+        _wait_state(page, f"window.trame.state.get('frame') != {target}")
+        page.click("#review-btn-play")
+        _wait_state(page, "window.trame.state.get('playing') == false")
         page.close()
 
     events = json.loads(ann.read_text())["events"]
-    scale = 1.0 / (box["width"] / natural)  # not needed: joints_display is in page pixels
-    del scale
     disp = 640 / 480  # the page shows the 480 px clip 640 px wide
     assert len(events) == 2, events
     depth, joint = events
@@ -170,7 +174,7 @@ def test_malformed_annotations_shown_and_kept(browser, tmp_path):
         assert "walk.json" in alert.inner_text()
         assert "walk.json.bak" in alert.inner_text()
         page.wait_for_selector("#frame-img[src^='data:image']")
-        _screenshot(page, "annotate_malformed.png")
+        _screenshot(page, "annotate_malformed.png", docs=False)
         page.close()
     assert ann.read_text() == text
     assert (tmp_path / "walk.json.bak").read_text() == text
