@@ -362,51 +362,57 @@ class Scene:
 
     def add_player(self) -> None:
         """Add a frame slider and a play/pause key (space) for interactive windows."""
+        self.playing = False
+        self._slider = None
         n = self.data.n_frames
         if n <= 1:
             return
-        state = {"playing": False}
 
         def on_slider(value):
             self.set_frame(int(round(value)))
 
-        slider = self.plotter.add_slider_widget(
+        self._slider = self.plotter.add_slider_widget(
             on_slider, [0, n - 1], value=self.frame, title="frame", fmt="%.0f",
             pointa=(0.1, 0.08), pointb=(0.9, 0.08), style="modern")
-
-        def tick(_step=None):
-            if state["playing"]:
-                nxt = (self.frame + 1) % n
-                slider.GetRepresentation().SetValue(nxt)
-                self.set_frame(nxt)
-                self.plotter.render()
-
-        def toggle():
-            state["playing"] = not state["playing"]
-
-        self.plotter.add_key_event("space", toggle)
+        self.plotter.add_key_event("space", self.toggle_play)
         self.plotter.add_text("space: play/pause", position="upper_left", font_size=9,
                               color="black")
-        fps = min(self.data.fps, 60.0)
-        self._timer_args = (tick, fps)
+
+    def toggle_play(self) -> None:
+        """Start or stop playing (in real time, from the current frame)."""
+        import time
+
+        self.playing = not getattr(self, "playing", False)
+        self._play_t0 = time.monotonic() - self.frame / self.data.fps
+
+    def tick(self, now: float | None = None) -> None:
+        """While playing, show the frame due at time ``now`` (``time.monotonic()``)."""
+        import time
+
+        if not getattr(self, "playing", False):
+            return
+        now = time.monotonic() if now is None else now
+        nxt = int((now - self._play_t0) * self.data.fps) % self.data.n_frames
+        if nxt != self.frame:
+            if self._slider is not None:
+                self._slider.GetRepresentation().SetValue(nxt)
+            self.set_frame(nxt)
 
     def show(self) -> None:
         """Open the interactive window (blocks until closed)."""
-        args = getattr(self, "_timer_args", None)
-        if args is not None:
-            tick, fps = args
-            self.plotter.show(interactive_update=True, auto_close=False)
-            import time
+        import time
 
-            try:
-                while not getattr(self.plotter, "_closed", False) and self.plotter.ren_win:
-                    tick()
-                    self.plotter.update(stime=1)
-                    time.sleep(1.0 / fps)
-            finally:
-                self.plotter.close()
-        else:
+        if getattr(self, "_slider", None) is None:
             self.plotter.show()
+            return
+        self.plotter.show(interactive_update=True, auto_close=False)
+        try:
+            while not getattr(self.plotter, "_closed", False) and self.plotter.ren_win:
+                self.tick()
+                self.plotter.update(stime=1)
+                time.sleep(1.0 / 60.0)
+        finally:
+            self.plotter.close()
 
 
 def _quiet_vtk() -> None:

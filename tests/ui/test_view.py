@@ -209,3 +209,23 @@ def test_missing_ui_extra_is_one_clear_line(monkeypatch):
     monkeypatch.setitem(sys.modules, "trame", None)  # as if the extra were not installed
     with pytest.raises(UsageError, match=r"trame is not installed.*pip install 'vidcap\[ui\]'"):
         require("ui.annotate", needs=("trame",))
+
+
+def test_player_plays_in_real_time(sample_bvh):
+    scene = uiview.Scene(uiview.load_points(sample_bvh), window_size=SIZE, off_screen=True)
+    try:
+        scene.add_player()
+        scene.tick()
+        assert scene.frame == 0  # not playing yet
+        scene.toggle_play()
+        t0 = scene._play_t0
+        scene.tick(t0 + 2.0 / 30.0 + 1e-6)  # 30 fps clip: two frames later
+        assert scene.frame == 2
+        assert scene._slider.GetRepresentation().GetValue() == 2
+        scene.tick(t0 + 5.0 / 30.0)  # wraps around the 4-frame clip
+        assert scene.frame in (0, 1)
+        scene.toggle_play()
+        scene.tick(t0 + 10.0)
+        assert scene.frame in (0, 1)
+    finally:
+        scene.plotter.close()
