@@ -67,7 +67,10 @@ def draw_model(image: np.ndarray, joints2d: np.ndarray, signs: np.ndarray, *,
     uj = np.zeros(len(JOINT_NAMES), bool) if user_joints is None else user_joints
     j = np.asarray(joints2d, dtype=float)
     shift = dict(shift=2, lineType=cv2.LINE_AA)
+    ok = np.isfinite(j).all(axis=1)  # frames without a fit have NaN joints: draw what there is
     for k, (a, b) in enumerate(SEGMENT_JOINTS):
+        if not (ok[a] and ok[b]):
+            continue
         colour = TOWARD_BGR if signs[k] >= 0 else AWAY_BGR
         if SEGMENT_NAMES[k] == selected:
             cv2.line(out, _pt(j[a]), _pt(j[b]), (255, 255, 255), t + 4, **shift)
@@ -77,6 +80,8 @@ def draw_model(image: np.ndarray, joints2d: np.ndarray, signs: np.ndarray, *,
             cv2.circle(out, _pt(mid), 4 * (t + 3), LOW_CONFIDENCE_BGR, max(1, t // 2), **shift)
     r = t + 1
     for i, p in enumerate(j):
+        if not ok[i]:
+            continue
         if uj[i]:
             cv2.circle(out, _pt(p), 4 * (r + 2), USER_JOINT_BGR, -1, **shift)
         cv2.circle(out, _pt(p), 4 * r, JOINT_BGR, -1, **shift)
@@ -115,8 +120,10 @@ def side_view(joints3d: np.ndarray, signs: np.ndarray, *, size=(240, 320),
     img = np.full((h, w, 3), 250, np.uint8)
     p = np.asarray(joints3d, dtype=float)
     s = (h - 20) / height_m
-    floor_y = p[:, 1].min()
-    centre_z = p[:, 2].mean()
+    if not np.isfinite(p).any():
+        return img
+    floor_y = np.nanmin(p[:, 1])
+    centre_z = np.nanmean(p[:, 2])
     uv = np.column_stack([w / 2 + (p[:, 2] - centre_z) * s, h - 10 - (p[:, 1] - floor_y) * s])
     cv2.line(img, (0, h - 10), (w, h - 10), (170, 170, 170), 1)
     cv2.putText(img, "camera ->", (w - 78, h - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (120, 120, 120),

@@ -131,6 +131,21 @@ class VidcapLifter:
         return lift(joints2d, signs, yaw, body=self.body, scale=scale).joints3d
 
 
+def _hold_missing(joints2d: np.ndarray) -> np.ndarray:
+    """Frames without a fit (NaN joints, e.g. no silhouette) take the nearest fitted frame's
+    joints, so that lifting and proposals run over the whole clip; (F, 15, 2) -> same."""
+    ok = np.isfinite(joints2d).all(axis=(1, 2))
+    if ok.all() or not ok.any():
+        return joints2d
+    idx = np.flatnonzero(ok)
+    pos = np.clip(np.searchsorted(idx, np.arange(len(ok))), 0, len(idx) - 1)
+    prev = idx[np.maximum(pos - 1, 0)]
+    nxt = idx[pos]
+    frames = np.arange(len(ok))
+    nearest = np.where(np.abs(frames - prev) <= np.abs(nxt - frames), prev, nxt)
+    return joints2d[nearest]
+
+
 def backup_path(path: Path) -> Path:
     """A free ``.bak`` name beside ``path`` (``x.json.bak``, ``x.json.bak1``, ...)."""
     for n in range(1000):
@@ -215,7 +230,7 @@ class AnnotateSession:
         joints2d[have] = user_joints[have]
         yaw = self.lifter.yaw(orientation, clip.width_ratio)
         signs = np.where(user_signs != 0, user_signs, self._proposed).astype(int)
-        joints3d = self.lifter.lift(joints2d, signs, yaw, clip.scale)
+        joints3d = self.lifter.lift(_hold_missing(joints2d), signs, yaw, clip.scale)
         (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.joints2d,
          self.yaw, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
                                                  orientation, joints2d, yaw, signs, joints3d)
@@ -224,7 +239,7 @@ class AnnotateSession:
         with self._lock:
             self._resolve_user()
             self._proposed, self.doubt, self.checks = self.lifter.propose(
-                self.joints2d, self.yaw, self.user_signs, self.clip.scale)
+                _hold_missing(self.joints2d), self.yaw, self.user_signs, self.clip.scale)
             self._resolve_user()
             self.stale = False
 
@@ -241,7 +256,8 @@ class AnnotateSession:
         with self._lock:
             version = self._version
             joints2d, yaw, fixed = self.joints2d, self.yaw, self.user_signs
-        proposed, doubt, checks = self.lifter.propose(joints2d, yaw, fixed, self.clip.scale)
+        proposed, doubt, checks = self.lifter.propose(_hold_missing(joints2d), yaw, fixed,
+                                                      self.clip.scale)
         with self._lock:
             if version != self._version:
                 return False
@@ -361,6 +377,7 @@ class AnnotateSession:
     def nearest_joint(self, frame: int, u: float, v: float, *, radius: float) -> str | None:
         """Name of the joint nearest pixel (u, v) within ``radius`` pixels, else None."""
         d = np.linalg.norm(self.joints2d[self._check_frame(frame)] - [u, v], axis=1)
+        d[~np.isfinite(d)] = np.inf
         i = int(np.argmin(d))
         return JOINT_NAMES[i] if d[i] <= radius else None
 

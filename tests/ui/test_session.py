@@ -171,3 +171,23 @@ def test_refresh_dropped_when_an_edit_comes_in(walk_clip, tmp_path):
     assert s.refresh() is False and s.stale
     assert s.refresh() is True and not s.stale
     assert s.signs[4, SEGMENT_INDEX["head"]] == -1
+
+
+def test_frames_without_a_fit_are_held_and_drawn(walk_clip, tmp_path):
+    from dataclasses import replace
+
+    from ui import render
+    from ui.session import _hold_missing
+
+    j2 = walk_clip.joints2d.copy()
+    j2[[0, 1, 20]] = np.nan
+    held = _hold_missing(j2)
+    np.testing.assert_array_equal(held[0], j2[2])
+    np.testing.assert_array_equal(held[1], j2[2])
+    assert np.isfinite(held).all() and np.array_equal(held[20], j2[19])
+    clip = replace(walk_clip, joints2d=j2)
+    s = AnnotateSession(clip, tmp_path / "a.json")
+    assert np.isfinite(s.joints3d).all()
+    assert s.nearest_joint(20, 100, 100, radius=1e9) is None
+    img = render.draw_model(clip.read_frame(20), s.joints2d[20], s.signs[20])
+    np.testing.assert_array_equal(img, clip.read_frame(20))  # nothing to draw, no crash
