@@ -80,6 +80,7 @@ class AnnotateApp:
         self.plotter = pv.Plotter(off_screen=True, window_size=[420, 320])
         self.scene = Scene(self._points3d, plotter=self.plotter, view_direction=(0.6, 0.3, 1.0),
                            follow=True)
+        self.scene.bone_rgb = self._bone_rgb()
 
         self._init_state()
         self._build_ui()
@@ -93,6 +94,12 @@ class AnnotateApp:
         j = np.array(joints3d, dtype=float)
         j[..., 1] -= np.nanmin(j[..., 1])
         return j
+
+    def _bone_rgb(self) -> np.ndarray:
+        """Bone colours (F, 10, 3) RGB by depth sign, as in the 2D picture."""
+        toward = np.array(render.TOWARD_BGR[::-1], np.uint8)
+        away = np.array(render.AWAY_BGR[::-1], np.uint8)
+        return np.where(self.session.signs[..., None] >= 0, toward, away)
 
     def _init_state(self) -> None:
         s, st = self.session, self.state
@@ -177,6 +184,7 @@ class AnnotateApp:
         self._points3d = Points3D(JOINT_NAMES, self._floor(s.joints3d), self._points3d.bones,
                                   s.clip.fps, 1)
         self.scene.data = self._points3d
+        self.scene.bone_rgb = self._bone_rgb()
         with st:
             st.edit_ms = round(ms, 1)
             st.save_status = f"saved {s.path.name}" if s.saved else "not saved"

@@ -260,6 +260,8 @@ class Scene:
         self.overlay = overlay
         self.follow = follow
         self.view_direction = view_direction
+        #: Optional per-frame bone colours (F, B, 3) uint8 RGB for the main data.
+        self.bone_rgb = None
         self.frame = 0
         if (off_screen or pv.OFF_SCREEN) and not os.environ.get("DISPLAY"):
             _quiet_vtk()
@@ -302,15 +304,24 @@ class Scene:
     def _layer(self, key, pts3d: Points3D, *, colour, point_size, line_width, bone_colour):
         import pyvista as pv
 
-        pts = pts3d.positions[min(self.frame, pts3d.n_frames - 1)]
-        bones = _bones_of_frame(pts, pts3d.bones)
+        f = min(self.frame, pts3d.n_frames - 1)
+        pts = pts3d.positions[f]
+        ok = np.isfinite(pts).all(axis=1)
+        keep = ok[pts3d.bones].all(axis=1) if len(pts3d.bones) else np.zeros(0, bool)
+        bones = pts3d.bones[keep]
         self.plotter.add_mesh(pv.PolyData(_frame_points(pts)), color=colour, point_size=point_size,
                               render_points_as_spheres=True, name=f"{key}_points",
                               reset_camera=False)
+        rgb = None if key != "data" or self.bone_rgb is None else self.bone_rgb[f][keep]
         if len(bones):
-            self.plotter.add_mesh(_bone_polydata(pts, bones), color=bone_colour,
-                                  line_width=line_width, render_lines_as_tubes=True,
-                                  name=f"{key}_bones", reset_camera=False)
+            poly = _bone_polydata(pts, bones)
+            style = dict(line_width=line_width, render_lines_as_tubes=True, name=f"{key}_bones",
+                         reset_camera=False)
+            if rgb is None:
+                self.plotter.add_mesh(poly, color=bone_colour, **style)
+            else:
+                poly.cell_data["rgb"] = np.asarray(rgb, np.uint8)
+                self.plotter.add_mesh(poly, scalars="rgb", rgb=True, **style)
         else:
             self.plotter.remove_actor(f"{key}_bones")
 
