@@ -115,6 +115,7 @@ class AnnotateApp:
         st.backup = str(s.backup) if s.backup else ""
         st.save_status = "no edits yet" if not s.load_error else "not saved: fix or edit"
         st.edit_ms = 0.0
+        st.refreshing = False
         st.flagged = []
         st.message = ""
         st.drag_joint = ""
@@ -272,6 +273,7 @@ class AnnotateApp:
             return
         self._after_edit(ms)
         if self.session.stale:
+            self.state.refreshing = True
             asyncio.ensure_future(self._refresh())
 
     async def _refresh(self) -> None:
@@ -280,6 +282,7 @@ class AnnotateApp:
         kept = await loop.run_in_executor(None, self.session.refresh)
         if kept:
             with self.state:
+                self.state.refreshing = False
                 self._after_edit(self.session.last_edit_ms)
 
     def _goto(self, frame: int) -> None:
@@ -313,7 +316,8 @@ class AnnotateApp:
                 v3.VSpacer()
                 v3.VChip("inputs: {{ n_inputs }}", id="inputs-count", classes="mx-1",
                          color="primary", variant="tonal")
-                v3.VChip("re-lift {{ edit_ms }} ms", classes="mx-1", variant="tonal")
+                v3.VChip("re-lift {{ edit_ms }} ms{{ refreshing ? ', re-proposing' : '' }}",
+                         classes="mx-1", variant="tonal", id="edit-time")
                 v3.VChip("{{ save_status }}", id="save-status", classes="mx-1", variant="tonal")
             with layout.content:
                 client.Script(_KEYS_JS)
