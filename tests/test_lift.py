@@ -105,10 +105,16 @@ def test_proposed_signs_are_mostly_right_where_they_matter(yaw):
     assert checks and all(c["priority"] >= checks[-1]["priority"] for c in checks)
 
 
-def test_orientation_follows_walking_direction():
-    j2, _, _, fps = posed_clip(90.0, 60)
-    s = estimate_scale(j2)
-    # the posed walk moves the root; make the track move right then mirror it
+def test_orientation_from_knees_and_from_walking_direction():
+    for yaw, label in ((90.0, "right"), (-90.0, "left")):
+        j2, _, _, fps = posed_clip(yaw, 60)
+        s = estimate_scale(j2)
+        assert set(propose_orientation(j2, scale=s, fps=fps)) == {label}
+    # straight limbs give no knee/elbow cue: then the way the subject moves decides
+    j2 = j2.copy()
+    for a, b, c in (("l_hip", "l_knee", "l_ankle"), ("r_hip", "r_knee", "r_ankle"),
+                    ("l_shoulder", "l_elbow", "l_wrist"), ("r_shoulder", "r_elbow", "r_wrist")):
+        j2[:, JOINT_INDEX[b]] = 0.5 * (j2[:, JOINT_INDEX[a]] + j2[:, JOINT_INDEX[c]])
     track = np.linspace(100, 400, 60)
     assert set(propose_orientation(j2, scale=s, fps=fps, track=track)) == {"right"}
     assert set(propose_orientation(j2, scale=s, fps=fps, track=track[::-1])) == {"left"}

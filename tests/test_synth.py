@@ -191,7 +191,12 @@ def test_procedural_motions_stand_on_the_floor():
         assert 1.7 < head.max() < 1.8 + 0.12  # jacks hop
     walk = make_motion("walk", body=body, n_frames=60, fps=30).positions()
     travel = np.linalg.norm(walk[-1, 0, [0, 2]] - walk[0, 0, [0, 2]])
-    assert 1.5 < travel < 3.5  # ~1.2 m/s for 2 s
+    assert 2.0 < travel < 3.4  # 1.0-1.7 m/s for 2 s
+    ank = walk[:, [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]][..., [0, 2]]
+    slide = np.linalg.norm(np.diff(ank, axis=0), axis=-1).min(axis=1)  # the planted foot
+    assert slide.max() < 1e-3
+    swing_height = walk[:, [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]], 1].max()
+    assert 0.1 < swing_height < 0.4
     jacks = make_motion("jacks", body=body, n_frames=60, fps=30).positions()
     assert np.ptp(jacks[:, 0, [0, 2]], axis=0).max() < 1e-9  # in place
     wr = jacks[:, JOINT_INDEX["l_wrist"], 1]
@@ -329,12 +334,17 @@ def test_unmappable_motion(tmp_path, cli):
     "args, text",
     [(["--motion", "dance"], "dance"), (["--motion", "walk", "--range", "5"], "--range"),
      (["--motion", "walk", "--range", "100:120"], "no frames"),
-     (["--motion", "walk", "--fps", "-3"], "--fps")],
+     (["--motion", "walk", "--fps", "-3"], "--fps"),
+     (["--size", "161x120"], "even"), (["--size", "big"], "WIDTHxHEIGHT"),
+     (["--background", "no_such.png"], "no_such.png")],
 )
 def test_bad_options(tmp_path, cli, args, text):
-    res = cli("synth", *args, "--frames", "10", "--size", "64x48", "-o", tmp_path / "x.mp4")
+    if "--size" not in args:
+        args = [*args, "--size", "64x48"]
+    res = cli("synth", *args, "--frames", "10", "-o", tmp_path / "x.mp4")
     assert res.returncode == 2, res.stderr
     assert text in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "x.mp4").exists() and not (tmp_path / "x_truth.npz").exists()
 
 
 def test_asf_needs_amc(shared_data):
@@ -370,3 +380,28 @@ def test_cli_file_motion_with_bvh(tmp_path, cli, shared_data):
     assert all(o.startswith("front") for o in t["orientation"])
     np.testing.assert_allclose(read_bvh(tmp_path / "a.bvh", units="m").positions(),
                                t["joints3d"], atol=1e-5)
+
+
+def test_render_infers_the_body_from_the_motion():
+    from vidcap.synth import prepare_clip
+
+    for h in (1.5, 1.9):
+        m = make_motion("walk", body=BodyModel(height=h), n_frames=2)
+        assert np.isclose(prepare_clip(m, size=(64, 48)).body.height, h)
+
+
+def test_sample_videos_match_their_truth():
+    from pathlib import Path
+
+    from vidcap.video import probe
+
+    root = Path(__file__).resolve().parents[1] / "sample_videos"
+    clips = sorted(root.glob("*.mp4"))
+    assert len(clips) >= 2
+    assert sum(p.stat().st_size for p in root.iterdir()) <= 2 * 1024 * 1024
+    for clip in clips:
+        t = np.load(clip.with_name(clip.stem + "_truth.npz"))
+        info = probe(clip, count=True)
+        assert t["masks"].shape == (info.n_frames, info.height, info.width)
+        assert np.isclose(float(t["fps"]), info.fps)
+        np.testing.assert_allclose(project(t["camera"], t["joints3d"]), t["joints2d"], atol=0.5)

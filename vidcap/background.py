@@ -184,18 +184,28 @@ def sample_frames(
         n = len(source)
         idx = _sample_indices(n, n_samples, rng)
         return np.ascontiguousarray(source[idx]), idx
-    from vidcap.video import iter_chunks, probe
+    from vidcap.video import iter_chunks, iter_frames, probe
 
     info = probe(source)
     idx = _sample_indices(info.n_frames, n_samples, rng)
-    wanted = set(idx.tolist())
     got, got_idx, start = [], [], 0
-    for chunk in iter_chunks(source, chunk_size=chunk_size):
-        for j in range(len(chunk)):
-            if start + j in wanted:
-                got.append(chunk[j].copy())
-                got_idx.append(start + j)
-        start += len(chunk)
+    if len(idx) > 1 and np.all(np.diff(idx) == idx[1] - idx[0]):
+        # Evenly spaced: only the sampled frames are converted to arrays.
+        step = int(idx[1] - idx[0])
+        for j, frame in enumerate(iter_frames(source, start=int(idx[0]), step=step)):
+            if j >= len(idx):
+                break
+            got.append(frame)
+            got_idx.append(int(idx[j]))
+        start = got_idx[-1] + 1 if got_idx else 0
+    else:
+        wanted = set(idx.tolist())
+        for chunk in iter_chunks(source, chunk_size=chunk_size):
+            for j in range(len(chunk)):
+                if start + j in wanted:
+                    got.append(chunk[j].copy())
+                    got_idx.append(start + j)
+            start += len(chunk)
     if start < info.n_frames and len(got) < min(n_samples, start):
         # The container over-stated its frame count: resample what exists.
         return sample_frames(source_frames_cache(source, start), n_samples=n_samples, rng=rng)
@@ -213,17 +223,18 @@ def source_frames_cache(path, n):  # pragma: no cover - rare: wrong frame counts
 def _sample_indices(n: int, k: int, rng) -> np.ndarray:
     if n <= k:
         return np.arange(n)
-    edges = np.linspace(0, n, k + 1)
     if rng is None:
-        idx = ((edges[:-1] + edges[1:]) / 2).astype(int)
-    else:
-        idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
+        # Evenly spaced with a constant stride, centred in the video.
+        step = n // k
+        return (n - step * (k - 1)) // 2 + step * np.arange(k)
+    edges = np.linspace(0, n, k + 1)
+    idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
     return np.unique(np.clip(idx, 0, n - 1))
 
 
 # --------------------------------------------------------------------------- estimation
 def estimate_background(
-    source, *, method: str = "felzenszwalb", n_samples: int = 32,
+    source, *, method: str = "felzenszwalb", n_samples: int = 24,
     work_size: int = 160, segment_scale: float = 60.0, min_region: int = 12,
     rng: np.random.Generator | None = None, progress: bool | None = None,
 ) -> BackgroundModel:
@@ -284,10 +295,10 @@ def estimate_background(
         conf = np.ones(frames.shape[1:3], np.float32)
         model = _finish(frames, gains, plate, weights, conf, "median", idx, name)
         return model
-    weights_small = _region_vote(frames, gains, work_size=work_size,
+    weights_small, holes = _region_vote(frames, gains, work_size=work_size,
                                  segment_scale=segment_scale, min_region=min_region,
                                  progress=progress)
-    return _finish_regions(frames, gains, weights_small, idx, name)
+    return _finish_regions(frames, gains, weights_small, idx, name, holes)
 
 
 def _frame_gains(frames: np.ndarray) -> np.ndarray:
@@ -300,12 +311,37 @@ def _frame_gains(frames: np.ndarray) -> np.ndarray:
     return np.clip(g, 0.25, 4.0).astype(np.float32)
 
 
+def _normalised_u8(frames, gains) -> np.ndarray:
+    """Frames divided by their per-channel gains, uint8 (K, H, W, 3)."""
+    if np.abs(gains - 1).max() < 0.005:
+        return frames
+    return np.stack([cv2.multiply(f, tuple(float(v) for v in 1 / g) + (0.0,))
+                     for f, g in zip(frames, gains, strict=True)])
+
+
+def _masked_median(x: np.ndarray, excl: np.ndarray | None) -> np.ndarray:
+    """Per-pixel median over axis 0 of uint8 ``x`` (K, H, W, 3), skipping ``excl``.
+
+    One fixed-rank partition: with m samples included, the first z excluded become
+    0 and the rest 255, which puts the included samples' median at the middle rank.
+    """
+    k = len(x)
+    mid = (k - 1) // 2
+    if excl is not None and excl.any():
+        m = k - excl.sum(axis=0)
+        z = mid - (np.maximum(m, 1) - 1) // 2
+        rank = np.cumsum(excl, axis=0, dtype=np.int16)
+        sentinel = np.where(rank <= z, 0, 255).astype(np.uint8)
+        x = np.where(excl[..., None], sentinel[..., None], x)
+    return np.partition(x, mid, axis=0)[mid]
+
+
 def _gain_median(frames, gains) -> np.ndarray:
-    norm = frames.astype(np.float32) / gains[:, None, None, :]
-    return np.clip(np.median(norm, axis=0) + 0.5, 0, 255).astype(np.uint8)
+    return _masked_median(_normalised_u8(frames, gains), None)
 
 
-def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress):
+def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress,
+                 min_stability=0.5, min_support=0.15):
     """Steps 2-5 at low resolution: per-sample background weights (K, h, w) in [0, 1]."""
     from skimage.segmentation import felzenszwalb
 
@@ -347,36 +383,125 @@ def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progres
         np.maximum(d, np.abs(planes[2] - planes[2, t]), out=d)
         np.less(d, tau, out=agree[t])
 
-    lab_flat = labels.reshape(k, -1)
-    reg_size = np.bincount(lab_flat.ravel(), minlength=n_regions).astype(np.float32)
-    weights = np.ones((k, h, w), np.float32)
-    for _ in range(2):
-        support = np.einsum("tuhw,uhw->thw", agree, weights, dtype=np.float32)
-        best = support.argmax(axis=0)
-        total = weights.sum(axis=0) + 1e-6
-        share = np.take_along_axis(support, best[None], 0)[0] / total
-        confident = share >= 0.5
-        same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
-        good = same & confident
-        # Region test: the share of a region's confident pixels that agree.
-        n_conf = np.bincount(lab_flat.ravel(), np.broadcast_to(confident, (k, h, w)).ravel(),
-                             minlength=n_regions)
-        n_good = np.bincount(lab_flat.ravel(), good.ravel(), minlength=n_regions)
-        score = np.where(n_conf >= np.maximum(3, 0.2 * reg_size),
-                         n_good / np.maximum(n_conf, 1), 0.0).astype(np.float32)
-        region_bg = score[labels]  # (k, h, w)
-        # Confident pixels keep their own vote; the rest follow their region.
-        weights = np.where(confident, good * np.maximum(region_bg, 0.5), region_bg)
-        weights = np.where(weights >= 0.5, weights, 0.0).astype(np.float32)
-    # A final consistency pass: among the frames kept, keep those agreeing with the
-    # weighted mode, so a stray frame does not pollute the plate.
-    support = np.einsum("tuhw,uhw->thw", agree, weights, dtype=np.float32)
-    best = support.argmax(axis=0)
-    same = np.take_along_axis(agree, best[None, None], 1)[:, 0]
-    return (weights * same).astype(np.float32)
+    lab_flat = labels.ravel()
+    reg_size = np.maximum(np.bincount(lab_flat, minlength=n_regions), 1).astype(np.float32)
+    # support[t, p]: share of samples showing at p the region colour sample t shows.
+    support = agree.sum(axis=1, dtype=np.float32) / k
+    # Region stability (the seed's "regions that do not change"): how often, on
+    # average over the region of sample t at p, its pixels show this colour. A
+    # background region reaching beyond the person scores near 1 even where the
+    # person covers it in most frames; a person's region scores the share of the
+    # time it stays put, lowered by its moving parts.
+    stability = (np.bincount(lab_flat, support.ravel(), minlength=n_regions)
+                 / reg_size)[labels]  # (k, h, w)
+    # A colour seen in too few samples is a mixture or a passer-by, however
+    # stable its region: candidates need some support of their own.
+    enough = support >= max(min_support, 2.5 / k)
+    scored = np.where(enough, stability, stability - 2.0)
+    best = scored.argmax(axis=0)
+    level = np.take_along_axis(scored, best[None], 0)[0]
+    same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
+    weights = same & (level >= min_stability)[None]
+    holes = _footprint_plate(small, means, med, tau, best, agree, weights)
+    return weights.astype(np.float32), holes
 
 
-def _finish_regions(frames, gains, weights_small, idx, name):
+def _footprint_plate(small, means, med, tau, best, agree, weights, *,
+                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15):
+    """Background inside the motion footprint, from the background around it.
+
+    Updates ``weights`` (k, h, w) in place and returns the static body parts
+    (h, w) bool, pixels never seen uncovered.
+
+    The motion footprint is the union over samples of the pixels that differ from
+    the temporal median. Inside it (and inside its holes) the per-pixel vote can
+    pick the person's colour when the person covers a pixel in most frames. The
+    background around the footprint, inpainted across it, is a spatial guess of
+    what lies behind; at a footprint pixel whose voted colour is far from that
+    guess while some sample is close to it, the samples showing that colour are
+    taken instead.
+
+    A person moving their limbs while the torso stays put (jumping jacks, waving)
+    leaves the torso as a *hole* of the footprint: static pixels the frame border
+    cannot reach through static pixels. A hole is a body part that never moved
+    (never seen uncovered) when its colour is far from the guess and
+
+    * it is not most of its footprint component (``max_hole_share`` of the filled
+      component's area): a static object walked around on all sides is usually
+      large next to the paths around it; and
+    * the footprint around it shows the hole's own colour in some samples
+      (``min_evidence`` of its ring pixels): the body part's outline changes while
+      its colour stays (a hop, sleeves, a shifting hem), whereas passers-by around
+      a static object rarely wear its colour.
+    """
+    k, h, w = small.shape[:3]
+    box = np.ones((3, 3), np.uint8)
+    blur = np.stack([cv2.GaussianBlur(x, (3, 3), 0) for x in small])
+    dev = np.abs(blur - np.median(blur, axis=0)[None]).max(axis=-1)  # (k, h, w)
+    moving = (dev > tau).any(axis=0).astype(np.uint8)
+    moving = cv2.morphologyEx(moving, cv2.MORPH_OPEN, box)
+    out = np.zeros((h, w), bool)
+    if not moving.any():
+        return out
+    n, lab = cv2.connectedComponents(1 - moving, connectivity=4)
+    border = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
+    hole_ids = np.setdiff1d(np.arange(1, n), border)
+    is_hole = np.isin(lab, hole_ids)
+    filled = (moving > 0) | is_hole
+    # Spatial guess: the voted plate outside the footprint, inpainted across it.
+    voted = np.take_along_axis(means, best[None, ..., None], 0)[0]
+    region = cv2.dilate(filled.astype(np.uint8), box)
+    guess = cv2.inpaint(np.clip(voted, 0, 255).astype(np.uint8), region, 3,
+                        cv2.INPAINT_TELEA).astype(np.float32)
+    far = 3.0 * tau
+    dist = np.abs(means - guess[None]).max(axis=-1)  # (k, h, w)
+    near_t = dist.argmin(axis=0)
+    near_d = np.take_along_axis(dist, near_t[None], 0)[0]
+    voted_d = np.abs(voted - guess).max(axis=-1)
+    # Switch when some sample is clearly nearer the guess than the voted colour.
+    # and that colour has support of its own (not a passer-by's transient colour).
+    alt = np.take_along_axis(agree, near_t[None, None], 1)[:, 0]  # (k, h, w)
+    switch = (filled & (voted_d > far) & (near_d <= 0.5 * voted_d)
+              & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
+    if switch.any():
+        weights[:, switch] = alt[:, switch]
+    if not len(hole_ids):
+        return out
+    _, comp = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
+    comp_area = np.bincount(comp.ravel())
+    hole_area = np.bincount(lab.ravel(), minlength=n)
+    # Colour of the nearest hole pixel, for every pixel (to compare the ring with).
+    _, near = cv2.distanceTransformWithLabels(
+        (~is_hole).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
+    ys, xs = np.nonzero(is_hole)
+    lut = np.zeros((int(near.max()) + 1, 3), np.float32)
+    lut[near[ys, xs]] = med[ys, xs]
+    near_colour = lut[near]  # (h, w, 3)
+    match = (np.abs(means - near_colour[None]).max(axis=-1) < tau).any(axis=0)
+    unseen = voted_d > far
+    for i in hole_ids:
+        hole = lab == i
+        c = np.bincount(comp[hole]).argmax()
+        if hole_area[i] > max_hole_share * comp_area[c]:
+            continue
+        ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
+            moving > 0)
+        if ring.any() and match[ring].mean() >= min_evidence:
+            out |= hole & unseen
+    if out.any():
+        # Footprint pixels next to a static body part, far from the guess in every
+        # sample, belong to it too (the head and shoulders above a hopping torso).
+        cand = (filled & unseen & ~switch) | out
+        nc, cl = cv2.connectedComponents(cand.astype(np.uint8), connectivity=8)
+        keep = np.zeros(nc, bool)
+        keep[np.unique(cl[out])] = True
+        keep[0] = False
+        out = keep[cl]
+    weights[:, out] = 0
+    return out
+
+
+def _finish_regions(frames, gains, weights_small, idx, name, holes=None):
     k, hh, ww = frames.shape[:3]
     h, w = weights_small.shape[1:]
     # Keep only samples well inside background regions (low resolution edges are
@@ -391,36 +516,43 @@ def _finish_regions(frames, gains, weights_small, idx, name):
     conf = (seen / k).astype(np.float32)
     plate = _robust_plate(frames, gains, wfull)
     if never.any():
-        plate[never] = _gain_median(frames, gains)[never]
+        # Never seen uncovered: guess from the surrounding background, so that
+        # whatever stands there (the person) still differs from the plate.
+        # Static body parts come from the low-resolution footprint: widen them by
+        # one low-res pixel so that the inpainting starts from background, not
+        # from the person's edge.
+        ring = never.astype(np.uint8)
+        if holes is not None and holes.any():
+            r = int(np.ceil(hh / h)) + 1
+            body = cv2.resize(holes.astype(np.uint8), (ww, hh),
+                              interpolation=cv2.INTER_NEAREST)
+            ring |= cv2.dilate(body, np.ones((2 * r + 1, 2 * r + 1), np.uint8))
+        plate = cv2.inpaint(plate, ring, 5, cv2.INPAINT_TELEA)
     return _finish(frames, gains, plate, wfull, conf, "felzenszwalb", idx, name,
                    never_seen=never)
 
 
 def _robust_plate(frames, gains, weights) -> np.ndarray:
-    """Weighted mean, then re-weighted without outliers, (H, W, 3) uint8."""
-    x = frames.astype(np.float32) / gains[:, None, None, :]
-    w = weights[..., None]
-    tot = np.maximum(w.sum(axis=0), 1e-6)
-    mean = (x * w).sum(axis=0) / tot
-    dev = np.abs(x - mean).sum(axis=-1, keepdims=True)
-    scale = 1.4826 * np.median(dev[weights > 0]) if (weights > 0).any() else 1.0
-    w2 = w * (dev <= max(3.0 * scale, 6.0))
-    tot2 = w2.sum(axis=0)
-    mean2 = np.where(tot2 > 0, (x * w2).sum(axis=0) / np.maximum(tot2, 1e-6), mean)
-    return np.clip(mean2 + 0.5, 0, 255).astype(np.uint8)
+    """Per-pixel median of the background samples, (H, W, 3) uint8."""
+    return _masked_median(_normalised_u8(frames, gains), weights <= 0)
 
 
 def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=None):
     """Noise estimates from background samples; the static-scene check."""
     k = len(frames)
-    ref = plate.astype(np.float32)[None] * gains[:, None, None, :]
-    resid = frames.astype(np.float32) - ref  # (K, H, W, 3)
+    full_hw = plate.shape[:2]
+    # Statistics on every other pixel of large frames: 4x less work, same noise.
+    st = 2 if plate.shape[0] * plate.shape[1] > 100_000 else 1
+    frames = frames[:, ::st, ::st]
+    weights = weights[:, ::st, ::st]
+    ref = plate[::st, ::st].astype(np.float32)[None] * gains[:, None, None, :]
+    resid = frames.astype(np.float32) - ref  # (K, h, w, 3)
     l1 = np.abs(resid).sum(axis=-1)
     bgw = weights > 0
     if method == "median":
         # Background = close to the median; the bulk of pixels in most frames.
         bgw = l1 < max(3.0 * 1.4826 * float(np.median(l1)) + 6.0, MIN_THRESHOLD)
-        conf = bgw.mean(axis=0).astype(np.float32)
+        conf = _upsample(bgw.mean(axis=0).astype(np.float32), full_hw)
     sel = resid[bgw]
     if len(sel) < 16:
         sel = resid.reshape(-1, 3)
@@ -428,8 +560,12 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
         np.float32)
     thr = _threshold_from_sigma(sigma, l1[bgw] if bgw.any() else l1.ravel())
     cnt = bgw.sum(axis=0)
-    noise_map = np.where(cnt > 0, (l1 * bgw).sum(axis=0) / np.maximum(cnt, 1), 0.0)
-    noise_map = cv2.dilate(noise_map.astype(np.float32), np.ones((3, 3), np.uint8))
+    # Mean over background samples of the difference, clipped at twice the
+    # threshold so a stray person pixel counted as background cannot inflate it.
+    clipped = np.minimum(l1, 2 * thr) * bgw
+    noise_map = np.where(cnt > 0, clipped.sum(axis=0) / np.maximum(cnt, 1), 0.0)
+    noise_map = cv2.dilate(_upsample(noise_map.astype(np.float32), full_hw),
+                           np.ones((3, 3), np.uint8))
     # Static-scene check: pixels far from the plate in some sample (beyond the
     # threshold), in connected areas large enough to be a person.
     moving = (l1 > 2 * thr).any(axis=0)
@@ -441,12 +577,18 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
             f"nothing moves in the {k} sampled frames: no person to separate from the "
             "background (a static scene?)", name)
     if never_seen is None:
-        never_seen = np.zeros(plate.shape[:2], bool)
+        never_seen = np.zeros(full_hw, bool)
     return BackgroundModel(
         plate=plate, confidence=np.clip(conf, 0, 1).astype(np.float32),
         never_seen=never_seen, noise_sigma=sigma, noise_map=noise_map.astype(np.float32),
         threshold=float(thr), method=method, n_samples=k,
         moving_fraction=moving_fraction, sample_indices=np.asarray(idx))
+
+
+def _upsample(img: np.ndarray, hw) -> np.ndarray:
+    if img.shape[:2] == tuple(hw):
+        return img
+    return cv2.resize(img, (hw[1], hw[0]), interpolation=cv2.INTER_NEAREST)
 
 
 def _threshold_from_sigma(sigma, l1=None) -> float:

@@ -86,9 +86,27 @@ def euler_degrees(quats: np.ndarray, order: str = "ZXY") -> np.ndarray:
         Angles in degrees in ``order``, continuous over frames.
     """
     q = np.asarray(quats, dtype=float)
-    e = Rotation.from_quat(q.reshape(-1, 4)).as_euler(order.upper(), degrees=True)
-    e = e.reshape(q.shape[:-1] + (3,))
-    return np.rad2deg(np.unwrap(np.deg2rad(e), axis=0))
+    e1 = Rotation.from_quat(q.reshape(-1, 4)).as_euler(order.upper(), degrees=True)
+    e1 = e1.reshape(q.shape[:-1] + (3,))
+    # Every rotation has two Tait-Bryan solutions, (a, b, c) and (a+180, 180-b, c+180);
+    # as_euler picks |b| <= 90, which jumps by ~180 degrees when the middle angle passes
+    # 90. Follow the motion instead: per frame take whichever solution, shifted by
+    # multiples of 360, lies nearest the previous frame's angles. The recursion runs
+    # over frames and is vectorised over joints.
+    e2 = e1 + np.array([180.0, 0.0, 180.0])
+    e2[..., 1] = 180.0 - e1[..., 1]
+    out = np.empty_like(e1)
+    if len(e1) == 0:
+        return out
+    out[0] = e1[0]
+    for f in range(1, len(e1)):
+        prev = out[f - 1]
+        c1 = e1[f] + 360.0 * np.round((prev - e1[f]) / 360.0)
+        c2 = e2[f] + 360.0 * np.round((prev - e2[f]) / 360.0)
+        d1 = np.abs(c1 - prev).sum(-1, keepdims=True)
+        d2 = np.abs(c2 - prev).sum(-1, keepdims=True)
+        out[f] = np.where(d2 < d1, c2, c1)
+    return out
 
 
 def bvh_text(motion: Motion, *, rotation_order: str = "ZXY", precision: int = 6) -> str:

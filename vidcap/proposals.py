@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import median_filter
+from scipy.ndimage import median_filter, uniform_filter1d
 
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_NAMES, BodyModel, segment_vectors
 from vidcap.lift import body_axes, depth_magnitudes, torso_width_ratio
@@ -118,6 +118,7 @@ def propose_signs(
     range_weight: float = 1.0,
     midline_weight: float = 1.0,
     lean_weight: float = 0.5,
+    torso_depth: float = 0.6,
 ) -> SignProposal:
     """Propose a depth sign for every segment and frame.
 
@@ -137,7 +138,12 @@ def propose_signs(
         zeta(t)) + flip_penalty``.
     hinge_weight, range_weight, midline_weight, lean_weight : float
         Weights of the anatomical costs (knee/elbow fold direction; thigh/upper arm
-        pointing behind the body; limb crossing the midline; torso/head leaning back).
+        pointing behind the body; limb crossing the midline or an arm entering the
+        torso; torso/head leaning back).
+    torso_depth : float
+        Front-back half-depth of the torso as a fraction of the model cylinder's
+        radius (real chests are flatter than the cylinder); elbows and wrists may not
+        enter that elliptic section.
 
     Returns
     -------
@@ -179,10 +185,22 @@ def propose_signs(
             l_up, l_lo = L[ks[0]], L[ks[1]]
             lat1 = side * w0 + np.sum(up * lf, -1) * l_up
             lat2 = lat1 + np.sum(lo * lf, -1) * l_lo
-            cross = _relu(-side * lat1) / l_up + _relu(-side * lat2) / l_lo
+            # knees, ankles and elbows stay on their own side (hands may cross in front)
+            cross = _relu(-side * lat1) / l_up
+            if kind == "leg":
+                cross = cross + _relu(-side * lat2) / l_lo
             cost += hinge_weight * fold + range_weight * behind + midline_weight * cross
-        if len(ks) == 1:
-            cost[:, 2:] = _BIG
+            if kind == "arm":  # elbow and wrist may not enter the torso (elliptic section)
+                r = body.radius("torso")
+                p1 = side * w0 * lf + up * l_up  # relative to the torso axis, shoulder height
+                p2 = p1 + lo * l_lo
+                Lt = L[SEGMENT_INDEX["torso"]]
+                for p in (p1, p2):
+                    below = (p[..., 1] > -Lt) & (p[..., 1] < 0.0)
+                    e = (np.sum(p * lf, -1) / r) ** 2 + (np.sum(p * f, -1) / (torso_depth * r)) ** 2
+                    cost += midline_weight * np.where(below, _relu(1.0 - e), 0.0)
+        if len(ks) == 1:  # one segment: only the states whose (unused) second sign is +1
+            cost[:, _STATES[:, 1] < 0] = _BIG
         # user constraints
         for n, k in enumerate(ks):
             fx = fixed[:, k]
@@ -208,7 +226,7 @@ def propose_signs(
     signs = np.ones((F, len(SEGMENT_NAMES)), dtype=np.int8)
     margin = np.zeros((F, len(SEGMENT_NAMES)))
     for c, (segs, _, _) in enumerate(_CHAINS):
-        valid = np.arange(S) < (2 if len(segs) == 1 else 4)
+        valid = (_STATES[:, 1] > 0) if len(segs) == 1 else np.ones(S, bool)
         for n, s in enumerate(segs):
             k = SEGMENT_INDEX[s]
             plus = np.min(np.where(valid & (_STATES[:, n] > 0), marg[c], np.inf), -1)
@@ -228,15 +246,16 @@ def propose_orientation(
     sides_known: bool = False,
     track=None,
     min_speed: float = 0.15,
+    min_bulge: float = 0.02,
     window_s: float = 0.5,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
-    * image-right vs image-left (the sign of sin yaw): the direction the subject
-      moves (``track``, e.g. the silhouette's centre), where it moves faster than
-      ``min_speed`` body heights per second; elsewhere the nearest moving frame's;
-      if it never moves, the way the knees point (forward) and the elbows (backward)
-      in the image;
+    * image-right vs image-left (the sign of sin yaw): the way the knees stick out
+      (forward) and the elbows (backward) in the image, averaged over ``window_s``,
+      where that exceeds ``min_bulge`` body heights; elsewhere the direction the
+      subject moves (``track``, e.g. the silhouette's centre) where it moves faster
+      than ``min_speed`` body heights per second; elsewhere the nearest such frame's;
     * side view vs front/back: the torso's horizontal foreshortening (< 0.5 = within
       30 degrees of a side view);
     * front vs back: with body-side named joints (``sides_known``), whether the
@@ -260,6 +279,8 @@ def propose_orientation(
         Horizontal image position of the subject in pixels (default: the pelvis).
     min_speed : float
         Walking threshold in body heights per second.
+    min_bulge : float
+        Knee/elbow bulge threshold in body heights.
     window_s : float
         Median-filter window in seconds for the foreshortening and direction.
 
@@ -273,22 +294,29 @@ def propose_orientation(
     ji = JOINT_INDEX
     x = j2[:, ji["pelvis"], 0] if track is None else np.asarray(track, dtype=float)
     win = max(1, int(round(window_s * fps)) | 1)
+
+    def bulge(a, b, c):
+        return j2[:, ji[b], 0] - 0.5 * (j2[:, ji[a], 0] + j2[:, ji[c], 0])
+
+    # knees stick out forward, elbows backward (in image x: the sign of sin yaw)
+    cue = (bulge("l_hip", "l_knee", "l_ankle") + bulge("r_hip", "r_knee", "r_ankle")
+           - bulge("l_shoulder", "l_elbow", "l_wrist") - bulge("r_shoulder", "r_elbow", "r_wrist"))
+    cue = uniform_filter1d(cue, win, mode="nearest") / (body.height * scale)
     xs = median_filter(x, size=win, mode="nearest") if F > 2 else x
     vel = np.gradient(xs) * fps if F > 1 else np.zeros(F)
     moving = np.abs(vel) > min_speed * body.height * scale
-    if moving.any():
-        idx = np.flatnonzero(moving)
-        nearest = idx[np.clip(np.searchsorted(idx, np.arange(F)), 0, len(idx) - 1)]
-        prev = idx[np.clip(np.searchsorted(idx, np.arange(F)) - 1, 0, len(idx) - 1)]
-        use = np.where(np.abs(prev - np.arange(F)) < np.abs(nearest - np.arange(F)), prev, nearest)
-        right = vel[use] > 0
+    bent = np.abs(cue) > min_bulge
+    score = np.where(bent, np.sign(cue), np.where(moving, np.sign(vel), 0.0))
+    known = score != 0
+    if known.any():
+        idx = np.flatnonzero(known)
+        pos = np.searchsorted(idx, np.arange(F))
+        after = idx[np.clip(pos, 0, len(idx) - 1)]
+        before = idx[np.clip(pos - 1, 0, len(idx) - 1)]
+        t = np.arange(F)
+        use = np.where(np.abs(before - t) < np.abs(after - t), before, after)
+        right = score[use] > 0
     else:
-        def bulge(a, b, c):
-            return j2[:, ji[b], 0] - 0.5 * (j2[:, ji[a], 0] + j2[:, ji[c], 0])
-
-        cue = (bulge("l_hip", "l_knee", "l_ankle") + bulge("r_hip", "r_knee", "r_ankle")
-               - bulge("l_shoulder", "l_elbow", "l_wrist")
-               - bulge("r_shoulder", "r_elbow", "r_wrist"))
         right = np.full(F, cue.sum() >= 0)
     rho = median_filter(torso_width_ratio(j2, scale, body), size=win, mode="nearest")
     if sides_known:

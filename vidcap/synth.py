@@ -435,16 +435,17 @@ def walk_motion(
     Returns
     -------
     Motion
-        Hips swing +-(~25) degrees, knees bend up to ~60 degrees in swing, arms swing
-        opposite to the legs with slightly bent elbows; the body advances so the
-        stance foot barely slides, and each frame's lowest ankle is on the floor.
+        Hips swing +-(~20) degrees, knees bend up to ~50 degrees in early swing,
+        arms swing opposite to the legs with slightly bent elbows. The root advances
+        so the stance foot stays planted (about 1.3 m/s) and each frame's lowest
+        ankle is on the floor.
     """
     body = body or BodyModel()
     var = (lambda s: 1.0 + s * rng.standard_normal()) if rng is not None else (lambda s: 1.0)
     phase0 = rng.uniform(0, 2 * np.pi) if rng is not None else 0.0
     cadence = 0.9 * var(0.05)  # strides per second
-    hip_amp = np.deg2rad(24.0) * var(0.08)
-    knee_amp = np.deg2rad(55.0) * var(0.08)
+    hip_amp = np.deg2rad(20.0) * var(0.08)
+    knee_amp = np.deg2rad(45.0) * var(0.08)
     arm_amp = np.deg2rad(20.0) * var(0.1)
     t = np.arange(n_frames) / fps
     ph = 2 * np.pi * cadence * t + phase0
@@ -452,8 +453,10 @@ def walk_motion(
     for side, off in (("l", 0.0), ("r", np.pi)):
         p = ph + off
         hip = hip_amp * np.sin(p) + np.deg2rad(3.0)
-        # knee flexes in swing (the leg moving forward: cos(p) > 0), a little in stance
-        knee = np.deg2rad(6.0) + knee_amp * np.clip(np.sin(p + 0.9), 0, None) ** 2
+        # swing is p in (-pi/2, pi/2) (the thigh moving forward): the knee starts to
+        # flex just before toe-off, peaks in early swing and is straight again before
+        # heel strike; a little flexion in stance
+        knee = np.deg2rad(6.0) + knee_amp * np.clip(np.cos(p + 0.4), 0, None) ** 1.5
         ang[f"{side}_hip"], ang[f"{side}_knee"] = _leg(side, hip, knee)
         arm_flex = -arm_amp * np.sin(p)  # opposite to the same-side leg
         elbow = np.deg2rad(15.0) + 0.5 * arm_amp * (1 - np.sin(p)) * 0.5
@@ -463,13 +466,22 @@ def walk_motion(
     lean = _swing(_UP, _FWD, np.full(n_frames, np.deg2rad(4.0)))
     twist = Rotation.from_rotvec(np.outer(np.deg2rad(4.0) * np.sin(ph), _UP))
     ang["pelvis"] = twist * lean
-    # speed: stride length (two steps) ~ 4 * leg * sin(hip_amp)
-    stride = 4.0 * body.pelvis_height * np.sin(hip_amp)
-    root = np.zeros((n_frames, 3))
-    root[:, 2] = -stride * cadence * t
-    root[:, 2] -= root[:, 2].mean()
-    motion = _pose_motion(body, fps, ang, root)
-    return _per_frame_floor(motion)
+    # Advance the body so the stance foot stays planted: the root
+    # moves by minus that foot's displacement relative to the root between frames.
+    still = _per_frame_floor(_pose_motion(body, fps, ang, np.zeros((n_frames, 3))))
+    rel = still.positions()
+    ankles = rel[:, [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]]  # (F, 2, 3)
+    # the stance leg is the one whose thigh swings backward: the left one when cos(ph) < 0
+    stance = np.where(np.cos(ph) < 0, 0, 1)[:-1]
+    step = ankles[1:, :, :][np.arange(n_frames - 1), stance] - ankles[:-1][
+        np.arange(n_frames - 1), stance
+    ]
+    root = still.root_positions.copy()
+    travel = np.zeros((n_frames, 3))
+    travel[1:, [0, 2]] = -np.cumsum(step[:, [0, 2]], axis=0)
+    travel -= travel.mean(axis=0)
+    root += travel
+    return Motion(still.skeleton, root, still.rotations, fps)
 
 
 def jacks_motion(
@@ -1086,17 +1098,24 @@ def prepare_clip(
 ) -> Clip:
     """Set up camera, background and lighting for ``motion`` (on our skeleton).
 
-    See :func:`make_camera` for the camera options. ``background`` is an image
-    array (resized if needed), an image file, or ``None`` for
+    ``body`` gives the cylinder radii (default: a body as tall as the motion's
+    skeleton). See :func:`make_camera` for the camera options. ``background`` is an
+    image array (resized if needed), an image file, or ``None`` for
     :func:`make_background`. ``rng`` (default ``default_rng(0)``) drives the
-    background texture and the lighting phase.
+    background texture and the lighting phase. ``noise`` is the Gaussian pixel noise
+    sigma (grey levels); ``lighting_drift`` the relative amplitude of a slow global
+    brightness/colour change (:func:`lighting_gains`).
     """
     import cv2
 
-    body = body or BodyModel()
     rng = rng if rng is not None else np.random.default_rng(0)
     if tuple(motion.skeleton.joint_names) != JOINT_NAMES:
         raise UsageError("render needs a motion on our skeleton (use retarget())")
+    if body is None:  # the body whose skeleton the motion uses (its standing height)
+        off = np.linalg.norm(motion.skeleton.offsets, axis=1)
+        J = JOINT_INDEX
+        body = BodyModel(height=float(off[J["neck"]] + off[J["head_top"]] + off[J["l_knee"]]
+                                      + off[J["l_ankle"]]))
     if noise < 0 or lighting_drift < 0:
         raise UsageError("noise and lighting drift must not be negative")
     joints3d = motion.positions()
@@ -1262,6 +1281,8 @@ def synth_clip(
         motion = make_motion(motion, body=options.get("body"), rng=rng)
     clip = prepare_clip(motion, rng=rng, **options)
     W, H = clip.camera.size
+    if W % 2 or H % 2:
+        raise UsageError(f"H.264 needs an even image size, got {W}x{H}", out_video)
     masks = np.empty((clip.n_frames, H, W), bool)
     with VideoWriter(out_video, motion.fps, crf=crf) as writer:
         for i, (frame, mask) in enumerate(iter_frames(clip, rng, show_progress=show_progress)):

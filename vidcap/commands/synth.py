@@ -13,13 +13,16 @@ HELP = "render a ground-truth clip (video + truth .npz) of the body model perfor
 ORDER = 90
 
 
-def _size(text: str) -> tuple[int, int]:
+def parse_size(text: str) -> tuple[int, int]:
+    """Parse ``WIDTHxHEIGHT`` (even, at least 8x8) into ``(width, height)``."""
     try:
-        w, h = (int(v) for v in text.lower().split("x"))
+        w, h = (int(v) for v in str(text).lower().split("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"size must be WIDTHxHEIGHT, got {text!r}") from None
+        raise UsageError(f"--size must be WIDTHxHEIGHT, got {text!r}") from None
     if w < 8 or h < 8:
-        raise argparse.ArgumentTypeError(f"size must be at least 8x8, got {text!r}")
+        raise UsageError(f"--size must be at least 8x8, got {text!r}")
+    if w % 2 or h % 2:  # H.264 (yuv420p) needs even sizes; padding would break the truth
+        raise UsageError(f"--size must be even in both directions, got {text!r}")
     return w, h
 
 
@@ -57,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--floor", type=float, metavar="FRAC", help="image row of the floor as a fraction of "
         "the height from the top (default: centre the motion vertically)",
     )
-    parser.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
+    parser.add_argument("--size", default="640x480", metavar="WxH",
                         help="image size (default 640x480)")
     parser.add_argument("-o", "--output", required=True, metavar="CLIP.mp4", help="video to write")
     parser.add_argument("--truth", metavar="TRUTH.npz",
@@ -86,6 +89,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--fps must be positive, got {args.fps}")
     if args.frames < 1:
         raise UsageError(f"--frames must be at least 1, got {args.frames}")
+    size = parse_size(args.size)
     out = Path(args.output)
     truth = Path(args.truth) if args.truth else out.with_name(out.stem + "_truth.npz")
     body = BodyModel(height=args.height)
@@ -95,11 +99,11 @@ def run(args: argparse.Namespace) -> int:
         fps=args.fps, n_frames=args.frames, rng=rng,
     )
     result = synth_clip(
-        out, truth, motion, bvh_path=args.bvh, rng=rng, body=body, size=args.size,
+        out, truth, motion, bvh_path=args.bvh, rng=rng, body=body, size=size,
         yaw_deg=args.yaw, elevation_deg=args.elevation, pixels_per_metre=args.ppm,
         floor_frac=args.floor, background=args.background, noise=args.noise,
         lighting_drift=args.lighting_drift,
     )
-    print(f"wrote {out} ({len(result['joints3d'])} frames, {args.size[0]}x{args.size[1]}, "
+    print(f"wrote {out} ({len(result['joints3d'])} frames, {size[0]}x{size[1]}, "
           f"{motion.fps:g} fps) and {truth}")
     return 0

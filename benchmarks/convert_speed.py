@@ -1,0 +1,68 @@
+"""End-to-end speed of `vidcap convert` on a 300-frame 640x480 clip (issue 7 benchmark).
+
+A walk is rendered with vidcap.synth (300 frames, 640x480, 30 fps) into a temporary
+folder. Measured in the same run: decode only (PyAV, every frame), the background
+plate estimation, and the conversion given that plate (silhouettes, 2D pose, 3D
+lift, motion, BVH write; no cache), with its per-stage times. Target: >= 100 fps
+excluding plate estimation.
+
+Run:  python benchmarks/convert_speed.py [--frames 300]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from vidcap.background import estimate_background  # noqa: E402
+from vidcap.pipeline import convert  # noqa: E402
+from vidcap.synth import synth_clip  # noqa: E402
+from vidcap.video import iter_frames  # noqa: E402
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--frames", type=int, default=300)
+    args = ap.parse_args(argv)
+    import cv2
+
+    from vidcap.synth import make_motion
+
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d)
+        video = d / "walk.mp4"
+        motion = make_motion("walk", n_frames=args.frames, rng=np.random.default_rng(0))
+        synth_clip(video, d / "truth.npz", motion, size=(640, 480), yaw_deg=90.0,
+                   rng=np.random.default_rng(0), show_progress=False)
+        t0 = time.perf_counter()
+        n = sum(1 for _ in iter_frames(video))
+        t_decode = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        plate = estimate_background(video, rng=np.random.default_rng(0), progress=False)
+        t_plate = time.perf_counter() - t0
+        cv2.imwrite(str(d / "plate.png"), plate.plate)
+        t0 = time.perf_counter()
+        res = convert(video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
+                      progress=False)
+        t_conv = time.perf_counter() - t0
+    rows = [("decode only", t_decode), ("plate estimation", t_plate),
+            ("convert given the plate", t_conv)]
+    rows += [(f"  stage: {k}", v) for k, v in res.timings.items() if k != "plate"]
+    print(f"{n} frames, 640x480")
+    print("step | seconds | fps | x decode time")
+    print("--- | --- | --- | ---")
+    for name, t in rows:
+        print(f"{name} | {t:.2f} | {n / t:.0f} | {t / t_decode:.1f}")
+    print(f"\nconvert excluding plate estimation: {n / t_conv:.0f} fps (target >= 100)")
+
+
+if __name__ == "__main__":
+    main()

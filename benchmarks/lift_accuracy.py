@@ -1,0 +1,162 @@
+"""3D lifting accuracy on ground-truth clips (issue 7 benchmark).
+
+For each real motion in ../shared/data/motion/ retargeted onto the body model and
+filmed by vidcap.synth's orthographic camera at yaw 90 and 45 degrees, the true 2D
+joints are lifted (seed 004 Eq. 2.2, scale estimated from the image height,
+orientation proposed) and compared with the true 3D joints after root alignment:
+
+* MPJPE (% of height) with the true depth signs and with the proposed ones;
+* share of (frame, segment) signs proposed correctly: all, and where the sign
+  matters (segment more than 0.25 of its length out of the image plane, i.e.
+  foreshortening ratio < 0.97);
+* user inputs (annotation events) needed to reach the true-sign result (MPJPE
+  within 0.25 % of height of it), simulating a user who fixes the wrong runs in
+  order of their 3D error, each fix being one depth event (carried forward until
+  the segment next enters the image plane) plus one orientation event if the
+  proposed orientation is wrong (one per wrong run of frames, carried forward).
+  Seed 004 section 4.3 needed 60 on an 82-frame walk.
+
+Run:  python benchmarks/lift_accuracy.py [--frames 82]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from vidcap.annotations import Annotations  # noqa: E402
+from vidcap.body import SEGMENT_NAMES, BodyModel  # noqa: E402
+from vidcap.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation  # noqa: E402
+from vidcap.proposals import propose_orientation, propose_signs  # noqa: E402
+from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
+
+DATA = ROOT.parent / "shared" / "data" / "motion"
+MATTERS = 0.25  # |dZ| / length above which a sign "matters"
+TRACE = False
+NEAR_PLANE = 0.15  # |dZ| / length below which a segment is "in the image plane"
+
+
+def truth_in_camera_frame(t):
+    """True joints in lift's frame: X image right, Y up, Z toward the camera."""
+    cam = t["camera"]
+    s = np.linalg.norm(cam[0, :3])
+    right, down, view = cam[0, :3] / s, cam[1, :3] / s, t["view_dir"]
+    R = np.stack([right, -down, -view])
+    return t["joints3d"] @ R.T
+
+
+def mpjpe(a, b, height):
+    a = a - a[:, :1]
+    b = b - b[:, :1]
+    return float(np.linalg.norm(a - b, axis=-1).mean() / height * 100)
+
+
+def evaluate(truth, body, *, max_events=60):
+    j2 = truth["joints2d"]
+    fps = float(truth["fps"])
+    true3 = truth_in_camera_frame(truth)
+    true_signs = truth["depth_signs"].astype(int)
+    s = estimate_scale(j2, body)
+    orient = propose_orientation(j2, scale=s, fps=fps, body=body, sides_known=True)
+    orient_ok = float(np.mean(orient == truth["orientation"]))
+    rho = torso_width_ratio(j2, s, body)
+    yaw_true_lbl = yaw_from_orientation(truth["orientation"], rho)
+    yaw = yaw_from_orientation(orient, rho)
+    e_true = mpjpe(lift(j2, true_signs, yaw_true_lbl, body=body, scale=s).joints3d, true3,
+                   body.height)
+    prop = propose_signs(j2, yaw, scale=s, body=body)
+    e_prop = mpjpe(lift(j2, prop.signs, yaw, body=body, scale=s).joints3d, true3, body.height)
+    ok = prop.signs == true_signs
+    matters = prop.zeta > MATTERS
+
+    # simulated user
+    ann = Annotations()
+    for _ in range(len(j2)):  # orientation: fix the first wrong frame until none is
+        _, uo, _ = ann.resolve(len(j2))
+        wrong_o = np.flatnonzero(np.where(uo != "", uo, orient) != truth["orientation"])
+        if not wrong_o.size:
+            break
+        ann.add_orientation(int(wrong_o[0]), str(truth["orientation"][wrong_o[0]]))
+    near = prop.zeta < NEAR_PLANE
+    L = body.segment_lengths()
+    e_final = e_prop
+    while True:
+        user_signs, user_orient, _ = ann.resolve(len(j2), near_plane=near)
+        o = np.where(user_orient != "", user_orient, orient)
+        y = yaw_from_orientation(o, rho)
+        p = propose_signs(j2, y, scale=s, body=body, fixed=user_signs)
+        e_final = mpjpe(lift(j2, p.signs, y, body=body, scale=s).joints3d, true3, body.height)
+        if e_final <= e_true + 0.25 or ann.n_user_inputs >= max_events:
+            break
+        wrong = p.signs != true_signs
+        if not wrong.any():
+            break
+        cost = np.where(wrong, 2 * p.zeta * L, 0.0)
+        # the worst run: group consecutive wrong frames per segment, sum their error
+        best, best_ev = -1.0, None
+        for k in range(len(SEGMENT_NAMES)):
+            w = wrong[:, k].astype(int)
+            starts = np.flatnonzero(np.diff(np.r_[0, w]) == 1)
+            stops = np.flatnonzero(np.diff(np.r_[w, 0]) == -1) + 1
+            for a, b in zip(starts, stops, strict=True):
+                c = cost[a:b, k].sum()
+                if c > best:
+                    best, best_ev = c, (int(a), SEGMENT_NAMES[k], int(true_signs[a, k]))
+        n_before = ann.n_user_inputs
+        ann.add_depth(*best_ev)
+        if ann.n_user_inputs == n_before:  # replaced an event: no progress possible
+            break
+        if TRACE:
+            print(ann.n_user_inputs, round(e_final, 3), best_ev, round(best, 3))
+    return {
+        "frames": len(j2),
+        "mpjpe_true": e_true,
+        "mpjpe_prop": e_prop,
+        "signs_all": float(ok.mean() * 100),
+        "signs_matter": float(ok[matters].mean() * 100) if matters.any() else float("nan"),
+        "orient_ok": orient_ok * 100,
+        "events": ann.n_user_inputs,
+        "mpjpe_final": e_final,
+        "true_changes": int((np.diff(true_signs, axis=0) != 0).sum()),
+    }
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--frames", type=int, default=82, help="frames per clip at 30 fps")
+    args = ap.parse_args(argv)
+    body = BodyModel()
+    motions = {
+        "131_01.bvh": dict(name_or_path=DATA / "131_01.bvh", frame_range=(200, None)),
+        "07_07.amc": dict(name_or_path=DATA / "07.asf", amc=DATA / "07_07.amc"),
+    }
+    rows = []
+    t0 = time.perf_counter()
+    for mname, kw in motions.items():
+        motion = make_motion(**kw, body=body, fps=30.0, rng=np.random.default_rng(0))
+        motion = motion.frames(0, min(args.frames, motion.n_frames))
+        for yaw in (90.0, 45.0):
+            clip = prepare_clip(motion, body=body, yaw_deg=yaw, rng=np.random.default_rng(1))
+            truth = truth_arrays(clip, np.zeros((motion.n_frames, 1, 1), bool))
+            rows.append((mname, yaw, evaluate(truth, body)))
+    head = ("motion", "yaw", "frames", "MPJPE true %", "MPJPE prop %", "signs ok %",
+            "ok where out of plane %", "orient ok %", "events", "MPJPE after %", "true changes")
+    print(" | ".join(head))
+    print(" | ".join("---" for _ in head))
+    for m, yaw, r in rows:
+        print(f"{m} | {yaw:.0f} | {r['frames']} | {r['mpjpe_true']:.2f} | {r['mpjpe_prop']:.2f} | "
+              f"{r['signs_all']:.1f} | {r['signs_matter']:.1f} | {r['orient_ok']:.0f} | "
+              f"{r['events']} | {r['mpjpe_final']:.2f} | {r['true_changes']}")
+    print(f"\n(targets: MPJPE with true signs <= 5 %, signs >= 90 %, events <= 6 on 82 frames;"
+          f" seed 004: 60 inputs; {time.perf_counter() - t0:.1f} s)")
+
+
+if __name__ == "__main__":
+    main()

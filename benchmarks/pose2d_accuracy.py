@@ -1,0 +1,142 @@
+"""2D pose accuracy against rendered ground truth (issue 6).
+
+Renders clips with :mod:`vidcap.synth` from the real motions in ``../shared/data/motion``
+(CMU 131_01 BVH and 07_07 ASF/AMC) at yaw 90 (side), 45 (three-quarter) and 0 (front),
+640x480, and fits the 2D model to the true silhouettes, per frame (the seed) and
+tracked (warm start). Errors are 2D joint distances as a fraction of the body's
+height in pixels (head top to ankles).
+
+During 2D fitting ``l_*`` means the image-left limb, not the performer's left, so
+each limb pair (arms: shoulder/elbow/wrist, legs: hip/knee/ankle) is matched to the
+truth with whichever assignment (as labelled or swapped) is closer in that frame.
+The share of frames where the swap was needed is reported as "swapped".
+
+Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
+[--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from vidcap.body import JOINT_INDEX, JOINT_NAMES  # noqa: E402
+from vidcap.fit.pose2d import fit_sequence  # noqa: E402
+
+MOTION_DIR = REPO.parent / "shared" / "data" / "motion"
+
+_PAIRS = [
+    [JOINT_INDEX[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")] for s in "lr"
+] + [[JOINT_INDEX[f"{s}_{j}"] for j in ("hip", "knee", "ankle")] for s in "lr"]
+ARMS = (_PAIRS[0], _PAIRS[1])
+LEGS = (_PAIRS[2], _PAIRS[3])
+
+
+def side_agnostic_errors(pred: np.ndarray, truth: np.ndarray):
+    """Per-joint errors (F, 15) with each limb pair matched in its better order.
+
+    Returns the errors and (F, 2) booleans: arms swapped, legs swapped.
+    """
+    err = np.linalg.norm(pred - truth, axis=-1)
+    swapped = np.zeros((len(pred), 2), dtype=bool)
+    for k, (a, b) in enumerate((ARMS, LEGS)):
+        direct = err[:, a].sum(1) + err[:, b].sum(1)
+        e_ab = np.linalg.norm(pred[:, a] - truth[:, b], axis=-1)
+        e_ba = np.linalg.norm(pred[:, b] - truth[:, a], axis=-1)
+        swap = e_ab.sum(1) + e_ba.sum(1) < direct
+        err[np.ix_(swap, a)] = e_ba[swap]
+        err[np.ix_(swap, b)] = e_ab[swap]
+        swapped[:, k] = swap
+    return err, swapped
+
+
+def body_height_px(truth_joints: np.ndarray) -> np.ndarray:
+    """Per-frame body height in pixels: the body model's height, from the truth."""
+    # The model's height is head top to ankles; use the head-top-to-lower-ankle extent
+    # of a standing pose's ratio: pelvis->head top is (25 + 52) / 175 of the height.
+    pel = truth_joints[:, JOINT_INDEX["pelvis"]]
+    top = truth_joints[:, JOINT_INDEX["head_top"]]
+    return np.linalg.norm(top - pel, axis=-1) * 175.0 / 77.0
+
+
+def summarise(err_frac: np.ndarray) -> dict:
+    e = err_frac[np.isfinite(err_frac)]
+    return {
+        "median": float(np.median(e)),
+        "p90": float(np.percentile(e, 90)),
+        "pck05": float(np.mean(e <= 0.05)),
+        "pck10": float(np.mean(e <= 0.10)),
+    }
+
+
+def load_motion(name: str, n_frames: int):
+    from vidcap.synth import make_motion
+
+    if name == "131_01":
+        return make_motion(MOTION_DIR / "131_01.bvh", fps=30.0, frame_range=(0, 4 * n_frames))
+    if name == "07_07":
+        return make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc", fps=30.0,
+                           frame_range=(0, 4 * n_frames))
+    return make_motion(name, n_frames=n_frames)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--frames", type=int, default=60, help="frames per clip (30 fps)")
+    ap.add_argument("--motions", default="131_01,07_07")
+    ap.add_argument("--yaws", default="90,45,0")
+    ap.add_argument("--height", type=int, default=80, help="normalised silhouette height")
+    ap.add_argument("--caps", action="store_true", help="draw capsules, not rectangles")
+    ap.add_argument("--no-refine", action="store_true", help="the seed's order only")
+    args = ap.parse_args(argv)
+
+    from vidcap.synth import render_clip
+
+    rows = []
+    per_joint = {}
+    for name in args.motions.split(","):
+        motion = load_motion(name, args.frames)
+        motion = motion.frames(0, min(args.frames, len(motion.root_positions)))
+        for yaw in map(float, args.yaws.split(",")):
+            _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                   rng=np.random.default_rng(0))
+            masks, tj = truth["masks"], truth["joints2d"]
+            hpx = body_height_px(tj)[:, None]
+            for tracked in (False, True):
+                t0 = time.process_time()
+                pose = fit_sequence(masks, tracked=tracked, height=args.height,
+                                    caps=args.caps, refine=not args.no_refine)
+                dt = (time.process_time() - t0) / len(masks)
+                err, sw = side_agnostic_errors(pose.joints2d, tj)
+                frac = err / hpx
+                s = summarise(frac)
+                mode = "tracked" if tracked else "per-frame"
+                rows.append((name, f"{yaw:g}", mode, s, sw.mean(0), pose.warm.mean(), dt))
+                per_joint[(name, yaw, mode)] = np.nanmedian(frac, axis=0)
+    print(f"2D joint error / body height, {args.frames} frames per clip, 640x480, "
+          f"silhouettes normalised to {args.height} px, "
+          f"{'capsules' if args.caps else 'rectangles'}"
+          f"{', seed order only' if args.no_refine else ''}")
+    print(f"{'motion':8} {'yaw':>4} {'mode':9} {'median':>7} {'p90':>7} {'PCK.05':>7} "
+          f"{'PCK.1':>7} {'armsw':>6} {'legsw':>6} {'warm':>5} {'ms/fr':>6}")
+    for name, yaw, mode, s, sw, warm, dt in rows:
+        print(f"{name:8} {yaw:>4} {mode:9} {s['median']:7.3f} {s['p90']:7.3f} {s['pck05']:7.1%} "
+              f"{s['pck10']:7.1%} {sw[0]:6.0%} {sw[1]:6.0%} {warm:5.0%} {dt * 1e3:6.1f}")
+    print("\nMedian error per joint (fraction of height), all clips, tracked:")
+    keys = [k for k in per_joint if k[2] == "tracked"]
+    for yaw in sorted({k[1] for k in keys}, reverse=True):
+        med = np.nanmean([per_joint[k] for k in keys if k[1] == yaw], axis=0)
+        cells = (f"{n}={v:.3f}" for n, v in zip(JOINT_NAMES, med, strict=True))
+        print(f"yaw {yaw:>3g}: " + " ".join(cells))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,91 @@
+"""2D pose fitting speed per frame at 640x480, beside the decode time of the same clip.
+
+Renders a 640x480 clip of the built-in walk with :mod:`vidcap.synth` (H.264, written
+to a temporary directory), then measures on one core (CPU time of this process,
+BLAS threads pinned to 1):
+
+* decoding the video with PyAV (:func:`vidcap.video.iter_frames`): the reference;
+* normalising the silhouette (crop + resize to the fitting height);
+* fitting every frame independently (the seed's method, ``--per-frame``);
+* fitting with tracking (warm start from the previous frame; the default).
+
+The seed reports about 1 s per frame (C#, 2.7 GHz Celeron). The issue's target is
+5 ms per frame. Usage: ``PYTHONPATH=. python benchmarks/pose2d_speed.py [--frames N]``
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from vidcap.fit.pose2d import fit_pose, fit_sequence  # noqa: E402
+from vidcap.fit.raster import normalise_mask  # noqa: E402
+
+
+def cpu(fn, repeat=3):
+    """Best CPU time of ``repeat`` runs of ``fn()``, seconds."""
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.process_time()
+        fn()
+        best = min(best, time.process_time() - t0)
+    return best
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--height", type=int, default=80)
+    args = ap.parse_args(argv)
+    try:
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})  # one core
+    except (AttributeError, OSError):
+        pass
+
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video import iter_frames
+
+    with tempfile.TemporaryDirectory() as tmp:
+        video, truth = Path(tmp) / "walk.mp4", Path(tmp) / "truth.npz"
+        synth_clip(video, truth, make_motion("walk", n_frames=args.frames), size=(640, 480),
+                   rng=np.random.default_rng(0), show_progress=False)
+        masks = np.load(truth)["masks"]
+        n = len(masks)
+        t_decode = cpu(lambda: sum(1 for _ in iter_frames(video))) / n
+    t_norm = cpu(lambda: [normalise_mask(m, height=args.height) for m in masks]) / n
+    t_cold = cpu(lambda: fit_sequence(masks, tracked=False, height=args.height), 1) / n
+    t_track = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height), 1) / n
+    warm = fit_sequence(masks, tracked=True, height=args.height).warm
+    prev = fit_pose(masks[0], height=args.height)
+    t_warm = cpu(lambda: fit_pose(masks[1], previous=prev, height=args.height), 5)
+
+    print(f"2D pose speed, {n} frames of 640x480 (synth walk), silhouettes normalised to "
+          f"{args.height} px, one core, CPU time")
+    print(f"{'stage':40} {'ms/frame':>9} {'x decode':>9}")
+    rows = [
+        ("decode (PyAV, H.264) - reference", t_decode),
+        ("normalise silhouette", t_norm),
+        ("fit, per frame (seed order)", t_cold),
+        (f"fit, tracked ({warm.mean():.0%} frames warm)", t_track),
+        ("fit, one warm frame", t_warm),
+        ("seed 004 (C#, 2.7 GHz Celeron)", 1.0),
+    ]
+    for name, t in rows:
+        print(f"{name:40} {t * 1e3:9.2f} {t / t_decode:9.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

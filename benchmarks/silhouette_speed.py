@@ -1,0 +1,81 @@
+"""Silhouette speed: plate estimation and per-frame extraction vs PyAV decode alone.
+
+    /work/venv/bin/python benchmarks/silhouette_speed.py [--frames 300] [--size 640x480]
+
+Writes a synthetic static-camera clip (textured background, a walking figure,
+camera noise) to a temporary H.264 file, then times in the same run:
+decode alone (PyAV, BGR frames), the background plate from the file, and the
+silhouettes of every frame (from frames in memory, and from the file including
+decode). Targets (issue 5): silhouettes >= 300 fps at 640x480 once the plate
+exists; plate <= 2 s for 300 frames of 640x480.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from tests._synthframes import clip  # noqa: E402
+from vidcap.background import estimate_background  # noqa: E402
+from vidcap.silhouette import extract_silhouettes  # noqa: E402
+from vidcap.video import iter_chunks, read_frames, write_video  # noqa: E402
+
+
+def best_of(fn, repeat=3):
+    times = []
+    out = None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return min(times), out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--size", default="640x480")
+    ap.add_argument("--repeat", type=int, default=3)
+    a = ap.parse_args()
+    w, h = (int(v) for v in a.size.split("x"))
+    frames, masks = clip(a.frames, h, w, rng=np.random.default_rng(0), walk=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        video = Path(tmp) / "clip.mp4"
+        write_video(video, frames, 25, crf=18)
+        n = a.frames
+        estimate_background(frames[:4])  # import skimage etc. once, outside the timings
+        t_dec, _ = best_of(lambda: sum(len(c) for c in iter_chunks(video)), a.repeat)
+        t_plate, bg = best_of(lambda: estimate_background(video), a.repeat)
+        t_plate_med, _ = best_of(lambda: estimate_background(video, method="median"), a.repeat)
+        mem = read_frames(video)
+        t_sil, sil = best_of(lambda: extract_silhouettes(mem, bg), a.repeat)
+        t_both, _ = best_of(lambda: extract_silhouettes(video, bg), a.repeat)
+    iou = (sil.masks & masks).sum((1, 2)) / np.maximum((sil.masks | masks).sum((1, 2)), 1)
+    dec_fps = n / t_dec
+    rows = [
+        ("PyAV decode alone (reference)", t_dec, n / t_dec, 1.0, ""),
+        ("plate, felzenszwalb (from file)", t_plate, n / t_plate, t_plate / t_dec,
+         "target <= 2 s" + (" OK" if t_plate <= 2 else " MISSED")),
+        ("plate, temporal median (from file)", t_plate_med, n / t_plate_med,
+         t_plate_med / t_dec, ""),
+        ("silhouettes, frames in memory", t_sil, n / t_sil, t_sil / t_dec,
+         "target >= 300 fps" + (" OK" if n / t_sil >= 300 else " MISSED")),
+        ("silhouettes incl. decode (file)", t_both, n / t_both, t_both / t_dec, ""),
+    ]
+    print(f"{n} frames {w}x{h}, best of {a.repeat}; median IoU vs truth {np.median(iou):.3f}")
+    print(f"{'stage':38s} {'seconds':>8s} {'fps':>8s} {'x decode time':>14s}  note")
+    for name, t, fps, ratio, note in rows:
+        print(f"{name:38s} {t:8.3f} {fps:8.1f} {ratio:14.2f}  {note}")
+    print(f"(decode alone runs at {dec_fps:.0f} fps)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,109 @@
+"""Batched rasteriser: exact against a brute-force distance test; normalisation."""
+
+import numpy as np
+import pytest
+
+from vidcap.body import JOINT_INDEX, SEGMENT_NAMES
+from vidcap.fit.raster import (
+    draw_segments,
+    image_angle,
+    model_dimensions,
+    normalise_mask,
+    pose_joints,
+    segment_spans,
+)
+
+
+def _brute(p0, p1, r, shape, caps):
+    ys, xs = np.mgrid[0 : shape[0], 0 : shape[1]].astype(float)
+    v = p1 - p0
+    vv = (v * v).sum(-1)[..., None, None]
+    dx, dy = xs - p0[..., 0, None, None], ys - p0[..., 1, None, None]
+    t = (dx * v[..., 0, None, None] + dy * v[..., 1, None, None]) / vv
+    rr = r[None, :, None, None] ** 2 + 1e-9
+    if caps:
+        tc = np.clip(t, 0, 1)
+        inside = (dx - tc * v[..., 0, None, None]) ** 2 + (dy - tc * v[..., 1, None, None]) ** 2
+        inside = inside <= rr
+    else:
+        inside = (dx**2 + dy**2 - t**2 * vv <= rr) & (t >= -1e-9) & (t <= 1 + 1e-9)
+    return inside.any(1)
+
+
+@pytest.mark.parametrize("caps", [True, False])
+def test_draw_matches_brute_force(caps):
+    rng = np.random.default_rng(1)
+    p0 = rng.uniform(5, 35, (40, 2, 2))
+    p1 = p0 + rng.normal(0, 8, (40, 2, 2))
+    p1[:5, 0, 1] = p0[:5, 0, 1]  # horizontal
+    p1[5:10, 1, 0] = p0[5:10, 1, 0]  # vertical
+    r = np.array([1.7, 3.2])
+    got = draw_segments(p0, p1, r, (40, 40), caps=caps)
+    assert got.shape == (40, 40, 40)
+    assert np.array_equal(got, _brute(p0, p1, r, (40, 40), caps))
+    # a window drawn at an origin is the same pixels
+    win = draw_segments(p0, p1, r, (10, 15), origin=(12, 20), caps=caps)
+    assert np.array_equal(win, got[:, 20:30, 12:27])
+
+
+def test_spans_are_row_runs():
+    # a horizontal 10 px bar of half-width 1 along y = 5: rows 4..6, columns 2..12
+    f, l = segment_spans(np.array([[[2.0, 5.0]]]), np.array([[[12.0, 5.0]]]), np.array([1.0]),
+                         np.arange(3, 8), caps=False)
+    covered = (l >= f)[0, 0]
+    assert covered.tolist() == [False, True, True, True, False]
+    assert (f[0, 0, 1:4] == 2).all() and (l[0, 0, 1:4] == 12).all()
+    # with round caps the ends reach one radius further on the axis row
+    f, l = segment_spans(np.array([[[2.0, 5.0]]]), np.array([[[12.0, 5.0]]]), np.array([1.0]),
+                         np.array([5]), caps=True)
+    assert (f[0, 0, 0], l[0, 0, 0]) == (1, 13)
+
+
+def test_rotated_bar_pixel_count():
+    # area of a 40 x 6 bar at 30 degrees, counted from pixel centres: ~240 +- perimeter
+    a = np.deg2rad(30.0)
+    c = np.array([50.0, 50.0])
+    d = 20 * np.array([np.cos(a), -np.sin(a)])
+    m = draw_segments((c - d)[None, None], (c + d)[None, None], np.array([3.0]), (100, 100),
+                      caps=False)[0]
+    assert abs(m.sum() - 240) < 20
+
+
+def test_pose_joints_lengths_and_angles():
+    H = 175.0
+    L, R, sh, hp = model_dimensions(H)
+    angles = np.deg2rad([90, 95, 200, 250, 300, 330, 262, 270, 278, 270])
+    fore = np.linspace(0.5, 1.0, 10)
+    j = pose_joints(np.array([50.0, 100.0]), angles, fore, 0.0, L, sh, hp)
+    for k, name in enumerate(SEGMENT_NAMES):
+        from vidcap.body import SEGMENTS
+
+        seg = SEGMENTS[k]
+        v = j[JOINT_INDEX[seg.distal]] - j[JOINT_INDEX[seg.proximal]]
+        assert np.hypot(*v) == pytest.approx(L[k] * fore[k])
+        assert image_angle(v) == pytest.approx(angles[k]), name
+    # spread 0: shoulders on the neck; spread 1: the body model's lateral offsets
+    assert np.allclose(j[JOINT_INDEX["l_shoulder"]], j[JOINT_INDEX["neck"]])
+    j1 = pose_joints(np.array([50.0, 100.0]), angles, fore, 1.0, L, sh, hp)
+    assert j1[JOINT_INDEX["l_shoulder"], 0] < j1[JOINT_INDEX["neck"], 0]  # image left
+    assert np.hypot(*(j1[JOINT_INDEX["l_hip"]] - j1[JOINT_INDEX["pelvis"]])) == pytest.approx(hp)
+    # batched
+    jb = pose_joints(np.zeros((4, 2)), np.repeat(angles[None], 4, 0), fore, np.ones(4), L, sh, hp)
+    assert jb.shape == (4, 15, 2)
+
+
+def test_normalise_round_trip():
+    mask = np.zeros((480, 640), bool)
+    mask[100:400, 300:360] = True
+    n = normalise_mask(mask, height=60)
+    assert n.bottom - n.top + 1 == 60
+    assert n.mask.sum() == pytest.approx(60 * 12, rel=0.1)
+    pts = np.array([[300.0, 100.0], [359.0, 399.0]])
+    back = n.to_original(n.to_normalised(pts))
+    assert np.allclose(back, pts)
+    # corners of the silhouette land on its normalised corners (to half a pixel)
+    ys, xs = np.nonzero(n.mask)
+    assert np.allclose(n.to_normalised(pts), [[xs.min(), ys.min()], [xs.max(), ys.max()]],
+                       atol=0.6)
+    with pytest.raises(ValueError):
+        normalise_mask(np.zeros((5, 5), bool))

@@ -1,0 +1,127 @@
+"""Background plate estimation (seed 004 section 3.1.2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests._synthframes import background, clip
+from vidcap.background import (
+    BackgroundError,
+    BackgroundModel,
+    estimate_background,
+    load_plate,
+    sample_frames,
+)
+from vidcap.errors import InputFileError
+
+
+def _plate_error(plate, truth):
+    return np.abs(plate.astype(int) - truth.astype(int)).sum(-1)
+
+
+@pytest.mark.parametrize("method", ["felzenszwalb", "median"])
+def test_plate_of_a_walker_matches_the_true_background(method):
+    frames, masks = clip(40, 120, 160, rng=np.random.default_rng(3), walk=True)
+    truth = background(120, 160, np.random.default_rng(3))
+    bg = estimate_background(frames, method=method, n_samples=20)
+    err = _plate_error(bg.plate, truth)
+    # camera noise sigma 2 per channel: L1 error of a clean mean stays well below 15
+    assert np.median(err) < 6
+    assert (err > 30).mean() < 0.01
+    assert bg.plate.shape == (120, 160, 3) and bg.plate.dtype == np.uint8
+    assert bg.confidence.shape == (120, 160)
+    assert 0 <= bg.confidence.min() and bg.confidence.max() <= 1
+    # the measured noise is near the true sigma (2 grey levels per channel)
+    assert 1.0 < float(np.mean(bg.noise_sigma)) < 3.5
+    assert 12 <= bg.threshold < 60
+
+
+def test_pixel_covered_in_most_frames_gets_background_where_uncovered():
+    """A block covering one spot in 70% of frames: the median takes the block's
+    colour, the region method the background's (the jumping-jacks case)."""
+    rng = np.random.default_rng(5)
+    h, w, n = 96, 128, 30
+    truth = background(h, w, rng)
+    frames = np.repeat(truth[None], n, axis=0).astype(np.float32)
+    for i in range(n):
+        if i % 10 < 7:  # covered 70% of the time, by a block that wobbles
+            x = 50 + (i % 3)
+            frames[i, 30:70, x:x + 24] = (40, 40, 170)
+        # a small walker elsewhere so the scene is not static
+        frames[i, 75:90, 4 * i % 120:4 * i % 120 + 6] = (200, 200, 30)
+    frames = np.clip(frames + rng.normal(0, 2, frames.shape), 0, 255).astype(np.uint8)
+    spot = (slice(35, 65), slice(55, 72))
+    med = estimate_background(frames, method="median", n_samples=n)
+    fz = estimate_background(frames, method="felzenszwalb", n_samples=n)
+    assert np.median(_plate_error(med.plate[spot], truth[spot])) > 100
+    assert np.median(_plate_error(fz.plate[spot], truth[spot])) < 10
+    assert fz.confidence[spot].mean() < 0.5 < fz.confidence[5:25, 5:25].mean()
+
+
+def test_never_uncovered_pixels_are_flagged():
+    rng = np.random.default_rng(6)
+    h, w, n = 96, 128, 24
+    truth = background(h, w, rng)
+    frames = np.repeat(truth[None], n, axis=0).copy()
+    for i in range(n):
+        # something always covering the middle, never twice the same colour (a
+        # person turning on the spot), and a walker so the scene is not static
+        frames[i, 30:70, 50:74] = rng.integers(0, 256, 3)
+        frames[i, 75:90, 4 * i % 120:4 * i % 120 + 6] = (200, 200, 30)
+    bg = estimate_background(frames, n_samples=n)
+    assert bg.never_seen[40:60, 55:70].mean() > 0.9
+    assert 0 < bg.never_seen_fraction < 0.2
+    assert not bg.never_seen[:20].any()
+
+
+def test_lighting_drift_is_normalised():
+    frames, _ = clip(30, 96, 128, rng=np.random.default_rng(7), walk=True, drift=0.25)
+    bg = estimate_background(frames, n_samples=15)
+    truth = background(96, 128, np.random.default_rng(7))
+    # the plate is at the samples' median light (gain ~1), not smeared
+    assert np.median(_plate_error(bg.plate, truth)) < 10
+
+
+def test_static_scene_is_a_clear_error():
+    rng = np.random.default_rng(8)
+    truth = background(64, 80, rng)
+    frames = np.clip(truth[None] + rng.normal(0, 2, (10, 64, 80, 3)), 0, 255).astype(np.uint8)
+    for method in ("felzenszwalb", "median"):
+        with pytest.raises(BackgroundError, match="nothing moves"):
+            estimate_background(frames, method=method)
+
+
+def test_one_frame_and_no_frame_are_clear_errors():
+    one = np.zeros((1, 32, 32, 3), np.uint8)
+    with pytest.raises(BackgroundError, match="one frame"):
+        estimate_background(one)
+    with pytest.raises(BackgroundError, match="no frames"):
+        estimate_background(np.zeros((0, 32, 32, 3), np.uint8))
+
+
+def test_sampling_is_spread_and_seeded():
+    frames = np.arange(100, dtype=np.uint8)[:, None, None, None] * np.ones((1, 2, 2, 3), np.uint8)
+    s, idx = sample_frames(frames, n_samples=10)
+    assert len(idx) == 10 and idx.min() < 10 and idx.max() >= 90
+    assert (s[:, 0, 0, 0] == idx).all()
+    a = sample_frames(frames, n_samples=10, rng=np.random.default_rng(1))[1]
+    b = sample_frames(frames, n_samples=10, rng=np.random.default_rng(1))[1]
+    assert (a == b).all()
+
+
+def test_given_plate(tmp_path):
+    import cv2
+
+    img = background(40, 50, np.random.default_rng(9))
+    cv2.imwrite(str(tmp_path / "p.png"), img)
+    bg = load_plate(tmp_path / "p.png")
+    assert (bg.plate == img).all() and bg.method == "given"
+    assert not np.isfinite(bg.threshold)
+    (tmp_path / "bad.png").write_text("not an image")
+    with pytest.raises(InputFileError, match="bad.png"):
+        load_plate(tmp_path / "bad.png")
+    with pytest.raises(InputFileError, match="missing.png"):
+        load_plate(tmp_path / "missing.png")
+    with pytest.raises(ValueError):
+        BackgroundModel.from_plate(np.zeros((4, 4), np.uint8))

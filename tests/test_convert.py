@@ -1,0 +1,147 @@
+"""vidcap convert / batch / review end to end on the sample clips (synth branch)."""
+
+import csv
+import shutil
+
+import numpy as np
+import pytest
+
+from tests.conftest import REPO, run_cli
+from vidcap.body import JOINT_INDEX
+from vidcap.bvh import read_bvh
+from vidcap.video import probe
+
+WALK = REPO / "sample_videos" / "walk_side.mp4"
+TRUTH = REPO / "sample_videos" / "walk_side_truth.npz"
+
+
+@pytest.fixture(scope="module")
+def converted(tmp_path_factory):
+    if not WALK.exists():
+        pytest.skip("sample_videos/ not present")
+    d = tmp_path_factory.mktemp("convert")
+    out, npz = d / "walk.bvh", d / "walk.npz"
+    r = run_cli("convert", WALK, "-o", out, "--save", npz)
+    assert r.returncode == 0, r.stderr
+    return out, npz, r
+
+
+def test_convert_writes_a_bvh_readable_by_us_and_bvhio(converted):
+    out, _, r = converted
+    info = probe(WALK)
+    m = read_bvh(out)
+    assert m.n_frames == info.n_frames == 42
+    assert m.fps == pytest.approx(info.fps, rel=1e-4)
+    bvhio = pytest.importorskip("bvhio")
+    c = bvhio.readAsBvh(str(out))
+    assert c.FrameCount == info.n_frames
+    assert c.FrameTime == pytest.approx(1.0 / info.fps, rel=1e-4)
+    assert "frames at 25 fps" in r.stdout
+
+
+def test_converted_figure_is_upright_and_walks_the_right_way(converted):
+    out, _, _ = converted
+    pos = read_bvh(out).positions()
+    i = JOINT_INDEX
+    head, pelvis = pos[:, i["head_top"], 1], pos[:, i["pelvis"], 1]
+    ankles = np.maximum(pos[:, i["l_ankle"], 1], pos[:, i["r_ankle"], 1])
+    assert np.all(head > pelvis) and np.all(pelvis > ankles)
+    # the clip walks to image right (truth), which is +X in our camera-aligned world
+    truth = np.load(TRUTH)
+    true_dir = np.sign(truth["joints2d"][-1, 0, 0] - truth["joints2d"][0, 0, 0])
+    travel = pos[-1, i["pelvis"], 0] - pos[0, i["pelvis"], 0]
+    assert true_dir > 0 and travel > 0.5  # metres over 1.7 s
+    assert np.all(np.diff(pos[:, i["pelvis"], 0]) > -0.02)  # never walks backward
+
+
+def test_saved_arrays(converted):
+    _, npz, _ = converted
+    with np.load(npz) as z:
+        for k in ("masks", "joint_names", "joints2d", "joints3d", "proposed_signs", "signs",
+                  "orientation", "proposed_orientation", "scores"):
+            assert k in z.files, k
+        F = z["masks"].shape[0]
+        assert z["joints3d"].shape == (F, 15, 3) and z["signs"].shape == (F, 10)
+        assert set(np.unique(z["signs"])) <= {-1, 1}
+        truth = np.load(TRUTH)
+        assert np.mean(z["orientation"] == truth["orientation"]) > 0.9
+
+
+def test_bad_annotations_fail_cleanly_and_leave_no_bvh(tmp_path):
+    if not WALK.exists():
+        pytest.skip("sample_videos/ not present")
+    video = tmp_path / "clip.mp4"
+    shutil.copy(WALK, video)
+    (tmp_path / "clip.vidcap.json").write_text('{"version": 1, "events": [{"frame": 0, '
+                                               '"type": "depth", "segment": "tail", '
+                                               '"value": "away"}]}')
+    out = tmp_path / "clip.bvh"
+    r = run_cli("convert", video, "-o", out, "--no-cache")
+    assert r.returncode == 2
+    assert "clip.vidcap.json" in r.stderr and "unknown segment 'tail'" in r.stderr
+    assert len([ln for ln in r.stderr.splitlines() if ln.startswith("vidcap: error")]) == 1
+    assert not out.exists()
+
+
+def test_annotations_override_the_proposals(tmp_path, converted):
+    _, npz, _ = converted
+    video = tmp_path / "clip.mp4"
+    shutil.copy(WALK, video)
+    with np.load(npz) as z:
+        proposed = z["proposed_signs"]
+    k = 0  # torso
+    flip = int(-proposed[5, k])
+    word = "toward" if flip > 0 else "away"
+    ann = tmp_path / "a.json"
+    ann.write_text('{"version": 1, "events": [{"frame": 5, "type": "depth", "segment": '
+                   f'"torso", "value": "{word}"}}, {{"frame": 0, "type": "orientation", '
+                   '"value": "right"}]}')
+    out, save = tmp_path / "o.bvh", tmp_path / "o.npz"
+    r = run_cli("convert", video, "-o", out, "--annotations", ann, "--save", save)
+    assert r.returncode == 0, r.stderr
+    with np.load(save) as z:
+        assert z["signs"][5, k] == flip
+        assert set(z["orientation"]) == {"right"}
+
+
+def test_batch_three_files_one_corrupt(tmp_path):
+    if not WALK.exists():
+        pytest.skip("sample_videos/ not present")
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(WALK, src / "a.mp4")
+    shutil.copy(WALK, src / "b.mp4")
+    (src / "c.mp4").write_bytes(np.random.default_rng(0).bytes(4000))
+    outdir = tmp_path / "out"
+    r = run_cli("batch", src, "-o", outdir, "--jobs", "2")
+    assert r.returncode != 0
+    assert sorted(p.name for p in outdir.glob("*.bvh")) == ["a.bvh", "b.bvh"]
+    rows = list(csv.DictReader((outdir / "summary.csv").open()))
+    status = {row["file"].split("/")[-1]: row for row in rows}
+    assert status["a.mp4"]["status"] == "ok" and status["a.mp4"]["frames"] == "42"
+    assert status["c.mp4"]["status"] == "failed" and "c.mp4" in status["c.mp4"]["message"]
+    assert "failed" in r.stdout and "c.mp4" in r.stdout
+    # re-running skips what is up to date, still reports the failure
+    r2 = run_cli("batch", src / "*.mp4", "-o", outdir, "--jobs", "2")
+    rows = {row["file"].split("/")[-1]: row["status"]
+            for row in csv.DictReader((outdir / "summary.csv").open())}
+    assert r2.returncode != 0 and rows == {"a.mp4": "skipped", "b.mp4": "skipped",
+                                           "c.mp4": "failed"}
+
+
+def test_review_frames_are_three_panels_wide(tmp_path, converted):
+    _, npz, _ = converted
+    out = tmp_path / "review.mp4"
+    r = run_cli("review", WALK, "--from", npz, "-o", out, "--png", tmp_path / "png")
+    assert r.returncode == 0, r.stderr
+    info, src = probe(out), probe(WALK)
+    assert info.width == 3 * src.width and info.height == src.height
+    assert info.n_frames == src.n_frames
+    import cv2
+
+    img = cv2.imread(str(tmp_path / "png" / "review_00010.png"))
+    w = src.width
+    # the 3D panel shows a skeleton (not a blank image) and differs from the frame
+    third = img[:, 2 * w:]
+    assert (third < 100).any(axis=2).sum() > 200
+    assert not np.array_equal(img[:, :w], third)

@@ -1,0 +1,140 @@
+"""Silhouette extraction (seed 004 section 3.1.3) and normalisation (section 4.2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests._synthframes import background, clip
+from vidcap.background import BackgroundModel, estimate_background
+from vidcap.silhouette import NoPersonError, extract_silhouettes, normalise_silhouette
+
+
+def _iou(a, b):
+    return (a & b).sum((1, 2)) / np.maximum((a | b).sum((1, 2)), 1)
+
+
+@pytest.fixture(scope="module")
+def walker():
+    return clip(40, 120, 160, rng=np.random.default_rng(11), walk=True)
+
+
+def test_walker_silhouettes_match_truth(walker):
+    frames, masks = walker
+    bg = estimate_background(frames, n_samples=20)
+    sil = extract_silhouettes(frames, bg)
+    iou = _iou(sil.masks, masks)
+    assert np.median(iou) > 0.9 and iou.min() > 0.7
+    assert sil.masks.shape == masks.shape and sil.masks.dtype == bool
+    assert sil.found.all() and (sil.n_other_blobs == 0).all()
+    # bbox: x0, y0, x1, y1 with exclusive ends, and heights from it
+    for m, (x0, y0, x1, y1) in zip(sil.masks, sil.bbox, strict=True):
+        ys, xs = np.nonzero(m)
+        assert (x0, y0, x1, y1) == (xs.min(), ys.min(), xs.max() + 1, ys.max() + 1)
+    assert (sil.heights == sil.bbox[:, 3] - sil.bbox[:, 1]).all()
+    assert (sil.areas == sil.masks.sum((1, 2))).all()
+
+
+def test_lighting_drift_and_chunks(walker):
+    frames, masks = clip(40, 120, 160, rng=np.random.default_rng(12), walk=True, drift=0.25)
+    bg = estimate_background(frames, n_samples=20)
+    sil = extract_silhouettes(frames, bg, chunk_size=7)
+    assert np.median(_iou(sil.masks, masks)) > 0.9
+    # the measured gains follow the drift (0.75 -> 1.25 about the median light)
+    assert sil.gains[-1].mean() / sil.gains[0].mean() == pytest.approx(1.25 / 0.75, rel=0.05)
+
+
+def test_threshold_override_and_shadows():
+    rng = np.random.default_rng(13)
+    plate = background(80, 100, rng)
+    frame = plate.copy()
+    frame[20:60, 40:55] = (30, 200, 30)                                # a person
+    frame[60:70, 55:90] = (plate[60:70, 55:90] * 0.7).astype(np.uint8)  # its shadow
+    bg = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    sil = extract_silhouettes(frame[None], bg)
+    assert sil.masks[0, 20:60, 40:55].mean() > 0.98  # a 3x3 median rounds corners
+    assert not sil.masks[0, 62:68, 60:88].any()                       # shadow dropped
+    keep = extract_silhouettes(frame[None], bg, shadows=False)
+    assert keep.masks[0, 62:68, 60:88].mean() > 0.9
+    # an absurd threshold finds nobody
+    with pytest.raises(NoPersonError):
+        extract_silhouettes(frame[None], bg, threshold=700)
+    assert extract_silhouettes(frame[None], bg, threshold=700, require_person=False).found[0] \
+        == np.False_
+
+
+def test_holes_filled_largest_blob_kept_others_reported():
+    plate = np.full((100, 120, 3), 128, np.uint8)
+    frame = plate.copy()
+    frame[10:90, 20:50] = 20           # the person ...
+    frame[40:50, 30:40] = 128          # ... with a hole (same colour as the background)
+    frame[30:70, 80:100] = 230         # another, smaller person
+    frame[5, 5] = 0                    # a speck
+    bg = BackgroundModel.from_plate(plate, noise_sigma=1.0)
+    sil = extract_silhouettes(frame[None], bg)
+    assert sil.masks[0, 11:89, 21:49].all()
+    assert not sil.masks[0, 30:70, 80:100].any() and not sil.masks[0, 5, 5]
+    assert sil.n_other_blobs[0] == 1 and sil.max_people == 2
+    f, x0, y0, x1, y1, _area = sil.others[0]
+    assert (f, x0, y0, x1, y1) == (0, 80, 30, 100, 70)
+
+
+def test_given_plate_measures_its_own_threshold():
+    rng = np.random.default_rng(14)
+    plate = background(80, 100, rng)
+    frames = np.clip(plate[None] + rng.normal(0, 3, (5, 80, 100, 3)), 0, 255).astype(np.uint8)
+    frames[:, 20:60, 40:55] = (30, 200, 30)
+    sil = extract_silhouettes(frames, BackgroundModel.from_plate(plate))
+    assert 12 <= sil.threshold < 60
+    assert _iou(sil.masks, np.broadcast_to(
+        np.pad(np.ones((40, 15), bool), ((20, 20), (40, 45))), sil.masks.shape)).min() > 0.95
+
+
+def test_size_mismatch_is_an_error():
+    bg = BackgroundModel.from_plate(np.zeros((10, 10, 3), np.uint8), noise_sigma=1)
+    with pytest.raises(Exception, match="10x10"):
+        extract_silhouettes(np.zeros((2, 12, 10, 3), np.uint8), bg)
+
+
+@pytest.mark.parametrize("scale", [0.3, 1.0, 2.5])
+def test_normalise_round_trip(scale):
+    h0 = int(round(100 * scale))
+    mask = np.zeros((int(300 * scale), int(200 * scale)), bool)
+    y0, x0 = int(50 * scale), int(60 * scale)
+    w0 = int(round(30 * scale))
+    mask[y0:y0 + h0, x0:x0 + w0] = True
+    n = normalise_silhouette(mask, height=64, pad=4)
+    assert n.mask.shape == (72, 64)
+    ys, xs = np.nonzero(n.mask)
+    assert ys.min() == 4 and ys.max() == 67           # the person spans exactly `height`
+    assert abs((xs.min() + xs.max() + 1) / 2 - 32) <= 1  # centred
+    # corners map back to the frame's bbox
+    top_left = n.to_frame([0, 4])
+    assert np.allclose(top_left[1], y0, atol=1e-6)
+    assert np.allclose(n.to_normalised(n.to_frame([[3.0, 7.0]])), [[3.0, 7.0]])
+    assert n.to_frame([32, 4])[0] == pytest.approx(x0 + w0 / 2)
+    assert not n.clipped
+    with pytest.raises(ValueError):
+        normalise_silhouette(np.zeros((5, 5), bool))
+
+
+def test_normalise_reports_clipping():
+    mask = np.zeros((100, 300), bool)
+    mask[40:60, 10:290] = True    # much wider than tall
+    assert normalise_silhouette(mask, height=32).clipped
+
+
+def test_half_resolution_work_scale_keeps_the_outline():
+    """At work_scale 2 the outline is refined at full resolution: the masks agree
+    with the full-resolution ones and with the truth to within a few edge pixels."""
+    frames, masks = clip(12, 240, 320, rng=np.random.default_rng(31), walk=True)
+    bg = estimate_background(frames, n_samples=12)
+    full = extract_silhouettes(frames, bg, work_scale=1)
+    half = extract_silhouettes(frames, bg, work_scale=2)
+    assert half.masks.shape == masks.shape
+    iou_half = (half.masks & masks).sum((1, 2)) / (half.masks | masks).sum((1, 2))
+    iou_full = (full.masks & masks).sum((1, 2)) / (full.masks | masks).sum((1, 2))
+    assert np.median(iou_half) > 0.95
+    assert np.median(iou_half) > np.median(iou_full) - 0.02
+    assert np.abs(half.bbox - full.bbox).max() <= 2
+    assert (half.found == full.found).all()

@@ -1,0 +1,99 @@
+"""``vidcap silhouettes`` and the real clips (ido_walk ground truth, vtest crowd)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tests._synthframes import background, clip
+from vidcap.background import BackgroundError, estimate_background
+from vidcap.silhouette import extract_silhouettes
+from vidcap.video import write_video
+
+
+def _iou(a, b):
+    return (a & b).sum((1, 2)) / np.maximum((a | b).sum((1, 2)), 1)
+
+
+def test_ido_walk_against_ground_truth(shared_data):
+    video = shared_data("video/ido_walk.avi")
+    truth = np.load(shared_data("video/ido_walk_masks.npz"))["masks"].astype(bool)
+    bg = estimate_background(video)
+    sil = extract_silhouettes(video, bg)
+    iou = _iou(sil.masks, truth)
+    assert len(iou) == 43
+    assert np.median(iou) >= 0.90
+    assert np.percentile(iou, 10) >= 0.80
+
+
+def test_cli_vtest_runs_to_the_end_and_reports_people(shared_data, cli, tmp_path):
+    video = shared_data("video/vtest_480x360.avi")
+    out = tmp_path / "v.npz"
+    r = cli("silhouettes", video, "-o", out, "--plate-out", tmp_path / "plate.png")
+    assert r.returncode == 0, r.stderr
+    assert "more than one person" in r.stderr
+    with np.load(out) as z:
+        assert z["masks"].shape == (795, 360, 480) and z["masks"].dtype == bool
+        assert z["bbox"].shape == (795, 4) and z["plate"].shape == (360, 480, 3)
+        assert z["confidence"].shape == (360, 480)
+        assert (z["n_other_blobs"] > 0).mean() > 0.5
+    assert (tmp_path / "plate.png").stat().st_size > 0
+
+
+def test_cli_synthetic_clip_and_given_plate(cli, tmp_path):
+    import cv2
+
+    frames, masks = clip(30, 96, 128, rng=np.random.default_rng(21), walk=True, noise=1.0)
+    video = tmp_path / "walk.mkv"
+    write_video(video, frames, 25, crf=12)
+    out = tmp_path / "m.npz"
+    r = cli("silhouettes", video, "-o", out, "--method", "median")
+    assert r.returncode == 0, r.stderr
+    with np.load(out) as z:
+        assert np.median(_iou(z["masks"], masks)) > 0.7  # tiny figure, yuv420 chroma
+        assert str(z["method"]) == "median"
+    plate = tmp_path / "plate.png"
+    cv2.imwrite(str(plate), background(96, 128, np.random.default_rng(21)))
+    r = cli("silhouettes", video, "-o", out, "--background", plate, "--threshold", "40")
+    assert r.returncode == 0, r.stderr
+    with np.load(out) as z:
+        assert np.median(_iou(z["masks"], masks)) > 0.7  # tiny figure, yuv420 chroma
+        assert float(z["threshold"]) == 40
+
+
+def test_cli_errors(cli, tmp_path):
+    rng = np.random.default_rng(22)
+    empty = tmp_path / "empty.mp4"
+    empty.write_bytes(b"")
+    one = tmp_path / "one.mkv"
+    write_video(one, background(64, 80, rng)[None], 25)
+    static = tmp_path / "static.mkv"
+    still = background(64, 80, rng)
+    write_video(static, [still] * 12, 25, crf=12)
+    cases = {empty: "empty", one: "one frame", static: "nothing moves"}
+    for video, words in cases.items():
+        r = cli("silhouettes", video, "-o", tmp_path / "x.npz")
+        assert r.returncode == 2, (video, r.stderr)
+        assert words in r.stderr and video.name in r.stderr
+        assert "Traceback" not in r.stderr
+        assert not (tmp_path / "x.npz").exists()
+    r = cli("silhouettes", static, "-o", tmp_path / "x.txt")
+    assert r.returncode == 2 and ".npz" in r.stderr
+    small = tmp_path / "small.png"
+    import cv2
+
+    cv2.imwrite(str(small), np.zeros((10, 10, 3), np.uint8))
+    r = cli("silhouettes", static, "-o", tmp_path / "x.npz", "--background", small)
+    assert r.returncode == 2 and "10x10" in r.stderr
+
+
+def test_static_scene_with_a_given_plate_finds_nobody():
+    from vidcap.background import BackgroundModel
+    from vidcap.silhouette import NoPersonError
+
+    still = background(64, 80, np.random.default_rng(23))
+    frames = np.repeat(still[None], 4, axis=0)
+    with pytest.raises(NoPersonError, match="no frame differs"):
+        extract_silhouettes(frames, BackgroundModel.from_plate(still))
+    with pytest.raises(BackgroundError):
+        estimate_background(frames)

@@ -1,0 +1,140 @@
+"""Video I/O through PyAV: reading real files, writing H.264, and clear errors."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import av
+import numpy as np
+import pytest
+
+from vidcap.errors import VideoError
+from vidcap.video import VideoWriter, iter_chunks, probe, read_frames, write_video
+
+
+def _frames(n=12, h=48, w=64, seed=0):
+    rng = np.random.default_rng(seed)
+    # Smooth content so H.264 reproduces it closely.
+    base = rng.integers(40, 200, size=(1, 1, 3))
+    y, x = np.mgrid[0:h, 0:w]
+    out = []
+    for i in range(n):
+        img = np.empty((h, w, 3), np.uint8)
+        img[...] = base
+        img[..., 0] = (x * 3 + i * 5) % 256
+        img[..., 1] = (y * 4) % 256
+        out.append(img)
+    return np.stack(out)
+
+
+def test_write_then_read_round_trip(tmp_path):
+    frames = _frames()
+    out = tmp_path / "clip.mp4"
+    assert write_video(out, frames, fps=25) == len(frames)
+    info = probe(out)
+    assert (info.n_frames, info.width, info.height) == (12, 64, 48)
+    assert info.fps == pytest.approx(25)
+    back = read_frames(out)
+    assert back.shape == frames.shape and back.dtype == np.uint8
+    assert np.abs(back.astype(int) - frames).mean() < 6  # lossy, but close
+
+
+def test_chunks_cover_every_frame_in_order(tmp_path):
+    frames = _frames(n=10)
+    out = tmp_path / "c.mp4"
+    write_video(out, frames, fps=10)
+    chunks = list(iter_chunks(out, chunk_size=4))
+    assert [len(c) for c in chunks] == [4, 4, 2]
+    np.testing.assert_array_equal(np.concatenate(chunks), read_frames(out))
+
+
+def test_failed_write_leaves_no_file(tmp_path):
+    out = tmp_path / "broken.mp4"
+    with pytest.raises(RuntimeError), VideoWriter(out, 25) as w:
+        w.write(_frames(2)[0])
+        raise RuntimeError("boom")
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ido_walk_reads_in_a_subprocess_that_exits_normally(shared_data):
+    # OpenCV >= 4.13 aborts the whole process on this file; PyAV must read it.
+    path = shared_data("video/ido_walk.avi")
+    code = (
+        "from vidcap.video import read_frames, probe;"
+        f"a = read_frames({str(path)!r}); i = probe({str(path)!r});"
+        "print(a.shape, a.dtype, i.n_frames, i.fps)"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["(43,", "144,", "180,", "3)", "uint8", "43", "25.0"]
+
+
+@pytest.fixture
+def bad_videos(tmp_path):
+    good = tmp_path / "good.mp4"
+    write_video(good, _frames(30), fps=25)
+    data = good.read_bytes()
+    files = {}
+    files["empty"] = tmp_path / "empty.mp4"
+    files["empty"].write_bytes(b"")
+    files["text"] = tmp_path / "notes.mp4"
+    files["text"].write_text("this is not a video\n" * 20)
+    files["truncated"] = tmp_path / "truncated.mp4"
+    files["truncated"].write_bytes(data[: len(data) // 3])
+    files["audio"] = tmp_path / "tone.m4a"
+    with av.open(str(files["audio"]), "w") as c:
+        s = c.add_stream("aac", rate=8000)
+        t = np.arange(4096, dtype=np.float32) / 8000
+        frame = av.AudioFrame.from_ndarray(
+            np.sin(2 * np.pi * 440 * t)[None].astype(np.float32), format="fltp", layout="mono"
+        )
+        frame.sample_rate = 8000
+        for p in s.encode(frame):
+            c.mux(p)
+        for p in s.encode():
+            c.mux(p)
+    files["missing"] = tmp_path / "nope.mp4"
+    return files
+
+
+@pytest.mark.parametrize("kind", ["empty", "text", "truncated", "audio", "missing"])
+def test_bad_inputs_raise_video_error_naming_the_file(bad_videos, kind):
+    path = bad_videos[kind]
+    with pytest.raises(VideoError) as err:
+        read_frames(path)
+        probe(path, count=True)
+    assert str(path) in str(err.value)
+
+
+@pytest.mark.parametrize("kind", ["empty", "text", "truncated", "audio"])
+def test_bad_inputs_give_one_line_cli_error_and_exit_2(bad_videos, kind, cli):
+    path = bad_videos[kind]
+    r = cli("info", "--count", path)
+    assert r.returncode == 2, r.stdout + r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith(f"vidcap: error: {path}: ")
+    assert "Traceback" not in r.stderr
+
+
+def test_info_on_a_good_clip(tmp_path, cli):
+    out = tmp_path / "ok.mp4"
+    write_video(out, _frames(7), fps=12)
+    r = cli("info", out)
+    assert r.returncode == 0, r.stderr
+    assert "7 frames" in r.stdout and "64x48" in r.stdout
+
+
+def test_outputs_get_ordinary_file_permissions(tmp_path):
+    import os
+
+    from vidcap.fileio import write_text_atomic
+
+    umask = os.umask(0o022)
+    try:
+        write_text_atomic(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(umask)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644

@@ -1,0 +1,64 @@
+"""``vidcap convert``: one video -> BVH through the whole video path."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from vidcap.errors import UsageError
+
+NAME = "convert"
+HELP = "convert a single-camera video of one person into BVH motion"
+ORDER = 10
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the ``vidcap convert`` parser."""
+    parser.add_argument("video", help="input video (static camera, one person)")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="BVH to write")
+    parser.add_argument("--annotations", metavar="A.json",
+                        help="depth/orientation/joint annotations (default: "
+                        "VIDEO_STEM.vidcap.json beside the video, if present)")
+    parser.add_argument("--background", metavar="PLATE.png",
+                        help="background plate image (default: estimated from the video)")
+    parser.add_argument("--height", type=float, default=1.75, metavar="M",
+                        help="subject's height in metres (default 1.75)")
+    parser.add_argument("--smooth", type=float, default=1.0, metavar="SIGMA",
+                        help="Gaussian smoothing of the motion in frames (0 = none; default 1)")
+    parser.add_argument("--save", metavar="OUT.npz",
+                        help="also save masks, joints2d, joints3d, proposed and final depth "
+                        "signs, orientation and scores")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="do not read or write the stage cache (.vidcap-cache beside OUT)")
+    parser.add_argument("--quiet", action="store_true", help="print nothing on success")
+
+
+def run(args) -> int:
+    """Run ``vidcap convert``."""
+    from vidcap.pipeline import convert
+
+    if not (args.height > 0):
+        raise UsageError(f"--height must be positive metres, got {args.height}")
+    if args.smooth < 0:
+        raise UsageError(f"--smooth must not be negative, got {args.smooth}")
+    log = (lambda m: None) if args.quiet else (lambda m: print(f"vidcap: {m}", file=sys.stderr))
+    res = convert(
+        args.video, args.output, save=args.save, cache_dir=not args.no_cache,
+        annotations=args.annotations, background=args.background, height=args.height,
+        smooth_sigma=args.smooth, log=log,
+    )
+    if not args.quiet:
+        lr = res.lifted
+        print(f"{args.output}: {res.n_frames} frames at {res.fps:g} fps; orientation "
+              f"{', '.join(sorted(set(lr.orientation)))}; jitter {res.jitter_before:.1f} -> "
+              f"{res.jitter_after:.1f} m/s^2")
+        if lr.clamped.any():
+            print(f"  {int(lr.clamped.any(axis=1).sum())} frames had a segment longer in the "
+                  "image than the model (depth clamped to 0)")
+        if lr.checks:
+            print("  check these depth signs first (frame, segment, proposed):")
+            for c in lr.checks[:5]:
+                word = "toward" if c["sign"] > 0 else "away"
+                print(f"    {c['frame']:5d}  {c['segment']:<12s} {word:<6s} "
+                      f"(frames {c['run'][0]}-{c['run'][1]})")
+    return 0

@@ -1,0 +1,27 @@
+"""``vidcap info VIDEO...``: what a video holds (frames, fps, size, codec)."""
+
+from __future__ import annotations
+
+from vidcap.video import probe
+
+NAME = "info"
+HELP = "print frame count, frame rate, size and codec of videos (checks they decode)"
+ORDER = 90
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("videos", nargs="+", metavar="VIDEO", help="video files")
+    parser.add_argument(
+        "--count", action="store_true",
+        help="decode every frame to count them (slower; proves the file decodes to the end)",
+    )
+
+
+def run(args) -> int:
+    for path in args.videos:
+        info = probe(path, count=args.count)
+        print(
+            f"{path}: {info.n_frames} frames, {info.fps:g} fps, {info.width}x{info.height}, "
+            f"{info.codec}, {info.duration:.2f} s"
+        )
+    return 0

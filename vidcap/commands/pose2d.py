@@ -1,0 +1,88 @@
+"""``vidcap pose2d``: 2D joints by fitting the cylinder model to the silhouettes."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.errors import InputFileError, UsageError
+
+NAME = "pose2d"
+HELP = "fit the 2D body model to every frame's silhouette (seed 004 section 3.1.4) -> .npz"
+ORDER = 40
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the ``vidcap pose2d`` parser."""
+    parser.add_argument("video", help="the video (its size defines the output's pixel frame)")
+    parser.add_argument("-o", "--output", required=True, metavar="POSE2D.npz",
+                        help="output .npz (joint_names, joints2d, angles, foreshortening, "
+                        "scores, margins, ...)")
+    parser.add_argument("--masks", metavar="MASKS.npz",
+                        help="silhouettes to use: an .npz with 'masks' (F, H, W) "
+                        "(default: compute them as `vidcap silhouettes` does)")
+    parser.add_argument("--per-frame", action="store_true",
+                        help="fit every frame independently (the seed's method); default: "
+                        "start each frame from the previous one")
+    parser.add_argument("--height", type=int, default=80, metavar="PX",
+                        help="silhouette height after normalisation (default 80)")
+    parser.add_argument("--no-refine", action="store_true",
+                        help="skip the extra Algorithm 1 pass over the limbs")
+
+
+def load_masks(path) -> np.ndarray:
+    """Read ``masks`` (F, H, W) from an .npz file; raise InputFileError naming it."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as d:
+            if "masks" not in d:
+                raise InputFileError(f"no 'masks' array (has: {', '.join(d.files)})", path)
+            masks = np.asarray(d["masks"]).astype(bool)
+    except InputFileError:
+        raise
+    except (OSError, ValueError) as exc:
+        raise InputFileError(f"cannot read masks ({exc})", path) from exc
+    if masks.ndim != 3:
+        raise InputFileError(f"'masks' must be (frames, height, width), got {masks.shape}", path)
+    return masks
+
+
+def compute_masks(video) -> np.ndarray:
+    """Silhouettes of ``video`` as ``vidcap silhouettes`` computes them."""
+    try:
+        from vidcap.background import estimate_background
+        from vidcap.silhouette import extract_silhouettes
+    except ImportError:
+        raise UsageError("silhouette extraction is not available in this build; pass "
+                         "--masks MASKS.npz") from None
+    background = estimate_background(video)
+    return extract_silhouettes(video, background).masks
+
+
+def run(args) -> int:
+    """Fit the model and write the .npz atomically."""
+    from vidcap.fileio import progress
+    from vidcap.fit.pose2d import fit_sequence
+    from vidcap.video import probe
+
+    if args.height < 16:
+        raise UsageError(f"--height must be at least 16 pixels, got {args.height}")
+    info = probe(args.video)
+    masks = load_masks(args.masks) if args.masks else compute_masks(args.video)
+    if masks.shape[1:] != (info.height, info.width):
+        raise InputFileError(
+            f"masks are {masks.shape[2]}x{masks.shape[1]} but the video is "
+            f"{info.width}x{info.height}", args.masks)
+    if not masks.any():
+        raise InputFileError("no silhouette in any frame", args.masks or args.video)
+    pose = fit_sequence(
+        masks, tracked=not args.per_frame, height=args.height, refine=not args.no_refine,
+        progress=lambda it, total: progress(it, total=total, desc="pose2d", unit="frame"),
+    )
+    pose.save(args.output)
+    n = int(np.isfinite(pose.joints2d[:, 0, 0]).sum())
+    print(f"{args.output}: 2D pose of {n}/{pose.n_frames} frames "
+          f"(median similarity {np.median(pose.similarity[pose.similarity > 0]):.3f})")
+    return 0

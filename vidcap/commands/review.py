@@ -1,0 +1,84 @@
+"""``vidcap review``: a side-by-side review video of a conversion."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.errors import InputFileError, UsageError
+
+NAME = "review"
+HELP = "write a review video: frame | silhouette with the 2D model | 3D pose"
+ORDER = 12
+
+_KEYS = ("masks", "joints2d", "bvh_joints3d")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Fill the ``vidcap review`` parser."""
+    parser.add_argument("video", help="the input video")
+    parser.add_argument("-o", "--output", metavar="review.mp4",
+                        help="review video to write")
+    parser.add_argument("--from", dest="from_npz", metavar="OUT.npz",
+                        help="results saved by `vidcap convert --save` (default: convert now)")
+    parser.add_argument("--png", metavar="DIR", help="write PNG frames into DIR instead")
+    parser.add_argument("--height", type=float, default=1.75, metavar="M",
+                        help="subject's height in metres when converting (default 1.75)")
+
+
+def _load(path) -> dict:
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            missing = [k for k in _KEYS if k not in z.files]
+            if missing:
+                raise InputFileError(f"not a `vidcap convert --save` file (lacks {missing})",
+                                     path)
+            return {k: z[k] for k in z.files}
+    except InputFileError:
+        raise
+    except (OSError, ValueError, EOFError) as exc:
+        raise InputFileError(f"cannot read ({exc})", path) from None
+
+
+def run(args) -> int:
+    """Run ``vidcap review``."""
+    import cv2
+
+    from vidcap.review import review_frames
+    from vidcap.video import iter_frames, probe
+
+    if not args.output and not args.png:
+        raise UsageError("give -o review.mp4 or --png DIR")
+    info = probe(args.video)
+    if args.from_npz:
+        d = _load(args.from_npz)
+    else:
+        from vidcap.pipeline import run as run_pipeline
+
+        res = run_pipeline(args.video, height=args.height)
+        d = {"masks": res.masks, "joints2d": res.lifted.joints2d,
+             "bvh_joints3d": res.motion.positions(), "scores": res.scores,
+             "similarity": res.similarity}
+    n = len(d["masks"])
+    frames = (f for i, f in enumerate(iter_frames(args.video)) if i < n)
+    imgs = review_frames(frames, d["masks"], d["joints2d"], d["bvh_joints3d"],
+                         scores=d.get("scores"), similarity=d.get("similarity"),
+                         height=args.height)
+    if args.png:
+        out = Path(args.png)
+        out.mkdir(parents=True, exist_ok=True)
+        for i, img in enumerate(imgs):
+            if not cv2.imwrite(str(out / f"review_{i:05d}.png"), img):
+                raise InputFileError("cannot write PNG frames here", out)
+        print(f"{out}: {n} review frames")
+    if args.output:
+        from vidcap.video import write_video
+
+        if args.png:
+            imgs = (cv2.imread(str(Path(args.png) / f"review_{i:05d}.png")) for i in range(n))
+        count = write_video(args.output, imgs, info.fps)
+        print(f"{args.output}: {count} review frames")
+    return 0

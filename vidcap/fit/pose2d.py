@@ -1,0 +1,1149 @@
+"""2D pose by fitting the 10-cylinder model to a silhouette (seed 004 section 3.1.4).
+
+The order of section 3.1.4, per frame (:func:`fit_pose` with ``previous=None``):
+
+1. Normalise the silhouette to a fixed height (section 4.2), so the body height in
+   pixels is the silhouette's height and every length follows Table 3.1.
+2. Torso position: the pelvis' y from the Table 3.1 ratios (head + torso below the
+   top of the silhouette), its x the horizontal middle of the silhouette (the median
+   over the torso's scan lines of the middle of each line's widest run).
+3. Torso angle with the head attached (Algorithm 1, Table 3.3 "Waist" limits), then
+   the head angle (Algorithm 1, "Neck" limits).
+4. Arms by contour analysis (Algorithms 2-4): the silhouette left over beside the
+   fitted torso and head, on each side, ordered into a curve away from the shoulder
+   and split at the elbow corner.
+5. Lower legs by scan-line contour analysis (Algorithm 2), knee crossing
+   (Algorithm 5) and swap.
+6. Upper legs with their lower legs as one unit (Algorithm 1, "hip" limits).
+7. Foreshortening of every segment (Algorithm 6).
+
+Beyond the seed:
+
+* Segments are drawn as rectangles (``caps=False``, the default) or capsules; the
+  renderer's cylinders seen from the side are rectangles, and rectangles measured
+  better on rendered clips (RESULTS.md).
+* Torso: after the seed's torso+head and head searches, the model is shifted so
+  the head lines up with the silhouette and the torso is searched again turning
+  about the neck (the silhouette's middle is pulled by arms and legs; the head is
+  not), so a leaning torso under an upright head is found.
+* Arms: residual slivers along the torso's edges are removed (an opening about an
+  arm's width) before the contour curves are built; the curves are rings of
+  distance from the shoulder rather than horizontal scan lines, so a raised or
+  horizontal arm gives a curve too.
+* ``spread``: how far the shoulders and hips sit from the torso axis (0 side view,
+  1 front view) is searched like a foreshortening ratio (the seed draws one view).
+* When Algorithm 5 reports crossed legs, both leg assignments are fitted and the
+  better one kept; near-ties go to the straighter legs (the seed always swaps).
+* ``refine`` (default on): the whole model is centred (shift search), each arm is
+  searched whole (lower arm rigid, within 90 degrees of the contour estimate) and
+  its length (Algorithm 6 on the arm as a unit), then every limb segment again
+  with Algorithm 1 against the whole silhouette (+-30 degrees; lower limbs within
+  150 degrees of their parent, thighs over 180-360 degrees rather than Table 3.3's
+  240-300 so high steps fit), the torso once more with every limb drawn, and the
+  final Algorithm 6 pass starts from the current ratios. ``refine=False``
+  (``--no-refine``) runs the seed's order only.
+* Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
+  still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
+  search from that pose with narrow intervals, skips the contour analysis, and
+  searches the four upper limbs, then the head and four lower limbs, then all
+  ratios in lockstep (one batch per iteration for a whole group,
+  :meth:`_Fitter.search_group`). Limbs then keep their labels through crossings. A
+  warm fit losing more than 3 % of the previous frame's S is redone from scratch
+  and the better kept. ``tracked=False`` (``--per-frame``) fits every frame
+  independently, as the seed does.
+
+Left and right
+--------------
+During 2D fitting ``l_*`` and ``r_*`` do NOT mean the performer's left and right.
+Per frame (seed 004 section 3.1.4) ``l_*`` is the limb on the image's left. In
+tracked mode a limb keeps its label from the frame where tracking (re)started, where
+it was the image-left one, so labels follow limbs through crossings. The 3D stage
+assigns true sides from the body orientation.
+
+Angles are image-plane angles in radians, counter-clockwise from the image's +x axis
+with y up (``pi/2`` straight up, ``3 pi/2`` straight down), in [0, 2 pi), of the
+vector from the segment's proximal to its distal joint; the same convention as
+:data:`vidcap.body.IMAGE_ANGLE_LIMITS_DEG` (which is in degrees).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from vidcap.body import (
+    IMAGE_ANGLE_LIMITS_DEG,
+    JOINT_INDEX,
+    JOINT_NAMES,
+    SEGMENT_NAMES,
+    SEGMENTS,
+)
+from vidcap.fit.contour import (
+    arm_angles,
+    fit_angle,
+    knees_crossed,
+    leg_curves,
+    limb_curve,
+    row_runs,
+)
+from vidcap.fit.raster import (
+    _DIST,
+    _PROX,
+    DESCENDANTS,
+    NormalisedMask,
+    direction,
+    draw_pose,
+    draw_segments,
+    image_angle,
+    model_dimensions,
+    normalise_mask,
+    pose_joints,
+    segment_spans,
+)
+from vidcap.fit.search import interval_search, interval_search_many
+from vidcap.fit.similarity import similarity_from_counts
+
+S = {name: i for i, name in enumerate(SEGMENT_NAMES)}
+J = JOINT_INDEX
+TWO_PI = 2 * np.pi
+_LIMITS = {k: np.deg2rad(v) for k, v in IMAGE_ANGLE_LIMITS_DEG.items()}
+_ONE_DEGREE = np.deg2rad(1.0)
+_THIRTY_DEGREES = np.deg2rad(30.0)
+#: Largest image-plane bend at an elbow or knee (the 150 degree flexion limit of
+#: vidcap.body.FLEXION_LIMITS_DEG): a lower limb does not fold back over its parent.
+_MAX_BEND = np.deg2rad(150.0)
+#: Thigh directions allowed when refining and tracking: Table 3.3's hip limits
+#: (240-300 degrees) keep the seed's first estimate upright, but a knee lifted to
+#: hip height (a high step, a kick) points the thigh nearly horizontal (beyond the
+#: seed).
+_THIGH_WIDE = (np.deg2rad(180.0), np.deg2rad(360.0))
+_REST_DEG = np.array([90, 90, 270, 270, 270, 270, 270, 270, 270, 270], dtype=float)
+
+
+@dataclass(frozen=True)
+class FramePose:
+    """The fitted 2D pose of one frame.
+
+    Attributes
+    ----------
+    joints : numpy.ndarray, shape (15, 2)
+        Joints in :data:`vidcap.body.JOINT_NAMES` order, original-frame pixels
+        ``(x, y)``, x right, y down. ``l_*``/``r_*`` are image-left/right limbs (see
+        the module docstring), not the performer's sides.
+    angles : numpy.ndarray, shape (10,)
+        Image-plane angle of every segment (:data:`vidcap.body.SEGMENT_NAMES`
+        order), radians in [0, 2 pi), counter-clockwise from +x with y up.
+    foreshortening : numpy.ndarray, shape (10,)
+        Apparent / true length of every segment, in (0, 1].
+    scores : numpy.ndarray, shape (10,)
+        The best similarity S (Eq. 3.3) found for every segment's last search.
+    margins : numpy.ndarray, shape (10,)
+        The best S minus the runner-up's (a distinct solution more than one
+        division away); small margins flag doubtful segments.
+    spread : float
+        Lateral spread of shoulders and hips, 0 (side view) to 1 (front view).
+    crossed : bool
+        Algorithm 5's verdict on this frame (per-frame fitting only).
+    similarity : float
+        S of the whole fitted model against the whole silhouette.
+    warm : bool
+        True if the frame was fitted from the previous frame's pose.
+    height_px : float
+        Body height in original-frame pixels (the silhouette's height).
+    """
+
+    joints: np.ndarray
+    angles: np.ndarray
+    foreshortening: np.ndarray
+    scores: np.ndarray
+    margins: np.ndarray
+    spread: float
+    crossed: bool
+    similarity: float
+    warm: bool
+    height_px: float
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """2D poses of a sequence (the output of ``vidcap pose2d``).
+
+    ``l_*``/``r_*`` joints and segments are image-left/right limbs, not the
+    performer's sides: per frame the limb on the image's left (seed 004 section
+    3.1.4); in tracked mode the limb that was on the image's left where tracking
+    (re)started, followed through crossings. The 3D stage assigns true sides.
+
+    Attributes
+    ----------
+    joint_names : tuple of str, (15,)
+        :data:`vidcap.body.JOINT_NAMES`.
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        Joints in original-frame pixels ``(x, y)``, x right, y down; NaN for frames
+        without a silhouette.
+    angles : numpy.ndarray, shape (F, 10)
+        Segment image-plane angles, radians in [0, 2 pi), counter-clockwise from +x
+        with y up (the convention of :data:`vidcap.body.IMAGE_ANGLE_LIMITS_DEG`).
+    foreshortening : numpy.ndarray, shape (F, 10)
+        Apparent / true segment length, in (0, 1].
+    scores : numpy.ndarray, shape (F, 10)
+        Best similarity S per segment.
+    margins : numpy.ndarray, shape (F, 10)
+        Best S minus the runner-up S per segment.
+    spread : numpy.ndarray, shape (F,)
+        Shoulder/hip lateral spread (0 side view, 1 front view).
+    similarity : numpy.ndarray, shape (F,)
+        S of the whole model per frame.
+    warm : numpy.ndarray, shape (F,), bool
+        Frames fitted from the previous frame's pose.
+    tracked : bool
+        Whether labels follow limbs over time (True) or are per-frame image sides.
+    segment_names : tuple of str, (10,)
+        :data:`vidcap.body.SEGMENT_NAMES`.
+    """
+
+    joint_names: tuple
+    joints2d: np.ndarray
+    angles: np.ndarray
+    foreshortening: np.ndarray
+    scores: np.ndarray
+    margins: np.ndarray
+    spread: np.ndarray
+    similarity: np.ndarray
+    warm: np.ndarray
+    tracked: bool
+    segment_names: tuple = field(default=SEGMENT_NAMES)
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames F."""
+        return len(self.joints2d)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The pose as a dict of arrays (the keys of ``pose2d.npz``)."""
+        return {
+            "joint_names": np.array(self.joint_names),
+            "segment_names": np.array(self.segment_names),
+            "joints2d": self.joints2d,
+            "angles": self.angles,
+            "foreshortening": self.foreshortening,
+            "scores": self.scores,
+            "margins": self.margins,
+            "spread": self.spread,
+            "similarity": self.similarity,
+            "warm": self.warm,
+            "tracked": np.array(self.tracked),
+        }
+
+    def save(self, path) -> None:
+        """Write ``pose2d.npz`` atomically (keys of :meth:`arrays`)."""
+        from vidcap.fileio import savez_atomic
+
+        savez_atomic(path, **self.arrays())
+
+    @classmethod
+    def load(cls, path) -> Pose2D:
+        """Read a file written by :meth:`save`."""
+        from vidcap.errors import InputFileError
+
+        try:
+            with np.load(path, allow_pickle=False) as d:
+                return cls(
+                    joint_names=tuple(str(s) for s in d["joint_names"]),
+                    joints2d=d["joints2d"], angles=d["angles"],
+                    foreshortening=d["foreshortening"], scores=d["scores"],
+                    margins=d["margins"], spread=d["spread"], similarity=d["similarity"],
+                    warm=d["warm"], tracked=bool(d["tracked"]),
+                    segment_names=tuple(str(s) for s in d["segment_names"]),
+                )
+        except (OSError, KeyError, ValueError) as exc:
+            raise InputFileError(f"not a pose2d file ({exc})", path) from exc
+
+
+class _Fitter:
+    """Fitting state for one normalised silhouette (all lengths in normalised px)."""
+
+    def __init__(self, norm: NormalisedMask, *, caps: bool):
+        self.norm = norm
+        self.sil = norm.mask
+        self.h, self.w = self.sil.shape
+        # Body height = silhouette height, less the round ends of the head and the
+        # lower legs when segments are drawn as capsules (they reach beyond the joints).
+        ends = (SEGMENTS[S["head"]].width_ratio + SEGMENTS[S["l_lower_leg"]].width_ratio) / 2
+        self.H = norm.height / (1.0 + ends) if caps else norm.height
+        self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H)
+        self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
+        self.caps = caps
+        self.root = np.zeros(2)
+        self.angles = np.deg2rad(_REST_DEG)
+        self.fore = np.ones(10)
+        self.spread = 0.5
+        self.scores = np.zeros(10)
+        self.margins = np.zeros(10)
+        self.drawn = np.zeros(10, dtype=bool)
+        self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
+        self.batches = 0
+        self._cache: dict = {}
+        self._joints = None
+        self._all_masks = None
+
+    # -- pose --------------------------------------------------------------------
+    def joints(self) -> np.ndarray:
+        """Joints of the current pose, (15, 2), cached until the pose changes."""
+        key = (self.root.tobytes(), self.angles.tobytes(), self.fore.tobytes(), self.spread)
+        if self._joints is None or self._joints[0] != key:
+            self._joints = (key, self._pose_joints())
+        return self._joints[1]
+
+    def _pose_joints(self, root=None, angles=None, fore=None, spread=None) -> np.ndarray:
+        return pose_joints(
+            self.root if root is None else root,
+            self.angles if angles is None else angles,
+            self.fore if fore is None else fore,
+            self.spread if spread is None else spread,
+            self.L, self.shoulder, self.hip,
+        )
+
+    def model(self, segments=None) -> np.ndarray:
+        seg = np.flatnonzero(self.drawn) if segments is None else segments
+        return draw_pose(self.joints(), self.R, (self.h, self.w), segments=seg, caps=self.caps)
+
+    def similarity(self) -> float:
+        m = self.model()
+        a = np.count_nonzero(self.sil)
+        return float(similarity_from_counts(a, np.count_nonzero(m), np.count_nonzero(m & self.sil)))
+
+    # -- scoring -----------------------------------------------------------------
+    def _all_segment_masks(self, joints: np.ndarray) -> np.ndarray:
+        """Masks of all ten segments at their current places, (10, h, w), one call."""
+        key = joints.tobytes()
+        if self._all_masks is None or self._all_masks[0] != key:
+            m = draw_segments(joints[_PROX][:, None], joints[_DIST][:, None],
+                              self.R[:, None], (self.h, self.w), caps=self.caps)
+            self._all_masks = (key, m)
+        return self._all_masks[1]
+
+    def _segment_mask(self, seg: int, joints: np.ndarray) -> np.ndarray:
+        """Mask of one segment at its current place (cached until it moves)."""
+        p0, p1 = joints[_PROX[seg]], joints[_DIST[seg]]
+        key = (p0[0], p0[1], p1[0], p1[1])
+        hit = self._cache.get(seg)
+        if hit is not None and hit[0] == key:
+            return hit[1]
+        r = self.R[seg] + 1.0
+        x0 = max(int(min(p0[0], p1[0]) - r), 0)
+        y0 = max(int(min(p0[1], p1[1]) - r), 0)
+        x1 = min(int(max(p0[0], p1[0]) + r) + 2, self.w)
+        y1 = min(int(max(p0[1], p1[1]) + r) + 2, self.h)
+        m = np.zeros((self.h, self.w), dtype=bool)
+        if x1 > x0 and y1 > y0:
+            m[y0:y1, x0:x1] = draw_segments(p0[None, None], p1[None, None], self.R[[seg]],
+                                            (y1 - y0, x1 - x0), origin=(x0, y0),
+                                            caps=self.caps)[0]
+        self._cache[seg] = (key, m)
+        return m
+
+    def scorer(self, ends, moving, rows=None):
+        """Score function for :func:`interval_search`.
+
+        ``ends(values) -> (p0, p1)``, each (B, K, 2), gives the end points of the
+        ``moving`` segments for every candidate; every other drawn segment is drawn
+        once into a base mask. Counts outside the candidates' bounding window are
+        constant and computed once, so a batch only draws and counts its window.
+        """
+        moving = np.asarray(moving, dtype=int)
+        r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
+        moving_set = set(moving.tolist())
+        still = [k for k in range(10) if self.drawn[k] and k not in moving_set]
+        j = self.joints()
+        base = np.zeros((self.h, self.w), dtype=bool)
+        for seg in still:  # at most ten cached masks, once per search (not per candidate)
+            base |= self._segment_mask(seg, j)
+        sil = self.sil
+        both = base & sil
+        a = int(self.sil_rows[r1] - self.sil_rows[r0])
+        m_base = np.count_nonzero(base[r0:r1])
+        i_base = np.count_nonzero(both[r0:r1])
+        radii = self.R[moving]
+        pad = float(radii.max()) + 1.0
+        if len(moving) <= 2:
+            # Exact counts from row spans: pixels a candidate adds to the model are
+            # those not in the base; row prefix sums give any span's count at once.
+            add = np.zeros((self.h, self.w + 1), dtype=np.int32)
+            hit = np.zeros((self.h, self.w + 1), dtype=np.int32)
+            np.cumsum(~base[r0:r1], axis=1, out=add[r0:r1, 1:])
+            np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=hit[r0:r1, 1:])
+        w = self.w
+
+        def rows_of(p0, p1):
+            lo = min(p0[..., 1].min(), p1[..., 1].min()) - pad
+            hi = max(p0[..., 1].max(), p1[..., 1].max()) + pad
+            return max(int(lo), r0), min(int(hi) + 2, r1)
+
+        def score_spans(values):
+            self.batches += 1
+            p0, p1 = ends(np.asarray(values, dtype=float))
+            y0, y1 = rows_of(p0, p1)
+            if y1 <= y0:
+                return np.full(len(values), similarity_from_counts(a, m_base, i_base))
+            rows = np.arange(y0, y1)
+            first, last = segment_spans(p0, p1, radii, rows, caps=self.caps)
+            first = np.clip(first, 0, w)
+            last = np.clip(last + 1, first, w)  # exclusive end, empty spans -> 0
+            if first.shape[1] == 2:
+                lo_i = np.maximum(first[:, 0], first[:, 1])
+                hi_i = np.maximum(np.minimum(last[:, 0], last[:, 1]), lo_i)
+                first = np.concatenate([first, lo_i[:, None]], axis=1)
+                last = np.concatenate([last, hi_i[:, None]], axis=1)
+                sign = np.array([1, 1, -1])[None, :, None]
+            else:
+                sign = 1
+            rr = rows[None, None, :]
+            dm = ((add[rr, last] - add[rr, first]) * sign).sum(axis=(1, 2))
+            di = ((hit[rr, last] - hit[rr, first]) * sign).sum(axis=(1, 2))
+            return similarity_from_counts(a, m_base + dm, i_base + di)
+
+        def score_masks(values):
+            self.batches += 1
+            p0, p1 = ends(np.asarray(values, dtype=float))
+            y0, y1 = rows_of(p0, p1)
+            lo = min(p0[..., 0].min(), p1[..., 0].min()) - pad
+            hi = max(p0[..., 0].max(), p1[..., 0].max()) + pad
+            x0, x1 = max(int(lo), 0), min(int(hi) + 2, w)
+            if x1 <= x0 or y1 <= y0:
+                return np.full(len(values), similarity_from_counts(a, m_base, i_base))
+            win = (slice(y0, y1), slice(x0, x1))
+            cand = draw_segments(p0, p1, radii, (y1 - y0, x1 - x0), origin=(x0, y0),
+                                 caps=self.caps)
+            cand |= base[win]
+            m = m_base - np.count_nonzero(base[win]) + np.count_nonzero(cand, axis=(1, 2))
+            i = i_base - np.count_nonzero(both[win]) + np.count_nonzero(cand & sil[win],
+                                                                         axis=(1, 2))
+            return similarity_from_counts(a, m, i)
+
+        return score_spans if len(moving) <= 2 else score_masks
+
+    def _general_ends(self, make, moving):
+        """End points from whole candidate poses (torso, head, spread, root searches)."""
+        moving = np.asarray(moving, dtype=int)
+
+        def ends(v):
+            n = len(v)
+            root, angles, fore, spread = make(
+                v, np.broadcast_to(self.root, (n, 2)).copy(), np.repeat(self.angles[None], n, 0),
+                np.repeat(self.fore[None], n, 0), np.full(n, self.spread))
+            jb = pose_joints(root, angles, fore, spread, self.L, self.shoulder, self.hip)
+            return jb[:, _PROX[moving]], jb[:, _DIST[moving]]
+
+        return ends
+
+    def _limb_ends(self, seg, moving, vector):
+        """End points when one limb segment's distal end moves (its children follow).
+
+        ``vector(v) -> (B, 2)``: the segment's new proximal -> distal vector.
+        """
+        j = self.joints()
+        moving = np.asarray(moving, dtype=int)
+        p0s, p1s = j[_PROX[moving]], j[_DIST[moving]]
+        own = moving == seg
+        start, old_end = j[_PROX[seg]], j[_DIST[seg]]
+
+        def ends(v):
+            delta = start + vector(v) - old_end  # (B, 2)
+            p0 = p0s[None] + delta[:, None] * ~own[None, :, None]
+            p1 = p1s[None] + delta[:, None]
+            return p0, p1
+
+        return ends
+
+    def search_angle(self, seg, *, with_segments=(), lo=None, hi=None, rows=None,
+                     start=None, interval=None, min_step=_ONE_DEGREE, divisions=8,
+                     prefer=None):
+        """Algorithm 1 on segment ``seg`` (``with_segments`` rotate rigidly with it).
+
+        ``prefer``: the angle that wins ties (default: the centre of the interval).
+        """
+        name = SEGMENT_NAMES[seg]
+        lim_lo, lim_hi = _LIMITS[name]
+        lo = lim_lo if lo is None else lo
+        hi = lim_hi if hi is None else hi
+        together = [seg, *with_segments]
+        offsets = self.angles[together] - self.angles[seg]
+        self.drawn[together] = True
+        moving = [d for d in range(10)
+                  if self.drawn[d] and any(d in DESCENDANTS[s] for s in together)]
+        if seg >= 2 and not with_segments:
+            length = self.L[seg] * self.fore[seg]
+            ends = self._limb_ends(seg, moving, lambda v: direction(v) * length)
+        else:
+            def make(v, root, ang, fore, spread):
+                ang[:, together] = v[:, None] + offsets
+                return root, ang, fore, spread
+
+            ends = self._general_ends(make, moving)
+        periodic = TWO_PI if hi - lo >= TWO_PI - 1e-9 else None
+        if start is not None and periodic is None:
+            # keep a warm start's interval inside the limits (angles are periodic)
+            start = lo + np.mod(start - lo + np.pi, TWO_PI) - np.pi
+        if prefer is not None and periodic is None:
+            prefer = lo + np.mod(prefer - lo + np.pi, TWO_PI) - np.pi
+        res = interval_search(self.scorer(ends, moving, rows), lo, hi, divisions=divisions,
+                              min_step=min_step, start=start, interval=interval,
+                              periodic=periodic, prefer=prefer)
+        self.angles[together] = np.mod(res.value + offsets, TWO_PI)
+        self.scores[together] = res.score
+        self.margins[together] = res.margin
+        return res
+
+    def search_fore(self, seg, *, start=None, interval=None, divisions=5, unit=False):
+        """Algorithm 6 on segment ``seg`` (its descendants move with its end).
+
+        ``unit``: scale the segment and its child limb segment together (a whole
+        limb's foreshortening, beyond the seed).
+        """
+        self.drawn[seg] = True
+        moving = [d for d in DESCENDANTS[seg] if self.drawn[d]]
+        length = max(self.L[seg], 1.0)
+        if unit:
+            together = list(DESCENDANTS[seg])
+            base = self.fore[together].copy()
+            length = max(float((self.L[together] * base).sum()), 1.0)
+
+            def make(v, root, ang, fore, spread):
+                fore[:, together] = np.minimum(v[:, None] * base, 1.0)
+                return root, ang, fore, spread
+
+            ends = self._general_ends(make, moving)
+            res = interval_search(self.scorer(ends, moving), 1.0 / length, 1.0,
+                                  divisions=divisions, min_step=1.0 / length, prefer=1.0)
+            self.fore[together] = np.minimum(res.value * base, 1.0)
+            return res
+        if seg >= 2:
+            u = direction(self.angles[seg]) * self.L[seg]
+            ends = self._limb_ends(seg, moving, lambda v: v[:, None] * u)
+        else:
+            def make(v, root, ang, fore, spread):
+                fore[:, seg] = v
+                return root, ang, fore, spread
+
+            ends = self._general_ends(make, moving)
+        step = 1.0 / length
+        res = interval_search(self.scorer(ends, moving), step, 1.0, divisions=divisions,
+                              min_step=step, start=start, interval=interval, prefer=1.0)
+        self.fore[seg] = res.value
+        self.scores[seg] = res.score
+        self.margins[seg] = res.margin
+        return res
+
+    def search_group(self, segs, *, kind="angle", start=None, interval=None, lo=None, hi=None,
+                     divisions=8, min_step=_ONE_DEGREE, prefer=None):
+        """Search one parameter of several limb segments at once (beyond the seed).
+
+        The searches run in lockstep (:func:`interval_search_many`): every
+        iteration scores all segments' candidates in one batch, each against the
+        model without that segment (and its child), counted from row spans. Each
+        segment's search is Algorithm 1 (``kind='angle'``) or Algorithm 6
+        (``kind='fore'``) exactly as alone; only the order differs (each sees the
+        others as they were when the group started).
+
+        Parameters
+        ----------
+        segs : sequence of int
+            Segments other than the torso (a segment moves itself and, for an upper
+            limb, its lower limb).
+        """
+        segs = np.asarray(segs, dtype=int)
+        n = len(segs)
+        self.drawn[:] = True
+        j = self.joints()
+        child = np.array([DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else s for s in segs])
+        pair = np.stack([segs, child], 1)  # (N, 2); a leaf is paired with itself
+        masks = self._all_segment_masks(j)  # (10, h, w)
+        # one base per segment searched: the model without that segment (and child)
+        keep = np.ones((n, 10), dtype=bool)
+        keep[np.arange(n)[:, None], pair] = False
+        base = (keep[:, :, None, None] & masks[None]).any(axis=1)  # (N, h, w)
+        sil = self.sil
+        # row prefix sums of pixels a candidate would add to the model (channel 0)
+        # and of those that are silhouette (channel 1), gathered together
+        cum = np.zeros((n, self.h, self.w + 1, 2), dtype=np.int32)
+        np.cumsum(~base, axis=2, out=cum[:, :, 1:, 0])
+        np.cumsum(sil & ~base, axis=2, out=cum[:, :, 1:, 1])
+        m_base = np.count_nonzero(base, axis=(1, 2))
+        i_base = np.count_nonzero(base & sil, axis=(1, 2))
+        a = int(self.sil_rows[-1])
+        own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
+        ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
+        is_leaf = (child == segs)[:, None, None]
+        all_leaves = bool(is_leaf.all())
+        radii = np.repeat(self.R[pair], 1, axis=0)  # (N, 2)
+        length = self.L[segs]
+        if kind == "angle":
+            def vec(v):
+                return direction(v) * (length * self.fore[segs])[:, None, None]
+        else:
+            unit = direction(self.angles[segs]) * length[:, None]
+
+            def vec(v):
+                return v[..., None] * unit[:, None, :]
+        pad = float(self.R.max()) + 1.0
+        q_idx = np.arange(n)[:, None, None, None]
+
+        def score(values):  # values (N, B)
+            self.batches += 1
+            B = values.shape[1]
+            end = own0[:, None] + vec(values)  # (N, B, 2)
+            delta = end - own1[:, None]
+            p0 = np.stack([np.broadcast_to(own0[:, None], end.shape),
+                           np.where(is_leaf, own0[:, None], ch0[:, None] + delta)], 2)
+            p1 = np.stack([end, np.where(is_leaf, end, ch1[:, None] + delta)], 2)
+            y0 = max(int(min(p0[..., 1].min(), p1[..., 1].min()) - pad), 0)
+            y1 = min(int(max(p0[..., 1].max(), p1[..., 1].max()) + pad) + 2, self.h)
+            rows = np.arange(y0, y1)
+            k = 1 if all_leaves else 2
+            first, last = segment_spans(p0[:, :, :k].reshape(n * B, k, 2),
+                                        p1[:, :, :k].reshape(n * B, k, 2),
+                                        np.repeat(radii[:, :k], B, axis=0), rows, caps=self.caps)
+            first = np.clip(first, 0, self.w).reshape(n, B, k, -1)
+            last = np.maximum(np.clip(last + 1, 0, self.w).reshape(n, B, k, -1), first)
+            if k == 2:  # union of two spans = both minus their overlap
+                lo_i = np.maximum(first[:, :, 0], first[:, :, 1])
+                hi_i = np.maximum(np.minimum(last[:, :, 0], last[:, :, 1]), lo_i)
+                first = np.concatenate([first, lo_i[:, :, None]], axis=2)
+                last = np.concatenate([last, hi_i[:, :, None]], axis=2)
+                sign = np.array([1, 1, -1])[None, None, :, None, None]
+            else:
+                sign = 1
+            rr = rows[None, None, None, :]
+            d = ((cum[q_idx, rr, last] - cum[q_idx, rr, first]) * sign).sum(axis=(2, 3))
+            return similarity_from_counts(a, m_base[:, None] + d[..., 0],
+                                          i_base[:, None] + d[..., 1])
+
+        if kind == "angle":
+            lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]
+                             else _LIMITS[SEGMENT_NAMES[s]] for s in segs])
+            lo_a = lims[:, 0] if lo is None else lo
+            hi_a = lims[:, 1] if hi is None else hi
+            st = np.array(self.angles[segs] if start is None else start, dtype=float)
+            full = hi_a - lo_a >= TWO_PI - 1e-9
+            # a full circle is searched as the circle centred on the start (no wrap);
+            # a limited range with the start unwrapped into it
+            st = np.where(full, st, lo_a + np.mod(st - lo_a + np.pi, TWO_PI) - np.pi)
+            lo_a = np.where(full, st - np.pi, lo_a)
+            hi_a = np.where(full, st + np.pi, hi_a)
+            if prefer is None:  # hidden arms hang down on ties
+                prefer = np.where([SEGMENT_NAMES[s].endswith("arm") for s in segs],
+                                  self._hang(), np.nan)
+            value, best, runner, _ = interval_search_many(
+                score, lo_a, hi_a, divisions=divisions, min_step=min_step, start=st,
+                interval=interval, prefer=prefer, periodic=TWO_PI)
+            self.angles[segs] = np.mod(value, TWO_PI)
+        else:
+            step = 1.0 / np.maximum(length, 1.0)
+            value, best, runner, _ = interval_search_many(
+                score, step, np.ones(n), divisions=divisions, min_step=float(step.min()),
+                start=self.fore[segs] if start is None else start, interval=interval,
+                prefer=1.0)
+            self.fore[segs] = value
+        self.scores[segs] = best
+        self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)
+
+    def search_spread(self, *, start=None, interval=None, min_step=0.05):
+        """Lateral spread of shoulders and hips in [0, 1] (beyond the seed).
+
+        Candidates move the shoulders and hips sideways while the elbows and knees
+        stay put (the upper limbs pivot and stretch to reach them), so the limbs
+        already fitted are not dragged off the silhouette; afterwards the upper
+        limbs' angles and foreshortening are recomputed from their new ends.
+        """
+        self.drawn[:] = True
+        uppers = np.array([S["l_upper_arm"], S["r_upper_arm"], S["l_upper_leg"],
+                           S["r_upper_leg"]])
+        j = self.joints()
+        fixed_ends = j[_DIST[uppers]]
+
+        def make(v, root, ang, fore, spread):
+            return root, ang, fore, v
+
+        general = self._general_ends(make, uppers)
+
+        def ends(v):
+            p0, _ = general(v)
+            return p0, np.broadcast_to(fixed_ends, p0.shape)
+
+        res = interval_search(self.scorer(ends, uppers), 0.0, 1.0, divisions=4, min_step=min_step,
+                              start=start, interval=interval, prefer=0.5)
+        self.spread = res.value
+        vec = fixed_ends - self.joints()[_PROX[uppers]]
+        self.angles[uppers] = image_angle(vec)
+        self.fore[uppers] = np.clip(np.hypot(*vec.T) / self.L[uppers], 1e-3, 1.0)
+        return res
+
+    def search_root(self, axis, half_range, *, rows=None):
+        """Shift the whole model by whole pixels along x (axis 0) or y (axis 1).
+
+        Beyond the seed (which fixes the torso from ratios and the silhouette's
+        middle). All shifts in ``[-half_range, half_range]`` are scored in one batch
+        as a 1-D cross-correlation of the drawn model with the silhouette.
+        """
+        n = max(1, int(round(half_range)))
+        model = self.model()
+        sil = self.sil
+        if rows is not None:
+            r0, r1 = max(0, int(rows[0])), min(self.h, int(rows[1]))
+            sil, model = sil[r0:r1], model[r0:r1]
+        sil = sil if axis == 0 else sil.T
+        mod = model if axis == 0 else model.T
+        padded = np.pad(sil, ((0, 0), (n, n)))
+        windows = np.lib.stride_tricks.sliding_window_view(padded, sil.shape[1], axis=1)
+        i = np.count_nonzero(windows & mod[:, None, :], axis=(0, 2))  # (2n+1,)
+        scores = similarity_from_counts(np.count_nonzero(sil), np.count_nonzero(mod), i)
+        shifts = np.arange(-n, n + 1)
+        best = np.flatnonzero(scores >= scores.max() - 1e-12)
+        k = best[np.argmin(np.abs(shifts[best]))]
+        self.batches += 1
+        self.root[axis] += shifts[k]
+        return scores[k]
+
+    # -- seed steps --------------------------------------------------------------
+    def place_torso(self):
+        """Pelvis from the Table 3.1 ratios and the silhouette's horizontal middle."""
+        neck_y = self.top + self.L[S["head"]]
+        pelvis_y = neck_y + self.L[S["torso"]]
+
+        band = self.sil[int(round(neck_y)) : int(round(pelvis_y)) + 1]
+        rows, starts, ends = row_runs(band)
+        if rows.size:
+            widest = np.zeros(band.shape[0], dtype=int)
+            mid = np.zeros(band.shape[0])
+            width = ends - starts + 1
+            order = np.lexsort((width, rows))  # per row, widest run last
+            widest[rows[order]] = width[order]
+            mid[rows[order]] = 0.5 * (starts[order] + ends[order])
+            x = float(np.median(mid[widest > 0]))
+        else:
+            x = float(np.median(np.nonzero(self.sil)[1]))
+        self.root = np.array([x, pelvis_y])
+
+    def fit_torso_head(self, *, warm=False):
+        top_rows = (0, self.root[1] + 1)
+        if warm:
+            self.search_torso_about_neck(start=self.angles[S["torso"]],
+                                         interval=np.deg2rad(20), rows=top_rows)
+            neck_y = self.joints()[J["neck"], 1]
+            self.search_angle(S["head"], rows=(0, neck_y + self.R[S["torso"]]),
+                              start=self.angles[S["head"]], interval=np.deg2rad(30))
+            return
+        # The seed: torso with the head attached (Alg. 1) about the pelvis, then the head.
+        self.angles[S["head"]] = self.angles[S["torso"]]
+        self.search_angle(S["torso"], with_segments=(S["head"],), rows=top_rows)
+        neck_y = self.joints()[J["neck"], 1]
+        head_rows = (0, neck_y + self.R[S["torso"]])
+        self.search_angle(S["head"], rows=head_rows)
+        # Beyond the seed: the silhouette's middle is pulled by arms and legs, the head
+        # is not. Line the head up with the silhouette (shift the whole model), then
+        # turn the torso about the neck so a leaning torso under an upright head is
+        # found, and look at the head again.
+        self.search_root(0, 0.1 * self.H, rows=(0, neck_y))
+        self.search_torso_about_neck(start=self.angles[S["torso"]], interval=np.deg2rad(40),
+                                     rows=top_rows)
+        self.search_angle(S["head"], rows=head_rows, start=self.angles[S["head"]],
+                          interval=np.deg2rad(20))
+
+    def search_torso_about_neck(self, *, start, interval, rows=None, alone=False):
+        """Algorithm 1 on the torso angle with the neck held still (beyond the seed).
+
+        ``alone``: score the torso's candidates with the limbs left where they are
+        (they re-attach afterwards); a cheaper approximation for small, warm steps.
+        """
+        seg = S["torso"]
+        self.drawn[seg] = True
+        lo, hi = _LIMITS["torso"]
+        neck = self.joints()[J["neck"]].copy()
+        length = self.L[seg] * self.fore[seg]
+        moving = [seg] if alone else [d for d in range(10) if self.drawn[d]]
+
+        def make(v, root, ang, fore, spread):
+            ang[:, seg] = v
+            return neck - direction(v) * length, ang, fore, spread
+
+        res = interval_search(self.scorer(self._general_ends(make, moving), moving, rows),
+                              lo, hi, divisions=8, min_step=_ONE_DEGREE, start=start,
+                              interval=interval)
+        self.angles[seg] = res.value
+        self.root = neck - direction(res.value) * length
+        self.scores[seg], self.margins[seg] = res.score, res.margin
+        return res
+
+    def contour_arms(self):
+        """Algorithms 2-4 on the silhouette left beside the torso and head."""
+        self.drawn[[S["torso"], S["head"]]] = True
+        body = self.model([S["torso"], S["head"]])
+        body = cv2.dilate(body.view(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+        rest = self.sil & ~body
+        # Slivers along the torso's edges (the model is not the silhouette's exact
+        # shape) are not arms: keep only parts at least ~an arm's width across.
+        k = max(2, int(round(1.5 * self.R[S["l_upper_arm"]])))
+        rest = cv2.morphologyEx(rest.view(np.uint8), cv2.MORPH_OPEN,
+                                cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))).astype(bool)
+        j = self.joints()
+        rest[max(int(j[J["pelvis"], 1]), 0) :] = False  # below the pelvis: legs
+        ys, xs = np.nonzero(rest)
+        axis = j[J["neck"]] - j[J["pelvis"]]
+        side = axis[0] * (ys - j[J["pelvis"], 1]) - axis[1] * (xs - j[J["pelvis"], 0])
+        # side < 0: image-left of an upward torso axis (cross product, y down).
+        min_pixels = max(4.0, (2 * self.R[S["l_upper_arm"]]) ** 2)
+        # Algorithm 4's minimumCornerDistance is 4 points in the seed; we also ask for
+        # a third of an upper arm, so a handful of noisy points is not a segment.
+        min_dist = max(4, int(round(0.33 * self.L[S["l_upper_arm"]])))
+        for s, sel in (("l", side < 0), ("r", side > 0)):
+            up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+            hang = np.mod(self.angles[S["torso"]] + np.pi, TWO_PI)
+            if np.count_nonzero(sel) < min_pixels:
+                self.angles[[up, lo]] = hang
+                continue
+            curve = limb_curve(np.stack([xs[sel], ys[sel]], 1), j[J[f"{s}_shoulder"]])
+            if len(curve) < 3:
+                self.angles[[up, lo]] = hang
+                continue
+            lower, upper, _ = arm_angles(curve, min_distance=min_dist)
+            self.angles[up], self.angles[lo] = upper, lower
+        self.drawn[[S["l_upper_arm"], S["l_lower_arm"], S["r_upper_arm"], S["r_lower_arm"]]] = True
+
+    def contour_lower_legs(self):
+        """Algorithm 2 on the lower legs, Algorithm 5 for crossing; returns crossed."""
+        # From the knees (Table 3.1 height above the lowest silhouette row) down.
+        bottom = self.norm.bottom
+        top = bottom - self.L[S["l_lower_leg"]] - (self.R[S["l_lower_leg"]] if self.caps else 0)
+        left, right, merged = leg_curves(self.sil, int(round(top)), bottom,
+                                         self.R[S["l_lower_leg"]])
+
+        for s, curve in (("l", left), ("r", right)):
+            seg = S[f"{s}_lower_leg"]
+            if len(curve) >= 3:
+                a = fit_angle(curve)
+                lo, hi = _LIMITS[SEGMENT_NAMES[seg]]
+                self.angles[seg] = np.clip(a if a >= np.pi / 2 else a + TWO_PI, lo, hi)
+            else:
+                self.angles[seg] = 1.5 * np.pi
+        return knees_crossed(merged)
+
+    def fit_upper_legs(self, *, warm=False, passes=2):
+        rows = (self.root[1] - self.R[S["torso"]], self.h)
+        for _ in range(passes):
+            for s in ("l", "r"):
+                up = S[f"{s}_upper_leg"]
+                kw = dict(start=self.angles[up], interval=np.deg2rad(20)) if warm else {}
+                # the lower leg keeps its (contour) angle and hangs from the knee
+                self.search_angle(up, rows=rows, **kw)
+            warm = True
+
+    def fit_foreshortening(self, *, warm=False, interval=0.4):
+        for seg in range(10):
+            kw = dict(start=self.fore[seg], interval=interval) if warm else {}
+            self.search_fore(seg, **kw)
+
+    def refine_limbs(self, half_width=_THIRTY_DEGREES, *, whole_arms=False):
+        """Algorithm 1 again on every limb segment against the whole silhouette.
+
+        ``whole_arms``: first search each whole arm (lower arm rigidly attached) within
+        90 degrees of the contour estimate (ties: hanging down), and its length, to undo
+        a contour curve that went astray (beyond the seed, which avoids Algorithm 1 on
+        the arms for fear of occlusion; the contour estimate is the tie-breaker).
+        """
+        if whole_arms:
+            for s in ("l", "r"):
+                up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+                self.angles[lo] = self.angles[up]  # a straight arm first
+                self.fore[[up, lo]] = 1.0
+                self.search_angle(up, with_segments=(lo,), start=self.angles[up],
+                                  interval=np.pi, prefer=self._hang())
+                self.search_fore(up, unit=True)
+        for seg_name in ("upper_leg", "lower_leg", "upper_arm", "lower_arm"):
+            for s in ("l", "r"):
+                seg = S[f"{s}_{seg_name}"]
+                lo = hi = None
+                if seg_name == "upper_leg":
+                    lo, hi = _THIGH_WIDE
+                if seg_name.startswith("lower"):
+                    # the projected elbow/knee bend stays within the flexion limit
+                    parent = S[f"{s}_upper_{seg_name.split('_')[1]}"]
+                    lo = self.angles[parent] - _MAX_BEND
+                    hi = self.angles[parent] + _MAX_BEND
+                    if seg_name == "lower_leg":
+                        lim = _LIMITS["l_lower_leg"]
+                        lo, hi = max(lo, lim[0]), min(hi, lim[1])
+                        if hi <= lo:
+                            lo, hi = lim
+                start = self.angles[seg]
+                if lo is not None:
+                    start = lo + np.mod(start - lo, TWO_PI)
+                    start = start if start <= hi else (lo if start - hi > TWO_PI - start + lo
+                                                       else hi)
+                # a shin may swing far from its contour estimate (a raised foot), so
+                # the lower legs get their whole range; an arm hidden in the torso
+                # covers the same pixels at any angle: ties go to hanging down
+                width = (hi - lo) if seg_name == "lower_leg" else 2 * half_width
+                prefer = self._hang() if seg_name.endswith("arm") else None
+                self.search_angle(seg, start=start, interval=width, lo=lo, hi=hi,
+                                  prefer=prefer)
+
+    def _hang(self) -> float:
+        """The direction of an arm hanging along the torso, radians."""
+        return float(np.mod(self.angles[S["torso"]] + np.pi, TWO_PI))
+
+    def state(self):
+        return (self.root.copy(), self.angles.copy(), self.fore.copy(), self.spread,
+                self.scores.copy(), self.margins.copy())
+
+    def set_state(self, st):
+        self.root, self.angles, self.fore, self.spread = (st[0].copy(), st[1].copy(),
+                                                          st[2].copy(), st[3])
+        self.scores, self.margins = st[4].copy(), st[5].copy()
+
+
+def _knee_bend(f: _Fitter) -> float:
+    """Sum of the image-plane knee bends (radians) of the current pose."""
+    d = f.angles[[S["l_lower_leg"], S["r_lower_leg"]]] - f.angles[[S["l_upper_leg"],
+                                                                   S["r_upper_leg"]]]
+    return float(np.abs(np.angle(np.exp(1j * d))).sum())
+
+
+def _segments_cross(a0, a1, b0, b1) -> bool:
+    """Do 2D segments a0-a1 and b0-b1 intersect (proper crossing)?"""
+    def side(p, q, r):
+        return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+
+    return (side(a0, a1, b0) * side(a0, a1, b1) < 0) and (side(b0, b1, a0) * side(b0, b1, a1) < 0)
+
+
+def _untangle_thighs(f: _Fitter, *, tie: float) -> None:
+    """Swap whole legs between the hips when the thighs cross (beyond the seed).
+
+    With the hips apart (spread > 0.3), thighs that cross each other mean the
+    image-left hip was given the image-right leg; the swapped legs (re-searched
+    +-15 degrees) are kept unless they fit worse.
+    """
+    j = f.joints()
+    if f.spread <= 0.3 or not _segments_cross(j[J["l_hip"]], j[J["l_knee"]],
+                                               j[J["r_hip"]], j[J["r_knee"]]):
+        return
+    kept, s_kept = f.state(), f.similarity()
+    legs_l = [S["l_upper_leg"], S["l_lower_leg"]]
+    legs_r = [S["r_upper_leg"], S["r_lower_leg"]]
+    f.angles[legs_l + legs_r] = f.angles[legs_r + legs_l]
+    f.fore[legs_l + legs_r] = f.fore[legs_r + legs_l]
+    for seg in (S["l_upper_leg"], S["r_upper_leg"], S["l_lower_leg"], S["r_lower_leg"]):
+        f.search_angle(seg, start=f.angles[seg], interval=np.deg2rad(30), lo=_THIGH_WIDE[0],
+                       hi=_THIGH_WIDE[1]) if seg in (S["l_upper_leg"], S["r_upper_leg"]) \
+            else f.search_angle(seg, start=f.angles[seg], interval=np.deg2rad(30))
+    if f.similarity() < s_kept - tie:
+        f.set_state(kept)
+
+
+def _swap_lower_legs(f: _Fitter):
+    a, b = S["l_lower_leg"], S["r_lower_leg"]
+    f.angles[[a, b]] = f.angles[[b, a]]
+
+
+def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
+                   refine: bool = True, spread: bool = True, verify_crossing: bool = True,
+                   caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01,
+                   warm_step_deg: float = 2.0):
+    """Fit the model to a normalised silhouette; see :func:`fit_pose`.
+
+    Returns
+    -------
+    fitter : _Fitter
+        The final fitting state (normalised pixels).
+    crossed : bool
+    warm : bool
+    """
+    f = _Fitter(norm, caps=caps)
+    f.place_torso()
+    crossed = False
+    warm = False
+    if previous is not None:
+        f.angles = np.array(previous.angles, dtype=float)
+        f.fore = np.array(previous.foreshortening, dtype=float)
+        f.spread = float(previous.spread) if spread else 0.5
+        f.drawn[:] = True
+        warm = f.similarity() >= warm_threshold
+    if warm:
+        # Tracking: every search starts from the previous frame's pose with a narrow
+        # interval (2 iterations of Algorithm 1: +-8 degrees in 2 degree steps, then
+        # 0.5; 2 of Algorithm 6); no contour step.
+        f.drawn[:] = True
+        f.search_root(0, 0.1 * f.H)
+        step = np.deg2rad(warm_step_deg)
+        f.search_torso_about_neck(start=f.angles[S["torso"]], interval=8 * step, alone=True)
+        uppers = [S[f"{s}_upper_{p}"] for p in ("arm", "leg") for s in "lr"]
+        leaves = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "lr"]
+        f.search_group(uppers, interval=8 * step)
+        f.search_group(leaves, interval=8 * step)
+        if spread:
+            f.search_spread(start=f.spread, interval=0.2, min_step=0.1)
+        f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
+        _untangle_thighs(f, tie=tie)
+    else:
+        f.angles = np.deg2rad(_REST_DEG)
+        f.fore = np.ones(10)
+        f.drawn[:] = False
+        f.fit_torso_head()
+        f.contour_arms()
+        crossed = f.contour_lower_legs()
+        if crossed:
+            _swap_lower_legs(f)  # Algorithm 2: swap the lower legs when crossed
+        f.drawn[:] = True
+
+        def legs_and_spread():
+            f.fit_upper_legs()
+            if spread:
+                f.search_spread()
+                f.fit_upper_legs(warm=True, passes=1)
+            return f.similarity()
+
+        s_kept = legs_and_spread()
+        if crossed and verify_crossing:
+            # Beyond the seed: keep the swap only if it covers the silhouette better
+            # than the unswapped legs (Algorithm 5 also fires on some bent knees).
+            # An X at the knees looks the same as two legs bent toward each other, so
+            # near-ties go to the straighter legs (smaller image-plane knee bends).
+            kept = f.state()
+            bend_kept = _knee_bend(f)
+            _swap_lower_legs(f)
+            f.spread = kept[3] if not spread else 0.5
+            s_other = legs_and_spread()
+            if s_other < s_kept - tie or (s_other <= s_kept + tie and _knee_bend(f) >= bend_kept):
+                f.set_state(kept)
+        if refine:
+            f.drawn[:] = True
+            f.search_root(0, 0.05 * f.H)
+            f.refine_limbs(whole_arms=True)
+            # the torso once more with every limb drawn (the arms no longer pull it)
+            f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(16))
+            _untangle_thighs(f, tie=tie)
+            if spread:
+                f.search_spread(start=f.spread, interval=0.4)
+        f.fit_foreshortening(warm=refine)
+    return f, crossed, warm
+
+
+def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
+             refine: bool = True, spread: bool = True, verify_crossing: bool = True,
+             caps: bool = False, warm_threshold: float = 0.55,
+             fallback: float = 0.97, warm_step_deg: float = 2.0) -> FramePose:
+    """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
+
+    Parameters
+    ----------
+    mask : numpy.ndarray, shape (H, W), bool
+        The silhouette in the original frame.
+    previous : FramePose, optional
+        The previous frame's pose. If it still covers this silhouette with
+        similarity >= ``warm_threshold``, every search starts from it with narrow
+        intervals (tracking); otherwise the frame is fitted from scratch.
+    height : int
+        Height in pixels the silhouette is normalised to before fitting.
+    refine : bool
+        Run the extra Algorithm 1 pass over the limbs (beyond the seed).
+    spread : bool
+        Search the shoulders' and hips' lateral spread (beyond the seed); if false
+        the spread is fixed at 0.5.
+    verify_crossing : bool
+        When Algorithm 5 says the legs cross, keep the swap only if it fits better.
+    caps : bool
+        Draw segments as capsules (true) or rectangles.
+    warm_threshold : float
+        Similarity of the previous pose needed to warm-start.
+    fallback : float
+        A warm fit whose similarity is below ``fallback`` times the previous
+        frame's is redone from scratch and the better of the two kept.
+    warm_step_deg : float
+        First step of a warm angle search in degrees (8 divisions, so the search
+        spans +-4 steps around the previous angle, then refines by a quarter).
+
+
+    Returns
+    -------
+    FramePose
+
+    Raises
+    ------
+    ValueError
+        If ``mask`` is empty.
+    """
+    norm = normalise_mask(mask, height=height)
+    kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
+              warm_step_deg=warm_step_deg)
+    f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
+                                      **kw)
+    if warm and f.similarity() < fallback * previous.similarity:
+        # the track is slipping: fit this frame from scratch, keep the better fit
+        g, g_crossed, _ = fit_normalised(norm, **kw)
+        if g.similarity() > f.similarity():
+            f, crossed, warm = g, g_crossed, False
+    return FramePose(
+        joints=norm.to_original(f.joints()),
+        angles=np.mod(f.angles, TWO_PI),
+        foreshortening=f.fore.copy(),
+        scores=f.scores.copy(),
+        margins=f.margins.copy(),
+        spread=float(f.spread),
+        crossed=bool(crossed),
+        similarity=f.similarity(),
+        warm=bool(warm),
+        height_px=norm.height / norm.scale,
+    )
+
+
+def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
+                 progress=None, **kw) -> Pose2D:
+    """Fit every frame of a silhouette sequence.
+
+    Parameters
+    ----------
+    masks : numpy.ndarray, shape (F, H, W), bool (or a sequence of (H, W) masks)
+        Silhouettes in original-frame pixels.
+    tracked : bool
+        Warm-start each frame from the previous one when its pose still fits
+        (beyond the seed); ``False`` fits every frame independently (the seed).
+    progress : callable, optional
+        Wraps the frame iterator (e.g. :func:`vidcap.fileio.progress`); called as
+        ``progress(iterable, total=F)``.
+    **kw
+        Passed to :func:`fit_pose` (``height``, ``refine``, ``spread``, ...).
+
+    Returns
+    -------
+    Pose2D
+        Frames with an empty silhouette get NaN joints and angles and zero scores.
+    """
+    n = len(masks)
+    joints = np.full((n, 15, 2), np.nan)
+    angles = np.full((n, 10), np.nan)
+    fore = np.full((n, 10), np.nan)
+    scores = np.zeros((n, 10))
+    margins = np.zeros((n, 10))
+    spread = np.full(n, np.nan)
+    sim = np.zeros(n)
+    warm = np.zeros(n, dtype=bool)
+    it = range(n) if progress is None else progress(range(n), total=n)
+    prev = None
+    for k in it:
+        m = np.asarray(masks[k], dtype=bool)
+        if not m.any():
+            prev = None
+            continue
+        fp = fit_pose(m, previous=prev if tracked else None, **kw)
+        joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
+        scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
+        sim[k], warm[k] = fp.similarity, fp.warm
+        prev = fp
+    return Pose2D(JOINT_NAMES, joints, angles, fore, scores, margins, spread, sim, warm,
+                  bool(tracked))
+
+
+__all__ = ["FramePose", "Pose2D", "fit_normalised", "fit_pose", "fit_sequence"]

@@ -1,0 +1,396 @@
+"""Batched rasteriser of the 2D body model, and silhouette normalisation.
+
+The 2D body model is seed 004's ten cylinders seen in the image plane: every segment
+is drawn as a band of the Table 3.2 width around the line from its proximal to its
+distal joint, either a rectangle or a capsule (a rectangle with round ends). Many
+candidate poses are drawn in one call, as an array of boolean masks ``(B, h, w)``,
+so a search can score all its candidates in one vectorised operation.
+
+Coordinates
+-----------
+Points are ``(x, y)`` in pixels, x right, y down, with pixel ``(row i, column j)``
+centred on ``(j, i)`` (the OpenCV convention). Segment *angles* follow
+:data:`vidcap.body.IMAGE_ANGLE_LIMITS_DEG`: counter-clockwise from the image's +x axis
+with y pointing **up**, in radians inside the library, so an angle ``a`` is the
+direction ``(cos a, -sin a)`` in pixel coordinates (``pi/2`` = straight up,
+``3 pi/2`` = straight down).
+
+The 2D skeleton
+---------------
+``pelvis`` is the root; the neck sits ``torso length x foreshortening`` along the
+torso angle, the head top beyond it along the head angle. The shoulders sit at the
+neck and the hips at the pelvis, displaced sideways (perpendicular to the torso
+axis) by ``spread`` times the body model's lateral offsets (:attr:`BodyModel.
+shoulder_half_width`, :attr:`BodyModel.hip_half_width`): ``spread = 0`` is a pure side
+view (both shoulders on the torso axis), ``spread = 1`` a front or back view. The
+``l_`` limbs are displaced toward the image's left: during 2D fitting ``l_*`` means
+*the limb on the image's left* (seed 004 section 3.1.4), not the performer's left.
+
+Normalisation
+-------------
+:func:`normalise_mask` crops a silhouette to its bounding box and resizes it to a
+fixed height (plus a margin), so the fitter's cost does not grow with the frame
+size (seed 004 section 4.2: "we normalize the silhouette to a fixed size"). This is
+a small local helper; the silhouette stage has its own
+(``vidcap.silhouette.normalise_silhouette``) and the two can be unified later.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vidcap.body import (
+    JOINT_INDEX,
+    SEGMENT_JOINTS,
+    SEGMENT_NAMES,
+    SEGMENTS,
+    BodyModel,
+)
+
+#: Joint index of each segment's proximal and distal joint, (S, 2).
+_PROX = SEGMENT_JOINTS[:, 0]
+_DIST = SEGMENT_JOINTS[:, 1]
+
+#: Limb chains: (segment index, parent joint index) in the order joints are placed.
+_SEG = {name: i for i, name in enumerate(SEGMENT_NAMES)}
+
+
+@dataclass(frozen=True)
+class NormalisedMask:
+    """A silhouette cropped and scaled to a fixed body height.
+
+    Attributes
+    ----------
+    mask : numpy.ndarray, shape (h, w), bool
+        The normalised silhouette, including a margin of empty pixels around it.
+    scale : float
+        Normalised pixels per original pixel (vertical; the horizontal scale differs
+        by the rounding of the width, see ``scale_xy``).
+    scale_xy : numpy.ndarray, shape (2,)
+        Normalised pixels per original pixel along x and y.
+    offset : numpy.ndarray, shape (2,)
+        Original-frame ``(x, y)`` of the normalised image's origin, so
+        ``original = normalised / scale_xy + offset``.
+    top, bottom : int
+        Rows of the silhouette's first and last pixel in the normalised image.
+    """
+
+    mask: np.ndarray
+    scale: float
+    scale_xy: np.ndarray
+    offset: np.ndarray
+    top: int
+    bottom: int
+
+    @property
+    def height(self) -> float:
+        """Height of the silhouette in normalised pixels (top of head to ankles)."""
+        return float(self.bottom - self.top + 1)
+
+    def to_original(self, points: np.ndarray) -> np.ndarray:
+        """Map normalised ``(..., 2)`` points ``(x, y)`` to original-frame pixels."""
+        return np.asarray(points, dtype=float) / self.scale_xy + self.offset
+
+    def to_normalised(self, points: np.ndarray) -> np.ndarray:
+        """Map original-frame ``(..., 2)`` points ``(x, y)`` to normalised pixels."""
+        return (np.asarray(points, dtype=float) - self.offset) * self.scale_xy
+
+
+def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25) -> NormalisedMask:
+    """Crop a silhouette to its bounding box and resize it to a fixed height.
+
+    Parameters
+    ----------
+    mask : numpy.ndarray, shape (H, W), bool
+        The silhouette in the original frame.
+    height : int
+        Height of the silhouette's bounding box after resizing, in pixels.
+    margin : float
+        Empty border added on every side, as a fraction of ``height``, so a model
+        that overreaches the silhouette is still counted as negative error.
+
+    Returns
+    -------
+    NormalisedMask
+
+    Raises
+    ------
+    ValueError
+        If ``mask`` is not 2-D or has no foreground pixel.
+    """
+    mask = np.asarray(mask)
+    if mask.ndim != 2:
+        raise ValueError(f"mask must be (H, W), got shape {mask.shape}")
+    rows = np.flatnonzero(mask.any(axis=1))
+    cols = np.flatnonzero(mask.any(axis=0))
+    if rows.size == 0:
+        raise ValueError("mask is empty")
+    r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+    crop = mask[r0:r1, c0:c1].astype(np.float32)
+    s = height / (r1 - r0)
+    w = max(1, int(round((c1 - c0) * s)))
+    interp = cv2.INTER_AREA if s < 1 else cv2.INTER_LINEAR
+    small = cv2.resize(crop, (w, height), interpolation=interp) >= 0.5
+    pad = int(round(margin * height))
+    out = np.zeros((height + 2 * pad, w + 2 * pad), dtype=bool)
+    out[pad : pad + height, pad : pad + w] = small
+    # Pixel centres: original x_o = c0 + (x_n - pad + 0.5) / s - 0.5.
+    sx = w / (c1 - c0)
+    offset = np.array([c0 - 0.5 - (pad - 0.5) / sx, r0 - 0.5 - (pad - 0.5) / s])
+    return NormalisedMask(out, float(s), np.array([sx, s]), offset, pad, pad + height - 1)
+
+
+def direction(angles: np.ndarray) -> np.ndarray:
+    """Unit pixel-space direction ``(x, y)`` of image-plane angles (y up), shape (..., 2)."""
+    a = np.asarray(angles, dtype=float)
+    return np.stack([np.cos(a), -np.sin(a)], axis=-1)
+
+
+def image_angle(vectors: np.ndarray) -> np.ndarray:
+    """Image-plane angle in [0, 2 pi) of pixel-space vectors ``(..., 2)`` (y down)."""
+    v = np.asarray(vectors, dtype=float)
+    return np.mod(np.arctan2(-v[..., 1], v[..., 0]), 2 * np.pi)
+
+
+def model_dimensions(height_px: float, body: BodyModel | None = None):
+    """Segment lengths and radii, and lateral joint offsets, in pixels.
+
+    Parameters
+    ----------
+    height_px : float
+        Body height in pixels.
+    body : BodyModel, optional
+        Proportions (default: the seed's Table 3.1/3.2 ratios).
+
+    Returns
+    -------
+    lengths, radii : numpy.ndarray, shape (10,)
+    shoulder, hip : float
+        Lateral distance of each shoulder (hip) from the torso axis at spread 1.
+    """
+    body = body or BodyModel()
+    k = height_px / body.height
+    return (
+        body.segment_lengths() * k,
+        body.segment_radii() * k,
+        body.shoulder_half_width * k,
+        body.hip_half_width * k,
+    )
+
+
+def pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip) -> np.ndarray:
+    """Joint positions of 2D model poses (vectorised over any leading batch shape).
+
+    Parameters
+    ----------
+    root : array_like, shape (..., 2)
+        Pelvis ``(x, y)`` in pixels.
+    angles : array_like, shape (..., 10)
+        Segment image-plane angles in radians (:data:`SEGMENT_NAMES` order).
+    foreshortening : array_like, shape (..., 10)
+        Apparent length / true length of every segment, in (0, 1].
+    spread : array_like, shape (...)
+        Lateral spread of shoulders and hips, 0 (side view) to 1 (front view).
+    lengths : array_like, shape (10,)
+        Segment lengths in pixels.
+    shoulder, hip : float
+        Lateral offsets of shoulders and hips in pixels at spread 1.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 15, 2)
+        Joints in :data:`vidcap.body.JOINT_NAMES` order, pixels.
+    """
+    angles = np.asarray(angles, dtype=float)
+    fs = np.asarray(foreshortening, dtype=float)
+    root = np.asarray(root, dtype=float)
+    spread = np.asarray(spread, dtype=float)
+    shape = np.broadcast_shapes(root.shape[:-1], angles.shape[:-1], fs.shape[:-1], spread.shape)
+    vec = direction(angles) * (fs * np.asarray(lengths))[..., None]  # (..., 10, 2)
+    vec = np.broadcast_to(vec, (*shape, 10, 2))
+    j = np.empty((*shape, 15, 2))
+    J = JOINT_INDEX
+    j[..., J["pelvis"], :] = root
+    j[..., J["neck"], :] = j[..., J["pelvis"], :] + vec[..., _SEG["torso"], :]
+    j[..., J["head_top"], :] = j[..., J["neck"], :] + vec[..., _SEG["head"], :]
+    # Image-left perpendicular of the torso axis: the torso points up (a ~ 90 deg), its
+    # left in the image is the direction rotated +90 deg (counter-clockwise, y up).
+    left = direction(angles[..., _SEG["torso"]] + np.pi / 2) * spread[..., None]
+    j[..., J["l_shoulder"], :] = j[..., J["neck"], :] + shoulder * left
+    j[..., J["r_shoulder"], :] = j[..., J["neck"], :] - shoulder * left
+    j[..., J["l_hip"], :] = j[..., J["pelvis"], :] + hip * left
+    j[..., J["r_hip"], :] = j[..., J["pelvis"], :] - hip * left
+    for side in ("l", "r"):
+        for a, b, seg in (
+            ("shoulder", "elbow", "upper_arm"),
+            ("elbow", "wrist", "lower_arm"),
+            ("hip", "knee", "upper_leg"),
+            ("knee", "ankle", "lower_leg"),
+        ):
+            seg_vec = vec[..., _SEG[f"{side}_{seg}"], :]
+            j[..., J[f"{side}_{b}"], :] = j[..., J[f"{side}_{a}"], :] + seg_vec
+    return j
+
+
+#: Segments moved when a segment's own parameter changes: itself and its descendants.
+DESCENDANTS: dict[int, tuple[int, ...]] = {
+    _SEG["torso"]: tuple(range(10)),
+    _SEG["head"]: (_SEG["head"],),
+    **{
+        _SEG[f"{s}_upper_{p}"]: (_SEG[f"{s}_upper_{p}"], _SEG[f"{s}_lower_{p}"])
+        for s in "lr"
+        for p in ("arm", "leg")
+    },
+    **{_SEG[f"{s}_lower_{p}"]: (_SEG[f"{s}_lower_{p}"],) for s in "lr" for p in ("arm", "leg")},
+}
+
+
+def draw_segments(
+    p0: np.ndarray,
+    p1: np.ndarray,
+    radii: np.ndarray,
+    shape: tuple[int, int],
+    *,
+    origin: tuple[int, int] = (0, 0),
+    caps: bool = True,
+) -> np.ndarray:
+    """Draw a batch of segment sets, each set's union into one mask.
+
+    Parameters
+    ----------
+    p0, p1 : numpy.ndarray, shape (B, K, 2)
+        Proximal and distal ends ``(x, y)`` of K segments for each of B candidates,
+        in pixels of the full image.
+    radii : numpy.ndarray, shape (K,)
+        Half-width of each segment in pixels.
+    shape : (int, int)
+        ``(h, w)`` of the window drawn.
+    origin : (int, int)
+        ``(x0, y0)``: the full-image pixel of the window's top-left corner.
+    caps : bool
+        Round ends (capsules) if true, square-cut rectangles if false.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, h, w), bool
+        ``True`` where a pixel centre lies inside any of the candidate's segments.
+    """
+    h, w = shape
+    first, last = segment_spans(p0, p1, radii, np.arange(origin[1], origin[1] + h), caps=caps)
+    cols = np.arange(origin[0], origin[0] + w)
+    inside = (cols >= first[..., None]) & (cols <= last[..., None])  # (B, K, h, w)
+    return inside.any(axis=1)
+
+
+def segment_spans(p0, p1, radii, rows, *, caps: bool = True):
+    """Row spans of a batch of segments: which pixel columns each one covers per row.
+
+    A capsule or rectangle is convex, so on every scan line the pixel centres it
+    covers form one run of columns. Computing the runs analytically (rather than
+    testing every pixel) lets a search count covered pixels from row prefix sums.
+
+    Parameters
+    ----------
+    p0, p1 : numpy.ndarray, shape (B, K, 2)
+        Segment ends ``(x, y)`` in pixels.
+    radii : numpy.ndarray, shape (K,) or (B, K)
+        Half-widths in pixels.
+    rows : numpy.ndarray of int, shape (R,)
+        The rows (pixel y) to scan.
+    caps : bool
+        Capsules (true) or rectangles (false), as in :func:`draw_segments`.
+
+    Returns
+    -------
+    first, last : numpy.ndarray of int, shape (B, K, R)
+        First and last covered column per row; ``last < first`` where a row is not
+        covered. Columns are not clipped to any image.
+    """
+    p0 = np.asarray(p0, dtype=np.float64)
+    p1 = np.asarray(p1, dtype=np.float64)
+    r = np.asarray(radii, dtype=np.float64)
+    r = r[None, :, None] if r.ndim == 1 else r[:, :, None]
+    y = np.asarray(rows, dtype=np.float64)[None, None, :]
+    v = p1 - p0
+    norm = np.sqrt((v * v).sum(-1))[..., None]
+    tiny = norm < 1e-9  # a point: any direction will do
+    ux = np.where(tiny, 1.0, v[..., 0, None] / np.where(tiny, 1.0, norm))
+    uy = np.where(tiny, 0.0, v[..., 1, None] / np.where(tiny, 1.0, norm))
+    # Nudge zero components so each constraint below is a finite x-interval: a
+    # coefficient of 1e-12 turns "all x" / "no x" into a huge / far-away interval.
+    ux = np.where(np.abs(ux) < 1e-12, 1e-12, ux)
+    uy = np.where(np.abs(uy) < 1e-12, 1e-12, uy)
+    cx = 0.5 * (p0[..., 0, None] + p1[..., 0, None])
+    dyc = y - 0.5 * (p0[..., 1, None] + p1[..., 1, None])  # (B, K, R)
+    # With X = x - cx: along = X ux + dyc uy in [-L/2, L/2], across = X uy - dyc ux in [-r, r].
+    # (1e-7 px of slack so pixel centres exactly on an edge count, as in a <= test)
+    half_a = np.abs((0.5 * norm + 1e-7) / ux)
+    half_c = np.abs((r + 1e-7) / uy)
+    mid_a = cx - dyc * (uy / ux)
+    mid_c = cx + dyc * (ux / uy)
+    left = np.maximum(mid_a - half_a, mid_c - half_c)
+    right = np.minimum(mid_a + half_a, mid_c + half_c)
+    if caps:
+        empty = left > right  # the rectangle misses this row: only the discs count
+        left[empty], right[empty] = np.inf, -np.inf
+        with np.errstate(invalid="ignore"):
+            for q in (p0, p1):  # end discs; rows missing a disc give NaN, ignored by fmin
+                h = np.sqrt(r * r - (y - q[..., 1, None]) ** 2)
+                left = np.fmin(left, q[..., 0, None] - h)
+                right = np.fmax(right, q[..., 0, None] + h)
+    first = np.ceil(np.clip(left, -1e6, 1e6)).astype(np.int64)
+    last = np.floor(np.clip(right, -1e6, 1e6)).astype(np.int64)
+    return first, last
+
+
+def draw_pose(joints: np.ndarray, radii: np.ndarray, shape: tuple[int, int], *,
+              segments=None, caps: bool = True) -> np.ndarray:
+    """Draw whole (or partial) 2D model poses into masks.
+
+    Parameters
+    ----------
+    joints : numpy.ndarray, shape (B, 15, 2) or (15, 2)
+        Joint positions in pixels.
+    radii : numpy.ndarray, shape (10,)
+        Segment half-widths in pixels.
+    shape : (int, int)
+        ``(h, w)`` of the output masks.
+    segments : sequence of int, optional
+        Segment indices to draw (default: all ten).
+    caps : bool
+        Capsules (true) or rectangles (false).
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, h, w) or (h, w), bool
+    """
+    joints = np.asarray(joints, dtype=float)
+    single = joints.ndim == 2
+    if single:
+        joints = joints[None]
+    seg = np.arange(10) if segments is None else np.asarray(segments, dtype=int)
+    if seg.size == 0:
+        out = np.zeros((joints.shape[0], *shape), dtype=bool)
+    else:
+        out = draw_segments(
+            joints[:, _PROX[seg]], joints[:, _DIST[seg]], np.asarray(radii)[seg], shape, caps=caps
+        )
+    return out[0] if single else out
+
+
+__all__ = [
+    "DESCENDANTS",
+    "NormalisedMask",
+    "SEGMENTS",
+    "direction",
+    "draw_pose",
+    "draw_segments",
+    "image_angle",
+    "model_dimensions",
+    "normalise_mask",
+    "pose_joints",
+    "segment_spans",
+]

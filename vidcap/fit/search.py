@@ -1,0 +1,254 @@
+"""The coarse-to-fine interval search of seed 004 Algorithms 1 and 6.
+
+One routine serves both: Algorithm 1 searches a segment's image-plane angle within
+its joint limits (8 divisions, stop below a 1 degree interval) and Algorithm 6 a
+segment's foreshortening ratio (5 divisions, stop below 1 / length in pixels). Each
+iteration evaluates the ``divisions + 1`` evenly spaced values of the current
+interval centred on the best value so far (clipped to the limits), then shrinks the
+interval to two divisions around the winner ("the division that gives the best
+covering result merged with its neighbour divisions"). All candidates of one
+iteration are scored by a single call of the score function, i.e. one batch.
+
+Deviations from the pseudo-code, where it does not do what the text says:
+
+* Algorithm 6 sets ``endPoint <- beginPoint``, which makes ``length`` 0 and
+  ``minimumStepRatio = 1/0``; the text means the segment's length from its begin to
+  its *end* point, which is what callers pass as ``min_step = 1 / length``.
+* Algorithm 6 iterates ``while ratio < ratioForEnd`` (strict), so the end of the
+  interval (ratio 1, an unforeshortened segment, the most common case) is never
+  tried in the first iteration; Algorithm 1 uses ``<=``. Both ends are included
+  here.
+* Algorithm 6 starts the ratio interval at 0, which the text calls "(0, 1)" and
+  which would draw a zero-length segment; callers pass ``lo = min_step``.
+* Algorithm 1's ``if stepAngle is 0`` guard and its mixed ``stepAngle`` /
+  ``StepAngle`` spelling are one variable; the step is always interval/divisions.
+* The seed keeps only the best value. We also return the best score among
+  candidates outside the winner's neighbouring divisions (the runner-up), so
+  callers can report a confidence margin.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Outcome of :func:`interval_search`.
+
+    Attributes
+    ----------
+    value : float
+        The value with the highest score.
+    score : float
+        Its score.
+    runner_up : float
+        The best score among evaluated values more than one initial step away from
+        ``value`` (``-inf`` if there were none).
+    evaluations : int
+        Number of candidates scored.
+    iterations : int
+        Number of batches (score-function calls).
+    """
+
+    value: float
+    score: float
+    runner_up: float
+    evaluations: int
+    iterations: int
+
+    @property
+    def margin(self) -> float:
+        """``score - runner_up`` (``score`` itself if there was no runner-up)."""
+        return self.score - self.runner_up if np.isfinite(self.runner_up) else self.score
+
+
+def interval_search(
+    score: Callable[[np.ndarray], np.ndarray],
+    lo: float,
+    hi: float,
+    *,
+    divisions: int = 8,
+    min_step: float,
+    start: float | None = None,
+    interval: float | None = None,
+    periodic: float | None = None,
+    prefer: float | None = None,
+) -> SearchResult:
+    """Maximise a 1-D score by coarse-to-fine interval search (seed 004 Alg. 1 and 6).
+
+    Parameters
+    ----------
+    score : callable
+        Maps candidate values, shape (B,), to scores, shape (B,). Called once per
+        iteration with all of that iteration's candidates.
+    lo, hi : float
+        Limits of the value (the joint limits; (0, 1] for foreshortening).
+    divisions : int
+        Number of divisions of each interval (8 in Alg. 1, 5 in Alg. 6).
+    min_step : float
+        Stop when the interval is no longer larger than this (1 degree in Alg. 1,
+        ``1 / length`` in Alg. 6).
+    start : float, optional
+        Centre of the first interval (default: the middle of the limits). A warm
+        start from the previous frame.
+    interval : float, optional
+        Width of the first interval (default: ``hi - lo``).
+    periodic : float, optional
+        The period of the value (``2 pi`` for an angle). When the limits span a
+        whole period candidates wrap around instead of being clipped, and the result
+        is reduced to ``[lo, lo + period)``.
+    prefer : float, optional
+        Among equal scores pick the candidate nearest this value (default: the
+        centre of the current interval). The seed's strict ``>`` keeps the first
+        (lowest) one, which for Algorithm 6 favours the shortest segment when the
+        silhouette cannot tell (a limb hidden inside the torso); callers pass
+        ``prefer=1`` there.
+
+    Returns
+    -------
+    SearchResult
+    """
+    if not hi > lo:
+        raise ValueError(f"empty search interval [{lo}, {hi}]")
+    if divisions < 2 or not min_step > 0:
+        raise ValueError("need divisions >= 2 and min_step > 0")
+    wrap = periodic is not None and hi - lo >= periodic - 1e-12
+    width = float(hi - lo if interval is None else min(interval, hi - lo))
+    best = 0.5 * (lo + hi) if start is None else float(start)
+    if not wrap:
+        best = float(np.clip(best, lo, hi))
+    step = width / divisions
+    first_step = step
+    best_score = -np.inf
+    values, scores = [], []
+    iterations = 0
+    # Always run at least once, even when the first interval is already small.
+    while True:
+        begin, end = best - width / 2, best + width / 2
+        if not wrap:
+            begin, end = max(begin, lo), min(end, hi)
+        n = int(np.floor((end - begin) / step + 1e-9)) + 1
+        cand = begin + step * np.arange(n)
+        if wrap:
+            cand = lo + np.mod(cand - lo, periodic)
+        s = np.asarray(score(cand), dtype=float)
+        iterations += 1
+        values.append(cand)
+        scores.append(s)
+        top = s >= s.max() - 1e-12
+        centre = best if prefer is None else prefer
+        gap = np.abs(cand[top] - centre)
+        if periodic is not None:
+            gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
+        k = int(np.flatnonzero(top)[np.argmin(gap)])
+        if s[k] > best_score + 1e-12:
+            best_score, best = float(s[k]), float(cand[k])
+        width = 2 * width / divisions
+        step = 2 * step / divisions
+        if not width > min_step:
+            break
+    values = np.concatenate(values)
+    scores = np.concatenate(scores)
+    dist = np.abs(values - best)
+    if wrap:
+        dist = np.minimum(dist, periodic - dist)
+    far = dist > first_step * 1.01
+    runner = float(scores[far].max()) if far.any() else -np.inf
+    return SearchResult(best, best_score, runner, int(values.size), iterations)
+
+
+def interval_search_many(
+    score: Callable[[np.ndarray], np.ndarray],
+    lo,
+    hi,
+    *,
+    divisions: int = 8,
+    min_step: float,
+    start=None,
+    interval=None,
+    periodic: float | None = None,
+    prefer=None,
+):
+    """Run several independent :func:`interval_search` es in lockstep, one batch each step.
+
+    Parameters
+    ----------
+    score : callable
+        Maps candidates, shape (N, B), to scores, shape (N, B): row ``k`` holds
+        search ``k``'s candidates. Called once per iteration for all N searches.
+    lo, hi, start, interval, prefer : array_like, shape (N,) (or scalars)
+        As in :func:`interval_search`, per search (a NaN ``prefer``: none).
+    divisions, min_step, periodic
+        As in :func:`interval_search`, shared (``min_step`` is the smallest one
+        wanted; every search runs the same number of iterations).
+
+    Returns
+    -------
+    value, score, runner_up : numpy.ndarray, shape (N,)
+    iterations : int
+    """
+    shape = np.broadcast_shapes(*(np.shape(x) for x in (lo, hi, start, interval, prefer)
+                                  if x is not None))
+    shape = shape if shape else (1,)
+    lo = np.broadcast_to(np.asarray(lo, dtype=float), shape)
+    hi = np.broadcast_to(np.asarray(hi, dtype=float), shape)
+    if not np.all(hi > lo):
+        raise ValueError("empty search interval")
+    n_search = lo.size
+    wrap = periodic is not None and np.all(hi - lo >= periodic - 1e-12)
+    width = hi - lo if interval is None else np.minimum(np.broadcast_to(interval, lo.shape),
+                                                        hi - lo)
+    width = np.array(width, dtype=float)
+    best = 0.5 * (lo + hi) if start is None else np.array(np.broadcast_to(start, lo.shape),
+                                                          dtype=float)
+    if not wrap:
+        best = np.clip(best, lo, hi)
+    step = width / divisions
+    first_step = step.copy()
+    best_score = np.full(n_search, -np.inf)
+    rows = np.arange(n_search)
+    values, scores = [], []
+    iterations = 0
+    k = np.arange(divisions + 1)
+    while True:
+        begin, end = best - width / 2, best + width / 2
+        if not wrap:
+            begin, end = np.maximum(begin, lo), np.minimum(end, hi)
+        cand = begin[:, None] + step[:, None] * k[None, :]
+        cand = np.minimum(cand, end[:, None] + 1e-9 * step[:, None])  # clipped: repeats
+        if wrap:
+            cand = lo[:, None] + np.mod(cand - lo[:, None], periodic)
+        s = np.asarray(score(cand), dtype=float)
+        iterations += 1
+        values.append(cand)
+        scores.append(s)
+        centre = best if prefer is None else np.where(
+            np.isnan(np.broadcast_to(prefer, lo.shape)), best, prefer)  # NaN: no preference
+        top = s >= s.max(axis=1, keepdims=True) - 1e-12
+        gap = np.abs(cand - centre[:, None])
+        if periodic is not None:
+            gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
+        dist = np.where(top, gap, np.inf)
+        j = np.argmin(dist, axis=1)
+        better = s[rows, j] > best_score + 1e-12
+        best_score = np.where(better, s[rows, j], best_score)
+        best = np.where(better, cand[rows, j], best)
+        width = 2 * width / divisions
+        step = 2 * step / divisions
+        if not np.any(width > min_step):
+            break
+    values = np.concatenate(values, axis=1)
+    scores = np.concatenate(scores, axis=1)
+    dist = np.abs(values - best[:, None])
+    if wrap:
+        dist = np.minimum(dist, periodic - dist)
+    far = dist > first_step[:, None] * 1.01
+    runner = np.where(far, scores, -np.inf).max(axis=1)
+    return best, best_score, runner, iterations
+
+
+__all__ = ["SearchResult", "interval_search", "interval_search_many"]

@@ -1,0 +1,400 @@
+"""Video -> BVH: the stages in sequence, with caching and progress.
+
+Stages (``../shared/design.md``)::
+
+    frames -> background plate -> silhouettes -> 2D pose -> 3D lift -> motion -> BVH
+
+The expensive image stages (plate, silhouettes, 2D pose) are cached as ``.npz``
+files in a cache folder (default ``.vidcap-cache`` beside the output), each keyed by
+a hash of the video's identity (absolute path, size, modification time), the
+stage's parameters and the key of the stage before it, so changing an option or the
+video redoes exactly the stages that depend on it. The 3D stage (:func:`lift_pose`)
+is cheap and always rerun, since it depends on the user's annotations.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.annotations import Annotations, default_path
+from vidcap.body import JOINT_NAMES, SEGMENT_NAMES, BodyModel
+from vidcap.errors import VidcapError
+from vidcap.fileio import savez_atomic
+from vidcap.lift import (
+    assign_sides,
+    estimate_scale,
+    lift,
+    torso_width_ratio,
+    yaw_from_orientation,
+)
+from vidcap.motion import build_motion
+from vidcap.proposals import propose_orientation, propose_signs
+
+#: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
+#: (a depth annotation is carried forward until the segment next enters it).
+NEAR_PLANE = 0.15
+
+
+@dataclass(frozen=True)
+class LiftResult:
+    """The 3D stage's output (:func:`lift_pose`).
+
+    Attributes
+    ----------
+    joints2d : (F, 15, 2) px, body-side named, user joint fixes applied, gaps filled.
+    joints3d : (F, 15, 3) m, camera-aligned world (X right, Y up, Z toward camera).
+    proposed_signs, signs : (F, 10) int8, proposed and final (user events applied).
+    proposed_orientation, orientation : (F,) str.
+    yaw : (F,) rad. scale : px per metre. clamped : (F, 10) bool.
+    checks : ranked list of (frame, segment) pairs to check (see
+        :meth:`vidcap.proposals.SignProposal.checks`).
+    margin, zeta : (F, 10) sign confidence and out-of-plane amount.
+    """
+
+    joints2d: np.ndarray
+    joints3d: np.ndarray
+    proposed_signs: np.ndarray
+    signs: np.ndarray
+    proposed_orientation: np.ndarray
+    orientation: np.ndarray
+    yaw: np.ndarray
+    scale: float
+    clamped: np.ndarray
+    checks: list
+    margin: np.ndarray
+    zeta: np.ndarray
+
+
+def fill_gaps(joints2d) -> np.ndarray:
+    """Linearly interpolate frames with NaN joints (no silhouette), (F, 15, 2).
+
+    Raises
+    ------
+    VidcapError
+        No frame has joints.
+    """
+    j = np.array(joints2d, float)
+    ok = np.isfinite(j).all(axis=(1, 2))
+    if not ok.any():
+        raise VidcapError("no person was found in any frame")
+    if ok.all():
+        return j
+    t = np.arange(len(j))
+    flat = j.reshape(len(j), -1)
+    for c in range(flat.shape[1]):  # 30 coordinate series, vectorised over frames
+        flat[:, c] = np.interp(t, t[ok], flat[ok, c])
+    return flat.reshape(j.shape)
+
+
+def lift_pose(
+    joints2d,
+    *,
+    fps: float,
+    body: BodyModel | None = None,
+    annotations: Annotations | None = None,
+    image_sides: bool = True,
+    spread=None,
+    track=None,
+) -> LiftResult:
+    """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        2D joints in pixels; NaN frames are interpolated.
+    fps : float
+    body : BodyModel, optional
+    annotations : Annotations, optional
+        User events (orientation, depth, joint positions), true-side names.
+    image_sides : bool
+        ``l_*`` means the image's left limb (the 2D fitter's naming) rather than the
+        body's left (ground truth).
+    spread : array_like, shape (F,), optional
+        Torso horizontal foreshortening (0 side view, 1 front view), e.g.
+        :attr:`vidcap.fit.pose2d.Pose2D.spread`; default from the 2D shoulders/hips.
+    track : array_like, shape (F,), optional
+        Horizontal image position of the subject (walking direction).
+
+    Returns
+    -------
+    LiftResult
+    """
+    body = body or BodyModel()
+    annotations = annotations or Annotations()
+    j2 = fill_gaps(joints2d)
+    F = len(j2)
+    scale = estimate_scale(j2, body)
+    if spread is None:
+        rho = torso_width_ratio(j2, scale, body)
+    else:
+        rho = np.asarray(spread, float)
+        rho = np.where(np.isfinite(rho), rho, torso_width_ratio(j2, scale, body))
+    proposed_orient = propose_orientation(j2, scale=scale, fps=fps, body=body,
+                                          sides_known=not image_sides, track=track)
+    _, user_orient, user_joints = annotations.resolve(F)
+    orient = np.where(user_orient != "", user_orient, proposed_orient).astype(str)
+    yaw = yaw_from_orientation(orient, rho)
+    if image_sides:
+        j2 = assign_sides(j2, yaw)
+    fix = np.isfinite(user_joints)
+    j2 = np.where(fix, user_joints, j2)
+    free = propose_signs(j2, yaw, scale=scale, body=body)
+    user_signs, _, _ = annotations.resolve(F, near_plane=free.zeta < NEAR_PLANE)
+    final = propose_signs(j2, yaw, scale=scale, body=body, fixed=user_signs) \
+        if (user_signs != 0).any() else free
+    out = lift(j2, final.signs, yaw, body=body, scale=scale)
+    return LiftResult(
+        joints2d=j2, joints3d=out.joints3d, proposed_signs=free.signs, signs=final.signs,
+        proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
+        clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
+    )
+
+
+# --------------------------------------------------------------------------- caching
+def _video_identity(video: Path) -> dict:
+    st = video.stat()
+    return {"path": str(video.resolve()), "size": st.st_size, "mtime_ns": st.st_mtime_ns}
+
+
+def _key(*parts) -> str:
+    text = json.dumps(parts, sort_keys=True, default=str)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+class StageCache:
+    """``.npz`` stage results in a folder, keyed by parameters (or disabled: ``None``)."""
+
+    def __init__(self, folder: str | os.PathLike | None):
+        self.folder = None if folder is None else Path(folder)
+
+    def path(self, stage: str, key: str) -> Path | None:
+        return None if self.folder is None else self.folder / f"{stage}-{key}.npz"
+
+    def load(self, stage: str, key: str) -> dict | None:
+        p = self.path(stage, key)
+        if p is None or not p.exists():
+            return None
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                return {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError):  # a damaged cache entry is just redone
+            return None
+
+    def save(self, stage: str, key: str, **arrays) -> None:
+        p = self.path(stage, key)
+        if p is not None:
+            savez_atomic(p, **arrays)
+
+
+# --------------------------------------------------------------------------- the run
+@dataclass
+class ConvertResult:
+    """Everything :func:`run` computed (arrays as in ``vidcap convert --save``)."""
+
+    video: str
+    fps: float
+    masks: np.ndarray
+    bbox: np.ndarray
+    scores: np.ndarray
+    similarity: np.ndarray
+    lifted: LiftResult
+    motion: object
+    jitter_before: float
+    jitter_after: float
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.masks)
+
+    def save_npz(self, path: str | os.PathLike) -> None:
+        """Write the ``--save`` arrays atomically."""
+        lr = self.lifted
+        savez_atomic(
+            path,
+            masks=self.masks, joint_names=np.array(JOINT_NAMES),
+            segment_names=np.array(SEGMENT_NAMES), joints2d=lr.joints2d,
+            joints3d=lr.joints3d, proposed_signs=lr.proposed_signs, signs=lr.signs,
+            proposed_orientation=lr.proposed_orientation.astype(str),
+            orientation=lr.orientation.astype(str), yaw=lr.yaw, scale=np.float64(lr.scale),
+            scores=self.scores, similarity=self.similarity, clamped=lr.clamped,
+            margin=np.minimum(lr.margin, 1e6), zeta=lr.zeta, fps=np.float64(self.fps),
+            bvh_joints3d=self.motion.positions(),
+        )
+
+
+def run(
+    video: str | os.PathLike,
+    *,
+    annotations: str | os.PathLike | Annotations | None = None,
+    background: str | os.PathLike | None = None,
+    height: float = 1.75,
+    smooth_sigma: float = 1.0,
+    cache_dir: str | os.PathLike | None = None,
+    progress: bool | None = None,
+    log=None,
+) -> ConvertResult:
+    """Run the whole video path on ``video``.
+
+    Parameters
+    ----------
+    video : str or path-like
+    annotations : path or Annotations, optional
+        Default: ``VIDEO_STEM.vidcap.json`` beside the video when it exists.
+    background : path, optional
+        A background plate image; default: estimated from the video.
+    height : float
+        Subject's height in metres.
+    smooth_sigma : float
+        Gaussian smoothing of the motion in frames (0 = none).
+    cache_dir : path, optional
+        Stage cache folder (None = no caching).
+    progress : bool, optional
+        Progress bars (default: when stderr is a terminal).
+    log : callable, optional
+        Called with one-line status messages.
+
+    Returns
+    -------
+    ConvertResult
+    """
+    from vidcap.background import estimate_background, load_plate
+    from vidcap.fileio import progress as bar
+    from vidcap.fit.pose2d import fit_sequence
+    from vidcap.silhouette import extract_silhouettes
+    from vidcap.video import probe
+
+    log = log or (lambda msg: None)
+    video = Path(video)
+    info = probe(video)
+    body = BodyModel(height=height)
+    cache = StageCache(cache_dir)
+    timings = {}
+
+    if annotations is None and default_path(video).exists():
+        annotations = default_path(video)
+    if isinstance(annotations, (str, os.PathLike)):
+        log(f"annotations: {annotations}")
+        annotations = Annotations.load(annotations, n_frames=info.n_frames or None)
+    ann = annotations or Annotations()
+
+    # 1. background plate
+    t0 = time.perf_counter()
+    ident = _video_identity(video)
+    if background is not None:
+        plate_model = load_plate(background)
+        k_plate = _key("plate-file", _video_identity(Path(background)))
+    else:
+        k_plate = _key("plate", ident)
+        hit = cache.load("plate", k_plate)
+        if hit is None:
+            log("estimating the background plate")
+            plate_model = estimate_background(video, rng=np.random.default_rng(0),
+                                              progress=progress)
+            cache.save("plate", k_plate, plate=plate_model.plate)
+        else:
+            from vidcap.background import BackgroundModel
+
+            plate_model = BackgroundModel.from_plate(hit["plate"])
+    timings["plate"] = time.perf_counter() - t0
+
+    # 2. silhouettes
+    t0 = time.perf_counter()
+    k_sil = _key("silhouettes", ident, k_plate)
+    hit = cache.load("silhouettes", k_sil)
+    if hit is None:
+        sil = extract_silhouettes(video, plate_model, progress=progress)
+        masks, bbox = sil.masks, sil.bbox
+        cache.save("silhouettes", k_sil, packed=np.packbits(masks, axis=-1),
+                   shape=np.array(masks.shape), bbox=bbox)
+    else:
+        shape = tuple(hit["shape"])
+        masks = np.unpackbits(hit["packed"], axis=-1, count=shape[-1]).astype(bool)
+        bbox = hit["bbox"]
+    timings["silhouettes"] = time.perf_counter() - t0
+    if len(masks) != info.n_frames and info.n_frames:
+        log(f"decoded {len(masks)} frames (container says {info.n_frames})")
+
+    # 3. 2D pose
+    t0 = time.perf_counter()
+    k_pose = _key("pose2d", k_sil)
+    hit = cache.load("pose2d", k_pose)
+    if hit is None:
+        def wrap(it, total):
+            return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
+
+        pose = fit_sequence(masks, progress=wrap)
+        hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
+               "similarity": pose.similarity}
+        cache.save("pose2d", k_pose, **hit)
+    timings["pose2d"] = time.perf_counter() - t0
+
+    # 4. 3D lift and 5. motion
+    t0 = time.perf_counter()
+    bb = np.asarray(bbox, float)
+    track = 0.5 * (bb[:, 0] + bb[:, 2]) if bb.ndim == 2 and bb.shape[1] == 4 else None
+    if track is not None:
+        track = np.where(masks.any(axis=(1, 2)), track, np.nan)
+        if np.isfinite(track).any():
+            t = np.arange(len(track))
+            ok = np.isfinite(track)
+            track = np.interp(t, t[ok], track[ok])
+        else:
+            track = None
+    _check_events(ann, len(masks), video)
+    lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
+                       image_sides=True, spread=hit["spread"], track=track)
+    mres = build_motion(lifted.joints3d, info.fps, body=body, smooth_sigma=smooth_sigma)
+    timings["lift+motion"] = time.perf_counter() - t0
+    return ConvertResult(
+        video=str(video), fps=info.fps, masks=masks, bbox=np.asarray(bbox),
+        scores=hit["scores"], similarity=hit["similarity"], lifted=lifted,
+        motion=mres.motion, jitter_before=mres.jitter_before,
+        jitter_after=mres.jitter_after, timings=timings,
+    )
+
+
+def _check_events(ann: Annotations, n_frames: int, video) -> None:
+    late = [e for e in ann.events if e.frame >= n_frames]
+    if late:
+        e = late[0]
+        raise VidcapError(
+            f"annotation at frame {e.frame} is beyond the video's {n_frames} frames", video)
+
+
+def convert(
+    video: str | os.PathLike,
+    out_bvh: str | os.PathLike,
+    *,
+    save: str | os.PathLike | None = None,
+    cache_dir: str | os.PathLike | None | bool = True,
+    **options,
+) -> ConvertResult:
+    """:func:`run` and write the BVH (atomically) and optionally the ``--save`` npz.
+
+    ``cache_dir=True`` puts the cache in ``.vidcap-cache`` beside ``out_bvh``;
+    ``False``/``None`` disables it.
+    """
+    from vidcap.bvh import write_bvh
+
+    out_bvh = Path(out_bvh)
+    if cache_dir is True:
+        cache_dir = out_bvh.parent / ".vidcap-cache"
+    elif cache_dir is False:
+        cache_dir = None
+    result = run(video, cache_dir=cache_dir, **options)
+    write_bvh(out_bvh, result.motion)
+    if save is not None:
+        result.save_npz(save)
+    return result
+
+
+__all__ = ["ConvertResult", "LiftResult", "StageCache", "convert", "fill_gaps", "lift_pose",
+           "run"]

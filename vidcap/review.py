@@ -1,0 +1,132 @@
+"""Review frames: input | silhouette with the 2D model | 3D pose (seed 004 Figures 4.1-4.2).
+
+The 3D panel is rendered off screen with pyvista (VTK falls back to OSMesa/EGL
+without a display); the figure is seen from 40 degrees to the camera's side so
+depth is visible, with a floor grid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
+
+_LEFT = (255, 128, 0)  # BGR: blue-ish for the body's left
+_RIGHT = (0, 96, 255)  # orange-red for the right
+_MID = (0, 200, 0)
+
+
+def _segment_colours():
+    return [_LEFT if n.startswith("l_") else _RIGHT if n.startswith("r_") else _MID
+            for n in SEGMENT_NAMES]
+
+
+def draw_2d(mask, joints2d, *, low=None) -> np.ndarray:
+    """The silhouette (grey) with the 2D model's segments drawn over it, (H, W, 3) uint8.
+
+    ``low`` (10,) bool marks low-confidence segments, drawn thin and dashed-looking
+    (white ends).
+    """
+    import cv2
+
+    img = np.where(np.asarray(mask, bool)[..., None], 110, 25).astype(np.uint8).repeat(3, -1)
+    h = img.shape[0]
+    thick = max(2, h // 120)
+    for k, (a, b) in enumerate(SEGMENT_JOINTS):
+        pa = tuple(int(round(x)) for x in joints2d[a])
+        pb = tuple(int(round(x)) for x in joints2d[b])
+        weak = low is not None and low[k]
+        cv2.line(img, pa, pb, _segment_colours()[k], 1 if weak else thick, cv2.LINE_AA)
+        if weak:
+            cv2.circle(img, pb, thick + 2, (255, 255, 255), 1, cv2.LINE_AA)
+    for p in joints2d:
+        cv2.circle(img, tuple(int(round(x)) for x in p), thick, (240, 240, 240), -1, cv2.LINE_AA)
+    return img
+
+
+class PoseRenderer:
+    """Off-screen pyvista renderer of the 3D skeleton, one (H, W, 3) BGR image per pose."""
+
+    def __init__(self, size: tuple[int, int], *, azimuth_deg: float = 40.0, height: float = 1.75):
+        import pyvista as pv
+
+        pv.OFF_SCREEN = True
+        w, h = size
+        self.pl = pv.Plotter(off_screen=True, window_size=(w + (w % 2), h + (h % 2)))
+        self.pl.set_background("white")
+        n = len(SEGMENT_JOINTS)
+        self.points = np.zeros((len(JOINT_INDEX), 3))
+        lines = np.hstack([np.full((n, 1), 2), SEGMENT_JOINTS]).ravel()
+        self.mesh = pv.PolyData(self.points.copy(), lines=lines)
+        cols = np.array([c[::-1] for c in _segment_colours()], np.uint8)
+        self.mesh.cell_data["rgb"] = cols
+        self.pl.add_mesh(self.mesh, scalars="rgb", rgb=True, line_width=6,
+                         render_lines_as_tubes=True)
+        self.joints = pv.PolyData(self.points.copy())
+        self.pl.add_mesh(self.joints, color="black", point_size=9,
+                         render_points_as_spheres=True)
+        floor = pv.Plane(center=(0, 0, 0), direction=(0, 1, 0), i_size=4 * height,
+                         j_size=4 * height, i_resolution=8, j_resolution=8)
+        self.floor = floor
+        self.floor_actor = self.pl.add_mesh(floor, style="wireframe", color="grey", opacity=0.5)
+        self.az = np.deg2rad(azimuth_deg)
+        self.height = height
+        self.size = (w, h)
+
+    def render(self, joints3d) -> np.ndarray:
+        """Render one pose (15, 3) metres (Y up); returns (H, W, 3) uint8 BGR."""
+        p = np.asarray(joints3d, float)
+        self.mesh.points = p
+        self.joints.points = p
+        c = p[JOINT_INDEX["pelvis"]].copy()
+        self.floor_actor.position = (c[0], 0.0, c[2])
+        focus = (c[0], 0.5 * self.height, c[2])
+        d = 3.2 * self.height
+        eye = (focus[0] + d * np.sin(self.az), focus[1] + 0.25 * d, focus[2] + d * np.cos(self.az))
+        self.pl.camera_position = [eye, focus, (0, 1, 0)]
+        img = self.pl.screenshot(return_img=True)
+        w, h = self.size
+        return np.ascontiguousarray(img[:h, :w, ::-1])
+
+    def close(self):
+        self.pl.close()
+
+
+def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=None,
+                  low_score: float = 0.5, height: float = 1.75):
+    """Yield the three-panel review images, (H, 3 W, 3) uint8 BGR each.
+
+    Parameters
+    ----------
+    frames : iterable of (H, W, 3) uint8
+    masks : (F, H, W) bool
+    joints2d : (F, 15, 2) px; joints3d : (F, 15, 3) m (Y up)
+    scores : (F, 10), optional
+        Per-segment 2D fit scores; below ``low_score`` a segment is marked.
+    similarity : (F,), optional
+        Whole-model fit; below ``low_score`` the frame is marked "LOW".
+    """
+    import cv2
+
+    renderer = None
+    try:
+        for f, frame in enumerate(frames):
+            h, w = frame.shape[:2]
+            if renderer is None:
+                renderer = PoseRenderer((w, h), height=height)
+            low = None if scores is None else np.asarray(scores[f]) < low_score
+            left = frame.copy()
+            mid = draw_2d(masks[f], joints2d[f], low=low)
+            right = renderer.render(joints3d[f])
+            img = np.concatenate([left, mid, right], axis=1)
+            fs = max(0.4, h / 600)
+            cv2.putText(img, f"{f}", (8, int(24 * fs * 1.6)), cv2.FONT_HERSHEY_SIMPLEX, fs,
+                        (255, 255, 255), 2, cv2.LINE_AA)
+            if similarity is not None and similarity[f] < low_score:
+                cv2.putText(img, "LOW", (w + 8, int(24 * fs * 1.6)), cv2.FONT_HERSHEY_SIMPLEX,
+                            fs, (0, 0, 255), 2, cv2.LINE_AA)
+                cv2.rectangle(img, (w, 0), (2 * w - 1, h - 1), (0, 0, 255), 2)
+            yield img
+    finally:
+        if renderer is not None:
+            renderer.close()
