@@ -1,13 +1,11 @@
 """The state behind the annotate page: one clip, its cached stage results, the
 user's annotations, and the lifted pose, re-lifted after every edit.
 
-The page (:mod:`ui.annotate`) only talks to :class:`AnnotateSession`; the session
-talks to the library through two small seams, so that it can be tested alone:
-
-* :class:`ClipData`, the results of the pipeline's heavy stages (frames,
-  silhouettes, 2D fit, proposals' inputs), built by :func:`load_clip`;
-* a *lifter* (:class:`VidcapLifter`): body yaw from orientation labels, depth-sign
-  proposals with the user's signs as constraints, and lifting to 3D.
+The page (:mod:`ui.annotate`) only talks to :class:`AnnotateSession`. The session
+holds a :class:`ClipData` (the pipeline's heavy, cached stages: frames, silhouettes,
+2D fit; built by :func:`load_clip` with :func:`vidcap.pipeline.run`) and reruns the
+3D stage, :func:`vidcap.pipeline.lift_pose`, with the user's annotations after every
+edit, exactly as ``vidcap convert`` does.
 """
 
 from __future__ import annotations
@@ -22,8 +20,15 @@ from pathlib import Path
 
 import numpy as np
 
-from vidcap.body import JOINT_INDEX, JOINT_NAMES, ORIENTATIONS, SEGMENT_INDEX, SEGMENT_NAMES
-from vidcap.errors import AnnotationError, VidcapError
+from vidcap.body import (
+    JOINT_INDEX,
+    JOINT_NAMES,
+    ORIENTATIONS,
+    SEGMENT_INDEX,
+    SEGMENT_NAMES,
+    BodyModel,
+)
+from vidcap.errors import AnnotationError
 
 
 @dataclass
@@ -39,18 +44,24 @@ class ClipData:
     read_frame : callable
         ``read_frame(i) -> (H, W, 3) uint8`` BGR frame ``i``.
     joints2d : numpy.ndarray, shape (F, 15, 2)
-        Fitted 2D joints in pixels (x right, y down), named by the body's sides.
+        2D joints as the 2D stage gives them, pixels (x right, y down); NaN in frames
+        without a person.
     masks : numpy.ndarray of bool, shape (F, H, W), or None
         Silhouettes.
     fit_score : numpy.ndarray, shape (F,)
-        Quality of the 2D fit per frame in [0, 1] (the silhouette similarity);
+        Quality of the 2D fit per frame in [0, 1] (the model/silhouette similarity);
         frames below :attr:`AnnotateSession.low_fit` are flagged.
-    scale : float
-        Pixels per metre of the subject.
-    width_ratio : numpy.ndarray, shape (F,)
-        Torso width foreshortening per frame (for the yaw from orientation labels).
-    orientation : numpy.ndarray of str, shape (F,)
-        Proposed orientation labels (:data:`vidcap.body.ORIENTATIONS`).
+    image_sides : bool
+        ``l_*`` in ``joints2d`` is the image's left limb (the 2D fitter's naming); False
+        when the joints are named by the body's sides (ground truth).
+    spread : numpy.ndarray, shape (F,), optional
+        Torso horizontal foreshortening from the 2D fit (see :func:`vidcap.pipeline.lift_pose`).
+    track : numpy.ndarray, shape (F,), optional
+        Horizontal image position of the subject (walking direction).
+    body : vidcap.body.BodyModel, optional
+        The subject (default 1.75 m).
+    size : tuple of int
+        (width, height) of the frames in pixels (read from frame 0 if not given).
     """
 
     video: Path
@@ -59,10 +70,11 @@ class ClipData:
     joints2d: np.ndarray
     masks: np.ndarray | None
     fit_score: np.ndarray
-    scale: float
-    width_ratio: np.ndarray
-    orientation: np.ndarray
-    size: tuple[int, int] = field(default=(0, 0))  # (width, height), filled in post-init
+    image_sides: bool = True
+    spread: np.ndarray | None = None
+    track: np.ndarray | None = None
+    body: BodyModel | None = None
+    size: tuple[int, int] = field(default=(0, 0))
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -71,8 +83,7 @@ class ClipData:
         if self.joints2d.shape != (F, len(JOINT_NAMES), 2):
             raise ValueError(f"joints2d must be (F, 15, 2), got {self.joints2d.shape}")
         self.fit_score = np.broadcast_to(np.asarray(self.fit_score, float), (F,)).copy()
-        self.width_ratio = np.broadcast_to(np.asarray(self.width_ratio, float), (F,)).copy()
-        self.orientation = np.broadcast_to(np.asarray(self.orientation).astype(str), (F,)).copy()
+        self.body = self.body or BodyModel()
         if self.size == (0, 0):
             h, w = self.read_frame(0).shape[:2]
             self.size = (w, h)
@@ -83,67 +94,14 @@ class ClipData:
         return self.joints2d.shape[0]
 
 
-class VidcapLifter:
-    """The library's lifting, as the session needs it (``vidcap.lift``, ``vidcap.proposals``).
-
-    Parameters
-    ----------
-    body : vidcap.body.BodyModel, optional
-        The subject's body (default 1.75 m).
-    """
-
-    def __init__(self, body=None):
-        from vidcap.body import BodyModel
-
-        self.body = body or BodyModel()
-
-    def yaw(self, orientation: np.ndarray, width_ratio: np.ndarray) -> np.ndarray:
-        """Body yaw (F,) in radians from labels (F,) and torso foreshortening (F,)."""
-        from vidcap.lift import yaw_from_orientation
-
-        return yaw_from_orientation(orientation, width_ratio)
-
-    def propose(self, joints2d, yaw, fixed, scale, *, tau: float = 0.2):
-        """Depth-sign proposals with the user's ``fixed`` signs as constraints.
-
-        Returns
-        -------
-        signs : numpy.ndarray of int, shape (F, 10)
-        doubt : numpy.ndarray, shape (F, 10)
-            Expected displacement of each segment's distal joint if its sign is wrong,
-            metres: ``2 zeta l p_wrong`` with ``p_wrong = 1 / (1 + exp(margin / tau))``
-            (as :meth:`vidcap.proposals.SignProposal.checks` ranks them).
-        checks : list of dict
-            The proposals' ranked list of (frame, segment) pairs to check.
-        """
-        from vidcap.proposals import propose_signs
-
-        p = propose_signs(joints2d, yaw, scale=scale, body=self.body, fixed=fixed)
-        with np.errstate(over="ignore"):
-            p_wrong = 1.0 / (1.0 + np.exp(np.minimum(p.margin / tau, 700.0)))
-        doubt = 2.0 * p.zeta * self.body.segment_lengths() * p_wrong
-        return p.signs, doubt, p.checks(self.body, limit=200, tau=tau)
-
-    def lift(self, joints2d, signs, yaw, scale) -> np.ndarray:
-        """3D joints (F, 15, 3) in metres (X right, Y up, Z toward the camera)."""
-        from vidcap.lift import lift
-
-        return lift(joints2d, signs, yaw, body=self.body, scale=scale).joints3d
-
-
-def _hold_missing(joints2d: np.ndarray) -> np.ndarray:
-    """Frames without a fit (NaN joints, e.g. no silhouette) take the nearest fitted frame's
-    joints, so that lifting and proposals run over the whole clip; (F, 15, 2) -> same."""
-    ok = np.isfinite(joints2d).all(axis=(1, 2))
-    if ok.all() or not ok.any():
-        return joints2d
-    idx = np.flatnonzero(ok)
-    pos = np.clip(np.searchsorted(idx, np.arange(len(ok))), 0, len(idx) - 1)
-    prev = idx[np.maximum(pos - 1, 0)]
-    nxt = idx[pos]
-    frames = np.arange(len(ok))
-    nearest = np.where(np.abs(frames - prev) <= np.abs(nxt - frames), prev, nxt)
-    return joints2d[nearest]
+def sign_doubt(margin: np.ndarray, zeta: np.ndarray, body: BodyModel, *,
+               tau: float = 0.2) -> np.ndarray:
+    """Expected displacement (metres) of each segment's distal joint if its proposed depth
+    sign is wrong: ``2 zeta l p_wrong`` with ``p_wrong = 1 / (1 + exp(margin / tau))``, as
+    :meth:`vidcap.proposals.SignProposal.checks` ranks them. Shapes (F, 10) -> (F, 10)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        p_wrong = 1.0 / (1.0 + np.exp(np.minimum(np.asarray(margin) / tau, 700.0)))
+    return 2.0 * np.asarray(zeta) * body.segment_lengths() * np.nan_to_num(p_wrong)
 
 
 def backup_path(path: Path) -> Path:
@@ -164,36 +122,40 @@ class AnnotateSession:
         The cached stage results.
     annotations_path : str or path-like
         The annotations JSON (read if it exists; written after every edit).
-    lifter : VidcapLifter, optional
-        The lifting seam (default: the library's).
     low_fit : float
         Fit scores below this mark a frame as needing attention (keyword-only knob).
     low_doubt : float
         A segment's sign is marked doubtful when a wrong sign would move its distal
-        joint by more than this (expected value, metres).
-    annotations_cls : type, optional
-        The annotations class (default :class:`vidcap.annotations.Annotations`).
+        joint by more than this (expected value, metres; :func:`sign_doubt`).
     defer_refresh : bool
         If True an edit only resolves the events and re-lifts with the current
         proposals (milliseconds even for long clips) and marks the session
         :attr:`stale`; the caller then runs :meth:`refresh` (e.g. in a worker thread)
-        to re-propose the other signs with the new constraints. If False (default)
-        every edit does both at once.
+        for the full 3D stage, which re-proposes the other signs with the new
+        constraints. If False (default) every edit runs the full 3D stage at once.
 
     Attributes
     ----------
     load_error : str or None
         Why the annotations file could not be read. The file is then copied to
         :attr:`backup` and not written until the user makes an edit.
+    joints2d, joints3d, signs, orientation, yaw : numpy.ndarray
+        The current result (as :class:`vidcap.pipeline.LiftResult`): body-side 2D joints
+        with the user's fixes (F, 15, 2), 3D joints (F, 15, 3), depth signs (F, 10),
+        orientation labels (F,), yaw (F,).
+    user_signs, user_orient, user_joints : numpy.ndarray
+        The user's events resolved over the clip (see
+        :meth:`vidcap.annotations.Annotations.resolve`).
     """
 
-    def __init__(self, clip: ClipData, annotations_path, *, lifter=None, low_fit: float = 0.5,
-                 low_doubt: float = 0.05, annotations_cls=None, defer_refresh: bool = False):
-        if annotations_cls is None:
-            from vidcap.annotations import Annotations as annotations_cls
+    def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
+                 low_doubt: float = 0.05, defer_refresh: bool = False):
+        from vidcap.annotations import Annotations
+        from vidcap.lift import estimate_scale, torso_width_ratio
+        from vidcap.pipeline import fill_gaps
+
         self.clip = clip
         self.path = Path(annotations_path)
-        self.lifter = lifter or VidcapLifter()
         self.low_fit = float(low_fit)
         self.low_doubt = float(low_doubt)
         self.load_error: str | None = None
@@ -205,11 +167,18 @@ class AnnotateSession:
         self.stale = False
         self._version = 0
         self._lock = threading.RLock()
-        self._proposed = np.ones((clip.n_frames, len(SEGMENT_NAMES)), int)
-        self.annotations = annotations_cls()
+        # what lift_pose derives from the 2D joints alone (for the quick re-lift)
+        self._filled = fill_gaps(clip.joints2d)
+        scale = estimate_scale(self._filled, clip.body)
+        rho = torso_width_ratio(self._filled, scale, clip.body)
+        if clip.spread is not None:
+            spread = np.asarray(clip.spread, float)
+            rho = np.where(np.isfinite(spread), spread, rho)
+        self._rho = rho
+        self.annotations = Annotations()
         if self.path.exists():
             try:
-                self.annotations = annotations_cls.load(self.path, clip.n_frames)
+                self.annotations = Annotations.load(self.path, clip.n_frames)
             except AnnotationError as exc:
                 self.load_error = str(exc)
                 self.backup = backup_path(self.path)
@@ -217,52 +186,76 @@ class AnnotateSession:
         self._recompute()
 
     # ------------------------------------------------------------------ derived state
-    def _resolve_user(self) -> None:
-        """The user's events over the clip, and the lift with the current proposals (fast:
-        no re-proposal)."""
-        clip = self.clip
-        F = clip.n_frames
-        user_signs, user_orient, user_joints = self.annotations.resolve(F)
+    def _lift_pose(self, annotations):
+        from vidcap.pipeline import lift_pose
+
+        c = self.clip
+        return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
+                         image_sides=c.image_sides, spread=c.spread, track=c.track)
+
+    def _take(self, res) -> None:
+        """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
+        from vidcap.pipeline import NEAR_PLANE
+
+        self._result = res
+        self.scale = float(res.scale)
+        self.checks = res.checks
+        self.doubt = sign_doubt(res.margin, res.zeta, self.clip.body)
+        self.proposed_orientation = np.asarray(res.proposed_orientation).astype(str)
+        self._near_plane = np.asarray(res.zeta) < NEAR_PLANE
+        self.user_signs, user_orient, self.user_joints = self.annotations.resolve(
+            self.n_frames, near_plane=self._near_plane)
+        self.user_orient = np.asarray(user_orient).astype(str)
+        self.joints2d = np.asarray(res.joints2d, float)
+        self.joints3d = np.asarray(res.joints3d, float)
+        self.signs = np.asarray(res.signs).astype(int)
+        self.orientation = np.asarray(res.orientation).astype(str)
+        self.yaw = np.asarray(res.yaw, float)
+
+    def _quick(self) -> None:
+        """The user's events with the last proposals: the 3D stage of
+        :func:`vidcap.pipeline.lift_pose` without re-proposing (no dynamic programming)."""
+        from vidcap.lift import assign_sides, lift, yaw_from_orientation
+
+        res, body = self._result, self.clip.body
+        user_signs, user_orient, user_joints = self.annotations.resolve(
+            self.n_frames, near_plane=self._near_plane)
         user_orient = np.asarray(user_orient).astype(str)
-        orientation = np.where(user_orient != "", user_orient, clip.orientation)
-        joints2d = clip.joints2d.copy()
-        have = np.isfinite(user_joints).all(axis=-1)
-        joints2d[have] = user_joints[have]
-        yaw = self.lifter.yaw(orientation, clip.width_ratio)
-        signs = np.where(user_signs != 0, user_signs, self._proposed).astype(int)
-        joints3d = self.lifter.lift(_hold_missing(joints2d), signs, yaw, clip.scale)
-        (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.joints2d,
-         self.yaw, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
-                                                 orientation, joints2d, yaw, signs, joints3d)
+        orientation = np.where(user_orient != "", user_orient, self.proposed_orientation)
+        yaw = yaw_from_orientation(orientation, self._rho)
+        j2 = assign_sides(self._filled, yaw) if self.clip.image_sides else self._filled
+        j2 = np.where(np.isfinite(user_joints), user_joints, j2)
+        signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
+        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale).joints3d
+        (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,
+         self.joints2d, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
+                                                      orientation, yaw, j2, signs, joints3d)
 
     def _recompute(self) -> None:
         with self._lock:
-            self._resolve_user()
-            self._proposed, self.doubt, self.checks = self.lifter.propose(
-                _hold_missing(self.joints2d), self.yaw, self.user_signs, self.clip.scale)
-            self._resolve_user()
+            self._take(self._lift_pose(self.annotations))
             self.stale = False
 
     def refresh(self) -> bool:
-        """Re-propose the depth signs with the user's as constraints and re-lift (the slow
-        part of an edit with ``defer_refresh``). Safe to run in a worker thread: the result
-        is dropped if another edit came in meanwhile.
+        """Run the full 3D stage (re-proposing the depth signs with the user's as
+        constraints): the slow part of an edit with ``defer_refresh``. Safe to run in a
+        worker thread: the result is dropped if another edit came in meanwhile.
 
         Returns
         -------
         bool
             Whether the result was kept.
         """
+        from vidcap.annotations import Annotations
+
         with self._lock:
             version = self._version
-            joints2d, yaw, fixed = self.joints2d, self.yaw, self.user_signs
-        proposed, doubt, checks = self.lifter.propose(_hold_missing(joints2d), yaw, fixed,
-                                                      self.clip.scale)
+            snapshot = Annotations(self.annotations.events)
+        res = self._lift_pose(snapshot)
         with self._lock:
             if version != self._version:
                 return False
-            self._proposed, self.doubt, self.checks = proposed, doubt, checks
-            self._resolve_user()
+            self._take(res)
             self.stale = False
         return True
 
@@ -321,7 +314,7 @@ class AnnotateSession:
         with self._lock:
             self._version += 1
             if self.defer_refresh:
-                self._resolve_user()
+                self._quick()
                 self.stale = True
             else:
                 self._recompute()
@@ -431,18 +424,85 @@ def default_annotations_path(video: str | os.PathLike) -> Path:
     return default_path(video)
 
 
-def load_clip(video: str | os.PathLike) -> ClipData:
-    """Run (or load from the cache) the pipeline's heavy stages for ``video``.
+def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None = None,
+              height: float = 1.75, progress: bool | None = None, log=None) -> ClipData:
+    """Run the pipeline's heavy stages for ``video`` (or load them from its stage cache).
+
+    Parameters
+    ----------
+    video : str or path-like
+    cache_dir : str or path-like, optional
+        Stage cache (default ``.vidcap-cache`` beside the video, shared with
+        ``vidcap convert`` runs whose output is beside the video).
+    height : float
+        Subject's height in metres.
+    progress : bool, optional
+        Progress bars (default: when stderr is a terminal).
+    log : callable, optional
+        Called with one-line status messages.
+
+    Returns
+    -------
+    ClipData
+        Frames are kept in memory as JPEG (about 30 kB each) and decoded on demand.
 
     Raises
     ------
     vidcap.errors.VidcapError
-        If the video cannot be read, or the pipeline is not part of this build.
+        If the video cannot be read or no person is found in it.
     """
+    import cv2
+
+    from vidcap import pipeline
+    from vidcap.annotations import Annotations
+    from vidcap.lift import assign_sides
+    from vidcap.video import iter_frames
+
+    video = Path(video)
+    cache_dir = video.parent / ".vidcap-cache" if cache_dir is None else Path(cache_dir)
+    # the user's annotations are the session's business: run the stages without them
+    res = pipeline.run(video, annotations=Annotations(), height=height, cache_dir=cache_dir,
+                       progress=progress, log=log)
+    pose = _cached_pose2d(pipeline, video, cache_dir)
+    if pose is not None and len(pose["joints2d"]) == res.n_frames:
+        joints2d, spread = pose["joints2d"], pose["spread"]
+    else:  # no cache entry: undo the side assignment of the run (no user orientation in it)
+        joints2d, spread = assign_sides(res.lifted.joints2d, res.lifted.yaw), None
+    jpegs = []
+    for frame in iter_frames(video):
+        ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
+        jpegs.append(buf)
+    n = min(len(jpegs), res.n_frames)
+
+    def read_frame(i: int) -> np.ndarray:
+        return cv2.imdecode(jpegs[i], cv2.IMREAD_COLOR)
+
+    track = _track(res.bbox, res.masks)
+    return ClipData(video=video, fps=res.fps, read_frame=read_frame, joints2d=joints2d[:n],
+                    masks=res.masks[:n], fit_score=np.asarray(res.similarity)[:n],
+                    image_sides=True, spread=None if spread is None else spread[:n],
+                    track=None if track is None else track[:n], body=BodyModel(height=height))
+
+
+def _cached_pose2d(pipeline, video: Path, cache_dir: Path) -> dict | None:
+    """The 2D stage's own arrays (image-side names, NaN gaps, torso spread) from the stage
+    cache that :func:`vidcap.pipeline.run` has just filled (same keys as ``run``)."""
     try:
-        from vidcap import pipeline  # noqa: F401
-    except ImportError:
-        raise VidcapError("vidcap annotate needs the video pipeline (vidcap.pipeline), which"
-                          " this build does not have yet", video) from None
-    raise VidcapError("the video pipeline's interface is not connected to the annotate page"
-                      " yet", video)
+        ident = pipeline._video_identity(video)
+        k_sil = pipeline._key("silhouettes", ident, pipeline._key("plate", ident))
+        return pipeline.StageCache(cache_dir).load("pose2d", pipeline._key("pose2d", k_sil))
+    except (AttributeError, OSError):
+        return None
+
+
+def _track(bbox: np.ndarray, masks: np.ndarray) -> np.ndarray | None:
+    """Horizontal centre of the person's box per frame, gaps interpolated (as the pipeline)."""
+    bb = np.asarray(bbox, float)
+    if bb.ndim != 2 or bb.shape[1] != 4:
+        return None
+    track = np.where(masks.any(axis=(1, 2)), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
+    ok = np.isfinite(track)
+    if not ok.any():
+        return None
+    t = np.arange(len(track))
+    return np.interp(t, t[ok], track[ok])

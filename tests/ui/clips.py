@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from ui.session import ClipData
-from vidcap.lift import torso_width_ratio
 from vidcap.video import read_frames
 
 REPO = Path(__file__).resolve().parents[2]
@@ -21,7 +20,8 @@ SAMPLES = REPO / "sample_videos"
 
 
 def truth_clip(name: str = "walk_side", *, poor_fit=(5,)) -> ClipData:
-    """ClipData for ``sample_videos/<name>.mp4`` from its truth file.
+    """ClipData for ``sample_videos/<name>.mp4`` from its truth file (joints named by the
+    body's true sides).
 
     ``poor_fit`` lists frames given a low fit score (to be flagged).
     """
@@ -29,9 +29,7 @@ def truth_clip(name: str = "walk_side", *, poor_fit=(5,)) -> ClipData:
     t = np.load(SAMPLES / f"{name}_truth.npz")
     frames = read_frames(video)
     j2 = t["joints2d"].astype(float)
-    scale = float(np.linalg.norm(t["camera"][0, :3]))
     fit = np.ones(len(j2))
     fit[list(poor_fit)] = 0.3
     return ClipData(video=video, fps=float(t["fps"]), read_frame=lambda i: frames[i],
-                    joints2d=j2, masks=t["masks"], fit_score=fit, scale=scale,
-                    width_ratio=torso_width_ratio(j2, scale), orientation=t["orientation"])
+                    joints2d=j2, masks=t["masks"], fit_score=fit, image_sides=False)

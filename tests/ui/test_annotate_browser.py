@@ -1,6 +1,7 @@
 """End-to-end: the annotate page in a real (headless Debian) Chromium, driven by Playwright.
 
-Starts the app in a subprocess on a free port, flips a depth, steps frames with the
+Starts ``vidcap annotate sample_videos/walk_side.mp4 --no-browser`` in a subprocess on a
+free port, flips a depth, steps frames with the
 keyboard, drags a joint, and checks the annotations file holds exactly those events.
 Screenshots go to ``test-artifacts/`` (and to ``docs/`` with ``VIDCAP_UPDATE_DOCS=1``).
 """
@@ -35,13 +36,19 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+@pytest.fixture(scope="module")
+def stage_cache(tmp_path_factory):
+    """One stage cache for the module: the first start runs the pipeline, the next reuse it."""
+    return tmp_path_factory.mktemp("vidcap-cache")
+
+
 @contextmanager
-def annotate_server(annotations: Path, *, timeout: float = 60.0):
-    """Run the annotate app on the sample walk; yield (url, process); always kill it."""
+def annotate_server(annotations: Path, cache: Path, *, timeout: float = 120.0):
+    """``vidcap annotate`` on the sample walk; yield (url, process, log); always kill it."""
     port = _free_port()
     env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    cmd = [sys.executable, str(REPO / "tests" / "ui" / "serve_truth.py"),
-           "--annotations", str(annotations), "--port", str(port)]
+    cmd = [sys.executable, "-m", "vidcap", "annotate", str(VIDEO), "--no-browser",
+           "--port", str(port), "--annotations", str(annotations), "--cache-dir", str(cache)]
     log = annotations.with_suffix(".log")
     with open(log, "w") as fh:
         proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=fh, stderr=subprocess.STDOUT)
@@ -95,9 +102,9 @@ def _screenshot(page, name: str, *, docs: bool = True) -> None:
         shutil.copy(ARTIFACTS / name, REPO / "docs" / name)
 
 
-def test_annotate_flip_step_drag(browser, tmp_path):
+def test_annotate_flip_step_drag(browser, stage_cache, tmp_path):
     ann = tmp_path / "walk.json"
-    with annotate_server(ann) as (url, _proc, log):
+    with annotate_server(ann, stage_cache) as (url, _proc, log):
         page = browser.new_page(viewport={"width": 1280, "height": 860})
         page.goto(url)
         page.wait_for_selector("#frame-img[src^='data:image']", timeout=30000)
@@ -162,11 +169,11 @@ def test_annotate_flip_step_drag(browser, tmp_path):
     assert "Traceback" not in log.read_text()
 
 
-def test_malformed_annotations_shown_and_kept(browser, tmp_path):
+def test_malformed_annotations_shown_and_kept(browser, stage_cache, tmp_path):
     ann = tmp_path / "walk.json"
     text = '{"version": 1, "events": [{"frame": 0, "type": "depth"}]}\n'
     ann.write_text(text)
-    with annotate_server(ann) as (url, _proc, log):
+    with annotate_server(ann, stage_cache) as (url, _proc, log):
         page = browser.new_page(viewport={"width": 1280, "height": 860})
         page.goto(url)
         alert = page.locator("#load-error")

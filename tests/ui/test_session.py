@@ -72,8 +72,8 @@ def test_joint_fix_moves_the_3d_joint(walk_clip, tmp_path):
     u, v = walk_clip.joints2d[12, j] + [12.0, -8.0]
     s.set_joint(12, "r_wrist", u, v)
     moved = s.joints3d[12, j] - before
-    assert moved[0] == pytest.approx(12.0 / walk_clip.scale, rel=0.05)
-    assert moved[1] == pytest.approx(8.0 / walk_clip.scale, rel=0.05)  # image y down, Y up
+    assert moved[0] == pytest.approx(12.0 / s.scale, rel=0.05)
+    assert moved[1] == pytest.approx(8.0 / s.scale, rel=0.05)  # image y down, Y up
     s.clear_joint(12, "r_wrist")
     np.testing.assert_allclose(s.joints3d[12, j], before)
     assert s.n_user_inputs == 0
@@ -159,35 +159,32 @@ def test_deferred_refresh_matches_full_edit(walk_clip, tmp_path):
 def test_refresh_dropped_when_an_edit_comes_in(walk_clip, tmp_path):
     s = AnnotateSession(walk_clip, tmp_path / "a.json", defer_refresh=True)
     s.set_depth(3, "torso", 1)
-    real = s.lifter.propose
+    real = s._lift_pose
 
-    def propose_then_edit(*args, **kwargs):
-        out = real(*args, **kwargs)
-        s.lifter.propose = real
+    def lift_then_edit(annotations):
+        out = real(annotations)
+        s._lift_pose = real
         s.set_depth(4, "head", -1)  # the user clicks again while the worker runs
         return out
 
-    s.lifter.propose = propose_then_edit
+    s._lift_pose = lift_then_edit
     assert s.refresh() is False and s.stale
     assert s.refresh() is True and not s.stale
     assert s.signs[4, SEGMENT_INDEX["head"]] == -1
 
 
-def test_frames_without_a_fit_are_held_and_drawn(walk_clip, tmp_path):
+def test_frames_without_a_fit_are_filled_and_drawn(walk_clip, tmp_path):
     from dataclasses import replace
 
     from ui import render
-    from ui.session import _hold_missing
 
     j2 = walk_clip.joints2d.copy()
     j2[[0, 1, 20]] = np.nan
-    held = _hold_missing(j2)
-    np.testing.assert_array_equal(held[0], j2[2])
-    np.testing.assert_array_equal(held[1], j2[2])
-    assert np.isfinite(held).all() and np.array_equal(held[20], j2[19])
     clip = replace(walk_clip, joints2d=j2)
     s = AnnotateSession(clip, tmp_path / "a.json")
-    assert np.isfinite(s.joints3d).all()
-    assert s.nearest_joint(20, 100, 100, radius=1e9) is None
-    img = render.draw_model(clip.read_frame(20), s.joints2d[20], s.signs[20])
+    assert np.isfinite(s.joints3d).all() and np.isfinite(s.joints2d).all()
+    # frame 20 is interpolated between its neighbours (vidcap.pipeline.fill_gaps)
+    np.testing.assert_allclose(s.joints2d[20], (j2[19] + j2[21]) / 2)
+    nan_pose = np.full((15, 2), np.nan)
+    img = render.draw_model(clip.read_frame(20), nan_pose, s.signs[20])
     np.testing.assert_array_equal(img, clip.read_frame(20))  # nothing to draw, no crash

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from vidcap.errors import UsageError
@@ -25,6 +26,10 @@ def add_arguments(parser) -> None:
                         help="interface to listen on (default 127.0.0.1: this computer only)")
     parser.add_argument("--no-browser", action="store_true",
                         help="do not open a browser; just print the page's address")
+    parser.add_argument("--height", type=float, default=1.75,
+                        help="the subject's height in metres (default 1.75)")
+    parser.add_argument("--cache-dir", metavar="DIR",
+                        help="stage cache (default: .vidcap-cache beside the video)")
 
 
 def run(args) -> int:
@@ -38,7 +43,13 @@ def run(args) -> int:
     annotate = require("ui.annotate", needs=UI_PACKAGES)
     from ui.session import AnnotateSession, default_annotations_path, load_clip
 
-    clip = load_clip(video)
+    if not 0.5 <= args.height <= 2.5:
+        raise UsageError(f"--height must be 0.5..2.5 metres, got {args.height}")
+
+    def log(msg: str) -> None:
+        print(f"vidcap annotate: {msg}", file=sys.stderr, flush=True)
+
+    clip = load_clip(video, cache_dir=args.cache_dir, height=args.height, log=log)
     session = AnnotateSession(clip, args.annotations or default_annotations_path(video))
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         print(f"vidcap annotate: warning: listening on {args.host}: other computers can reach"
