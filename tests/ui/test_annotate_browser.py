@@ -182,6 +182,12 @@ def test_malformed_annotations_shown_and_kept(browser, stage_cache, tmp_path):
         assert "walk.json.bak" in alert.inner_text()
         page.wait_for_selector("#frame-img[src^='data:image']")
         _screenshot(page, "annotate_malformed.png", docs=False)
+        # N jumps to the frame that most needs attention (no edit: nothing is written)
+        first = next(it for it in _state(page, "flagged") if it["frame"] != 0)
+        page.click("#frame-label")
+        page.keyboard.press("n")
+        _wait_state(page, f"window.trame.state.get('frame') == {first['frame']}")
+        page.wait_for_selector(f"#message:has-text('frame {first['frame']}:')")
         page.close()
     assert ann.read_text() == text
     assert (tmp_path / "walk.json.bak").read_text() == text

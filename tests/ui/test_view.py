@@ -229,3 +229,10 @@ def test_player_plays_in_real_time(sample_bvh):
         assert scene.frame in (0, 1)
     finally:
         scene.plotter.close()
+
+
+def test_cli_annotate_user_errors(cli, tmp_path):
+    r = cli("annotate", tmp_path / "missing.mp4", "--no-browser")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "missing.mp4" in r.stderr
+    r = cli("annotate", tmp_path / "missing.mp4", "--port", "70000")
+    assert r.returncode == 2 and "--port" in r.stderr
