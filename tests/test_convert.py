@@ -63,6 +63,9 @@ def test_saved_arrays(converted):
         F = z["masks"].shape[0]
         assert z["joints3d"].shape == (F, 15, 3) and z["signs"].shape == (F, 10)
         assert set(np.unique(z["signs"])) <= {-1, 1}
+        # the ranked checks, most doubtful first
+        assert len(z["check_frame"]) == len(z["check_segment"]) > 0
+        assert np.all(np.diff(z["check_priority"]) <= 0)
         truth = np.load(TRUTH)
         assert np.mean(z["orientation"] == truth["orientation"]) > 0.9
 
@@ -80,6 +83,18 @@ def test_bad_annotations_fail_cleanly_and_leave_no_bvh(tmp_path):
     assert r.returncode == 2
     assert "clip.vidcap.json" in r.stderr and "unknown segment 'tail'" in r.stderr
     assert len([ln for ln in r.stderr.splitlines() if ln.startswith("vidcap: error")]) == 1
+    assert not out.exists()
+
+
+def test_annotation_beyond_the_clip_names_the_annotations_file(tmp_path):
+    if not WALK.exists():
+        pytest.skip("sample_videos/ not present")
+    ann = tmp_path / "late.json"
+    ann.write_text('{"version": 1, "events": [{"frame": 420, "type": "orientation", '
+                   '"value": "left"}]}')
+    out = tmp_path / "o.bvh"
+    r = run_cli("convert", WALK, "-o", out, "--annotations", ann)
+    assert r.returncode == 2 and "late.json" in r.stderr and "frame 420" in r.stderr
     assert not out.exists()
 
 
@@ -145,3 +160,17 @@ def test_review_frames_are_three_panels_wide(tmp_path, converted):
     third = img[:, 2 * w:]
     assert (third < 100).any(axis=2).sum() > 200
     assert not np.array_equal(img[:, :w], third)
+
+
+def test_second_run_uses_the_stage_cache(converted):
+    from vidcap.pipeline import convert
+
+    out, _, _ = converted
+    cache = out.parent / ".vidcap-cache"
+    files = sorted(p.name for p in cache.iterdir())
+    assert {f.split("-")[0] for f in files} == {"plate", "silhouettes", "pose2d"}
+    again = out.parent / "again.bvh"
+    res = convert(WALK, again, progress=False)
+    assert sorted(p.name for p in cache.iterdir()) == files
+    assert res.timings["pose2d"] < 0.5 and res.timings["plate"] < 0.5
+    assert again.read_text() == out.read_text()

@@ -147,3 +147,20 @@ def test_joints_to_motion_reproduces_the_pose_and_smoothing_reduces_jitter():
     assert pos[..., 1].min() >= -1e-9  # feet never below the floor
     ank = [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
     assert np.quantile(pos[:, ank, 1].min(1), 0.1) < 0.01  # and on it when lowest
+
+
+def test_keyframes_and_slerp_interpolation():
+    from vidcap.motion import interpolate_keyframes, keyframes_by_confidence
+
+    scores = np.array([0.9, 0.2, 0.2, 0.9] + [0.1] * 25 + [0.8])
+    keys = keyframes_by_confidence(scores, min_score=0.5, max_gap=10)
+    assert keys[0] == 0 and keys[-1] == 29 and {3, 29} <= set(keys)
+    assert np.diff(keys).max() <= 10
+    j2, j3, signs, fps = posed_clip(45.0, 30)
+    m = joints_to_motion(lift(j2, signs, np.deg2rad(45.0), scale=200.0).joints3d, fps)
+    k = np.arange(0, 30, 3).tolist() + [29]
+    mi = interpolate_keyframes(m, k)
+    np.testing.assert_allclose(mi.rotations[k], m.rotations[k], atol=1e-9)
+    # smooth motion: interpolated frames stay close to the originals
+    err = np.linalg.norm(mi.positions() - m.positions(), axis=-1)
+    assert err[k].max() < 1e-9 and err.max() < 0.05

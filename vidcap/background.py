@@ -532,9 +532,25 @@ def _finish_regions(frames, gains, weights_small, idx, name, holes=None):
                    never_seen=never)
 
 
-def _robust_plate(frames, gains, weights) -> np.ndarray:
-    """Per-pixel median of the background samples, (H, W, 3) uint8."""
-    return _masked_median(_normalised_u8(frames, gains), weights <= 0)
+def _robust_plate(frames, gains, weights, *, max_samples=9) -> np.ndarray:
+    """Per-pixel median of the background samples, (H, W, 3) uint8.
+
+    At full resolution the median runs over at most ``max_samples`` evenly picked
+    samples (the cost is linear in them); pixels with no background sample among
+    those take the median over all samples.
+    """
+    x = _normalised_u8(frames, gains)
+    excl = weights <= 0
+    k = len(x)
+    if k <= max_samples:
+        return _masked_median(x, excl)
+    sub = np.unique(np.linspace(0, k - 1, max_samples).round().astype(int))
+    plate = _masked_median(x[sub], excl[sub])
+    lost = excl[sub].all(axis=0) & ~excl.all(axis=0)
+    if lost.any():
+        ys, xs = np.nonzero(lost)
+        plate[ys, xs] = _masked_median(x[:, ys, xs][:, None], excl[:, ys, xs][:, None])[0]
+    return plate
 
 
 def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=None):
@@ -556,6 +572,8 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
     sel = resid[bgw]
     if len(sel) < 16:
         sel = resid.reshape(-1, 3)
+    if len(sel) > 200_000:  # plenty for a robust spread; the median is the cost
+        sel = sel[:: len(sel) // 200_000]
     sigma = (1.4826 * np.median(np.abs(sel - np.median(sel, axis=0)), axis=0)).astype(
         np.float32)
     thr = _threshold_from_sigma(sigma, l1[bgw] if bgw.any() else l1.ravel())

@@ -22,10 +22,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.ndimage import gaussian_filter1d, median_filter
 
 from vidcap.annotations import Annotations, default_path
 from vidcap.body import JOINT_NAMES, SEGMENT_NAMES, BodyModel
-from vidcap.errors import VidcapError
+from vidcap.errors import AnnotationError, VidcapError
 from vidcap.fileio import savez_atomic
 from vidcap.lift import (
     assign_sides,
@@ -34,7 +35,7 @@ from vidcap.lift import (
     torso_width_ratio,
     yaw_from_orientation,
 )
-from vidcap.motion import build_motion
+from vidcap.motion import build_motion, keyframes_by_confidence
 from vidcap.proposals import propose_orientation, propose_signs
 
 #: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
@@ -102,6 +103,8 @@ def lift_pose(
     image_sides: bool = True,
     spread=None,
     track=None,
+    smooth_2d: float = 0.0,
+    yaw_window_s: float = 1.0,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -121,6 +124,11 @@ def lift_pose(
         :attr:`vidcap.fit.pose2d.Pose2D.spread`; default from the 2D shoulders/hips.
     track : array_like, shape (F,), optional
         Horizontal image position of the subject (walking direction).
+    smooth_2d : float
+        Gaussian smoothing of the 2D joints over time before lifting, in frames
+        (0 = none): Eq. 2.2 amplifies image noise where a segment is nearly in plane.
+    yaw_window_s : float
+        Running-median window (seconds) of the torso's horizontal foreshortening.
 
     Returns
     -------
@@ -131,13 +139,18 @@ def lift_pose(
     j2 = fill_gaps(joints2d)
     F = len(j2)
     scale = estimate_scale(j2, body)
+    if smooth_2d > 0 and F > 2:
+        j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     if spread is None:
         rho = torso_width_ratio(j2, scale, body)
     else:
         rho = np.asarray(spread, float)
         rho = np.where(np.isfinite(rho), rho, torso_width_ratio(j2, scale, body))
+    # the body turns slowly: a running median over ~1 s removes single-frame misfits
+    rho = median_filter(rho, size=max(1, int(round(yaw_window_s * fps)) | 1), mode="nearest")
     proposed_orient = propose_orientation(j2, scale=scale, fps=fps, body=body,
-                                          sides_known=not image_sides, track=track)
+                                          sides_known=not image_sides, track=track,
+                                          window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
     orient = np.where(user_orient != "", user_orient, proposed_orient).astype(str)
     yaw = yaw_from_orientation(orient, rho)
@@ -226,6 +239,10 @@ class ConvertResult:
             orientation=lr.orientation.astype(str), yaw=lr.yaw, scale=np.float64(lr.scale),
             scores=self.scores, similarity=self.similarity, clamped=lr.clamped,
             margin=np.minimum(lr.margin, 1e6), zeta=lr.zeta, fps=np.float64(self.fps),
+            check_frame=np.array([c["frame"] for c in lr.checks], dtype=int),
+            check_segment=np.array([c["segment"] for c in lr.checks], dtype="U16"),
+            check_sign=np.array([c["sign"] for c in lr.checks], dtype=int),
+            check_priority=np.array([c["priority"] for c in lr.checks], dtype=float),
             bvh_joints3d=self.motion.positions(),
         )
 
@@ -237,6 +254,7 @@ def run(
     background: str | os.PathLike | None = None,
     height: float = 1.75,
     smooth_sigma: float = 1.0,
+    keyframe_score: float | None = None,
     cache_dir: str | os.PathLike | None = None,
     progress: bool | None = None,
     log=None,
@@ -254,6 +272,10 @@ def run(
         Subject's height in metres.
     smooth_sigma : float
         Gaussian smoothing of the motion in frames (0 = none).
+    keyframe_score : float, optional
+        Key only the frames whose 2D fit similarity is at least this (plus enough
+        frames to leave no gap over 10 frames) and Slerp between them (seed 004
+        section 3.1.5 keys the poses); default: every frame is a key.
     cache_dir : path, optional
         Stage cache folder (None = no caching).
     progress : bool, optional
@@ -280,9 +302,11 @@ def run(
 
     if annotations is None and default_path(video).exists():
         annotations = default_path(video)
+    ann_source = video
     if isinstance(annotations, (str, os.PathLike)):
         log(f"annotations: {annotations}")
-        annotations = Annotations.load(annotations, n_frames=info.n_frames or None)
+        ann_source = annotations
+        annotations = Annotations.load(annotations)  # frames are checked once decoded
     ann = annotations or Annotations()
 
     # 1. background plate
@@ -348,10 +372,15 @@ def run(
             track = np.interp(t, t[ok], track[ok])
         else:
             track = None
-    _check_events(ann, len(masks), video)
+    _check_events(ann, len(masks), ann_source)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track)
-    mres = build_motion(lifted.joints3d, info.fps, body=body, smooth_sigma=smooth_sigma)
+    keys = None
+    if keyframe_score is not None:
+        keys = keyframes_by_confidence(hit["similarity"], min_score=keyframe_score)
+        log(f"{len(keys)} keyframes of {len(masks)}")
+    mres = build_motion(lifted.joints3d, info.fps, body=body, smooth_sigma=smooth_sigma,
+                        keys=keys)
     timings["lift+motion"] = time.perf_counter() - t0
     return ConvertResult(
         video=str(video), fps=info.fps, masks=masks, bbox=np.asarray(bbox),
@@ -361,12 +390,13 @@ def run(
     )
 
 
-def _check_events(ann: Annotations, n_frames: int, video) -> None:
+def _check_events(ann: Annotations, n_frames: int, source) -> None:
     late = [e for e in ann.events if e.frame >= n_frames]
     if late:
         e = late[0]
-        raise VidcapError(
-            f"annotation at frame {e.frame} is beyond the video's {n_frames} frames", video)
+        raise AnnotationError(
+            f"{e.type} event at frame {e.frame} is beyond the video's {n_frames} frames "
+            f"(frames count from 0)", source)
 
 
 def convert(

@@ -25,6 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="subject's height in metres (default 1.75)")
     parser.add_argument("--smooth", type=float, default=1.0, metavar="SIGMA",
                         help="Gaussian smoothing of the motion in frames (0 = none; default 1)")
+    parser.add_argument("--keyframes", type=float, metavar="MIN_SIMILARITY",
+                        help="key only frames whose 2D fit similarity is at least this and "
+                        "interpolate the rest (default: every frame)")
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "
                         "signs, orientation and scores")
@@ -45,7 +48,7 @@ def run(args) -> int:
     res = convert(
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
         annotations=args.annotations, background=args.background, height=args.height,
-        smooth_sigma=args.smooth, log=log,
+        smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log,
     )
     if not args.quiet:
         lr = res.lifted

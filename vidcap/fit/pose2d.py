@@ -123,6 +123,15 @@ _THIGH_WIDE = (np.deg2rad(180.0), np.deg2rad(360.0))
 _REST_DEG = np.array([90, 90, 270, 270, 270, 270, 270, 270, 270, 270], dtype=float)
 
 
+def _into_range(angle, lo, hi):
+    """The representative of ``angle`` (mod 2 pi) in ``[lo, hi]``, or the nearer bound."""
+    x = lo + np.mod(np.asarray(angle, dtype=float) - lo, TWO_PI)
+    beyond = x > hi
+    nearer_lo = (lo + TWO_PI - x) < (x - hi)
+    out = np.where(beyond, np.where(nearer_lo, lo, hi), x)
+    return float(out) if np.ndim(out) == 0 else out
+
+
 @dataclass(frozen=True)
 class FramePose:
     """The fitted 2D pose of one frame.
@@ -486,9 +495,9 @@ class _Fitter:
         periodic = TWO_PI if hi - lo >= TWO_PI - 1e-9 else None
         if start is not None and periodic is None:
             # keep a warm start's interval inside the limits (angles are periodic)
-            start = lo + np.mod(start - lo + np.pi, TWO_PI) - np.pi
+            start = _into_range(start, lo, hi)
         if prefer is not None and periodic is None:
-            prefer = lo + np.mod(prefer - lo + np.pi, TWO_PI) - np.pi
+            prefer = _into_range(prefer, lo, hi)
         res = interval_search(self.scorer(ends, moving, rows), lo, hi, divisions=divisions,
                               min_step=min_step, start=start, interval=interval,
                               periodic=periodic, prefer=prefer)
@@ -630,7 +639,7 @@ class _Fitter:
             full = hi_a - lo_a >= TWO_PI - 1e-9
             # a full circle is searched as the circle centred on the start (no wrap);
             # a limited range with the start unwrapped into it
-            st = np.where(full, st, lo_a + np.mod(st - lo_a + np.pi, TWO_PI) - np.pi)
+            st = np.where(full, st, _into_range(st, lo_a, hi_a))
             lo_a = np.where(full, st - np.pi, lo_a)
             hi_a = np.where(full, st + np.pi, hi_a)
             if prefer is None:  # hidden arms hang down on ties
@@ -879,9 +888,7 @@ class _Fitter:
                             lo, hi = lim
                 start = self.angles[seg]
                 if lo is not None:
-                    start = lo + np.mod(start - lo, TWO_PI)
-                    start = start if start <= hi else (lo if start - hi > TWO_PI - start + lo
-                                                       else hi)
+                    start = _into_range(start, lo, hi)
                 # a shin may swing far from its contour estimate (a raised foot), so
                 # the lower legs get their whole range; an arm hidden in the torso
                 # covers the same pixels at any angle: ties go to hanging down
@@ -1034,7 +1041,8 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
-             fallback: float = 0.97, warm_step_deg: float = 2.0) -> FramePose:
+             fallback: float = 0.97, warm_step_deg: float = 2.0,
+             challenge: bool = False) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -1064,6 +1072,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     warm_step_deg : float
         First step of a warm angle search in degrees (8 divisions, so the search
         spans +-4 steps around the previous angle, then refines by a quarter).
+    challenge : bool
+        Also fit a warm-started frame from scratch and keep the better fit (how a
+        track escapes a wrong but stable pose; :func:`fit_sequence` does this every
+        ``reinit_every`` frames).
 
 
     Returns
@@ -1080,7 +1092,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
               warm_step_deg=warm_step_deg)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
                                       **kw)
-    if warm and f.similarity() < fallback * previous.similarity:
+    if warm and (challenge or f.similarity() < fallback * previous.similarity):
         # the track is slipping: fit this frame from scratch, keep the better fit
         g, g_crossed, _ = fit_normalised(norm, **kw)
         if g.similarity() > f.similarity():
@@ -1100,7 +1112,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
-                 progress=None, **kw) -> Pose2D:
+                 progress=None, reinit_every: int = 10, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -1113,6 +1125,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     progress : callable, optional
         Wraps the frame iterator (e.g. :func:`vidcap.fileio.progress`); called as
         ``progress(iterable, total=F)``.
+    reinit_every : int
+        In tracked mode every this many frames the frame is also fitted from scratch
+        and the better fit kept (0: never).
     **kw
         Passed to :func:`fit_pose` (``height``, ``refine``, ``spread``, ...).
 
@@ -1137,7 +1152,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         if not m.any():
             prev = None
             continue
-        fp = fit_pose(m, previous=prev if tracked else None, **kw)
+        challenge = bool(reinit_every) and k % reinit_every == 0
+        fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
         joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
         scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
         sim[k], warm[k] = fp.similarity, fp.warm

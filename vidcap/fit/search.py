@@ -133,6 +133,10 @@ def interval_search(
             begin, end = max(begin, lo), min(end, hi)
         n = int(np.floor((end - begin) / step + 1e-9)) + 1
         cand = begin + step * np.arange(n)
+        if iterations == 0 and start is not None:
+            # a warm start is itself a candidate, so a search never ends worse than it
+            # began (beyond the seed, whose grid may step over the previous value)
+            cand = np.append(cand, best)
         if wrap:
             cand = lo + np.mod(cand - lo, periodic)
         s = np.asarray(score(cand), dtype=float)
@@ -220,6 +224,8 @@ def interval_search_many(
             begin, end = np.maximum(begin, lo), np.minimum(end, hi)
         cand = begin[:, None] + step[:, None] * k[None, :]
         cand = np.minimum(cand, end[:, None] + 1e-9 * step[:, None])  # clipped: repeats
+        if iterations == 0 and start is not None:
+            cand = np.concatenate([cand, best[:, None]], axis=1)  # the start competes too
         if wrap:
             cand = lo[:, None] + np.mod(cand - lo[:, None], periodic)
         s = np.asarray(score(cand), dtype=float)
