@@ -10,6 +10,7 @@ edit, exactly as ``vidcap convert`` does.
 
 from __future__ import annotations
 
+import inspect
 import os
 import shutil
 import threading
@@ -152,7 +153,9 @@ class AnnotateSession:
                  low_doubt: float = 0.05, defer_refresh: bool = False):
         from vidcap.annotations import Annotations
         from vidcap.lift import estimate_scale, torso_width_ratio
-        from vidcap.pipeline import fill_gaps
+        from scipy.ndimage import median_filter
+
+        from vidcap.pipeline import fill_gaps, lift_pose
 
         self.clip = clip
         self.path = Path(annotations_path)
@@ -174,6 +177,10 @@ class AnnotateSession:
         if clip.spread is not None:
             spread = np.asarray(clip.spread, float)
             rho = np.where(np.isfinite(spread), spread, rho)
+        window = inspect.signature(lift_pose).parameters.get("yaw_window_s")
+        if window is not None:  # lift_pose's running median of the foreshortening
+            size = max(1, int(round(window.default * clip.fps)) | 1)
+            rho = median_filter(rho, size=size, mode="nearest")
         self._rho = rho
         self.annotations = Annotations()
         if self.path.exists():

@@ -188,3 +188,15 @@ def test_frames_without_a_fit_are_filled_and_drawn(walk_clip, tmp_path):
     nan_pose = np.full((15, 2), np.nan)
     img = render.draw_model(clip.read_frame(20), nan_pose, s.signs[20])
     np.testing.assert_array_equal(img, clip.read_frame(20))  # nothing to draw, no crash
+
+
+def test_quick_relift_agrees_with_the_full_stage_for_user_signs(walk_clip, tmp_path):
+    """Before the worker's refresh, a user's sign already shows (and the rest agrees with
+    the last full result, so the page does not jump when the refresh lands)."""
+    lazy = AnnotateSession(walk_clip, tmp_path / "a.json", defer_refresh=True)
+    lazy.set_depth(6, "l_upper_arm", -1)
+    quick = lazy.joints3d.copy()
+    lazy.refresh()
+    k = SEGMENT_INDEX["l_upper_arm"]
+    assert lazy.signs[6, k] == -1
+    np.testing.assert_allclose(quick[6], lazy.joints3d[6], atol=1e-9)
