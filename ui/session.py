@@ -151,10 +151,10 @@ class AnnotateSession:
 
     def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
                  low_doubt: float = 0.05, defer_refresh: bool = False):
-        from vidcap.annotations import Annotations
-        from vidcap.lift import estimate_scale, torso_width_ratio
         from scipy.ndimage import median_filter
 
+        from vidcap.annotations import Annotations
+        from vidcap.lift import estimate_scale, torso_width_ratio
         from vidcap.pipeline import fill_gaps, lift_pose
 
         self.clip = clip
