@@ -213,7 +213,8 @@ class AnnotateApp:
 
         @server.trigger("set_orientation")
         def set_orientation(label):
-            if label and label != self.state.orientation or not self.state.orientation_user:
+            # choosing the proposed label also counts: it confirms it from this frame on
+            if label and (label != self.state.orientation or not self.state.orientation_user):
                 self._edit(self.session.set_orientation, int(self.state.frame), label)
 
         @server.trigger("drag_start")
