@@ -277,8 +277,14 @@ class AnnotateApp:
             return
         self._after_edit(ms)
         if self.session.stale:
-            self.state.refreshing = True
-            asyncio.ensure_future(self._refresh())
+            try:
+                loop = asyncio.get_running_loop()
+            except RuntimeError:  # no server loop (used from a script or a test): do it now
+                if self.session.refresh():
+                    self._after_edit(ms)
+            else:
+                self.state.refreshing = True
+                loop.create_task(self._refresh())
 
     async def _refresh(self) -> None:
         """Re-propose the other depth signs in a worker thread, then redraw."""
@@ -294,9 +300,13 @@ class AnnotateApp:
 
     def _toggle_play(self) -> None:
         st = self.state
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:  # playing needs the server's event loop
+            return
         st.playing = not st.playing
         if st.playing and (self._play_task is None or self._play_task.done()):
-            self._play_task = asyncio.ensure_future(self._play_loop())
+            self._play_task = loop.create_task(self._play_loop())
 
     async def _play_loop(self) -> None:
         st = self.state
