@@ -41,7 +41,7 @@ def test_page_state_for_a_frame(app):
 
 
 def test_triggers_edit_and_save(app, tmp_path):
-    st, s = app.state, app.session
+    st = app.state
     _call(app, "goto", 4)
     assert st.frame == 4
     _call(app, "set_orientation", "front_right")
