@@ -1,0 +1,84 @@
+"""The annotate page's server side without a browser: triggers, state and the saved file."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("trame")
+pytest.importorskip("trame_pyvista")
+
+from ui.annotate import AnnotateApp  # noqa: E402
+from ui.session import AnnotateSession  # noqa: E402
+from vidcap.body import JOINT_NAMES  # noqa: E402
+
+
+@pytest.fixture
+def app(walk_clip, tmp_path, monkeypatch):
+    import pyvista as pv
+
+    monkeypatch.setattr(pv, "OFF_SCREEN", True)
+    a = AnnotateApp(AnnotateSession(walk_clip, tmp_path / "a.json"))
+    yield a
+    a.plotter.close()
+
+
+def _call(app, name, *args):
+    app.ctrl.trigger_fn(name)(*args)
+
+
+def test_page_state_for_a_frame(app):
+    st = app.state
+    assert st.frame_src.startswith("data:image/jpeg;base64,")
+    assert st.review_side_src.startswith("data:image/jpeg;base64,")
+    assert len(st.segments) == 10 and len(st.joints_display) == 15
+    assert st.n_inputs == 0 and st.load_error == ""
+    # the picture is shown 640 px wide: joints are scaled by the same factor
+    np.testing.assert_allclose(np.array(st.joints_display) / app.display_scale,
+                               app.session.joints2d[0], atol=0.06)
+
+
+def test_triggers_edit_and_save(app, tmp_path):
+    st = app.state
+    _call(app, "goto", 4)
+    assert st.frame == 4
+    _call(app, "set_orientation", "front_right")
+    assert st.orientation == "front_right" and st.orientation_user and st.n_inputs == 1
+    _call(app, "step", 1)
+    assert st.frame == 5
+    _call(app, "set_depth", "r_lower_leg", -1)
+    seg = next(x for x in st.segments if x["name"] == "r_lower_leg")
+    assert seg["sign"] == -1 and seg["user"]
+    # a click on a joint without moving it is not an edit; a drag is
+    x, y = st.joints_display[JOINT_NAMES.index("l_ankle")]
+    _call(app, "drag_start", x, y)
+    assert st.drag_joint == "l_ankle"
+    _call(app, "drag_end", x + 0.5, y)
+    assert st.n_inputs == 2 and st.drag_joint == ""
+    _call(app, "drag_start", x + 1, y - 1)
+    _call(app, "drag_end", x + 21, y - 1)
+    assert st.n_inputs == 3 and "l_ankle" in st.user_joints
+    _call(app, "drag_start", 1.0, 1.0)  # far from every joint: nothing is picked
+    _call(app, "drag_end", 50.0, 50.0)
+    assert st.n_inputs == 3
+    _call(app, "clear_joint", "l_ankle")
+    assert st.n_inputs == 2 and "l_ankle" not in st.user_joints
+    events = json.loads((tmp_path / "a.json").read_text())["events"]
+    assert [(e["frame"], e["type"]) for e in events] == [(4, "orientation"), (5, "depth")]
+    _call(app, "set_depth", "tail", 1)  # refused, reported, nothing written
+    assert "refused" in st.message and st.n_inputs == 2
+
+
+def test_keys_and_attention(app):
+    st = app.state
+    _call(app, "key", "next")
+    _call(app, "key", "next")
+    _call(app, "key", "prev")
+    assert st.frame == 1
+    _call(app, "key", "attention")
+    first = app.session.flagged()
+    assert st.frame in {it["frame"] for it in first} and st.message.startswith("frame ")
+    _call(app, "goto", 10_000)
+    assert st.frame == app.session.n_frames - 1

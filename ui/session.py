@@ -1,0 +1,515 @@
+"""The state behind the annotate page: one clip, its cached stage results, the
+user's annotations, and the lifted pose, re-lifted after every edit.
+
+The page (:mod:`ui.annotate`) only talks to :class:`AnnotateSession`. The session
+holds a :class:`ClipData` (the pipeline's heavy, cached stages: frames, silhouettes,
+2D fit; built by :func:`load_clip` with :func:`vidcap.pipeline.run`) and reruns the
+3D stage, :func:`vidcap.pipeline.lift_pose`, with the user's annotations after every
+edit, exactly as ``vidcap convert`` does.
+"""
+
+from __future__ import annotations
+
+import inspect
+import os
+import shutil
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.body import (
+    JOINT_INDEX,
+    JOINT_NAMES,
+    ORIENTATIONS,
+    SEGMENT_INDEX,
+    SEGMENT_NAMES,
+    BodyModel,
+)
+from vidcap.errors import AnnotationError
+
+
+@dataclass
+class ClipData:
+    """The pipeline's results for one clip that the annotate page needs.
+
+    Attributes
+    ----------
+    video : pathlib.Path
+        The video file.
+    fps : float
+        Frames per second.
+    read_frame : callable
+        ``read_frame(i) -> (H, W, 3) uint8`` BGR frame ``i``.
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        2D joints as the 2D stage gives them, pixels (x right, y down); NaN in frames
+        without a person.
+    masks : numpy.ndarray of bool, shape (F, H, W), or None
+        Silhouettes.
+    fit_score : numpy.ndarray, shape (F,)
+        Quality of the 2D fit per frame in [0, 1] (the model/silhouette similarity);
+        frames below :attr:`AnnotateSession.low_fit` are flagged.
+    image_sides : bool
+        ``l_*`` in ``joints2d`` is the image's left limb (the 2D fitter's naming); False
+        when the joints are named by the body's sides (ground truth).
+    spread : numpy.ndarray, shape (F,), optional
+        Torso horizontal foreshortening from the 2D fit (see :func:`vidcap.pipeline.lift_pose`).
+    track : numpy.ndarray, shape (F,), optional
+        Horizontal image position of the subject (walking direction).
+    body : vidcap.body.BodyModel, optional
+        The subject (default 1.75 m).
+    size : tuple of int
+        (width, height) of the frames in pixels (read from frame 0 if not given).
+    """
+
+    video: Path
+    fps: float
+    read_frame: Callable[[int], np.ndarray]
+    joints2d: np.ndarray
+    masks: np.ndarray | None
+    fit_score: np.ndarray
+    image_sides: bool = True
+    spread: np.ndarray | None = None
+    track: np.ndarray | None = None
+    body: BodyModel | None = None
+    size: tuple[int, int] = field(default=(0, 0))
+
+    def __post_init__(self):
+        self.video = Path(self.video)
+        self.joints2d = np.asarray(self.joints2d, dtype=float)
+        F = self.joints2d.shape[0]
+        if self.joints2d.shape != (F, len(JOINT_NAMES), 2):
+            raise ValueError(f"joints2d must be (F, 15, 2), got {self.joints2d.shape}")
+        self.fit_score = np.broadcast_to(np.asarray(self.fit_score, float), (F,)).copy()
+        self.body = self.body or BodyModel()
+        if self.size == (0, 0):
+            h, w = self.read_frame(0).shape[:2]
+            self.size = (w, h)
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames F."""
+        return self.joints2d.shape[0]
+
+
+def sign_doubt(margin: np.ndarray, zeta: np.ndarray, body: BodyModel, *,
+               tau: float = 0.2) -> np.ndarray:
+    """Expected displacement (metres) of each segment's distal joint if its proposed depth
+    sign is wrong: ``2 zeta l p_wrong`` with ``p_wrong = 1 / (1 + exp(margin / tau))``, as
+    :meth:`vidcap.proposals.SignProposal.checks` ranks them. Shapes (F, 10) -> (F, 10)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        p_wrong = 1.0 / (1.0 + np.exp(np.minimum(np.asarray(margin) / tau, 700.0)))
+    return 2.0 * np.asarray(zeta) * body.segment_lengths() * np.nan_to_num(p_wrong)
+
+
+def backup_path(path: Path) -> Path:
+    """A free ``.bak`` name beside ``path`` (``x.json.bak``, ``x.json.bak1``, ...)."""
+    for n in range(1000):
+        cand = path.with_name(path.name + (".bak" if n == 0 else f".bak{n}"))
+        if not cand.exists():
+            return cand
+    raise AnnotationError("too many backups beside the annotations file", path)
+
+
+class AnnotateSession:
+    """One clip being annotated: edits, re-lifting and autosave.
+
+    Parameters
+    ----------
+    clip : ClipData
+        The cached stage results.
+    annotations_path : str or path-like
+        The annotations JSON (read if it exists; written after every edit).
+    low_fit : float
+        Fit scores below this mark a frame as needing attention (keyword-only knob).
+    low_doubt : float
+        A segment's sign is marked doubtful when a wrong sign would move its distal
+        joint by more than this (expected value, metres; :func:`sign_doubt`).
+    defer_refresh : bool
+        If True an edit only resolves the events and re-lifts with the current
+        proposals (milliseconds even for long clips) and marks the session
+        :attr:`stale`; the caller then runs :meth:`refresh` (e.g. in a worker thread)
+        for the full 3D stage, which re-proposes the other signs with the new
+        constraints. If False (default) every edit runs the full 3D stage at once.
+
+    Attributes
+    ----------
+    load_error : str or None
+        Why the annotations file could not be read. The file is then copied to
+        :attr:`backup` and not written until the user makes an edit.
+    joints2d, joints3d, signs, orientation, yaw : numpy.ndarray
+        The current result (as :class:`vidcap.pipeline.LiftResult`): body-side 2D joints
+        with the user's fixes (F, 15, 2), 3D joints (F, 15, 3), depth signs (F, 10),
+        orientation labels (F,), yaw (F,).
+    user_signs, user_orient, user_joints : numpy.ndarray
+        The user's events resolved over the clip (see
+        :meth:`vidcap.annotations.Annotations.resolve`).
+    """
+
+    def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
+                 low_doubt: float = 0.05, defer_refresh: bool = False):
+        from scipy.ndimage import median_filter
+
+        from vidcap.annotations import Annotations
+        from vidcap.lift import estimate_scale, torso_width_ratio
+        from vidcap.pipeline import fill_gaps, lift_pose
+
+        self.clip = clip
+        self.path = Path(annotations_path)
+        self.low_fit = float(low_fit)
+        self.low_doubt = float(low_doubt)
+        self.load_error: str | None = None
+        self.backup: Path | None = None
+        self.last_edit_ms = 0.0
+        self.saved = False
+        self._visited: set[tuple[int, str]] = set()
+        self.defer_refresh = bool(defer_refresh)
+        self.stale = False
+        self._version = 0
+        self._lock = threading.RLock()
+        # what lift_pose derives from the 2D joints alone (for the quick re-lift)
+        self._filled = fill_gaps(clip.joints2d)
+        scale = estimate_scale(self._filled, clip.body)
+        rho = torso_width_ratio(self._filled, scale, clip.body)
+        if clip.spread is not None:
+            spread = np.asarray(clip.spread, float)
+            rho = np.where(np.isfinite(spread), spread, rho)
+        window = inspect.signature(lift_pose).parameters.get("yaw_window_s")
+        if window is not None:  # lift_pose's running median of the foreshortening
+            size = max(1, int(round(window.default * clip.fps)) | 1)
+            rho = median_filter(rho, size=size, mode="nearest")
+        self._rho = rho
+        self.annotations = Annotations()
+        if self.path.exists():
+            try:
+                self.annotations = Annotations.load(self.path, clip.n_frames)
+            except AnnotationError as exc:
+                self.load_error = str(exc)
+                self.backup = backup_path(self.path)
+                shutil.copy2(self.path, self.backup)
+        self._recompute()
+
+    # ------------------------------------------------------------------ derived state
+    def _lift_pose(self, annotations):
+        from vidcap.pipeline import lift_pose
+
+        c = self.clip
+        return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
+                         image_sides=c.image_sides, spread=c.spread, track=c.track)
+
+    def _take(self, res) -> None:
+        """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
+        from vidcap.pipeline import NEAR_PLANE
+
+        self._result = res
+        self.scale = float(res.scale)
+        self.checks = res.checks
+        self.doubt = sign_doubt(res.margin, res.zeta, self.clip.body)
+        self.proposed_orientation = np.asarray(res.proposed_orientation).astype(str)
+        self._near_plane = np.asarray(res.zeta) < NEAR_PLANE
+        self.user_signs, user_orient, self.user_joints = self.annotations.resolve(
+            self.n_frames, near_plane=self._near_plane)
+        self.user_orient = np.asarray(user_orient).astype(str)
+        self.joints2d = np.asarray(res.joints2d, float)
+        self.joints3d = np.asarray(res.joints3d, float)
+        self.signs = np.asarray(res.signs).astype(int)
+        self.orientation = np.asarray(res.orientation).astype(str)
+        self.yaw = np.asarray(res.yaw, float)
+
+    def _quick(self) -> None:
+        """The user's events with the last proposals: the 3D stage of
+        :func:`vidcap.pipeline.lift_pose` without re-proposing (no dynamic programming)."""
+        from vidcap.lift import assign_sides, lift, yaw_from_orientation
+
+        res, body = self._result, self.clip.body
+        user_signs, user_orient, user_joints = self.annotations.resolve(
+            self.n_frames, near_plane=self._near_plane)
+        user_orient = np.asarray(user_orient).astype(str)
+        orientation = np.where(user_orient != "", user_orient, self.proposed_orientation)
+        yaw = yaw_from_orientation(orientation, self._rho)
+        j2 = assign_sides(self._filled, yaw) if self.clip.image_sides else self._filled
+        j2 = np.where(np.isfinite(user_joints), user_joints, j2)
+        signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
+        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale).joints3d
+        (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,
+         self.joints2d, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
+                                                      orientation, yaw, j2, signs, joints3d)
+
+    def _recompute(self) -> None:
+        with self._lock:
+            self._take(self._lift_pose(self.annotations))
+            self.stale = False
+
+    def refresh(self) -> bool:
+        """Run the full 3D stage (re-proposing the depth signs with the user's as
+        constraints): the slow part of an edit with ``defer_refresh``. Safe to run in a
+        worker thread: the result is dropped if another edit came in meanwhile.
+
+        Returns
+        -------
+        bool
+            Whether the result was kept.
+        """
+        from vidcap.annotations import Annotations
+
+        with self._lock:
+            version = self._version
+            snapshot = Annotations(self.annotations.events)
+        res = self._lift_pose(snapshot)
+        with self._lock:
+            if version != self._version:
+                return False
+            self._take(res)
+            self.stale = False
+        return True
+
+    @property
+    def n_frames(self) -> int:
+        """Frames in the clip."""
+        return self.clip.n_frames
+
+    @property
+    def n_user_inputs(self) -> int:
+        """The user's inputs so far (seed 004 section 4.3 counts them)."""
+        return int(self.annotations.n_user_inputs)
+
+    def low_confidence(self, frame: int) -> np.ndarray:
+        """Segments (10,) bool whose sign is doubtful or whose frame fits badly."""
+        doubtful = (self.doubt[frame] > self.low_doubt) & (self.user_signs[frame] == 0)
+        return doubtful | (self.clip.fit_score[frame] < self.low_fit)
+
+    def frame_info(self, frame: int) -> dict:
+        """What the page shows for ``frame`` (JSON-ready)."""
+        f = self._check_frame(frame)
+        low = self.low_confidence(f)
+        segs = []
+        for k, name in enumerate(SEGMENT_NAMES):
+            segs.append({
+                "name": name,
+                "label": name.replace("_", " "),
+                "sign": int(self.signs[f, k]),
+                "user": bool(self.user_signs[f, k] != 0),
+                "event": self._event_at(f, "depth", name),
+                "low": bool(low[k]),
+                "doubt_cm": round(100.0 * float(self.doubt[f, k]), 1),
+            })
+        return {
+            "frame": f,
+            "segments": segs,
+            "orientation": str(self.orientation[f]),
+            "orientation_user": bool(self.user_orient[f] != ""),
+            "fit_score": round(float(self.clip.fit_score[f]), 3),
+            "user_joints": [JOINT_NAMES[i] for i in
+                            np.flatnonzero(np.isfinite(self.user_joints[f]).all(-1))],
+        }
+
+    def _event_at(self, frame: int, type_: str, key: str) -> bool:
+        return any(e.frame == frame and e.type == type_ and e.key == key
+                   for e in self.annotations.events)
+
+    def _check_frame(self, frame) -> int:
+        f = int(frame)
+        if not 0 <= f < self.n_frames:
+            raise ValueError(f"frame {frame} is outside 0..{self.n_frames - 1}")
+        return f
+
+    # ------------------------------------------------------------------ edits
+    def _edited(self, t0: float) -> float:
+        with self._lock:
+            self._version += 1
+            if self.defer_refresh:
+                self._quick()
+                self.stale = True
+            else:
+                self._recompute()
+        self.save()
+        self.last_edit_ms = (time.perf_counter() - t0) * 1000.0
+        return self.last_edit_ms
+
+    def set_depth(self, frame: int, segment: str, sign) -> float:
+        """From ``frame`` on, ``segment`` points toward (+1) / away (-1) / auto (0).
+
+        Returns the time the edit took (re-lift and save), milliseconds.
+        """
+        t0 = time.perf_counter()
+        if segment not in SEGMENT_INDEX:
+            raise ValueError(f"unknown segment {segment!r}")
+        with self._lock:
+            self.annotations.add_depth(self._check_frame(frame), segment, int(sign))
+        return self._edited(t0)
+
+    def flip_depth(self, frame: int, segment: str) -> float:
+        """Set ``segment``'s sign from ``frame`` on to the opposite of what is shown now."""
+        current = int(self.signs[self._check_frame(frame), SEGMENT_INDEX[segment]])
+        return self.set_depth(frame, segment, -1 if current >= 0 else 1)
+
+    def set_orientation(self, frame: int, label: str) -> float:
+        """From ``frame`` on, the body faces ``label``. Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        if label not in ORIENTATIONS:
+            raise ValueError(f"unknown orientation {label!r}")
+        with self._lock:
+            self.annotations.add_orientation(self._check_frame(frame), label)
+        return self._edited(t0)
+
+    def set_joint(self, frame: int, joint: str, u: float, v: float) -> float:
+        """At ``frame``, ``joint`` is at pixel (u, v). Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        if joint not in JOINT_INDEX:
+            raise ValueError(f"unknown joint {joint!r}")
+        w, h = self.clip.size
+        u = float(np.clip(u, 0, w - 1))
+        v = float(np.clip(v, 0, h - 1))
+        with self._lock:
+            self.annotations.add_joint(self._check_frame(frame), joint, round(u, 2), round(v, 2))
+        return self._edited(t0)
+
+    def clear_joint(self, frame: int, joint: str) -> float:
+        """Forget the user's position of ``joint`` at ``frame``. Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        with self._lock:
+            self.annotations.remove(self._check_frame(frame), "joint", joint)
+        return self._edited(t0)
+
+    def nearest_joint(self, frame: int, u: float, v: float, *, radius: float) -> str | None:
+        """Name of the joint nearest pixel (u, v) within ``radius`` pixels, else None."""
+        d = np.linalg.norm(self.joints2d[self._check_frame(frame)] - [u, v], axis=1)
+        d[~np.isfinite(d)] = np.inf
+        i = int(np.argmin(d))
+        return JOINT_NAMES[i] if d[i] <= radius else None
+
+    def save(self) -> None:
+        """Write the annotations atomically. After a load error an empty set is not written,
+        so the user's (malformed) file is never replaced by nothing."""
+        if self.load_error is not None and self.n_user_inputs == 0:
+            return
+        self.annotations.save(self.path)
+        self.saved = True
+
+    # ------------------------------------------------------------------ attention
+    def flagged(self) -> list[dict]:
+        """Frames needing attention, most urgent first: doubtful depth signs (the
+        proposals' ranked checks) and badly fitting frames.
+
+        Each item has ``frame``, ``segment`` (or ``""``) and ``reason``.
+        """
+        out = []
+        for c in self.checks:
+            k = SEGMENT_INDEX[c["segment"]]
+            if self.user_signs[c["frame"], k] == 0:
+                out.append({"frame": int(c["frame"]), "segment": c["segment"],
+                            "reason": f"{c['segment'].replace('_', ' ')}: depth doubtful"})
+        bad = np.flatnonzero(self.clip.fit_score < self.low_fit)
+        for f in bad[np.argsort(self.clip.fit_score[bad], kind="stable")]:
+            out.append({"frame": int(f), "segment": "",
+                        "reason": f"2D fit poor ({self.clip.fit_score[f]:.2f})"})
+        return out
+
+    def next_attention(self, frame: int) -> dict | None:
+        """The most urgent flagged item not yet visited (and not at ``frame``); marks it
+        visited. Cycles once every item has been visited."""
+        items = self.flagged()
+        if not items:
+            return None
+        fresh = [it for it in items if (it["frame"], it["segment"]) not in self._visited
+                 and it["frame"] != frame]
+        if not fresh:
+            self._visited.clear()
+            fresh = [it for it in items if it["frame"] != frame] or items
+        item = fresh[0]
+        self._visited.add((item["frame"], item["segment"]))
+        return item
+
+
+def default_annotations_path(video: str | os.PathLike) -> Path:
+    """``VIDEO_STEM.vidcap.json`` beside the video (:func:`vidcap.annotations.default_path`)."""
+    from vidcap.annotations import default_path
+
+    return default_path(video)
+
+
+def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None = None,
+              height: float = 1.75, progress: bool | None = None, log=None) -> ClipData:
+    """Run the pipeline's heavy stages for ``video`` (or load them from its stage cache).
+
+    Parameters
+    ----------
+    video : str or path-like
+    cache_dir : str or path-like, optional
+        Stage cache (default ``.vidcap-cache`` beside the video, shared with
+        ``vidcap convert`` runs whose output is beside the video).
+    height : float
+        Subject's height in metres.
+    progress : bool, optional
+        Progress bars (default: when stderr is a terminal).
+    log : callable, optional
+        Called with one-line status messages.
+
+    Returns
+    -------
+    ClipData
+        Frames are kept in memory as JPEG (about 30 kB each) and decoded on demand.
+
+    Raises
+    ------
+    vidcap.errors.VidcapError
+        If the video cannot be read or no person is found in it.
+    """
+    import cv2
+
+    from vidcap import pipeline
+    from vidcap.annotations import Annotations
+    from vidcap.lift import assign_sides
+    from vidcap.video import iter_frames
+
+    video = Path(video)
+    cache_dir = video.parent / ".vidcap-cache" if cache_dir is None else Path(cache_dir)
+    # the user's annotations are the session's business: run the stages without them
+    res = pipeline.run(video, annotations=Annotations(), height=height, cache_dir=cache_dir,
+                       progress=progress, log=log)
+    pose = _cached_pose2d(pipeline, video, cache_dir)
+    if pose is not None and len(pose["joints2d"]) == res.n_frames:
+        joints2d, spread = pose["joints2d"], pose["spread"]
+    else:  # no cache entry: undo the side assignment of the run (no user orientation in it)
+        joints2d, spread = assign_sides(res.lifted.joints2d, res.lifted.yaw), None
+    jpegs = []
+    for frame in iter_frames(video):
+        ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
+        jpegs.append(buf)
+    n = min(len(jpegs), res.n_frames)
+
+    def read_frame(i: int) -> np.ndarray:
+        return cv2.imdecode(jpegs[i], cv2.IMREAD_COLOR)
+
+    track = _track(res.bbox, res.masks)
+    return ClipData(video=video, fps=res.fps, read_frame=read_frame, joints2d=joints2d[:n],
+                    masks=res.masks[:n], fit_score=np.asarray(res.similarity)[:n],
+                    image_sides=True, spread=None if spread is None else spread[:n],
+                    track=None if track is None else track[:n], body=BodyModel(height=height))
+
+
+def _cached_pose2d(pipeline, video: Path, cache_dir: Path) -> dict | None:
+    """The 2D stage's own arrays (image-side names, NaN gaps, torso spread) from the stage
+    cache that :func:`vidcap.pipeline.run` has just filled (same keys as ``run``)."""
+    try:
+        ident = pipeline._video_identity(video)
+        k_sil = pipeline._key("silhouettes", ident, pipeline._key("plate", ident))
+        return pipeline.StageCache(cache_dir).load("pose2d", pipeline._key("pose2d", k_sil))
+    except (AttributeError, OSError):
+        return None
+
+
+def _track(bbox: np.ndarray, masks: np.ndarray) -> np.ndarray | None:
+    """Horizontal centre of the person's box per frame, gaps interpolated (as the pipeline)."""
+    bb = np.asarray(bbox, float)
+    if bb.ndim != 2 or bb.shape[1] != 4:
+        return None
+    track = np.where(masks.any(axis=(1, 2)), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
+    ok = np.isfinite(track)
+    if not ok.any():
+        return None
+    t = np.arange(len(track))
+    return np.interp(t, t[ok], track[ok])

@@ -1,0 +1,58 @@
+"""``vidcap annotate``: the web page for depth directions, orientation and occluded joints."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from vidcap.errors import UsageError
+
+NAME = "annotate"
+HELP = "annotate depth directions, orientation and occluded joints of a video in a web page"
+ORDER = 50
+
+#: Packages of the ``ui`` extra the page needs.
+UI_PACKAGES = ("trame", "trame_vuetify", "trame_pyvista")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("video", help="the video to annotate")
+    parser.add_argument("--annotations", metavar="A.json",
+                        help="annotations file to read and autosave"
+                             " (default: VIDEO_STEM.vidcap.json beside the video)")
+    parser.add_argument("--port", type=int, default=0,
+                        help="TCP port of the page (default: a free one, printed)")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="interface to listen on (default 127.0.0.1: this computer only)")
+    parser.add_argument("--no-browser", action="store_true",
+                        help="do not open a browser; just print the page's address")
+    parser.add_argument("--height", type=float, default=1.75,
+                        help="the subject's height in metres (default 1.75)")
+    parser.add_argument("--cache-dir", metavar="DIR",
+                        help="stage cache (default: .vidcap-cache beside the video)")
+
+
+def run(args) -> int:
+    from vidcap.commands._ui import require
+
+    if not 0 <= args.port <= 65535:
+        raise UsageError(f"--port must be 0..65535, got {args.port}")
+    video = Path(args.video)
+    if not video.is_file():
+        raise UsageError("no such video file", video)
+    annotate = require("ui.annotate", needs=UI_PACKAGES)
+    from ui.session import AnnotateSession, default_annotations_path, load_clip
+
+    if not 0.5 <= args.height <= 2.5:
+        raise UsageError(f"--height must be 0.5..2.5 metres, got {args.height}")
+
+    def log(msg: str) -> None:
+        print(f"vidcap annotate: {msg}", file=sys.stderr, flush=True)
+
+    clip = load_clip(video, cache_dir=args.cache_dir, height=args.height, log=log)
+    session = AnnotateSession(clip, args.annotations or default_annotations_path(video))
+    if args.host not in ("127.0.0.1", "localhost", "::1"):
+        print(f"vidcap annotate: warning: listening on {args.host}: other computers can reach"
+              " the page and edit the annotations")
+    annotate.serve(session, host=args.host, port=args.port, open_browser=not args.no_browser)
+    return 0
