@@ -44,3 +44,15 @@ def test_pose2d_cli_errors(tmp_path, cli):
     r = cli("pose2d", video, "--masks", small, "-o", tmp_path / "o.npz")
     assert r.returncode == 2 and "small.npz" in r.stderr
     assert not (tmp_path / "o.npz").exists()
+
+
+def test_pose2d_cli_without_masks_needs_silhouettes(tmp_path, cli):
+    import importlib.util
+
+    if importlib.util.find_spec("vidcap.silhouette") is not None:
+        import pytest
+
+        pytest.skip("silhouette extraction is available: covered by its own tests")
+    video, _, _ = _clip(tmp_path)
+    r = cli("pose2d", video, "-o", tmp_path / "o.npz")
+    assert r.returncode == 2 and "--masks" in r.stderr

@@ -49,8 +49,11 @@ Beyond the seed:
   ratios in lockstep (one batch per iteration for a whole group,
   :meth:`_Fitter.search_group`). Limbs then keep their labels through crossings. A
   warm fit losing more than 3 % of the previous frame's S is redone from scratch
-  and the better kept. ``tracked=False`` (``--per-frame``) fits every frame
-  independently, as the seed does.
+  and the better kept, and every 10th frame a fresh fit challenges the track (so a
+  wrong but stable track is left). ``tracked=False`` (``--per-frame``) fits every
+  frame independently, as the seed does.
+* Warm starts take part in their own search's first batch, so a search never ends
+  below where it started.
 
 Left and right
 --------------
