@@ -429,15 +429,21 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     * it is not most of its footprint component (``max_hole_share`` of the filled
       component's area): a static object walked around on all sides is usually
       large next to the paths around it; and
-    * the footprint around it shows the hole's own colour in some samples
-      (``min_evidence`` of its ring pixels): the body part's outline changes while
-      its colour stays (a hop, sleeves, a shifting hem), whereas passers-by around
-      a static object rarely wear its colour.
+    * the footprint around it shows the hole's own colour in some samples where
+      its own background has another colour (``min_evidence`` of its ring
+      pixels): the body part's outline changes while its colour stays (a hop,
+      sleeves, a shifting hem), whereas around a patch of background or a static
+      object the ring's background continues the patch's colour and passers-by
+      rarely wear it.
     """
     k, h, w = small.shape[:3]
     box = np.ones((3, 3), np.uint8)
     blur = np.stack([cv2.GaussianBlur(x, (3, 3), 0) for x in small])
     dev = np.abs(blur - np.median(blur, axis=0)[None]).max(axis=-1)  # (k, h, w)
+    # Pixel noise of the blurred samples (robust: most pixels are static in most
+    # samples); region colours can flicker more than pixels, so not ``tau``.
+    noise = 1.4826 * float(np.median(dev[:, ::2, ::2]))
+    tau_region, tau = tau, max(8.0, 5.0 * noise)
     moving = (dev > tau).any(axis=0).astype(np.uint8)
     moving = cv2.morphologyEx(moving, cv2.MORPH_OPEN, box)
     out = np.zeros((h, w), bool)
@@ -461,7 +467,8 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     # Switch when some sample is clearly nearer the guess than the voted colour.
     # and that colour has support of its own (not a passer-by's transient colour).
     alt = np.take_along_axis(agree, near_t[None, None], 1)[:, 0]  # (k, h, w)
-    switch = (filled & (voted_d > far) & (near_d <= 0.5 * voted_d)
+    # (the region colours' own spread sets how far is clearly different)
+    switch = (filled & (voted_d > 3.0 * max(tau, tau_region)) & (near_d <= 0.5 * voted_d)
               & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
     if switch.any():
         weights[:, switch] = alt[:, switch]
@@ -470,14 +477,10 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     _, comp = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
     comp_area = np.bincount(comp.ravel())
     hole_area = np.bincount(lab.ravel(), minlength=n)
-    # Colour of the nearest hole pixel, for every pixel (to compare the ring with).
-    _, near = cv2.distanceTransformWithLabels(
-        (~is_hole).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
-    ys, xs = np.nonzero(is_hole)
-    lut = np.zeros((int(near.max()) + 1, 3), np.float32)
-    lut[near[ys, xs]] = med[ys, xs]
-    near_colour = lut[near]  # (h, w, 3)
-    match = (np.abs(means - near_colour[None]).max(axis=-1) < tau).any(axis=0)
+    # How often each pixel differs from its temporal median: around a body part
+    # that never moved, the limbs and the hop cover the ring often; around a gap
+    # left between a passer-by's sampled positions they cover it once or twice.
+    cover = (dev > tau).mean(axis=0)
     unseen = voted_d > far
     for i in hole_ids:
         hole = lab == i
@@ -486,7 +489,7 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
             continue
         ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
             moving > 0)
-        if ring.any() and match[ring].mean() >= min_evidence:
+        if ring.any() and cover[ring].mean() >= min_evidence:
             out |= hole & unseen
     if out.any():
         # Footprint pixels next to a static body part, far from the guess in every
