@@ -21,9 +21,16 @@ the spot) still takes its background from the frames where it is uncovered:
 5. The per-pixel vote is repeated with every sample weighted by how background-like
    its region was (step 4), which overturns a person's colour that happened to win
    the plain vote.
-6. At full resolution, the plate is the robust mean of the samples over the frames
+6. Motion footprint (:func:`_footprint_plate`): the union of the pixels that differ
+   from the temporal median in some sample. Inside it, the background around it,
+   inpainted across, is a spatial guess that overturns a voted colour far from it
+   when a supported sample colour is near it. Static areas enclosed by the
+   footprint whose ring the limbs cover often (a torso during jumping jacks) are
+   body parts that never moved: flagged ``never_seen``, confidence 0.
+7. At full resolution, the plate is the median of (at most 9 of) the samples
    each pixel was found to be background in. Pixels never found uncovered are
-   flagged (``never_seen``); their plate value is the temporal median, unreliable.
+   flagged (``never_seen``) and inpainted from the surrounding background
+   (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
 
 ``method='median'`` gives the plain per-pixel temporal median as a baseline.
 """
