@@ -456,11 +456,14 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     out = np.zeros((h, w), bool)
     if not moving.any():
         return out
-    n, lab = cv2.connectedComponents(1 - moving, connectivity=4)
+    # Holes are looked for with narrow gaps sealed (a hop's thin band above the
+    # head, an arm's sweep, rarely close at low resolution).
+    sealed = cv2.morphologyEx(moving, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    n, lab = cv2.connectedComponents(1 - sealed, connectivity=4)
     border = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
     hole_ids = np.setdiff1d(np.arange(1, n), border)
     is_hole = np.isin(lab, hole_ids)
-    filled = (moving > 0) | is_hole
+    filled = (sealed > 0) | is_hole
     # Spatial guess: the voted plate outside the footprint, inpainted across it.
     voted = np.take_along_axis(means, best[None, ..., None], 0)[0]
     region = cv2.dilate(filled.astype(np.uint8), box)
@@ -495,7 +498,7 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
         if hole_area[i] > max_hole_share * comp_area[c]:
             continue
         ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
-            moving > 0)
+            sealed > 0)
         if ring.any() and cover[ring].mean() >= min_evidence:
             out |= hole & unseen
     if out.any():
