@@ -77,6 +77,17 @@ def main() -> int:
             mo = synth.make_motion(motion, n_frames=90, rng=rng(0))
             f, truth = synth.render_clip(mo, rng=rng(0), **kw)
             rows += score(name, f, truth["masks"])
+        # As `vidcap synth --motion jacks --yaw 0 [--lighting-drift 0.1] -o x.mp4`: H.264
+        # files (4:2:0 colour, compression) scored as `vidcap silhouettes` reads them.
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            for name, kw in [("synth jacks front, H.264 file", {}),
+                             ("synth jacks front, drift, H.264", {"lighting_drift": 0.1})]:
+                video, tpath = Path(tmp) / "j.mp4", Path(tmp) / "j.npz"
+                truth = synth.synth_clip(video, tpath, "jacks", yaw_deg=0,
+                                         show_progress=False, **kw)
+                rows += score(name, video, truth["masks"])
         # The committed sample clips (H.264 files and their truth).
         for stem in ("walk_side", "walk_three_quarter", "arms"):
             video = ROOT / "sample_videos" / f"{stem}.mp4"

@@ -125,3 +125,30 @@ def test_given_plate(tmp_path):
         load_plate(tmp_path / "missing.png")
     with pytest.raises(ValueError):
         BackgroundModel.from_plate(np.zeros((4, 4), np.uint8))
+
+
+def test_sparse_walker_gaps_are_not_static_body_parts():
+    """A walker sampled only 12 times leaves static background enclosed between
+    its positions (holes of the motion footprint); their ring is covered once or
+    twice, not often, so they are background, not a body part that never moved."""
+    frames, _ = clip(12, 120, 160, rng=np.random.default_rng(31), walk=True)
+    truth = background(120, 160, np.random.default_rng(31))
+    bg = estimate_background(frames, n_samples=12)
+    assert bg.never_seen_fraction < 0.01
+    assert np.median(_plate_error(bg.plate, truth)) < 8
+
+
+def test_static_torso_is_flagged_never_seen_and_inpainted():
+    """Jumping jacks in place: the torso never moves; the median keeps it in the
+    plate, the footprint-hole step flags it and inpaints background there."""
+    frames, masks = clip(30, 120, 160, rng=np.random.default_rng(4))
+    truth = background(120, 160, np.random.default_rng(4))
+    always = masks.all(axis=0)
+    fz = estimate_background(frames, n_samples=15)
+    med = estimate_background(frames, method="median", n_samples=15)
+    assert fz.never_seen[always].mean() > 0.5
+    assert fz.confidence[always].mean() < 0.3
+    # the inpainted plate is nearer the true background than the body's colours
+    err_fz = np.median(_plate_error(fz.plate[always], truth[always]))
+    err_med = np.median(_plate_error(med.plate[always], truth[always]))
+    assert err_fz < 0.5 * err_med

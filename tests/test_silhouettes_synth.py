@@ -32,7 +32,7 @@ def test_jumping_jacks_in_place_keep_the_torso():
     always = masks.all(axis=0)
     assert bg.never_seen[always].mean() > 0.5
     assert bg.confidence[always].mean() < 0.3
-    assert np.median(iou) > 0.85
+    assert np.median(iou) > 0.93  # 0.99 measured at 240x180, 45 frames
     med = estimate_background(frames, method="median", n_samples=20)
     base = _iou(extract_silhouettes(frames, med, require_person=False).masks, masks)
     assert np.median(iou) > np.median(base) + 0.3

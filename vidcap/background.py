@@ -21,9 +21,16 @@ the spot) still takes its background from the frames where it is uncovered:
 5. The per-pixel vote is repeated with every sample weighted by how background-like
    its region was (step 4), which overturns a person's colour that happened to win
    the plain vote.
-6. At full resolution, the plate is the robust mean of the samples over the frames
+6. Motion footprint (:func:`_footprint_plate`): the union of the pixels that differ
+   from the temporal median in some sample. Inside it, the background around it,
+   inpainted across, is a spatial guess that overturns a voted colour far from it
+   when a supported sample colour is near it. Static areas enclosed by the
+   footprint whose ring the limbs cover often (a torso during jumping jacks) are
+   body parts that never moved: flagged ``never_seen``, confidence 0.
+7. At full resolution, the plate is the median of (at most 9 of) the samples
    each pixel was found to be background in. Pixels never found uncovered are
-   flagged (``never_seen``); their plate value is the temporal median, unreliable.
+   flagged (``never_seen``) and inpainted from the surrounding background
+   (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
 
 ``method='median'`` gives the plain per-pixel temporal median as a baseline.
 """
@@ -429,25 +436,34 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     * it is not most of its footprint component (``max_hole_share`` of the filled
       component's area): a static object walked around on all sides is usually
       large next to the paths around it; and
-    * the footprint around it shows the hole's own colour in some samples
-      (``min_evidence`` of its ring pixels): the body part's outline changes while
-      its colour stays (a hop, sleeves, a shifting hem), whereas passers-by around
-      a static object rarely wear its colour.
+    * the footprint around it shows the hole's own colour in some samples where
+      its own background has another colour (``min_evidence`` of its ring
+      pixels): the body part's outline changes while its colour stays (a hop,
+      sleeves, a shifting hem), whereas around a patch of background or a static
+      object the ring's background continues the patch's colour and passers-by
+      rarely wear it.
     """
     k, h, w = small.shape[:3]
     box = np.ones((3, 3), np.uint8)
     blur = np.stack([cv2.GaussianBlur(x, (3, 3), 0) for x in small])
     dev = np.abs(blur - np.median(blur, axis=0)[None]).max(axis=-1)  # (k, h, w)
+    # Pixel noise of the blurred samples (robust: most pixels are static in most
+    # samples); region colours can flicker more than pixels, so not ``tau``.
+    noise = 1.4826 * float(np.median(dev[:, ::2, ::2]))
+    tau_region, tau = tau, max(8.0, 5.0 * noise)
     moving = (dev > tau).any(axis=0).astype(np.uint8)
     moving = cv2.morphologyEx(moving, cv2.MORPH_OPEN, box)
     out = np.zeros((h, w), bool)
     if not moving.any():
         return out
-    n, lab = cv2.connectedComponents(1 - moving, connectivity=4)
+    # Holes are looked for with narrow gaps sealed (a hop's thin band above the
+    # head, an arm's sweep, rarely close at low resolution).
+    sealed = cv2.morphologyEx(moving, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    n, lab = cv2.connectedComponents(1 - sealed, connectivity=4)
     border = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
     hole_ids = np.setdiff1d(np.arange(1, n), border)
     is_hole = np.isin(lab, hole_ids)
-    filled = (moving > 0) | is_hole
+    filled = (sealed > 0) | is_hole
     # Spatial guess: the voted plate outside the footprint, inpainted across it.
     voted = np.take_along_axis(means, best[None, ..., None], 0)[0]
     region = cv2.dilate(filled.astype(np.uint8), box)
@@ -461,7 +477,8 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     # Switch when some sample is clearly nearer the guess than the voted colour.
     # and that colour has support of its own (not a passer-by's transient colour).
     alt = np.take_along_axis(agree, near_t[None, None], 1)[:, 0]  # (k, h, w)
-    switch = (filled & (voted_d > far) & (near_d <= 0.5 * voted_d)
+    # (the region colours' own spread sets how far is clearly different)
+    switch = (filled & (voted_d > 3.0 * max(tau, tau_region)) & (near_d <= 0.5 * voted_d)
               & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
     if switch.any():
         weights[:, switch] = alt[:, switch]
@@ -470,14 +487,10 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     _, comp = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
     comp_area = np.bincount(comp.ravel())
     hole_area = np.bincount(lab.ravel(), minlength=n)
-    # Colour of the nearest hole pixel, for every pixel (to compare the ring with).
-    _, near = cv2.distanceTransformWithLabels(
-        (~is_hole).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL)
-    ys, xs = np.nonzero(is_hole)
-    lut = np.zeros((int(near.max()) + 1, 3), np.float32)
-    lut[near[ys, xs]] = med[ys, xs]
-    near_colour = lut[near]  # (h, w, 3)
-    match = (np.abs(means - near_colour[None]).max(axis=-1) < tau).any(axis=0)
+    # How often each pixel differs from its temporal median: around a body part
+    # that never moved, the limbs and the hop cover the ring often; around a gap
+    # left between a passer-by's sampled positions they cover it once or twice.
+    cover = (dev > tau).mean(axis=0)
     unseen = voted_d > far
     for i in hole_ids:
         hole = lab == i
@@ -485,8 +498,8 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
         if hole_area[i] > max_hole_share * comp_area[c]:
             continue
         ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
-            moving > 0)
-        if ring.any() and match[ring].mean() >= min_evidence:
+            sealed > 0)
+        if ring.any() and cover[ring].mean() >= min_evidence:
             out |= hole & unseen
     if out.any():
         # Footprint pixels next to a static body part, far from the guess in every

@@ -227,6 +227,10 @@ class _Params:
         self.plate_full = bg.plate
         self.tmap_full = np.clip(np.ceil(np.maximum(
             self.threshold, local_factor * bg.noise_map)), 0, 255).astype(np.uint8)
+        # Luma threshold for the edge band: the L1 threshold over three channels
+        # is about three times a per-channel one.
+        self.edge_luma = True
+        self.tmap_luma = np.ceil(self.tmap_full / 3.0).astype(np.uint8)
         self.plate_f = plate.astype(np.float32)
         self.shadows = shadows
         # A shadow darkens every channel by the same factor (alpha) and keeps the
@@ -345,8 +349,15 @@ def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params
     ref = p.plate_full[y0:y1, x0:x1]
     if np.abs(g - 1).max() > 0.01:
         ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
-    b, g_, r_ = cv2.split(cv2.absdiff(frame[y0:y1, x0:x1], ref))
-    fg = cv2.compare(cv2.add(cv2.add(b, g_), r_), p.tmap_full[y0:y1, x0:x1], cv2.CMP_GT)
+    if p.edge_luma:
+        # Video codecs keep colour at half resolution (4:2:0): a colour edge
+        # bleeds a pixel or two into the background, brightness does not.
+        d = cv2.absdiff(cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY),
+                        cv2.cvtColor(ref, cv2.COLOR_BGR2GRAY))
+        fg = cv2.compare(d, p.tmap_luma[y0:y1, x0:x1], cv2.CMP_GT)
+    else:
+        b, g_, r_ = cv2.split(cv2.absdiff(frame[y0:y1, x0:x1], ref))
+        fg = cv2.compare(cv2.add(cv2.add(b, g_), r_), p.tmap_full[y0:y1, x0:x1], cv2.CMP_GT)
     fg = cv2.medianBlur(fg, 3)
     # m = m outside the band, the full-resolution test inside it.
     np.copyto(m, (fg > 0).view(np.uint8), where=band > 0)
