@@ -10,6 +10,7 @@ from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX, SEGMENT_NAMES, 
 from vidcap.bvh import read_bvh
 from vidcap.errors import MotionFileError, VidcapError
 from vidcap.kinematics import Motion, Skeleton
+from vidcap.motion import minimal_rotation
 from vidcap.synth import (
     JOINT_MAPS,
     body_yaw,
@@ -17,7 +18,6 @@ from vidcap.synth import (
     detect_joint_map,
     make_camera,
     make_motion,
-    minimal_rotation,
     project,
     render_body,
     render_clip,
@@ -119,7 +119,7 @@ def _arm_forward_motion(body):
     """Rest pose with the left arm pointing straight forward (-Z)."""
     m = Motion.rest(body.skeleton(), 1)
     rot = m.rotations.copy()
-    rot[0, JOINT_INDEX["l_shoulder"]] = minimal_rotation([-1, 0, 0], [0, 0, -1]).as_quat()[0]
+    rot[0, JOINT_INDEX["l_shoulder"]] = minimal_rotation([-1, 0, 0], [0, 0, -1])
     return Motion(m.skeleton, m.root_positions, rot, 30.0)
 
 

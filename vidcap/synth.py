@@ -47,7 +47,6 @@ from scipy.spatial.transform import Rotation
 from vidcap.body import (
     JOINT_INDEX,
     JOINT_NAMES,
-    PARENT_INDEX,
     SEGMENT_JOINTS,
     SEGMENT_NAMES,
     BodyModel,
@@ -55,6 +54,7 @@ from vidcap.body import (
 )
 from vidcap.errors import InputFileError, MotionFileError, UsageError
 from vidcap.kinematics import Motion, Skeleton
+from vidcap.motion import joints_to_motion, minimal_rotation
 
 #: Built-in procedural motions (generated directly on our skeleton).
 BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "jacks", "arms")
@@ -204,93 +204,6 @@ def _unit(v: np.ndarray, axis: int = -1) -> np.ndarray:
     return v / np.where(n > 1e-12, n, 1.0)
 
 
-def minimal_rotation(a: np.ndarray, b: np.ndarray) -> Rotation:
-    """The smallest rotations turning directions ``a`` onto ``b``.
-
-    Parameters
-    ----------
-    a, b : numpy.ndarray, shape (N, 3) or (3,)
-        Directions (need not be unit); broadcast against each other.
-
-    Returns
-    -------
-    scipy.spatial.transform.Rotation
-        N rotations about ``a x b`` (for opposite directions: a half turn about an
-        axis perpendicular to ``a``).
-    """
-    a, b = np.broadcast_arrays(np.atleast_2d(a).astype(float), np.atleast_2d(b).astype(float))
-    a, b = _unit(a), _unit(b)
-    cross = np.cross(a, b)
-    s = np.linalg.norm(cross, axis=-1)
-    c = np.sum(a * b, axis=-1)
-    angle = np.arctan2(s, c)
-    axis = cross / np.where(s > 1e-12, s, 1.0)[:, None]
-    flip = (s <= 1e-12) & (c < 0)
-    if np.any(flip):
-        # any axis perpendicular to a
-        trial = np.where(np.abs(a[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
-        perp = _unit(np.cross(a, trial))
-        axis = np.where(flip[:, None], perp, axis)
-    return Rotation.from_rotvec(axis * angle[:, None])
-
-
-def _torso_rotation(pts: np.ndarray) -> np.ndarray:
-    """World rotation matrices (F, 3, 3) of the torso frame from joint positions (F, 15, 3)."""
-    J = JOINT_INDEX
-    up = _unit(pts[:, J["neck"]] - pts[:, J["pelvis"]])
-    lat = (pts[:, J["r_hip"]] - pts[:, J["l_hip"]]) + (
-        pts[:, J["r_shoulder"]] - pts[:, J["l_shoulder"]]
-    )
-    x = _unit(lat - np.sum(lat * up, axis=-1, keepdims=True) * up)
-    z = np.cross(x, up)
-    return np.stack([x, up, z], axis=-1)
-
-
-def motion_from_joint_positions(
-    pts: np.ndarray, body: BodyModel, fps: float
-) -> Motion:
-    """A motion on ``body``'s skeleton whose bones point along those of ``pts``.
-
-    Parameters
-    ----------
-    pts : numpy.ndarray, shape (F, 15, 3)
-        Joint positions in :data:`JOINT_NAMES` order, metres, Y up. Only their
-        bone directions and the pelvis position are used.
-    body : BodyModel
-        Our body (segment lengths).
-    fps : float
-        Frame rate.
-
-    Returns
-    -------
-    Motion
-        Root at ``pts``'s pelvis; torso rotation from the torso frame; each other
-        joint the minimal rotation of its rest bone onto the source bone.
-    """
-    pts = np.asarray(pts, dtype=float)
-    F = pts.shape[0]
-    skel = body.skeleton()
-    J = len(JOINT_NAMES)
-    child = {p: j for j, p in enumerate(PARENT_INDEX) if p > 0}  # one child per limb joint
-    world = np.empty((F, J, 3, 3))
-    local = np.empty((F, J, 4))
-    world[:, 0] = _torso_rotation(pts)
-    local[:, 0] = Rotation.from_matrix(world[:, 0]).as_quat()
-    for j in range(1, J):
-        p = PARENT_INDEX[j]
-        c = child.get(j)
-        if c is None:  # leaf joint: carries only its End Site
-            world[:, j] = world[:, p]
-            local[:, j] = (0.0, 0.0, 0.0, 1.0)
-            continue
-        d_world = pts[:, c] - pts[:, j]
-        d_parent = np.einsum("fji,fj->fi", world[:, p], d_world)  # R_p^T d
-        rot = minimal_rotation(skel.offsets[c][None, :], d_parent)
-        local[:, j] = rot.as_quat()
-        world[:, j] = world[:, p] @ rot.as_matrix()
-    return Motion(skel, pts[:, 0].copy(), local, fps)
-
-
 def _floor_motion(motion: Motion) -> Motion:
     """Shift ``motion`` vertically so its lowest ankle over the clip is at y = 0."""
     pos = motion.positions()
@@ -308,8 +221,8 @@ def _up_fix(pts: np.ndarray) -> np.ndarray:
         return pts
     axis = np.zeros(3)
     axis[k] = np.sign(up[k])
-    rot = minimal_rotation(axis, np.array([0.0, 1.0, 0.0]))
-    return pts @ rot.as_matrix()[0].T
+    rot = Rotation.from_quat(minimal_rotation(axis, np.array([0.0, 1.0, 0.0])))
+    return pts @ rot.as_matrix().T
 
 
 def retarget(
@@ -353,7 +266,7 @@ def retarget(
     src_leg = float(np.median(np.concatenate(legs)))
     if not src_leg > 0:
         raise MotionFileError("the source's legs have zero length", source)
-    out = motion_from_joint_positions(pts, body, motion.fps)
+    out = joints_to_motion(pts, motion.fps, body=body)
     scaled = Motion(out.skeleton, out.root_positions * (body.pelvis_height / src_leg),
                     out.rotations, out.fps)
     return _floor_motion(scaled)
