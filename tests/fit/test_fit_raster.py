@@ -107,3 +107,35 @@ def test_normalise_round_trip():
                        atol=0.6)
     with pytest.raises(ValueError):
         normalise_mask(np.zeros((5, 5), bool))
+
+
+@pytest.mark.parametrize("caps", [True, False])
+def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatch):
+    """span_counts (numba kernel and numpy fallback) = weights summed under draw_segments."""
+    from vidcap.fit import raster
+
+    assert raster._kernels() is not None  # numba is a dependency: the fast path must be live
+    rng = np.random.default_rng(7)
+    h, w = 40, 36
+    for k in (1, 2, 5):
+        b = 120
+        p0 = rng.uniform(-8, 44, (b, k, 2))
+        p1 = p0 + rng.normal(0, 12, (b, k, 2))
+        p1[:4] = p0[:4]  # points
+        p1[4:8, :, 0] = p0[4:8, :, 0]  # vertical
+        p1[8:12, :, 1] = p0[8:12, :, 1]  # horizontal
+        p0[12:16] = np.round(p0[12:16]) + 0.5  # ends on pixel borders
+        radii = rng.uniform(0.3, 5.0, k)
+        weights = rng.integers(0, 2, (3, h, w, 2)).astype(bool)
+        cum = raster.row_prefix_sums(weights)
+        table = rng.integers(0, 3, b)
+        masks = raster.draw_segments(p0, p1, radii, (h, w), caps=caps)
+        masks[:, :3] = masks[:, 31:] = False
+        want = np.einsum("bhw,bhwc->bc", masks.astype(int), weights[table].astype(int))
+        fast = raster.span_counts(p0, p1, radii, cum, rows=(3, 31), table=table, caps=caps)
+        monkeypatch.setattr(raster, "_kernels", lambda: None)
+        slow = raster.span_counts(p0, p1, radii, cum, rows=(3, 31), table=table, caps=caps)
+        monkeypatch.undo()
+        np.testing.assert_array_equal(fast, want)
+        np.testing.assert_array_equal(slow, want)
+        assert want.sum() > 0

@@ -104,7 +104,7 @@ from vidcap.fit.raster import (
     model_dimensions,
     normalise_mask,
     pose_joints,
-    segment_spans,
+    span_counts,
 )
 from vidcap.fit.search import interval_search, interval_search_many
 from vidcap.fit.similarity import similarity_from_counts
@@ -380,62 +380,22 @@ class _Fitter:
         i_base = np.count_nonzero(both[r0:r1])
         radii = self.R[moving]
         pad = float(radii.max()) + 1.0
-        if len(moving) <= 2:
-            # Exact counts from row spans: pixels a candidate adds to the model are
-            # those not in the base; row prefix sums give any span's count at once.
-            add = np.zeros((self.h, self.w + 1), dtype=np.int32)
-            hit = np.zeros((self.h, self.w + 1), dtype=np.int32)
-            np.cumsum(~base[r0:r1], axis=1, out=add[r0:r1, 1:])
-            np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=hit[r0:r1, 1:])
-        w = self.w
+        # Exact counts from row spans: pixels a candidate adds to the model are those
+        # not in the base; row prefix sums give any span's count at once (no masks).
+        cum = np.zeros((self.h, self.w + 1, 2), dtype=np.int32)
+        np.cumsum(~base[r0:r1], axis=1, out=cum[r0:r1, 1:, 0])
+        np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[r0:r1, 1:, 1])
 
-        def rows_of(p0, p1):
+        def score(values):
+            self.batches += 1
+            p0, p1 = ends(np.asarray(values, dtype=float))
             lo = min(p0[..., 1].min(), p1[..., 1].min()) - pad
             hi = max(p0[..., 1].max(), p1[..., 1].max()) + pad
-            return max(int(lo), r0), min(int(hi) + 2, r1)
+            d = span_counts(p0, p1, radii, cum, rows=(max(int(lo), r0), min(int(hi) + 2, r1)),
+                            caps=self.caps)
+            return similarity_from_counts(a, m_base + d[:, 0], i_base + d[:, 1])
 
-        def score_spans(values):
-            self.batches += 1
-            p0, p1 = ends(np.asarray(values, dtype=float))
-            y0, y1 = rows_of(p0, p1)
-            if y1 <= y0:
-                return np.full(len(values), similarity_from_counts(a, m_base, i_base))
-            rows = np.arange(y0, y1)
-            first, last = segment_spans(p0, p1, radii, rows, caps=self.caps)
-            first = np.clip(first, 0, w)
-            last = np.clip(last + 1, first, w)  # exclusive end, empty spans -> 0
-            if first.shape[1] == 2:
-                lo_i = np.maximum(first[:, 0], first[:, 1])
-                hi_i = np.maximum(np.minimum(last[:, 0], last[:, 1]), lo_i)
-                first = np.concatenate([first, lo_i[:, None]], axis=1)
-                last = np.concatenate([last, hi_i[:, None]], axis=1)
-                sign = np.array([1, 1, -1])[None, :, None]
-            else:
-                sign = 1
-            rr = rows[None, None, :]
-            dm = ((add[rr, last] - add[rr, first]) * sign).sum(axis=(1, 2))
-            di = ((hit[rr, last] - hit[rr, first]) * sign).sum(axis=(1, 2))
-            return similarity_from_counts(a, m_base + dm, i_base + di)
-
-        def score_masks(values):
-            self.batches += 1
-            p0, p1 = ends(np.asarray(values, dtype=float))
-            y0, y1 = rows_of(p0, p1)
-            lo = min(p0[..., 0].min(), p1[..., 0].min()) - pad
-            hi = max(p0[..., 0].max(), p1[..., 0].max()) + pad
-            x0, x1 = max(int(lo), 0), min(int(hi) + 2, w)
-            if x1 <= x0 or y1 <= y0:
-                return np.full(len(values), similarity_from_counts(a, m_base, i_base))
-            win = (slice(y0, y1), slice(x0, x1))
-            cand = draw_segments(p0, p1, radii, (y1 - y0, x1 - x0), origin=(x0, y0),
-                                 caps=self.caps)
-            cand |= base[win]
-            m = m_base - np.count_nonzero(base[win]) + np.count_nonzero(cand, axis=(1, 2))
-            i = i_base - np.count_nonzero(both[win]) + np.count_nonzero(cand & sil[win],
-                                                                         axis=(1, 2))
-            return similarity_from_counts(a, m, i)
-
-        return score_spans if len(moving) <= 2 else score_masks
+        return score
 
     def _general_ends(self, make, moving):
         """End points from whole candidate poses (torso, head, spread, root searches)."""
@@ -589,8 +549,8 @@ class _Fitter:
         own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
         is_leaf = (child == segs)[:, None, None]
-        all_leaves = bool(is_leaf.all())
-        radii = np.repeat(self.R[pair], 1, axis=0)  # (N, 2)
+        k = 1 if bool(is_leaf.all()) else 2
+        radii = self.R[pair][:, :k]  # (N, k)
         length = self.L[segs]
         if kind == "angle":
             def vec(v):
@@ -601,7 +561,6 @@ class _Fitter:
             def vec(v):
                 return v[..., None] * unit[:, None, :]
         pad = float(self.R.max()) + 1.0
-        q_idx = np.arange(n)[:, None, None, None]
 
         def score(values):  # values (N, B)
             self.batches += 1
@@ -613,23 +572,9 @@ class _Fitter:
             p1 = np.stack([end, np.where(is_leaf, end, ch1[:, None] + delta)], 2)
             y0 = max(int(min(p0[..., 1].min(), p1[..., 1].min()) - pad), 0)
             y1 = min(int(max(p0[..., 1].max(), p1[..., 1].max()) + pad) + 2, self.h)
-            rows = np.arange(y0, y1)
-            k = 1 if all_leaves else 2
-            first, last = segment_spans(p0[:, :, :k].reshape(n * B, k, 2),
-                                        p1[:, :, :k].reshape(n * B, k, 2),
-                                        np.repeat(radii[:, :k], B, axis=0), rows, caps=self.caps)
-            first = np.clip(first, 0, self.w).reshape(n, B, k, -1)
-            last = np.maximum(np.clip(last + 1, 0, self.w).reshape(n, B, k, -1), first)
-            if k == 2:  # union of two spans = both minus their overlap
-                lo_i = np.maximum(first[:, :, 0], first[:, :, 1])
-                hi_i = np.maximum(np.minimum(last[:, :, 0], last[:, :, 1]), lo_i)
-                first = np.concatenate([first, lo_i[:, :, None]], axis=2)
-                last = np.concatenate([last, hi_i[:, :, None]], axis=2)
-                sign = np.array([1, 1, -1])[None, None, :, None, None]
-            else:
-                sign = 1
-            rr = rows[None, None, None, :]
-            d = ((cum[q_idx, rr, last] - cum[q_idx, rr, first]) * sign).sum(axis=(2, 3))
+            d = span_counts(p0[:, :, :k].reshape(n * B, k, 2), p1[:, :, :k].reshape(n * B, k, 2),
+                            np.repeat(radii, B, axis=0), cum, rows=(y0, y1),
+                            table=np.repeat(np.arange(n), B), caps=self.caps).reshape(n, B, 2)
             return similarity_from_counts(a, m_base[:, None] + d[..., 0],
                                           i_base[:, None] + d[..., 1])
 

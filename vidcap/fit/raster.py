@@ -37,6 +37,7 @@ a small local helper; the silhouette stage has its own
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -381,6 +382,180 @@ def draw_pose(joints: np.ndarray, radii: np.ndarray, shape: tuple[int, int], *,
     return out[0] if single else out
 
 
+# --------------------------------------------------------------------------- span counting
+def _kernel_source():
+    """Define the numba span-counting kernel (called once, lazily: importing numba is slow)."""
+    import numba
+
+    # No fastmath: the spans must be computed with exactly the float operations of
+    # segment_spans, so both paths cover the same pixels.
+    @numba.njit(cache=True, nogil=True, inline="always")
+    def span(x0, y0, x1, y1, r, y, caps):
+        vx = x1 - x0
+        vy = y1 - y0
+        norm = np.sqrt(vx * vx + vy * vy)
+        if norm < 1e-9:
+            ux, uy = 1.0, 0.0
+        else:
+            ux, uy = vx / norm, vy / norm
+        if abs(ux) < 1e-12:
+            ux = 1e-12
+        if abs(uy) < 1e-12:
+            uy = 1e-12
+        cx = 0.5 * (x0 + x1)
+        dyc = y - 0.5 * (y0 + y1)
+        half_a = abs((0.5 * norm + 1e-7) / ux)
+        half_c = abs((r + 1e-7) / uy)
+        mid_a = cx - dyc * (uy / ux)
+        mid_c = cx + dyc * (ux / uy)
+        left = max(mid_a - half_a, mid_c - half_c)
+        right = min(mid_a + half_a, mid_c + half_c)
+        if caps:
+            if left > right:
+                left, right = np.inf, -np.inf
+            d = y - y0
+            q = r * r - d * d
+            if q >= 0:
+                h = np.sqrt(q)
+                left = min(left, x0 - h)
+                right = max(right, x0 + h)
+            d = y - y1
+            q = r * r - d * d
+            if q >= 0:
+                h = np.sqrt(q)
+                left = min(left, x1 - h)
+                right = max(right, x1 + h)
+        return (np.ceil(min(max(left, -1e6), 1e6)), np.floor(min(max(right, -1e6), 1e6)))
+
+    @numba.njit(cache=True, nogil=True)
+    def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
+        n_b, n_k = p0.shape[0], p0.shape[1]
+        w = cum.shape[2] - 1
+        n_c = cum.shape[3]
+        first = np.empty(n_k, np.int64)
+        last = np.empty(n_k, np.int64)
+        for b in range(n_b):
+            t = table[b]
+            for c in range(n_c):
+                out[b, c] = 0
+            for y in range(y0, y1):
+                m = 0
+                for k in range(n_k):
+                    lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
+                                  radii[b, k], float(y), caps)
+                    f = int(min(max(lo, 0.0), w))
+                    e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
+                    if e <= f:
+                        continue
+                    j = m  # insertion sort by first column
+                    while j > 0 and first[j - 1] > f:
+                        first[j] = first[j - 1]
+                        last[j] = last[j - 1]
+                        j -= 1
+                    first[j] = f
+                    last[j] = e
+                    m += 1
+                if m == 0:
+                    continue
+                s, e = first[0], last[0]
+                for k in range(1, m + 1):
+                    if k < m and first[k] <= e:
+                        if last[k] > e:
+                            e = last[k]
+                        continue
+                    for c in range(n_c):
+                        out[b, c] += cum[t, y, e, c] - cum[t, y, s, c]
+                    if k < m:
+                        s, e = first[k], last[k]
+
+    return counts
+
+
+@functools.lru_cache(maxsize=1)
+def _kernels():
+    """The compiled span-counting kernel, or None when numba is unavailable."""
+    try:
+        return _kernel_source()
+    except ImportError:  # pragma: no cover - numba is a declared dependency
+        return None
+
+
+def row_prefix_sums(weights: np.ndarray) -> np.ndarray:
+    """Row prefix sums of per-pixel weights, the table :func:`span_counts` reads.
+
+    Parameters
+    ----------
+    weights : numpy.ndarray, shape (..., h, w, C), bool or int
+        C weight channels per pixel.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., h, w + 1, C), int32
+        ``out[..., y, x, c]`` = sum of ``weights[..., y, :x, c]``.
+    """
+    weights = np.asarray(weights)
+    out = np.zeros((*weights.shape[:-2], weights.shape[-2] + 1, weights.shape[-1]), np.int32)
+    np.cumsum(weights, axis=-2, out=out[..., 1:, :])
+    return out
+
+
+def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True) -> np.ndarray:
+    """Weighted pixel counts under the union of each candidate's segments (no masks drawn).
+
+    For every candidate, the pixels covered by any of its K segments (exactly the
+    pixels :func:`draw_segments` sets) are summed over C weight channels, read from
+    row prefix sums: on each row every segment covers one run of columns
+    (:func:`segment_spans`), the runs are merged and each merged run costs one
+    difference per channel. With numba this is one compiled pass over candidates,
+    rows and segments; without it the masks are drawn and summed with numpy (the
+    same integers).
+
+    Parameters
+    ----------
+    p0, p1 : numpy.ndarray, shape (B, K, 2)
+        Segment ends ``(x, y)`` in pixels of the table's image.
+    radii : numpy.ndarray, shape (K,) or (B, K)
+        Half-widths in pixels.
+    cum : numpy.ndarray, shape (h, w + 1, C) or (T, h, w + 1, C), int
+        Row prefix sums of C per-pixel weights (:func:`row_prefix_sums`), one table
+        or T tables.
+    rows : (int, int), optional
+        Only rows ``rows[0] <= y < rows[1]`` are counted (default: all ``h``).
+    table : numpy.ndarray of int, shape (B,), optional
+        Which of the T tables each candidate is counted against (default: table 0).
+    caps : bool
+        Capsules (true) or rectangles (false).
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, C), int64
+    """
+    p0 = np.ascontiguousarray(p0, dtype=np.float64)
+    p1 = np.ascontiguousarray(p1, dtype=np.float64)
+    n_b, n_k = p0.shape[:2]
+    cum = np.asarray(cum)
+    if cum.ndim == 3:
+        cum = cum[None]
+    h = cum.shape[1]
+    y0, y1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
+    radii = np.ascontiguousarray(np.broadcast_to(np.asarray(radii, dtype=np.float64),
+                                                 (n_b, n_k)))
+    table = np.zeros(n_b, np.int64) if table is None else np.ascontiguousarray(table, np.int64)
+    out = np.zeros((n_b, cum.shape[3]), np.int64)
+    if y1 <= y0 or n_b == 0 or n_k == 0:
+        return out
+    kernel = _kernels()
+    if kernel is not None:
+        kernel(p0, p1, radii, table, cum, y0, y1, bool(caps), out)
+        return out
+    w = cum.shape[2] - 1
+    first, last = segment_spans(p0, p1, radii, np.arange(y0, y1), caps=caps)  # (B, K, R)
+    cols = np.arange(w)
+    inside = ((cols >= first[..., None]) & (cols <= last[..., None])).any(axis=1)  # (B, R, w)
+    weights = np.diff(cum[:, y0:y1], axis=2)  # (T, R, w, C)
+    return np.einsum("brx,brxc->bc", inside.astype(np.int64), weights[table].astype(np.int64))
+
+
 __all__ = [
     "DESCENDANTS",
     "NormalisedMask",
@@ -392,5 +567,7 @@ __all__ = [
     "model_dimensions",
     "normalise_mask",
     "pose_joints",
+    "row_prefix_sums",
     "segment_spans",
+    "span_counts",
 ]
