@@ -104,6 +104,7 @@ from vidcap.fit.raster import (
     model_dimensions,
     normalise_mask,
     pose_joints,
+    row_prefix_sums,
     span_counts,
 )
 from vidcap.fit.search import interval_search, interval_search_many
@@ -296,6 +297,8 @@ class _Fitter:
         self.margins = np.zeros(10)
         self.drawn = np.zeros(10, dtype=bool)
         self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
+        self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil], -1))
+        self._similarity = None
         self.batches = 0
         self._cache: dict = {}
         self._joints = None
@@ -323,18 +326,27 @@ class _Fitter:
         return draw_pose(self.joints(), self.R, (self.h, self.w), segments=seg, caps=self.caps)
 
     def similarity(self) -> float:
-        m = self.model()
-        a = np.count_nonzero(self.sil)
-        return float(similarity_from_counts(a, np.count_nonzero(m), np.count_nonzero(m & self.sil)))
+        """S of the drawn model against the whole silhouette, counted from row spans."""
+        seg = np.flatnonzero(self.drawn)
+        j = self.joints()
+        key = (j.tobytes(), seg.tobytes())
+        if self._similarity is None or self._similarity[0] != key:
+            # channel 0 counts model pixels, channel 1 model pixels on the silhouette
+            d = span_counts(j[None, _PROX[seg]], j[None, _DIST[seg]], self.R[seg],
+                            self._sil_cum, caps=self.caps)[0]
+            s = float(similarity_from_counts(int(self.sil_rows[-1]), d[0], d[1]))
+            self._similarity = (key, s)
+        return self._similarity[1]
 
     # -- scoring -----------------------------------------------------------------
-    def _all_segment_masks(self, joints: np.ndarray) -> np.ndarray:
-        """Masks of all ten segments at their current places, (10, h, w), one call."""
+    def _all_segment_masks(self, joints: np.ndarray):
+        """Masks of all ten segments at their current places, (10, h, w), one call,
+        and how many segments cover each pixel, (h, w) uint8."""
         key = joints.tobytes()
         if self._all_masks is None or self._all_masks[0] != key:
             m = draw_segments(joints[_PROX][:, None], joints[_DIST][:, None],
                               self.R[:, None], (self.h, self.w), caps=self.caps)
-            self._all_masks = (key, m)
+            self._all_masks = (key, (m, m.sum(axis=0, dtype=np.uint8)))
         return self._all_masks[1]
 
     def _segment_mask(self, seg: int, joints: np.ndarray) -> np.ndarray:
@@ -532,11 +544,12 @@ class _Fitter:
         j = self.joints()
         child = np.array([DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else s for s in segs])
         pair = np.stack([segs, child], 1)  # (N, 2); a leaf is paired with itself
-        masks = self._all_segment_masks(j)  # (10, h, w)
-        # one base per segment searched: the model without that segment (and child)
-        keep = np.ones((n, 10), dtype=bool)
-        keep[np.arange(n)[:, None], pair] = False
-        base = (keep[:, :, None, None] & masks[None]).any(axis=1)  # (N, h, w)
+        masks, cover = self._all_segment_masks(j)  # (10, h, w), (h, w)
+        # one base per segment searched: the model without that segment (and child),
+        # i.e. pixels covered by more segments than the pair's own
+        own = masks[segs].astype(np.uint8)
+        own += masks[child] & (child != segs)[:, None, None]
+        base = cover[None] > own  # (N, h, w)
         sil = self.sil
         # row prefix sums of pixels a candidate would add to the model (channel 0)
         # and of those that are silhouette (channel 1), gathered together

@@ -516,7 +516,7 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
         Segment ends ``(x, y)`` in pixels of the table's image.
     radii : numpy.ndarray, shape (K,) or (B, K)
         Half-widths in pixels.
-    cum : numpy.ndarray, shape (h, w + 1, C) or (T, h, w + 1, C), int
+    cum : numpy.ndarray, shape (h, w + 1, C) or (T, h, w + 1, C), int32
         Row prefix sums of C per-pixel weights (:func:`row_prefix_sums`), one table
         or T tables.
     rows : (int, int), optional
@@ -530,17 +530,20 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
     -------
     numpy.ndarray, shape (B, C), int64
     """
-    p0 = np.ascontiguousarray(p0, dtype=np.float64)
-    p1 = np.ascontiguousarray(p1, dtype=np.float64)
+    # one compiled signature: C-contiguous, writable arrays of fixed dtypes
+    need = ("C", "W")
+    p0 = np.require(p0, np.float64, need)
+    p1 = np.require(p1, np.float64, need)
     n_b, n_k = p0.shape[:2]
     cum = np.asarray(cum)
     if cum.ndim == 3:
         cum = cum[None]
+    cum = np.require(cum, np.int32, need)
     h = cum.shape[1]
     y0, y1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
-    radii = np.ascontiguousarray(np.broadcast_to(np.asarray(radii, dtype=np.float64),
-                                                 (n_b, n_k)))
-    table = np.zeros(n_b, np.int64) if table is None else np.ascontiguousarray(table, np.int64)
+    radii = np.require(np.broadcast_to(np.asarray(radii, dtype=np.float64), (n_b, n_k)),
+                       np.float64, need)
+    table = np.zeros(n_b, np.int64) if table is None else np.require(table, np.int64, need)
     out = np.zeros((n_b, cum.shape[3]), np.int64)
     if y1 <= y0 or n_b == 0 or n_k == 0:
         return out
