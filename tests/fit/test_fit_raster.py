@@ -111,7 +111,8 @@ def test_normalise_round_trip():
 
 @pytest.mark.parametrize("caps", [True, False])
 def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatch):
-    """span_counts (numba kernel and numpy fallback) = weights summed under draw_segments."""
+    """span_counts (numba kernel and numpy fallback) = weights summed under draw_segments;
+    draw_segments' compiled and numpy paths draw the same pixels."""
     from vidcap.fit import raster
 
     assert raster._kernels() is not None  # numba is a dependency: the fast path must be live
@@ -133,8 +134,13 @@ def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatc
         masks[:, :3] = masks[:, 31:] = False
         want = np.einsum("bhw,bhwc->bc", masks.astype(int), weights[table].astype(int))
         fast = raster.span_counts(p0, p1, radii, cum, rows=(3, 31), table=table, caps=caps)
+        window = raster.draw_segments(p0, p1, radii, (20, 17), origin=(9, 5), caps=caps)
         monkeypatch.setattr(raster, "_kernels", lambda: None)
         slow = raster.span_counts(p0, p1, radii, cum, rows=(3, 31), table=table, caps=caps)
+        np.testing.assert_array_equal(raster.draw_segments(p0, p1, radii, (h, w), caps=caps)
+                                      [:, 3:31], masks[:, 3:31])
+        np.testing.assert_array_equal(
+            raster.draw_segments(p0, p1, radii, (20, 17), origin=(9, 5), caps=caps), window)
         monkeypatch.undo()
         np.testing.assert_array_equal(fast, want)
         np.testing.assert_array_equal(slow, want)

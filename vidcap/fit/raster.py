@@ -280,6 +280,16 @@ def draw_segments(
         ``True`` where a pixel centre lies inside any of the candidate's segments.
     """
     h, w = shape
+    kernels = _kernels()
+    if kernels is not None:  # the same pixels, filled span by span
+        need = ("C", "W")
+        p0 = np.require(p0, np.float64, need)
+        p1 = np.require(p1, np.float64, need)
+        r = np.require(np.broadcast_to(np.asarray(radii, dtype=np.float64), p0.shape[:2]),
+                       np.float64, need)
+        out = np.zeros((p0.shape[0], h, w), dtype=bool)
+        kernels[1](p0, p1, r, float(origin[0]), float(origin[1]), bool(caps), out)
+        return out
     first, last = segment_spans(p0, p1, radii, np.arange(origin[1], origin[1] + h), caps=caps)
     cols = np.arange(origin[0], origin[0] + w)
     inside = (cols >= first[..., None]) & (cols <= last[..., None])  # (B, K, h, w)
@@ -468,12 +478,26 @@ def _kernel_source():
                     if k < m:
                         s, e = first[k], last[k]
 
-    return counts
+    @numba.njit(cache=True, nogil=True)
+    def draw(p0, p1, radii, x0, y0, caps, out):
+        n_b, n_k = p0.shape[0], p0.shape[1]
+        h, w = out.shape[1], out.shape[2]
+        for b in range(n_b):
+            for i in range(h):
+                for k in range(n_k):
+                    lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
+                                  radii[b, k], float(y0 + i), caps)
+                    f = int(min(max(lo - x0, 0.0), w))
+                    e = int(min(max(hi - x0 + 1.0, float(f)), w))
+                    for x in range(f, e):
+                        out[b, i, x] = True
+
+    return counts, draw
 
 
 @functools.lru_cache(maxsize=1)
 def _kernels():
-    """The compiled span-counting kernel, or None when numba is unavailable."""
+    """The compiled (span-counting, drawing) kernels, or None when numba is unavailable."""
     try:
         return _kernel_source()
     except ImportError:  # pragma: no cover - numba is a declared dependency
@@ -547,9 +571,9 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
     out = np.zeros((n_b, cum.shape[3]), np.int64)
     if y1 <= y0 or n_b == 0 or n_k == 0:
         return out
-    kernel = _kernels()
-    if kernel is not None:
-        kernel(p0, p1, radii, table, cum, y0, y1, bool(caps), out)
+    kernels = _kernels()
+    if kernels is not None:
+        kernels[0](p0, p1, radii, table, cum, y0, y1, bool(caps), out)
         return out
     w = cum.shape[2] - 1
     first, last = segment_spans(p0, p1, radii, np.arange(y0, y1), caps=caps)  # (B, K, R)
