@@ -127,12 +127,12 @@ def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatc
         p1[8:12, :, 1] = p0[8:12, :, 1]  # horizontal
         p0[12:16] = np.round(p0[12:16]) + 0.5  # ends on pixel borders
         radii = rng.uniform(0.3, 5.0, k)
-        weights = rng.integers(0, 2, (3, h, w, 2)).astype(bool)
+        weights = rng.integers(0, 2, (3, 2, h, w)).astype(bool)
         cum = raster.row_prefix_sums(weights)
         table = rng.integers(0, 3, b)
         masks = raster.draw_segments(p0, p1, radii, (h, w), caps=caps)
         masks[:, :3] = masks[:, 31:] = False
-        want = np.einsum("bhw,bhwc->bc", masks.astype(int), weights[table].astype(int))
+        want = np.einsum("bhw,bchw->bc", masks.astype(int), weights[table].astype(int))
         fast = raster.span_counts(p0, p1, radii, cum, rows=(3, 31), table=table, caps=caps)
         window = raster.draw_segments(p0, p1, radii, (20, 17), origin=(9, 5), caps=caps)
         monkeypatch.setattr(raster, "_kernels", lambda: None)

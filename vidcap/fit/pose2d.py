@@ -297,10 +297,9 @@ class _Fitter:
         self.margins = np.zeros(10)
         self.drawn = np.zeros(10, dtype=bool)
         self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
-        self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil], -1))
+        self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil]))
         self._similarity = None
         self.batches = 0
-        self._cache: dict = {}
         self._joints = None
         self._all_masks = None
 
@@ -349,26 +348,6 @@ class _Fitter:
             self._all_masks = (key, (m, m.sum(axis=0, dtype=np.uint8)))
         return self._all_masks[1]
 
-    def _segment_mask(self, seg: int, joints: np.ndarray) -> np.ndarray:
-        """Mask of one segment at its current place (cached until it moves)."""
-        p0, p1 = joints[_PROX[seg]], joints[_DIST[seg]]
-        key = (p0[0], p0[1], p1[0], p1[1])
-        hit = self._cache.get(seg)
-        if hit is not None and hit[0] == key:
-            return hit[1]
-        r = self.R[seg] + 1.0
-        x0 = max(int(min(p0[0], p1[0]) - r), 0)
-        y0 = max(int(min(p0[1], p1[1]) - r), 0)
-        x1 = min(int(max(p0[0], p1[0]) + r) + 2, self.w)
-        y1 = min(int(max(p0[1], p1[1]) + r) + 2, self.h)
-        m = np.zeros((self.h, self.w), dtype=bool)
-        if x1 > x0 and y1 > y0:
-            m[y0:y1, x0:x1] = draw_segments(p0[None, None], p1[None, None], self.R[[seg]],
-                                            (y1 - y0, x1 - x0), origin=(x0, y0),
-                                            caps=self.caps)[0]
-        self._cache[seg] = (key, m)
-        return m
-
     def scorer(self, ends, moving, rows=None):
         """Score function for :func:`interval_search`.
 
@@ -382,9 +361,9 @@ class _Fitter:
         moving_set = set(moving.tolist())
         still = [k for k in range(10) if self.drawn[k] and k not in moving_set]
         j = self.joints()
-        base = np.zeros((self.h, self.w), dtype=bool)
-        for seg in still:  # at most ten cached masks, once per search (not per candidate)
-            base |= self._segment_mask(seg, j)
+        # the still segments, drawn once per search (not per candidate)
+        base = draw_segments(j[None, _PROX[still]], j[None, _DIST[still]], self.R[still],
+                             (self.h, self.w), caps=self.caps)[0]
         sil = self.sil
         both = base & sil
         a = int(self.sil_rows[r1] - self.sil_rows[r0])
@@ -394,9 +373,9 @@ class _Fitter:
         pad = float(radii.max()) + 1.0
         # Exact counts from row spans: pixels a candidate adds to the model are those
         # not in the base; row prefix sums give any span's count at once (no masks).
-        cum = np.zeros((self.h, self.w + 1, 2), dtype=np.int32)
-        np.cumsum(~base[r0:r1], axis=1, out=cum[r0:r1, 1:, 0])
-        np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[r0:r1, 1:, 1])
+        cum = np.zeros((2, self.h, self.w + 1), dtype=np.int32)
+        np.cumsum(~base[r0:r1], axis=1, out=cum[0, r0:r1, 1:])
+        np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[1, r0:r1, 1:])
 
         def score(values):
             self.batches += 1
@@ -553,9 +532,9 @@ class _Fitter:
         sil = self.sil
         # row prefix sums of pixels a candidate would add to the model (channel 0)
         # and of those that are silhouette (channel 1), gathered together
-        cum = np.zeros((n, self.h, self.w + 1, 2), dtype=np.int32)
-        np.cumsum(~base, axis=2, out=cum[:, :, 1:, 0])
-        np.cumsum(sil & ~base, axis=2, out=cum[:, :, 1:, 1])
+        cum = np.zeros((n, 2, self.h, self.w + 1), dtype=np.int32)
+        np.cumsum(~base, axis=2, out=cum[:, 0, :, 1:])
+        np.cumsum(sil & ~base, axis=2, out=cum[:, 1, :, 1:])
         m_base = np.count_nonzero(base, axis=(1, 2))
         i_base = np.count_nonzero(base & sil, axis=(1, 2))
         a = int(self.sil_rows[-1])

@@ -211,30 +211,47 @@ def pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip) ->
     spread = np.asarray(spread, dtype=float)
     shape = np.broadcast_shapes(root.shape[:-1], angles.shape[:-1], fs.shape[:-1], spread.shape)
     vec = direction(angles) * (fs * np.asarray(lengths))[..., None]  # (..., 10, 2)
-    vec = np.broadcast_to(vec, (*shape, 10, 2))
-    j = np.empty((*shape, 15, 2))
-    J = JOINT_INDEX
-    j[..., J["pelvis"], :] = root
-    j[..., J["neck"], :] = j[..., J["pelvis"], :] + vec[..., _SEG["torso"], :]
-    j[..., J["head_top"], :] = j[..., J["neck"], :] + vec[..., _SEG["head"], :]
     # Image-left perpendicular of the torso axis: the torso points up (a ~ 90 deg), its
     # left in the image is the direction rotated +90 deg (counter-clockwise, y up).
     left = direction(angles[..., _SEG["torso"]] + np.pi / 2) * spread[..., None]
-    j[..., J["l_shoulder"], :] = j[..., J["neck"], :] + shoulder * left
-    j[..., J["r_shoulder"], :] = j[..., J["neck"], :] - shoulder * left
-    j[..., J["l_hip"], :] = j[..., J["pelvis"], :] + hip * left
-    j[..., J["r_hip"], :] = j[..., J["pelvis"], :] - hip * left
-    for side in ("l", "r"):
-        for a, b, seg in (
-            ("shoulder", "elbow", "upper_arm"),
-            ("elbow", "wrist", "lower_arm"),
-            ("hip", "knee", "upper_leg"),
-            ("knee", "ankle", "lower_leg"),
-        ):
-            seg_vec = vec[..., _SEG[f"{side}_{seg}"], :]
-            j[..., J[f"{side}_{b}"], :] = j[..., J[f"{side}_{a}"], :] + seg_vec
+    lat_s, lat_h = shoulder * left, hip * left
+    # every joint = its parent + one offset, placed level by level down the tree
+    offs = np.empty((*shape, 15, 2))
+    offs[..., _BONE_JOINTS, :] = vec[..., _BONE_SEGS, :]
+    offs[..., _LATERAL, :] = np.stack([lat_s, -lat_s, lat_h, -lat_h], axis=-2)
+    j = np.empty((*shape, 15, 2))
+    j[..., JOINT_INDEX["pelvis"], :] = root
+    for child, parent in _LEVELS:
+        j[..., child, :] = j[..., parent, :] + offs[..., child, :]
     return j
 
+
+_LATERAL = np.array([JOINT_INDEX[n] for n in ("l_shoulder", "r_shoulder", "l_hip", "r_hip")])
+#: Joints placed along a segment from its proximal joint, and those segments.
+_BONE_SEGS = np.array([s for s in range(10) if _DIST[s] not in _LATERAL])
+_BONE_JOINTS = _DIST[_BONE_SEGS]
+
+
+def _levels():
+    """(children, parents) index arrays of the 2D skeleton, one pair per tree level."""
+    parent = {int(d): int(p) for p, d in zip(_PROX, _DIST, strict=True)}
+    for n in ("l_shoulder", "r_shoulder"):
+        parent[JOINT_INDEX[n]] = JOINT_INDEX["neck"]
+    for n in ("l_hip", "r_hip"):
+        parent[JOINT_INDEX[n]] = JOINT_INDEX["pelvis"]
+    depth = {JOINT_INDEX["pelvis"]: 0}
+    while len(depth) < len(parent) + 1:
+        for c, p in parent.items():
+            if p in depth and c not in depth:
+                depth[c] = depth[p] + 1
+    levels = []
+    for d in range(1, max(depth.values()) + 1):
+        kids = np.array(sorted(c for c in parent if depth[c] == d))
+        levels.append((kids, np.array([parent[c] for c in kids])))
+    return tuple(levels)
+
+
+_LEVELS = _levels()
 
 #: Segments moved when a segment's own parameter changes: itself and its descendants.
 DESCENDANTS: dict[int, tuple[int, ...]] = {
@@ -440,8 +457,8 @@ def _kernel_source():
     @numba.njit(cache=True, nogil=True)
     def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
         n_b, n_k = p0.shape[0], p0.shape[1]
-        w = cum.shape[2] - 1
-        n_c = cum.shape[3]
+        w = cum.shape[3] - 1
+        n_c = cum.shape[1]
         first = np.empty(n_k, np.int64)
         last = np.empty(n_k, np.int64)
         for b in range(n_b):
@@ -474,7 +491,7 @@ def _kernel_source():
                             e = last[k]
                         continue
                     for c in range(n_c):
-                        out[b, c] += cum[t, y, e, c] - cum[t, y, s, c]
+                        out[b, c] += cum[t, c, y, e] - cum[t, c, y, s]
                     if k < m:
                         s, e = first[k], last[k]
 
@@ -509,17 +526,17 @@ def row_prefix_sums(weights: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    weights : numpy.ndarray, shape (..., h, w, C), bool or int
+    weights : numpy.ndarray, shape (..., C, h, w), bool or int
         C weight channels per pixel.
 
     Returns
     -------
-    numpy.ndarray, shape (..., h, w + 1, C), int32
-        ``out[..., y, x, c]`` = sum of ``weights[..., y, :x, c]``.
+    numpy.ndarray, shape (..., C, h, w + 1), int32
+        ``out[..., c, y, x]`` = sum of ``weights[..., c, y, :x]``.
     """
     weights = np.asarray(weights)
-    out = np.zeros((*weights.shape[:-2], weights.shape[-2] + 1, weights.shape[-1]), np.int32)
-    np.cumsum(weights, axis=-2, out=out[..., 1:, :])
+    out = np.zeros((*weights.shape[:-1], weights.shape[-1] + 1), np.int32)
+    np.cumsum(weights, axis=-1, out=out[..., 1:])
     return out
 
 
@@ -540,7 +557,7 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
         Segment ends ``(x, y)`` in pixels of the table's image.
     radii : numpy.ndarray, shape (K,) or (B, K)
         Half-widths in pixels.
-    cum : numpy.ndarray, shape (h, w + 1, C) or (T, h, w + 1, C), int32
+    cum : numpy.ndarray, shape (C, h, w + 1) or (T, C, h, w + 1), int32
         Row prefix sums of C per-pixel weights (:func:`row_prefix_sums`), one table
         or T tables.
     rows : (int, int), optional
@@ -563,24 +580,24 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
     if cum.ndim == 3:
         cum = cum[None]
     cum = np.require(cum, np.int32, need)
-    h = cum.shape[1]
+    h = cum.shape[2]
     y0, y1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
     radii = np.require(np.broadcast_to(np.asarray(radii, dtype=np.float64), (n_b, n_k)),
                        np.float64, need)
     table = np.zeros(n_b, np.int64) if table is None else np.require(table, np.int64, need)
-    out = np.zeros((n_b, cum.shape[3]), np.int64)
+    out = np.zeros((n_b, cum.shape[1]), np.int64)
     if y1 <= y0 or n_b == 0 or n_k == 0:
         return out
     kernels = _kernels()
     if kernels is not None:
         kernels[0](p0, p1, radii, table, cum, y0, y1, bool(caps), out)
         return out
-    w = cum.shape[2] - 1
+    w = cum.shape[3] - 1
     first, last = segment_spans(p0, p1, radii, np.arange(y0, y1), caps=caps)  # (B, K, R)
     cols = np.arange(w)
     inside = ((cols >= first[..., None]) & (cols <= last[..., None])).any(axis=1)  # (B, R, w)
-    weights = np.diff(cum[:, y0:y1], axis=2)  # (T, R, w, C)
-    return np.einsum("brx,brxc->bc", inside.astype(np.int64), weights[table].astype(np.int64))
+    weights = np.diff(cum[:, :, y0:y1], axis=3)  # (T, C, R, w)
+    return np.einsum("brx,bcrx->bc", inside.astype(np.int64), weights[table].astype(np.int64))
 
 
 __all__ = [
