@@ -299,11 +299,10 @@ def draw_segments(
     h, w = shape
     kernels = _kernels()
     if kernels is not None:  # the same pixels, filled span by span
-        need = ("C", "W")
-        p0 = np.require(p0, np.float64, need)
-        p1 = np.require(p1, np.float64, need)
-        r = np.require(np.broadcast_to(np.asarray(radii, dtype=np.float64), p0.shape[:2]),
-                       np.float64, need)
+        p0 = _carray(p0, np.float64)
+        p1 = _carray(p1, np.float64)
+        r = _carray(np.broadcast_to(np.asarray(radii, dtype=np.float64), p0.shape[:2]),
+                    np.float64)
         out = np.zeros((p0.shape[0], h, w), dtype=bool)
         kernels[1](p0, p1, r, float(origin[0]), float(origin[1]), bool(caps), out)
         return out
@@ -521,6 +520,14 @@ def _kernels():
         return None
 
 
+def _carray(a, dtype) -> np.ndarray:
+    """``a`` as a C-contiguous writable array of ``dtype`` (a copy only if needed)."""
+    if (isinstance(a, np.ndarray) and a.dtype == dtype and a.flags.c_contiguous
+            and a.flags.writeable):
+        return a
+    return np.array(a, dtype=dtype, order="C")
+
+
 def row_prefix_sums(weights: np.ndarray) -> np.ndarray:
     """Row prefix sums of per-pixel weights, the table :func:`span_counts` reads.
 
@@ -572,19 +579,18 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
     numpy.ndarray, shape (B, C), int64
     """
     # one compiled signature: C-contiguous, writable arrays of fixed dtypes
-    need = ("C", "W")
-    p0 = np.require(p0, np.float64, need)
-    p1 = np.require(p1, np.float64, need)
+    p0 = _carray(p0, np.float64)
+    p1 = _carray(p1, np.float64)
     n_b, n_k = p0.shape[:2]
     cum = np.asarray(cum)
     if cum.ndim == 3:
         cum = cum[None]
-    cum = np.require(cum, np.int32, need)
+    cum = _carray(cum, np.int32)
     h = cum.shape[2]
     y0, y1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
-    radii = np.require(np.broadcast_to(np.asarray(radii, dtype=np.float64), (n_b, n_k)),
-                       np.float64, need)
-    table = np.zeros(n_b, np.int64) if table is None else np.require(table, np.int64, need)
+    radii = _carray(np.broadcast_to(np.asarray(radii, dtype=np.float64), (n_b, n_k)),
+                    np.float64)
+    table = np.zeros(n_b, np.int64) if table is None else _carray(table, np.int64)
     out = np.zeros((n_b, cum.shape[1]), np.int64)
     if y1 <= y0 or n_b == 0 or n_k == 0:
         return out
