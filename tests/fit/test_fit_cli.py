@@ -46,13 +46,21 @@ def test_pose2d_cli_errors(tmp_path, cli):
     assert not (tmp_path / "o.npz").exists()
 
 
-def test_pose2d_cli_without_masks_needs_silhouettes(tmp_path, cli):
-    import importlib.util
+def test_pose2d_cli_without_masks_extracts_silhouettes(tmp_path, cli):
+    """Without --masks the silhouettes come from the video (as ``vidcap silhouettes``)."""
+    from vidcap.synth import make_motion, synth_clip
 
-    if importlib.util.find_spec("vidcap.silhouette") is not None:
-        import pytest
-
-        pytest.skip("silhouette extraction is available: covered by its own tests")
-    video, _, _ = _clip(tmp_path)
-    r = cli("pose2d", video, "-o", tmp_path / "o.npz")
-    assert r.returncode == 2 and "--masks" in r.stderr
+    video, truth = tmp_path / "walk.mp4", tmp_path / "truth.npz"
+    synth_clip(video, truth, make_motion("walk", n_frames=30), size=(160, 120),
+               rng=np.random.default_rng(1))
+    out = tmp_path / "pose2d.npz"
+    r = cli("pose2d", video, "-o", out)
+    assert r.returncode == 0, r.stderr
+    pose = Pose2D.load(out)
+    d = np.load(truth)
+    assert pose.joints2d.shape == (30, 15, 2)
+    found = np.isfinite(pose.joints2d).all(axis=(1, 2))
+    assert found.mean() > 0.8  # a silhouette was extracted in (nearly) every frame
+    hpx = np.ptp(d["joints2d"][0, :, 1])
+    err = np.linalg.norm(pose.joints2d[found] - d["joints2d"][found], axis=-1)
+    assert np.median(err[:, :3]) < 0.08 * hpx  # pelvis, neck, head top
