@@ -1,0 +1,118 @@
+"""Compiled kernels of :mod:`vidcap.fit.raster` (numba; imported lazily from there).
+
+Module-level functions so that numba's on-disk cache (``cache=True``) is reused by
+later processes instead of compiling again. No fastmath: :func:`span` computes a
+segment's row span with exactly the float operations of
+:func:`vidcap.fit.raster.segment_spans`, so the compiled and numpy paths cover the
+same pixels (tests/fit/test_fit_raster.py checks it).
+"""
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def span(x0, y0, x1, y1, r, y, caps):
+    """(first, last) covered column (floats, integral) of segment (x0, y0)-(x1, y1) on row y."""
+    vx = x1 - x0
+    vy = y1 - y0
+    norm = np.sqrt(vx * vx + vy * vy)
+    if norm < 1e-9:
+        ux, uy = 1.0, 0.0
+    else:
+        ux, uy = vx / norm, vy / norm
+    if abs(ux) < 1e-12:
+        ux = 1e-12
+    if abs(uy) < 1e-12:
+        uy = 1e-12
+    cx = 0.5 * (x0 + x1)
+    dyc = y - 0.5 * (y0 + y1)
+    half_a = abs((0.5 * norm + 1e-7) / ux)
+    half_c = abs((r + 1e-7) / uy)
+    mid_a = cx - dyc * (uy / ux)
+    mid_c = cx + dyc * (ux / uy)
+    left = max(mid_a - half_a, mid_c - half_c)
+    right = min(mid_a + half_a, mid_c + half_c)
+    if caps:
+        if left > right:
+            left, right = np.inf, -np.inf
+        d = y - y0
+        q = r * r - d * d
+        if q >= 0:
+            h = np.sqrt(q)
+            left = min(left, x0 - h)
+            right = max(right, x0 + h)
+        d = y - y1
+        q = r * r - d * d
+        if q >= 0:
+            h = np.sqrt(q)
+            left = min(left, x1 - h)
+            right = max(right, x1 + h)
+    return (np.ceil(min(max(left, -1e6), 1e6)), np.floor(min(max(right, -1e6), 1e6)))
+
+
+
+@numba.njit(cache=True, nogil=True)
+def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
+    """out[b, c] = weights of channel c under candidate b's segments, rows y0..y1-1.
+
+    p0, p1 (B, K, 2), radii (B, K), table (B,) int64, cum (T, C, h, w + 1) int32 row
+    prefix sums; spans clipped to the image, sorted and merged per row.
+    """
+    n_b, n_k = p0.shape[0], p0.shape[1]
+    w = cum.shape[3] - 1
+    n_c = cum.shape[1]
+    first = np.empty(n_k, np.int64)
+    last = np.empty(n_k, np.int64)
+    for b in range(n_b):
+        t = table[b]
+        for c in range(n_c):
+            out[b, c] = 0
+        for y in range(y0, y1):
+            m = 0
+            for k in range(n_k):
+                lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
+                              radii[b, k], float(y), caps)
+                f = int(min(max(lo, 0.0), w))
+                e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
+                if e <= f:
+                    continue
+                j = m  # insertion sort by first column
+                while j > 0 and first[j - 1] > f:
+                    first[j] = first[j - 1]
+                    last[j] = last[j - 1]
+                    j -= 1
+                first[j] = f
+                last[j] = e
+                m += 1
+            if m == 0:
+                continue
+            s, e = first[0], last[0]
+            for k in range(1, m + 1):
+                if k < m and first[k] <= e:
+                    if last[k] > e:
+                        e = last[k]
+                    continue
+                for c in range(n_c):
+                    out[b, c] += cum[t, c, y, e] - cum[t, c, y, s]
+                if k < m:
+                    s, e = first[k], last[k]
+
+
+@numba.njit(cache=True, nogil=True)
+def draw(p0, p1, radii, x0, y0, caps, out):
+    """Set out[b] (h, w) where any of candidate b's segments covers a pixel centre.
+
+    The window's top-left pixel is (x0, y0) of the full image (floats, integral).
+    """
+    n_b, n_k = p0.shape[0], p0.shape[1]
+    h, w = out.shape[1], out.shape[2]
+    for b in range(n_b):
+        for i in range(h):
+            for k in range(n_k):
+                lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
+                              radii[b, k], float(y0 + i), caps)
+                f = int(min(max(lo - x0, 0.0), w))
+                e = int(min(max(hi - x0 + 1.0, float(f)), w))
+                for x in range(f, e):
+                    out[b, i, x] = True
