@@ -33,6 +33,15 @@ fixed height (plus a margin), so the fitter's cost does not grow with the frame
 size (seed 004 section 4.2: "we normalize the silhouette to a fixed size"). This is
 a small local helper; the silhouette stage has its own
 (``vidcap.silhouette.normalise_silhouette``) and the two can be unified later.
+
+Speed
+-----
+Searches score candidates with :func:`span_counts`: every segment covers one run
+of columns per row (:func:`segment_spans`), so the pixels a candidate covers, and
+how many of them are silhouette, are read from row prefix sums without drawing a
+mask. It and :func:`draw_segments` run as numba kernels (``vidcap/fit/_kernels.py``,
+loaded on first use, cached on disk) when numba is importable, else as numpy code
+giving the same integers and pixels.
 """
 
 from __future__ import annotations
