@@ -310,8 +310,7 @@ def draw_segments(
     if kernels is not None:  # the same pixels, filled span by span
         p0 = _carray(p0, np.float64)
         p1 = _carray(p1, np.float64)
-        r = _carray(np.broadcast_to(np.asarray(radii, dtype=np.float64), p0.shape[:2]),
-                    np.float64)
+        r = _radii(radii, *p0.shape[:2])
         out = np.zeros((p0.shape[0], h, w), dtype=bool)
         kernels[1](p0, p1, r, float(origin[0]), float(origin[1]), bool(caps), out)
         return out
@@ -436,6 +435,13 @@ def _carray(a, dtype) -> np.ndarray:
     return np.array(a, dtype=dtype, order="C")
 
 
+def _radii(radii, n_b: int, n_k: int) -> np.ndarray:
+    """Radii (K,) or (B, K) as a fresh C-contiguous (B, K) float64 array."""
+    out = np.empty((n_b, n_k))
+    out[...] = radii
+    return out
+
+
 def row_prefix_sums(weights: np.ndarray) -> np.ndarray:
     """Row prefix sums of per-pixel weights, the table :func:`span_counts` reads.
 
@@ -496,8 +502,7 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
     cum = _carray(cum, np.int32)
     h = cum.shape[2]
     y0, y1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
-    radii = _carray(np.broadcast_to(np.asarray(radii, dtype=np.float64), (n_b, n_k)),
-                    np.float64)
+    radii = _radii(radii, n_b, n_k)
     table = np.zeros(n_b, np.int64) if table is None else _carray(table, np.int64)
     out = np.zeros((n_b, cum.shape[1]), np.int64)
     if y1 <= y0 or n_b == 0 or n_k == 0:
