@@ -222,6 +222,12 @@ class ConvertResult:
     jitter_before: float
     jitter_after: float
     timings: dict = field(default_factory=dict)
+    #: The 2D stage's own joints (F, 15, 2): image-side limb names, NaN where no fit.
+    image_joints2d: np.ndarray | None = None
+    #: Torso spread per frame from the 2D stage (0 = side view, 1 = front view), (F,).
+    spread: np.ndarray | None = None
+    #: Horizontal centre of the person per frame in pixels, gaps interpolated, (F,).
+    track: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -362,16 +368,7 @@ def run(
 
     # 4. 3D lift and 5. motion
     t0 = time.perf_counter()
-    bb = np.asarray(bbox, float)
-    track = 0.5 * (bb[:, 0] + bb[:, 2]) if bb.ndim == 2 and bb.shape[1] == 4 else None
-    if track is not None:
-        track = np.where(masks.any(axis=(1, 2)), track, np.nan)
-        if np.isfinite(track).any():
-            t = np.arange(len(track))
-            ok = np.isfinite(track)
-            track = np.interp(t, t[ok], track[ok])
-        else:
-            track = None
+    track = person_track(bbox, masks)
     _check_events(ann, len(masks), ann_source)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track)
@@ -387,7 +384,34 @@ def run(
         scores=hit["scores"], similarity=hit["similarity"], lifted=lifted,
         motion=mres.motion, jitter_before=mres.jitter_before,
         jitter_after=mres.jitter_after, timings=timings,
+        image_joints2d=hit["joints2d"], spread=hit["spread"], track=track,
     )
+
+
+def person_track(bbox, masks) -> np.ndarray | None:
+    """Horizontal centre of the person's box per frame, gaps interpolated.
+
+    Parameters
+    ----------
+    bbox : array_like, shape (F, 4)
+        ``x0, y0, x1, y1`` per frame (pixels).
+    masks : numpy.ndarray, shape (F, H, W) bool
+        Frames with an empty mask count as gaps.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,), or None
+        Pixels; None when no frame shows the person or ``bbox`` is malformed.
+    """
+    bb = np.asarray(bbox, float)
+    if bb.ndim != 2 or bb.shape[1] != 4:
+        return None
+    track = np.where(np.asarray(masks).any(axis=(1, 2)), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
+    ok = np.isfinite(track)
+    if not ok.any():
+        return None
+    t = np.arange(len(track))
+    return np.interp(t, t[ok], track[ok])
 
 
 def _check_events(ann: Annotations, n_frames: int, source) -> None:
