@@ -39,6 +39,7 @@ sys.path.insert(0, str(ROOT))
 from vidcap.annotations import Annotations  # noqa: E402
 from vidcap.body import SEGMENT_NAMES, BodyModel  # noqa: E402
 from vidcap.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation  # noqa: E402
+from vidcap.pipeline import plane_passages  # noqa: E402
 from vidcap.proposals import propose_orientation, propose_signs  # noqa: E402
 from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
 
@@ -131,7 +132,7 @@ def evaluate(truth, body, *, max_events=60):
     ann = Annotations()
     _orientation_events(ann, len(j2), orient, truth["orientation"])
     n_orient = ann.n_user_inputs
-    near = prop.zeta < NEAR_PLANE
+    near = plane_passages(prop.zeta)
     L = body.segment_lengths()
     reached = False
     while True:
