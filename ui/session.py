@@ -202,14 +202,14 @@ class AnnotateSession:
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
-        from vidcap.pipeline import NEAR_PLANE
+        from vidcap.pipeline import plane_passages
 
         self._result = res
         self.scale = float(res.scale)
         self.checks = res.checks
         self.doubt = sign_doubt(res.margin, res.zeta, self.clip.body)
         self.proposed_orientation = np.asarray(res.proposed_orientation).astype(str)
-        self._near_plane = np.asarray(res.zeta) < NEAR_PLANE
+        self._near_plane = plane_passages(res.zeta)
         self.user_signs, user_orient, self.user_joints = self.annotations.resolve(
             self.n_frames, near_plane=self._near_plane)
         self.user_orient = np.asarray(user_orient).astype(str)

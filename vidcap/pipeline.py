@@ -43,6 +43,38 @@ from vidcap.proposals import propose_orientation, propose_signs
 NEAR_PLANE = 0.15
 
 
+def plane_passages(zeta, *, near: float = NEAR_PLANE, window: int = 5) -> np.ndarray:
+    """Frames where each segment passes through the image plane.
+
+    A passage is a frame where ``zeta = |dZ| / length`` is below ``near`` and is the
+    smallest within ``window`` frames (a run of equal minima, e.g. clamped zeros,
+    counts as a whole). Given to :meth:`vidcap.annotations.Annotations.resolve` as
+    ``near_plane``, a depth event then holds until its segment next passes through
+    the plane, also when the segment never leaves the near-plane zone (a side-view
+    walk), where "until it next enters the zone" would hold across a sign change.
+
+    Parameters
+    ----------
+    zeta : array_like, shape (F, 10)
+        Out-of-plane fraction of every segment (:attr:`SignProposal.zeta`).
+    near : float
+        Only minima below this count.
+    window : int
+        Frames over which a minimum must be the smallest (odd).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F, 10)
+    """
+    from scipy.ndimage import minimum_filter1d
+
+    z = np.asarray(zeta, dtype=float)
+    if z.shape[0] == 0:
+        return np.zeros(z.shape, bool)
+    low = minimum_filter1d(z, size=max(1, int(window)), axis=0, mode="nearest")
+    return (z <= low + 1e-12) & (z < near)
+
+
 @dataclass(frozen=True)
 class LiftResult:
     """The 3D stage's output (:func:`lift_pose`).
@@ -159,7 +191,7 @@ def lift_pose(
     fix = np.isfinite(user_joints)
     j2 = np.where(fix, user_joints, j2)
     free = propose_signs(j2, yaw, scale=scale, body=body)
-    user_signs, _, _ = annotations.resolve(F, near_plane=free.zeta < NEAR_PLANE)
+    user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=scale, body=body, fixed=user_signs) \
         if (user_signs != 0).any() else free
     out = lift(j2, final.signs, yaw, body=body, scale=scale)
