@@ -370,11 +370,13 @@ def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Pa
     b, g_, r_ = cv2.split(cv2.absdiff(frame[y0:y1, x0:x1], ref))
     l1 = cv2.medianBlur(cv2.add(cv2.add(b, g_), r_), 3)
     box = (4 * r + 1, 4 * r + 1)
-    inner_f = inner.astype(np.float32)
-    num = cv2.boxFilter(l1.astype(np.float32) * inner_f, -1, box, normalize=False)
-    den = cv2.boxFilter(inner_f, -1, box, normalize=False)
-    level = num / np.maximum(den, 1.0)
-    fg = (l1 > p.tmap_full[y0:y1, x0:x1]) & (l1 >= p.edge_fraction * level)
+    # Box means on uint8 (OpenCV's fast path): the interior's mean difference is
+    # num / den with num = mean of l1 over interior pixels (0 elsewhere) and den =
+    # 255 * the interior's share of the box.
+    num = cv2.blur(cv2.bitwise_and(l1, l1, mask=inner), box).astype(np.float32)
+    den = cv2.blur(inner * np.uint8(255), box)
+    fg = (l1 > p.tmap_full[y0:y1, x0:x1]) & (
+        l1 * den.astype(np.float32) >= (255.0 * p.edge_fraction) * num)
     fg = cv2.medianBlur(fg.view(np.uint8), 3)
     np.copyto(m, fg, where=(band > 0) & (den > 0))
 
