@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -138,3 +139,34 @@ def test_half_resolution_work_scale_keeps_the_outline():
     assert np.median(iou_half) > np.median(iou_full) - 0.02
     assert np.abs(half.bbox - full.bbox).max() <= 2
     assert (half.found == full.found).all()
+
+
+def test_blurred_outline_is_decided_by_the_persons_own_contrast():
+    """A soft edge (antialiasing, codec blur) is a band of mixtures: the noise
+    threshold alone keeps mixtures with a few per cent of person (a fat mask);
+    the contrast test keeps the pixels at least ``edge_fraction`` person."""
+    rng = np.random.default_rng(5)
+    h, w = 120, 160
+    plate = np.full((h, w, 3), (150, 170, 140), np.uint8)
+    yy, xx = np.mgrid[:h, :w]
+    cover = ((np.abs(xx - 80) < 18) & (np.abs(yy - 60) < 40)).astype(np.float32)
+    # Gaussian blur of the hard edge: coverage falls from 1 to 0 over ~6 px.
+    soft = cv2.GaussianBlur(cover, (0, 0), 1.5)
+    person = np.array([40, 40, 200], np.float32)
+    frames = []
+    for _ in range(4):
+        f = soft[..., None] * person + (1 - soft[..., None]) * plate
+        f += rng.normal(0, 2.0, f.shape)
+        frames.append(np.clip(np.round(f), 0, 255).astype(np.uint8))
+    frames = np.stack(frames)
+    bg = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    half = (soft >= 0.5)[None].repeat(len(frames), 0)
+    plain = extract_silhouettes(frames, bg, edge_band=0)
+    ours = extract_silhouettes(frames, bg, edge_fraction=0.5)
+    # The plain test keeps faint mixtures: wider than the half-coverage outline.
+    assert (plain.areas > 1.1 * half.sum((1, 2))).all()
+    assert np.median(_iou(ours.masks, half)) > 0.97
+    assert np.median(_iou(ours.masks, half)) > np.median(_iou(plain.masks, half)) + 0.05
+    # A lower share keeps more of the band, never less than the half test.
+    low = extract_silhouettes(frames, bg, edge_fraction=0.2)
+    assert (low.areas >= ours.areas).all() and (low.areas <= plain.areas).all()
