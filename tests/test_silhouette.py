@@ -8,7 +8,7 @@ import pytest
 
 from tests._synthframes import background, clip
 from vidcap.background import BackgroundModel, estimate_background
-from vidcap.silhouette import NoPersonError, extract_silhouettes, normalise_silhouette
+from vidcap.silhouette import NoPersonError, extract_silhouettes
 
 
 def _iou(a, b):
@@ -95,34 +95,6 @@ def test_size_mismatch_is_an_error():
     bg = BackgroundModel.from_plate(np.zeros((10, 10, 3), np.uint8), noise_sigma=1)
     with pytest.raises(Exception, match="10x10"):
         extract_silhouettes(np.zeros((2, 12, 10, 3), np.uint8), bg)
-
-
-@pytest.mark.parametrize("scale", [0.3, 1.0, 2.5])
-def test_normalise_round_trip(scale):
-    h0 = int(round(100 * scale))
-    mask = np.zeros((int(300 * scale), int(200 * scale)), bool)
-    y0, x0 = int(50 * scale), int(60 * scale)
-    w0 = int(round(30 * scale))
-    mask[y0:y0 + h0, x0:x0 + w0] = True
-    n = normalise_silhouette(mask, height=64, pad=4)
-    assert n.mask.shape == (72, 64)
-    ys, xs = np.nonzero(n.mask)
-    assert ys.min() == 4 and ys.max() == 67           # the person spans exactly `height`
-    assert abs((xs.min() + xs.max() + 1) / 2 - 32) <= 1  # centred
-    # corners map back to the frame's bbox
-    top_left = n.to_frame([0, 4])
-    assert np.allclose(top_left[1], y0, atol=1e-6)
-    assert np.allclose(n.to_normalised(n.to_frame([[3.0, 7.0]])), [[3.0, 7.0]])
-    assert n.to_frame([32, 4])[0] == pytest.approx(x0 + w0 / 2)
-    assert not n.clipped
-    with pytest.raises(ValueError):
-        normalise_silhouette(np.zeros((5, 5), bool))
-
-
-def test_normalise_reports_clipping():
-    mask = np.zeros((100, 300), bool)
-    mask[40:60, 10:290] = True    # much wider than tall
-    assert normalise_silhouette(mask, height=32).clipped
 
 
 def test_half_resolution_work_scale_keeps_the_outline():

@@ -1,5 +1,8 @@
-"""Silhouettes by background subtraction (seed 004 section 3.1.3), and their
-normalisation to a fixed height for the pose fitter (seed 004 section 4.2).
+"""Silhouettes by background subtraction (seed 004 section 3.1.3).
+
+The fixed-height normalisation the pose fitter works on (seed 004 section 4.2) is
+:func:`vidcap.fit.raster.normalise_mask`, beside the rasteriser that shares its
+coordinate convention.
 
 Per frame: the plate is scaled by the frame's own brightness per channel (slow
 lighting drift), the L1 colour difference ``sum_c |frame_c - plate_c|`` (grey
@@ -25,11 +28,9 @@ from vidcap.errors import VidcapError
 
 __all__ = [
     "NoPersonError",
-    "NormalisedSilhouette",
     "Silhouettes",
     "extract_silhouettes",
     "iter_silhouettes",
-    "normalise_silhouette",
     "silhouette_frame",
 ]
 
@@ -110,103 +111,6 @@ class Silhouettes:
         if not len(self.found):
             return 0
         return int((self.found + self.n_other_blobs).max())
-
-
-@dataclass(frozen=True)
-class NormalisedSilhouette:
-    """A silhouette scaled to a fixed height, and the map back to the frame.
-
-    ``mask`` has shape ``(height + 2 * pad, width)``. A point ``(x, y)`` in frame
-    pixels maps to ``(u, v) = scale * ((x, y) - origin)`` in the normalised
-    crop and back by ``(x, y) = (u, v) / scale + origin`` (:meth:`to_frame`).
-    The person's bbox top lies at ``v = pad`` and its bottom at
-    ``v = pad + height``; its horizontal centre is at ``u = width / 2``.
-
-    Attributes
-    ----------
-    mask : numpy.ndarray, shape (height + 2 * pad, width), bool
-    scale : float
-        Normalised pixels per frame pixel.
-    origin : numpy.ndarray, shape (2,), float
-        Frame coordinates (x, y) of the crop's (0, 0) corner.
-    clipped : bool
-        Part of the silhouette fell outside the crop's width.
-    """
-
-    mask: np.ndarray
-    scale: float
-    origin: np.ndarray
-    clipped: bool
-
-    def to_frame(self, uv) -> np.ndarray:
-        """Map normalised points (..., 2) ``(u, v)`` to frame pixels ``(x, y)``."""
-        return np.asarray(uv, float) / self.scale + self.origin
-
-    def to_normalised(self, xy) -> np.ndarray:
-        """Map frame points (..., 2) ``(x, y)`` to normalised pixels ``(u, v)``."""
-        return (np.asarray(xy, float) - self.origin) * self.scale
-
-
-def normalise_silhouette(
-    mask: np.ndarray, bbox=None, *, height: int = 128, width: int | None = None,
-    pad: int = 4,
-) -> NormalisedSilhouette:
-    """Scale a silhouette so that its bounding box is ``height`` pixels tall.
-
-    Seed 004 section 4.2: the fitter's cost must not depend on the frame size, so
-    it works on the silhouette normalised to a fixed size.
-
-    Parameters
-    ----------
-    mask : numpy.ndarray, shape (H, W), bool
-        The person's silhouette in the frame.
-    bbox : array-like, shape (4,), optional
-        ``x0, y0, x1, y1`` (exclusive ends) of the person; computed from ``mask``
-        when omitted.
-    height : int
-        Output height of the person, pixels.
-    width : int, optional
-        Output width (default ``height``: a square crop plus vertical padding).
-    pad : int
-        Empty rows above and below the person.
-
-    Returns
-    -------
-    NormalisedSilhouette
-        ``mask`` of shape ``(height + 2 * pad, width)``.
-
-    Raises
-    ------
-    ValueError
-        The mask is empty.
-    """
-    mask = np.asarray(mask, bool)
-    width = height if width is None else int(width)
-    if bbox is None:
-        ys, xs = np.nonzero(mask)
-        if not len(ys):
-            raise ValueError("the mask is empty")
-        bbox = (xs.min(), ys.min(), xs.max() + 1, ys.max() + 1)
-    x0, y0, x1, y1 = (float(v) for v in bbox)
-    if y1 <= y0 or x1 <= x0:
-        raise ValueError("the mask is empty")
-    scale = height / (y1 - y0)
-    origin = np.array([(x0 + x1) / 2 - width / 2 / scale, y0 - pad / scale])
-    # u = scale * (x - ox): affine from frame to crop (pixel centres at +0.5).
-    # Pixel centres: frame pixel i covers [i, i+1), crop pixel j covers [j, j+1).
-    m = np.array([[scale, 0, -scale * origin[0] + 0.5 * scale - 0.5],
-                  [0, scale, -scale * origin[1] + 0.5 * scale - 0.5]], np.float64)
-    out_h = height + 2 * pad
-    src = mask.astype(np.float32)
-    if scale < 0.75:
-        # Area-like downscaling: box-average over one output pixel's footprint.
-        k = int(round(1 / scale))
-        src = cv2.blur(src, (k, k))
-    out = cv2.warpAffine(src, m, (width, out_h), flags=cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    inside_x = (origin[0] <= x0) and (origin[0] + width / scale >= x1)
-    return NormalisedSilhouette(mask=out >= 0.5, scale=float(scale), origin=origin,
-                                clipped=not inside_x)
 
 
 # --------------------------------------------------------------------------- extraction
