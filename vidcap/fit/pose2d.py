@@ -908,7 +908,7 @@ class _Fitter:
                 self.search_angle(seg, start=start, interval=width, lo=lo, hi=hi,
                                   prefer=prefer)
 
-    def search_arm_grid(self, s, *, prior=None, step_deg=15.0, tie_px=5.0, fine_deg=10.0):
+    def search_arm_grid(self, s, *, prior=None, step_deg=15.0, tie_px=10.0, fine_deg=10.0):
         """Search one whole arm over every (upper, lower) angle pair at once (beyond the seed).
 
         Algorithm 1 searches one angle within an interval, so a forearm poking out of
