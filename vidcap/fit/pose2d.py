@@ -1033,7 +1033,8 @@ def _swap_lower_legs(f: _Fitter):
 def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
                    refine: bool = True, spread: bool = True, verify_crossing: bool = True,
                    caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01,
-                   warm_step_deg: float = 2.0, arm_grid: bool = True):
+                   warm_step_deg: float = 2.0, arm_grid: bool = True,
+                   spread_value: float | None = None):
     """Fit the model to a normalised silhouette; see :func:`fit_pose`.
 
     Returns
@@ -1043,14 +1044,17 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
     crossed : bool
     warm : bool
     """
+    fixed_spread = 0.5 if spread_value is None else float(spread_value)
+    spread = spread and spread_value is None  # search the spread?
     f = _Fitter(norm, caps=caps)
+    f.spread = fixed_spread
     f.place_torso()
     crossed = False
     warm = False
     if previous is not None:
         f.angles = np.array(previous.angles, dtype=float)
         f.fore = np.array(previous.foreshortening, dtype=float)
-        f.spread = float(previous.spread) if spread else 0.5
+        f.spread = float(previous.spread) if spread else fixed_spread
         f.drawn[:] = True
         warm = f.similarity() >= warm_threshold
     if warm:
@@ -1120,7 +1124,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
              fallback: float = 0.97, warm_step_deg: float = 2.0,
-             challenge: bool = False, arm_grid: bool = True) -> FramePose:
+             challenge: bool = False, arm_grid: bool = True,
+             spread_value: float | None = None) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -1138,6 +1143,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     spread : bool
         Search the shoulders' and hips' lateral spread (beyond the seed); if false
         the spread is fixed at 0.5.
+    spread_value : float, optional
+        Fix the spread at this value in [0, 1] instead (no search);
+        :func:`fit_sequence` uses it to refit frames whose spread jumps away from
+        their neighbours'.
     verify_crossing : bool
         When Algorithm 5 says the legs cross, keep the swap only if it fits better.
     caps : bool
@@ -1170,7 +1179,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     """
     norm = normalise_mask(mask, height=height)
     kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
-              warm_step_deg=warm_step_deg, arm_grid=arm_grid)
+              warm_step_deg=warm_step_deg, arm_grid=arm_grid, spread_value=spread_value)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
                                       **kw)
     if warm and (challenge or f.similarity() < fallback * previous.similarity):
@@ -1193,7 +1202,9 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
-                 progress=None, reinit_every: int = 10, **kw) -> Pose2D:
+                 progress=None, reinit_every: int = 10, spread_window: int = 15,
+                 spread_jump: float = 0.25, spread_tie: float = 0.01,
+                 back_tie: float | None = 0.002, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -1209,6 +1220,21 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     reinit_every : int
         In tracked mode every this many frames the frame is also fitted from scratch
         and the better fit kept (0: never).
+    back_tie : float or None
+        Tracked mode: when a fresh fit replaces the track at a frame, the frames
+        before it (back to where that track began) are refitted warm from the new
+        pose, backward, while that improves their similarity by more than
+        ``back_tie`` (None: off). A track that started in a wrong pose is thus
+        corrected from the frame where the right one was found.
+    spread_window, spread_jump, spread_tie
+        Temporal prior on the spread (tracked mode, beyond the seed): the spread
+        follows the body's yaw, which changes slowly, but a single silhouette
+        barely shows it (the torso cylinder looks the same from every side), so
+        per-frame estimates wander. After the pass, a frame whose spread is more
+        than ``spread_jump`` from the running median over ``spread_window``
+        frames is refitted warm from its own pose with the spread fixed at that
+        median, and the refit kept unless its similarity is more than
+        ``spread_tie`` lower. 0 window: off.
     **kw
         Passed to :func:`fit_pose` (``height``, ``refine``, ``spread``, ...).
 
@@ -1227,20 +1253,64 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     sim = np.zeros(n)
     warm = np.zeros(n, dtype=bool)
     it = range(n) if progress is None else progress(range(n), total=n)
+
+    def store(k, fp):
+        joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
+        scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
+        sim[k], warm[k] = fp.similarity, fp.warm
+
     prev = None
+    start = 0  # first frame of the current track
     for k in it:
         m = np.asarray(masks[k], dtype=bool)
         if not m.any():
             prev = None
+            start = k + 1
             continue
         challenge = bool(reinit_every) and k % reinit_every == 0
         fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
-        joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
-        scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
-        sim[k], warm[k] = fp.similarity, fp.warm
+        store(k, fp)
+        if tracked and prev is not None and not fp.warm and back_tie is not None:
+            # A fresh fit replaced the track: the frames before it were probably
+            # tracked in a wrong pose too. Carry the new pose backward while it fits
+            # those frames better (beyond the seed).
+            back = fp
+            for b in range(k - 1, start - 1, -1):
+                fb = fit_pose(np.asarray(masks[b], dtype=bool), previous=back, **kw)
+                if not fb.warm or fb.similarity <= sim[b] + back_tie:
+                    break
+                store(b, fb)
+                back = fb
+            start = k
         prev = fp
+    if tracked and spread_window > 1 and kw.get("spread", True) and n > 2:
+        _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw,
+                       joints, angles, fore, scores, margins, spread, sim)
     return Pose2D(JOINT_NAMES, joints, angles, fore, scores, margins, spread, sim, warm,
                   bool(tracked))
+
+
+def _smooth_spread(masks, window, jump, tie, kw, joints, angles, fore, scores, margins,
+                   spread, sim):
+    """Refit frames whose spread jumps away from the running median (in place)."""
+    from scipy.ndimage import median_filter
+
+    ok = np.isfinite(spread)
+    if ok.sum() < 3:
+        return
+    idx = np.flatnonzero(ok)
+    med = np.full_like(spread, np.nan)
+    med[idx] = median_filter(spread[idx], size=window, mode="nearest")
+    for k in np.flatnonzero(ok & (np.abs(spread - med) > jump)):
+        own = FramePose(joints=joints[k], angles=angles[k], foreshortening=fore[k],
+                        scores=scores[k], margins=margins[k], spread=float(med[k]),
+                        crossed=False, similarity=float(sim[k]), warm=True, height_px=0.0)
+        fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=own,
+                      **{**kw, "spread_value": float(med[k])})
+        if fp.similarity >= sim[k] - tie:
+            joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
+            scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
+            sim[k] = fp.similarity
 
 
 __all__ = ["FramePose", "Pose2D", "fit_normalised", "fit_pose", "fit_sequence"]
