@@ -60,6 +60,11 @@ Beyond the seed:
   and the better kept, and every 10th frame a fresh fit challenges the track (so a
   wrong but stable track is left). ``tracked=False`` (``--per-frame``) fits every
   frame independently, as the seed does.
+* Temporal priors in tracked mode (:func:`fit_sequence`): when a fresh fit replaces
+  the track, the frames before it are re-tracked backward from it while that fits
+  them better (a track that began in a wrong pose is corrected from where the right
+  one was found); and a frame whose ``spread`` jumps away from its neighbours'
+  running median is refitted with the spread fixed at that median.
 * Warm starts take part in their own search's first batch, so a search never ends
   below where it started.
 
