@@ -158,3 +158,9 @@ def test_arm_grid_finds_folded_forearm(arm_deg):
     assert err < 0.03
     off = fit_pose(mask, arm_grid=False).joints[[JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]]
     assert np.linalg.norm(off - truth[JOINT_INDEX["r_wrist"]], axis=1).min() / H > 0.1
+
+
+def test_spread_value_fixes_the_spread():
+    mask, _ = _figure([90, 90, 250, 290, 270, 270, 266, 274, 274, 266], spread=1.0)
+    assert fit_pose(mask).spread > 0.6
+    assert fit_pose(mask, spread_value=0.2).spread == pytest.approx(0.2)
