@@ -21,7 +21,7 @@ sample clips against their truth: 3D MPJPE after root alignment (also allowing t
 body's left/right limbs to be swapped per frame: in a side view the image cannot tell
 which leg is which), 2D joint error, orientation agreement.
 
-Run:  python benchmarks/lift_accuracy.py [--frames 82] [--end-to-end]
+Run:  python benchmarks/lift_accuracy.py [--frames 82] [--synth] [--end-to-end]
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ sys.path.insert(0, str(ROOT))
 from vidcap.annotations import Annotations  # noqa: E402
 from vidcap.body import SEGMENT_NAMES, BodyModel  # noqa: E402
 from vidcap.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation  # noqa: E402
+from vidcap.pipeline import plane_passages  # noqa: E402
 from vidcap.proposals import propose_orientation, propose_signs  # noqa: E402
 from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
 
@@ -63,6 +64,45 @@ def mpjpe(a, b, height):
     return float(np.linalg.norm(a - b, axis=-1).mean() / height * 100)
 
 
+def true_zeta(truth, body):
+    """|dZ| / length of every (frame, segment) from the true 3D joints, shape (F, 10)."""
+    from vidcap.body import SEGMENT_JOINTS
+
+    j3 = truth["joints3d"]
+    seg = j3[:, SEGMENT_JOINTS[:, 1]] - j3[:, SEGMENT_JOINTS[:, 0]]
+    return np.abs(seg @ truth["view_dir"]) / np.linalg.norm(seg, axis=-1)
+
+
+def sign_scores(signs, truth, body):
+    """Share of (frame, segment) depth signs proposed correctly, in %.
+
+    A sign is correct when it equals the true one; a segment *exactly* in the image
+    plane (|dZ| < 1e-6 of its length) has no sign (both give the same 3D pose) and
+    counts as correct either way. Returns the share over all pairs, over the pairs
+    out of the image plane by more than ``MATTERS`` of their length, and over the
+    others (near the plane, where a wrong sign moves the distal joint by less than
+    ``2 * MATTERS`` lengths), plus the share of pairs that are out of plane.
+    """
+    z = true_zeta(truth, body)
+    ok = (np.asarray(signs) == truth["depth_signs"]) | (z < 1e-6)
+    out = z > MATTERS
+
+    def pct(m):
+        return float(ok[m].mean() * 100) if m.any() else float("nan")
+
+    return pct(np.ones_like(ok)), pct(out), pct(~out), float(out.mean() * 100)
+
+
+def _orientation_events(ann, n, proposed, true):
+    """Simulated user, orientation: fix the first wrong frame until none is wrong."""
+    for _ in range(n):
+        _, uo, _ = ann.resolve(n)
+        wrong = np.flatnonzero(np.where(uo != "", uo, proposed) != true)
+        if not wrong.size:
+            return
+        ann.add_orientation(int(wrong[0]), str(true[wrong[0]]))
+
+
 def evaluate(truth, body, *, max_events=60):
     j2 = truth["joints2d"]
     fps = float(truth["fps"])
@@ -78,33 +118,36 @@ def evaluate(truth, body, *, max_events=60):
                    body.height)
     prop = propose_signs(j2, yaw, scale=s, body=body)
     e_prop = mpjpe(lift(j2, prop.signs, yaw, body=body, scale=s).joints3d, true3, body.height)
-    ok = prop.signs == true_signs
-    matters = prop.zeta > MATTERS
+    # the same scores with the true orientation (the signs' own share of the error)
+    prop_to = propose_signs(j2, yaw_true_lbl, scale=s, body=body)
+    all_ok, out_ok, near_ok, out_share = sign_scores(prop.signs, truth, body)
+    all_ok_to, out_ok_to, _, _ = sign_scores(prop_to.signs, truth, body)
 
-    # simulated user
+    # Simulated user. Orientation first (each event holds until the next one); then
+    # depth: the wrong run of frames (per segment) with the largest summed 3D error of
+    # its distal joint gets one event at its first frame with the true sign, which
+    # holds until the segment next enters the image plane (as in `vidcap annotate`);
+    # the proposals are re-run with the user's signs as constraints after each event.
+    # Stop when the MPJPE is within 0.25 % of height of the true-sign result.
     ann = Annotations()
-    for _ in range(len(j2)):  # orientation: fix the first wrong frame until none is
-        _, uo, _ = ann.resolve(len(j2))
-        wrong_o = np.flatnonzero(np.where(uo != "", uo, orient) != truth["orientation"])
-        if not wrong_o.size:
-            break
-        ann.add_orientation(int(wrong_o[0]), str(truth["orientation"][wrong_o[0]]))
-    near = prop.zeta < NEAR_PLANE
+    _orientation_events(ann, len(j2), orient, truth["orientation"])
+    n_orient = ann.n_user_inputs
+    near = plane_passages(prop.zeta)
     L = body.segment_lengths()
-    e_final = e_prop
+    reached = False
     while True:
         user_signs, user_orient, _ = ann.resolve(len(j2), near_plane=near)
         o = np.where(user_orient != "", user_orient, orient)
         y = yaw_from_orientation(o, rho)
         p = propose_signs(j2, y, scale=s, body=body, fixed=user_signs)
         e_final = mpjpe(lift(j2, p.signs, y, body=body, scale=s).joints3d, true3, body.height)
-        if e_final <= e_true + 0.25 or ann.n_user_inputs >= max_events:
+        if e_final <= e_true + 0.25:
+            reached = True
             break
         wrong = p.signs != true_signs
-        if not wrong.any():
+        if ann.n_user_inputs >= max_events or not wrong.any():
             break
         cost = np.where(wrong, 2 * p.zeta * L, 0.0)
-        # the worst run: group consecutive wrong frames per segment, sum their error
         best, best_ev = -1.0, None
         for k in range(len(SEGMENT_NAMES)):
             w = wrong[:, k].astype(int)
@@ -124,10 +167,16 @@ def evaluate(truth, body, *, max_events=60):
         "frames": len(j2),
         "mpjpe_true": e_true,
         "mpjpe_prop": e_prop,
-        "signs_all": float(ok.mean() * 100),
-        "signs_matter": float(ok[matters].mean() * 100) if matters.any() else float("nan"),
+        "signs_all": all_ok,
+        "signs_matter": out_ok,
+        "signs_near": near_ok,
+        "out_share": out_share,
+        "signs_all_true_orient": all_ok_to,
+        "signs_matter_true_orient": out_ok_to,
         "orient_ok": orient_ok * 100,
         "events": ann.n_user_inputs,
+        "orient_events": n_orient,
+        "reached": reached,
         "mpjpe_final": e_final,
         "true_changes": int((np.diff(true_signs, axis=0) != 0).sum()),
     }
@@ -166,6 +215,9 @@ def end_to_end(samples: Path, body):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--frames", type=int, default=82, help="frames per clip at 30 fps")
+    ap.add_argument("--synth", action="store_true",
+                    help="vidcap.synth's built-in motions (walk, arms, jacks) at yaw 90/45/20 "
+                         "instead: the set the proposal weights are chosen on")
     ap.add_argument("--end-to-end", action="store_true",
                     help="also run the whole pipeline on sample_videos/ against their truth")
     args = ap.parse_args(argv)
@@ -174,23 +226,40 @@ def main(argv=None):
         "131_01.bvh": dict(name_or_path=DATA / "131_01.bvh", frame_range=(200, None)),
         "07_07.amc": dict(name_or_path=DATA / "07.asf", amc=DATA / "07_07.amc"),
     }
+    yaws = (90.0, 45.0)
+    if args.synth:
+        motions = {n: dict(name_or_path=n) for n in ("walk", "arms", "jacks")}
+        yaws = (90.0, 45.0, 20.0)
     rows = []
     t0 = time.perf_counter()
     for mname, kw in motions.items():
         motion = make_motion(**kw, body=body, fps=30.0, rng=np.random.default_rng(0))
         motion = motion.frames(0, min(args.frames, motion.n_frames))
-        for yaw in (90.0, 45.0):
+        for yaw in yaws:
             clip = prepare_clip(motion, body=body, yaw_deg=yaw, rng=np.random.default_rng(1))
             truth = truth_arrays(clip, np.zeros((motion.n_frames, 1, 1), bool))
             rows.append((mname, yaw, evaluate(truth, body)))
-    head = ("motion", "yaw", "frames", "MPJPE true %", "MPJPE prop %", "signs ok %",
-            "ok where out of plane %", "orient ok %", "events", "MPJPE after %", "true changes")
+    head = ("motion", "yaw", "frames", "MPJPE true %", "MPJPE prop %", "signs ok % (all)",
+            "ok out of plane %", "ok near plane %", "out of plane share %",
+            "all / out, true orient %", "orient ok %", "events (orient)", "MPJPE after %",
+            "true changes")
     print(" | ".join(head))
     print(" | ".join("---" for _ in head))
     for m, yaw, r in rows:
+        ev = f"{r['events']} ({r['orient_events']})" + ("" if r["reached"] else " not reached")
         print(f"{m} | {yaw:.0f} | {r['frames']} | {r['mpjpe_true']:.2f} | {r['mpjpe_prop']:.2f} | "
-              f"{r['signs_all']:.1f} | {r['signs_matter']:.1f} | {r['orient_ok']:.0f} | "
-              f"{r['events']} | {r['mpjpe_final']:.2f} | {r['true_changes']}")
+              f"{r['signs_all']:.1f} | {r['signs_matter']:.1f} | {r['signs_near']:.1f} | "
+              f"{r['out_share']:.0f} | {r['signs_all_true_orient']:.1f} / "
+              f"{r['signs_matter_true_orient']:.1f} | {r['orient_ok']:.0f} | {ev} | "
+              f"{r['mpjpe_final']:.2f} | {r['true_changes']}")
+    if args.synth:
+        keys = ("signs_all", "signs_matter", "events")
+        mean = {k: np.nanmean([r[k] for _, _, r in rows]) for k in keys}
+        gap = np.mean([r["mpjpe_prop"] - r["mpjpe_true"] for _, _, r in rows])
+        dev = np.mean([r["events"] - r["orient_events"] for _, _, r in rows])
+        print(f"\nmean: signs ok {mean['signs_all']:.1f} %, out of plane "
+              f"{mean['signs_matter']:.1f} %, MPJPE prop - true {gap:.2f} points, "
+              f"depth events {dev:.1f}")
     print(f"\n(targets: MPJPE with true signs <= 5 %, signs >= 90 %, events <= 6 on 82 frames;"
           f" seed 004: 60 inputs; {time.perf_counter() - t0:.1f} s)")
     if args.end_to_end:

@@ -129,3 +129,23 @@ def test_api_rejects_bad_values():
 
 def test_default_path():
     assert default_path("/x/walk.mp4").name == "walk.vidcap.json"
+
+
+def test_plane_passages_end_a_depth_event_that_never_leaves_the_near_plane_zone():
+    from vidcap.pipeline import plane_passages
+
+    F, k = 20, SEGMENT_INDEX["l_lower_leg"]
+    zeta = np.full((F, 10), 0.5)
+    zeta[:, k] = 0.1 * np.abs(np.cos(np.linspace(0.0, np.pi, F)))  # crosses the plane once
+    passes = plane_passages(zeta)
+    starts = np.flatnonzero(np.diff(np.r_[0, passes[:, k].astype(int)]) == 1)
+    assert len(starts) == 1 and 8 <= starts[0] <= 11  # one passage (a run of equal minima)
+    assert not passes[:, SEGMENT_INDEX["head"]].any()  # never below the near-plane bound
+    a = Annotations()
+    a.add_depth(1, "l_lower_leg", "toward")
+    signs, _, _ = a.resolve(F, near_plane=passes)
+    held = np.flatnonzero(signs[:, k])
+    assert held[0] == 1 and held[-1] == np.flatnonzero(passes[:, k])[0] - 1
+    # the old rule (zone entry) holds the event across the sign change
+    signs_old, _, _ = a.resolve(F, near_plane=zeta < 0.15)
+    assert (signs_old[1:, k] == 1).all()

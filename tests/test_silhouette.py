@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from tests._synthframes import background, clip
 from vidcap.background import BackgroundModel, estimate_background
-from vidcap.silhouette import NoPersonError, extract_silhouettes, normalise_silhouette
+from vidcap.silhouette import NoPersonError, extract_silhouettes
 
 
 def _iou(a, b):
@@ -96,34 +97,6 @@ def test_size_mismatch_is_an_error():
         extract_silhouettes(np.zeros((2, 12, 10, 3), np.uint8), bg)
 
 
-@pytest.mark.parametrize("scale", [0.3, 1.0, 2.5])
-def test_normalise_round_trip(scale):
-    h0 = int(round(100 * scale))
-    mask = np.zeros((int(300 * scale), int(200 * scale)), bool)
-    y0, x0 = int(50 * scale), int(60 * scale)
-    w0 = int(round(30 * scale))
-    mask[y0:y0 + h0, x0:x0 + w0] = True
-    n = normalise_silhouette(mask, height=64, pad=4)
-    assert n.mask.shape == (72, 64)
-    ys, xs = np.nonzero(n.mask)
-    assert ys.min() == 4 and ys.max() == 67           # the person spans exactly `height`
-    assert abs((xs.min() + xs.max() + 1) / 2 - 32) <= 1  # centred
-    # corners map back to the frame's bbox
-    top_left = n.to_frame([0, 4])
-    assert np.allclose(top_left[1], y0, atol=1e-6)
-    assert np.allclose(n.to_normalised(n.to_frame([[3.0, 7.0]])), [[3.0, 7.0]])
-    assert n.to_frame([32, 4])[0] == pytest.approx(x0 + w0 / 2)
-    assert not n.clipped
-    with pytest.raises(ValueError):
-        normalise_silhouette(np.zeros((5, 5), bool))
-
-
-def test_normalise_reports_clipping():
-    mask = np.zeros((100, 300), bool)
-    mask[40:60, 10:290] = True    # much wider than tall
-    assert normalise_silhouette(mask, height=32).clipped
-
-
 def test_half_resolution_work_scale_keeps_the_outline():
     """At work_scale 2 the outline is refined at full resolution: the masks agree
     with the full-resolution ones and with the truth to within a few edge pixels."""
@@ -138,3 +111,34 @@ def test_half_resolution_work_scale_keeps_the_outline():
     assert np.median(iou_half) > np.median(iou_full) - 0.02
     assert np.abs(half.bbox - full.bbox).max() <= 2
     assert (half.found == full.found).all()
+
+
+def test_blurred_outline_is_decided_by_the_persons_own_contrast():
+    """A soft edge (antialiasing, codec blur) is a band of mixtures: the noise
+    threshold alone keeps mixtures with a few per cent of person (a fat mask);
+    the contrast test keeps the pixels at least ``edge_fraction`` person."""
+    rng = np.random.default_rng(5)
+    h, w = 120, 160
+    plate = np.full((h, w, 3), (150, 170, 140), np.uint8)
+    yy, xx = np.mgrid[:h, :w]
+    cover = ((np.abs(xx - 80) < 18) & (np.abs(yy - 60) < 40)).astype(np.float32)
+    # Gaussian blur of the hard edge: coverage falls from 1 to 0 over ~6 px.
+    soft = cv2.GaussianBlur(cover, (0, 0), 1.5)
+    person = np.array([40, 40, 200], np.float32)
+    frames = []
+    for _ in range(4):
+        f = soft[..., None] * person + (1 - soft[..., None]) * plate
+        f += rng.normal(0, 2.0, f.shape)
+        frames.append(np.clip(np.round(f), 0, 255).astype(np.uint8))
+    frames = np.stack(frames)
+    bg = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    half = (soft >= 0.5)[None].repeat(len(frames), 0)
+    plain = extract_silhouettes(frames, bg, edge_band=0)
+    ours = extract_silhouettes(frames, bg, edge_fraction=0.5)
+    # The plain test keeps faint mixtures: wider than the half-coverage outline.
+    assert (plain.areas > 1.1 * half.sum((1, 2))).all()
+    assert np.median(_iou(ours.masks, half)) > 0.97
+    assert np.median(_iou(ours.masks, half)) > np.median(_iou(plain.masks, half)) + 0.05
+    # A lower share keeps more of the band, never less than the half test.
+    low = extract_silhouettes(frames, bg, edge_fraction=0.2)
+    assert (low.areas >= ours.areas).all() and (low.areas <= plain.areas).all()

@@ -202,14 +202,14 @@ class AnnotateSession:
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
-        from vidcap.pipeline import NEAR_PLANE
+        from vidcap.pipeline import plane_passages
 
         self._result = res
         self.scale = float(res.scale)
         self.checks = res.checks
         self.doubt = sign_doubt(res.margin, res.zeta, self.clip.body)
         self.proposed_orientation = np.asarray(res.proposed_orientation).astype(str)
-        self._near_plane = np.asarray(res.zeta) < NEAR_PLANE
+        self._near_plane = plane_passages(res.zeta)
         self.user_signs, user_orient, self.user_joints = self.annotations.resolve(
             self.n_frames, near_plane=self._near_plane)
         self.user_orient = np.asarray(user_orient).astype(str)
@@ -462,7 +462,6 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
 
     from vidcap import pipeline
     from vidcap.annotations import Annotations
-    from vidcap.lift import assign_sides
     from vidcap.video import iter_frames
 
     video = Path(video)
@@ -470,11 +469,7 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     # the user's annotations are the session's business: run the stages without them
     res = pipeline.run(video, annotations=Annotations(), height=height, cache_dir=cache_dir,
                        progress=progress, log=log)
-    pose = _cached_pose2d(pipeline, video, cache_dir)
-    if pose is not None and len(pose["joints2d"]) == res.n_frames:
-        joints2d, spread = pose["joints2d"], pose["spread"]
-    else:  # no cache entry: undo the side assignment of the run (no user orientation in it)
-        joints2d, spread = assign_sides(res.lifted.joints2d, res.lifted.yaw), None
+    joints2d, spread = res.image_joints2d, res.spread
     jpegs = []
     for frame in iter_frames(video):
         ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
@@ -484,32 +479,10 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     def read_frame(i: int) -> np.ndarray:
         return cv2.imdecode(jpegs[i], cv2.IMREAD_COLOR)
 
-    track = _track(res.bbox, res.masks)
+    track = res.track
     return ClipData(video=video, fps=res.fps, read_frame=read_frame, joints2d=joints2d[:n],
                     masks=res.masks[:n], fit_score=np.asarray(res.similarity)[:n],
                     image_sides=True, spread=None if spread is None else spread[:n],
                     track=None if track is None else track[:n], body=BodyModel(height=height))
 
 
-def _cached_pose2d(pipeline, video: Path, cache_dir: Path) -> dict | None:
-    """The 2D stage's own arrays (image-side names, NaN gaps, torso spread) from the stage
-    cache that :func:`vidcap.pipeline.run` has just filled (same keys as ``run``)."""
-    try:
-        ident = pipeline._video_identity(video)
-        k_sil = pipeline._key("silhouettes", ident, pipeline._key("plate", ident))
-        return pipeline.StageCache(cache_dir).load("pose2d", pipeline._key("pose2d", k_sil))
-    except (AttributeError, OSError):
-        return None
-
-
-def _track(bbox: np.ndarray, masks: np.ndarray) -> np.ndarray | None:
-    """Horizontal centre of the person's box per frame, gaps interpolated (as the pipeline)."""
-    bb = np.asarray(bbox, float)
-    if bb.ndim != 2 or bb.shape[1] != 4:
-        return None
-    track = np.where(masks.any(axis=(1, 2)), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
-    ok = np.isfinite(track)
-    if not ok.any():
-        return None
-    t = np.arange(len(track))
-    return np.interp(t, t[ok], track[ok])

@@ -43,6 +43,38 @@ from vidcap.proposals import propose_orientation, propose_signs
 NEAR_PLANE = 0.15
 
 
+def plane_passages(zeta, *, near: float = NEAR_PLANE, window: int = 5) -> np.ndarray:
+    """Frames where each segment passes through the image plane.
+
+    A passage is a frame where ``zeta = |dZ| / length`` is below ``near`` and is the
+    smallest within ``window`` frames (a run of equal minima, e.g. clamped zeros,
+    counts as a whole). Given to :meth:`vidcap.annotations.Annotations.resolve` as
+    ``near_plane``, a depth event then holds until its segment next passes through
+    the plane, also when the segment never leaves the near-plane zone (a side-view
+    walk), where "until it next enters the zone" would hold across a sign change.
+
+    Parameters
+    ----------
+    zeta : array_like, shape (F, 10)
+        Out-of-plane fraction of every segment (:attr:`SignProposal.zeta`).
+    near : float
+        Only minima below this count.
+    window : int
+        Frames over which a minimum must be the smallest (odd).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F, 10)
+    """
+    from scipy.ndimage import minimum_filter1d
+
+    z = np.asarray(zeta, dtype=float)
+    if z.shape[0] == 0:
+        return np.zeros(z.shape, bool)
+    low = minimum_filter1d(z, size=max(1, int(window)), axis=0, mode="nearest")
+    return (z <= low + 1e-12) & (z < near)
+
+
 @dataclass(frozen=True)
 class LiftResult:
     """The 3D stage's output (:func:`lift_pose`).
@@ -159,7 +191,7 @@ def lift_pose(
     fix = np.isfinite(user_joints)
     j2 = np.where(fix, user_joints, j2)
     free = propose_signs(j2, yaw, scale=scale, body=body)
-    user_signs, _, _ = annotations.resolve(F, near_plane=free.zeta < NEAR_PLANE)
+    user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=scale, body=body, fixed=user_signs) \
         if (user_signs != 0).any() else free
     out = lift(j2, final.signs, yaw, body=body, scale=scale)
@@ -222,6 +254,12 @@ class ConvertResult:
     jitter_before: float
     jitter_after: float
     timings: dict = field(default_factory=dict)
+    #: The 2D stage's own joints (F, 15, 2): image-side limb names, NaN where no fit.
+    image_joints2d: np.ndarray | None = None
+    #: Torso spread per frame from the 2D stage (0 = side view, 1 = front view), (F,).
+    spread: np.ndarray | None = None
+    #: Horizontal centre of the person per frame in pixels, gaps interpolated, (F,).
+    track: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -362,16 +400,7 @@ def run(
 
     # 4. 3D lift and 5. motion
     t0 = time.perf_counter()
-    bb = np.asarray(bbox, float)
-    track = 0.5 * (bb[:, 0] + bb[:, 2]) if bb.ndim == 2 and bb.shape[1] == 4 else None
-    if track is not None:
-        track = np.where(masks.any(axis=(1, 2)), track, np.nan)
-        if np.isfinite(track).any():
-            t = np.arange(len(track))
-            ok = np.isfinite(track)
-            track = np.interp(t, t[ok], track[ok])
-        else:
-            track = None
+    track = person_track(bbox, masks)
     _check_events(ann, len(masks), ann_source)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track)
@@ -387,7 +416,34 @@ def run(
         scores=hit["scores"], similarity=hit["similarity"], lifted=lifted,
         motion=mres.motion, jitter_before=mres.jitter_before,
         jitter_after=mres.jitter_after, timings=timings,
+        image_joints2d=hit["joints2d"], spread=hit["spread"], track=track,
     )
+
+
+def person_track(bbox, masks) -> np.ndarray | None:
+    """Horizontal centre of the person's box per frame, gaps interpolated.
+
+    Parameters
+    ----------
+    bbox : array_like, shape (F, 4)
+        ``x0, y0, x1, y1`` per frame (pixels).
+    masks : numpy.ndarray, shape (F, H, W) bool
+        Frames with an empty mask count as gaps.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,), or None
+        Pixels; None when no frame shows the person or ``bbox`` is malformed.
+    """
+    bb = np.asarray(bbox, float)
+    if bb.ndim != 2 or bb.shape[1] != 4:
+        return None
+    track = np.where(np.asarray(masks).any(axis=(1, 2)), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
+    ok = np.isfinite(track)
+    if not ok.any():
+        return None
+    t = np.arange(len(track))
+    return np.interp(t, t[ok], track[ok])
 
 
 def _check_events(ann: Annotations, n_frames: int, source) -> None:

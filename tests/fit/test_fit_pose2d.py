@@ -140,3 +140,27 @@ def test_bad_pose_file(tmp_path):
     np.savez(p, a=np.zeros(3))
     with pytest.raises(InputFileError, match="x.npz"):
         Pose2D.load(p)
+
+
+
+@pytest.mark.parametrize("arm_deg", [(285, 60), (250, 120)])
+def test_arm_grid_finds_folded_forearm(arm_deg):
+    # side view: one arm folded at the elbow, its forearm pointing up past the
+    # torso's edge; the other arm hangs inside the torso's silhouette. The interval
+    # searches from the contour estimate miss the forearm (wrist ~0.4 of the height
+    # off); the whole-arm grid finds it. In a side view image-left/right is
+    # arbitrary, so the nearer fitted wrist is compared.
+    angles = [90, 90, 265, 275, *arm_deg, 266, 274, 274, 266]
+    mask, truth = _figure(angles, spread=0.0)
+    fp = fit_pose(mask)
+    wrists = fp.joints[[JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]]
+    err = np.linalg.norm(wrists - truth[JOINT_INDEX["r_wrist"]], axis=1).min() / H
+    assert err < 0.03
+    off = fit_pose(mask, arm_grid=False).joints[[JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]]]
+    assert np.linalg.norm(off - truth[JOINT_INDEX["r_wrist"]], axis=1).min() / H > 0.1
+
+
+def test_spread_value_fixes_the_spread():
+    mask, _ = _figure([90, 90, 250, 290, 270, 270, 266, 274, 274, 266], spread=1.0)
+    assert fit_pose(mask).spread > 0.6
+    assert fit_pose(mask, spread_value=0.2).spread == pytest.approx(0.2)

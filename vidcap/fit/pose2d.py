@@ -40,7 +40,15 @@ Beyond the seed:
   with Algorithm 1 against the whole silhouette (+-30 degrees; lower limbs within
   150 degrees of their parent, thighs over 180-360 degrees rather than Table 3.3's
   240-300 so high steps fit), the torso once more with every limb drawn, and the
-  final Algorithm 6 pass starts from the current ratios. ``refine=False``
+  final Algorithm 6 pass starts from the current ratios.
+* ``arm_grid`` (default on, with ``refine``): after the limb refinement each whole
+  arm is scored at every (upper, lower) angle pair 15 degrees apart in one batch
+  (:meth:`_Fitter.search_arm_grid`), so a forearm poking out far from the contour
+  estimate (raised beside the head, bent forward) is found; near-ties (an arm
+  inside the torso's silhouette covers the same pixels at any angle) go to the
+  arm hanging along the torso. Run on fresh fits only: in tracked frames it
+  measured worse (it re-places carried arms on slivers along the torso's edges),
+  so warm frames carry their arms from the previous frame. ``refine=False``
   (``--no-refine``) runs the seed's order only.
 * Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
   still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
@@ -52,6 +60,11 @@ Beyond the seed:
   and the better kept, and every 10th frame a fresh fit challenges the track (so a
   wrong but stable track is left). ``tracked=False`` (``--per-frame``) fits every
   frame independently, as the seed does.
+* Temporal priors in tracked mode (:func:`fit_sequence`): when a fresh fit replaces
+  the track, the frames before it are re-tracked backward from it while that fits
+  them better (a track that began in a wrong pose is corrected from where the right
+  one was found); and a frame whose ``spread`` jumps away from its neighbours'
+  running median is refitted with the spread fixed at that median.
 * Warm starts take part in their own search's first batch, so a search never ends
   below where it started.
 
@@ -837,6 +850,70 @@ class _Fitter:
                 self.search_angle(seg, start=start, interval=width, lo=lo, hi=hi,
                                   prefer=prefer)
 
+    def search_arm_grid(self, s, *, prior=None, step_deg=15.0, tie_px=10.0, fine_deg=10.0):
+        """Search one whole arm over every (upper, lower) angle pair at once (beyond the seed).
+
+        Algorithm 1 searches one angle within an interval, so a forearm poking out of
+        the silhouette far from its current estimate (raised beside the head, bent
+        forward across the chest) is never reached, and an arm inside the torso's
+        silhouette covers the same pixels at any angle. Here every pair of
+        image-plane angles ``step_deg`` apart (elbow bend within the flexion limit)
+        is scored in one batch against the rest of the model; among the candidates
+        within ``tie_px`` pixels' worth of similarity of the best, the one closest
+        to ``prior`` wins (the previous frame's arm when tracking, else an arm
+        hanging along the torso), so a hidden arm is carried rather than put at an
+        arbitrary angle. The winner is refined by Algorithm 1 (+-``fine_deg``) and
+        kept unless the arm already in place fits better by more than the tie.
+
+        Parameters
+        ----------
+        s : {'l', 'r'}
+            Which arm (image-left/right label).
+        prior : tuple of float, optional
+            ``(upper, lower)`` angles in radians preferred among near-ties.
+        """
+        up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+        if prior is None:
+            prior = (self._hang(), self._hang())
+        prior = np.asarray(prior, dtype=float)
+        self.drawn[[up, lo]] = True
+        a = np.deg2rad(np.arange(0.0, 360.0, step_deg))
+        ua, la = (g.ravel() for g in np.meshgrid(a, a, indexing="ij"))
+        bend = np.abs(np.angle(np.exp(1j * (la - ua))))
+        ua, la = ua[bend <= _MAX_BEND + 1e-9], la[bend <= _MAX_BEND + 1e-9]
+        shoulder = self.joints()[J[f"{s}_shoulder"]]
+        len_u, len_l = self.L[up] * self.fore[up], self.L[lo] * self.fore[lo]
+
+        def ends(idx):
+            k = idx.astype(int)
+            elbow = shoulder + direction(ua[k]) * len_u
+            wrist = elbow + direction(la[k]) * len_l
+            p0 = np.stack([np.broadcast_to(shoulder, elbow.shape), elbow], axis=1)
+            p1 = np.stack([elbow, wrist], axis=1)
+            return p0, p1
+
+        score = self.scorer(ends, [up, lo])(np.arange(len(ua), dtype=float))
+        n_sil = max(int(self.sil_rows[-1]), 1)
+        tie = tie_px * 2.0 * float(score.max()) / n_sil
+
+        def distance(u, low):
+            return (np.abs(np.angle(np.exp(1j * (u - prior[0]))))
+                    + np.abs(np.angle(np.exp(1j * (low - prior[1])))))
+
+        near = np.flatnonzero(score >= score.max() - tie)
+        k = near[np.argmin(distance(ua[near], la[near]))]
+        kept, s_kept = self.state(), self.similarity()
+        self.angles[up], self.angles[lo] = ua[k], la[k]
+        fine = np.deg2rad(fine_deg)
+        self.search_angle(up, with_segments=(lo,), start=ua[k], interval=2 * fine,
+                          lo=0.0, hi=TWO_PI, prefer=ua[k])
+        self.search_angle(lo, start=la[k], interval=2 * fine, lo=0.0, hi=TWO_PI,
+                          prefer=la[k])
+        s_new = self.similarity()
+        if s_new < s_kept - tie or (s_new <= s_kept + tie and distance(
+                self.angles[up], self.angles[lo]) > distance(kept[1][up], kept[1][lo])):
+            self.set_state(kept)
+
     def _hang(self) -> float:
         """The direction of an arm hanging along the torso, radians."""
         return float(np.mod(self.angles[S["torso"]] + np.pi, TWO_PI))
@@ -898,7 +975,8 @@ def _swap_lower_legs(f: _Fitter):
 def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
                    refine: bool = True, spread: bool = True, verify_crossing: bool = True,
                    caps: bool = False, warm_threshold: float = 0.55, tie: float = 0.01,
-                   warm_step_deg: float = 2.0):
+                   warm_step_deg: float = 2.0, arm_grid: bool = True,
+                   spread_value: float | None = None):
     """Fit the model to a normalised silhouette; see :func:`fit_pose`.
 
     Returns
@@ -908,14 +986,17 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
     crossed : bool
     warm : bool
     """
+    fixed_spread = 0.5 if spread_value is None else float(spread_value)
+    spread = spread and spread_value is None  # search the spread?
     f = _Fitter(norm, caps=caps)
+    f.spread = fixed_spread
     f.place_torso()
     crossed = False
     warm = False
     if previous is not None:
         f.angles = np.array(previous.angles, dtype=float)
         f.fore = np.array(previous.foreshortening, dtype=float)
-        f.spread = float(previous.spread) if spread else 0.5
+        f.spread = float(previous.spread) if spread else fixed_spread
         f.drawn[:] = True
         warm = f.similarity() >= warm_threshold
     if warm:
@@ -969,6 +1050,9 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
             f.drawn[:] = True
             f.search_root(0, 0.05 * f.H)
             f.refine_limbs(whole_arms=True)
+            if arm_grid:
+                for s in ("l", "r"):
+                    f.search_arm_grid(s)
             # the torso once more with every limb drawn (the arms no longer pull it)
             f.search_torso_about_neck(start=f.angles[S["torso"]], interval=np.deg2rad(16))
             _untangle_thighs(f, tie=tie)
@@ -982,7 +1066,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
              fallback: float = 0.97, warm_step_deg: float = 2.0,
-             challenge: bool = False) -> FramePose:
+             challenge: bool = False, arm_grid: bool = True,
+             spread_value: float | None = None) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -1000,6 +1085,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     spread : bool
         Search the shoulders' and hips' lateral spread (beyond the seed); if false
         the spread is fixed at 0.5.
+    spread_value : float, optional
+        Fix the spread at this value in [0, 1] instead (no search);
+        :func:`fit_sequence` uses it to refit frames whose spread jumps away from
+        their neighbours'.
     verify_crossing : bool
         When Algorithm 5 says the legs cross, keep the swap only if it fits better.
     caps : bool
@@ -1016,7 +1105,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         Also fit a warm-started frame from scratch and keep the better fit (how a
         track escapes a wrong but stable pose; :func:`fit_sequence` does this every
         ``reinit_every`` frames).
-
+    arm_grid : bool
+        With ``refine``, search each whole arm over every (upper, lower) angle pair
+        in fresh (not warm-started) fits; near-ties go to a hanging arm
+        (:meth:`_Fitter.search_arm_grid`).
 
     Returns
     -------
@@ -1029,7 +1121,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     """
     norm = normalise_mask(mask, height=height)
     kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
-              warm_step_deg=warm_step_deg)
+              warm_step_deg=warm_step_deg, arm_grid=arm_grid, spread_value=spread_value)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
                                       **kw)
     if warm and (challenge or f.similarity() < fallback * previous.similarity):
@@ -1052,7 +1144,9 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
-                 progress=None, reinit_every: int = 10, **kw) -> Pose2D:
+                 progress=None, reinit_every: int = 10, spread_window: int = 15,
+                 spread_jump: float = 0.25, spread_tie: float = 0.01,
+                 back_tie: float | None = 0.002, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -1068,6 +1162,21 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     reinit_every : int
         In tracked mode every this many frames the frame is also fitted from scratch
         and the better fit kept (0: never).
+    back_tie : float or None
+        Tracked mode: when a fresh fit replaces the track at a frame, the frames
+        before it (back to where that track began) are refitted warm from the new
+        pose, backward, while that improves their similarity by more than
+        ``back_tie`` (None: off). A track that started in a wrong pose is thus
+        corrected from the frame where the right one was found.
+    spread_window, spread_jump, spread_tie
+        Temporal prior on the spread (tracked mode, beyond the seed): the spread
+        follows the body's yaw, which changes slowly, but a single silhouette
+        barely shows it (the torso cylinder looks the same from every side), so
+        per-frame estimates wander. After the pass, a frame whose spread is more
+        than ``spread_jump`` from the running median over ``spread_window``
+        frames is refitted warm from its own pose with the spread fixed at that
+        median, and the refit kept unless its similarity is more than
+        ``spread_tie`` lower. 0 window: off.
     **kw
         Passed to :func:`fit_pose` (``height``, ``refine``, ``spread``, ...).
 
@@ -1086,20 +1195,64 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     sim = np.zeros(n)
     warm = np.zeros(n, dtype=bool)
     it = range(n) if progress is None else progress(range(n), total=n)
+
+    def store(k, fp):
+        joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
+        scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
+        sim[k], warm[k] = fp.similarity, fp.warm
+
     prev = None
+    start = 0  # first frame of the current track
     for k in it:
         m = np.asarray(masks[k], dtype=bool)
         if not m.any():
             prev = None
+            start = k + 1
             continue
         challenge = bool(reinit_every) and k % reinit_every == 0
         fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
-        joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
-        scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
-        sim[k], warm[k] = fp.similarity, fp.warm
+        store(k, fp)
+        if tracked and prev is not None and not fp.warm and back_tie is not None:
+            # A fresh fit replaced the track: the frames before it were probably
+            # tracked in a wrong pose too. Carry the new pose backward while it fits
+            # those frames better (beyond the seed).
+            back = fp
+            for b in range(k - 1, start - 1, -1):
+                fb = fit_pose(np.asarray(masks[b], dtype=bool), previous=back, **kw)
+                if not fb.warm or fb.similarity <= sim[b] + back_tie:
+                    break
+                store(b, fb)
+                back = fb
+            start = k
         prev = fp
+    if tracked and spread_window > 1 and kw.get("spread", True) and n > 2:
+        _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw,
+                       joints, angles, fore, scores, margins, spread, sim)
     return Pose2D(JOINT_NAMES, joints, angles, fore, scores, margins, spread, sim, warm,
                   bool(tracked))
+
+
+def _smooth_spread(masks, window, jump, tie, kw, joints, angles, fore, scores, margins,
+                   spread, sim):
+    """Refit frames whose spread jumps away from the running median (in place)."""
+    from scipy.ndimage import median_filter
+
+    ok = np.isfinite(spread)
+    if ok.sum() < 3:
+        return
+    idx = np.flatnonzero(ok)
+    med = np.full_like(spread, np.nan)
+    med[idx] = median_filter(spread[idx], size=window, mode="nearest")
+    for k in np.flatnonzero(ok & (np.abs(spread - med) > jump)):
+        own = FramePose(joints=joints[k], angles=angles[k], foreshortening=fore[k],
+                        scores=scores[k], margins=margins[k], spread=float(med[k]),
+                        crossed=False, similarity=float(sim[k]), warm=True, height_px=0.0)
+        fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=own,
+                      **{**kw, "spread_value": float(med[k])})
+        if fp.similarity >= sim[k] - tie:
+            joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
+            scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
+            sim[k] = fp.similarity
 
 
 __all__ = ["FramePose", "Pose2D", "fit_normalised", "fit_pose", "fit_sequence"]
