@@ -84,6 +84,8 @@ class PoseRenderer:
         d = 3.2 * self.height
         eye = (focus[0] + d * np.sin(self.az), focus[1] + 0.25 * d, focus[2] + d * np.cos(self.az))
         self.pl.camera_position = [eye, focus, (0, 1, 0)]
+        # screenshot() reuses the last rendered image; new points need a fresh render.
+        self.pl.render()
         img = self.pl.screenshot(return_img=True)
         w, h = self.size
         return np.ascontiguousarray(img[:h, :w, ::-1])
