@@ -30,9 +30,9 @@ Normalisation
 -------------
 :func:`normalise_mask` crops a silhouette to its bounding box and resizes it to a
 fixed height (plus a margin), so the fitter's cost does not grow with the frame
-size (seed 004 section 4.2: "we normalize the silhouette to a fixed size"). This is
-a small local helper; the silhouette stage has its own
-(``vidcap.silhouette.normalise_silhouette``) and the two can be unified later.
+size (seed 004 section 4.2: "we normalize the silhouette to a fixed size"). It is
+the project's one normaliser; it lives here because it shares the rasteriser's pixel
+convention.
 
 Speed
 -----
