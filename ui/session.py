@@ -222,16 +222,16 @@ class AnnotateSession:
     def _quick(self) -> None:
         """The user's events with the last proposals: the 3D stage of
         :func:`vidcap.pipeline.lift_pose` without re-proposing (no dynamic programming)."""
-        from vidcap.lift import assign_sides, lift, yaw_from_orientation
+        from vidcap.lift import lift
+        from vidcap.pipeline import apply_user_view
 
         res, body = self._result, self.clip.body
         user_signs, user_orient, user_joints = self.annotations.resolve(
             self.n_frames, near_plane=self._near_plane)
         user_orient = np.asarray(user_orient).astype(str)
-        orientation = np.where(user_orient != "", user_orient, self.proposed_orientation)
-        yaw = yaw_from_orientation(orientation, self._rho)
-        j2 = assign_sides(self._filled, yaw) if self.clip.image_sides else self._filled
-        j2 = np.where(np.isfinite(user_joints), user_joints, j2)
+        orientation, yaw, j2 = apply_user_view(
+            self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
+            image_sides=self.clip.image_sides)
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
         joints3d = lift(j2, signs, yaw, body=body, scale=self.scale).joints3d
         (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,

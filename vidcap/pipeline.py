@@ -126,6 +126,40 @@ def fill_gaps(joints2d) -> np.ndarray:
     return flat.reshape(j.shape)
 
 
+def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,
+                    *, image_sides: bool = True):
+    """Orientation, yaw and side-named 2D joints once the user's events are applied.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        Gap-filled 2D joints, pixels.
+    proposed_orientation : array_like of str, shape (F,)
+        The automatic orientation proposal.
+    spread : array_like, shape (F,)
+        Torso horizontal foreshortening (0 side view, 1 front view).
+    user_orientation : array_like of str, shape (F,)
+        The user's orientation per frame, ``""`` where none.
+    user_joints : numpy.ndarray, shape (F, 15, 2)
+        The user's joint positions, NaN where none.
+    image_sides : bool
+        ``joints2d`` names limbs by image side (the 2D fitter's naming).
+
+    Returns
+    -------
+    orientation : numpy.ndarray of str, shape (F,)
+    yaw : numpy.ndarray, shape (F,), radians
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        Named by the body's true sides, with the user's joints in place.
+    """
+    orientation = np.where(user_orientation != "", user_orientation,
+                           proposed_orientation).astype(str)
+    yaw = yaw_from_orientation(orientation, spread)
+    j2 = assign_sides(joints2d, yaw) if image_sides else joints2d
+    j2 = np.where(np.isfinite(user_joints), user_joints, j2)
+    return orientation, yaw, j2
+
+
 def lift_pose(
     joints2d,
     *,
@@ -184,12 +218,8 @@ def lift_pose(
                                           sides_known=not image_sides, track=track,
                                           window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
-    orient = np.where(user_orient != "", user_orient, proposed_orient).astype(str)
-    yaw = yaw_from_orientation(orient, rho)
-    if image_sides:
-        j2 = assign_sides(j2, yaw)
-    fix = np.isfinite(user_joints)
-    j2 = np.where(fix, user_joints, j2)
+    orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
+                                      image_sides=image_sides)
     free = propose_signs(j2, yaw, scale=scale, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=scale, body=body, fixed=user_signs) \
