@@ -145,3 +145,50 @@ def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatc
         np.testing.assert_array_equal(fast, want)
         np.testing.assert_array_equal(slow, want)
         assert want.sum() > 0
+
+
+def test_pose_joints_batch_equals_pose_joints_bit_for_bit(monkeypatch):
+    """The compiled joint kernel gives exactly pose_joints' floats (and so does its fallback)."""
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(3)
+    b = 50
+    root = rng.uniform(0, 100, (b, 2))
+    angles = rng.uniform(-7, 7, (b, 10))
+    fore = rng.uniform(0.01, 1, (b, 10))
+    spread = rng.uniform(0, 1, b)
+    lengths, _, sh, hip = raster.model_dimensions(83.7)
+    want = raster.pose_joints(root, angles, fore, spread, lengths, sh, hip)
+    got = raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip)
+    assert got.shape == (b, 15, 2)
+    np.testing.assert_array_equal(got, want)
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    np.testing.assert_array_equal(
+        raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip), want)
+
+
+def test_span_similarity_equals_counts_then_similarity(monkeypatch):
+    """span_similarity (compiled, and numpy fallback) = similarity_from_counts of span_counts."""
+    from vidcap.fit import raster
+    from vidcap.fit.similarity import similarity_from_counts
+
+    rng = np.random.default_rng(11)
+    h, w, t, k, b = 40, 36, 3, 2, 90
+    p0 = rng.uniform(-8, 44, (b, k, 2))
+    p1 = p0 + rng.normal(0, 12, (b, k, 2))
+    radii = rng.uniform(0.3, 5.0, (t, k))
+    cum = raster.row_prefix_sums(rng.integers(0, 2, (t, 2, h, w)).astype(bool))
+    table = rng.integers(0, t, b)
+    m_base = rng.integers(0, 200, t)
+    i_base = m_base // 2
+    a = 300
+    d = raster.span_counts(p0, p1, radii[table], cum, rows=(2, 35), table=table)
+    want = similarity_from_counts(a, m_base[table] + d[:, 0], i_base[table] + d[:, 1])
+    got = raster.span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=(2, 35),
+                                 table=table)
+    np.testing.assert_array_equal(got, want)
+    assert np.ptp(want) > 0
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    np.testing.assert_array_equal(
+        raster.span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=(2, 35),
+                               table=table), want)

@@ -52,6 +52,60 @@ def span(x0, y0, x1, y1, r, y, caps):
 
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def row_range(p0, p1, radii, b, y0, y1):
+    """Rows y0 <= y < y1 that candidate b's segments may cover (a conservative window).
+
+    Every covered pixel centre lies within a segment's radius of its end points'
+    rows (rectangle and capsule alike), so rows outside add nothing.
+    """
+    lo, hi = np.inf, -np.inf
+    for k in range(p0.shape[1]):
+        r = radii[k]
+        lo = min(lo, p0[b, k, 1] - r, p1[b, k, 1] - r)
+        hi = max(hi, p0[b, k, 1] + r, p1[b, k, 1] + r)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return y0, y1
+    return max(y0, min(y1, int(np.floor(lo)) - 1)), min(y1, max(y0, int(np.ceil(hi)) + 2))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, out):
+    """Add candidate b's merged-span weights (table t, rows y0..y1-1) to out (C,)."""
+    n_k = p0.shape[1]
+    w = cum.shape[3] - 1
+    n_c = cum.shape[1]
+    for y in range(y0, y1):
+        m = 0
+        for k in range(n_k):
+            lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
+                          radii[k], float(y), caps)
+            f = int(min(max(lo, 0.0), w))
+            e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
+            if e <= f:
+                continue
+            j = m  # insertion sort by first column
+            while j > 0 and first[j - 1] > f:
+                first[j] = first[j - 1]
+                last[j] = last[j - 1]
+                j -= 1
+            first[j] = f
+            last[j] = e
+            m += 1
+        if m == 0:
+            continue
+        s, e = first[0], last[0]
+        for k in range(1, m + 1):
+            if k < m and first[k] <= e:
+                if last[k] > e:
+                    e = last[k]
+                continue
+            for c in range(n_c):
+                out[c] += cum[t, c, y, e] - cum[t, c, y, s]
+            if k < m:
+                s, e = first[k], last[k]
+
+
 @numba.njit(cache=True, nogil=True)
 def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
     """out[b, c] = weights of channel c under candidate b's segments, rows y0..y1-1.
@@ -60,43 +114,43 @@ def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
     prefix sums; spans clipped to the image, sorted and merged per row.
     """
     n_b, n_k = p0.shape[0], p0.shape[1]
-    w = cum.shape[3] - 1
-    n_c = cum.shape[1]
     first = np.empty(n_k, np.int64)
     last = np.empty(n_k, np.int64)
     for b in range(n_b):
-        t = table[b]
-        for c in range(n_c):
+        for c in range(cum.shape[1]):
             out[b, c] = 0
-        for y in range(y0, y1):
-            m = 0
-            for k in range(n_k):
-                lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
-                              radii[b, k], float(y), caps)
-                f = int(min(max(lo, 0.0), w))
-                e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
-                if e <= f:
-                    continue
-                j = m  # insertion sort by first column
-                while j > 0 and first[j - 1] > f:
-                    first[j] = first[j - 1]
-                    last[j] = last[j - 1]
-                    j -= 1
-                first[j] = f
-                last[j] = e
-                m += 1
-            if m == 0:
-                continue
-            s, e = first[0], last[0]
-            for k in range(1, m + 1):
-                if k < m and first[k] <= e:
-                    if last[k] > e:
-                        e = last[k]
-                    continue
-                for c in range(n_c):
-                    out[b, c] += cum[t, c, y, e] - cum[t, c, y, s]
-                if k < m:
-                    s, e = first[k], last[k]
+        r0, r1 = row_range(p0, p1, radii[b], b, y0, y1)
+        count_one(p0, p1, radii[b], b, cum, table[b], r0, r1, caps, first, last, out[b])
+
+
+@numba.njit(cache=True, nogil=True)
+def similarity_terms(p0, p1, radii, table, cum, y0, y1, caps, a, m_base, i_base, x, q):
+    """Eq. 3.3's terms for candidate b: S = exp(x[b]) * q[b] (exp taken by numpy).
+
+    As :func:`counts` with cum's channels (pixels added to the model, of which
+    silhouette), against table t = table[b] with radii[t] (T, K), m_base[t] and
+    i_base[t] the model and overlap counts of what is not moving, ``a`` the
+    silhouette count; x = -p - n and q = 1 - p with the float operations of
+    ``similarity_from_counts``.
+    """
+    n_b, n_k = p0.shape[0], p0.shape[1]
+    first = np.empty(n_k, np.int64)
+    last = np.empty(n_k, np.int64)
+    d = np.zeros(2, np.int64)
+    for b in range(n_b):
+        t = table[b]
+        d[0] = 0
+        d[1] = 0
+        r0, r1 = row_range(p0, p1, radii[t], b, y0, y1)
+        count_one(p0, p1, radii[t], b, cum, t, r0, r1, caps, first, last, d)
+        m = m_base[t] + d[0]
+        i = i_base[t] + d[1]
+        union = a + m - i
+        safe = max(union, 1)
+        p = (a - i) / safe
+        n = (m - i) / safe
+        x[b] = -p - n
+        q[b] = 1.0 - p
 
 
 @numba.njit(cache=True, nogil=True)
@@ -116,3 +170,40 @@ def draw(p0, p1, radii, x0, y0, caps, out):
                 e = int(min(max(hi - x0 + 1.0, float(f)), w))
                 for x in range(f, e):
                     out[b, i, x] = True
+
+
+@numba.njit(cache=True, nogil=True)
+def joints(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, order, parent,
+           kind, out):
+    """out[b] (15, 2): joints of pose b, with the float operations of ``pose_joints``.
+
+    c, s (B, 10): cos and sin of the segment angles; c_left, s_left (B,): of the torso
+    angle + pi/2; joints placed in ``order`` from ``parent``, offset by segment
+    ``kind[j] >= 0`` or laterally (-1/-2 shoulder +/-, -3/-4 hip +/-).
+    """
+    n_b = root.shape[0]
+    for b in range(n_b):
+        lx = c_left[b] * spread[b]
+        ly = -s_left[b] * spread[b]
+        out[b, 0, 0] = root[b, 0]
+        out[b, 0, 1] = root[b, 1]
+        for q in range(order.shape[0]):
+            j = order[q]
+            p = parent[j]
+            k = kind[j]
+            if k >= 0:
+                fl = fore[b, k] * lengths[k]
+                dx = c[b, k] * fl
+                dy = -s[b, k] * fl
+            elif k >= -2:
+                dx = shoulder * lx
+                dy = shoulder * ly
+            else:
+                dx = hip * lx
+                dy = hip * ly
+            if k == -2 or k == -4:
+                out[b, j, 0] = out[b, p, 0] - dx
+                out[b, j, 1] = out[b, p, 1] - dy
+            else:
+                out[b, j, 0] = out[b, p, 0] + dx
+                out[b, j, 1] = out[b, p, 1] + dy

@@ -116,9 +116,10 @@ from vidcap.fit.raster import (
     image_angle,
     model_dimensions,
     normalise_mask,
-    pose_joints,
+    pose_joints_batch,
     row_prefix_sums,
     span_counts,
+    span_similarity,
 )
 from vidcap.fit.search import interval_search, interval_search_many
 from vidcap.fit.similarity import similarity_from_counts
@@ -288,6 +289,13 @@ class Pose2D:
             raise InputFileError(f"not a pose2d file ({exc})", path) from exc
 
 
+def _c64(a) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array (no copy if it already is one)."""
+    if a.dtype == np.float64 and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
 class _Fitter:
     """Fitting state for one normalised silhouette (all lengths in normalised px)."""
 
@@ -324,14 +332,10 @@ class _Fitter:
             self._joints = (key, self._pose_joints())
         return self._joints[1]
 
-    def _pose_joints(self, root=None, angles=None, fore=None, spread=None) -> np.ndarray:
-        return pose_joints(
-            self.root if root is None else root,
-            self.angles if angles is None else angles,
-            self.fore if fore is None else fore,
-            self.spread if spread is None else spread,
-            self.L, self.shoulder, self.hip,
-        )
+    def _pose_joints(self) -> np.ndarray:
+        return pose_joints_batch(self.root[None], self.angles[None], self.fore[None],
+                                 np.array([self.spread], dtype=float), self.L, self.shoulder,
+                                 self.hip)[0]
 
     def model(self, segments=None) -> np.ndarray:
         seg = np.flatnonzero(self.drawn) if segments is None else segments
@@ -382,22 +386,25 @@ class _Fitter:
         a = int(self.sil_rows[r1] - self.sil_rows[r0])
         m_base = np.count_nonzero(base[r0:r1])
         i_base = np.count_nonzero(both[r0:r1])
-        radii = self.R[moving]
-        pad = float(radii.max()) + 1.0
+        radii = self.R[moving][None]  # (1, K): one table
         # Exact counts from row spans: pixels a candidate adds to the model are those
         # not in the base; row prefix sums give any span's count at once (no masks).
-        cum = np.zeros((2, self.h, self.w + 1), dtype=np.int32)
-        np.cumsum(~base[r0:r1], axis=1, out=cum[0, r0:r1, 1:])
-        np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[1, r0:r1, 1:])
+        cum = np.zeros((1, 2, self.h, self.w + 1), dtype=np.int32)
+        np.cumsum(~base[r0:r1], axis=1, out=cum[0, 0, r0:r1, 1:])
+        np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[0, 1, r0:r1, 1:])
+        m_base = np.array([m_base], np.int64)
+        i_base = np.array([i_base], np.int64)
+        tables = {}
 
         def score(values):
             self.batches += 1
             p0, p1 = ends(np.asarray(values, dtype=float))
-            lo = min(p0[..., 1].min(), p1[..., 1].min()) - pad
-            hi = max(p0[..., 1].max(), p1[..., 1].max()) + pad
-            d = span_counts(p0, p1, radii, cum, rows=(max(int(lo), r0), min(int(hi) + 2, r1)),
-                            caps=self.caps)
-            return similarity_from_counts(a, m_base + d[:, 0], i_base + d[:, 1])
+            n_b = len(p0)
+            if n_b not in tables:
+                tables[n_b] = np.zeros(n_b, np.int64)
+            # each candidate's rows are limited to its segments' extent in the kernel
+            return span_similarity(_c64(p0), _c64(p1), radii, cum, a, m_base, i_base,
+                                   rows=(r0, r1), table=tables[n_b], caps=self.caps)
 
         return score
 
@@ -410,7 +417,7 @@ class _Fitter:
             root, angles, fore, spread = make(
                 v, np.broadcast_to(self.root, (n, 2)).copy(), np.repeat(self.angles[None], n, 0),
                 np.repeat(self.fore[None], n, 0), np.full(n, self.spread))
-            jb = pose_joints(root, angles, fore, spread, self.L, self.shoulder, self.hip)
+            jb = pose_joints_batch(root, angles, fore, spread, self.L, self.shoulder, self.hip)
             return jb[:, _PROX[moving]], jb[:, _DIST[moving]]
 
         return ends
@@ -565,23 +572,27 @@ class _Fitter:
 
             def vec(v):
                 return v[..., None] * unit[:, None, :]
-        pad = float(self.R.max()) + 1.0
+        radii = np.ascontiguousarray(radii)
+        tables = {}
 
         def score(values):  # values (N, B)
             self.batches += 1
             B = values.shape[1]
             end = own0[:, None] + vec(values)  # (N, B, 2)
             delta = end - own1[:, None]
-            p0 = np.stack([np.broadcast_to(own0[:, None], end.shape),
-                           np.where(is_leaf, own0[:, None], ch0[:, None] + delta)], 2)
-            p1 = np.stack([end, np.where(is_leaf, end, ch1[:, None] + delta)], 2)
-            y0 = max(int(min(p0[..., 1].min(), p1[..., 1].min()) - pad), 0)
-            y1 = min(int(max(p0[..., 1].max(), p1[..., 1].max()) + pad) + 2, self.h)
-            d = span_counts(p0[:, :, :k].reshape(n * B, k, 2), p1[:, :, :k].reshape(n * B, k, 2),
-                            np.repeat(radii, B, axis=0), cum, rows=(y0, y1),
-                            table=np.repeat(np.arange(n), B), caps=self.caps).reshape(n, B, 2)
-            return similarity_from_counts(a, m_base[:, None] + d[..., 0],
-                                          i_base[:, None] + d[..., 1])
+            p0 = np.empty((n, B, k, 2))
+            p1 = np.empty((n, B, k, 2))
+            p0[:, :, 0] = own0[:, None]
+            p1[:, :, 0] = end
+            if k == 2:
+                p0[:, :, 1] = np.where(is_leaf, own0[:, None], ch0[:, None] + delta)
+                p1[:, :, 1] = np.where(is_leaf, end, ch1[:, None] + delta)
+            if B not in tables:
+                tables[B] = np.repeat(np.arange(n), B)
+            s = span_similarity(p0.reshape(n * B, k, 2), p1.reshape(n * B, k, 2), radii, cum,
+                                a, m_base, i_base, rows=(0, self.h), table=tables[B],
+                                caps=self.caps)
+            return s.reshape(n, B)
 
         if kind == "angle":
             lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]

@@ -59,6 +59,7 @@ from vidcap.body import (
     SEGMENTS,
     BodyModel,
 )
+from vidcap.fit.similarity import similarity_from_counts
 
 #: Joint index of each segment's proximal and distal joint, (S, 2).
 _PROX = SEGMENT_JOINTS[:, 0]
@@ -262,6 +263,53 @@ def _levels():
 
 _LEVELS = _levels()
 
+
+def _kernel_tables():
+    """(order, parent, kind) of the compiled :func:`pose_joints_batch` kernel."""
+    order = np.concatenate([kids for kids, _ in _LEVELS]).astype(np.int64)
+    parent = np.zeros(15, np.int64)
+    kind = np.zeros(15, np.int64)
+    for kids, parents in _LEVELS:
+        parent[kids] = parents
+    kind[_BONE_JOINTS] = _BONE_SEGS
+    kind[_LATERAL] = [-1, -2, -3, -4]  # l/r shoulder, l/r hip: +/- the lateral offset
+    return order, parent, kind
+
+
+_KERNEL_TABLES = _kernel_tables()
+
+
+def pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, hip) -> np.ndarray:
+    """:func:`pose_joints` for one flat batch, with less per-call overhead.
+
+    Parameters
+    ----------
+    root : numpy.ndarray, shape (B, 2)
+    angles, foreshortening : numpy.ndarray, shape (B, 10)
+    spread : numpy.ndarray, shape (B,)
+    lengths : numpy.ndarray, shape (10,)
+    shoulder, hip : float
+        As in :func:`pose_joints`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, 15, 2)
+        The same floats as :func:`pose_joints` (the compiled kernel repeats its
+        operations; without numba it is called).
+    """
+    kernels = _kernels()
+    if kernels is None:
+        return pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip)
+    angles = _carray(angles, np.float64)
+    # the same numpy calls as direction() makes, so the same sines and cosines
+    c, s = np.cos(angles), np.sin(angles)
+    left = angles[:, _SEG["torso"]] + np.pi / 2
+    out = np.empty((angles.shape[0], 15, 2))
+    kernels[2](_carray(root, np.float64), c, s, np.cos(left), np.sin(left),
+               _carray(foreshortening, np.float64), _carray(spread, np.float64),
+               _carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES, out)
+    return out
+
 #: Segments moved when a segment's own parameter changes: itself and its descendants.
 DESCENDANTS: dict[int, tuple[int, ...]] = {
     _SEG["torso"]: tuple(range(10)),
@@ -424,7 +472,7 @@ def _kernels():
         from vidcap.fit import _kernels as k
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
-    return k.counts, k.draw
+    return k.counts, k.draw, k.joints, k.similarity_terms
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -519,6 +567,52 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
     return np.einsum("brx,bcrx->bc", inside.astype(np.int64), weights[table].astype(np.int64))
 
 
+def span_similarity(p0, p1, radii, cum, a, m_base, i_base, *, rows, table,
+                    caps: bool = True) -> np.ndarray:
+    """Eq. 3.3's S of candidates that add segments to a fixed part of the model.
+
+    One call per batch of a search: :func:`span_counts` of what each candidate's
+    segments add to the model and to its overlap with the silhouette, then
+    :func:`vidcap.fit.similarity.similarity_from_counts` (the same floats), in one
+    compiled pass when numba is available.
+
+    Parameters
+    ----------
+    p0, p1 : numpy.ndarray, shape (B, K, 2), float64, C-contiguous
+        Segment ends of the moving segments.
+    radii : numpy.ndarray, shape (T, K), float64
+        Half-widths, per table.
+    cum : numpy.ndarray, shape (T, 2, h, w + 1), int32
+        Row prefix sums of the pixels not yet in the model (channel 0) and of those
+        that are silhouette (channel 1), one table per fixed part.
+    a : int
+        Silhouette pixels counted (in ``rows``).
+    m_base, i_base : numpy.ndarray, shape (T,), int64
+        Model and overlap pixels of each fixed part.
+    rows : (int, int)
+        Only rows ``rows[0] <= y < rows[1]`` are counted.
+    table : numpy.ndarray, shape (B,), int64
+        The table of every candidate.
+    caps : bool
+        Capsules (true) or rectangles (false).
+
+    Returns
+    -------
+    numpy.ndarray, shape (B,)
+        S of every candidate.
+    """
+    kernels = _kernels()
+    n_b = p0.shape[0]
+    y0, y1 = max(0, int(rows[0])), min(cum.shape[2], int(rows[1]))
+    if kernels is None or y1 <= y0 or n_b == 0:
+        d = span_counts(p0, p1, radii[table], cum, rows=(y0, y1), table=table, caps=caps)
+        return similarity_from_counts(a, m_base[table] + d[:, 0], i_base[table] + d[:, 1])
+    x = np.empty(n_b)
+    q = np.empty(n_b)
+    kernels[3](p0, p1, radii, table, cum, y0, y1, bool(caps), int(a), m_base, i_base, x, q)
+    return np.exp(x) * q
+
+
 __all__ = [
     "DESCENDANTS",
     "NormalisedMask",
@@ -530,7 +624,9 @@ __all__ = [
     "model_dimensions",
     "normalise_mask",
     "pose_joints",
+    "pose_joints_batch",
     "row_prefix_sums",
     "segment_spans",
     "span_counts",
+    "span_similarity",
 ]
