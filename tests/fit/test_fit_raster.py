@@ -192,3 +192,26 @@ def test_span_similarity_equals_counts_then_similarity(monkeypatch):
     np.testing.assert_array_equal(
         raster.span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=(2, 35),
                                table=table), want)
+
+
+@pytest.mark.parametrize("caps", [True, False])
+def test_base_tables_compiled_and_numpy_paths_agree_with_drawn_model(caps, monkeypatch):
+    """base_tables = row prefix sums of (not model) and (silhouette and not model)."""
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(5)
+    h, w = 30, 27
+    sil = rng.integers(0, 2, (h, w)).astype(bool)
+    p0 = rng.uniform(-3, 30, (4, 2))
+    p1 = p0 + rng.normal(0, 9, (4, 2))
+    radii = rng.uniform(0.5, 4, 4)
+    model = raster.draw_segments(p0[None], p1[None], radii, (h, w), caps=caps)[0]
+    want = raster.row_prefix_sums(np.stack([~model, sil & ~model]))
+    want[:, :4] = want[:, 25:] = 0
+    for fallback in (False, True):
+        if fallback:
+            monkeypatch.setattr(raster, "_kernels", lambda: None)
+        cum, m, i = raster.base_tables(p0, p1, radii, sil, rows=(4, 25), caps=caps)
+        np.testing.assert_array_equal(cum[0], want)
+        assert m == np.count_nonzero(model[4:25]) > 0
+        assert i == np.count_nonzero((model & sil)[4:25])

@@ -207,3 +207,41 @@ def joints(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, ord
             else:
                 out[b, j, 0] = out[b, p, 0] + dx
                 out[b, j, 1] = out[b, p, 1] + dy
+
+
+@numba.njit(cache=True, nogil=True)
+def base_tables(p0, p1, radii, sil, y0, y1, caps, cum):
+    """Row prefix sums of the pixels outside a drawn model, and on the silhouette.
+
+    The model is the union of segments p0, p1 (K, 2), radii (K,), exactly the pixels
+    :func:`draw` sets; for rows y0 <= y < y1: cum[0, y, x] counts pixels of
+    row y left of x not in the model, cum[1, y, x] those also on the silhouette
+    (h, w) bool. Returns (model pixels, model pixels on the silhouette) in those rows.
+    """
+    n_k = p0.shape[0]
+    w = sil.shape[1]
+    cov = np.zeros(w, np.bool_)
+    m = 0
+    i = 0
+    for y in range(y0, y1):
+        cov[:] = False
+        for k in range(n_k):
+            lo, hi = span(p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], radii[k], float(y), caps)
+            f = int(min(max(lo, 0.0), w))
+            e = int(min(max(hi + 1.0, float(f)), w))
+            for x in range(f, e):
+                cov[x] = True
+        c0 = 0
+        c1 = 0
+        for x in range(w):
+            if cov[x]:
+                m += 1
+                if sil[y, x]:
+                    i += 1
+            else:
+                c0 += 1
+                if sil[y, x]:
+                    c1 += 1
+            cum[0, y, x + 1] = c0
+            cum[1, y, x + 1] = c1
+    return m, i

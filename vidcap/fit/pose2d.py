@@ -110,6 +110,7 @@ from vidcap.fit.raster import (
     _PROX,
     DESCENDANTS,
     NormalisedMask,
+    base_tables,
     direction,
     draw_pose,
     draw_segments,
@@ -378,20 +379,12 @@ class _Fitter:
         moving_set = set(moving.tolist())
         still = [k for k in range(10) if self.drawn[k] and k not in moving_set]
         j = self.joints()
-        # the still segments, drawn once per search (not per candidate)
-        base = draw_segments(j[None, _PROX[still]], j[None, _DIST[still]], self.R[still],
-                             (self.h, self.w), caps=self.caps)[0]
-        sil = self.sil
-        both = base & sil
+        # the still segments, drawn once per search (not per candidate): row prefix
+        # sums of the pixels a candidate may add to the model (no masks per candidate)
+        cum, m_base, i_base = base_tables(j[_PROX[still]], j[_DIST[still]], self.R[still],
+                                          self.sil, rows=(r0, r1), caps=self.caps)
         a = int(self.sil_rows[r1] - self.sil_rows[r0])
-        m_base = np.count_nonzero(base[r0:r1])
-        i_base = np.count_nonzero(both[r0:r1])
         radii = self.R[moving][None]  # (1, K): one table
-        # Exact counts from row spans: pixels a candidate adds to the model are those
-        # not in the base; row prefix sums give any span's count at once (no masks).
-        cum = np.zeros((1, 2, self.h, self.w + 1), dtype=np.int32)
-        np.cumsum(~base[r0:r1], axis=1, out=cum[0, 0, r0:r1, 1:])
-        np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[0, 1, r0:r1, 1:])
         m_base = np.array([m_base], np.int64)
         i_base = np.array([i_base], np.int64)
         tables = {}

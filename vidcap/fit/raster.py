@@ -472,7 +472,7 @@ def _kernels():
         from vidcap.fit import _kernels as k
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
-    return k.counts, k.draw, k.joints, k.similarity_terms
+    return k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -613,9 +613,50 @@ def span_similarity(p0, p1, radii, cum, a, m_base, i_base, *, rows, table,
     return np.exp(x) * q
 
 
+def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
+    """What a search adds to: row prefix sums of the pixels outside a drawn model.
+
+    Parameters
+    ----------
+    p0, p1 : numpy.ndarray, shape (K, 2)
+        Ends of the segments drawn (the part of the model that does not move).
+    radii : numpy.ndarray, shape (K,)
+        Their half-widths.
+    sil : numpy.ndarray, shape (h, w), bool
+        The silhouette.
+    rows : (int, int), optional
+        Only rows ``rows[0] <= y < rows[1]`` (default: all).
+    caps : bool
+        Capsules (true) or rectangles (false).
+
+    Returns
+    -------
+    cum : numpy.ndarray, shape (1, 2, h, w + 1), int32
+        Channel 0: row prefix sums of pixels not in the model; channel 1: of those on
+        the silhouette (zero outside ``rows``); the table :func:`span_similarity` reads.
+    m, i : int
+        Model pixels, and model pixels on the silhouette, in ``rows``.
+    """
+    h, w = sil.shape
+    r0, r1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
+    cum = np.zeros((1, 2, h, w + 1), dtype=np.int32)
+    kernels = _kernels()
+    p0 = _carray(p0, np.float64)
+    p1 = _carray(p1, np.float64)
+    if kernels is not None and r1 > r0:
+        m, i = kernels[4](p0, p1, _carray(radii, np.float64), _carray(sil, np.bool_), r0, r1,
+                          bool(caps), cum[0])
+        return cum, int(m), int(i)
+    base = draw_segments(p0[None], p1[None], np.asarray(radii), (h, w), caps=caps)[0]
+    np.cumsum(~base[r0:r1], axis=1, out=cum[0, 0, r0:r1, 1:])
+    np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[0, 1, r0:r1, 1:])
+    return cum, int(np.count_nonzero(base[r0:r1])), int(np.count_nonzero((base & sil)[r0:r1]))
+
+
 __all__ = [
     "DESCENDANTS",
     "NormalisedMask",
+    "base_tables",
     "SEGMENTS",
     "direction",
     "draw_pose",
