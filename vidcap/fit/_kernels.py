@@ -7,6 +7,8 @@ segment's row span with exactly the float operations of
 same pixels (tests/fit/test_fit_raster.py checks it).
 """
 
+import math
+
 import numba
 import numpy as np
 
@@ -245,3 +247,78 @@ def base_tables(p0, p1, radii, sil, y0, y1, caps, cum):
             cum[0, y, x + 1] = c0
             cum[1, y, x + 1] = c1
     return m, i
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _mod(a, b):
+    """numpy's float ``np.mod(a, b)`` (npy_divmod's remainder), for b > 0."""
+    m = np.fmod(a, b)
+    if m != 0.0:
+        if (b < 0) != (m < 0):
+            m += b
+    else:
+        m = math.copysign(0.0, b)
+    return m
+
+
+@numba.njit(cache=True, nogil=True)
+def search_grid(begin, step, lo, period, out):
+    """One iteration's candidates of ``interval_search``, as its numpy code makes them.
+
+    out[i] = begin + step * i, wrapped into [lo, lo + period) when period > 0.
+    """
+    n = out.shape[0]
+    for i in range(n):
+        out[i] = begin + step * float(i)
+    if period > 0:
+        for i in range(n):
+            out[i] = lo + _mod(out[i] - lo, period)
+
+
+@numba.njit(cache=True, nogil=True)
+def search_grid_start(begin, step, start, lo, period, out):
+    """:func:`search_grid` with a warm start appended as the last candidate."""
+    n = out.shape[0] - 1
+    for i in range(n):
+        out[i] = begin + step * float(i)
+    out[n] = start
+    if period > 0:
+        for i in range(n + 1):
+            out[i] = lo + _mod(out[i] - lo, period)
+
+
+@numba.njit(cache=True, nogil=True)
+def search_pick(cand, s, centre, period):
+    """Index of the best score, ties (within 1e-12) to the candidate nearest ``centre``
+    (periodic distance when period > 0; the first of equals), as ``interval_search``."""
+    top = -np.inf
+    for i in range(s.shape[0]):
+        if s[i] > top:
+            top = s[i]
+    thr = top - 1e-12
+    k = -1
+    best_gap = np.inf
+    for i in range(s.shape[0]):
+        if s[i] >= thr:
+            gap = abs(cand[i] - centre)
+            if period > 0:
+                g = _mod(gap, period)
+                gap = min(g, period - g)
+            if k < 0 or gap < best_gap:
+                k = i
+                best_gap = gap
+    return k
+
+
+@numba.njit(cache=True, nogil=True)
+def search_runner(values, scores, best, period, far):
+    """Best score among values more than ``far`` from ``best`` (periodic distance when
+    period > 0), -inf if none: ``interval_search``'s runner-up."""
+    r = -np.inf
+    for i in range(values.shape[0]):
+        d = abs(values[i] - best)
+        if period > 0:
+            d = min(d, period - d)
+        if d > far and scores[i] > r:
+            r = scores[i]
+    return r

@@ -29,10 +29,25 @@ Deviations from the pseudo-code, where it does not do what the text says:
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+
+@functools.lru_cache(maxsize=1)
+def _kernels():
+    """The compiled search helpers (:mod:`vidcap.fit._kernels`), or None without numba.
+
+    They repeat the float operations of the numpy code they replace, so a search
+    returns the same values either way (tests/fit/test_fit_search.py).
+    """
+    try:
+        from vidcap.fit import _kernels as k
+    except ImportError:  # pragma: no cover - numba is a declared dependency
+        return None
+    return k
 
 
 @dataclass(frozen=True)
@@ -126,29 +141,43 @@ def interval_search(
     best_score = -np.inf
     values, scores = [], []
     iterations = 0
+    kernels = _kernels()
+    period = float(periodic) if wrap else 0.0  # candidates wrap around
+    gap_period = float(periodic) if periodic is not None else 0.0  # distances do
     # Always run at least once, even when the first interval is already small.
     while True:
         begin, end = best - width / 2, best + width / 2
         if not wrap:
             begin, end = max(begin, lo), min(end, hi)
         n = int(np.floor((end - begin) / step + 1e-9)) + 1
-        cand = begin + step * np.arange(n)
-        if iterations == 0 and start is not None:
-            # a warm start is itself a candidate, so a search never ends worse than it
-            # began (beyond the seed, whose grid may step over the previous value)
-            cand = np.append(cand, best)
-        if wrap:
-            cand = lo + np.mod(cand - lo, periodic)
+        warm = iterations == 0 and start is not None
+        # a warm start is itself a candidate, so a search never ends worse than it
+        # began (beyond the seed, whose grid may step over the previous value)
+        if kernels is not None:  # the same floats as the numpy lines below
+            cand = np.empty(n + warm)
+            if warm:
+                kernels.search_grid_start(begin, step, best, lo, period, cand)
+            else:
+                kernels.search_grid(begin, step, lo, period, cand)
+        else:
+            cand = begin + step * np.arange(n)
+            if warm:
+                cand = np.append(cand, best)
+            if wrap:
+                cand = lo + np.mod(cand - lo, periodic)
         s = np.asarray(score(cand), dtype=float)
         iterations += 1
         values.append(cand)
         scores.append(s)
-        top = s >= s.max() - 1e-12
         centre = best if prefer is None else prefer
-        gap = np.abs(cand[top] - centre)
-        if periodic is not None:
-            gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
-        k = int(np.flatnonzero(top)[np.argmin(gap)])
+        if kernels is not None:
+            k = kernels.search_pick(cand, s, float(centre), gap_period)
+        else:
+            top = s >= s.max() - 1e-12
+            gap = np.abs(cand[top] - centre)
+            if periodic is not None:
+                gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
+            k = int(np.flatnonzero(top)[np.argmin(gap)])
         if s[k] > best_score + 1e-12:
             best_score, best = float(s[k]), float(cand[k])
         width = 2 * width / divisions
@@ -157,11 +186,14 @@ def interval_search(
             break
     values = np.concatenate(values)
     scores = np.concatenate(scores)
-    dist = np.abs(values - best)
-    if wrap:
-        dist = np.minimum(dist, periodic - dist)
-    far = dist > first_step * 1.01
-    runner = float(scores[far].max()) if far.any() else -np.inf
+    if kernels is not None:
+        runner = float(kernels.search_runner(values, scores, best, period, first_step * 1.01))
+    else:
+        dist = np.abs(values - best)
+        if wrap:
+            dist = np.minimum(dist, periodic - dist)
+        far = dist > first_step * 1.01
+        runner = float(scores[far].max()) if far.any() else -np.inf
     return SearchResult(best, best_score, runner, int(values.size), iterations)
 
 
