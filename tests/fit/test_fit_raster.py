@@ -215,3 +215,22 @@ def test_base_tables_compiled_and_numpy_paths_agree_with_drawn_model(caps, monke
         np.testing.assert_array_equal(cum[0], want)
         assert m == np.count_nonzero(model[4:25]) > 0
         assert i == np.count_nonzero((model & sil)[4:25])
+
+
+def test_group_tables_compiled_and_numpy_paths_agree(monkeypatch):
+    """group_tables: each table is the model without the searched segment (and child)."""
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(9)
+    h, w = 25, 22
+    masks = rng.random((10, h, w)) < 0.3
+    sil = rng.random((h, w)) < 0.5
+    segs, child = np.array([2, 3, 6]), np.array([3, 3, 7])
+    got = raster.group_tables(masks, segs, child, sil)
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    want = raster.group_tables(masks, segs, child, sil)
+    for g, x in zip(got, want, strict=True):
+        np.testing.assert_array_equal(g, x)
+    others = np.delete(masks, [2, 3], axis=0).any(axis=0)  # segment 2 with its child 3
+    assert got[1][0] == np.count_nonzero(others)
+    assert got[2][0] == np.count_nonzero(others & sil)

@@ -85,3 +85,30 @@ def test_compiled_bookkeeping_equals_numpy_fallback(periodic, monkeypatch):
             for c in cases]
     assert got == want
     assert len({r.value for r in want}) > 1
+
+
+@pytest.mark.parametrize("periodic", [None, 2 * np.pi])
+def test_many_compiled_bookkeeping_equals_numpy_fallback(periodic, monkeypatch):
+    """interval_search_many: compiled helpers and numpy code give the same arrays."""
+    from vidcap.fit import search
+
+    rng = np.random.default_rng(4)
+    table = rng.normal(size=4096)
+
+    def score(v):  # (N, B) -> (N, B), rough, with exact ties
+        return np.round(table[(np.abs(v) * 97).astype(int) % 4096], 1) + np.arange(len(v))[:, None]
+
+    lo = np.array([0.0, 1.0, 2.0, 0.5])
+    hi = lo + (2 * np.pi if periodic else np.array([1.0, 3.0, 0.5, 2.0]))
+    cases = [dict(), dict(start=lo + 0.3, interval=0.5),
+             dict(start=hi - 0.1, interval=0.4, prefer=np.array([np.nan, 1.5, np.nan, 1.0]))]
+    got = [search.interval_search_many(score, lo, hi, min_step=0.01, periodic=periodic, **c)
+           for c in cases]
+    monkeypatch.setattr(search, "_kernels", lambda: None)
+    want = [search.interval_search_many(score, lo, hi, min_step=0.01, periodic=periodic, **c)
+            for c in cases]
+    for g, w in zip(got, want, strict=True):
+        for a, b in zip(g[:3], w[:3], strict=True):
+            np.testing.assert_array_equal(a, b)
+        assert g[3] == w[3]
+    assert not np.array_equal(want[0][0], want[1][0])

@@ -322,3 +322,101 @@ def search_runner(values, scores, best, period, far):
         if d > far and scores[i] > r:
             r = scores[i]
     return r
+
+
+@numba.njit(cache=True, nogil=True)
+def group_tables(masks, segs, child, sil, cum, m_base, i_base):
+    """Per searched segment n: the model without segs[n] (and child[n]) as row sums.
+
+    masks (10, h, w) bool: every segment drawn; a pixel is in base n if more segments
+    cover it than the pair's own (child[n] == segs[n]: a leaf, counted once).
+    cum[n, 0] / cum[n, 1]: row prefix sums of pixels not in base n / of those on the
+    silhouette; m_base[n], i_base[n]: base n's pixels / those on the silhouette.
+    """
+    n_s, h, w = masks.shape
+    for n in range(segs.shape[0]):
+        s, c = segs[n], child[n]
+        m = 0
+        i = 0
+        for y in range(h):
+            c0 = 0
+            c1 = 0
+            for x in range(w):
+                cover = 0
+                for k in range(n_s):
+                    if masks[k, y, x]:
+                        cover += 1
+                own = 0
+                if masks[s, y, x]:
+                    own += 1
+                if c != s and masks[c, y, x]:
+                    own += 1
+                if cover > own:
+                    m += 1
+                    if sil[y, x]:
+                        i += 1
+                else:
+                    c0 += 1
+                    if sil[y, x]:
+                        c1 += 1
+                cum[n, 0, y, x + 1] = c0
+                cum[n, 1, y, x + 1] = c1
+        m_base[n] = m
+        i_base[n] = i
+
+
+@numba.njit(cache=True, nogil=True)
+def many_grid(best, width, step, lo, hi, clip, period, warm, out):
+    """One iteration's candidates of ``interval_search_many``, as its numpy code makes
+    them: out (N, divisions + 1 [+ 1 if warm: the start, last]); clip: limit to
+    [lo, hi]; wrapped into [lo, lo + period) when period > 0."""
+    n_s, n_c = out.shape
+    n_g = n_c - 1 if warm else n_c
+    for r in range(n_s):
+        begin = best[r] - width[r] / 2
+        end = best[r] + width[r] / 2
+        if clip:
+            begin = max(begin, lo[r])
+            end = min(end, hi[r])
+        cap = end + 1e-9 * step[r]
+        for i in range(n_g):
+            out[r, i] = min(begin + step[r] * float(i), cap)
+        if warm:
+            out[r, n_g] = best[r]
+        if period > 0:
+            for i in range(n_c):
+                out[r, i] = lo[r] + _mod(out[r, i] - lo[r], period)
+
+
+@numba.njit(cache=True, nogil=True)
+def many_pick(cand, s, prefer, period, best, best_score):
+    """Per row, ``search_pick`` (ties to the candidate nearest prefer[r], or to best[r]
+    where prefer[r] is NaN), then keep it in best / best_score if it scores higher."""
+    for r in range(s.shape[0]):
+        centre = best[r] if np.isnan(prefer[r]) else prefer[r]
+        top = -np.inf
+        for i in range(s.shape[1]):
+            if s[r, i] > top:
+                top = s[r, i]
+        thr = top - 1e-12
+        k = -1
+        best_gap = np.inf
+        for i in range(s.shape[1]):
+            if s[r, i] >= thr:
+                gap = abs(cand[r, i] - centre)
+                if period > 0:
+                    g = _mod(gap, period)
+                    gap = min(g, period - g)
+                if k < 0 or gap < best_gap:
+                    k = i
+                    best_gap = gap
+        if s[r, k] > best_score[r] + 1e-12:
+            best_score[r] = s[r, k]
+            best[r] = cand[r, k]
+
+
+@numba.njit(cache=True, nogil=True)
+def many_runner(values, scores, best, period, far, out):
+    """Per row, ``search_runner`` (far[r]: the distance beyond which a value counts)."""
+    for r in range(values.shape[0]):
+        out[r] = search_runner(values[r], scores[r], best[r], period, far[r])

@@ -114,6 +114,7 @@ from vidcap.fit.raster import (
     direction,
     draw_pose,
     draw_segments,
+    group_tables,
     image_angle,
     model_dimensions,
     normalise_mask,
@@ -357,13 +358,12 @@ class _Fitter:
 
     # -- scoring -----------------------------------------------------------------
     def _all_segment_masks(self, joints: np.ndarray):
-        """Masks of all ten segments at their current places, (10, h, w), one call,
-        and how many segments cover each pixel, (h, w) uint8."""
+        """Masks of all ten segments at their current places, (10, h, w), one call."""
         key = joints.tobytes()
         if self._all_masks is None or self._all_masks[0] != key:
             m = draw_segments(joints[_PROX][:, None], joints[_DIST][:, None],
                               self.R[:, None], (self.h, self.w), caps=self.caps)
-            self._all_masks = (key, (m, m.sum(axis=0, dtype=np.uint8)))
+            self._all_masks = (key, m)
         return self._all_masks[1]
 
     def scorer(self, ends, moving, rows=None):
@@ -536,20 +536,7 @@ class _Fitter:
         j = self.joints()
         child = np.array([DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else s for s in segs])
         pair = np.stack([segs, child], 1)  # (N, 2); a leaf is paired with itself
-        masks, cover = self._all_segment_masks(j)  # (10, h, w), (h, w)
-        # one base per segment searched: the model without that segment (and child),
-        # i.e. pixels covered by more segments than the pair's own
-        own = masks[segs].astype(np.uint8)
-        own += masks[child] & (child != segs)[:, None, None]
-        base = cover[None] > own  # (N, h, w)
-        sil = self.sil
-        # row prefix sums of pixels a candidate would add to the model (channel 0)
-        # and of those that are silhouette (channel 1), gathered together
-        cum = np.zeros((n, 2, self.h, self.w + 1), dtype=np.int32)
-        np.cumsum(~base, axis=2, out=cum[:, 0, :, 1:])
-        np.cumsum(sil & ~base, axis=2, out=cum[:, 1, :, 1:])
-        m_base = np.count_nonzero(base, axis=(1, 2))
-        i_base = np.count_nonzero(base & sil, axis=(1, 2))
+        cum, m_base, i_base = group_tables(self._all_segment_masks(j), segs, child, self.sil)
         a = int(self.sil_rows[-1])
         own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]

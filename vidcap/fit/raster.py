@@ -472,7 +472,7 @@ def _kernels():
         from vidcap.fit import _kernels as k
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
-    return k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables
+    return k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables, k.group_tables
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -653,6 +653,49 @@ def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
     return cum, int(np.count_nonzero(base[r0:r1])), int(np.count_nonzero((base & sil)[r0:r1]))
 
 
+def group_tables(masks, segs, child, sil):
+    """:func:`base_tables` for a group search: one table per segment searched.
+
+    Parameters
+    ----------
+    masks : numpy.ndarray, shape (10, h, w), bool
+        Every segment of the model drawn (:func:`draw_segments`).
+    segs, child : numpy.ndarray of int, shape (N,)
+        The segments searched and the child moving with each (``child == segs``:
+        a leaf, no child).
+    sil : numpy.ndarray, shape (h, w), bool
+        The silhouette.
+
+    Returns
+    -------
+    cum : numpy.ndarray, shape (N, 2, h, w + 1), int32
+        Per segment, row prefix sums of the pixels outside the model without that
+        segment and child (channel 0), and of those on the silhouette (channel 1).
+    m_base, i_base : numpy.ndarray, shape (N,), int64
+        Pixels of each such model, and of those on the silhouette.
+    """
+    n = len(segs)
+    h, w = sil.shape
+    cum = np.zeros((n, 2, h, w + 1), dtype=np.int32)
+    kernels = _kernels()
+    segs = np.asarray(segs, dtype=np.int64)
+    child = np.asarray(child, dtype=np.int64)
+    if kernels is not None:
+        m_base = np.zeros(n, np.int64)
+        i_base = np.zeros(n, np.int64)
+        kernels[5](_carray(masks, np.bool_), segs, child, _carray(sil, np.bool_), cum,
+                   m_base, i_base)
+        return cum, m_base, i_base
+    # pixels covered by more segments than the pair's own
+    own = masks[segs].astype(np.uint8)
+    own += masks[child] & (child != segs)[:, None, None]
+    base = masks.sum(axis=0, dtype=np.uint8)[None] > own  # (N, h, w)
+    np.cumsum(~base, axis=2, out=cum[:, 0, :, 1:])
+    np.cumsum(sil & ~base, axis=2, out=cum[:, 1, :, 1:])
+    return (cum, np.count_nonzero(base, axis=(1, 2)).astype(np.int64),
+            np.count_nonzero(base & sil, axis=(1, 2)).astype(np.int64))
+
+
 __all__ = [
     "DESCENDANTS",
     "NormalisedMask",
@@ -661,6 +704,7 @@ __all__ = [
     "direction",
     "draw_pose",
     "draw_segments",
+    "group_tables",
     "image_angle",
     "model_dimensions",
     "normalise_mask",

@@ -250,7 +250,29 @@ def interval_search_many(
     values, scores = [], []
     iterations = 0
     k = np.arange(divisions + 1)
+    kernels = _kernels()
+    if kernels is not None:
+        period = float(periodic) if wrap else 0.0
+        gap_period = float(periodic) if periodic is not None else 0.0
+        lo_c, hi_c = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+        pref = np.full(n_search, np.nan) if prefer is None else np.array(
+            np.broadcast_to(prefer, lo.shape), dtype=float)
+        best = np.ascontiguousarray(best, dtype=float)
     while True:
+        if kernels is not None:  # the same floats as the numpy code below
+            warm = iterations == 0 and start is not None
+            cand = np.empty((n_search, divisions + 1 + warm))
+            kernels.many_grid(best, width, step, lo_c, hi_c, not wrap, period, warm, cand)
+            s = np.ascontiguousarray(score(cand), dtype=float)
+            iterations += 1
+            values.append(cand)
+            scores.append(s)
+            kernels.many_pick(cand, s, pref, gap_period, best, best_score)
+            width = 2 * width / divisions
+            step = 2 * step / divisions
+            if not np.any(width > min_step):
+                break
+            continue
         begin, end = best - width / 2, best + width / 2
         if not wrap:
             begin, end = np.maximum(begin, lo), np.minimum(end, hi)
@@ -281,6 +303,10 @@ def interval_search_many(
             break
     values = np.concatenate(values, axis=1)
     scores = np.concatenate(scores, axis=1)
+    if kernels is not None:
+        runner = np.empty(n_search)
+        kernels.many_runner(values, scores, best, period, first_step * 1.01, runner)
+        return best, best_score, runner, iterations
     dist = np.abs(values - best[:, None])
     if wrap:
         dist = np.minimum(dist, periodic - dist)
