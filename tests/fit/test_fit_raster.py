@@ -234,3 +234,18 @@ def test_group_tables_compiled_and_numpy_paths_agree(monkeypatch):
     others = np.delete(masks, [2, 3], axis=0).any(axis=0)  # segment 2 with its child 3
     assert got[1][0] == np.count_nonzero(others)
     assert got[2][0] == np.count_nonzero(others & sil)
+
+
+def test_shift_overlaps_compiled_and_numpy_paths_agree(monkeypatch):
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(1)
+    sil = rng.random((20, 15)) < 0.5
+    model = rng.random((20, 15)) < 0.3
+    got = raster.shift_overlaps(sil, model, 6)
+    assert got[6] == np.count_nonzero(sil & model)  # no shift
+    shifted = np.zeros_like(model)
+    shifted[:, 2:] = model[:, :-2]  # the model moved right by 2 = t - n for t = 8
+    assert got[8] == np.count_nonzero(sil & shifted)
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    np.testing.assert_array_equal(raster.shift_overlaps(sil, model, 6), got)

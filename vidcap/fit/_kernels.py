@@ -334,31 +334,28 @@ def group_tables(masks, segs, child, sil, cum, m_base, i_base):
     silhouette; m_base[n], i_base[n]: base n's pixels / those on the silhouette.
     """
     n_s, h, w = masks.shape
+    cover = np.zeros((h, w), np.int64)
+    for k in range(n_s):
+        for y in range(h):
+            for x in range(w):
+                if masks[k, y, x]:
+                    cover[y, x] += 1
     for n in range(segs.shape[0]):
         s, c = segs[n], child[n]
+        pair = np.int64(c != s)
         m = 0
         i = 0
         for y in range(h):
             c0 = 0
             c1 = 0
-            for x in range(w):
-                cover = 0
-                for k in range(n_s):
-                    if masks[k, y, x]:
-                        cover += 1
-                own = 0
-                if masks[s, y, x]:
-                    own += 1
-                if c != s and masks[c, y, x]:
-                    own += 1
-                if cover > own:
-                    m += 1
-                    if sil[y, x]:
-                        i += 1
-                else:
-                    c0 += 1
-                    if sil[y, x]:
-                        c1 += 1
+            for x in range(w):  # branch-free: masks are noisy at their edges
+                own = np.int64(masks[s, y, x]) + pair * np.int64(masks[c, y, x])
+                inside = np.int64(cover[y, x] > own)
+                on = np.int64(sil[y, x])
+                m += inside
+                i += inside & on
+                c0 += 1 - inside
+                c1 += (1 - inside) & on
                 cum[n, 0, y, x + 1] = c0
                 cum[n, 1, y, x + 1] = c1
         m_base[n] = m
@@ -420,3 +417,17 @@ def many_runner(values, scores, best, period, far, out):
     """Per row, ``search_runner`` (far[r]: the distance beyond which a value counts)."""
     for r in range(values.shape[0]):
         out[r] = search_runner(values[r], scores[r], best[r], period, far[r])
+
+
+@numba.njit(cache=True, nogil=True)
+def shift_overlap(sil, model, n, out):
+    """out[t] = pixels where model[y, x] and sil[y, x + t - n], for t in 0..2n (columns
+    outside sil count as empty): the overlap of the model moved right by t - n."""
+    h, w = sil.shape
+    for t in range(2 * n + 1):
+        d = t - n
+        c = 0
+        for y in range(h):
+            for x in range(max(0, -d), min(w, w - d)):
+                c += np.int64(model[y, x] & sil[y, x + d])
+        out[t] = c

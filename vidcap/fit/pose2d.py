@@ -120,6 +120,7 @@ from vidcap.fit.raster import (
     normalise_mask,
     pose_joints_batch,
     row_prefix_sums,
+    shift_overlaps,
     span_counts,
     span_similarity,
 )
@@ -649,9 +650,7 @@ class _Fitter:
             sil, model = sil[r0:r1], model[r0:r1]
         sil = sil if axis == 0 else sil.T
         mod = model if axis == 0 else model.T
-        padded = np.pad(sil, ((0, 0), (n, n)))
-        windows = np.lib.stride_tricks.sliding_window_view(padded, sil.shape[1], axis=1)
-        i = np.count_nonzero(windows & mod[:, None, :], axis=(0, 2))  # (2n+1,)
+        i = shift_overlaps(sil, mod, n)  # (2n+1,)
         scores = similarity_from_counts(np.count_nonzero(sil), np.count_nonzero(mod), i)
         shifts = np.arange(-n, n + 1)
         best = np.flatnonzero(scores >= scores.max() - 1e-12)

@@ -182,14 +182,25 @@ def model_dimensions(height_px: float, body: BodyModel | None = None):
     shoulder, hip : float
         Lateral distance of each shoulder (hip) from the torso axis at spread 1.
     """
-    body = body or BodyModel()
-    k = height_px / body.height
-    return (
-        body.segment_lengths() * k,
-        body.segment_radii() * k,
-        body.shoulder_half_width * k,
-        body.hip_half_width * k,
-    )
+    height, lengths, radii, shoulder, hip = (_default_body() if body is None
+                                             else _body_metres(body))
+    k = height_px / height
+    return lengths * k, radii * k, shoulder * k, hip * k
+
+
+def _body_metres(body: BodyModel):
+    """(height, lengths, radii, shoulder, hip) of ``body`` in metres."""
+    return (body.height, body.segment_lengths(), body.segment_radii(),
+            body.shoulder_half_width, body.hip_half_width)
+
+
+@functools.lru_cache(maxsize=1)
+def _default_body():
+    """:func:`_body_metres` of the default body (built once per process; read-only)."""
+    out = _body_metres(BodyModel())
+    for a in out[1:3]:
+        a.setflags(write=False)
+    return out
 
 
 def pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip) -> np.ndarray:
@@ -472,7 +483,8 @@ def _kernels():
         from vidcap.fit import _kernels as k
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
-    return k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables, k.group_tables
+    return (k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables, k.group_tables,
+            k.shift_overlap)
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -696,6 +708,31 @@ def group_tables(masks, segs, child, sil):
             np.count_nonzero(base & sil, axis=(1, 2)).astype(np.int64))
 
 
+def shift_overlaps(sil: np.ndarray, model: np.ndarray, n: int) -> np.ndarray:
+    """Overlap of a model mask with a silhouette for every column shift in [-n, n].
+
+    Parameters
+    ----------
+    sil, model : numpy.ndarray, shape (h, w), bool
+    n : int
+        Largest shift in pixels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2 n + 1,), int64
+        Element ``t``: pixels of ``model`` moved by ``t - n`` columns (positive:
+        right) that land on ``sil`` (pixels moved out of the image count as empty).
+    """
+    kernels = _kernels()
+    if kernels is not None:
+        out = np.empty(2 * n + 1, np.int64)
+        kernels[6](_carray(sil, np.bool_), _carray(model, np.bool_), int(n), out)
+        return out
+    padded = np.pad(sil, ((0, 0), (n, n)))
+    windows = np.lib.stride_tricks.sliding_window_view(padded, sil.shape[1], axis=1)
+    return np.count_nonzero(windows & model[:, None, :], axis=(0, 2)).astype(np.int64)
+
+
 __all__ = [
     "DESCENDANTS",
     "NormalisedMask",
@@ -712,6 +749,7 @@ __all__ = [
     "pose_joints_batch",
     "row_prefix_sums",
     "segment_spans",
+    "shift_overlaps",
     "span_counts",
     "span_similarity",
 ]
