@@ -326,6 +326,7 @@ def run(
     cache_dir: str | os.PathLike | None = None,
     progress: bool | None = None,
     log=None,
+    jobs: int | None = None,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -350,6 +351,11 @@ def run(
         Progress bars (default: when stderr is a terminal).
     log : callable, optional
         Called with one-line status messages.
+    jobs : int, optional
+        Worker processes for the 2D fit (default: the usable CPUs, at most
+        :data:`vidcap.fit.parallel.MAX_JOBS`); 1 fits in this process. Clips of
+        fewer than 120 frames are fitted in this process anyway
+        (:func:`vidcap.fit.parallel.fit_sequence_chunked`).
 
     Returns
     -------
@@ -357,7 +363,7 @@ def run(
     """
     from vidcap.background import estimate_background, load_plate
     from vidcap.fileio import progress as bar
-    from vidcap.fit.pose2d import fit_sequence
+    from vidcap.fit.parallel import chunk_bounds, default_jobs, fit_sequence_chunked
     from vidcap.silhouette import extract_silhouettes
     from vidcap.video import probe
 
@@ -416,13 +422,16 @@ def run(
 
     # 3. 2D pose
     t0 = time.perf_counter()
-    k_pose = _key("pose2d", k_sil)
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
+    chunks = chunk_bounds(len(masks), jobs)
+    k_pose = _key("pose2d", k_sil) if len(chunks) < 2 else _key("pose2d", k_sil, chunks)
     hit = cache.load("pose2d", k_pose)
     if hit is None:
         def wrap(it, total):
             return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
 
-        pose = fit_sequence(masks, progress=wrap)
+        pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap)
         hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
                "similarity": pose.similarity}
         cache.save("pose2d", k_pose, **hit)

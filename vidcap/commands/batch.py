@@ -65,7 +65,8 @@ def _one(video: str, out: str, height: float) -> dict:
     row = {"file": video, "output": out, "frames": 0, "seconds": 0.0, "fps": 0.0,
            "status": "ok", "message": ""}
     try:
-        res = convert(video, out, height=height, progress=False)
+        # files already run in parallel processes: each fits its frames serially
+        res = convert(video, out, height=height, progress=False, jobs=1)
         row["frames"] = res.n_frames
     except Exception as exc:  # noqa: BLE001 - a bad file must never stop the others
         row["status"] = "failed"

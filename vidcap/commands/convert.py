@@ -33,6 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "signs, orientation and scores")
     parser.add_argument("--no-cache", action="store_true",
                         help="do not read or write the stage cache (.vidcap-cache beside OUT)")
+    parser.add_argument("--jobs", "-j", type=int, metavar="N",
+                        help="processes fitting the 2D pose (default: the CPUs, at most 8; "
+                        "1 = this process only)")
     parser.add_argument("--quiet", action="store_true", help="print nothing on success")
 
 
@@ -44,11 +47,13 @@ def run(args) -> int:
         raise UsageError(f"--height must be positive metres, got {args.height}")
     if args.smooth < 0:
         raise UsageError(f"--smooth must not be negative, got {args.smooth}")
+    if args.jobs is not None and args.jobs < 1:
+        raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
     log = (lambda m: None) if args.quiet else (lambda m: print(f"vidcap: {m}", file=sys.stderr))
     res = convert(
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
         annotations=args.annotations, background=args.background, height=args.height,
-        smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log,
+        smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
     )
     if not args.quiet:
         lr = res.lifted

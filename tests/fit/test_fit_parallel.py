@@ -1,0 +1,121 @@
+"""Chunked fitting on worker processes (vidcap.fit.parallel)."""
+
+import numpy as np
+import pytest
+
+from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
+from vidcap.fit.parallel import (
+    chunk_bounds,
+    default_jobs,
+    fit_sequence_chunked,
+    reconcile_labels,
+    swap_labels,
+)
+from vidcap.fit.pose2d import fit_sequence
+
+
+@pytest.fixture(scope="module")
+def walk_masks():
+    from vidcap.synth import make_motion, render_clip
+
+    motion = make_motion("walk", n_frames=50, rng=np.random.default_rng(0))
+    _, truth = render_clip(motion, size=(240, 180), yaw_deg=90.0, noise=0.0,
+                           rng=np.random.default_rng(0))
+    return truth["masks"]
+
+
+def test_chunk_bounds_tile_the_clip_aligned_with_overlap():
+    b = chunk_bounds(300, 2)
+    assert b == [(0, 0, 150), (140, 150, 300)]
+    b = chunk_bounds(301, 4, overlap=10, align=10, min_chunk=60)
+    assert [x[1] for x in b] == [0, 80, 160, 240]  # 301 / 4 rounded up to tens
+    assert all(s == max(0, beg - 10) and s % 10 == 0 for s, beg, _ in b)
+    assert b[-1][2] == 301 and all(b[k][2] == b[k + 1][1] for k in range(len(b) - 1))
+    assert chunk_bounds(119, 8) == [(0, 0, 119)]  # shorter than two chunks: serial
+    assert chunk_bounds(1000, 1) == [(0, 0, 1000)]
+    assert 1 <= default_jobs() <= 8
+
+
+def _arrays(rng, n=6):
+    return {"joints2d": rng.normal(size=(n, 15, 2)) * 50,
+            **{k: rng.normal(size=(n, 10)) for k in ("angles", "foreshortening", "scores",
+                                                      "margins")},
+            "spread": rng.random(n), "similarity": rng.random(n), "warm": np.ones(n, bool)}
+
+
+def test_reconcile_finds_a_leg_swap_and_swap_labels_undoes_it():
+    rng = np.random.default_rng(0)
+    prev = _arrays(rng)
+    cur = swap_labels(prev, {"arms": False, "legs": True})
+    l_knee, r_knee = JOINT_INDEX["l_knee"], JOINT_INDEX["r_knee"]
+    np.testing.assert_array_equal(cur["joints2d"][:, l_knee], prev["joints2d"][:, r_knee])
+    a, b = SEGMENT_INDEX["l_lower_leg"], SEGMENT_INDEX["r_lower_leg"]
+    np.testing.assert_array_equal(cur["angles"][:, a], prev["angles"][:, b])
+    np.testing.assert_array_equal(cur["joints2d"][:, :9], prev["joints2d"][:, :9])  # arms kept
+    cur["joints2d"] += rng.normal(size=cur["joints2d"].shape)  # a little disagreement
+    swaps = reconcile_labels(prev, cur)
+    assert swaps == {"arms": False, "legs": True}
+    back = swap_labels(cur, swaps)
+    assert np.abs(back["joints2d"] - prev["joints2d"]).max() < 10
+    np.testing.assert_array_equal(back["angles"], prev["angles"])
+    # NaN frames (no silhouette) do not decide anything
+    cur2 = dict(cur, joints2d=cur["joints2d"].copy())
+    cur2["joints2d"][0] = np.nan
+    assert reconcile_labels(prev, cur2) == swaps
+
+
+def test_per_frame_chunks_equal_one_serial_pass(walk_masks):
+    seen = []
+
+    def progress(it, total):
+        seen.append(total)
+        for k in it:
+            seen.append(k)
+            yield k
+
+    got = fit_sequence_chunked(walk_masks, jobs=2, tracked=False, min_chunk=20,
+                               progress=progress)
+    want = fit_sequence(walk_masks, tracked=False)
+    for key, value in want.arrays().items():
+        np.testing.assert_array_equal(got.arrays()[key], value, err_msg=key)
+    assert seen[0] == len(walk_masks) and len(seen) == 1 + len(walk_masks)
+
+
+def test_tracked_chunks_agree_with_serial_and_keep_labels(walk_masks, monkeypatch):
+    from vidcap.fit import parallel
+
+    serial = fit_sequence(walk_masks)
+    got = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
+    assert got.tracked and got.n_frames == serial.n_frames
+    err = np.linalg.norm(got.joints2d - serial.joints2d, axis=-1)
+    assert np.median(err) < 1.0  # px: the second chunk's track settles on the serial one
+    # a chunk whose track began with the other labelling is relabelled to agree: make
+    # every later chunk come back with both limb pairs swapped (workers are forked,
+    # so they see the patched function) and the joined result must not change
+    monkeypatch.setattr(parallel, "_fit_chunk", _swapped_chunk)
+    again = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
+    for key, value in got.arrays().items():
+        np.testing.assert_array_equal(again.arrays()[key], value, err_msg=key)
+
+
+def _swapped_chunk(packed, width, skip, tracked, kw):
+    from vidcap.fit import parallel
+
+    out = _REAL_FIT_CHUNK(packed, width, skip, tracked, kw)
+    return parallel.swap_labels(out, {"arms": True, "legs": True}) if skip else out
+
+
+def _real():
+    from vidcap.fit import parallel
+
+    return parallel._fit_chunk
+
+
+_REAL_FIT_CHUNK = _real()
+
+
+def test_one_job_or_short_clip_is_the_serial_path(walk_masks):
+    want = fit_sequence(walk_masks[:12])
+    for jobs in (1, 4):
+        got = fit_sequence_chunked(walk_masks[:12], jobs=jobs)
+        np.testing.assert_array_equal(got.joints2d, want.joints2d)

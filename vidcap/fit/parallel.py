@@ -1,0 +1,258 @@
+"""Fitting a clip in chunks on several cores (beyond the seed).
+
+:func:`fit_sequence_chunked` splits a clip into consecutive chunks, fits each with
+:func:`vidcap.fit.pose2d.fit_sequence` in a worker process and joins the results.
+
+Tracked fitting (the default) carries every frame's pose into the next, so a chunk
+cannot start where the previous one ends: each chunk after the first starts
+``overlap`` frames early, from scratch, and those frames are fitted twice. The
+overlap frames are dropped from the later chunk, so by the frame where a chunk's
+output begins its track has settled (it began with a fresh fit and has had a
+challenge, see ``reinit_every``). Chunk starts are multiples of ``reinit_every``, so
+the frames challenged by a fresh fit are the same as in one serial pass.
+
+Left and right
+--------------
+In tracked mode ``l_*``/``r_*`` label limbs from the frame where a track began
+(:mod:`vidcap.fit.pose2d`), so two chunks may label the same leg differently (the
+legs of a side view cross every step). Each chunk's arm pair and leg pair are
+relabelled (:func:`reconcile_labels`) to whichever labelling agrees better with the
+chunk before it over the overlap frames, so labels follow limbs across the whole
+clip as in one serial pass.
+
+Workers are processes (``concurrent.futures.ProcessPoolExecutor``), forked on Linux
+so they start in milliseconds with the compiled kernels already loaded; masks are
+sent bit-packed. Each worker reports every frame it finishes, so one progress bar
+advances smoothly over the whole clip.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import queue as queue_mod
+import sys
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+from vidcap.body import JOINT_INDEX, SEGMENT_NAMES
+from vidcap.fit.pose2d import Pose2D, fit_sequence
+
+#: Most worker processes :func:`default_jobs` picks.
+MAX_JOBS = 8
+
+_SEG = {name: i for i, name in enumerate(SEGMENT_NAMES)}
+#: (joints, segments) of the image-left and image-right member of each limb pair.
+_PAIRS = {
+    "arms": tuple(
+        ([JOINT_INDEX[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")],
+         [_SEG[f"{s}_{p}_arm"] for p in ("upper", "lower")]) for s in "lr"),
+    "legs": tuple(
+        ([JOINT_INDEX[f"{s}_{j}"] for j in ("hip", "knee", "ankle")],
+         [_SEG[f"{s}_{p}_leg"] for p in ("upper", "lower")]) for s in "lr"),
+}
+_PER_SEGMENT = ("angles", "foreshortening", "scores", "margins")
+_PER_FRAME = ("joints2d", "angles", "foreshortening", "scores", "margins", "spread",
+              "similarity", "warm")
+
+
+def default_jobs() -> int:
+    """Worker processes to use: the CPUs this process may run on, at most :data:`MAX_JOBS`."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        n = os.cpu_count() or 1
+    return max(1, min(n, MAX_JOBS))
+
+
+def chunk_bounds(n_frames: int, jobs: int, *, overlap: int = 10, align: int = 10,
+                 min_chunk: int = 60) -> list[tuple[int, int, int]]:
+    """How :func:`fit_sequence_chunked` splits a clip.
+
+    Parameters
+    ----------
+    n_frames : int
+        Frames in the clip.
+    jobs : int
+        Worker processes: about one chunk per worker.
+    overlap : int
+        Frames each chunk after the first starts before its output begins.
+    align : int
+        Chunk outputs begin at multiples of this (``reinit_every``), so chunk starts
+        are too when ``overlap`` is a multiple of it.
+    min_chunk : int
+        Fewest output frames per chunk; a clip shorter than two such chunks is one
+        chunk (fitted serially).
+
+    Returns
+    -------
+    list of (start, begin, end)
+        Each chunk fits frames ``start..end-1`` and outputs ``begin..end-1``
+        (``start = begin - overlap``, ``0`` for the first); the outputs tile the clip.
+    """
+    jobs = max(1, int(jobs))
+    align = max(1, int(align))
+    n_chunks = min(jobs, n_frames // max(1, min_chunk))
+    if n_chunks < 2:
+        return [(0, 0, n_frames)]
+    size = int(math.ceil(n_frames / n_chunks / align)) * align
+    begins = list(range(0, n_frames, size))
+    ends = begins[1:] + [n_frames]
+    return [(max(0, b - overlap), b, e) for b, e in zip(begins, ends, strict=True)]
+
+
+def reconcile_labels(prev: dict, cur: dict) -> dict:
+    """Relabel ``cur``'s limb pairs to agree with ``prev`` over the frames both fitted.
+
+    Parameters
+    ----------
+    prev, cur : dict
+        Per-frame arrays (the keys of :meth:`Pose2D.arrays`; ``joints2d`` (F, 15, 2)
+        and the per-segment arrays (F, 10)) of the same overlap frames, from the
+        chunk before and from this chunk.
+
+    Returns
+    -------
+    dict
+        ``{"arms": bool, "legs": bool}``: whether this chunk's image-left and
+        image-right arms (legs) should swap labels, i.e. whether the swapped
+        labelling's joints are closer to ``prev``'s, summed over the overlap frames.
+    """
+    out = {}
+    a, b = np.asarray(prev["joints2d"], float), np.asarray(cur["joints2d"], float)
+    for name, ((jl, _), (jr, _)) in _PAIRS.items():
+        both = jl + jr
+        keep = np.nansum(np.linalg.norm(a[:, both] - b[:, both], axis=-1))
+        swap = np.nansum(np.linalg.norm(a[:, both] - b[:, jr + jl], axis=-1))
+        out[name] = bool(swap < keep)
+    return out
+
+
+def swap_labels(arrays: dict, swaps: dict) -> dict:
+    """``arrays`` (per-frame, as in :func:`reconcile_labels`) with limb pairs relabelled.
+
+    Returns a new dict; ``swaps`` is what :func:`reconcile_labels` returns.
+    """
+    out = {k: (np.array(v, copy=True) if k in _PER_FRAME else v) for k, v in arrays.items()}
+    for name, ((jl, sl), (jr, sr)) in _PAIRS.items():
+        if not swaps.get(name):
+            continue
+        out["joints2d"][:, jl + jr] = arrays["joints2d"][:, jr + jl]
+        for key in _PER_SEGMENT:
+            out[key][:, sl + sr] = arrays[key][:, sr + sl]
+    return out
+
+
+# ----------------------------------------------------------------------------- workers
+_QUEUE = None
+
+
+def _init_worker(q) -> None:
+    global _QUEUE
+    _QUEUE = q
+    # one core each: no BLAS or OpenMP threads competing with the other workers
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = "1"
+
+
+def _fit_chunk(packed: np.ndarray, width: int, skip: int, tracked: bool, kw: dict) -> dict:
+    """Fit one chunk in a worker; reports each frame from ``skip`` on to the queue."""
+    masks = np.unpackbits(packed, axis=-1, count=width).astype(bool)
+
+    def report(it, total):
+        for k in it:
+            yield k
+            if k >= skip and _QUEUE is not None:
+                _QUEUE.put(1)
+
+    pose = fit_sequence(masks, tracked=tracked, progress=report, **kw)
+    return pose.arrays()
+
+
+def _context():
+    """Fork where it is safe and fast (Linux), else the platform's default."""
+    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("fork")
+    return multiprocessing.get_context()  # pragma: no cover
+
+
+def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True,
+                         progress=None, overlap: int = 10, min_chunk: int = 60,
+                         **kw) -> Pose2D:
+    """:func:`vidcap.fit.pose2d.fit_sequence` in chunks on ``jobs`` worker processes.
+
+    Parameters
+    ----------
+    masks : numpy.ndarray, shape (F, H, W), bool
+        Silhouettes in original-frame pixels.
+    jobs : int, optional
+        Worker processes (default :func:`default_jobs`). 1, or a clip shorter than
+        two chunks of ``min_chunk`` frames, runs ``fit_sequence`` in this process.
+    tracked : bool
+        As in ``fit_sequence``; per-frame fitting (False) needs no overlap.
+    progress : callable, optional
+        As in ``fit_sequence``: wraps an iterator over the frames as they finish.
+    overlap : int
+        Frames each chunk after the first fits before its output begins (see the
+        module docstring; a multiple of ``reinit_every`` keeps the challenge frames
+        of a serial pass).
+    min_chunk : int
+        Fewest output frames per chunk.
+    **kw
+        Passed to ``fit_sequence`` (``reinit_every``, ``height``, ...).
+
+    Returns
+    -------
+    Pose2D
+        As from ``fit_sequence``; tracked labels reconciled across chunks.
+    """
+    masks = np.asarray(masks, dtype=bool)
+    n = len(masks)
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    align = int(kw.get("reinit_every", 10)) or 1
+    bounds = chunk_bounds(n, jobs, overlap=overlap if tracked else 0, align=align,
+                          min_chunk=min_chunk)
+    if jobs == 1 or len(bounds) < 2:
+        return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
+    ctx = _context()
+    q = ctx.Queue()
+    width = masks.shape[-1]
+    with ProcessPoolExecutor(max_workers=min(jobs, len(bounds)), mp_context=ctx,
+                             initializer=_init_worker, initargs=(q,)) as pool:
+        futures = [pool.submit(_fit_chunk, np.packbits(masks[s:e], axis=-1), width, b - s,
+                               tracked, kw) for s, b, e in bounds]
+
+        def finished():
+            done = 0
+            while done < n:
+                try:
+                    done += q.get(timeout=0.05)
+                except queue_mod.Empty:
+                    if all(f.done() for f in futures):
+                        break
+                    continue
+                yield done - 1
+            yield from range(done, n)  # reports still in flight when the last chunk ended
+
+        for _ in (finished() if progress is None else progress(finished(), total=n)):
+            pass
+        parts = [f.result() for f in futures]
+    out = {k: np.empty((n, *np.shape(v)[1:]), dtype=np.asarray(v).dtype)
+           for k, v in parts[0].items() if k in _PER_FRAME}
+    for (s, b, e), part in zip(bounds, parts, strict=True):
+        if tracked and b > s:
+            prev = {k: out[k][s:b] for k in out}
+            cur = {k: part[k][: b - s] for k in out}
+            part = swap_labels(part, reconcile_labels(prev, cur))
+        for k in out:
+            out[k][b:e] = part[k][b - s:]
+    return Pose2D(tuple(str(x) for x in parts[0]["joint_names"]), out["joints2d"],
+                  out["angles"], out["foreshortening"], out["scores"], out["margins"],
+                  out["spread"], out["similarity"], out["warm"], bool(tracked),
+                  tuple(str(x) for x in parts[0]["segment_names"]))
+
+
+__all__ = ["MAX_JOBS", "chunk_bounds", "default_jobs", "fit_sequence_chunked",
+           "reconcile_labels", "swap_labels"]
