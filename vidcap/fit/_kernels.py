@@ -1,8 +1,8 @@
 """Compiled kernels of :mod:`vidcap.fit.raster` (numba; imported lazily from there).
 
 Module-level functions so that numba's on-disk cache (``cache=True``) is reused by
-later processes instead of compiling again. No fastmath: :func:`span` computes a
-segment's row span with exactly the float operations of
+later processes instead of compiling again. No fastmath: :func:`span_setup` and
+:func:`span_row` compute a segment's row span with exactly the float operations of
 :func:`vidcap.fit.raster.segment_spans`, so the compiled and numpy paths cover the
 same pixels (tests/fit/test_fit_raster.py checks it).
 """
@@ -14,8 +14,12 @@ import numpy as np
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def span(x0, y0, x1, y1, r, y, caps):
-    """(first, last) covered column (floats, integral) of segment (x0, y0)-(x1, y1) on row y."""
+def span_setup(x0, y0, x1, y1, r, out):
+    """The row-independent part of a segment's row span (:func:`span_row`) into out (9,).
+
+    Segment (x0, y0)-(x1, y1) of half-width r; computed once per segment rather
+    than once per row, with the same floats as ``segment_spans``.
+    """
     vx = x1 - x0
     vy = y1 - y0
     norm = np.sqrt(vx * vx + vy * vy)
@@ -27,31 +31,50 @@ def span(x0, y0, x1, y1, r, y, caps):
         ux = 1e-12
     if abs(uy) < 1e-12:
         uy = 1e-12
-    cx = 0.5 * (x0 + x1)
-    dyc = y - 0.5 * (y0 + y1)
-    half_a = abs((0.5 * norm + 1e-7) / ux)
-    half_c = abs((r + 1e-7) / uy)
-    mid_a = cx - dyc * (uy / ux)
-    mid_c = cx + dyc * (ux / uy)
+    out[0] = 0.5 * (x0 + x1)  # cx
+    out[1] = 0.5 * (y0 + y1)  # cy
+    out[2] = abs((0.5 * norm + 1e-7) / ux)  # half_a
+    out[3] = abs((r + 1e-7) / uy)  # half_c
+    out[4] = uy / ux
+    out[5] = ux / uy
+    out[6] = x0
+    out[7] = y0
+    out[8] = r
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def span_row(q, x1, y1, y, caps):
+    """(first, last) covered column (floats, integral) of a segment on row y.
+
+    q: :func:`span_setup` of the segment, whose distal end is (x1, y1); caps: round
+    ends. The same floats as ``segment_spans``.
+    """
+    cx = q[0]
+    dyc = y - q[1]
+    half_a = q[2]
+    half_c = q[3]
+    mid_a = cx - dyc * q[4]
+    mid_c = cx + dyc * q[5]
     left = max(mid_a - half_a, mid_c - half_c)
     right = min(mid_a + half_a, mid_c + half_c)
     if caps:
+        r = q[8]
+        x0 = q[6]
         if left > right:
             left, right = np.inf, -np.inf
-        d = y - y0
-        q = r * r - d * d
-        if q >= 0:
-            h = np.sqrt(q)
+        d = y - q[7]
+        qq = r * r - d * d
+        if qq >= 0:
+            h = np.sqrt(qq)
             left = min(left, x0 - h)
             right = max(right, x0 + h)
         d = y - y1
-        q = r * r - d * d
-        if q >= 0:
-            h = np.sqrt(q)
+        qq = r * r - d * d
+        if qq >= 0:
+            h = np.sqrt(qq)
             left = min(left, x1 - h)
             right = max(right, x1 + h)
     return (np.ceil(min(max(left, -1e6), 1e6)), np.floor(min(max(right, -1e6), 1e6)))
-
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -72,16 +95,17 @@ def row_range(p0, p1, radii, b, y0, y1):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, out):
+def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
     """Add candidate b's merged-span weights (table t, rows y0..y1-1) to out (C,)."""
     n_k = p0.shape[1]
     w = cum.shape[3] - 1
     n_c = cum.shape[1]
+    for k in range(n_k):
+        span_setup(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1], radii[k], setup[k])
     for y in range(y0, y1):
         m = 0
         for k in range(n_k):
-            lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
-                          radii[k], float(y), caps)
+            lo, hi = span_row(setup[k], p1[b, k, 0], p1[b, k, 1], float(y), caps)
             f = int(min(max(lo, 0.0), w))
             e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
             if e <= f:
@@ -118,11 +142,12 @@ def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
     n_b, n_k = p0.shape[0], p0.shape[1]
     first = np.empty(n_k, np.int64)
     last = np.empty(n_k, np.int64)
+    setup = np.empty((n_k, 9))
     for b in range(n_b):
         for c in range(cum.shape[1]):
             out[b, c] = 0
         r0, r1 = row_range(p0, p1, radii[b], b, y0, y1)
-        count_one(p0, p1, radii[b], b, cum, table[b], r0, r1, caps, first, last, out[b])
+        count_one(p0, p1, radii[b], b, cum, table[b], r0, r1, caps, first, last, setup, out[b])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -138,13 +163,14 @@ def similarity_terms(p0, p1, radii, table, cum, y0, y1, caps, a, m_base, i_base,
     n_b, n_k = p0.shape[0], p0.shape[1]
     first = np.empty(n_k, np.int64)
     last = np.empty(n_k, np.int64)
+    setup = np.empty((n_k, 9))
     d = np.zeros(2, np.int64)
     for b in range(n_b):
         t = table[b]
         d[0] = 0
         d[1] = 0
         r0, r1 = row_range(p0, p1, radii[t], b, y0, y1)
-        count_one(p0, p1, radii[t], b, cum, t, r0, r1, caps, first, last, d)
+        count_one(p0, p1, radii[t], b, cum, t, r0, r1, caps, first, last, setup, d)
         m = m_base[t] + d[0]
         i = i_base[t] + d[1]
         union = a + m - i
@@ -163,11 +189,18 @@ def draw(p0, p1, radii, x0, y0, caps, out):
     """
     n_b, n_k = p0.shape[0], p0.shape[1]
     h, w = out.shape[1], out.shape[2]
+    setup = np.empty(9)
+    one = np.empty(1)
     for b in range(n_b):
-        for i in range(h):
-            for k in range(n_k):
-                lo, hi = span(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1],
-                              radii[b, k], float(y0 + i), caps)
+        for k in range(n_k):
+            x1, y1 = p1[b, k, 0], p1[b, k, 1]
+            span_setup(p0[b, k, 0], p0[b, k, 1], x1, y1, radii[b, k], setup)
+            # only the rows this segment can reach (the others have empty spans)
+            one[0] = radii[b, k]
+            i0, i1 = row_range(p0[b:b + 1, k:k + 1], p1[b:b + 1, k:k + 1], one, 0,
+                               int(y0), int(y0) + h)
+            for i in range(i0 - int(y0), i1 - int(y0)):
+                lo, hi = span_row(setup, x1, y1, float(y0 + i), caps)
                 f = int(min(max(lo - x0, 0.0), w))
                 e = int(min(max(hi - x0 + 1.0, float(f)), w))
                 for x in range(f, e):
@@ -225,10 +258,13 @@ def base_tables(p0, p1, radii, sil, y0, y1, caps, cum):
     cov = np.zeros(w, np.bool_)
     m = 0
     i = 0
+    setup = np.empty((n_k, 9))
+    for k in range(n_k):
+        span_setup(p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], radii[k], setup[k])
     for y in range(y0, y1):
         cov[:] = False
         for k in range(n_k):
-            lo, hi = span(p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], radii[k], float(y), caps)
+            lo, hi = span_row(setup[k], p1[k, 0], p1[k, 1], float(y), caps)
             f = int(min(max(lo, 0.0), w))
             e = int(min(max(hi + 1.0, float(f)), w))
             for x in range(f, e):
