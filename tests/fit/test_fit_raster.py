@@ -249,3 +249,40 @@ def test_shift_overlaps_compiled_and_numpy_paths_agree(monkeypatch):
     assert got[8] == np.count_nonzero(sil & shifted)
     monkeypatch.setattr(raster, "_kernels", lambda: None)
     np.testing.assert_array_equal(raster.shift_overlaps(sil, model, 6), got)
+
+
+def test_limb_and_pose_similarity_compiled_equal_numpy_paths(monkeypatch):
+    """The fused end-point + similarity kernels give the numpy paths' floats exactly."""
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(8)
+    h, w, b = 60, 50, 40
+    cum = raster.row_prefix_sums(rng.integers(0, 2, (1, 2, h, w)).astype(bool))
+    m_base, i_base = np.array([150]), np.array([90])
+    a = 700
+    # one limb segment (index 0 of K = 2) and its child
+    vec = rng.normal(0, 10, (b, 2))
+    start, old_end = np.array([25.0, 20.0]), np.array([27.0, 35.0])
+    p0s, p1s = np.array([start, old_end]), np.array([old_end, [30.0, 48.0]])
+    own = np.array([True, False])
+    radii = np.array([[2.5, 2.0]])
+    lengths, _, sh, hip = raster.model_dimensions(50.0)
+    root = rng.uniform(20, 30, (b, 2))
+    angles = rng.uniform(0, 7, (b, 10))
+    fore = rng.uniform(0.2, 1, (b, 10))
+    spread = rng.random(b)
+    segs = np.array([0, 1, 6, 7])
+    r4 = np.array([[3.0, 2.0, 2.5, 2.0]])
+
+    def run():
+        return (raster.limb_similarity(vec, start, old_end, p0s, p1s, own, radii, cum, a,
+                                       m_base, i_base, rows=(0, h), caps=False),
+                raster.pose_similarity(root, angles, fore, spread, lengths, sh, hip, segs, r4,
+                                       cum, a, m_base, i_base, rows=(5, 55), caps=True))
+
+    got = run()
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    want = run()
+    for g, x in zip(got, want, strict=True):
+        np.testing.assert_array_equal(g, x)
+        assert np.ptp(x) > 0

@@ -171,14 +171,79 @@ def similarity_terms(p0, p1, radii, table, cum, y0, y1, caps, a, m_base, i_base,
         d[1] = 0
         r0, r1 = row_range(p0, p1, radii[t], b, y0, y1)
         count_one(p0, p1, radii[t], b, cum, t, r0, r1, caps, first, last, setup, d)
-        m = m_base[t] + d[0]
-        i = i_base[t] + d[1]
-        union = a + m - i
-        safe = max(union, 1)
-        p = (a - i) / safe
-        n = (m - i) / safe
-        x[b] = -p - n
-        q[b] = 1.0 - p
+        x[b], q[b] = _terms(a, m_base[t] + d[0], i_base[t] + d[1])
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _terms(a, m, i):
+    """(-p - n, 1 - p) of Eq. 3.3 from counts, the floats of ``similarity_from_counts``."""
+    union = a + m - i
+    safe = max(union, 1)
+    p = (a - i) / safe
+    n = (m - i) / safe
+    return -p - n, 1.0 - p
+
+
+@numba.njit(cache=True, nogil=True)
+def limb_terms(vec, start, old_end, p0s, p1s, notown, radii, cum, y0, y1, caps, a, m_base,
+               i_base, x, q):
+    """:func:`similarity_terms` of candidates that move one limb segment's distal end.
+
+    Candidate b's segment vector is vec[b] (2,): every moving segment (p0s, p1s (K, 2))
+    shifts by delta = start + vec[b] - old_end, its proximal end only where
+    notown[k] = 1.0 (children; 0.0: the segment itself) - the floats of the numpy
+    end-point code. One table (cum (1, 2, h, w + 1), radii (1, K)).
+    """
+    n_b = vec.shape[0]
+    n_k = p0s.shape[0]
+    p0 = np.empty((1, n_k, 2))
+    p1 = np.empty((1, n_k, 2))
+    first = np.empty(n_k, np.int64)
+    last = np.empty(n_k, np.int64)
+    setup = np.empty((n_k, 9))
+    d = np.zeros(2, np.int64)
+    for b in range(n_b):
+        dx = start[0] + vec[b, 0] - old_end[0]
+        dy = start[1] + vec[b, 1] - old_end[1]
+        for k in range(n_k):
+            p0[0, k, 0] = p0s[k, 0] + dx * notown[k]
+            p0[0, k, 1] = p0s[k, 1] + dy * notown[k]
+            p1[0, k, 0] = p1s[k, 0] + dx
+            p1[0, k, 1] = p1s[k, 1] + dy
+        d[0] = 0
+        d[1] = 0
+        r0, r1 = row_range(p0, p1, radii[0], 0, y0, y1)
+        count_one(p0, p1, radii[0], 0, cum, 0, r0, r1, caps, first, last, setup, d)
+        x[b], q[b] = _terms(a, m_base[0] + d[0], i_base[0] + d[1])
+
+
+@numba.njit(cache=True, nogil=True)
+def pose_terms(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, order, parent,
+               kind, prox, dist, radii, cum, y0, y1, caps, a, m_base, i_base, x, q):
+    """:func:`similarity_terms` of whole candidate poses (as :func:`joints` places them)
+    whose segments prox[k] -> dist[k] (joint indices) move. One table."""
+    n_b = root.shape[0]
+    n_k = prox.shape[0]
+    jb = np.empty((1, 15, 2))
+    p0 = np.empty((1, n_k, 2))
+    p1 = np.empty((1, n_k, 2))
+    first = np.empty(n_k, np.int64)
+    last = np.empty(n_k, np.int64)
+    setup = np.empty((n_k, 9))
+    d = np.zeros(2, np.int64)
+    for b in range(n_b):
+        joints(root[b:b + 1], c[b:b + 1], s[b:b + 1], c_left[b:b + 1], s_left[b:b + 1],
+               fore[b:b + 1], spread[b:b + 1], lengths, shoulder, hip, order, parent, kind, jb)
+        for k in range(n_k):
+            p0[0, k, 0] = jb[0, prox[k], 0]
+            p0[0, k, 1] = jb[0, prox[k], 1]
+            p1[0, k, 0] = jb[0, dist[k], 0]
+            p1[0, k, 1] = jb[0, dist[k], 1]
+        d[0] = 0
+        d[1] = 0
+        r0, r1 = row_range(p0, p1, radii[0], 0, y0, y1)
+        count_one(p0, p1, radii[0], 0, cum, 0, r0, r1, caps, first, last, setup, d)
+        x[b], q[b] = _terms(a, m_base[0] + d[0], i_base[0] + d[1])
 
 
 @numba.njit(cache=True, nogil=True)

@@ -116,9 +116,11 @@ from vidcap.fit.raster import (
     draw_segments,
     group_tables,
     image_angle,
+    limb_similarity,
     model_dimensions,
     normalise_mask,
     pose_joints_batch,
+    pose_similarity,
     row_prefix_sums,
     shift_overlaps,
     span_counts,
@@ -390,9 +392,22 @@ class _Fitter:
         i_base = np.array([i_base], np.int64)
         tables = {}
 
+        limb = getattr(ends, "limb", None)
+        pose = getattr(ends, "pose", None)
+
         def score(values):
             self.batches += 1
-            p0, p1 = ends(np.asarray(values, dtype=float))
+            values = np.asarray(values, dtype=float)
+            # candidate end points built inside the compiled pass where possible
+            if limb is not None:
+                start, old_end, p0s, p1s, own, vector = limb
+                return limb_similarity(vector(values), start, old_end, p0s, p1s, own, radii,
+                                       cum, a, m_base, i_base, rows=(r0, r1), caps=self.caps)
+            if pose is not None:
+                return pose_similarity(*pose(values), self.L, self.shoulder, self.hip, moving,
+                                       radii, cum, a, m_base, i_base, rows=(r0, r1),
+                                       caps=self.caps)
+            p0, p1 = ends(values)
             n_b = len(p0)
             if n_b not in tables:
                 tables[n_b] = np.zeros(n_b, np.int64)
@@ -406,14 +421,17 @@ class _Fitter:
         """End points from whole candidate poses (torso, head, spread, root searches)."""
         moving = np.asarray(moving, dtype=int)
 
-        def ends(v):
+        def poses(v):
             n = len(v)
-            root, angles, fore, spread = make(
+            return make(
                 v, np.broadcast_to(self.root, (n, 2)).copy(), np.repeat(self.angles[None], n, 0),
                 np.repeat(self.fore[None], n, 0), np.full(n, self.spread))
-            jb = pose_joints_batch(root, angles, fore, spread, self.L, self.shoulder, self.hip)
+
+        def ends(v):
+            jb = pose_joints_batch(*poses(v), self.L, self.shoulder, self.hip)
             return jb[:, _PROX[moving]], jb[:, _DIST[moving]]
 
+        ends.pose = poses  # what the scorer's compiled pass needs instead
         return ends
 
     def _limb_ends(self, seg, moving, vector):
@@ -433,6 +451,7 @@ class _Fitter:
             p1 = p1s[None] + delta[:, None]
             return p0, p1
 
+        ends.limb = (start, old_end, p0s, p1s, own, vector)  # for the scorer's compiled pass
         return ends
 
     def search_angle(self, seg, *, with_segments=(), lo=None, hi=None, rows=None,

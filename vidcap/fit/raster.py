@@ -484,7 +484,7 @@ def _kernels():
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
     return (k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables, k.group_tables,
-            k.shift_overlap)
+            k.shift_overlap, k.limb_terms, k.pose_terms)
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -625,6 +625,82 @@ def span_similarity(p0, p1, radii, cum, a, m_base, i_base, *, rows, table,
     return np.exp(x) * q
 
 
+def limb_similarity(vec, start, old_end, p0s, p1s, own, radii, cum, a, m_base, i_base, *,
+                    rows, caps: bool = True) -> np.ndarray:
+    """:func:`span_similarity` of candidates that move one limb segment's distal end.
+
+    Parameters
+    ----------
+    vec : numpy.ndarray, shape (B, 2)
+        Each candidate's proximal -> distal vector of the segment.
+    start, old_end : numpy.ndarray, shape (2,)
+        The segment's proximal joint and its distal joint now.
+    p0s, p1s : numpy.ndarray, shape (K, 2)
+        Ends of the K moving segments now (the segment and its descendants); each
+        shifts with the distal end, except the segment's own proximal end.
+    own : numpy.ndarray of bool, shape (K,)
+        Which moving segment is the segment itself.
+    radii, cum, a, m_base, i_base, rows, caps
+        As in :func:`span_similarity`, one table.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B,)
+    """
+    kernels = _kernels()
+    y0, y1 = max(0, int(rows[0])), min(cum.shape[2], int(rows[1]))
+    if kernels is None or y1 <= y0 or len(vec) == 0:
+        delta = start + vec - old_end  # (B, 2)
+        p0 = p0s[None] + delta[:, None] * ~own[None, :, None]
+        p1 = p1s[None] + delta[:, None]
+        return span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=rows,
+                               table=np.zeros(len(vec), np.int64), caps=caps)
+    x = np.empty(len(vec))
+    q = np.empty(len(vec))
+    kernels[7](_carray(vec, np.float64), start, old_end, p0s, p1s, (~own).astype(np.float64),
+               radii, cum, y0, y1, bool(caps), int(a), m_base, i_base, x, q)
+    return np.exp(x) * q
+
+
+def pose_similarity(root, angles, foreshortening, spread, lengths, shoulder, hip, segments,
+                    radii, cum, a, m_base, i_base, *, rows, caps: bool = True) -> np.ndarray:
+    """:func:`span_similarity` of whole candidate poses (:func:`pose_joints_batch`).
+
+    Parameters
+    ----------
+    root, angles, foreshortening, spread, lengths, shoulder, hip
+        As in :func:`pose_joints_batch`: B candidate poses.
+    segments : numpy.ndarray of int, shape (K,)
+        The segments that move (drawn from each pose); the rest is in ``cum``.
+    radii, cum, a, m_base, i_base, rows, caps
+        As in :func:`span_similarity`, one table.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B,)
+    """
+    kernels = _kernels()
+    n_b = len(root)
+    y0, y1 = max(0, int(rows[0])), min(cum.shape[2], int(rows[1]))
+    if kernels is None or y1 <= y0 or n_b == 0:
+        jb = pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, hip)
+        return span_similarity(_carray(jb[:, _PROX[segments]], np.float64),
+                               _carray(jb[:, _DIST[segments]], np.float64), radii, cum, a,
+                               m_base, i_base, rows=rows, table=np.zeros(n_b, np.int64),
+                               caps=caps)
+    angles = _carray(angles, np.float64)
+    c, s = np.cos(angles), np.sin(angles)  # as pose_joints_batch
+    left = angles[:, _SEG["torso"]] + np.pi / 2
+    x = np.empty(n_b)
+    q = np.empty(n_b)
+    kernels[8](_carray(root, np.float64), c, s, np.cos(left), np.sin(left),
+               _carray(foreshortening, np.float64), _carray(spread, np.float64),
+               _carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES,
+               _PROX[segments].astype(np.int64), _DIST[segments].astype(np.int64), radii, cum,
+               y0, y1, bool(caps), int(a), m_base, i_base, x, q)
+    return np.exp(x) * q
+
+
 def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
     """What a search adds to: row prefix sums of the pixels outside a drawn model.
 
@@ -743,10 +819,12 @@ __all__ = [
     "draw_segments",
     "group_tables",
     "image_angle",
+    "limb_similarity",
     "model_dimensions",
     "normalise_mask",
     "pose_joints",
     "pose_joints_batch",
+    "pose_similarity",
     "row_prefix_sums",
     "segment_spans",
     "shift_overlaps",
