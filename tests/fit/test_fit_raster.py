@@ -275,8 +275,12 @@ def test_limb_and_pose_similarity_compiled_equal_numpy_paths(monkeypatch):
     r4 = np.array([[3.0, 2.0, 2.5, 2.0]])
 
     def run():
-        return (raster.limb_similarity(vec, start, old_end, p0s, p1s, own, radii, cum, a,
-                                       m_base, i_base, rows=(0, h), caps=False),
+        return (raster.limb_similarity(vec[:, 0], "angle", 12.5, start, old_end, p0s, p1s,
+                                       own, radii, cum, a, m_base, i_base, rows=(0, h),
+                                       caps=False),
+                raster.limb_similarity(np.abs(vec[:, 1]) / 10, "ratio", np.array([3.0, 14.0]),
+                                       start, old_end, p0s, p1s, own, radii, cum, a, m_base,
+                                       i_base, rows=(0, h)),
                 raster.pose_similarity(root, angles, fore, spread, lengths, sh, hip, segs, r4,
                                        cum, a, m_base, i_base, rows=(5, 55), caps=True))
 

@@ -185,16 +185,18 @@ def _terms(a, m, i):
 
 
 @numba.njit(cache=True, nogil=True)
-def limb_terms(vec, start, old_end, p0s, p1s, notown, radii, cum, y0, y1, caps, a, m_base,
-               i_base, x, q):
+def limb_terms(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, radii, cum, y0, y1,
+               caps, a, m_base, i_base, x, q):
     """:func:`similarity_terms` of candidates that move one limb segment's distal end.
 
-    Candidate b's segment vector is vec[b] (2,): every moving segment (p0s, p1s (K, 2))
+    Candidate b's segment vector is (ca[b] * k0, (sign * cb[b]) * k1) (an angle's cos
+    and sin times a length, sign -1; or a ratio times a vector, sign 1, ca = cb, the
+    floats of the numpy code); every moving segment (p0s, p1s (K, 2))
     shifts by delta = start + vec[b] - old_end, its proximal end only where
     notown[k] = 1.0 (children; 0.0: the segment itself) - the floats of the numpy
     end-point code. One table (cum (1, 2, h, w + 1), radii (1, K)).
     """
-    n_b = vec.shape[0]
+    n_b = ca.shape[0]
     n_k = p0s.shape[0]
     p0 = np.empty((1, n_k, 2))
     p1 = np.empty((1, n_k, 2))
@@ -203,8 +205,8 @@ def limb_terms(vec, start, old_end, p0s, p1s, notown, radii, cum, y0, y1, caps, 
     setup = np.empty((n_k, 9))
     d = np.zeros(2, np.int64)
     for b in range(n_b):
-        dx = start[0] + vec[b, 0] - old_end[0]
-        dy = start[1] + vec[b, 1] - old_end[1]
+        dx = start[0] + ca[b] * k0 - old_end[0]
+        dy = start[1] + (sign * cb[b]) * k1 - old_end[1]
         for k in range(n_k):
             p0[0, k, 0] = p0s[k, 0] + dx * notown[k]
             p0[0, k, 1] = p0s[k, 1] + dy * notown[k]

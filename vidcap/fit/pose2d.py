@@ -400,9 +400,8 @@ class _Fitter:
             values = np.asarray(values, dtype=float)
             # candidate end points built inside the compiled pass where possible
             if limb is not None:
-                start, old_end, p0s, p1s, own, vector = limb
-                return limb_similarity(vector(values), start, old_end, p0s, p1s, own, radii,
-                                       cum, a, m_base, i_base, rows=(r0, r1), caps=self.caps)
+                return limb_similarity(values, *limb, radii, cum, a, m_base, i_base,
+                                       rows=(r0, r1), caps=self.caps)
             if pose is not None:
                 return pose_similarity(*pose(values), self.L, self.shoulder, self.hip, moving,
                                        radii, cum, a, m_base, i_base, rows=(r0, r1),
@@ -424,7 +423,7 @@ class _Fitter:
         def poses(v):
             n = len(v)
             return make(
-                v, np.broadcast_to(self.root, (n, 2)).copy(), np.repeat(self.angles[None], n, 0),
+                v, np.repeat(self.root[None], n, 0), np.repeat(self.angles[None], n, 0),
                 np.repeat(self.fore[None], n, 0), np.full(n, self.spread))
 
         def ends(v):
@@ -434,11 +433,19 @@ class _Fitter:
         ends.pose = poses  # what the scorer's compiled pass needs instead
         return ends
 
-    def _limb_ends(self, seg, moving, vector):
+    def _limb_ends(self, seg, moving, form, scale):
         """End points when one limb segment's distal end moves (its children follow).
 
-        ``vector(v) -> (B, 2)``: the segment's new proximal -> distal vector.
+        The segment's new proximal -> distal vector is ``direction(v) * scale``
+        (``form='angle'``) or ``v[:, None] * scale`` (``form='ratio'``).
         """
+        if form == "angle":
+            def vector(v):
+                return direction(v) * scale
+        else:
+            def vector(v):
+                return v[:, None] * scale
+
         j = self.joints()
         moving = np.asarray(moving, dtype=int)
         p0s, p1s = j[_PROX[moving]], j[_DIST[moving]]
@@ -451,7 +458,7 @@ class _Fitter:
             p1 = p1s[None] + delta[:, None]
             return p0, p1
 
-        ends.limb = (start, old_end, p0s, p1s, own, vector)  # for the scorer's compiled pass
+        ends.limb = (form, scale, start, old_end, p0s, p1s, own)  # for the compiled pass
         return ends
 
     def search_angle(self, seg, *, with_segments=(), lo=None, hi=None, rows=None,
@@ -472,7 +479,7 @@ class _Fitter:
                   if self.drawn[d] and any(d in DESCENDANTS[s] for s in together)]
         if seg >= 2 and not with_segments:
             length = self.L[seg] * self.fore[seg]
-            ends = self._limb_ends(seg, moving, lambda v: direction(v) * length)
+            ends = self._limb_ends(seg, moving, "angle", length)
         else:
             def make(v, root, ang, fore, spread):
                 ang[:, together] = v[:, None] + offsets
@@ -518,7 +525,7 @@ class _Fitter:
             return res
         if seg >= 2:
             u = direction(self.angles[seg]) * self.L[seg]
-            ends = self._limb_ends(seg, moving, lambda v: v[:, None] * u)
+            ends = self._limb_ends(seg, moving, "ratio", u)
         else:
             def make(v, root, ang, fore, spread):
                 fore[:, seg] = v

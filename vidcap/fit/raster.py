@@ -625,14 +625,19 @@ def span_similarity(p0, p1, radii, cum, a, m_base, i_base, *, rows, table,
     return np.exp(x) * q
 
 
-def limb_similarity(vec, start, old_end, p0s, p1s, own, radii, cum, a, m_base, i_base, *,
-                    rows, caps: bool = True) -> np.ndarray:
+def limb_similarity(values, form, scale, start, old_end, p0s, p1s, own, radii, cum, a, m_base,
+                    i_base, *, rows, caps: bool = True) -> np.ndarray:
     """:func:`span_similarity` of candidates that move one limb segment's distal end.
 
     Parameters
     ----------
-    vec : numpy.ndarray, shape (B, 2)
-        Each candidate's proximal -> distal vector of the segment.
+    values : numpy.ndarray, shape (B,)
+        The candidates: angles in radians (``form='angle'``) or length ratios
+        (``form='ratio'``).
+    form : {'angle', 'ratio'}
+        The segment's proximal -> distal vector is ``direction(values) * scale``
+        (``scale`` a length in pixels) or ``values[:, None] * scale`` (``scale`` a
+        vector, shape (2,)).
     start, old_end : numpy.ndarray, shape (2,)
         The segment's proximal joint and its distal joint now.
     p0s, p1s : numpy.ndarray, shape (K, 2)
@@ -649,16 +654,23 @@ def limb_similarity(vec, start, old_end, p0s, p1s, own, radii, cum, a, m_base, i
     """
     kernels = _kernels()
     y0, y1 = max(0, int(rows[0])), min(cum.shape[2], int(rows[1]))
-    if kernels is None or y1 <= y0 or len(vec) == 0:
+    values = np.asarray(values, dtype=np.float64)
+    if kernels is None or y1 <= y0 or len(values) == 0:
+        vec = direction(values) * scale if form == "angle" else values[:, None] * scale
         delta = start + vec - old_end  # (B, 2)
         p0 = p0s[None] + delta[:, None] * ~own[None, :, None]
         p1 = p1s[None] + delta[:, None]
         return span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=rows,
-                               table=np.zeros(len(vec), np.int64), caps=caps)
-    x = np.empty(len(vec))
-    q = np.empty(len(vec))
-    kernels[7](_carray(vec, np.float64), start, old_end, p0s, p1s, (~own).astype(np.float64),
-               radii, cum, y0, y1, bool(caps), int(a), m_base, i_base, x, q)
+                               table=np.zeros(len(values), np.int64), caps=caps)
+    if form == "angle":  # direction(): (cos, -sin), times the length
+        ca, cb, sign, k0, k1 = np.cos(values), np.sin(values), -1.0, scale, scale
+    else:
+        ca, cb, sign, k0, k1 = values, values, 1.0, scale[0], scale[1]
+    x = np.empty(len(values))
+    q = np.empty(len(values))
+    kernels[7](ca, cb, sign, float(k0), float(k1), start, old_end, p0s, p1s,
+               (~own).astype(np.float64), radii, cum, y0, y1, bool(caps), int(a), m_base, i_base,
+               x, q)
     return np.exp(x) * q
 
 
