@@ -290,3 +290,34 @@ def test_limb_and_pose_similarity_compiled_equal_numpy_paths(monkeypatch):
     for g, x in zip(got, want, strict=True):
         np.testing.assert_array_equal(g, x)
         assert np.ptp(x) > 0
+
+
+@pytest.mark.parametrize("form", ["angle", "ratio"])
+def test_group_similarity_compiled_equals_numpy_path(form, monkeypatch):
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(12)
+    h, w, n, b = 50, 40, 3, 7
+    masks = rng.random((10, h, w)) < 0.2
+    sil = rng.random((h, w)) < 0.5
+    cum, m_base, i_base = raster.group_tables(masks, np.array([2, 3, 6]), np.array([3, 3, 7]),
+                                              sil)
+    own0 = rng.uniform(10, 30, (n, 2))
+    own1 = own0 + rng.normal(0, 8, (n, 2))
+    ch0, ch1 = own1.copy(), own1 + rng.normal(0, 8, (n, 2))
+    leaf = np.array([False, True, False])
+    radii = rng.uniform(1, 3, (n, 2))
+    if form == "angle":
+        values, scale = rng.uniform(0, 7, (n, b)), rng.uniform(5, 12, n)
+    else:
+        values, scale = rng.uniform(0.1, 1, (n, b)), rng.normal(0, 10, (n, 2))
+
+    def run():
+        return raster.group_similarity(values, form, scale, own0, own1, ch0, ch1, leaf, radii,
+                                       cum, 900, m_base, i_base, caps=False)
+
+    got = run()
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    want = run()
+    assert got.shape == (n, b) and np.ptp(want) > 0
+    np.testing.assert_array_equal(got, want)

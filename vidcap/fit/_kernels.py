@@ -534,3 +534,48 @@ def shift_overlap(sil, model, n, out):
             for x in range(max(0, -d), min(w, w - d)):
                 c += np.int64(model[y, x] & sil[y, x + d])
         out[t] = c
+
+
+@numba.njit(cache=True, nogil=True)
+def group_terms(ca, cb, sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, radii, cum, y0, y1,
+                caps, a, m_base, i_base, x, q):
+    """:func:`similarity_terms` of a group search's candidates, (N, B) -> x, q (N * B,).
+
+    Search n's segment runs from own0[n] to own0[n] + (ca[n, b] * k0[n], (sign *
+    cb[n, b]) * k1[n]); unless leaf[n], its child (ch0[n], ch1[n]) shifts with the
+    segment's end (n_k = 2 segments per candidate, else 1). Table n: cum[n], radii[n],
+    m_base[n], i_base[n]. The floats of the numpy code.
+    """
+    n_s, n_b = ca.shape
+    p0 = np.empty((1, n_k, 2))
+    p1 = np.empty((1, n_k, 2))
+    first = np.empty(n_k, np.int64)
+    last = np.empty(n_k, np.int64)
+    setup = np.empty((n_k, 9))
+    d = np.zeros(2, np.int64)
+    for n in range(n_s):
+        for b in range(n_b):
+            ex = own0[n, 0] + ca[n, b] * k0[n]
+            ey = own0[n, 1] + (sign * cb[n, b]) * k1[n]
+            p0[0, 0, 0] = own0[n, 0]
+            p0[0, 0, 1] = own0[n, 1]
+            p1[0, 0, 0] = ex
+            p1[0, 0, 1] = ey
+            if n_k == 2:
+                if leaf[n]:
+                    p0[0, 1, 0] = own0[n, 0]
+                    p0[0, 1, 1] = own0[n, 1]
+                    p1[0, 1, 0] = ex
+                    p1[0, 1, 1] = ey
+                else:
+                    dx = ex - own1[n, 0]
+                    dy = ey - own1[n, 1]
+                    p0[0, 1, 0] = ch0[n, 0] + dx
+                    p0[0, 1, 1] = ch0[n, 1] + dy
+                    p1[0, 1, 0] = ch1[n, 0] + dx
+                    p1[0, 1, 1] = ch1[n, 1] + dy
+            d[0] = 0
+            d[1] = 0
+            r0, r1 = row_range(p0, p1, radii[n], 0, y0, y1)
+            count_one(p0, p1, radii[n], 0, cum, n, r0, r1, caps, first, last, setup, d)
+            x[n * n_b + b], q[n * n_b + b] = _terms(a, m_base[n] + d[0], i_base[n] + d[1])

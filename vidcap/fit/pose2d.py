@@ -114,6 +114,7 @@ from vidcap.fit.raster import (
     direction,
     draw_pose,
     draw_segments,
+    group_similarity,
     group_tables,
     image_angle,
     limb_similarity,
@@ -567,39 +568,19 @@ class _Fitter:
         a = int(self.sil_rows[-1])
         own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
-        is_leaf = (child == segs)[:, None, None]
-        k = 1 if bool(is_leaf.all()) else 2
-        radii = self.R[pair][:, :k]  # (N, k)
+        leaf = child == segs
+        k = 1 if bool(leaf.all()) else 2
+        radii = np.ascontiguousarray(self.R[pair][:, :k])  # (N, k)
         length = self.L[segs]
         if kind == "angle":
-            def vec(v):
-                return direction(v) * (length * self.fore[segs])[:, None, None]
+            form, scale = "angle", length * self.fore[segs]
         else:
-            unit = direction(self.angles[segs]) * length[:, None]
-
-            def vec(v):
-                return v[..., None] * unit[:, None, :]
-        radii = np.ascontiguousarray(radii)
-        tables = {}
+            form, scale = "ratio", direction(self.angles[segs]) * length[:, None]
 
         def score(values):  # values (N, B)
             self.batches += 1
-            B = values.shape[1]
-            end = own0[:, None] + vec(values)  # (N, B, 2)
-            delta = end - own1[:, None]
-            p0 = np.empty((n, B, k, 2))
-            p1 = np.empty((n, B, k, 2))
-            p0[:, :, 0] = own0[:, None]
-            p1[:, :, 0] = end
-            if k == 2:
-                p0[:, :, 1] = np.where(is_leaf, own0[:, None], ch0[:, None] + delta)
-                p1[:, :, 1] = np.where(is_leaf, end, ch1[:, None] + delta)
-            if B not in tables:
-                tables[B] = np.repeat(np.arange(n), B)
-            s = span_similarity(p0.reshape(n * B, k, 2), p1.reshape(n * B, k, 2), radii, cum,
-                                a, m_base, i_base, rows=(0, self.h), table=tables[B],
-                                caps=self.caps)
-            return s.reshape(n, B)
+            return group_similarity(values, form, scale, own0, own1, ch0, ch1, leaf, radii,
+                                    cum, a, m_base, i_base, caps=self.caps)
 
         if kind == "angle":
             lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]

@@ -484,7 +484,7 @@ def _kernels():
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
     return (k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables, k.group_tables,
-            k.shift_overlap, k.limb_terms, k.pose_terms)
+            k.shift_overlap, k.limb_terms, k.pose_terms, k.group_terms)
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -674,6 +674,68 @@ def limb_similarity(values, form, scale, start, old_end, p0s, p1s, own, radii, c
     return np.exp(x) * q
 
 
+def group_similarity(values, form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
+                     i_base, *, caps: bool = True) -> np.ndarray:
+    """:func:`span_similarity` of N limb searches' candidates at once (one table each).
+
+    Parameters
+    ----------
+    values : numpy.ndarray, shape (N, B)
+        Search n's candidates: angles (``form='angle'``) or length ratios
+        (``form='ratio'``).
+    form : {'angle', 'ratio'}
+        Segment n's proximal -> distal vector is ``direction(values[n]) * scale[n]``
+        (``scale`` (N,), lengths) or ``values[n, :, None] * scale[n]`` (``scale`` (N, 2)).
+    own0, own1 : numpy.ndarray, shape (N, 2)
+        Segment n's proximal and distal joints now.
+    ch0, ch1 : numpy.ndarray, shape (N, 2)
+        Its child segment's ends now (moved with the distal end unless ``leaf[n]``).
+    leaf : numpy.ndarray of bool, shape (N,)
+        Segments without a child.
+    radii : numpy.ndarray, shape (N, K)
+        Half-widths (segment, child); K = 1 if every segment is a leaf.
+    cum, a, m_base, i_base, caps
+        As in :func:`span_similarity`: table n for search n (:func:`group_tables`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, B)
+    """
+    n, n_b = values.shape
+    k = radii.shape[1]
+    kernels = _kernels()
+    if kernels is None or n_b == 0:
+        vec = (direction(values) * scale[:, None, None] if form == "angle"
+               else values[..., None] * scale[:, None, :])
+        end = own0[:, None] + vec  # (N, B, 2)
+        delta = end - own1[:, None]
+        is_leaf = leaf[:, None, None]
+        p0 = np.empty((n, n_b, k, 2))
+        p1 = np.empty((n, n_b, k, 2))
+        p0[:, :, 0] = own0[:, None]
+        p1[:, :, 0] = end
+        if k == 2:
+            p0[:, :, 1] = np.where(is_leaf, own0[:, None], ch0[:, None] + delta)
+            p1[:, :, 1] = np.where(is_leaf, end, ch1[:, None] + delta)
+        s = span_similarity(p0.reshape(n * n_b, k, 2), p1.reshape(n * n_b, k, 2), radii, cum,
+                            a, m_base, i_base, rows=(0, cum.shape[2]),
+                            table=np.repeat(np.arange(n), n_b), caps=caps)
+        return s.reshape(n, n_b)
+    values = _carray(values, np.float64)
+    if form == "angle":  # direction(): (cos, -sin), times the length
+        ca, cb, sign = np.cos(values), np.sin(values), -1.0
+        k0 = k1 = _carray(scale, np.float64)
+    else:
+        ca, cb, sign = values, values, 1.0
+        k0, k1 = np.ascontiguousarray(scale[:, 0]), np.ascontiguousarray(scale[:, 1])
+    x = np.empty(n * n_b)
+    q = np.empty(n * n_b)
+    kernels[9](ca, cb, sign, k0, k1, own0, own1, ch0, ch1, _carray(leaf, np.bool_), k,
+               _carray(radii, np.float64), cum, 0, cum.shape[2], bool(caps), int(a), m_base,
+               i_base, x, q)
+    return (np.exp(x) * q).reshape(n, n_b)
+
+
 def pose_similarity(root, angles, foreshortening, spread, lengths, shoulder, hip, segments,
                     radii, cum, a, m_base, i_base, *, rows, caps: bool = True) -> np.ndarray:
     """:func:`span_similarity` of whole candidate poses (:func:`pose_joints_batch`).
@@ -829,6 +891,7 @@ __all__ = [
     "direction",
     "draw_pose",
     "draw_segments",
+    "group_similarity",
     "group_tables",
     "image_angle",
     "limb_similarity",

@@ -197,6 +197,13 @@ def interval_search(
     return SearchResult(best, best_score, runner, int(values.size), iterations)
 
 
+def _as_shape(x, shape) -> np.ndarray:
+    """``x`` as a float array of ``shape`` (``np.broadcast_to`` only when needed)."""
+    if isinstance(x, np.ndarray) and x.shape == shape and x.dtype == np.float64:
+        return x
+    return np.broadcast_to(np.asarray(x, dtype=float), shape)
+
+
 def interval_search_many(
     score: Callable[[np.ndarray], np.ndarray],
     lo,
@@ -230,16 +237,16 @@ def interval_search_many(
     shape = np.broadcast_shapes(*(np.shape(x) for x in (lo, hi, start, interval, prefer)
                                   if x is not None))
     shape = shape if shape else (1,)
-    lo = np.broadcast_to(np.asarray(lo, dtype=float), shape)
-    hi = np.broadcast_to(np.asarray(hi, dtype=float), shape)
+    lo = _as_shape(lo, shape)
+    hi = _as_shape(hi, shape)
     if not np.all(hi > lo):
         raise ValueError("empty search interval")
     n_search = lo.size
     wrap = periodic is not None and np.all(hi - lo >= periodic - 1e-12)
-    width = hi - lo if interval is None else np.minimum(np.broadcast_to(interval, lo.shape),
+    width = hi - lo if interval is None else np.minimum(_as_shape(interval, lo.shape),
                                                         hi - lo)
     width = np.array(width, dtype=float)
-    best = 0.5 * (lo + hi) if start is None else np.array(np.broadcast_to(start, lo.shape),
+    best = 0.5 * (lo + hi) if start is None else np.array(_as_shape(start, lo.shape),
                                                           dtype=float)
     if not wrap:
         best = np.clip(best, lo, hi)
@@ -256,7 +263,7 @@ def interval_search_many(
         gap_period = float(periodic) if periodic is not None else 0.0
         lo_c, hi_c = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
         pref = np.full(n_search, np.nan) if prefer is None else np.array(
-            np.broadcast_to(prefer, lo.shape), dtype=float)
+            _as_shape(prefer, lo.shape), dtype=float)
         best = np.ascontiguousarray(best, dtype=float)
     while True:
         if kernels is not None:  # the same floats as the numpy code below
