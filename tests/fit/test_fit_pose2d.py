@@ -164,3 +164,16 @@ def test_spread_value_fixes_the_spread():
     mask, _ = _figure([90, 90, 250, 290, 270, 270, 266, 274, 274, 266], spread=1.0)
     assert fit_pose(mask).spread > 0.6
     assert fit_pose(mask, spread_value=0.2).spread == pytest.approx(0.2)
+
+
+def test_into_range_scalar_path_equals_array_path():
+    from vidcap.fit.pose2d import _into_range
+
+    rng = np.random.default_rng(0)
+    angles = rng.uniform(-20, 20, 500)
+    lo = rng.uniform(-4, 4, 500)
+    hi = lo + rng.uniform(0.1, 7, 500)
+    want = _into_range(angles, lo, hi)
+    got = np.array([_into_range(a, b, c) for a, b, c in zip(angles, lo, hi, strict=True)])
+    np.testing.assert_array_equal(got, want)
+    assert np.all((want >= lo - 1e-12) & (want <= hi + 1e-12))

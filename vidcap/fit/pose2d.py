@@ -149,6 +149,13 @@ _REST_DEG = np.array([90, 90, 270, 270, 270, 270, 270, 270, 270, 270], dtype=flo
 
 def _into_range(angle, lo, hi):
     """The representative of ``angle`` (mod 2 pi) in ``[lo, hi]``, or the nearer bound."""
+    if np.ndim(angle) == 0 and np.ndim(lo) == 0 and np.ndim(hi) == 0:
+        # scalars: Python's float % is numpy's np.mod (the same remainder), cheaper
+        lo, hi = float(lo), float(hi)
+        x = lo + (float(angle) - lo) % TWO_PI
+        if x > hi:
+            return lo if (lo + TWO_PI - x) < (x - hi) else hi
+        return x
     x = lo + np.mod(np.asarray(angle, dtype=float) - lo, TWO_PI)
     beyond = x > hi
     nearer_lo = (lo + TWO_PI - x) < (x - hi)

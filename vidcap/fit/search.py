@@ -30,6 +30,7 @@ Deviations from the pseudo-code, where it does not do what the text says:
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -131,11 +132,12 @@ def interval_search(
         raise ValueError(f"empty search interval [{lo}, {hi}]")
     if divisions < 2 or not min_step > 0:
         raise ValueError("need divisions >= 2 and min_step > 0")
+    lo, hi = float(lo), float(hi)  # Python floats: the same arithmetic, less overhead
     wrap = periodic is not None and hi - lo >= periodic - 1e-12
     width = float(hi - lo if interval is None else min(interval, hi - lo))
     best = 0.5 * (lo + hi) if start is None else float(start)
     if not wrap:
-        best = float(np.clip(best, lo, hi))
+        best = min(max(best, lo), hi)  # np.clip of a scalar
     step = width / divisions
     first_step = step
     best_score = -np.inf
@@ -149,7 +151,7 @@ def interval_search(
         begin, end = best - width / 2, best + width / 2
         if not wrap:
             begin, end = max(begin, lo), min(end, hi)
-        n = int(np.floor((end - begin) / step + 1e-9)) + 1
+        n = math.floor((end - begin) / step + 1e-9) + 1
         warm = iterations == 0 and start is not None
         # a warm start is itself a candidate, so a search never ends worse than it
         # began (beyond the seed, whose grid may step over the previous value)
@@ -178,8 +180,9 @@ def interval_search(
             if periodic is not None:
                 gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
             k = int(np.flatnonzero(top)[np.argmin(gap)])
-        if s[k] > best_score + 1e-12:
-            best_score, best = float(s[k]), float(cand[k])
+        sk = float(s[k])
+        if sk > best_score + 1e-12:
+            best_score, best = sk, float(cand[k])
         width = 2 * width / divisions
         step = 2 * step / divisions
         if not width > min_step:
