@@ -114,14 +114,14 @@ from vidcap.fit.raster import (
     direction,
     draw_pose,
     draw_segments,
-    group_similarity,
+    group_scorer,
     group_tables,
     image_angle,
-    limb_similarity,
+    limb_scorer,
     model_dimensions,
     normalise_mask,
     pose_joints_batch,
-    pose_similarity,
+    pose_scorer,
     row_prefix_sums,
     shift_overlaps,
     span_counts,
@@ -402,18 +402,24 @@ class _Fitter:
 
         limb = getattr(ends, "limb", None)
         pose = getattr(ends, "pose", None)
+        # candidate end points built inside the compiled pass where possible
+        if limb is not None:
+            fast = limb_scorer(*limb, radii, cum, a, m_base, i_base, rows=(r0, r1),
+                               caps=self.caps)
+        elif pose is not None:
+            poses = pose_scorer(self.L, self.shoulder, self.hip, moving, radii, cum, a, m_base,
+                                i_base, rows=(r0, r1), caps=self.caps)
+
+            def fast(values):
+                return poses(*pose(values))
+        else:
+            fast = None
 
         def score(values):
             self.batches += 1
             values = np.asarray(values, dtype=float)
-            # candidate end points built inside the compiled pass where possible
-            if limb is not None:
-                return limb_similarity(values, *limb, radii, cum, a, m_base, i_base,
-                                       rows=(r0, r1), caps=self.caps)
-            if pose is not None:
-                return pose_similarity(*pose(values), self.L, self.shoulder, self.hip, moving,
-                                       radii, cum, a, m_base, i_base, rows=(r0, r1),
-                                       caps=self.caps)
+            if fast is not None:
+                return fast(values)
             p0, p1 = ends(values)
             n_b = len(p0)
             if n_b not in tables:
@@ -584,10 +590,12 @@ class _Fitter:
         else:
             form, scale = "ratio", direction(self.angles[segs]) * length[:, None]
 
+        scores = group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
+                              i_base, caps=self.caps)
+
         def score(values):  # values (N, B)
             self.batches += 1
-            return group_similarity(values, form, scale, own0, own1, ch0, ch1, leaf, radii,
-                                    cum, a, m_base, i_base, caps=self.caps)
+            return scores(values)
 
         if kind == "angle":
             lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]

@@ -652,26 +652,53 @@ def limb_similarity(values, form, scale, start, old_end, p0s, p1s, own, radii, c
     -------
     numpy.ndarray, shape (B,)
     """
+    return limb_scorer(form, scale, start, old_end, p0s, p1s, own, radii, cum, a, m_base,
+                       i_base, rows=rows, caps=caps)(values)
+
+
+def limb_scorer(form, scale, start, old_end, p0s, p1s, own, radii, cum, a, m_base, i_base, *,
+                rows, caps: bool = True):
+    """:func:`limb_similarity` with everything but ``values`` bound once per search.
+
+    Returns
+    -------
+    callable
+        ``values (B,) -> S (B,)``.
+    """
     kernels = _kernels()
     y0, y1 = max(0, int(rows[0])), min(cum.shape[2], int(rows[1]))
-    values = np.asarray(values, dtype=np.float64)
-    if kernels is None or y1 <= y0 or len(values) == 0:
-        vec = direction(values) * scale if form == "angle" else values[:, None] * scale
-        delta = start + vec - old_end  # (B, 2)
-        p0 = p0s[None] + delta[:, None] * ~own[None, :, None]
-        p1 = p1s[None] + delta[:, None]
-        return span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=rows,
-                               table=np.zeros(len(values), np.int64), caps=caps)
-    if form == "angle":  # direction(): (cos, -sin), times the length
-        ca, cb, sign, k0, k1 = np.cos(values), np.sin(values), -1.0, scale, scale
-    else:
-        ca, cb, sign, k0, k1 = values, values, 1.0, scale[0], scale[1]
-    x = np.empty(len(values))
-    q = np.empty(len(values))
-    kernels[7](ca, cb, sign, float(k0), float(k1), start, old_end, p0s, p1s,
-               (~own).astype(np.float64), radii, cum, y0, y1, bool(caps), int(a), m_base, i_base,
-               x, q)
-    return np.exp(x) * q
+    if kernels is None or y1 <= y0:
+        def numpy_path(values):
+            values = np.asarray(values, dtype=np.float64)
+            vec = direction(values) * scale if form == "angle" else values[:, None] * scale
+            delta = start + vec - old_end  # (B, 2)
+            p0 = p0s[None] + delta[:, None] * ~own[None, :, None]
+            p1 = p1s[None] + delta[:, None]
+            return span_similarity(p0, p1, radii, cum, a, m_base, i_base, rows=rows,
+                                   table=np.zeros(len(values), np.int64), caps=caps)
+
+        return numpy_path
+    angle = form == "angle"
+    sign, k0, k1 = (-1.0, float(scale), float(scale)) if angle else (1.0, float(scale[0]),
+                                                                      float(scale[1]))
+    rest = (start, old_end, _carray(p0s, np.float64), _carray(p1s, np.float64),
+            (~np.asarray(own, bool)).astype(np.float64), _carray(radii, np.float64), cum,
+            y0, y1, bool(caps), int(a), m_base, i_base)
+    kernel = kernels[7]
+
+    def compiled(values):
+        values = _carray(values, np.float64)
+        x = np.empty(len(values))
+        q = np.empty(len(values))
+        if angle:  # direction(): (cos, -sin), times the length
+            kernel(np.cos(values), np.sin(values), sign, k0, k1, *rest, x, q)
+        else:
+            kernel(values, values, sign, k0, k1, *rest, x, q)
+        np.exp(x, out=x)
+        x *= q
+        return x
+
+    return compiled
 
 
 def group_similarity(values, form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
@@ -701,39 +728,68 @@ def group_similarity(values, form, scale, own0, own1, ch0, ch1, leaf, radii, cum
     -------
     numpy.ndarray, shape (N, B)
     """
-    n, n_b = values.shape
-    k = radii.shape[1]
+    return group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
+                        i_base, caps=caps)(values)
+
+
+def group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base, i_base, *,
+                 caps: bool = True):
+    """:func:`group_similarity` with everything but ``values`` bound once per search.
+
+    Returns
+    -------
+    callable
+        ``values (N, B) -> S (N, B)``.
+    """
     kernels = _kernels()
-    if kernels is None or n_b == 0:
-        vec = (direction(values) * scale[:, None, None] if form == "angle"
-               else values[..., None] * scale[:, None, :])
-        end = own0[:, None] + vec  # (N, B, 2)
-        delta = end - own1[:, None]
-        is_leaf = leaf[:, None, None]
-        p0 = np.empty((n, n_b, k, 2))
-        p1 = np.empty((n, n_b, k, 2))
-        p0[:, :, 0] = own0[:, None]
-        p1[:, :, 0] = end
-        if k == 2:
-            p0[:, :, 1] = np.where(is_leaf, own0[:, None], ch0[:, None] + delta)
-            p1[:, :, 1] = np.where(is_leaf, end, ch1[:, None] + delta)
-        s = span_similarity(p0.reshape(n * n_b, k, 2), p1.reshape(n * n_b, k, 2), radii, cum,
-                            a, m_base, i_base, rows=(0, cum.shape[2]),
-                            table=np.repeat(np.arange(n), n_b), caps=caps)
-        return s.reshape(n, n_b)
-    values = _carray(values, np.float64)
-    if form == "angle":  # direction(): (cos, -sin), times the length
-        ca, cb, sign = np.cos(values), np.sin(values), -1.0
-        k0 = k1 = _carray(scale, np.float64)
+    k = radii.shape[1]
+    if kernels is None:
+        def numpy_path(values):
+            n, n_b = values.shape
+            vec = (direction(values) * scale[:, None, None] if form == "angle"
+                   else values[..., None] * scale[:, None, :])
+            end = own0[:, None] + vec  # (N, B, 2)
+            delta = end - own1[:, None]
+            is_leaf = leaf[:, None, None]
+            p0 = np.empty((n, n_b, k, 2))
+            p1 = np.empty((n, n_b, k, 2))
+            p0[:, :, 0] = own0[:, None]
+            p1[:, :, 0] = end
+            if k == 2:
+                p0[:, :, 1] = np.where(is_leaf, own0[:, None], ch0[:, None] + delta)
+                p1[:, :, 1] = np.where(is_leaf, end, ch1[:, None] + delta)
+            s = span_similarity(p0.reshape(n * n_b, k, 2), p1.reshape(n * n_b, k, 2), radii,
+                                cum, a, m_base, i_base, rows=(0, cum.shape[2]),
+                                table=np.repeat(np.arange(n), n_b), caps=caps)
+            return s.reshape(n, n_b)
+
+        return numpy_path
+    angle = form == "angle"
+    if angle:
+        sign, k0 = -1.0, _carray(scale, np.float64)
+        k1 = k0
     else:
-        ca, cb, sign = values, values, 1.0
+        sign = 1.0
         k0, k1 = np.ascontiguousarray(scale[:, 0]), np.ascontiguousarray(scale[:, 1])
-    x = np.empty(n * n_b)
-    q = np.empty(n * n_b)
-    kernels[9](ca, cb, sign, k0, k1, own0, own1, ch0, ch1, _carray(leaf, np.bool_), k,
-               _carray(radii, np.float64), cum, 0, cum.shape[2], bool(caps), int(a), m_base,
-               i_base, x, q)
-    return (np.exp(x) * q).reshape(n, n_b)
+    rest = (_carray(own0, np.float64), _carray(own1, np.float64), _carray(ch0, np.float64),
+            _carray(ch1, np.float64), _carray(leaf, np.bool_), k, _carray(radii, np.float64),
+            cum, 0, cum.shape[2], bool(caps), int(a), m_base, i_base)
+    kernel = kernels[9]
+
+    def compiled(values):
+        values = _carray(values, np.float64)
+        n, n_b = values.shape
+        x = np.empty(n * n_b)
+        q = np.empty(n * n_b)
+        if angle:  # direction(): (cos, -sin), times the length
+            kernel(np.cos(values), np.sin(values), sign, k0, k1, *rest, x, q)
+        else:
+            kernel(values, values, sign, k0, k1, *rest, x, q)
+        np.exp(x, out=x)
+        x *= q
+        return x.reshape(n, n_b)
+
+    return compiled
 
 
 def pose_similarity(root, angles, foreshortening, spread, lengths, shoulder, hip, segments,
@@ -753,26 +809,51 @@ def pose_similarity(root, angles, foreshortening, spread, lengths, shoulder, hip
     -------
     numpy.ndarray, shape (B,)
     """
+    return pose_scorer(lengths, shoulder, hip, segments, radii, cum, a, m_base, i_base,
+                       rows=rows, caps=caps)(root, angles, foreshortening, spread)
+
+
+def pose_scorer(lengths, shoulder, hip, segments, radii, cum, a, m_base, i_base, *, rows,
+                caps: bool = True):
+    """:func:`pose_similarity` with everything but the poses bound once per search.
+
+    Returns
+    -------
+    callable
+        ``(root, angles, foreshortening, spread) -> S (B,)``.
+    """
     kernels = _kernels()
-    n_b = len(root)
+    segments = np.asarray(segments, dtype=np.int64)
     y0, y1 = max(0, int(rows[0])), min(cum.shape[2], int(rows[1]))
-    if kernels is None or y1 <= y0 or n_b == 0:
-        jb = pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, hip)
-        return span_similarity(_carray(jb[:, _PROX[segments]], np.float64),
-                               _carray(jb[:, _DIST[segments]], np.float64), radii, cum, a,
-                               m_base, i_base, rows=rows, table=np.zeros(n_b, np.int64),
-                               caps=caps)
-    angles = _carray(angles, np.float64)
-    c, s = np.cos(angles), np.sin(angles)  # as pose_joints_batch
-    left = angles[:, _SEG["torso"]] + np.pi / 2
-    x = np.empty(n_b)
-    q = np.empty(n_b)
-    kernels[8](_carray(root, np.float64), c, s, np.cos(left), np.sin(left),
-               _carray(foreshortening, np.float64), _carray(spread, np.float64),
-               _carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES,
-               _PROX[segments].astype(np.int64), _DIST[segments].astype(np.int64), radii, cum,
-               y0, y1, bool(caps), int(a), m_base, i_base, x, q)
-    return np.exp(x) * q
+    if kernels is None or y1 <= y0:
+        def numpy_path(root, angles, foreshortening, spread):
+            jb = pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, hip)
+            return span_similarity(_carray(jb[:, _PROX[segments]], np.float64),
+                                   _carray(jb[:, _DIST[segments]], np.float64), radii, cum, a,
+                                   m_base, i_base, rows=rows,
+                                   table=np.zeros(len(root), np.int64), caps=caps)
+
+        return numpy_path
+    head = (_carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES,
+            _PROX[segments].astype(np.int64), _DIST[segments].astype(np.int64),
+            _carray(radii, np.float64), cum, y0, y1, bool(caps), int(a), m_base, i_base)
+    kernel = kernels[8]
+    torso = _SEG["torso"]
+
+    def compiled(root, angles, foreshortening, spread):
+        angles = _carray(angles, np.float64)
+        n_b = len(angles)
+        left = angles[:, torso] + np.pi / 2  # as pose_joints_batch
+        x = np.empty(n_b)
+        q = np.empty(n_b)
+        kernel(_carray(root, np.float64), np.cos(angles), np.sin(angles), np.cos(left),
+               np.sin(left), _carray(foreshortening, np.float64), _carray(spread, np.float64),
+               *head, x, q)
+        np.exp(x, out=x)
+        x *= q
+        return x
+
+    return compiled
 
 
 def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
@@ -891,14 +972,17 @@ __all__ = [
     "direction",
     "draw_pose",
     "draw_segments",
+    "group_scorer",
     "group_similarity",
     "group_tables",
     "image_angle",
+    "limb_scorer",
     "limb_similarity",
     "model_dimensions",
     "normalise_mask",
     "pose_joints",
     "pose_joints_batch",
+    "pose_scorer",
     "pose_similarity",
     "row_prefix_sums",
     "segment_spans",
