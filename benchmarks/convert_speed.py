@@ -3,8 +3,9 @@
 A walk is rendered with vidcap.synth (300 frames, 640x480, 30 fps) into a temporary
 folder. Measured in the same run: decode only (PyAV, every frame), the background
 plate estimation, and the conversion given that plate (silhouettes, 2D pose, 3D
-lift, motion, BVH write; no cache), with its per-stage times. Target: >= 100 fps
-excluding plate estimation.
+lift, motion, BVH write; no cache), with its per-stage times, with the 2D fit on
+vidcap's default number of processes (``--jobs``) and again on one (``jobs=1``).
+Wall-clock times. Target: >= 100 fps excluding plate estimation.
 
 Run:  python benchmarks/convert_speed.py [--frames 300]
 """
@@ -23,6 +24,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vidcap.background import estimate_background  # noqa: E402
+from vidcap.fit.parallel import default_jobs  # noqa: E402
 from vidcap.pipeline import convert  # noqa: E402
 from vidcap.synth import synth_clip  # noqa: E402
 from vidcap.video import iter_frames  # noqa: E402
@@ -31,6 +33,8 @@ from vidcap.video import iter_frames  # noqa: E402
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--jobs", type=int, default=None,
+                    help="fitting processes (default: vidcap's default, the usable CPUs)")
     args = ap.parse_args(argv)
     import cv2
 
@@ -51,17 +55,25 @@ def main(argv=None):
         cv2.imwrite(str(d / "plate.png"), plate.plate)
         t0 = time.perf_counter()
         res = convert(video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
-                      progress=False)
+                      progress=False, jobs=args.jobs)
         t_conv = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        serial = convert(video, d / "walk1.bvh", background=d / "plate.png", cache_dir=None,
+                         progress=False, jobs=1)
+        t_serial = time.perf_counter() - t0
+    jobs = default_jobs() if args.jobs is None else args.jobs
     rows = [("decode only", t_decode), ("plate estimation", t_plate),
-            ("convert given the plate", t_conv)]
+            (f"convert given the plate ({jobs} fitting processes)", t_conv)]
     rows += [(f"  stage: {k}", v) for k, v in res.timings.items() if k != "plate"]
+    rows += [("convert given the plate (1 process, jobs=1)", t_serial)]
+    rows += [(f"  stage: {k}", v) for k, v in serial.timings.items() if k != "plate"]
     print(f"{n} frames, 640x480")
     print("step | seconds | fps | x decode time")
     print("--- | --- | --- | ---")
     for name, t in rows:
         print(f"{name} | {t:.2f} | {n / t:.0f} | {t / t_decode:.1f}")
-    print(f"\nconvert excluding plate estimation: {n / t_conv:.0f} fps (target >= 100)")
+    print(f"\nconvert excluding plate estimation: {n / t_conv:.0f} fps with {jobs} fitting "
+          f"processes, {n / t_serial:.0f} fps with one (target >= 100)")
 
 
 if __name__ == "__main__":

@@ -321,3 +321,28 @@ def test_group_similarity_compiled_equals_numpy_path(form, monkeypatch):
     want = run()
     assert got.shape == (n, b) and np.ptp(want) > 0
     np.testing.assert_array_equal(got, want)
+
+
+def test_group_tables_reach_rows_give_the_same_counts(monkeypatch):
+    """Tables filled only in the rows a search reaches: same counts, zeros elsewhere."""
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(10)
+    h, w = 30, 20
+    masks = rng.random((10, h, w)) < 0.3
+    sil = rng.random((h, w)) < 0.5
+    segs, child = np.array([2, 6]), np.array([3, 6])
+    rows = np.array([[5, 17], [12, 40]])
+    for (lo, hi), s, c in zip(rows, segs, child, strict=True):  # the pairs stay inside
+        for k in {s, c}:
+            masks[k, :lo] = masks[k, hi:] = False
+    full = raster.group_tables(masks, segs, child, sil)
+    got = raster.group_tables(masks, segs, child, sil, rows=rows)
+    np.testing.assert_array_equal(got[1], full[1])
+    np.testing.assert_array_equal(got[2], full[2])
+    np.testing.assert_array_equal(got[0][0, :, 5:17], full[0][0, :, 5:17])
+    assert not got[0][0, :, :5].any() and not got[0][0, :, 17:].any()
+    np.testing.assert_array_equal(got[0][1, :, 12:], full[0][1, :, 12:])
+    monkeypatch.setattr(raster, "_kernels", lambda: None)
+    for g, x in zip(got, raster.group_tables(masks, segs, child, sil, rows=rows), strict=True):
+        np.testing.assert_array_equal(g, x)

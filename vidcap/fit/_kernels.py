@@ -428,13 +428,16 @@ def search_runner(values, scores, best, period, far):
 
 
 @numba.njit(cache=True, nogil=True)
-def group_tables(masks, segs, child, sil, cum, m_base, i_base):
+def group_tables(masks, segs, child, sil, rows, cum, m_base, i_base):
     """Per searched segment n: the model without segs[n] (and child[n]) as row sums.
 
     masks (10, h, w) bool: every segment drawn; a pixel is in base n if more segments
     cover it than the pair's own (child[n] == segs[n]: a leaf, counted once).
     cum[n, 0] / cum[n, 1]: row prefix sums of pixels not in base n / of those on the
-    silhouette; m_base[n], i_base[n]: base n's pixels / those on the silhouette.
+    silhouette, filled for rows rows[n, 0] <= y < rows[n, 1] only (the rows search
+    n's candidates can reach; the pair covers nothing outside them, so there base n
+    is every covered pixel); m_base[n], i_base[n]: base n's pixels / those on the
+    silhouette, over the whole image.
     """
     n_s, h, w = masks.shape
     cover = np.zeros((h, w), np.int64)
@@ -443,12 +446,26 @@ def group_tables(masks, segs, child, sil, cum, m_base, i_base):
             for x in range(w):
                 if masks[k, y, x]:
                     cover[y, x] += 1
+    covered = np.zeros(h, np.int64)  # per row: covered pixels, and those on the silhouette
+    covered_sil = np.zeros(h, np.int64)
+    for y in range(h):
+        for x in range(w):
+            if cover[y, x] > 0:
+                covered[y] += 1
+                if sil[y, x]:
+                    covered_sil[y] += 1
+    all_m = covered.sum()
+    all_i = covered_sil.sum()
     for n in range(segs.shape[0]):
         s, c = segs[n], child[n]
         pair = np.int64(c != s)
-        m = 0
-        i = 0
-        for y in range(h):
+        y0 = max(0, min(h, rows[n, 0]))
+        y1 = max(y0, min(h, rows[n, 1]))
+        m = all_m
+        i = all_i
+        for y in range(y0, y1):
+            m -= covered[y]
+            i -= covered_sil[y]
             c0 = 0
             c1 = 0
             for x in range(w):  # branch-free: masks are noisy at their edges

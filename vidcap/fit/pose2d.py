@@ -577,9 +577,15 @@ class _Fitter:
         j = self.joints()
         child = np.array([DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else s for s in segs])
         pair = np.stack([segs, child], 1)  # (N, 2); a leaf is paired with itself
-        cum, m_base, i_base = group_tables(self._all_segment_masks(j), segs, child, self.sil)
-        a = int(self.sil_rows[-1])
         own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
+        # every candidate of search n (and the pair as it is) lies within the segment's
+        # and its child's full lengths of the segment's proximal joint (angles turn it,
+        # ratios are at most 1): its table needs only those rows (+ margins)
+        reach = self.L[segs] + np.where(child != segs, self.L[child], 0.0) + self.R.max() + 4
+        rows = np.stack([np.floor(own0[:, 1] - reach), np.ceil(own0[:, 1] + reach) + 1], 1)
+        cum, m_base, i_base = group_tables(self._all_segment_masks(j), segs, child, self.sil,
+                                           rows=rows.astype(np.int64))
+        a = int(self.sil_rows[-1])
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
         leaf = child == segs
         k = 1 if bool(leaf.all()) else 2

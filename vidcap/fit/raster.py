@@ -896,7 +896,7 @@ def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
     return cum, int(np.count_nonzero(base[r0:r1])), int(np.count_nonzero((base & sil)[r0:r1]))
 
 
-def group_tables(masks, segs, child, sil):
+def group_tables(masks, segs, child, sil, *, rows=None):
     """:func:`base_tables` for a group search: one table per segment searched.
 
     Parameters
@@ -908,6 +908,10 @@ def group_tables(masks, segs, child, sil):
         a leaf, no child).
     sil : numpy.ndarray, shape (h, w), bool
         The silhouette.
+    rows : numpy.ndarray of int, shape (N, 2), optional
+        Fill table n only for rows ``rows[n, 0] <= y < rows[n, 1]`` (zeros elsewhere):
+        the rows search n's candidates can reach. Segment ``segs[n]`` and its child
+        must cover no pixel outside them. Default: every row.
 
     Returns
     -------
@@ -915,7 +919,7 @@ def group_tables(masks, segs, child, sil):
         Per segment, row prefix sums of the pixels outside the model without that
         segment and child (channel 0), and of those on the silhouette (channel 1).
     m_base, i_base : numpy.ndarray, shape (N,), int64
-        Pixels of each such model, and of those on the silhouette.
+        Pixels of each such model, and of those on the silhouette (whole image).
     """
     n = len(segs)
     h, w = sil.shape
@@ -923,11 +927,13 @@ def group_tables(masks, segs, child, sil):
     kernels = _kernels()
     segs = np.asarray(segs, dtype=np.int64)
     child = np.asarray(child, dtype=np.int64)
+    rows = (np.tile(np.array([0, h], np.int64), (n, 1)) if rows is None
+            else np.asarray(rows, dtype=np.int64))
     if kernels is not None:
         m_base = np.zeros(n, np.int64)
         i_base = np.zeros(n, np.int64)
-        kernels[5](_carray(masks, np.bool_), segs, child, _carray(sil, np.bool_), cum,
-                   m_base, i_base)
+        kernels[5](_carray(masks, np.bool_), segs, child, _carray(sil, np.bool_),
+                   _carray(rows, np.int64), cum, m_base, i_base)
         return cum, m_base, i_base
     # pixels covered by more segments than the pair's own
     own = masks[segs].astype(np.uint8)
@@ -935,6 +941,9 @@ def group_tables(masks, segs, child, sil):
     base = masks.sum(axis=0, dtype=np.uint8)[None] > own  # (N, h, w)
     np.cumsum(~base, axis=2, out=cum[:, 0, :, 1:])
     np.cumsum(sil & ~base, axis=2, out=cum[:, 1, :, 1:])
+    y = np.arange(h)
+    outside = (y < rows[:, :1]) | (y >= rows[:, 1:])  # (N, h)
+    cum[np.broadcast_to(outside[:, None], cum.shape[:3])] = 0
     return (cum, np.count_nonzero(base, axis=(1, 2)).astype(np.int64),
             np.count_nonzero(base & sil, axis=(1, 2)).astype(np.int64))
 

@@ -204,6 +204,8 @@ def _as_shape(x, shape) -> np.ndarray:
     """``x`` as a float array of ``shape`` (``np.broadcast_to`` only when needed)."""
     if isinstance(x, np.ndarray) and x.shape == shape and x.dtype == np.float64:
         return x
+    if isinstance(x, (float, int)):
+        return np.full(shape, float(x))
     return np.broadcast_to(np.asarray(x, dtype=float), shape)
 
 
