@@ -215,6 +215,12 @@ def test_base_tables_compiled_and_numpy_paths_agree_with_drawn_model(caps, monke
         np.testing.assert_array_equal(cum[0], want)
         assert m == np.count_nonzero(model[4:25]) > 0
         assert i == np.count_nonzero((model & sil)[4:25])
+        # the table only in the rows a search reaches; the counts still over all rows
+        part, m2, i2 = raster.base_tables(p0, p1, radii, sil, rows=(4, 25), reach=(9, 17),
+                                          sil_cum=raster.row_prefix_sums(sil), caps=caps)
+        np.testing.assert_array_equal(part[0][:, 9:17], want[:, 9:17])
+        assert not part[0][:, :9].any() and not part[0][:, 17:].any()
+        assert (m2, i2) == (m, i)
 
 
 def test_group_tables_compiled_and_numpy_paths_agree(monkeypatch):

@@ -312,41 +312,79 @@ def joints(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, ord
 
 
 @numba.njit(cache=True, nogil=True)
-def base_tables(p0, p1, radii, sil, y0, y1, caps, cum):
+def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
     """Row prefix sums of the pixels outside a drawn model, and on the silhouette.
 
     The model is the union of segments p0, p1 (K, 2), radii (K,), exactly the pixels
-    :func:`draw` sets; for rows y0 <= y < y1: cum[0, y, x] counts pixels of
-    row y left of x not in the model, cum[1, y, x] those also on the silhouette
-    (h, w) bool. Returns (model pixels, model pixels on the silhouette) in those rows.
+    :func:`draw` sets; for rows f0 <= y < f1 (within y0..y1): cum[0, y, x] counts
+    pixels of row y left of x not in the model, cum[1, y, x] those also on the
+    silhouette (h, w) bool (sil_cum (h, w + 1): its row prefix sums). Returns (model
+    pixels, model pixels on the silhouette) in rows y0 <= y < y1 (outside f0..f1
+    counted from the merged spans, without visiting pixels).
     """
     n_k = p0.shape[0]
     w = sil.shape[1]
-    cov = np.zeros(w, np.bool_)
+    cov = np.zeros(w, np.int64)
     m = 0
     i = 0
     setup = np.empty((n_k, 9))
+    reach = np.empty((n_k, 2), np.int64)
+    first = np.empty(n_k, np.int64)
+    last = np.empty(n_k, np.int64)
+    one = np.empty(1)
     for k in range(n_k):
         span_setup(p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], radii[k], setup[k])
+        one[0] = radii[k]
+        reach[k, 0], reach[k, 1] = row_range(p0[k:k + 1].reshape(1, 1, 2),
+                                             p1[k:k + 1].reshape(1, 1, 2), one, 0, y0, y1)
     for y in range(y0, y1):
-        cov[:] = False
+        table = f0 <= y < f1
+        if table:
+            cov[:] = 0
+        n = 0
         for k in range(n_k):
+            if y < reach[k, 0] or y >= reach[k, 1]:
+                continue  # the segment does not reach this row
             lo, hi = span_row(setup[k], p1[k, 0], p1[k, 1], float(y), caps)
             f = int(min(max(lo, 0.0), w))
             e = int(min(max(hi + 1.0, float(f)), w))
-            for x in range(f, e):
-                cov[x] = True
+            if e <= f:
+                continue
+            if table:
+                for x in range(f, e):
+                    cov[x] = 1
+                continue
+            j = n  # insertion sort by first column, then merge (as count_one)
+            while j > 0 and first[j - 1] > f:
+                first[j] = first[j - 1]
+                last[j] = last[j - 1]
+                j -= 1
+            first[j] = f
+            last[j] = e
+            n += 1
+        if not table:
+            if n == 0:
+                continue
+            s, e = first[0], last[0]
+            for k in range(1, n + 1):
+                if k < n and first[k] <= e:
+                    if last[k] > e:
+                        e = last[k]
+                    continue
+                m += e - s
+                i += sil_cum[y, e] - sil_cum[y, s]
+                if k < n:
+                    s, e = first[k], last[k]
+            continue
         c0 = 0
         c1 = 0
-        for x in range(w):
-            if cov[x]:
-                m += 1
-                if sil[y, x]:
-                    i += 1
-            else:
-                c0 += 1
-                if sil[y, x]:
-                    c1 += 1
+        for x in range(w):  # branch-free
+            on = np.int64(sil[y, x])
+            out = 1 - cov[x]
+            m += cov[x]
+            i += cov[x] & on
+            c0 += out
+            c1 += out & on
             cum[0, y, x + 1] = c0
             cum[1, y, x + 1] = c1
     return m, i

@@ -392,15 +392,22 @@ class _Fitter:
         j = self.joints()
         # the still segments, drawn once per search (not per candidate): row prefix
         # sums of the pixels a candidate may add to the model (no masks per candidate)
+        limb = getattr(ends, "limb", None)
+        reach = None
+        if limb is not None:
+            # a limb's candidates stay within its moving segments' full lengths of the
+            # fixed proximal joint: the table is needed only in those rows
+            y, ext = limb[2][1], float(self.L[moving].sum() + self.R.max()) + 4.0
+            reach = (int(np.floor(y - ext)), int(np.ceil(y + ext)) + 1)
         cum, m_base, i_base = base_tables(j[_PROX[still]], j[_DIST[still]], self.R[still],
-                                          self.sil, rows=(r0, r1), caps=self.caps)
+                                          self.sil, rows=(r0, r1), reach=reach,
+                                          sil_cum=self._sil_cum[1], caps=self.caps)
         a = int(self.sil_rows[r1] - self.sil_rows[r0])
         radii = self.R[moving][None]  # (1, K): one table
         m_base = np.array([m_base], np.int64)
         i_base = np.array([i_base], np.int64)
         tables = {}
 
-        limb = getattr(ends, "limb", None)
         pose = getattr(ends, "pose", None)
         # candidate end points built inside the compiled pass where possible
         if limb is not None:

@@ -856,7 +856,8 @@ def pose_scorer(lengths, shoulder, hip, segments, radii, cum, a, m_base, i_base,
     return compiled
 
 
-def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
+def base_tables(p0, p1, radii, sil, *, rows=None, reach=None, sil_cum=None,
+                caps: bool = True):
     """What a search adds to: row prefix sums of the pixels outside a drawn model.
 
     Parameters
@@ -869,6 +870,12 @@ def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
         The silhouette.
     rows : (int, int), optional
         Only rows ``rows[0] <= y < rows[1]`` (default: all).
+    reach : (int, int), optional
+        Fill the table only in these rows (within ``rows``; zeros elsewhere): the
+        rows the search's candidates can reach. The counts still cover ``rows``.
+        Default: all of ``rows``.
+    sil_cum : numpy.ndarray, shape (h, w + 1), int32, optional
+        Row prefix sums of ``sil`` (:func:`row_prefix_sums`), if already at hand.
     caps : bool
         Capsules (true) or rectangles (false).
 
@@ -876,23 +883,28 @@ def base_tables(p0, p1, radii, sil, *, rows=None, caps: bool = True):
     -------
     cum : numpy.ndarray, shape (1, 2, h, w + 1), int32
         Channel 0: row prefix sums of pixels not in the model; channel 1: of those on
-        the silhouette (zero outside ``rows``); the table :func:`span_similarity` reads.
+        the silhouette (zero outside ``rows`` and ``reach``); the table
+        :func:`span_similarity` reads.
     m, i : int
         Model pixels, and model pixels on the silhouette, in ``rows``.
     """
     h, w = sil.shape
     r0, r1 = (0, h) if rows is None else (max(0, int(rows[0])), min(h, int(rows[1])))
+    f0, f1 = (r0, r1) if reach is None else (max(r0, int(reach[0])), min(r1, int(reach[1])))
     cum = np.zeros((1, 2, h, w + 1), dtype=np.int32)
     kernels = _kernels()
     p0 = _carray(p0, np.float64)
     p1 = _carray(p1, np.float64)
     if kernels is not None and r1 > r0:
-        m, i = kernels[4](p0, p1, _carray(radii, np.float64), _carray(sil, np.bool_), r0, r1,
+        sil = _carray(sil, np.bool_)
+        sil_cum = row_prefix_sums(sil) if sil_cum is None else _carray(sil_cum, np.int32)
+        m, i = kernels[4](p0, p1, _carray(radii, np.float64), sil, sil_cum, r0, r1, f0, f1,
                           bool(caps), cum[0])
         return cum, int(m), int(i)
     base = draw_segments(p0[None], p1[None], np.asarray(radii), (h, w), caps=caps)[0]
-    np.cumsum(~base[r0:r1], axis=1, out=cum[0, 0, r0:r1, 1:])
-    np.cumsum(sil[r0:r1] & ~base[r0:r1], axis=1, out=cum[0, 1, r0:r1, 1:])
+    if f1 > f0:
+        np.cumsum(~base[f0:f1], axis=1, out=cum[0, 0, f0:f1, 1:])
+        np.cumsum(sil[f0:f1] & ~base[f0:f1], axis=1, out=cum[0, 1, f0:f1, 1:])
     return cum, int(np.count_nonzero(base[r0:r1])), int(np.count_nonzero((base & sil)[r0:r1]))
 
 
