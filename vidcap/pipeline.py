@@ -355,7 +355,8 @@ def run(
         Worker processes for the 2D fit (default: the usable CPUs, at most
         :data:`vidcap.fit.parallel.MAX_JOBS`); 1 fits in this process. Clips of
         fewer than 120 frames are fitted in this process anyway
-        (:func:`vidcap.fit.parallel.fit_sequence_chunked`).
+        (:func:`vidcap.fit.parallel.fit_sequence_chunked`). The workers start, and
+        load the fit's compiled kernels, while the silhouettes are extracted.
 
     Returns
     -------
@@ -363,7 +364,7 @@ def run(
     """
     from vidcap.background import estimate_background, load_plate
     from vidcap.fileio import progress as bar
-    from vidcap.fit.parallel import chunk_bounds, default_jobs, fit_sequence_chunked
+    from vidcap.fit.parallel import FitPool, chunk_bounds, default_jobs, fit_sequence_chunked
     from vidcap.silhouette import extract_silhouettes
     from vidcap.video import probe
 
@@ -407,35 +408,45 @@ def run(
     t0 = time.perf_counter()
     k_sil = _key("silhouettes", ident, k_plate)
     hit = cache.load("silhouettes", k_sil)
-    if hit is None:
-        sil = extract_silhouettes(video, plate_model, progress=progress)
-        masks, bbox = sil.masks, sil.bbox
-        cache.save("silhouettes", k_sil, packed=np.packbits(masks, axis=-1),
-                   shape=np.array(masks.shape), bbox=bbox)
-    else:
-        shape = tuple(hit["shape"])
-        masks = np.unpackbits(hit["packed"], axis=-1, count=shape[-1]).astype(bool)
-        bbox = hit["bbox"]
-    timings["silhouettes"] = time.perf_counter() - t0
-    if len(masks) != info.n_frames and info.n_frames:
-        log(f"decoded {len(masks)} frames (container says {info.n_frames})")
-
-    # 3. 2D pose
-    t0 = time.perf_counter()
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
-    # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
-    chunks = chunk_bounds(len(masks), jobs)
-    k_pose = _key("pose2d", k_sil) if len(chunks) < 2 else _key("pose2d", k_sil, chunks)
-    hit = cache.load("pose2d", k_pose)
-    if hit is None:
-        def wrap(it, total):
-            return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
+    # the 2D fit's worker processes start now and load their compiled kernels while
+    # this process extracts the silhouettes (unless the fit is cached or serial)
+    expected = chunk_bounds(info.n_frames or 0, jobs)
+    pose_path = cache.path("pose2d", _key("pose2d", k_sil, expected))
+    pool = (FitPool(min(jobs, len(expected)))
+            if len(expected) > 1 and not (pose_path and pose_path.exists()) else None)
+    try:
+        if hit is None:
+            sil = extract_silhouettes(video, plate_model, progress=progress)
+            masks, bbox = sil.masks, sil.bbox
+            cache.save("silhouettes", k_sil, packed=np.packbits(masks, axis=-1),
+                       shape=np.array(masks.shape), bbox=bbox)
+        else:
+            shape = tuple(hit["shape"])
+            masks = np.unpackbits(hit["packed"], axis=-1, count=shape[-1]).astype(bool)
+            bbox = hit["bbox"]
+        timings["silhouettes"] = time.perf_counter() - t0
+        if len(masks) != info.n_frames and info.n_frames:
+            log(f"decoded {len(masks)} frames (container says {info.n_frames})")
 
-        pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap)
-        hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
-               "similarity": pose.similarity}
-        cache.save("pose2d", k_pose, **hit)
-    timings["pose2d"] = time.perf_counter() - t0
+        # 3. 2D pose
+        t0 = time.perf_counter()
+        # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
+        chunks = chunk_bounds(len(masks), jobs)
+        k_pose = _key("pose2d", k_sil) if len(chunks) < 2 else _key("pose2d", k_sil, chunks)
+        hit = cache.load("pose2d", k_pose)
+        if hit is None:
+            def wrap(it, total):
+                return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
+
+            pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, pool=pool)
+            hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
+                   "similarity": pose.similarity}
+            cache.save("pose2d", k_pose, **hit)
+        timings["pose2d"] = time.perf_counter() - t0
+    finally:
+        if pool is not None:
+            pool.close()
 
     # 4. 3D lift and 5. motion
     t0 = time.perf_counter()

@@ -119,3 +119,15 @@ def test_one_job_or_short_clip_is_the_serial_path(walk_masks):
     for jobs in (1, 4):
         got = fit_sequence_chunked(walk_masks[:12], jobs=jobs)
         np.testing.assert_array_equal(got.joints2d, want.joints2d)
+
+
+def test_a_pool_started_ahead_gives_the_same_fit(walk_masks):
+    from vidcap.fit.parallel import FitPool
+
+    want = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
+    with FitPool(2) as pool:
+        for _ in range(2):  # reusable
+            got = fit_sequence_chunked(walk_masks, min_chunk=20, pool=pool)
+            np.testing.assert_array_equal(got.joints2d, want.joints2d)
+            np.testing.assert_array_equal(got.similarity, want.similarity)
+    assert pool.executor._shutdown_thread

@@ -20,10 +20,11 @@ relabelled (:func:`reconcile_labels`) to whichever labelling agrees better with 
 chunk before it over the overlap frames, so labels follow limbs across the whole
 clip as in one serial pass.
 
-Workers are processes (``concurrent.futures.ProcessPoolExecutor``), forked on Linux
-so they start in milliseconds with the compiled kernels already loaded; masks are
-sent bit-packed. Each worker reports every frame it finishes, so one progress bar
-advances smoothly over the whole clip.
+Workers are processes (``concurrent.futures.ProcessPoolExecutor``), forked on Linux;
+masks are sent bit-packed. A :class:`FitPool` starts them ahead of the fit so they
+load the compiled kernels (~0.5-0.8 s of CPU each) while the caller does other
+work. Each worker reports every frame it finishes, so one progress bar advances
+smoothly over the whole clip.
 """
 
 from __future__ import annotations
@@ -145,16 +146,76 @@ def swap_labels(arrays: dict, swaps: dict) -> dict:
     return out
 
 
+def warm_up() -> None:
+    """Load the compiled kernels in this process by fitting a tiny synthetic figure.
+
+    Loading numba's cached kernels costs ~0.5-0.8 s of CPU per process: a
+    :class:`FitPool`'s workers do it as they start, while the parent is still busy
+    (e.g. extracting silhouettes), so their first chunk starts with the kernels loaded.
+    """
+    from vidcap.fit.raster import draw_pose, model_dimensions, pose_joints
+
+    lengths, radii, shoulder, hip = model_dimensions(60.0)
+    angles = np.deg2rad([90, 90, 250, 290, 280, 300, 260, 275, 285, 265])
+    frames = []
+    for dx in (0.0, 2.0):
+        j = pose_joints(np.array([40.0 + dx, 40.0]), angles, np.ones(10), 0.4, lengths,
+                        shoulder, hip)
+        frames.append(draw_pose(j, radii, (90, 80), caps=False))
+    fit_sequence(np.array(frames), reinit_every=0, spread_window=0)
+
+
 # ----------------------------------------------------------------------------- workers
 _QUEUE = None
 
 
-def _init_worker(q) -> None:
+def _init_worker(q, warm: bool = False) -> None:
     global _QUEUE
     _QUEUE = q
     # one core each: no BLAS or OpenMP threads competing with the other workers
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"
+    if warm:
+        warm_up()
+
+
+def _ready() -> bool:
+    return True
+
+
+class FitPool:
+    """Worker processes for :func:`fit_sequence_chunked`, started ahead of the fit.
+
+    The workers start (and load the compiled kernels, :func:`warm_up`) as soon as the
+    pool is created, so a caller can create it, do other work (the pipeline extracts
+    silhouettes) and then fit without waiting for the workers to get ready. Use as a
+    context manager; pass it as ``pool=`` to :func:`fit_sequence_chunked`.
+
+    Parameters
+    ----------
+    jobs : int
+        Worker processes.
+    """
+
+    def __init__(self, jobs: int):
+        self.jobs = max(1, int(jobs))
+        ctx = _context()
+        self.queue = ctx.Queue()
+        self.executor = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx,
+                                            initializer=_init_worker,
+                                            initargs=(self.queue, True))
+        for _ in range(self.jobs):  # start every worker now
+            self.executor.submit(_ready)
+
+    def __enter__(self) -> FitPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop the workers (waits for running chunks)."""
+        self.executor.shutdown(wait=True, cancel_futures=True)
 
 
 def _fit_chunk(packed: np.ndarray, width: int, skip: int, tracked: bool, kw: dict) -> dict:
@@ -180,7 +241,7 @@ def _context():
 
 def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True,
                          progress=None, overlap: int = 10, min_chunk: int = 60,
-                         **kw) -> Pose2D:
+                         pool: FitPool | None = None, **kw) -> Pose2D:
     """:func:`vidcap.fit.pose2d.fit_sequence` in chunks on ``jobs`` worker processes.
 
     Parameters
@@ -200,6 +261,9 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         of a serial pass).
     min_chunk : int
         Fewest output frames per chunk.
+    pool : FitPool, optional
+        Workers started beforehand (``jobs`` defaults to its size); default: a pool
+        made for this call.
     **kw
         Passed to ``fit_sequence`` (``reinit_every``, ``height``, ...).
 
@@ -210,19 +274,26 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     """
     masks = np.asarray(masks, dtype=bool)
     n = len(masks)
-    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    if jobs is None:
+        jobs = pool.jobs if pool is not None else default_jobs()
+    jobs = max(1, int(jobs))
     align = int(kw.get("reinit_every", 10)) or 1
     bounds = chunk_bounds(n, jobs, overlap=overlap if tracked else 0, align=align,
                           min_chunk=min_chunk)
     if jobs == 1 or len(bounds) < 2:
         return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
-    ctx = _context()
-    q = ctx.Queue()
+    own = pool is None
+    if own:
+        ctx = _context()
+        q = ctx.Queue()
+        executor = ProcessPoolExecutor(max_workers=min(jobs, len(bounds)), mp_context=ctx,
+                                       initializer=_init_worker, initargs=(q,))
+    else:
+        q, executor = pool.queue, pool.executor
     width = masks.shape[-1]
-    with ProcessPoolExecutor(max_workers=min(jobs, len(bounds)), mp_context=ctx,
-                             initializer=_init_worker, initargs=(q,)) as pool:
-        futures = [pool.submit(_fit_chunk, np.packbits(masks[s:e], axis=-1), width, b - s,
-                               tracked, kw) for s, b, e in bounds]
+    try:
+        futures = [executor.submit(_fit_chunk, np.packbits(masks[s:e], axis=-1), width, b - s,
+                                   tracked, kw) for s, b, e in bounds]
 
         def finished():
             done = 0
@@ -239,6 +310,9 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         for _ in (finished() if progress is None else progress(finished(), total=n)):
             pass
         parts = [f.result() for f in futures]
+    finally:
+        if own:
+            executor.shutdown(wait=True, cancel_futures=True)
     out = {k: np.empty((n, *np.shape(v)[1:]), dtype=np.asarray(v).dtype)
            for k, v in parts[0].items() if k in _PER_FRAME}
     for (s, b, e), part in zip(bounds, parts, strict=True):
@@ -254,5 +328,5 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
                   tuple(str(x) for x in parts[0]["segment_names"]))
 
 
-__all__ = ["MAX_JOBS", "chunk_bounds", "default_jobs", "fit_sequence_chunked",
-           "reconcile_labels", "swap_labels"]
+__all__ = ["MAX_JOBS", "FitPool", "chunk_bounds", "default_jobs", "fit_sequence_chunked",
+           "reconcile_labels", "swap_labels", "warm_up"]
