@@ -6,6 +6,9 @@
 * :mod:`vidcap.fit.search` - the coarse-to-fine interval search of Algorithms 1 and 6.
 * :mod:`vidcap.fit.contour` - scan lines, elbow corner, knee crossing (Algorithms 2-5).
 * :mod:`vidcap.fit.pose2d` - the fitting order of section 3.1.4, tracking, confidence.
+* :mod:`vidcap.fit.parallel` - a clip fitted in chunks on worker processes, limb labels
+  reconciled across chunks.
+* :mod:`vidcap.fit._kernels` - the compiled (numba) kernels behind raster and search.
 
 The public entry points are :func:`fit_pose` (one silhouette) and
 :func:`fit_sequence` (a clip, returning :class:`Pose2D`). During 2D fitting ``l_*``
