@@ -188,3 +188,28 @@ def test_leg_symmetry_lowers_the_3d_error_of_proposed_signs():
     e_true = _mpjpe(lift(j2, t["depth_signs"], y, body=body, scale=s).joints3d, j3)
     # the symmetric choice closes at least half the gap to the true signs' error
     assert err[0.5] - e_true < 0.5 * (err[0.0] - e_true)
+
+
+def _turning_clip(yaw_deg):
+    """The posed walk turning in place: per-frame yaw (degrees) -> (2D joints, fps)."""
+    from tests.posed import project, to_camera, walk_motion
+
+    m = walk_motion(len(yaw_deg))
+    world = m.positions()
+    cam = np.stack([to_camera(world[f], y) for f, y in enumerate(yaw_deg)])
+    return project(cam), m.fps
+
+
+def test_orientation_follows_a_fast_turn_through_the_side_view():
+    # a half turn at 270 degrees/s (as in the CMU walk 131_01): 7 frames in the side sector
+    yaw = np.r_[np.zeros(10), np.linspace(0.0, 180.0, 21), np.full(10, 180.0)]
+    j2, fps = _turning_clip(yaw)
+    s = estimate_scale(j2)
+    side = (yaw > 63) & (yaw < 117)  # a margin from the sector's edges
+    got = propose_orientation(j2, scale=s, fps=fps, sides_known=True)
+    assert side.sum() >= 5 and set(got[side]) == {"right"}
+    assert set(got[(yaw > 3) & (yaw < 57)]) == {"front_right"}
+    assert set(got[(yaw > 123) & (yaw < 177)]) == {"back_right"}
+    # a half-second window blurs the passage into the neighbouring sectors
+    blurred = propose_orientation(j2, scale=s, fps=fps, sides_known=True, turn_window_s=0.5)
+    assert (blurred[side] != "right").sum() >= 3

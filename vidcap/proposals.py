@@ -292,6 +292,7 @@ def propose_orientation(
     min_speed: float = 0.15,
     min_bulge: float = 0.02,
     window_s: float = 0.5,
+    turn_window_s: float | None = 0.2,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
@@ -326,7 +327,13 @@ def propose_orientation(
     min_bulge : float
         Knee/elbow bulge threshold in body heights.
     window_s : float
-        Median-filter window in seconds for the foreshortening and direction.
+        Median-filter window in seconds for the walking direction and the knee/elbow
+        cue (and the foreshortening when ``turn_window_s`` is None).
+    turn_window_s : float, optional
+        Median-filter window in seconds for the torso's foreshortening that decides
+        side view vs front/back. A turning body passes through the 60-degree side
+        sector quickly (at 180 degrees/s in a third of a second), so a window much
+        longer than that labels the whole passage with the neighbouring sector.
 
     Returns
     -------
@@ -362,7 +369,8 @@ def propose_orientation(
         right = score[use] > 0
     else:
         right = np.full(F, cue.sum() >= 0)
-    rho = median_filter(torso_width_ratio(j2, scale, body), size=win, mode="nearest")
+    twin = win if turn_window_s is None else max(1, int(round(turn_window_s * fps)) | 1)
+    rho = median_filter(torso_width_ratio(j2, scale, body), size=twin, mode="nearest")
     if sides_known:
         d = (j2[:, ji["l_shoulder"], 0] - j2[:, ji["r_shoulder"], 0]
              + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])
