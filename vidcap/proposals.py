@@ -107,6 +107,67 @@ def _relu(x):
     return np.maximum(x, 0.0)
 
 
+def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_weight,
+                 lean_weight, torso_depth):
+    """Anatomical cost of every sign state of every chain, (C, F, 4), with the lateral
+    offsets of the limbs' distal joints ({chain: (F, 4, 2)}) and zeta (F, 10)."""
+
+    j2 = np.asarray(j2, dtype=float)
+    F = j2.shape[0]
+    yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
+    L = body.segment_lengths()
+    dz, _ = depth_magnitudes(j2, scale, body)
+    zeta = dz / L
+    vec = segment_vectors(j2) / scale
+    vec[..., 1] *= -1.0
+    fwd, left = body_axes(yaw)  # (F, 3)
+
+    C, S = len(_CHAINS), 4
+    unary = np.zeros((C, F, S))
+    lateral = {}  # chain -> (F, S, 2): lateral offsets (body left) of its two distal joints
+    for c, (segs, kind, side) in enumerate(_CHAINS):
+        ks = [SEGMENT_INDEX[s] for s in segs]
+        sig = _STATES[:, : len(ks)]  # (S, n)
+        # 3D unit vectors of the chain's segments for every state: (F, S, n, 3)
+        v3 = np.concatenate(
+            [np.broadcast_to(vec[:, None, ks, :], (F, S, len(ks), 2)),
+             (sig[None] * dz[:, None, ks])[..., None]], axis=-1) / L[ks][:, None]
+        cost = np.zeros((F, S))
+        f, lf = fwd[:, None, :], left[:, None, :]
+        if kind in ("torso", "head"):
+            cost += lean_weight * _relu(-np.sum(v3[:, :, 0] * f, -1))
+        else:
+            up, lo = v3[:, :, 0], v3[:, :, 1]
+            m = np.sum(np.cross(up, lo) * lf, -1)  # > 0: folds like a knee, < 0: like an elbow
+            fold = _relu(-m) if kind == "leg" else _relu(m)
+            back_limit = np.sin(np.deg2rad(25.0 if kind == "leg" else 45.0))
+            behind = _relu(-np.sum(up * f, -1) - back_limit)
+            w0 = body.hip_half_width if kind == "leg" else body.shoulder_half_width
+            l_up, l_lo = L[ks[0]], L[ks[1]]
+            lat1 = side * w0 + np.sum(up * lf, -1) * l_up
+            lat2 = lat1 + np.sum(lo * lf, -1) * l_lo
+            lateral[c] = np.stack([lat1, lat2], -1) / (l_up + l_lo)
+            # knees, ankles and elbows stay on their own side (hands may cross in front)
+            cross = _relu(-side * lat1) / l_up
+            if kind == "leg":
+                cross = cross + _relu(-side * lat2) / l_lo
+            cost += hinge_weight * fold + range_weight * behind + midline_weight * cross
+            if kind == "arm":  # elbow and wrist may not enter the torso (elliptic section)
+                r = body.radius("torso")
+                p1 = side * w0 * lf + up * l_up  # relative to the torso axis, shoulder height
+                p2 = p1 + lo * l_lo
+                Lt = L[SEGMENT_INDEX["torso"]]
+                for p in (p1, p2):
+                    below = (p[..., 1] > -Lt) & (p[..., 1] < 0.0)
+                    e = (np.sum(p * lf, -1) / r) ** 2 + (np.sum(p * f, -1) / (torso_depth * r)) ** 2
+                    cost += midline_weight * np.where(below, _relu(1.0 - e), 0.0)
+        if len(ks) == 1:  # one segment: only the states whose (unused) second sign is +1
+            cost[:, _STATES[:, 1] < 0] = _BIG
+        unary[c] = cost
+    return unary, lateral, zeta
+
+
+
 def propose_signs(
     joints2d,
     yaw,
@@ -169,63 +230,19 @@ def propose_signs(
     body = body or BodyModel()
     j2 = np.asarray(joints2d, dtype=float)
     F = j2.shape[0]
-    yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
-    L = body.segment_lengths()
-    dz, _ = depth_magnitudes(j2, scale, body)
-    zeta = dz / L
-    vec = segment_vectors(j2) / scale
-    vec[..., 1] *= -1.0
-    fwd, left = body_axes(yaw)  # (F, 3)
     fixed = np.zeros((F, len(SEGMENT_NAMES)), int) if fixed is None else np.asarray(fixed)
-
+    unary, lateral, zeta = _chain_costs(
+        j2, yaw, scale=scale, body=body, hinge_weight=hinge_weight, range_weight=range_weight,
+        midline_weight=midline_weight, lean_weight=lean_weight, torso_depth=torso_depth)
     C, S = len(_CHAINS), 4
-    unary = np.zeros((C, F, S))
     trans = np.zeros((C, max(F - 1, 0), S, S))
-    lateral = {}  # chain -> (F, S, 2): lateral offsets (body left) of its two distal joints
-    for c, (segs, kind, side) in enumerate(_CHAINS):
+    for c, (segs, _, _) in enumerate(_CHAINS):
         ks = [SEGMENT_INDEX[s] for s in segs]
-        sig = _STATES[:, : len(ks)]  # (S, n)
-        # 3D unit vectors of the chain's segments for every state: (F, S, n, 3)
-        v3 = np.concatenate(
-            [np.broadcast_to(vec[:, None, ks, :], (F, S, len(ks), 2)),
-             (sig[None] * dz[:, None, ks])[..., None]], axis=-1) / L[ks][:, None]
-        cost = np.zeros((F, S))
-        f, lf = fwd[:, None, :], left[:, None, :]
-        if kind in ("torso", "head"):
-            cost += lean_weight * _relu(-np.sum(v3[:, :, 0] * f, -1))
-        else:
-            up, lo = v3[:, :, 0], v3[:, :, 1]
-            m = np.sum(np.cross(up, lo) * lf, -1)  # > 0: folds like a knee, < 0: like an elbow
-            fold = _relu(-m) if kind == "leg" else _relu(m)
-            back_limit = np.sin(np.deg2rad(25.0 if kind == "leg" else 45.0))
-            behind = _relu(-np.sum(up * f, -1) - back_limit)
-            w0 = body.hip_half_width if kind == "leg" else body.shoulder_half_width
-            l_up, l_lo = L[ks[0]], L[ks[1]]
-            lat1 = side * w0 + np.sum(up * lf, -1) * l_up
-            lat2 = lat1 + np.sum(lo * lf, -1) * l_lo
-            lateral[c] = np.stack([lat1, lat2], -1) / (l_up + l_lo)
-            # knees, ankles and elbows stay on their own side (hands may cross in front)
-            cross = _relu(-side * lat1) / l_up
-            if kind == "leg":
-                cross = cross + _relu(-side * lat2) / l_lo
-            cost += hinge_weight * fold + range_weight * behind + midline_weight * cross
-            if kind == "arm":  # elbow and wrist may not enter the torso (elliptic section)
-                r = body.radius("torso")
-                p1 = side * w0 * lf + up * l_up  # relative to the torso axis, shoulder height
-                p2 = p1 + lo * l_lo
-                Lt = L[SEGMENT_INDEX["torso"]]
-                for p in (p1, p2):
-                    below = (p[..., 1] > -Lt) & (p[..., 1] < 0.0)
-                    e = (np.sum(p * lf, -1) / r) ** 2 + (np.sum(p * f, -1) / (torso_depth * r)) ** 2
-                    cost += midline_weight * np.where(below, _relu(1.0 - e), 0.0)
-        if len(ks) == 1:  # one segment: only the states whose (unused) second sign is +1
-            cost[:, _STATES[:, 1] < 0] = _BIG
-        # user constraints
-        for n, k in enumerate(ks):
+        sig = _STATES[:, : len(ks)]
+        for n, k in enumerate(ks):  # user constraints
             fx = fixed[:, k]
             bad = (fx[:, None] != 0) & (sig[None, :, n] != fx[:, None])
-            cost[bad] += _BIG
-        unary[c] = cost
+            unary[c][bad] += _BIG
         if F > 1:
             for n, k in enumerate(ks):
                 flip = (sig[:, None, n] != sig[None, :, n]).astype(float)  # (S, S)
