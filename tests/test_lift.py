@@ -213,3 +213,24 @@ def test_orientation_follows_a_fast_turn_through_the_side_view():
     # a half-second window blurs the passage into the neighbouring sectors
     blurred = propose_orientation(j2, scale=s, fps=fps, sides_known=True, turn_window_s=0.5)
     assert (blurred[side] != "right").sum() >= 3
+
+
+def test_orientation_from_raised_forearms_turning_like_elbows():
+    # facing image right, legs straight, upper arms held forward and forearms raised
+    # (a boxer's guard): the elbows stick out *forward*, but they still turn the way
+    # an elbow does, the opposite sense of a knee
+    j2, _, _, fps = posed_clip(90.0, 30)
+    j2 = j2.copy()
+    s, L = 200.0, BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    for side in ("l", "r"):
+        hip, knee, ankle = (ji[f"{side}_{n}"] for n in ("hip", "knee", "ankle"))
+        j2[:, knee] = 0.5 * (j2[:, hip] + j2[:, ankle])
+        sh, el, wr = (ji[f"{side}_{n}"] for n in ("shoulder", "elbow", "wrist"))
+        j2[:, el] = j2[:, sh] + [s * L[si[f"{side}_upper_arm"]] * 0.9, 0.0]
+        j2[:, wr] = j2[:, el] + [0.0, -s * L[si[f"{side}_lower_arm"]] * 0.9]
+    still = np.full(30, 320.0)  # no walking cue
+    assert set(propose_orientation(j2, scale=s, fps=fps, track=still)) == {"right"}
+    mirrored = j2.copy()
+    mirrored[..., 0] = 640.0 - mirrored[..., 0]
+    assert set(propose_orientation(mirrored, scale=s, fps=fps, track=still)) == {"left"}

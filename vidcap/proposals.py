@@ -307,15 +307,21 @@ def propose_orientation(
     sides_known: bool = False,
     track=None,
     min_speed: float = 0.15,
-    min_bulge: float = 0.02,
+    min_fold: float = 0.1,
     window_s: float = 0.5,
     turn_window_s: float | None = 0.2,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
-    * image-right vs image-left (the sign of sin yaw): the way the knees stick out
-      (forward) and the elbows (backward) in the image, averaged over ``window_s``,
-      where that exceeds ``min_bulge`` body heights; elsewhere the direction the
+    * image-right vs image-left (the sign of sin yaw): the sense in which the knees
+      and elbows turn in the image. Both are hinges about the body's lateral axis
+      (the shin folds backward, the forearm forward), so a flexed knee seen from
+      the body's right turns clockwise whatever the thigh's direction (standing,
+      kicking, sitting) and an elbow the other way; that sense is the sign of the
+      image cross product of the upper and lower segments, ``sin`` of the image
+      angle between them times their foreshortening ratios, summed (knees minus
+      elbows) and averaged over ``window_s``. Where it exceeds ``min_fold``
+      it decides; elsewhere the direction the
       subject moves (``track``, e.g. the silhouette's centre) where it moves faster
       than ``min_speed`` body heights per second; elsewhere the nearest such frame's;
     * side view vs front/back: the torso's horizontal foreshortening (< 0.5 = within
@@ -341,8 +347,8 @@ def propose_orientation(
         Horizontal image position of the subject in pixels (default: the pelvis).
     min_speed : float
         Walking threshold in body heights per second.
-    min_bulge : float
-        Knee/elbow bulge threshold in body heights.
+    min_fold : float
+        Threshold of the knee/elbow turning cue (a sum of sines, dimensionless).
     window_s : float
         Median-filter window in seconds for the walking direction and the knee/elbow
         cue (and the foreshortening when ``turn_window_s`` is None).
@@ -363,17 +369,24 @@ def propose_orientation(
     x = j2[:, ji["pelvis"], 0] if track is None else np.asarray(track, dtype=float)
     win = max(1, int(round(window_s * fps)) | 1)
 
-    def bulge(a, b, c):
-        return j2[:, ji[b], 0] - 0.5 * (j2[:, ji[a], 0] + j2[:, ji[c], 0])
+    lengths = body.segment_lengths()
 
-    # knees stick out forward, elbows backward (in image x: the sign of sin yaw)
-    cue = (bulge("l_hip", "l_knee", "l_ankle") + bulge("r_hip", "r_knee", "r_ankle")
-           - bulge("l_shoulder", "l_elbow", "l_wrist") - bulge("r_shoulder", "r_elbow", "r_wrist"))
-    cue = uniform_filter1d(cue, win, mode="nearest") / (body.height * scale)
+    def fold(a, b, c, upper, lower):
+        """Image cross product (y down) of a->b and b->c over the model lengths: > 0
+        where the limb turns clockwise on screen (a knee seen from the body's right)."""
+        u, v = j2[:, ji[b]] - j2[:, ji[a]], j2[:, ji[c]] - j2[:, ji[b]]
+        norm = scale**2 * lengths[SEGMENT_INDEX[upper]] * lengths[SEGMENT_INDEX[lower]]
+        return (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / norm
+
+    cue = (fold("l_hip", "l_knee", "l_ankle", "l_upper_leg", "l_lower_leg")
+           + fold("r_hip", "r_knee", "r_ankle", "r_upper_leg", "r_lower_leg")
+           - fold("l_shoulder", "l_elbow", "l_wrist", "l_upper_arm", "l_lower_arm")
+           - fold("r_shoulder", "r_elbow", "r_wrist", "r_upper_arm", "r_lower_arm"))
+    cue = uniform_filter1d(cue, win, mode="nearest")
     xs = median_filter(x, size=win, mode="nearest") if F > 2 else x
     vel = np.gradient(xs) * fps if F > 1 else np.zeros(F)
     moving = np.abs(vel) > min_speed * body.height * scale
-    bent = np.abs(cue) > min_bulge
+    bent = np.abs(cue) > min_fold
     score = np.where(bent, np.sign(cue), np.where(moving, np.sign(vel), 0.0))
     known = score != 0
     if known.any():
