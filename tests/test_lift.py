@@ -234,3 +234,39 @@ def test_orientation_from_raised_forearms_turning_like_elbows():
     mirrored = j2.copy()
     mirrored[..., 0] = 640.0 - mirrored[..., 0]
     assert set(propose_orientation(mirrored, scale=s, fps=fps, track=still)) == {"left"}
+
+
+def test_elbow_fold_turns_with_the_upper_arm():
+    from vidcap.proposals import _elbow_fold
+
+    down, up, fwd = np.array([0, -1.0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])
+    side = np.array([1.0, 0, 0])
+    cases = [  # (upper arm, forearm, cost): the body faces +Z
+        (down, fwd, 0.0), (down, -fwd, 1.0),  # hanging: the forearm comes forward
+        (side, up, 0.0), (side, fwd, 0.0), (side, -fwd, 1.0),  # raised sideways
+        (fwd, up, 0.0), (fwd, down, 1.0),  # raised forward: the hand comes to the face
+        (up, -fwd, 0.0),  # overhead: no hinge direction
+    ]
+    for u, lo, cost in cases:
+        got = _elbow_fold(u[None], lo[None], fwd[None])[0]
+        assert got == pytest.approx(cost, abs=1e-9), (u, lo)
+
+
+def test_forearm_bent_forward_from_an_arm_raised_above_the_shoulder():
+    # facing image right (yaw 90: the body's right side toward the camera); the right
+    # upper arm raised sideways to 120 degrees, the elbow bent 45 degrees forward
+    j2, j3, _, _ = posed_clip(90.0, 12)
+    from tests.posed import project, true_signs
+
+    fwd, right, down = np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, -1.0, 0])
+    u = np.cos(np.deg2rad(120)) * down + np.sin(np.deg2rad(120)) * right
+    lo = np.cos(np.deg2rad(45)) * u + np.sin(np.deg2rad(45)) * fwd
+    L = BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    j3 = j3.copy()
+    j3[:, ji["r_elbow"]] = j3[:, ji["r_shoulder"]] + L[si["r_upper_arm"]] * u
+    j3[:, ji["r_wrist"]] = j3[:, ji["r_elbow"]] + L[si["r_lower_arm"]] * lo
+    j2, signs = project(j3), true_signs(j3)
+    prop = propose_signs(j2, np.full(12, np.pi / 2), scale=200.0)
+    for seg in ("r_upper_arm", "r_lower_arm"):
+        np.testing.assert_array_equal(prop.signs[:, si[seg]], signs[:, si[seg]])

@@ -5,7 +5,9 @@ orientation to the user (60 inputs for an 82-frame walk). Here they are proposed
 from three kinds of evidence, and the user only corrects what is wrong:
 
 * **anatomy**: knees fold only backward and elbows only forward
-  (:data:`vidcap.body.FLEXION_DIRECTION`); thighs and upper arms rarely point far
+  (:data:`vidcap.body.FLEXION_DIRECTION`), the elbow's "forward" turning with the
+  upper arm (forward for an arm hanging or raised sideways, up for an arm raised
+  forward: :func:`_elbow_fold`); thighs and upper arms rarely point far
   behind the body; limbs rarely cross the body's midline; the torso leans forward
   rather than backward;
 * **walking direction**: the subject faces the way its silhouette moves;
@@ -107,6 +109,35 @@ def _relu(x):
     return np.maximum(x, 0.0)
 
 
+def _elbow_fold(upper, lower, fwd, *, fade: float = 0.3):
+    """Cost of a forearm folding against the elbow's flexion direction, (...).
+
+    The elbow's hinge turns with the upper arm: its flexion direction is the body's
+    forward direction carried by the shortest rotation (the swing) that takes the
+    hanging arm (down) to the upper arm's direction -- forward for an arm hanging or
+    raised sideways (the forearm bends to the front), up for an arm raised forward
+    (the hand comes to the face). The cost is how far the forearm points against it,
+    ``relu(-lower . w)``. The swing is undefined for an arm straight overhead, so the
+    cost fades out as ``1 + down . upper`` falls below ``fade``.
+
+    Parameters
+    ----------
+    upper, lower, fwd : numpy.ndarray, shape (..., 3)
+        Unit directions of the upper arm, the forearm and the body's forward axis
+        (Y up).
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+    """
+    down = np.array([0.0, -1.0, 0.0])
+    c = np.cross(np.broadcast_to(down, upper.shape), upper)  # swing axis * sin
+    d = 1.0 + upper @ down  # 1 + cos, 0 for an arm overhead
+    cf = np.cross(c, fwd)
+    w = fwd + cf + np.cross(c, cf) / np.maximum(d, 1e-6)[..., None]
+    return _relu(-np.sum(lower * w, -1)) * np.clip(d / fade, 0.0, 1.0)
+
+
 def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_weight,
                  lean_weight, torso_depth):
     """Anatomical cost of every sign state of every chain, (C, F, 4), with the lateral
@@ -138,8 +169,10 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
             cost += lean_weight * _relu(-np.sum(v3[:, :, 0] * f, -1))
         else:
             up, lo = v3[:, :, 0], v3[:, :, 1]
-            m = np.sum(np.cross(up, lo) * lf, -1)  # > 0: folds like a knee, < 0: like an elbow
-            fold = _relu(-m) if kind == "leg" else _relu(m)
+            if kind == "leg":  # the shin folds backward about the body's lateral axis
+                fold = _relu(-np.sum(np.cross(up, lo) * lf, -1))
+            else:  # the forearm folds toward the swung forward direction
+                fold = _elbow_fold(up, lo, np.broadcast_to(f, up.shape))
             back_limit = np.sin(np.deg2rad(25.0 if kind == "leg" else 45.0))
             behind = _relu(-np.sum(up * f, -1) - back_limit)
             w0 = body.hip_half_width if kind == "leg" else body.shoulder_half_width
@@ -203,7 +236,8 @@ def propose_signs(
         A sign change between frames t-1 and t costs ``flip_cost * min(zeta(t-1),
         zeta(t)) + flip_penalty``.
     hinge_weight, range_weight, midline_weight, lean_weight : float
-        Weights of the anatomical costs (knee/elbow fold direction; thigh/upper arm
+        Weights of the anatomical costs (knee/elbow fold direction, the elbow's
+        carried by the upper arm's swing from hanging; thigh/upper arm
         pointing behind the body; limb crossing the midline or an arm entering the
         torso; torso/head leaning back).
     torso_depth : float
