@@ -248,8 +248,13 @@ def test_elbow_fold_turns_with_the_upper_arm():
         (up, -fwd, 0.0),  # overhead: no hinge direction
     ]
     for u, lo, cost in cases:
-        got = _elbow_fold(u[None], lo[None], fwd[None])[0]
+        got = _elbow_fold(u[None], lo[None], fwd[None])[0][0]
         assert got == pytest.approx(cost, abs=1e-9), (u, lo)
+    # twist: the forearm's tilt out of the plane of the upper arm and its flexion
+    for u, lo, tilt in ((down, side, 1.0), (down, fwd, 0.0), (fwd, side, 1.0),
+                        (side, (side + fwd) / np.sqrt(2), 0.0), (side, up, 1.0), (up, side, 0.0)):
+        got = _elbow_fold(u[None], lo[None], fwd[None])[1][0]
+        assert got == pytest.approx(tilt, abs=1e-9), (u, lo)
 
 
 def test_forearm_bent_forward_from_an_arm_raised_above_the_shoulder():
@@ -270,3 +275,28 @@ def test_forearm_bent_forward_from_an_arm_raised_above_the_shoulder():
     prop = propose_signs(j2, np.full(12, np.pi / 2), scale=200.0)
     for seg in ("r_upper_arm", "r_lower_arm"):
         np.testing.assert_array_equal(prop.signs[:, si[seg]], signs[:, si[seg]])
+
+
+def test_forearm_follows_a_slightly_abducted_upper_arm():
+    # facing image right: the body's left side is away from the camera. The left arm
+    # hangs 12 degrees out to the side with the elbow bent 25 degrees forward: the
+    # forearm is near the image plane and both its signs fold forward; only the
+    # upper arm's (neutral) rotation says the wrist is out to the side too
+    from tests.posed import project, true_signs
+
+    j2, j3, _, _ = posed_clip(90.0, 12)
+    fwd, left, down = np.array([1.0, 0, 0]), np.array([0, 0, -1.0]), np.array([0, -1.0, 0])
+    u = np.cos(np.deg2rad(12)) * down + np.sin(np.deg2rad(12)) * left
+    w = fwd  # the elbow's flexion direction for an arm swung out sideways
+    lo = np.cos(np.deg2rad(25)) * u + np.sin(np.deg2rad(25)) * w
+    L = BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    j3 = j3.copy()
+    j3[:, ji["l_elbow"]] = j3[:, ji["l_shoulder"]] + L[si["l_upper_arm"]] * u
+    j3[:, ji["l_wrist"]] = j3[:, ji["l_elbow"]] + L[si["l_lower_arm"]] * lo
+    j2, signs = project(j3), true_signs(j3)
+    k = si["l_lower_arm"]
+    assert np.all(signs[:, k] == -1)
+    yaw = np.full(12, np.pi / 2)
+    np.testing.assert_array_equal(propose_signs(j2, yaw, scale=200.0).signs[:, k], signs[:, k])
+    assert np.all(propose_signs(j2, yaw, scale=200.0, twist_weight=0.0).signs[:, k] == 1)

@@ -117,8 +117,11 @@ def _elbow_fold(upper, lower, fwd, *, fade: float = 0.3):
     hanging arm (down) to the upper arm's direction -- forward for an arm hanging or
     raised sideways (the forearm bends to the front), up for an arm raised forward
     (the hand comes to the face). The cost is how far the forearm points against it,
-    ``relu(-lower . w)``. The swing is undefined for an arm straight overhead, so the
-    cost fades out as ``1 + down . upper`` falls below ``fade``.
+    ``relu(-lower . w)``. The humerus' own rotation (twist) turns the forearm out of
+    the plane of the upper arm and ``w``; its cost is ``|lower . (upper x w)|``, the
+    sine of that tilt (the forearm of a straight elbow follows the upper arm). The
+    swing is undefined for an arm straight overhead, so both fade out as ``1 + down .
+    upper`` falls below ``fade``.
 
     Parameters
     ----------
@@ -128,18 +131,20 @@ def _elbow_fold(upper, lower, fwd, *, fade: float = 0.3):
 
     Returns
     -------
-    numpy.ndarray, shape (...)
+    fold, twist : numpy.ndarray, shape (...)
     """
     down = np.array([0.0, -1.0, 0.0])
     c = np.cross(np.broadcast_to(down, upper.shape), upper)  # swing axis * sin
     d = 1.0 + upper @ down  # 1 + cos, 0 for an arm overhead
     cf = np.cross(c, fwd)
     w = fwd + cf + np.cross(c, cf) / np.maximum(d, 1e-6)[..., None]
-    return _relu(-np.sum(lower * w, -1)) * np.clip(d / fade, 0.0, 1.0)
+    k = np.clip(d / fade, 0.0, 1.0)
+    twist = np.abs(np.sum(lower * np.cross(upper, w), -1)) * k
+    return _relu(-np.sum(lower * w, -1)) * k, twist
 
 
 def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_weight,
-                 lean_weight, torso_depth):
+                 lean_weight, torso_depth, twist_weight=0.0):
     """Anatomical cost of every sign state of every chain, (C, F, 4), with the lateral
     offsets of the limbs' distal joints ({chain: (F, 4, 2)}) and zeta (F, 10)."""
 
@@ -172,7 +177,8 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
             if kind == "leg":  # the shin folds backward about the body's lateral axis
                 fold = _relu(-np.sum(np.cross(up, lo) * lf, -1))
             else:  # the forearm folds toward the swung forward direction
-                fold = _elbow_fold(up, lo, np.broadcast_to(f, up.shape))
+                fold, twist = _elbow_fold(up, lo, np.broadcast_to(f, up.shape))
+                cost += twist_weight * twist
             back_limit = np.sin(np.deg2rad(25.0 if kind == "leg" else 45.0))
             behind = _relu(-np.sum(up * f, -1) - back_limit)
             w0 = body.hip_half_width if kind == "leg" else body.shoulder_half_width
@@ -218,6 +224,7 @@ def propose_signs(
     symmetry_weight: float = 0.5,
     arm_symmetry_weight: float = 0.0,
     symmetry_cap: float = 0.5,
+    twist_weight: float = 0.3,
 ) -> SignProposal:
     """Propose a depth sign for every segment and frame.
 
@@ -256,6 +263,12 @@ def propose_signs(
     symmetry_cap : float
         Asymmetry above this (limb lengths) costs no more (robust to deliberate
         one-sided poses).
+    twist_weight : float
+        Weight of the forearm's tilt out of the plane of the upper arm and the elbow's
+        flexion direction (the upper arm's rotation about its own axis away from
+        neutral; see :func:`_elbow_fold`). The rotation has a wide range (about 90
+        degrees each way), so this is a weak preference for the neutral one that
+        decides where the other costs leave the forearm's sign open.
 
     Returns
     -------
@@ -267,7 +280,8 @@ def propose_signs(
     fixed = np.zeros((F, len(SEGMENT_NAMES)), int) if fixed is None else np.asarray(fixed)
     unary, lateral, zeta = _chain_costs(
         j2, yaw, scale=scale, body=body, hinge_weight=hinge_weight, range_weight=range_weight,
-        midline_weight=midline_weight, lean_weight=lean_weight, torso_depth=torso_depth)
+        midline_weight=midline_weight, lean_weight=lean_weight, torso_depth=torso_depth,
+        twist_weight=twist_weight)
     C, S = len(_CHAINS), 4
     trans = np.zeros((C, max(F - 1, 0), S, S))
     for c, (segs, _, _) in enumerate(_CHAINS):
