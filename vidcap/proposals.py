@@ -7,9 +7,10 @@ from three kinds of evidence, and the user only corrects what is wrong:
 * **anatomy**: knees fold only backward and elbows only forward
   (:data:`vidcap.body.FLEXION_DIRECTION`), the elbow's "forward" turning with the
   upper arm (forward for an arm hanging or raised sideways, up for an arm raised
-  forward: :func:`_elbow_fold`); thighs and upper arms rarely point far
-  behind the body; limbs rarely cross the body's midline; the torso leans forward
-  rather than backward;
+  forward: :func:`_elbow_fold`), the forearm and shin preferably in the plane of
+  that fold (the upper arm and thigh not rotated about their own axes); thighs and
+  upper arms rarely point far behind the body; limbs rarely cross the body's
+  midline; the torso leans forward rather than backward;
 * **walking direction**: the subject faces the way its silhouette moves;
 * **temporal continuity**: a segment can only change its depth direction where it
   passes through the image plane (foreshortening ratio near 1). A flip between two
@@ -144,7 +145,7 @@ def _elbow_fold(upper, lower, fwd, *, fade: float = 0.3):
 
 
 def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_weight,
-                 lean_weight, torso_depth, twist_weight=0.0):
+                 lean_weight, torso_depth, twist_weight=0.0, leg_twist_weight=0.0):
     """Anatomical cost of every sign state of every chain, (C, F, 4), with the lateral
     offsets of the limbs' distal joints ({chain: (F, 4, 2)}) and zeta (F, 10)."""
 
@@ -176,6 +177,8 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
             up, lo = v3[:, :, 0], v3[:, :, 1]
             if kind == "leg":  # the shin folds backward about the body's lateral axis
                 fold = _relu(-np.sum(np.cross(up, lo) * lf, -1))
+                _, twist = _elbow_fold(up, lo, -np.broadcast_to(f, up.shape))
+                cost += leg_twist_weight * twist
             else:  # the forearm folds toward the swung forward direction
                 fold, twist = _elbow_fold(up, lo, np.broadcast_to(f, up.shape))
                 cost += twist_weight * twist
@@ -225,6 +228,7 @@ def propose_signs(
     arm_symmetry_weight: float = 0.0,
     symmetry_cap: float = 0.5,
     twist_weight: float = 0.3,
+    leg_twist_weight: float = 1.0,
 ) -> SignProposal:
     """Propose a depth sign for every segment and frame.
 
@@ -269,6 +273,11 @@ def propose_signs(
         neutral; see :func:`_elbow_fold`). The rotation has a wide range (about 90
         degrees each way), so this is a weak preference for the neutral one that
         decides where the other costs leave the forearm's sign open.
+    leg_twist_weight : float
+        The same for the shin and the thigh (the knee's flexion direction being
+        backward carried by the thigh's swing): the knee is a hinge and the hip
+        rotates less (about 40 degrees each way), so the shin stays nearer the
+        plane of the thigh's swing than the forearm does.
 
     Returns
     -------
@@ -281,7 +290,7 @@ def propose_signs(
     unary, lateral, zeta = _chain_costs(
         j2, yaw, scale=scale, body=body, hinge_weight=hinge_weight, range_weight=range_weight,
         midline_weight=midline_weight, lean_weight=lean_weight, torso_depth=torso_depth,
-        twist_weight=twist_weight)
+        twist_weight=twist_weight, leg_twist_weight=leg_twist_weight)
     C, S = len(_CHAINS), 4
     trans = np.zeros((C, max(F - 1, 0), S, S))
     for c, (segs, _, _) in enumerate(_CHAINS):
