@@ -148,7 +148,6 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
                  lean_weight, torso_depth, twist_weight=0.0, leg_twist_weight=0.0):
     """Anatomical cost of every sign state of every chain, (C, F, 4), with the lateral
     offsets of the limbs' distal joints ({chain: (F, 4, 2)}) and zeta (F, 10)."""
-
     j2 = np.asarray(j2, dtype=float)
     F = j2.shape[0]
     yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
@@ -177,6 +176,7 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
             up, lo = v3[:, :, 0], v3[:, :, 1]
             if kind == "leg":  # the shin folds backward about the body's lateral axis
                 fold = _relu(-np.sum(np.cross(up, lo) * lf, -1))
+                # the same swing construction with the knee's backward fold direction
                 _, twist = _elbow_fold(up, lo, -np.broadcast_to(f, up.shape))
                 cost += leg_twist_weight * twist
             else:  # the forearm folds toward the swung forward direction
@@ -207,7 +207,6 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
             cost[:, _STATES[:, 1] < 0] = _BIG
         unary[c] = cost
     return unary, lateral, zeta
-
 
 
 def propose_signs(
@@ -280,6 +279,7 @@ def propose_signs(
         side views, where the legs lie near the image plane and the hip's rotation
         (toe-out) decides which way the shin leaves the plane, it flipped both shins
         for a whole clip (end to end walk_side 8.7 -> 9.6 % MPJPE).
+
     Returns
     -------
     SignProposal
