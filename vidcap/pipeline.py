@@ -216,7 +216,7 @@ def lift_pose(
     rho = median_filter(rho, size=max(1, int(round(yaw_window_s * fps)) | 1), mode="nearest")
     proposed_orient = propose_orientation(j2, scale=scale, fps=fps, body=body,
                                           sides_known=not image_sides, track=track,
-                                          window_s=yaw_window_s)
+                                          window_s=yaw_window_s, turn_window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides)
