@@ -188,3 +188,139 @@ def test_leg_symmetry_lowers_the_3d_error_of_proposed_signs():
     e_true = _mpjpe(lift(j2, t["depth_signs"], y, body=body, scale=s).joints3d, j3)
     # the symmetric choice closes at least half the gap to the true signs' error
     assert err[0.5] - e_true < 0.5 * (err[0.0] - e_true)
+
+
+def _turning_clip(yaw_deg):
+    """The posed walk turning in place: per-frame yaw (degrees) -> (2D joints, fps)."""
+    from tests.posed import project, to_camera, walk_motion
+
+    m = walk_motion(len(yaw_deg))
+    world = m.positions()
+    cam = np.stack([to_camera(world[f], y) for f, y in enumerate(yaw_deg)])
+    return project(cam), m.fps
+
+
+def test_orientation_follows_a_fast_turn_through_the_side_view():
+    # a half turn at 270 degrees/s (as in the CMU walk 131_01): 7 frames in the side sector
+    yaw = np.r_[np.zeros(10), np.linspace(0.0, 180.0, 21), np.full(10, 180.0)]
+    j2, fps = _turning_clip(yaw)
+    s = estimate_scale(j2)
+    side = (yaw > 63) & (yaw < 117)  # a margin from the sector's edges
+    got = propose_orientation(j2, scale=s, fps=fps, sides_known=True)
+    assert side.sum() >= 5 and set(got[side]) == {"right"}
+    assert set(got[(yaw > 3) & (yaw < 57)]) == {"front_right"}
+    assert set(got[(yaw > 123) & (yaw < 177)]) == {"back_right"}
+    # a half-second window blurs the passage into the neighbouring sectors
+    blurred = propose_orientation(j2, scale=s, fps=fps, sides_known=True, turn_window_s=0.5)
+    assert (blurred[side] != "right").sum() >= 3
+
+
+def test_orientation_from_raised_forearms_turning_like_elbows():
+    # facing image right, legs straight, upper arms held forward and forearms raised
+    # (a boxer's guard): the elbows stick out *forward*, but they still turn the way
+    # an elbow does, the opposite sense of a knee
+    j2, _, _, fps = posed_clip(90.0, 30)
+    j2 = j2.copy()
+    s, L = 200.0, BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    for side in ("l", "r"):
+        hip, knee, ankle = (ji[f"{side}_{n}"] for n in ("hip", "knee", "ankle"))
+        j2[:, knee] = 0.5 * (j2[:, hip] + j2[:, ankle])
+        sh, el, wr = (ji[f"{side}_{n}"] for n in ("shoulder", "elbow", "wrist"))
+        j2[:, el] = j2[:, sh] + [s * L[si[f"{side}_upper_arm"]] * 0.9, 0.0]
+        j2[:, wr] = j2[:, el] + [0.0, -s * L[si[f"{side}_lower_arm"]] * 0.9]
+    still = np.full(30, 320.0)  # no walking cue
+    assert set(propose_orientation(j2, scale=s, fps=fps, track=still)) == {"right"}
+    mirrored = j2.copy()
+    mirrored[..., 0] = 640.0 - mirrored[..., 0]
+    assert set(propose_orientation(mirrored, scale=s, fps=fps, track=still)) == {"left"}
+
+
+def test_elbow_fold_turns_with_the_upper_arm():
+    from vidcap.proposals import _elbow_fold
+
+    down, up, fwd = np.array([0, -1.0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])
+    side = np.array([1.0, 0, 0])
+    cases = [  # (upper arm, forearm, cost): the body faces +Z
+        (down, fwd, 0.0), (down, -fwd, 1.0),  # hanging: the forearm comes forward
+        (side, up, 0.0), (side, fwd, 0.0), (side, -fwd, 1.0),  # raised sideways
+        (fwd, up, 0.0), (fwd, down, 1.0),  # raised forward: the hand comes to the face
+        (up, -fwd, 0.0),  # overhead: no hinge direction
+    ]
+    for u, lo, cost in cases:
+        got = _elbow_fold(u[None], lo[None], fwd[None])[0][0]
+        assert got == pytest.approx(cost, abs=1e-9), (u, lo)
+    # twist: the forearm's tilt out of the plane of the upper arm and its flexion
+    for u, lo, tilt in ((down, side, 1.0), (down, fwd, 0.0), (fwd, side, 1.0),
+                        (side, (side + fwd) / np.sqrt(2), 0.0), (side, up, 1.0), (up, side, 0.0)):
+        got = _elbow_fold(u[None], lo[None], fwd[None])[1][0]
+        assert got == pytest.approx(tilt, abs=1e-9), (u, lo)
+
+
+def test_forearm_bent_forward_from_an_arm_raised_above_the_shoulder():
+    # facing image right (yaw 90: the body's right side toward the camera); the right
+    # upper arm raised sideways to 120 degrees, the elbow bent 45 degrees forward
+    j2, j3, _, _ = posed_clip(90.0, 12)
+    from tests.posed import project, true_signs
+
+    fwd, right, down = np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, -1.0, 0])
+    u = np.cos(np.deg2rad(120)) * down + np.sin(np.deg2rad(120)) * right
+    lo = np.cos(np.deg2rad(45)) * u + np.sin(np.deg2rad(45)) * fwd
+    L = BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    j3 = j3.copy()
+    j3[:, ji["r_elbow"]] = j3[:, ji["r_shoulder"]] + L[si["r_upper_arm"]] * u
+    j3[:, ji["r_wrist"]] = j3[:, ji["r_elbow"]] + L[si["r_lower_arm"]] * lo
+    j2, signs = project(j3), true_signs(j3)
+    prop = propose_signs(j2, np.full(12, np.pi / 2), scale=200.0)
+    for seg in ("r_upper_arm", "r_lower_arm"):
+        np.testing.assert_array_equal(prop.signs[:, si[seg]], signs[:, si[seg]])
+
+
+def test_forearm_follows_a_slightly_abducted_upper_arm():
+    # facing image right: the body's left side is away from the camera. The left arm
+    # hangs 12 degrees out to the side with the elbow bent 25 degrees forward: the
+    # forearm is near the image plane and both its signs fold forward; only the
+    # upper arm's (neutral) rotation says the wrist is out to the side too
+    from tests.posed import project, true_signs
+
+    j2, j3, _, _ = posed_clip(90.0, 12)
+    fwd, left, down = np.array([1.0, 0, 0]), np.array([0, 0, -1.0]), np.array([0, -1.0, 0])
+    u = np.cos(np.deg2rad(12)) * down + np.sin(np.deg2rad(12)) * left
+    w = fwd  # the elbow's flexion direction for an arm swung out sideways
+    lo = np.cos(np.deg2rad(25)) * u + np.sin(np.deg2rad(25)) * w
+    L = BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    j3 = j3.copy()
+    j3[:, ji["l_elbow"]] = j3[:, ji["l_shoulder"]] + L[si["l_upper_arm"]] * u
+    j3[:, ji["l_wrist"]] = j3[:, ji["l_elbow"]] + L[si["l_lower_arm"]] * lo
+    j2, signs = project(j3), true_signs(j3)
+    k = si["l_lower_arm"]
+    assert np.all(signs[:, k] == -1)
+    yaw = np.full(12, np.pi / 2)
+    np.testing.assert_array_equal(propose_signs(j2, yaw, scale=200.0).signs[:, k], signs[:, k])
+    assert np.all(propose_signs(j2, yaw, scale=200.0, twist_weight=0.0).signs[:, k] == 1)
+
+
+def test_shin_follows_a_slightly_abducted_thigh():
+    # facing image right (the body's left side away from the camera): the left thigh
+    # 8 degrees out to the side, the knee bent 40 degrees backward. Both shin signs
+    # fold backward; the knee being a hinge in the thigh's plane says the ankle is out
+    from tests.posed import project, true_signs
+
+    j2, j3, _, _ = posed_clip(90.0, 12)
+    back, left, down = np.array([-1.0, 0, 0]), np.array([0, 0, -1.0]), np.array([0, -1.0, 0])
+    u = np.cos(np.deg2rad(8)) * down + np.sin(np.deg2rad(8)) * left
+    lo = np.cos(np.deg2rad(40)) * u + np.sin(np.deg2rad(40)) * back
+    L = BodyModel().segment_lengths()
+    ji, si = JOINT_INDEX, SEGMENT_INDEX
+    j3 = j3.copy()
+    j3[:, ji["l_knee"]] = j3[:, ji["l_hip"]] + L[si["l_upper_leg"]] * u
+    j3[:, ji["l_ankle"]] = j3[:, ji["l_knee"]] + L[si["l_lower_leg"]] * lo
+    j2, signs = project(j3), true_signs(j3)
+    k = si["l_lower_leg"]
+    assert np.all(signs[:, k] == -1)
+    yaw = np.full(12, np.pi / 2)
+    hinge = propose_signs(j2, yaw, scale=200.0, leg_twist_weight=1.0).signs[:, k]
+    np.testing.assert_array_equal(hinge, signs[:, k])
+    assert np.any(propose_signs(j2, yaw, scale=200.0).signs[:, k] != signs[:, k])  # off

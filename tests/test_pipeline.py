@@ -58,3 +58,33 @@ def test_stage_cache_round_trip_and_damage(tmp_path):
     c.path("pose2d", "k1").write_bytes(b"garbage")
     assert c.load("pose2d", "k1") is None  # a damaged entry is recomputed, not an error
     assert StageCache(None).load("pose2d", "k1") is None
+
+
+def test_run_says_when_more_than_one_person_is_in_view(tmp_path):
+    from tests._synthframes import background, figure_mask
+    from vidcap.pipeline import run
+    from vidcap.video import write_video
+
+    rng = np.random.default_rng(3)
+    h, w, n = 240, 320, 24
+    bg = background(h, w, rng)
+    frames = []
+    for i in range(n):
+        # a walker crossing the frame and, from frame 12 on, a second one standing by
+        m = figure_mask(h, w, 2 * np.pi * i / 12, cx=(0.25 + 0.3 * i / n) * w) > 0
+        if i >= 12:
+            m |= figure_mask(h, w, 0.0, cx=0.88 * w) > 0
+        frames.append(np.where(m[..., None], np.uint8([40, 50, 160]), bg))
+    video = tmp_path / "two.mp4"
+    write_video(video, frames, 12.0)
+    said = []
+    run(video, progress=False, log=said.append)
+    crowd = [m for m in said if "more than one person" in m]
+    assert len(crowd) == 1, said
+    count = int(crowd[0].split("blob in ")[1].split(" of ")[0])
+    assert 8 <= count <= 12  # the frames with the second figure (its first few may be plate)
+    said.clear()
+    lone = tmp_path / "one.mp4"
+    write_video(lone, frames[:12], 12.0)
+    run(lone, progress=False, log=said.append)
+    assert not any("more than one person" in m for m in said)

@@ -19,3 +19,30 @@ def test_pose_renderer_draws_each_new_pose():
         renderer.close()
     assert np.abs(first - second).mean() > 0.5  # a different pose, a different image
     assert np.abs(first - again).mean() < 0.05  # the same pose, the same image
+
+
+def test_small_videos_are_reviewed_enlarged_by_a_whole_factor():
+    from vidcap.review import review_frames, review_scale
+
+    assert review_scale(144, 360) == 3
+    assert review_scale(360, 360) == 1
+    assert review_scale(480, 360) == 1
+    assert review_scale(100, 0) == 1
+    h, w = 40, 30
+    frame = np.zeros((h, w, 3), np.uint8)
+    frame[10, 20] = 255  # one white pixel at (x=20, y=10)
+    mask = np.zeros((1, h, w), bool)
+    mask[0, 5:35, 10:20] = True
+    joints2d = np.full((1, 15, 2), 15.0)
+    joints3d = BodyModel().rest_positions()[None]
+    (img,) = review_frames([frame], mask, joints2d, joints3d, min_height=100)
+    k = 3  # ceil(100 / 40)
+    assert img.shape == (k * h, 3 * k * w, 3)
+    # the input panel repeats every pixel k x k times, at the scaled place
+    assert (img[k * 10:k * 11, k * 20:k * 21] == 255).all()
+    assert img[k * 10 - 1, k * 20].max() == 0
+    # the silhouette panel is the scaled mask (grey inside, dark outside)
+    mid = img[:, k * w:2 * k * w]
+    assert mid[k * 30, k * 12, 0] == 110 and mid[k * 30, k * 25, 0] == 25
+    (same,) = review_frames([frame], mask, joints2d, joints3d, min_height=0)
+    assert same.shape == (h, 3 * w, 3)

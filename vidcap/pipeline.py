@@ -216,7 +216,7 @@ def lift_pose(
     rho = median_filter(rho, size=max(1, int(round(yaw_window_s * fps)) | 1), mode="nearest")
     proposed_orient = propose_orientation(j2, scale=scale, fps=fps, body=body,
                                           sides_known=not image_sides, track=track,
-                                          window_s=yaw_window_s)
+                                          window_s=yaw_window_s, turn_window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides)
@@ -418,14 +418,22 @@ def run(
     try:
         if hit is None:
             sil = extract_silhouettes(video, plate_model, progress=progress)
-            masks, bbox = sil.masks, sil.bbox
+            masks, bbox, n_other = sil.masks, sil.bbox, sil.n_other_blobs
             cache.save("silhouettes", k_sil, packed=np.packbits(masks, axis=-1),
-                       shape=np.array(masks.shape), bbox=bbox)
+                       shape=np.array(masks.shape), bbox=bbox, n_other=n_other)
         else:
             shape = tuple(hit["shape"])
             masks = np.unpackbits(hit["packed"], axis=-1, count=shape[-1]).astype(bool)
             bbox = hit["bbox"]
+            n_other = hit["n_other"] if "n_other" in hit else np.zeros(len(masks), np.int64)
         timings["silhouettes"] = time.perf_counter() - t0
+        crowded = int(np.count_nonzero(n_other))
+        if crowded >= max(3, 0.05 * len(masks)):
+            # vidcap follows one person: say so rather than silently mixing people (an
+            # extra blob in a frame or two is a plate artefact, not a person, and is not
+            # told)
+            log(f"more than one person-sized blob in {crowded} of {len(masks)} frames "
+                f"(up to {int(n_other.max()) + 1} at once); the largest is followed")
         if len(masks) != info.n_frames and info.n_frames:
             log(f"decoded {len(masks)} frames (container says {info.n_frames})")
 

@@ -5,9 +5,12 @@ orientation to the user (60 inputs for an 82-frame walk). Here they are proposed
 from three kinds of evidence, and the user only corrects what is wrong:
 
 * **anatomy**: knees fold only backward and elbows only forward
-  (:data:`vidcap.body.FLEXION_DIRECTION`); thighs and upper arms rarely point far
-  behind the body; limbs rarely cross the body's midline; the torso leans forward
-  rather than backward;
+  (:data:`vidcap.body.FLEXION_DIRECTION`), the elbow's "forward" turning with the
+  upper arm (forward for an arm hanging or raised sideways, up for an arm raised
+  forward: :func:`_elbow_fold`), the forearm preferably in the plane of that fold
+  (the upper arm not rotated about its own axis; the same for the shin is a knob,
+  off by default); thighs and upper arms rarely point far behind the body; limbs
+  rarely cross the body's midline; the torso leans forward rather than backward;
 * **walking direction**: the subject faces the way its silhouette moves;
 * **temporal continuity**: a segment can only change its depth direction where it
   passes through the image plane (foreshortening ratio near 1). A flip between two
@@ -107,67 +110,45 @@ def _relu(x):
     return np.maximum(x, 0.0)
 
 
-def propose_signs(
-    joints2d,
-    yaw,
-    *,
-    scale: float,
-    body: BodyModel | None = None,
-    fixed=None,
-    flip_cost: float = 3.0,
-    flip_penalty: float = 0.05,
-    hinge_weight: float = 2.0,
-    range_weight: float = 1.0,
-    midline_weight: float = 1.0,
-    lean_weight: float = 0.5,
-    torso_depth: float = 0.6,
-    symmetry_weight: float = 0.5,
-    arm_symmetry_weight: float = 0.0,
-    symmetry_cap: float = 0.5,
-) -> SignProposal:
-    """Propose a depth sign for every segment and frame.
+def _elbow_fold(upper, lower, fwd, *, fade: float = 0.3):
+    """Cost of a forearm folding against the elbow's flexion direction, (...).
+
+    The elbow's hinge turns with the upper arm: its flexion direction is the body's
+    forward direction carried by the shortest rotation (the swing) that takes the
+    hanging arm (down) to the upper arm's direction -- forward for an arm hanging or
+    raised sideways (the forearm bends to the front), up for an arm raised forward
+    (the hand comes to the face). The cost is how far the forearm points against it,
+    ``relu(-lower . w)``. The humerus' own rotation (twist) turns the forearm out of
+    the plane of the upper arm and ``w``; its cost is ``|lower . (upper x w)|``, the
+    sine of that tilt (the forearm of a straight elbow follows the upper arm). The
+    swing is undefined for an arm straight overhead, so both fade out as ``1 + down .
+    upper`` falls below ``fade``.
 
     Parameters
     ----------
-    joints2d : array_like, shape (F, 15, 2)
-        Image joints in pixels, named by the body's sides.
-    yaw : array_like, shape (F,)
-        Body yaw in radians (0 = facing the camera, +pi/2 = facing image right).
-    scale : float
-        Pixels per metre.
-    body : BodyModel, optional
-    fixed : array_like of int, shape (F, 10), optional
-        User signs (+1/-1), 0 where free.
-    flip_cost, flip_penalty : float
-        A sign change between frames t-1 and t costs ``flip_cost * min(zeta(t-1),
-        zeta(t)) + flip_penalty``.
-    hinge_weight, range_weight, midline_weight, lean_weight : float
-        Weights of the anatomical costs (knee/elbow fold direction; thigh/upper arm
-        pointing behind the body; limb crossing the midline or an arm entering the
-        torso; torso/head leaning back).
-    torso_depth : float
-        Front-back half-depth of the torso as a fraction of the model cylinder's
-        radius (real chests are flatter than the cylinder); elbows and wrists may not
-        enter that elliptic section.
-    symmetry_weight, arm_symmetry_weight : float
-        Both legs (both arms) are chosen jointly (16 sign states per frame); a state
-        costs this weight times the left/right lateral asymmetry of the pair: the sum
-        of ``|lat_left + lat_right|`` over the knee and ankle (elbow and wrist), where
-        ``lat`` is the joint's offset along the body's left axis from the midline, in
-        units of the limb's length. Walking, standing and jumping keep the legs
-        mirror-symmetric sideways (one leg's step sideways shows in the other); arms
-        are off by default (one-arm gestures; weighted on the synth 'arms' motion it
-        cost up to 1 point of MPJPE, while it fixed 'jacks' seen at 45 degrees).
-    symmetry_cap : float
-        Asymmetry above this (limb lengths) costs no more (robust to deliberate
-        one-sided poses).
+    upper, lower, fwd : numpy.ndarray, shape (..., 3)
+        Unit directions of the upper arm, the forearm and the body's forward axis
+        (Y up).
 
     Returns
     -------
-    SignProposal
+    fold, twist : numpy.ndarray, shape (...)
     """
-    body = body or BodyModel()
-    j2 = np.asarray(joints2d, dtype=float)
+    down = np.array([0.0, -1.0, 0.0])
+    c = np.cross(np.broadcast_to(down, upper.shape), upper)  # swing axis * sin
+    d = 1.0 + upper @ down  # 1 + cos, 0 for an arm overhead
+    cf = np.cross(c, fwd)
+    w = fwd + cf + np.cross(c, cf) / np.maximum(d, 1e-6)[..., None]
+    k = np.clip(d / fade, 0.0, 1.0)
+    twist = np.abs(np.sum(lower * np.cross(upper, w), -1)) * k
+    return _relu(-np.sum(lower * w, -1)) * k, twist
+
+
+def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_weight,
+                 lean_weight, torso_depth, twist_weight=0.0, leg_twist_weight=0.0):
+    """Anatomical cost of every sign state of every chain, (C, F, 4), with the lateral
+    offsets of the limbs' distal joints ({chain: (F, 4, 2)}) and zeta (F, 10)."""
+    j2 = np.asarray(j2, dtype=float)
     F = j2.shape[0]
     yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
     L = body.segment_lengths()
@@ -176,11 +157,9 @@ def propose_signs(
     vec = segment_vectors(j2) / scale
     vec[..., 1] *= -1.0
     fwd, left = body_axes(yaw)  # (F, 3)
-    fixed = np.zeros((F, len(SEGMENT_NAMES)), int) if fixed is None else np.asarray(fixed)
 
     C, S = len(_CHAINS), 4
     unary = np.zeros((C, F, S))
-    trans = np.zeros((C, max(F - 1, 0), S, S))
     lateral = {}  # chain -> (F, S, 2): lateral offsets (body left) of its two distal joints
     for c, (segs, kind, side) in enumerate(_CHAINS):
         ks = [SEGMENT_INDEX[s] for s in segs]
@@ -195,8 +174,14 @@ def propose_signs(
             cost += lean_weight * _relu(-np.sum(v3[:, :, 0] * f, -1))
         else:
             up, lo = v3[:, :, 0], v3[:, :, 1]
-            m = np.sum(np.cross(up, lo) * lf, -1)  # > 0: folds like a knee, < 0: like an elbow
-            fold = _relu(-m) if kind == "leg" else _relu(m)
+            if kind == "leg":  # the shin folds backward about the body's lateral axis
+                fold = _relu(-np.sum(np.cross(up, lo) * lf, -1))
+                # the same swing construction with the knee's backward fold direction
+                _, twist = _elbow_fold(up, lo, -np.broadcast_to(f, up.shape))
+                cost += leg_twist_weight * twist
+            else:  # the forearm folds toward the swung forward direction
+                fold, twist = _elbow_fold(up, lo, np.broadcast_to(f, up.shape))
+                cost += twist_weight * twist
             back_limit = np.sin(np.deg2rad(25.0 if kind == "leg" else 45.0))
             behind = _relu(-np.sum(up * f, -1) - back_limit)
             w0 = body.hip_half_width if kind == "leg" else body.shoulder_half_width
@@ -220,12 +205,102 @@ def propose_signs(
                     cost += midline_weight * np.where(below, _relu(1.0 - e), 0.0)
         if len(ks) == 1:  # one segment: only the states whose (unused) second sign is +1
             cost[:, _STATES[:, 1] < 0] = _BIG
-        # user constraints
-        for n, k in enumerate(ks):
+        unary[c] = cost
+    return unary, lateral, zeta
+
+
+def propose_signs(
+    joints2d,
+    yaw,
+    *,
+    scale: float,
+    body: BodyModel | None = None,
+    fixed=None,
+    flip_cost: float = 3.0,
+    flip_penalty: float = 0.05,
+    hinge_weight: float = 2.0,
+    range_weight: float = 1.0,
+    midline_weight: float = 1.0,
+    lean_weight: float = 0.5,
+    torso_depth: float = 0.6,
+    symmetry_weight: float = 0.5,
+    arm_symmetry_weight: float = 0.0,
+    symmetry_cap: float = 0.5,
+    twist_weight: float = 0.3,
+    leg_twist_weight: float = 0.0,
+) -> SignProposal:
+    """Propose a depth sign for every segment and frame.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints in pixels, named by the body's sides.
+    yaw : array_like, shape (F,)
+        Body yaw in radians (0 = facing the camera, +pi/2 = facing image right).
+    scale : float
+        Pixels per metre.
+    body : BodyModel, optional
+    fixed : array_like of int, shape (F, 10), optional
+        User signs (+1/-1), 0 where free.
+    flip_cost, flip_penalty : float
+        A sign change between frames t-1 and t costs ``flip_cost * min(zeta(t-1),
+        zeta(t)) + flip_penalty``.
+    hinge_weight, range_weight, midline_weight, lean_weight : float
+        Weights of the anatomical costs (knee/elbow fold direction, the elbow's
+        carried by the upper arm's swing from hanging; thigh/upper arm
+        pointing behind the body; limb crossing the midline or an arm entering the
+        torso; torso/head leaning back).
+    torso_depth : float
+        Front-back half-depth of the torso as a fraction of the model cylinder's
+        radius (real chests are flatter than the cylinder); elbows and wrists may not
+        enter that elliptic section.
+    symmetry_weight, arm_symmetry_weight : float
+        Both legs (both arms) are chosen jointly (16 sign states per frame); a state
+        costs this weight times the left/right lateral asymmetry of the pair: the sum
+        of ``|lat_left + lat_right|`` over the knee and ankle (elbow and wrist), where
+        ``lat`` is the joint's offset along the body's left axis from the midline, in
+        units of the limb's length. Walking, standing and jumping keep the legs
+        mirror-symmetric sideways (one leg's step sideways shows in the other); arms
+        are off by default (one-arm gestures; weighted on the synth 'arms' motion it
+        cost up to 1 point of MPJPE, while it fixed 'jacks' seen at 45 degrees).
+    symmetry_cap : float
+        Asymmetry above this (limb lengths) costs no more (robust to deliberate
+        one-sided poses).
+    twist_weight : float
+        Weight of the forearm's tilt out of the plane of the upper arm and the elbow's
+        flexion direction (the upper arm's rotation about its own axis away from
+        neutral; see :func:`_elbow_fold`). The rotation has a wide range (about 90
+        degrees each way), so this is a weak preference for the neutral one that
+        decides where the other costs leave the forearm's sign open.
+    leg_twist_weight : float
+        The same for the shin and the thigh (the knee's flexion direction being
+        backward carried by the thigh's swing), off by default: on the synth motions
+        (true 2D joints) a weight of 1 was best (all pairs 82.7 -> 87.6 %), but in
+        side views, where the legs lie near the image plane and the hip's rotation
+        (toe-out) decides which way the shin leaves the plane, it flipped both shins
+        for a whole clip (end to end walk_side 8.7 -> 9.6 % MPJPE).
+
+    Returns
+    -------
+    SignProposal
+    """
+    body = body or BodyModel()
+    j2 = np.asarray(joints2d, dtype=float)
+    F = j2.shape[0]
+    fixed = np.zeros((F, len(SEGMENT_NAMES)), int) if fixed is None else np.asarray(fixed)
+    unary, lateral, zeta = _chain_costs(
+        j2, yaw, scale=scale, body=body, hinge_weight=hinge_weight, range_weight=range_weight,
+        midline_weight=midline_weight, lean_weight=lean_weight, torso_depth=torso_depth,
+        twist_weight=twist_weight, leg_twist_weight=leg_twist_weight)
+    C, S = len(_CHAINS), 4
+    trans = np.zeros((C, max(F - 1, 0), S, S))
+    for c, (segs, _, _) in enumerate(_CHAINS):
+        ks = [SEGMENT_INDEX[s] for s in segs]
+        sig = _STATES[:, : len(ks)]
+        for n, k in enumerate(ks):  # user constraints
             fx = fixed[:, k]
             bad = (fx[:, None] != 0) & (sig[None, :, n] != fx[:, None])
-            cost[bad] += _BIG
-        unary[c] = cost
+            unary[c][bad] += _BIG
         if F > 1:
             for n, k in enumerate(ks):
                 flip = (sig[:, None, n] != sig[None, :, n]).astype(float)  # (S, S)
@@ -290,14 +365,21 @@ def propose_orientation(
     sides_known: bool = False,
     track=None,
     min_speed: float = 0.15,
-    min_bulge: float = 0.02,
+    min_fold: float = 0.1,
     window_s: float = 0.5,
+    turn_window_s: float | None = 0.2,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
-    * image-right vs image-left (the sign of sin yaw): the way the knees stick out
-      (forward) and the elbows (backward) in the image, averaged over ``window_s``,
-      where that exceeds ``min_bulge`` body heights; elsewhere the direction the
+    * image-right vs image-left (the sign of sin yaw): the sense in which the knees
+      and elbows turn in the image. Both are hinges about the body's lateral axis
+      (the shin folds backward, the forearm forward), so a flexed knee seen from
+      the body's right turns clockwise whatever the thigh's direction (standing,
+      kicking, sitting) and an elbow the other way; that sense is the sign of the
+      image cross product of the upper and lower segments, ``sin`` of the image
+      angle between them times their foreshortening ratios, summed (knees minus
+      elbows) and averaged over ``window_s``. Where it exceeds ``min_fold``
+      it decides; elsewhere the direction the
       subject moves (``track``, e.g. the silhouette's centre) where it moves faster
       than ``min_speed`` body heights per second; elsewhere the nearest such frame's;
     * side view vs front/back: the torso's horizontal foreshortening (< 0.5 = within
@@ -323,10 +405,16 @@ def propose_orientation(
         Horizontal image position of the subject in pixels (default: the pelvis).
     min_speed : float
         Walking threshold in body heights per second.
-    min_bulge : float
-        Knee/elbow bulge threshold in body heights.
+    min_fold : float
+        Threshold of the knee/elbow turning cue (a sum of sines, dimensionless).
     window_s : float
-        Median-filter window in seconds for the foreshortening and direction.
+        Median-filter window in seconds for the walking direction and the knee/elbow
+        cue (and the foreshortening when ``turn_window_s`` is None).
+    turn_window_s : float, optional
+        Median-filter window in seconds for the torso's foreshortening that decides
+        side view vs front/back. A turning body passes through the 60-degree side
+        sector quickly (at 180 degrees/s in a third of a second), so a window much
+        longer than that labels the whole passage with the neighbouring sector.
 
     Returns
     -------
@@ -339,17 +427,24 @@ def propose_orientation(
     x = j2[:, ji["pelvis"], 0] if track is None else np.asarray(track, dtype=float)
     win = max(1, int(round(window_s * fps)) | 1)
 
-    def bulge(a, b, c):
-        return j2[:, ji[b], 0] - 0.5 * (j2[:, ji[a], 0] + j2[:, ji[c], 0])
+    lengths = body.segment_lengths()
 
-    # knees stick out forward, elbows backward (in image x: the sign of sin yaw)
-    cue = (bulge("l_hip", "l_knee", "l_ankle") + bulge("r_hip", "r_knee", "r_ankle")
-           - bulge("l_shoulder", "l_elbow", "l_wrist") - bulge("r_shoulder", "r_elbow", "r_wrist"))
-    cue = uniform_filter1d(cue, win, mode="nearest") / (body.height * scale)
+    def fold(a, b, c, upper, lower):
+        """Image cross product (y down) of a->b and b->c over the model lengths: > 0
+        where the limb turns clockwise on screen (a knee seen from the body's right)."""
+        u, v = j2[:, ji[b]] - j2[:, ji[a]], j2[:, ji[c]] - j2[:, ji[b]]
+        norm = scale**2 * lengths[SEGMENT_INDEX[upper]] * lengths[SEGMENT_INDEX[lower]]
+        return (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]) / norm
+
+    cue = (fold("l_hip", "l_knee", "l_ankle", "l_upper_leg", "l_lower_leg")
+           + fold("r_hip", "r_knee", "r_ankle", "r_upper_leg", "r_lower_leg")
+           - fold("l_shoulder", "l_elbow", "l_wrist", "l_upper_arm", "l_lower_arm")
+           - fold("r_shoulder", "r_elbow", "r_wrist", "r_upper_arm", "r_lower_arm"))
+    cue = uniform_filter1d(cue, win, mode="nearest")
     xs = median_filter(x, size=win, mode="nearest") if F > 2 else x
     vel = np.gradient(xs) * fps if F > 1 else np.zeros(F)
     moving = np.abs(vel) > min_speed * body.height * scale
-    bent = np.abs(cue) > min_bulge
+    bent = np.abs(cue) > min_fold
     score = np.where(bent, np.sign(cue), np.where(moving, np.sign(vel), 0.0))
     known = score != 0
     if known.any():
@@ -362,7 +457,8 @@ def propose_orientation(
         right = score[use] > 0
     else:
         right = np.full(F, cue.sum() >= 0)
-    rho = median_filter(torso_width_ratio(j2, scale, body), size=win, mode="nearest")
+    twin = win if turn_window_s is None else max(1, int(round(turn_window_s * fps)) | 1)
+    rho = median_filter(torso_width_ratio(j2, scale, body), size=twin, mode="nearest")
     if sides_known:
         d = (j2[:, ji["l_shoulder"], 0] - j2[:, ji["r_shoulder"], 0]
              + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])

@@ -94,9 +94,15 @@ class PoseRenderer:
         self.pl.close()
 
 
+def review_scale(frame_height: int, min_height: int) -> int:
+    """Whole-number factor that brings a panel ``frame_height`` px tall to at least
+    ``min_height`` px (1 when it is already tall enough)."""
+    return max(1, -(-int(min_height) // max(int(frame_height), 1)))
+
+
 def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=None,
-                  low_score: float = 0.5, height: float = 1.75):
-    """Yield the three-panel review images, (H, 3 W, 3) uint8 BGR each.
+                  low_score: float = 0.5, height: float = 1.75, min_height: int = 360):
+    """Yield the three-panel review images, (k H, 3 k W, 3) uint8 BGR each.
 
     Parameters
     ----------
@@ -107,18 +113,31 @@ def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=
         Per-segment 2D fit scores; below ``low_score`` a segment is marked.
     similarity : (F,), optional
         Whole-model fit; below ``low_score`` the frame is marked "LOW".
+    min_height : int
+        Panels of a smaller video are enlarged by the whole-number factor
+        ``k = ceil(min_height / H)`` (:func:`review_scale`; pixels repeated, so the
+        input is shown as it is), so a 180x144 clip is not reviewed at thumbnail
+        size. 0 or a frame at least this tall: ``k = 1``.
     """
     import cv2
 
     renderer = None
+    k = 1
     try:
         for f, frame in enumerate(frames):
-            h, w = frame.shape[:2]
             if renderer is None:
-                renderer = PoseRenderer((w, h), height=height)
+                k = review_scale(frame.shape[0], min_height)
+                renderer = PoseRenderer((k * frame.shape[1], k * frame.shape[0]),
+                                        height=height)
+            mask = np.asarray(masks[f], bool)
+            if k > 1:
+                frame = cv2.resize(frame, None, fx=k, fy=k, interpolation=cv2.INTER_NEAREST)
+                mask = mask.repeat(k, 0).repeat(k, 1)
+            h, w = frame.shape[:2]
             low = None if scores is None else np.asarray(scores[f]) < low_score
             left = frame.copy()
-            mid = draw_2d(masks[f], joints2d[f], low=low)
+            # pixel centres: original (x, y) -> k x + (k - 1) / 2
+            mid = draw_2d(mask, k * np.asarray(joints2d[f], float) + (k - 1) / 2, low=low)
             right = renderer.render(joints3d[f])
             img = np.concatenate([left, mid, right], axis=1)
             fs = max(0.4, h / 600)

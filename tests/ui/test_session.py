@@ -35,7 +35,11 @@ def test_depth_edit_relifts_from_that_frame_on_and_saves(walk_clip, tmp_path):
     old_sign = s.signs[:, k].copy()
     ms = s.set_depth(10, "l_lower_arm", -int(old_sign[10]))
     assert ms > 0
-    assert (s.signs[10:, k] == -old_sign[10]).all()  # carried forward to the end
+    # carried forward until the segment next passes through the image plane (after
+    # that the proposals decide again)
+    passes = np.flatnonzero(s._near_plane[11:, k])
+    stop = 11 + int(passes[0]) if passes.size else walk_clip.n_frames
+    assert stop > 12 and (s.signs[10:stop, k] == -old_sign[10]).all()
     dz_old = before[10, b, 2] - before[10, a, 2]
     dz_new = s.joints3d[10, b, 2] - s.joints3d[10, a, 2]
     # Eq. 2.2: the same depth magnitude, the other sign (unless the segment is in the plane)

@@ -26,6 +26,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--png", metavar="DIR", help="write PNG frames into DIR instead")
     parser.add_argument("--height", type=float, default=1.75, metavar="M",
                         help="subject's height in metres when converting (default 1.75)")
+    parser.add_argument("--min-height", type=int, default=360, metavar="PX",
+                        help="enlarge the panels of smaller videos by a whole factor to at "
+                             "least PX pixels tall (default 360; 0: never)")
 
 
 def _load(path) -> dict:
@@ -66,7 +69,7 @@ def run(args) -> int:
     frames = (f for i, f in enumerate(iter_frames(args.video)) if i < n)
     imgs = review_frames(frames, d["masks"], d["joints2d"], d["bvh_joints3d"],
                          scores=d.get("scores"), similarity=d.get("similarity"),
-                         height=args.height)
+                         height=args.height, min_height=args.min_height)
     if args.png:
         out = Path(args.png)
         out.mkdir(parents=True, exist_ok=True)
