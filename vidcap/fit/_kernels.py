@@ -95,6 +95,20 @@ def row_range(p0, p1, radii, b, y0, y1):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def insert_run(first, last, n, f, e):
+    """Insert the column run ``[f, e)`` into the ``n`` runs sorted by first column
+    (insertion sort, a handful of segments per row); returns the new count."""
+    j = n
+    while j > 0 and first[j - 1] > f:
+        first[j] = first[j - 1]
+        last[j] = last[j - 1]
+        j -= 1
+    first[j] = f
+    last[j] = e
+    return n + 1
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
     """Add candidate b's merged-span weights (table t, rows y0..y1-1) to out (C,)."""
     n_k = p0.shape[1]
@@ -110,14 +124,7 @@ def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
             e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
             if e <= f:
                 continue
-            j = m  # insertion sort by first column
-            while j > 0 and first[j - 1] > f:
-                first[j] = first[j - 1]
-                last[j] = last[j - 1]
-                j -= 1
-            first[j] = f
-            last[j] = e
-            m += 1
+            m = insert_run(first, last, m, f, e)
         if m == 0:
             continue
         s, e = first[0], last[0]
@@ -354,14 +361,7 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
                 for x in range(f, e):
                     cov[x] = 1
                 continue
-            j = n  # insertion sort by first column, then merge (as count_one)
-            while j > 0 and first[j - 1] > f:
-                first[j] = first[j - 1]
-                last[j] = last[j - 1]
-                j -= 1
-            first[j] = f
-            last[j] = e
-            n += 1
+            n = insert_run(first, last, n, f, e)  # then merged, as in count_one
         if not table:
             if n == 0:
                 continue

@@ -656,6 +656,20 @@ def limb_similarity(values, form, scale, start, old_end, p0s, p1s, own, radii, c
                        i_base, rows=rows, caps=caps)(values)
 
 
+def _similarity_terms(kernel, values, angle, sign, k0, k1, rest) -> np.ndarray:
+    """S (Eq. 3.3) of every candidate value from a compiled limb/group kernel: the kernel
+    writes the exponent and the (1 - p) factor per candidate, flat (values.size,)."""
+    x = np.empty(values.size)
+    q = np.empty(values.size)
+    if angle:  # direction(): (cos, -sin), times the length
+        kernel(np.cos(values), np.sin(values), sign, k0, k1, *rest, x, q)
+    else:
+        kernel(values, values, sign, k0, k1, *rest, x, q)
+    np.exp(x, out=x)
+    x *= q
+    return x
+
+
 def limb_scorer(form, scale, start, old_end, p0s, p1s, own, radii, cum, a, m_base, i_base, *,
                 rows, caps: bool = True):
     """:func:`limb_similarity` with everything but ``values`` bound once per search.
@@ -687,16 +701,7 @@ def limb_scorer(form, scale, start, old_end, p0s, p1s, own, radii, cum, a, m_bas
     kernel = kernels[7]
 
     def compiled(values):
-        values = _carray(values, np.float64)
-        x = np.empty(len(values))
-        q = np.empty(len(values))
-        if angle:  # direction(): (cos, -sin), times the length
-            kernel(np.cos(values), np.sin(values), sign, k0, k1, *rest, x, q)
-        else:
-            kernel(values, values, sign, k0, k1, *rest, x, q)
-        np.exp(x, out=x)
-        x *= q
-        return x
+        return _similarity_terms(kernel, _carray(values, np.float64), angle, sign, k0, k1, rest)
 
     return compiled
 
@@ -778,16 +783,7 @@ def group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
 
     def compiled(values):
         values = _carray(values, np.float64)
-        n, n_b = values.shape
-        x = np.empty(n * n_b)
-        q = np.empty(n * n_b)
-        if angle:  # direction(): (cos, -sin), times the length
-            kernel(np.cos(values), np.sin(values), sign, k0, k1, *rest, x, q)
-        else:
-            kernel(values, values, sign, k0, k1, *rest, x, q)
-        np.exp(x, out=x)
-        x *= q
-        return x.reshape(n, n_b)
+        return _similarity_terms(kernel, values, angle, sign, k0, k1, rest).reshape(values.shape)
 
     return compiled
 
