@@ -109,6 +109,28 @@ def insert_run(first, last, n, f, e):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def merge_runs(first, last, n):
+    """Merge ``n`` runs sorted by first column into disjoint runs, in place; returns
+    how many there are."""
+    if n == 0:
+        return 0
+    out = 0
+    s, e = first[0], last[0]
+    for k in range(1, n):
+        if first[k] <= e:
+            if last[k] > e:
+                e = last[k]
+            continue
+        first[out] = s
+        last[out] = e
+        out += 1
+        s, e = first[k], last[k]
+    first[out] = s
+    last[out] = e
+    return out + 1
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
     """Add candidate b's merged-span weights (table t, rows y0..y1-1) to out (C,)."""
     n_k = p0.shape[1]
@@ -125,18 +147,9 @@ def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
             if e <= f:
                 continue
             m = insert_run(first, last, m, f, e)
-        if m == 0:
-            continue
-        s, e = first[0], last[0]
-        for k in range(1, m + 1):
-            if k < m and first[k] <= e:
-                if last[k] > e:
-                    e = last[k]
-                continue
+        for r in range(merge_runs(first, last, m)):
             for c in range(n_c):
-                out[c] += cum[t, c, y, e] - cum[t, c, y, s]
-            if k < m:
-                s, e = first[k], last[k]
+                out[c] += cum[t, c, y, last[r]] - cum[t, c, y, first[r]]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -361,20 +374,11 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
                 for x in range(f, e):
                     cov[x] = 1
                 continue
-            n = insert_run(first, last, n, f, e)  # then merged, as in count_one
+            n = insert_run(first, last, n, f, e)
         if not table:
-            if n == 0:
-                continue
-            s, e = first[0], last[0]
-            for k in range(1, n + 1):
-                if k < n and first[k] <= e:
-                    if last[k] > e:
-                        e = last[k]
-                    continue
-                m += e - s
-                i += sil_cum[y, e] - sil_cum[y, s]
-                if k < n:
-                    s, e = first[k], last[k]
+            for r in range(merge_runs(first, last, n)):
+                m += last[r] - first[r]
+                i += sil_cum[y, last[r]] - sil_cum[y, first[r]]
             continue
         c0 = 0
         c1 = 0
