@@ -187,11 +187,8 @@ def similarity_terms(p0, p1, radii, table, cum, y0, y1, caps, a, m_base, i_base,
     d = np.zeros(2, np.int64)
     for b in range(n_b):
         t = table[b]
-        d[0] = 0
-        d[1] = 0
-        r0, r1 = row_range(p0, p1, radii[t], b, y0, y1)
-        count_one(p0, p1, radii[t], b, cum, t, r0, r1, caps, first, last, setup, d)
-        x[b], q[b] = _terms(a, m_base[t] + d[0], i_base[t] + d[1])
+        x[b], q[b] = candidate_terms(p0, p1, radii[t], b, cum, t, y0, y1, caps, first, last,
+                                     setup, d, a, m_base[t], i_base[t])
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -202,6 +199,17 @@ def _terms(a, m, i):
     p = (a - i) / safe
     n = (m - i) / safe
     return -p - n, 1.0 - p
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def candidate_terms(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, d, a, m0, i0):
+    """Eq. 3.3's terms (:func:`_terms`) for candidate b against table t, whose base model
+    has m0 pixels, i0 of them on the silhouette; d (2,) is scratch."""
+    d[0] = 0
+    d[1] = 0
+    r0, r1 = row_range(p0, p1, radii, b, y0, y1)
+    count_one(p0, p1, radii, b, cum, t, r0, r1, caps, first, last, setup, d)
+    return _terms(a, m0 + d[0], i0 + d[1])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -232,11 +240,8 @@ def limb_terms(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, radii, cu
             p0[0, k, 1] = p0s[k, 1] + dy * notown[k]
             p1[0, k, 0] = p1s[k, 0] + dx
             p1[0, k, 1] = p1s[k, 1] + dy
-        d[0] = 0
-        d[1] = 0
-        r0, r1 = row_range(p0, p1, radii[0], 0, y0, y1)
-        count_one(p0, p1, radii[0], 0, cum, 0, r0, r1, caps, first, last, setup, d)
-        x[b], q[b] = _terms(a, m_base[0] + d[0], i_base[0] + d[1])
+        x[b], q[b] = candidate_terms(p0, p1, radii[0], 0, cum, 0, y0, y1, caps, first, last,
+                                     setup, d, a, m_base[0], i_base[0])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -261,11 +266,8 @@ def pose_terms(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip,
             p0[0, k, 1] = jb[0, prox[k], 1]
             p1[0, k, 0] = jb[0, dist[k], 0]
             p1[0, k, 1] = jb[0, dist[k], 1]
-        d[0] = 0
-        d[1] = 0
-        r0, r1 = row_range(p0, p1, radii[0], 0, y0, y1)
-        count_one(p0, p1, radii[0], 0, cum, 0, r0, r1, caps, first, last, setup, d)
-        x[b], q[b] = _terms(a, m_base[0] + d[0], i_base[0] + d[1])
+        x[b], q[b] = candidate_terms(p0, p1, radii[0], 0, cum, 0, y0, y1, caps, first, last,
+                                     setup, d, a, m_base[0], i_base[0])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -633,8 +635,6 @@ def group_terms(ca, cb, sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, radii, cu
                     p0[0, 1, 1] = ch0[n, 1] + dy
                     p1[0, 1, 0] = ch1[n, 0] + dx
                     p1[0, 1, 1] = ch1[n, 1] + dy
-            d[0] = 0
-            d[1] = 0
-            r0, r1 = row_range(p0, p1, radii[n], 0, y0, y1)
-            count_one(p0, p1, radii[n], 0, cum, n, r0, r1, caps, first, last, setup, d)
-            x[n * n_b + b], q[n * n_b + b] = _terms(a, m_base[n] + d[0], i_base[n] + d[1])
+            x[n * n_b + b], q[n * n_b + b] = candidate_terms(
+                p0, p1, radii[n], 0, cum, n, y0, y1, caps, first, last, setup, d, a,
+                m_base[n], i_base[n])
