@@ -110,6 +110,7 @@ from vidcap.fit.raster import (
     _PROX,
     DESCENDANTS,
     NormalisedMask,
+    _carray,
     base_tables,
     direction,
     draw_pose,
@@ -302,13 +303,6 @@ class Pose2D:
             raise InputFileError(f"not a pose2d file ({exc})", path) from exc
 
 
-def _c64(a) -> np.ndarray:
-    """``a`` as a C-contiguous float64 array (no copy if it already is one)."""
-    if a.dtype == np.float64 and a.flags.c_contiguous:
-        return a
-    return np.ascontiguousarray(a, dtype=np.float64)
-
-
 class _Fitter:
     """Fitting state for one normalised silhouette (all lengths in normalised px)."""
 
@@ -432,8 +426,9 @@ class _Fitter:
             if n_b not in tables:
                 tables[n_b] = np.zeros(n_b, np.int64)
             # each candidate's rows are limited to its segments' extent in the kernel
-            return span_similarity(_c64(p0), _c64(p1), radii, cum, a, m_base, i_base,
-                                   rows=(r0, r1), table=tables[n_b], caps=self.caps)
+            return span_similarity(_carray(p0, np.float64), _carray(p1, np.float64), radii,
+                                   cum, a, m_base, i_base, rows=(r0, r1), table=tables[n_b],
+                                   caps=self.caps)
 
         return score
 
