@@ -316,7 +316,7 @@ def pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, h
     c, s = np.cos(angles), np.sin(angles)
     left = angles[:, _SEG["torso"]] + np.pi / 2
     out = np.empty((angles.shape[0], 15, 2))
-    kernels[2](_carray(root, np.float64), c, s, np.cos(left), np.sin(left),
+    kernels.joints(_carray(root, np.float64), c, s, np.cos(left), np.sin(left),
                _carray(foreshortening, np.float64), _carray(spread, np.float64),
                _carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES, out)
     return out
@@ -371,7 +371,7 @@ def draw_segments(
         p1 = _carray(p1, np.float64)
         r = _radii(radii, *p0.shape[:2])
         out = np.zeros((p0.shape[0], h, w), dtype=bool)
-        kernels[1](p0, p1, r, float(origin[0]), float(origin[1]), bool(caps), out)
+        kernels.draw(p0, p1, r, float(origin[0]), float(origin[1]), bool(caps), out)
         return out
     first, last = segment_spans(p0, p1, radii, np.arange(origin[1], origin[1] + h), caps=caps)
     cols = np.arange(origin[0], origin[0] + w)
@@ -478,13 +478,13 @@ def draw_pose(joints: np.ndarray, radii: np.ndarray, shape: tuple[int, int], *,
 # --------------------------------------------------------------------------- span counting
 @functools.lru_cache(maxsize=1)
 def _kernels():
-    """The compiled (span-counting, drawing) kernels, or None when numba is unavailable."""
+    """The compiled kernels (the module :mod:`vidcap.fit._kernels`), or None when numba
+    is unavailable (then every caller takes its numpy path, with the same results)."""
     try:  # importing numba costs ~0.5 s: only when a kernel is first needed
         from vidcap.fit import _kernels as k
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
-    return (k.counts, k.draw, k.joints, k.similarity_terms, k.base_tables, k.group_tables,
-            k.shift_overlap, k.limb_terms, k.pose_terms, k.group_terms)
+    return k
 
 
 def _carray(a, dtype) -> np.ndarray:
@@ -569,7 +569,7 @@ def span_counts(p0, p1, radii, cum, *, rows=None, table=None, caps: bool = True)
         return out
     kernels = _kernels()
     if kernels is not None:
-        kernels[0](p0, p1, radii, table, cum, y0, y1, bool(caps), out)
+        kernels.counts(p0, p1, radii, table, cum, y0, y1, bool(caps), out)
         return out
     w = cum.shape[3] - 1
     first, last = segment_spans(p0, p1, radii, np.arange(y0, y1), caps=caps)  # (B, K, R)
@@ -621,7 +621,8 @@ def span_similarity(p0, p1, radii, cum, a, m_base, i_base, *, rows, table,
         return similarity_from_counts(a, m_base[table] + d[:, 0], i_base[table] + d[:, 1])
     x = np.empty(n_b)
     q = np.empty(n_b)
-    kernels[3](p0, p1, radii, table, cum, y0, y1, bool(caps), int(a), m_base, i_base, x, q)
+    kernels.similarity_terms(p0, p1, radii, table, cum, y0, y1, bool(caps), int(a), m_base,
+                             i_base, x, q)
     return np.exp(x) * q
 
 
@@ -698,7 +699,7 @@ def limb_scorer(form, scale, start, old_end, p0s, p1s, own, radii, cum, a, m_bas
     rest = (start, old_end, _carray(p0s, np.float64), _carray(p1s, np.float64),
             (~np.asarray(own, bool)).astype(np.float64), _carray(radii, np.float64), cum,
             y0, y1, bool(caps), int(a), m_base, i_base)
-    kernel = kernels[7]
+    kernel = kernels.limb_terms
 
     def compiled(values):
         return _similarity_terms(kernel, _carray(values, np.float64), angle, sign, k0, k1, rest)
@@ -779,7 +780,7 @@ def group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
     rest = (_carray(own0, np.float64), _carray(own1, np.float64), _carray(ch0, np.float64),
             _carray(ch1, np.float64), _carray(leaf, np.bool_), k, _carray(radii, np.float64),
             cum, 0, cum.shape[2], bool(caps), int(a), m_base, i_base)
-    kernel = kernels[9]
+    kernel = kernels.group_terms
 
     def compiled(values):
         values = _carray(values, np.float64)
@@ -833,7 +834,7 @@ def pose_scorer(lengths, shoulder, hip, segments, radii, cum, a, m_base, i_base,
     head = (_carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES,
             _PROX[segments].astype(np.int64), _DIST[segments].astype(np.int64),
             _carray(radii, np.float64), cum, y0, y1, bool(caps), int(a), m_base, i_base)
-    kernel = kernels[8]
+    kernel = kernels.pose_terms
     torso = _SEG["torso"]
 
     def compiled(root, angles, foreshortening, spread):
@@ -894,7 +895,7 @@ def base_tables(p0, p1, radii, sil, *, rows=None, reach=None, sil_cum=None,
     if kernels is not None and r1 > r0:
         sil = _carray(sil, np.bool_)
         sil_cum = row_prefix_sums(sil) if sil_cum is None else _carray(sil_cum, np.int32)
-        m, i = kernels[4](p0, p1, _carray(radii, np.float64), sil, sil_cum, r0, r1, f0, f1,
+        m, i = kernels.base_tables(p0, p1, _carray(radii, np.float64), sil, sil_cum, r0, r1, f0, f1,
                           bool(caps), cum[0])
         return cum, int(m), int(i)
     base = draw_segments(p0[None], p1[None], np.asarray(radii), (h, w), caps=caps)[0]
@@ -940,7 +941,7 @@ def group_tables(masks, segs, child, sil, *, rows=None):
     if kernels is not None:
         m_base = np.zeros(n, np.int64)
         i_base = np.zeros(n, np.int64)
-        kernels[5](_carray(masks, np.bool_), segs, child, _carray(sil, np.bool_),
+        kernels.group_tables(_carray(masks, np.bool_), segs, child, _carray(sil, np.bool_),
                    _carray(rows, np.int64), cum, m_base, i_base)
         return cum, m_base, i_base
     # pixels covered by more segments than the pair's own
@@ -974,7 +975,7 @@ def shift_overlaps(sil: np.ndarray, model: np.ndarray, n: int) -> np.ndarray:
     kernels = _kernels()
     if kernels is not None:
         out = np.empty(2 * n + 1, np.int64)
-        kernels[6](_carray(sil, np.bool_), _carray(model, np.bool_), int(n), out)
+        kernels.shift_overlap(_carray(sil, np.bool_), _carray(model, np.bool_), int(n), out)
         return out
     padded = np.pad(sil, ((0, 0), (n, n)))
     windows = np.lib.stride_tricks.sliding_window_view(padded, sil.shape[1], axis=1)

@@ -29,26 +29,15 @@ Deviations from the pseudo-code, where it does not do what the text says:
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-
-@functools.lru_cache(maxsize=1)
-def _kernels():
-    """The compiled search helpers (:mod:`vidcap.fit._kernels`), or None without numba.
-
-    They repeat the float operations of the numpy code they replace, so a search
-    returns the same values either way (tests/fit/test_fit_search.py).
-    """
-    try:
-        from vidcap.fit import _kernels as k
-    except ImportError:  # pragma: no cover - numba is a declared dependency
-        return None
-    return k
+# The compiled search helpers repeat the float operations of the numpy code they
+# replace, so a search returns the same values either way (tests/fit/test_fit_search.py).
+from vidcap.fit.raster import _kernels
 
 
 @dataclass(frozen=True)
