@@ -195,17 +195,21 @@ class FitPool:
     ----------
     jobs : int
         Worker processes.
+    warm : bool
+        Start every worker now and load its kernels (:func:`warm_up`); false: workers
+        start with their first chunk.
     """
 
-    def __init__(self, jobs: int):
+    def __init__(self, jobs: int, *, warm: bool = True):
         self.jobs = max(1, int(jobs))
         ctx = _context()
         self.queue = ctx.Queue()
         self.executor = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx,
                                             initializer=_init_worker,
-                                            initargs=(self.queue, True))
-        for _ in range(self.jobs):  # start every worker now
-            self.executor.submit(_ready)
+                                            initargs=(self.queue, warm))
+        if warm:
+            for _ in range(self.jobs):  # start every worker now
+                self.executor.submit(_ready)
 
     def __enter__(self) -> FitPool:
         return self
@@ -284,12 +288,8 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
     own = pool is None
     if own:
-        ctx = _context()
-        q = ctx.Queue()
-        executor = ProcessPoolExecutor(max_workers=min(jobs, len(bounds)), mp_context=ctx,
-                                       initializer=_init_worker, initargs=(q,))
-    else:
-        q, executor = pool.queue, pool.executor
+        pool = FitPool(min(jobs, len(bounds)), warm=False)
+    q, executor = pool.queue, pool.executor
     width = masks.shape[-1]
     try:
         futures = [executor.submit(_fit_chunk, np.packbits(masks[s:e], axis=-1), width, b - s,
@@ -312,7 +312,7 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         parts = [f.result() for f in futures]
     finally:
         if own:
-            executor.shutdown(wait=True, cancel_futures=True)
+            pool.close()
     out = {k: np.empty((n, *np.shape(v)[1:]), dtype=np.asarray(v).dtype)
            for k, v in parts[0].items() if k in _PER_FRAME}
     for (s, b, e), part in zip(bounds, parts, strict=True):
