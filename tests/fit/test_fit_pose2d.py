@@ -177,3 +177,54 @@ def test_into_range_scalar_path_equals_array_path():
     got = np.array([_into_range(a, b, c) for a, b, c in zip(angles, lo, hi, strict=True)])
     np.testing.assert_array_equal(got, want)
     assert np.all((want >= lo - 1e-12) & (want <= hi + 1e-12))
+
+
+def test_compiled_searches_equal_the_scorer_path(monkeypatch):
+    """Each kind of search run as one compiled call (limb angle and ratio, pose angles,
+    torso about the neck, foreshortening) ends where interval_search with the Python
+    scorer does, with the same score, margin and number of candidates."""
+    import vidcap.fit.pose2d as pose2d
+    from vidcap.fit.raster import normalise_mask
+
+    mask, _ = _figure([96, 84, 240, 300, 200, 330, 262, 280, 300, 250],
+                      fore=[1, 1, 0.8, 1, 0.7, 1, 1, 0.9, 1, 1])
+    norm = normalise_mask(mask, height=80)
+    s = SEGMENT_INDEX
+
+    def run(f):
+        out = []
+        out.append(f.search_angle(s["torso"], with_segments=(s["head"],)))
+        out.append(f.search_angle(s["head"], start=f.angles[s["head"]] + 0.3,
+                                  interval=np.deg2rad(40)))
+        out.append(f.search_torso_about_neck(start=f.angles[s["torso"]], interval=0.5))
+        for seg in ("l_upper_arm", "l_lower_arm", "r_lower_leg"):
+            out.append(f.search_angle(s[seg]))
+            out.append(f.search_angle(s[seg], start=f.angles[s[seg]] - 0.2, interval=0.3,
+                                      prefer=f.angles[s[seg]]))
+            out.append(f.search_fore(s[seg]))
+        out.append(f.search_fore(s["l_upper_leg"], unit=True))
+        out.append(f.search_fore(s["head"]))
+        return out, f.state()
+
+    def fitter():
+        f = pose2d._Fitter(norm, caps=False)
+        f.place_torso()
+        f.drawn[:] = True
+        return f
+
+    kernels = pose2d._kernels()
+    assert kernels is not None
+    calls = []
+    search_1d = kernels.search_1d
+    monkeypatch.setattr(kernels, "search_1d", lambda *a: calls.append(a[11]) or search_1d(*a))
+    compiled, st_c = run(fitter())
+    assert sorted(set(calls)) == [0, 1, 2, 3, 4]  # every kind of candidate was compiled
+    monkeypatch.setattr(pose2d, "_kernels", lambda: None)
+    python, st_p = run(fitter())
+    for a, b in zip(compiled, python, strict=True):
+        assert a.value == pytest.approx(b.value, abs=1e-12)
+        assert a.score == pytest.approx(b.score, abs=1e-12)
+        assert a.runner_up == pytest.approx(b.runner_up, abs=1e-12)
+        assert (a.evaluations, a.iterations) == (b.evaluations, b.iterations)
+    for x, y in zip(st_c[:3], st_p[:3], strict=True):
+        np.testing.assert_allclose(x, y, atol=1e-12)

@@ -12,6 +12,14 @@ import math
 import numba
 import numpy as np
 
+from vidcap.fit.raster import (
+    SEARCH_LIMB_ANGLE,
+    SEARCH_LIMB_RATIO,
+    SEARCH_POSE_ANGLES,
+    SEARCH_POSE_FORE,
+    SEARCH_POSE_TORSO_NECK,
+)
+
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def span_setup(x0, y0, x1, y1, r, out):
@@ -170,6 +178,28 @@ def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
         count_one(p0, p1, radii[b], b, cum, table[b], r0, r1, caps, first, last, setup, out[b])
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def candidate_scratch(n_k):
+    """Scratch for scoring one candidate of K segments: ends p0, p1 (1, K, 2), span runs
+    first, last (K,), span set-up (K, 9), counts d (2,)."""
+    return (np.empty((1, n_k, 2)), np.empty((1, n_k, 2)), np.empty(n_k, np.int64),
+            np.empty(n_k, np.int64), np.empty((n_k, 9)), np.zeros(2, np.int64))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def pose_candidate(jb, prox, dist, p0, p1, radii, cum, y0, y1, caps, first, last, setup, d, a,
+                   m0, i0):
+    """Eq. 3.3's terms of a pose whose joints are jb (1, 15, 2) and whose segments
+    prox[k] -> dist[k] move (one table)."""
+    for k in range(prox.shape[0]):
+        p0[0, k, 0] = jb[0, prox[k], 0]
+        p0[0, k, 1] = jb[0, prox[k], 1]
+        p1[0, k, 0] = jb[0, dist[k], 0]
+        p1[0, k, 1] = jb[0, dist[k], 1]
+    return candidate_terms(p0, p1, radii, 0, cum, 0, y0, y1, caps, first, last, setup, d, a,
+                           m0, i0)
+
+
 @numba.njit(cache=True, nogil=True)
 def similarity_terms(p0, p1, radii, table, cum, y0, y1, caps, a, m_base, i_base, x, q):
     """Eq. 3.3's terms for candidate b: S = exp(x[b]) * q[b] (exp taken by numpy).
@@ -180,11 +210,8 @@ def similarity_terms(p0, p1, radii, table, cum, y0, y1, caps, a, m_base, i_base,
     silhouette count; x = -p - n and q = 1 - p with the float operations of
     ``similarity_from_counts``.
     """
-    n_b, n_k = p0.shape[0], p0.shape[1]
-    first = np.empty(n_k, np.int64)
-    last = np.empty(n_k, np.int64)
-    setup = np.empty((n_k, 9))
-    d = np.zeros(2, np.int64)
+    n_b = p0.shape[0]
+    _, _, first, last, setup, d = candidate_scratch(p0.shape[1])
     for b in range(n_b):
         t = table[b]
         x[b], q[b] = candidate_terms(p0, p1, radii[t], b, cum, t, y0, y1, caps, first, last,
@@ -212,6 +239,22 @@ def candidate_terms(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, 
     return _terms(a, m0 + d[0], i0 + d[1])
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def limb_candidate(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, p0, p1, radii, cum,
+                   y0, y1, caps, first, last, setup, d, a, m0, i0):
+    """Eq. 3.3's terms of one candidate that moves a limb segment's distal end
+    (:func:`limb_terms`); p0, p1 (1, K, 2) are scratch."""
+    dx = start[0] + ca * k0 - old_end[0]
+    dy = start[1] + (sign * cb) * k1 - old_end[1]
+    for k in range(p0s.shape[0]):
+        p0[0, k, 0] = p0s[k, 0] + dx * notown[k]
+        p0[0, k, 1] = p0s[k, 1] + dy * notown[k]
+        p1[0, k, 0] = p1s[k, 0] + dx
+        p1[0, k, 1] = p1s[k, 1] + dy
+    return candidate_terms(p0, p1, radii, 0, cum, 0, y0, y1, caps, first, last, setup, d, a,
+                           m0, i0)
+
+
 @numba.njit(cache=True, nogil=True)
 def limb_terms(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, radii, cum, y0, y1,
                caps, a, m_base, i_base, x, q):
@@ -224,24 +267,121 @@ def limb_terms(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, radii, cu
     notown[k] = 1.0 (children; 0.0: the segment itself) - the floats of the numpy
     end-point code. One table (cum (1, 2, h, w + 1), radii (1, K)).
     """
-    n_b = ca.shape[0]
-    n_k = p0s.shape[0]
-    p0 = np.empty((1, n_k, 2))
-    p1 = np.empty((1, n_k, 2))
-    first = np.empty(n_k, np.int64)
-    last = np.empty(n_k, np.int64)
-    setup = np.empty((n_k, 9))
-    d = np.zeros(2, np.int64)
-    for b in range(n_b):
-        dx = start[0] + ca[b] * k0 - old_end[0]
-        dy = start[1] + (sign * cb[b]) * k1 - old_end[1]
-        for k in range(n_k):
-            p0[0, k, 0] = p0s[k, 0] + dx * notown[k]
-            p0[0, k, 1] = p0s[k, 1] + dy * notown[k]
-            p1[0, k, 0] = p1s[k, 0] + dx
-            p1[0, k, 1] = p1s[k, 1] + dy
-        x[b], q[b] = candidate_terms(p0, p1, radii[0], 0, cum, 0, y0, y1, caps, first, last,
-                                     setup, d, a, m_base[0], i_base[0])
+    p0, p1, first, last, setup, d = candidate_scratch(p0s.shape[0])
+    for b in range(ca.shape[0]):
+        x[b], q[b] = limb_candidate(ca[b], cb[b], sign, k0, k1, start, old_end, p0s, p1s,
+                                    notown, p0, p1, radii[0], cum, y0, y1, caps, first, last,
+                                    setup, d, a, m_base[0], i_base[0])
+
+
+@numba.njit(cache=True, nogil=True)
+def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
+              has_prefer, mode, limb, pose, radii, cum, y0, y1, caps, a, m0, i0, out):
+    """A whole ``interval_search`` in one call: its loop, with the same grid, tie-break
+    and runner-up kernels, scoring each candidate as :func:`limb_terms` or
+    :func:`pose_terms` do, S = exp(-p - n) (1 - p).
+
+    cos, sin and exp are libm's here, numpy's in the Python path: the same values
+    except where numpy's SIMD functions differ in the last bit.
+
+    ``best``: the first interval's centre (the warm start when ``warm``), clipped
+    as ``interval_search`` does; ``width``: the first interval; ``period`` > 0 when
+    candidates wrap, ``gap_period`` > 0 when distances are periodic. ``mode``: one
+    of the SEARCH_* kinds. ``limb`` = (sign, k0, k1, start, old_end, p0s, p1s,
+    notown) as :func:`limb_terms` takes them; ``pose`` = (idx, coef, neck, length,
+    root, angles, fore, spread, lengths, shoulder, hip, order, parent, kind, prox,
+    dist): the current pose (root (2,), angles, fore (10,), spread), what a value v
+    sets (SEARCH_POSE_ANGLES: angles[idx] = v + coef; SEARCH_POSE_TORSO_NECK: the
+    torso angle idx[0] = v and the root = neck - direction(v) * length;
+    SEARCH_POSE_FORE: fore[idx] = min(v * coef, 1)) and the moving segments' joints
+    prox[k] -> dist[k].
+    radii (K,): the moving segments'; one table (cum (1, 2, h, w + 1)), m0, i0
+    the counts of what does not move. out (5,): value, score, runner-up,
+    evaluations, iterations. Needs divisions >= 3 (the interval must shrink).
+    """
+    sign, k0, k1, start, old_end, p0s, p1s, notown = limb
+    (idx, coef, neck, length, root, angles, fore, spread, lengths, shoulder, hip, order,
+     parent, kind, prox, dist) = pose
+    cap = 64 * (divisions + 2)
+    values = np.empty(cap)
+    scores = np.empty(cap)
+    p0, p1, first, last, setup, d = candidate_scratch(radii.shape[0])
+    # one candidate pose (pose modes)
+    r1 = np.empty((1, 2))
+    ang = angles.copy()
+    c1 = np.empty((1, 10))
+    s1 = np.empty((1, 10))
+    cl = np.empty(1)
+    sl = np.empty(1)
+    f1 = np.empty((1, 10))
+    f1[0] = fore
+    sp = np.full(1, spread)
+    jb = np.empty((1, 15, 2))
+    torso = 0
+    step = width / divisions
+    first_step = step
+    best_score = -np.inf
+    used = 0
+    iterations = 0
+    while True:
+        begin, end = best - width / 2, best + width / 2
+        if period <= 0:
+            begin, end = max(begin, lo), min(end, hi)
+        n = int(math.floor((end - begin) / step + 1e-9)) + 1
+        extra = 1 if (iterations == 0 and warm) else 0
+        if used + n + extra > cap:
+            break
+        cand = values[used:used + n + extra]
+        s = scores[used:used + n + extra]
+        if extra:
+            search_grid_start(begin, step, best, lo, period, cand)
+        else:
+            search_grid(begin, step, lo, period, cand)
+        for b in range(cand.shape[0]):
+            v = cand[b]
+            if mode == SEARCH_LIMB_ANGLE or mode == SEARCH_LIMB_RATIO:
+                ca, cb = (math.cos(v), math.sin(v)) if mode == SEARCH_LIMB_ANGLE else (v, v)
+                x, q = limb_candidate(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown,
+                                      p0, p1, radii, cum, y0, y1, caps, first, last, setup, d,
+                                      a, m0, i0)
+            else:
+                r1[0, 0] = root[0]
+                r1[0, 1] = root[1]
+                if mode == SEARCH_POSE_ANGLES:
+                    for t in range(idx.shape[0]):
+                        ang[idx[t]] = v + coef[t]
+                elif mode == SEARCH_POSE_TORSO_NECK:
+                    ang[idx[0]] = v
+                    r1[0, 0] = neck[0] - math.cos(v) * length
+                    r1[0, 1] = neck[1] - (-math.sin(v)) * length
+                elif mode == SEARCH_POSE_FORE:
+                    for t in range(idx.shape[0]):
+                        f1[0, idx[t]] = min(v * coef[t], 1.0)
+                for t in range(10):
+                    c1[0, t] = math.cos(ang[t])
+                    s1[0, t] = math.sin(ang[t])
+                left = ang[torso] + np.pi / 2
+                cl[0] = math.cos(left)
+                sl[0] = math.sin(left)
+                joints(r1, c1, s1, cl, sl, f1, sp, lengths, shoulder, hip, order, parent, kind,
+                       jb)
+                x, q = pose_candidate(jb, prox, dist, p0, p1, radii, cum, y0, y1, caps, first,
+                                      last, setup, d, a, m0, i0)
+            s[b] = math.exp(x) * q
+        used += cand.shape[0]
+        iterations += 1
+        k = search_pick(cand, s, prefer if has_prefer else best, gap_period)
+        if s[k] > best_score + 1e-12:
+            best_score, best = s[k], cand[k]
+        width = 2 * width / divisions
+        step = 2 * step / divisions
+        if not width > min_step:
+            break
+    out[0] = best
+    out[1] = best_score
+    out[2] = search_runner(values[:used], scores[:used], best, period, first_step * 1.01)
+    out[3] = used
+    out[4] = iterations
 
 
 @numba.njit(cache=True, nogil=True)
@@ -249,25 +389,13 @@ def pose_terms(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip,
                kind, prox, dist, radii, cum, y0, y1, caps, a, m_base, i_base, x, q):
     """:func:`similarity_terms` of whole candidate poses (as :func:`joints` places them)
     whose segments prox[k] -> dist[k] (joint indices) move. One table."""
-    n_b = root.shape[0]
-    n_k = prox.shape[0]
     jb = np.empty((1, 15, 2))
-    p0 = np.empty((1, n_k, 2))
-    p1 = np.empty((1, n_k, 2))
-    first = np.empty(n_k, np.int64)
-    last = np.empty(n_k, np.int64)
-    setup = np.empty((n_k, 9))
-    d = np.zeros(2, np.int64)
-    for b in range(n_b):
+    p0, p1, first, last, setup, d = candidate_scratch(prox.shape[0])
+    for b in range(root.shape[0]):
         joints(root[b:b + 1], c[b:b + 1], s[b:b + 1], c_left[b:b + 1], s_left[b:b + 1],
                fore[b:b + 1], spread[b:b + 1], lengths, shoulder, hip, order, parent, kind, jb)
-        for k in range(n_k):
-            p0[0, k, 0] = jb[0, prox[k], 0]
-            p0[0, k, 1] = jb[0, prox[k], 1]
-            p1[0, k, 0] = jb[0, dist[k], 0]
-            p1[0, k, 1] = jb[0, dist[k], 1]
-        x[b], q[b] = candidate_terms(p0, p1, radii[0], 0, cum, 0, y0, y1, caps, first, last,
-                                     setup, d, a, m_base[0], i_base[0])
+        x[b], q[b] = pose_candidate(jb, prox, dist, p0, p1, radii[0], cum, y0, y1, caps, first,
+                                    last, setup, d, a, m_base[0], i_base[0])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -608,12 +736,7 @@ def group_terms(ca, cb, sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, radii, cu
     m_base[n], i_base[n]. The floats of the numpy code.
     """
     n_s, n_b = ca.shape
-    p0 = np.empty((1, n_k, 2))
-    p1 = np.empty((1, n_k, 2))
-    first = np.empty(n_k, np.int64)
-    last = np.empty(n_k, np.int64)
-    setup = np.empty((n_k, 9))
-    d = np.zeros(2, np.int64)
+    p0, p1, first, last, setup, d = candidate_scratch(n_k)
     for n in range(n_s):
         for b in range(n_b):
             ex = own0[n, 0] + ca[n, b] * k0[n]

@@ -107,10 +107,18 @@ from vidcap.fit.contour import (
 )
 from vidcap.fit.raster import (
     _DIST,
+    _KERNEL_TABLES,
     _PROX,
+    _SEG,
     DESCENDANTS,
+    SEARCH_LIMB_ANGLE,
+    SEARCH_LIMB_RATIO,
+    SEARCH_POSE_ANGLES,
+    SEARCH_POSE_FORE,
+    SEARCH_POSE_TORSO_NECK,
     NormalisedMask,
     _carray,
+    _kernels,
     base_tables,
     direction,
     draw_pose,
@@ -128,7 +136,7 @@ from vidcap.fit.raster import (
     span_counts,
     span_similarity,
 )
-from vidcap.fit.search import interval_search, interval_search_many
+from vidcap.fit.search import SearchResult, interval_search, interval_search_many
 from vidcap.fit.similarity import similarity_from_counts
 
 S = {name: i for i, name in enumerate(SEGMENT_NAMES)}
@@ -303,6 +311,17 @@ class Pose2D:
             raise InputFileError(f"not a pose2d file ({exc})", path) from exc
 
 
+# placeholders for the kind of candidate a compiled search does not use (the kernel
+# takes both; their types match the real ones, so one compiled version serves)
+_NO_LIMB = (0.0, 0.0, 0.0, np.zeros(2), np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2)),
+            np.zeros(1))
+_NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), np.zeros(10),
+            np.zeros(10), 0.0, np.zeros(10), 0.0, 0.0, *_KERNEL_TABLES, np.zeros(1, np.int64),
+            np.zeros(1, np.int64))
+_NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
+assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/sin
+
+
 class _Fitter:
     """Fitting state for one normalised silhouette (all lengths in normalised px)."""
 
@@ -371,21 +390,14 @@ class _Fitter:
             self._all_masks = (key, m)
         return self._all_masks[1]
 
-    def scorer(self, ends, moving, rows=None):
-        """Score function for :func:`interval_search`.
-
-        ``ends(values) -> (p0, p1)``, each (B, K, 2), gives the end points of the
-        ``moving`` segments for every candidate; every other drawn segment is drawn
-        once into a base mask. Counts outside the candidates' bounding window are
-        constant and computed once, so a batch only draws and counts its window.
-        """
-        moving = np.asarray(moving, dtype=int)
+    def _tables(self, ends, moving, rows):
+        """The still segments of a search, drawn once (not per candidate): row prefix
+        sums of the pixels a candidate may add to the model, the counts of what does
+        not move, and the silhouette's pixels in the rows searched."""
         r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
         moving_set = set(moving.tolist())
         still = [k for k in range(10) if self.drawn[k] and k not in moving_set]
         j = self.joints()
-        # the still segments, drawn once per search (not per candidate): row prefix
-        # sums of the pixels a candidate may add to the model (no masks per candidate)
         limb = getattr(ends, "limb", None)
         reach = None
         if limb is not None:
@@ -397,9 +409,74 @@ class _Fitter:
                                           self.sil, rows=(r0, r1), reach=reach,
                                           sil_cum=self._sil_cum[1], caps=self.caps)
         a = int(self.sil_rows[r1] - self.sil_rows[r0])
+        return (r0, r1), cum, a, np.array([m_base], np.int64), np.array([i_base], np.int64)
+
+    def search(self, ends, moving, rows, lo, hi, *, divisions, min_step, start=None,
+               interval=None, periodic=None, prefer=None):
+        """:func:`interval_search` of the candidates ``ends`` describes (see
+        :meth:`scorer`), as one compiled call when ``ends`` carries what the kernel
+        needs (a limb's end, or a pose ``action``), else with :meth:`scorer`."""
+        limb = getattr(ends, "limb", None)
+        action = getattr(ends, "action", None)
+        kernels = _kernels()
+        moving = np.asarray(moving, dtype=int)
+        tables = None
+        if kernels is not None and divisions >= 3 and hi > lo and (limb or action):
+            tables = self._tables(ends, moving, rows)
+        if tables is None or tables[0][1] <= tables[0][0]:
+            return interval_search(self.scorer(ends, moving, rows), lo, hi,
+                                   divisions=divisions, min_step=min_step, start=start,
+                                   interval=interval, periodic=periodic, prefer=prefer)
+        (r0, r1), cum, a, m_base, i_base = tables
+        # the same set-up as interval_search's
+        lo, hi = float(lo), float(hi)
+        wrap = periodic is not None and hi - lo >= periodic - 1e-12
+        width = float(hi - lo if interval is None else min(interval, hi - lo))
+        best = 0.5 * (lo + hi) if start is None else float(start)
+        if not wrap:
+            best = min(max(best, lo), hi)
+        if limb is not None:
+            form, scale, p_start, old_end, p0s, p1s, own = limb
+            angle = form == "angle"
+            mode = SEARCH_LIMB_ANGLE if angle else SEARCH_LIMB_RATIO
+            sign, k0, k1 = ((-1.0, float(scale), float(scale)) if angle
+                            else (1.0, float(scale[0]), float(scale[1])))
+            limb_args = (sign, k0, k1, _carray(p_start, np.float64),
+                         _carray(old_end, np.float64), _carray(p0s, np.float64),
+                         _carray(p1s, np.float64), (~np.asarray(own, bool)).astype(np.float64))
+            pose_args = _NO_POSE
+        else:
+            mode, idx, coef, neck, length = action
+            limb_args = _NO_LIMB
+            pose_args = (np.asarray(idx, np.int64), np.asarray(coef, np.float64),
+                         np.asarray(neck, np.float64), float(length), self.root.copy(),
+                         self.angles.copy(), self.fore.copy(),
+                         float(self.spread), _carray(self.L, np.float64), float(self.shoulder),
+                         float(self.hip), *_KERNEL_TABLES, _PROX[moving].astype(np.int64),
+                         _DIST[moving].astype(np.int64))
+        out = np.empty(5)
+        self.batches += 1
+        kernels.search_1d(
+            lo, hi, int(divisions), float(min_step), best, start is not None, width,
+            float(periodic) if wrap else 0.0, float(periodic) if periodic is not None else 0.0,
+            0.0 if prefer is None else float(prefer), prefer is not None, mode, limb_args,
+            pose_args, _carray(self.R[moving], np.float64), cum, r0, r1, bool(self.caps), a,
+            int(m_base[0]), int(i_base[0]), out)
+        return SearchResult(float(out[0]), float(out[1]), float(out[2]), int(out[3]),
+                            int(out[4]))
+
+    def scorer(self, ends, moving, rows=None):
+        """Score function for :func:`interval_search`.
+
+        ``ends(values) -> (p0, p1)``, each (B, K, 2), gives the end points of the
+        ``moving`` segments for every candidate; every other drawn segment is drawn
+        once into a base mask. Counts outside the candidates' bounding window are
+        constant and computed once, so a batch only draws and counts its window.
+        """
+        moving = np.asarray(moving, dtype=int)
+        (r0, r1), cum, a, m_base, i_base = self._tables(ends, moving, rows)
         radii = self.R[moving][None]  # (1, K): one table
-        m_base = np.array([m_base], np.int64)
-        i_base = np.array([i_base], np.int64)
+        limb = getattr(ends, "limb", None)
         tables = {}
 
         pose = getattr(ends, "pose", None)
@@ -432,8 +509,13 @@ class _Fitter:
 
         return score
 
-    def _general_ends(self, make, moving):
-        """End points from whole candidate poses (torso, head, spread, root searches)."""
+    def _general_ends(self, make, moving, action=None):
+        """End points from whole candidate poses (torso, head, spread, root searches).
+
+        ``action``: what ``make`` does, for the compiled search
+        (:meth:`search`): ``(mode, idx, coef, neck, length)`` with ``mode`` one of
+        ``raster.SEARCH_POSE_*``.
+        """
         moving = np.asarray(moving, dtype=int)
 
         def poses(v):
@@ -447,6 +529,7 @@ class _Fitter:
             return jb[:, _PROX[moving]], jb[:, _DIST[moving]]
 
         ends.pose = poses  # what the scorer's compiled pass needs instead
+        ends.action = action
         return ends
 
     def _limb_ends(self, seg, moving, form, scale):
@@ -501,16 +584,16 @@ class _Fitter:
                 ang[:, together] = v[:, None] + offsets
                 return root, ang, fore, spread
 
-            ends = self._general_ends(make, moving)
+            ends = self._general_ends(make, moving, (SEARCH_POSE_ANGLES, together, offsets,
+                                                     _NOWHERE, 0.0))
         periodic = TWO_PI if hi - lo >= TWO_PI - 1e-9 else None
         if start is not None and periodic is None:
             # keep a warm start's interval inside the limits (angles are periodic)
             start = _into_range(start, lo, hi)
         if prefer is not None and periodic is None:
             prefer = _into_range(prefer, lo, hi)
-        res = interval_search(self.scorer(ends, moving, rows), lo, hi, divisions=divisions,
-                              min_step=min_step, start=start, interval=interval,
-                              periodic=periodic, prefer=prefer)
+        res = self.search(ends, moving, rows, lo, hi, divisions=divisions, min_step=min_step,
+                          start=start, interval=interval, periodic=periodic, prefer=prefer)
         self.angles[together] = np.mod(res.value + offsets, TWO_PI)
         self.scores[together] = res.score
         self.margins[together] = res.margin
@@ -534,9 +617,10 @@ class _Fitter:
                 fore[:, together] = np.minimum(v[:, None] * base, 1.0)
                 return root, ang, fore, spread
 
-            ends = self._general_ends(make, moving)
-            res = interval_search(self.scorer(ends, moving), 1.0 / length, 1.0,
-                                  divisions=divisions, min_step=1.0 / length, prefer=1.0)
+            ends = self._general_ends(make, moving, (SEARCH_POSE_FORE, together, base,
+                                                     _NOWHERE, 0.0))
+            res = self.search(ends, moving, None, 1.0 / length, 1.0, divisions=divisions,
+                              min_step=1.0 / length, prefer=1.0)
             self.fore[together] = np.minimum(res.value * base, 1.0)
             return res
         if seg >= 2:
@@ -547,10 +631,11 @@ class _Fitter:
                 fore[:, seg] = v
                 return root, ang, fore, spread
 
-            ends = self._general_ends(make, moving)
+            ends = self._general_ends(make, moving, (SEARCH_POSE_FORE, [seg], [1.0], _NOWHERE,
+                                                     0.0))
         step = 1.0 / length
-        res = interval_search(self.scorer(ends, moving), step, 1.0, divisions=divisions,
-                              min_step=step, start=start, interval=interval, prefer=1.0)
+        res = self.search(ends, moving, None, step, 1.0, divisions=divisions, min_step=step,
+                          start=start, interval=interval, prefer=1.0)
         self.fore[seg] = res.value
         self.scores[seg] = res.score
         self.margins[seg] = res.margin
@@ -751,9 +836,10 @@ class _Fitter:
             ang[:, seg] = v
             return neck - direction(v) * length, ang, fore, spread
 
-        res = interval_search(self.scorer(self._general_ends(make, moving), moving, rows),
-                              lo, hi, divisions=8, min_step=_ONE_DEGREE, start=start,
-                              interval=interval)
+        ends = self._general_ends(make, moving, (SEARCH_POSE_TORSO_NECK, [seg], [0.0], neck,
+                                                 length))
+        res = self.search(ends, moving, rows, lo, hi, divisions=8, min_step=_ONE_DEGREE,
+                          start=start, interval=interval)
         self.angles[seg] = res.value
         self.root = neck - direction(res.value) * length
         self.scores[seg], self.margins[seg] = res.score, res.margin

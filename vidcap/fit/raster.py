@@ -68,6 +68,13 @@ _DIST = SEGMENT_JOINTS[:, 1]
 #: Limb chains: (segment index, parent joint index) in the order joints are placed.
 _SEG = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 
+# The kinds of candidate a compiled 1-D search (``_kernels.search_1d``) scores: a limb
+# segment's distal end moved by an angle or a length ratio (its children follow), or a
+# whole pose in which each value sets some angles, the torso about the neck, or some
+# foreshortening ratios (scaled, at most 1).
+SEARCH_LIMB_ANGLE, SEARCH_LIMB_RATIO = 0, 1
+SEARCH_POSE_ANGLES, SEARCH_POSE_TORSO_NECK, SEARCH_POSE_FORE = 2, 3, 4
+
 
 @dataclass(frozen=True)
 class NormalisedMask:
