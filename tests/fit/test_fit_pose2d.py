@@ -204,7 +204,13 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
             out.append(f.search_fore(s[seg]))
         out.append(f.search_fore(s["l_upper_leg"], unit=True))
         out.append(f.search_fore(s["head"]))
-        return out, f.state()
+        # group searches (lockstep; their own compiled call)
+        uppers = [s[f"{side}_upper_{p}"] for p in ("arm", "leg") for side in "lr"]
+        leaves = [s["head"]] + [s[f"{side}_lower_{p}"] for p in ("arm", "leg") for side in "lr"]
+        f.search_group(uppers, interval=0.3)
+        f.search_group(leaves, interval=0.3)
+        f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
+        return out, (*f.state()[:3], f.scores.copy(), f.margins.copy())
 
     def fitter():
         f = pose2d._Fitter(norm, caps=False)
@@ -215,10 +221,13 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     kernels = pose2d._kernels()
     assert kernels is not None
     calls = []
-    search_1d = kernels.search_1d
+    search_1d, group_search = kernels.search_1d, kernels.group_search
     monkeypatch.setattr(kernels, "search_1d", lambda *a: calls.append(a[11]) or search_1d(*a))
+    monkeypatch.setattr(kernels, "group_search",
+                        lambda *a: calls.append("group") or group_search(*a))
     compiled, st_c = run(fitter())
-    assert sorted(set(calls)) == [0, 1, 2, 3, 4]  # every kind of candidate was compiled
+    # every kind of candidate was scored by a compiled search
+    assert set(calls) == {0, 1, 2, 3, 4, "group"}
     monkeypatch.setattr(pose2d, "_kernels", lambda: None)
     python, st_p = run(fitter())
     for a, b in zip(compiled, python, strict=True):
@@ -226,5 +235,5 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
         assert a.score == pytest.approx(b.score, abs=1e-12)
         assert a.runner_up == pytest.approx(b.runner_up, abs=1e-12)
         assert (a.evaluations, a.iterations) == (b.evaluations, b.iterations)
-    for x, y in zip(st_c[:3], st_p[:3], strict=True):
+    for x, y in zip(st_c, st_p, strict=True):  # root, angles, fore, scores, margins
         np.testing.assert_allclose(x, y, atol=1e-12)

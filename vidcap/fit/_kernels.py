@@ -739,25 +739,85 @@ def group_terms(ca, cb, sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, radii, cu
     p0, p1, first, last, setup, d = candidate_scratch(n_k)
     for n in range(n_s):
         for b in range(n_b):
-            ex = own0[n, 0] + ca[n, b] * k0[n]
-            ey = own0[n, 1] + (sign * cb[n, b]) * k1[n]
-            p0[0, 0, 0] = own0[n, 0]
-            p0[0, 0, 1] = own0[n, 1]
-            p1[0, 0, 0] = ex
-            p1[0, 0, 1] = ey
-            if n_k == 2:
-                if leaf[n]:
-                    p0[0, 1, 0] = own0[n, 0]
-                    p0[0, 1, 1] = own0[n, 1]
-                    p1[0, 1, 0] = ex
-                    p1[0, 1, 1] = ey
-                else:
-                    dx = ex - own1[n, 0]
-                    dy = ey - own1[n, 1]
-                    p0[0, 1, 0] = ch0[n, 0] + dx
-                    p0[0, 1, 1] = ch0[n, 1] + dy
-                    p1[0, 1, 0] = ch1[n, 0] + dx
-                    p1[0, 1, 1] = ch1[n, 1] + dy
-            x[n * n_b + b], q[n * n_b + b] = candidate_terms(
-                p0, p1, radii[n], 0, cum, n, y0, y1, caps, first, last, setup, d, a,
-                m_base[n], i_base[n])
+            x[n * n_b + b], q[n * n_b + b] = group_candidate(
+                n, ca[n, b], cb[n, b], sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, p0, p1,
+                radii, cum, y0, y1, caps, first, last, setup, d, a, m_base, i_base)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def group_candidate(n, ca, cb, sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, p0, p1, radii,
+                    cum, y0, y1, caps, first, last, setup, d, a, m_base, i_base):
+    """Eq. 3.3's terms of one candidate of group search n (:func:`group_terms`)."""
+    ex = own0[n, 0] + ca * k0[n]
+    ey = own0[n, 1] + (sign * cb) * k1[n]
+    p0[0, 0, 0] = own0[n, 0]
+    p0[0, 0, 1] = own0[n, 1]
+    p1[0, 0, 0] = ex
+    p1[0, 0, 1] = ey
+    if n_k == 2:
+        if leaf[n]:
+            p0[0, 1, 0] = own0[n, 0]
+            p0[0, 1, 1] = own0[n, 1]
+            p1[0, 1, 0] = ex
+            p1[0, 1, 1] = ey
+        else:
+            dx = ex - own1[n, 0]
+            dy = ey - own1[n, 1]
+            p0[0, 1, 0] = ch0[n, 0] + dx
+            p0[0, 1, 1] = ch0[n, 1] + dy
+            p1[0, 1, 0] = ch1[n, 0] + dx
+            p1[0, 1, 1] = ch1[n, 1] + dy
+    return candidate_terms(p0, p1, radii[n], 0, cum, n, y0, y1, caps, first, last, setup, d, a,
+                           m_base[n], i_base[n])
+
+
+@numba.njit(cache=True, nogil=True)
+def group_search(best, width, lo, hi, clip, period, gap_period, warm, prefer, divisions,
+                 min_step, angle, sign, k0, k1, own0, own1, ch0, ch1, leaf, n_k, radii, cum, y0,
+                 y1, caps, a, m_base, i_base, best_score, runner):
+    """A whole ``interval_search_many`` of a group search in one call.
+
+    Its loop with the same grid, pick and runner-up kernels (:func:`many_grid`,
+    :func:`many_pick`, :func:`many_runner`), scoring each candidate as
+    :func:`group_terms` does with S = exp(-p - n) (1 - p); cos, sin and exp are
+    libm's (see :func:`search_1d`). ``best`` (N,) holds the first intervals' centres
+    on entry and the values found on return; ``width`` (N,) the first intervals;
+    ``prefer`` (N,) NaN where none. best_score, runner (N,) are written.
+    Returns the number of iterations. Needs divisions >= 3.
+    """
+    n_s = best.shape[0]
+    step = width / divisions
+    first_step = step.copy()
+    n_max = 64
+    values = np.empty((n_s, n_max * (divisions + 2)))
+    scores = np.empty((n_s, n_max * (divisions + 2)))
+    p0, p1, first, last, setup, d = candidate_scratch(n_k)
+    for r in range(n_s):
+        best_score[r] = -np.inf
+    used = 0
+    iterations = 0
+    while iterations < n_max:
+        extra = 1 if (iterations == 0 and warm) else 0
+        n_c = divisions + 1 + extra
+        cand = np.empty((n_s, n_c))
+        s = np.empty((n_s, n_c))
+        many_grid(best, width, step, lo, hi, clip, period, extra == 1, cand)
+        for n in range(n_s):
+            for b in range(n_c):
+                v = cand[n, b]
+                ca, cb = (math.cos(v), math.sin(v)) if angle else (v, v)
+                x, q = group_candidate(n, ca, cb, sign, k0, k1, own0, own1, ch0, ch1, leaf,
+                                       n_k, p0, p1, radii, cum, y0, y1, caps, first, last,
+                                       setup, d, a, m_base, i_base)
+                s[n, b] = math.exp(x) * q
+                values[n, used + b] = v
+                scores[n, used + b] = s[n, b]
+        used += n_c
+        iterations += 1
+        many_pick(cand, s, prefer, gap_period, best, best_score)
+        width = 2 * width / divisions
+        step = 2 * step / divisions
+        if not np.any(width > min_step):
+            break
+    many_runner(values[:, :used], scores[:, :used], best, period, first_step * 1.01, runner)
+    return iterations

@@ -136,7 +136,7 @@ from vidcap.fit.raster import (
     span_counts,
     span_similarity,
 )
-from vidcap.fit.search import SearchResult, interval_search, interval_search_many
+from vidcap.fit.search import interval_search, interval_search_many
 from vidcap.fit.similarity import similarity_from_counts
 
 S = {name: i for i, name in enumerate(SEGMENT_NAMES)}
@@ -421,20 +421,13 @@ class _Fitter:
         kernels = _kernels()
         moving = np.asarray(moving, dtype=int)
         tables = None
-        if kernels is not None and divisions >= 3 and hi > lo and (limb or action):
+        if kernels is not None and divisions >= 3 and (limb or action):
             tables = self._tables(ends, moving, rows)
         if tables is None or tables[0][1] <= tables[0][0]:
             return interval_search(self.scorer(ends, moving, rows), lo, hi,
                                    divisions=divisions, min_step=min_step, start=start,
                                    interval=interval, periodic=periodic, prefer=prefer)
         (r0, r1), cum, a, m_base, i_base = tables
-        # the same set-up as interval_search's
-        lo, hi = float(lo), float(hi)
-        wrap = periodic is not None and hi - lo >= periodic - 1e-12
-        width = float(hi - lo if interval is None else min(interval, hi - lo))
-        best = 0.5 * (lo + hi) if start is None else float(start)
-        if not wrap:
-            best = min(max(best, lo), hi)
         if limb is not None:
             form, scale, p_start, old_end, p0s, p1s, own = limb
             angle = form == "angle"
@@ -450,20 +443,24 @@ class _Fitter:
             limb_args = _NO_LIMB
             pose_args = (np.asarray(idx, np.int64), np.asarray(coef, np.float64),
                          np.asarray(neck, np.float64), float(length), self.root.copy(),
-                         self.angles.copy(), self.fore.copy(),
-                         float(self.spread), _carray(self.L, np.float64), float(self.shoulder),
-                         float(self.hip), *_KERNEL_TABLES, _PROX[moving].astype(np.int64),
+                         self.angles.copy(), self.fore.copy(), float(self.spread),
+                         _carray(self.L, np.float64), float(self.shoulder), float(self.hip),
+                         *_KERNEL_TABLES, _PROX[moving].astype(np.int64),
                          _DIST[moving].astype(np.int64))
-        out = np.empty(5)
+        radii = _carray(self.R[moving], np.float64)
+
+        def run(lo_, hi_, centre, warm, width, period, gap_period, pref, divisions_, min_step_):
+            out = np.empty(5)
+            kernels.search_1d(lo_, hi_, divisions_, min_step_, centre, warm, width,
+                              period, gap_period, 0.0 if np.isnan(pref) else pref,
+                              not np.isnan(pref), mode, limb_args, pose_args, radii, cum, r0,
+                              r1, bool(self.caps), a, int(m_base[0]), int(i_base[0]), out)
+            return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
+
         self.batches += 1
-        kernels.search_1d(
-            lo, hi, int(divisions), float(min_step), best, start is not None, width,
-            float(periodic) if wrap else 0.0, float(periodic) if periodic is not None else 0.0,
-            0.0 if prefer is None else float(prefer), prefer is not None, mode, limb_args,
-            pose_args, _carray(self.R[moving], np.float64), cum, r0, r1, bool(self.caps), a,
-            int(m_base[0]), int(i_base[0]), out)
-        return SearchResult(float(out[0]), float(out[1]), float(out[2]), int(out[3]),
-                            int(out[4]))
+        return interval_search(None, lo, hi, divisions=divisions, min_step=min_step,
+                               start=start, interval=interval, periodic=periodic,
+                               prefer=prefer, run=run)
 
     def scorer(self, ends, moving, rows=None):
         """Score function for :func:`interval_search`.
@@ -683,12 +680,30 @@ class _Fitter:
         else:
             form, scale = "ratio", direction(self.angles[segs]) * length[:, None]
 
-        scores = group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
-                              i_base, caps=self.caps)
-
-        def score(values):  # values (N, B)
+        def score(values):  # values (N, B); without the compiled search below
             self.batches += 1
-            return scores(values)
+            return group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
+                                i_base, caps=self.caps)(values)
+
+        run = None
+        kernels = _kernels()
+        if kernels is not None and divisions >= 3:  # the whole search, one compiled call
+            angle = form == "angle"
+            sign, k0, k1 = ((-1.0, _carray(scale, np.float64), _carray(scale, np.float64))
+                            if angle else (1.0, np.ascontiguousarray(scale[:, 0]),
+                                           np.ascontiguousarray(scale[:, 1])))
+            group = (angle, sign, k0, k1, _carray(own0, np.float64), _carray(own1, np.float64),
+                     _carray(ch0, np.float64), _carray(ch1, np.float64), _carray(leaf, np.bool_),
+                     k, radii, cum, 0, cum.shape[2], bool(self.caps), a, m_base, i_base)
+
+            def run(centre, width, lo_, hi_, clip, period, gap_period, warm, pref, divisions_,
+                    min_step_):
+                self.batches += 1
+                best, runner = np.empty(len(centre)), np.empty(len(centre))
+                it = kernels.group_search(centre, width, lo_, hi_, clip, period, gap_period,
+                                          warm, pref, divisions_, min_step_, *group, best,
+                                          runner)
+                return best, runner, int(it)
 
         if kind == "angle":
             lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]
@@ -707,14 +722,14 @@ class _Fitter:
                                   self._hang(), np.nan)
             value, best, runner, _ = interval_search_many(
                 score, lo_a, hi_a, divisions=divisions, min_step=min_step, start=st,
-                interval=interval, prefer=prefer, periodic=TWO_PI)
+                interval=interval, prefer=prefer, periodic=TWO_PI, run=run)
             self.angles[segs] = np.mod(value, TWO_PI)
         else:
             step = 1.0 / np.maximum(length, 1.0)
             value, best, runner, _ = interval_search_many(
                 score, step, np.ones(n), divisions=divisions, min_step=float(step.min()),
                 start=self.fore[segs] if start is None else start, interval=interval,
-                prefer=1.0)
+                prefer=1.0, run=run)
             self.fore[segs] = value
         self.scores[segs] = best
         self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)

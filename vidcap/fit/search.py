@@ -82,6 +82,7 @@ def interval_search(
     interval: float | None = None,
     periodic: float | None = None,
     prefer: float | None = None,
+    run: Callable | None = None,
 ) -> SearchResult:
     """Maximise a 1-D score by coarse-to-fine interval search (seed 004 Alg. 1 and 6).
 
@@ -112,6 +113,15 @@ def interval_search(
         (lowest) one, which for Algorithm 6 favours the shortest segment when the
         silhouette cannot tell (a limb hidden inside the torso); callers pass
         ``prefer=1`` there.
+    run : callable, optional
+        Does the whole search in one (compiled) call instead of calling ``score``
+        per iteration, given what is set up here:
+        ``run(lo, hi, centre, warm, width, period, gap_period, prefer, divisions,
+        min_step)`` (the first interval's centre, clipped; ``warm``: it is a start
+        and competes; ``period``
+        > 0 when candidates wrap, ``gap_period`` > 0 when distances are periodic;
+        ``prefer`` NaN for none) returns ``(value, score, runner_up, evaluations,
+        iterations)``. ``score`` is then not called.
 
     Returns
     -------
@@ -127,14 +137,18 @@ def interval_search(
     best = 0.5 * (lo + hi) if start is None else float(start)
     if not wrap:
         best = min(max(best, lo), hi)  # np.clip of a scalar
+    period = float(periodic) if wrap else 0.0  # candidates wrap around
+    gap_period = float(periodic) if periodic is not None else 0.0  # distances do
+    if run is not None:
+        return SearchResult(*run(lo, hi, best, start is not None, width, period, gap_period,
+                                 np.nan if prefer is None else float(prefer), int(divisions),
+                                 float(min_step)))
     step = width / divisions
     first_step = step
     best_score = -np.inf
     values, scores = [], []
     iterations = 0
     kernels = _kernels()
-    period = float(periodic) if wrap else 0.0  # candidates wrap around
-    gap_period = float(periodic) if periodic is not None else 0.0  # distances do
     # Always run at least once, even when the first interval is already small.
     while True:
         begin, end = best - width / 2, best + width / 2
@@ -209,6 +223,7 @@ def interval_search_many(
     interval=None,
     periodic: float | None = None,
     prefer=None,
+    run: Callable | None = None,
 ):
     """Run several independent :func:`interval_search` es in lockstep, one batch each step.
 
@@ -222,6 +237,12 @@ def interval_search_many(
     divisions, min_step, periodic
         As in :func:`interval_search`, shared (``min_step`` is the smallest one
         wanted; every search runs the same number of iterations).
+    run : callable, optional
+        Does the whole search in one (compiled) call instead of calling ``score``
+        per iteration: ``run(centre, width, lo, hi, clip, period, gap_period, warm,
+        prefer, divisions, min_step)`` (arrays (N,) as set up here, ``centre`` overwritten with the
+        values found; ``clip``: keep candidates within the limits; ``prefer`` NaN
+        for none) returns ``(score, runner_up, iterations)``.
 
     Returns
     -------
@@ -252,13 +273,19 @@ def interval_search_many(
     iterations = 0
     k = np.arange(divisions + 1)
     kernels = _kernels()
-    if kernels is not None:
+    if kernels is not None or run is not None:
         period = float(periodic) if wrap else 0.0
         gap_period = float(periodic) if periodic is not None else 0.0
         lo_c, hi_c = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
         pref = np.full(n_search, np.nan) if prefer is None else np.array(
             _as_shape(prefer, lo.shape), dtype=float)
-        best = np.ascontiguousarray(best, dtype=float)
+        best = np.array(best, dtype=float)  # a copy: run writes into it
+        if run is not None:
+            score_, runner, iterations = run(best, np.ascontiguousarray(width, dtype=float),
+                                             lo_c, hi_c, not wrap, period, gap_period,
+                                             start is not None, pref, int(divisions),
+                                             float(min_step))
+            return best, score_, runner, iterations
     while True:
         if kernels is not None:  # the same floats as the numpy code below
             warm = iterations == 0 and start is not None
