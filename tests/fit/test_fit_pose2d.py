@@ -204,6 +204,7 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
             out.append(f.search_fore(s[seg]))
         out.append(f.search_fore(s["l_upper_leg"], unit=True))
         out.append(f.search_fore(s["head"]))
+        out.append(f.search_spread(start=0.3, interval=0.4, min_step=0.1))
         # group searches (lockstep; their own compiled call)
         uppers = [s[f"{side}_upper_{p}"] for p in ("arm", "leg") for side in "lr"]
         leaves = [s["head"]] + [s[f"{side}_lower_{p}"] for p in ("arm", "leg") for side in "lr"]
@@ -227,7 +228,7 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
                         lambda *a: calls.append("group") or group_search(*a))
     compiled, st_c = run(fitter())
     # every kind of candidate was scored by a compiled search
-    assert set(calls) == {0, 1, 2, 3, 4, "group"}
+    assert set(calls) == {0, 1, 2, 3, 4, 5, "group"}
     monkeypatch.setattr(pose2d, "_kernels", lambda: None)
     python, st_p = run(fitter())
     for a, b in zip(compiled, python, strict=True):

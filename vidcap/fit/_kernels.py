@@ -17,6 +17,7 @@ from vidcap.fit.raster import (
     SEARCH_LIMB_RATIO,
     SEARCH_POSE_ANGLES,
     SEARCH_POSE_FORE,
+    SEARCH_POSE_SPREAD,
     SEARCH_POSE_TORSO_NECK,
 )
 
@@ -187,15 +188,20 @@ def candidate_scratch(n_k):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def pose_candidate(jb, prox, dist, p0, p1, radii, cum, y0, y1, caps, first, last, setup, d, a,
-                   m0, i0):
+def pose_candidate(jb, prox, dist, fixed, p0, p1, radii, cum, y0, y1, caps, first, last, setup,
+                   d, a, m0, i0):
     """Eq. 3.3's terms of a pose whose joints are jb (1, 15, 2) and whose segments
-    prox[k] -> dist[k] move (one table)."""
+    prox[k] -> dist[k] move (one table); with ``fixed`` (K, 2) given (K rows), the
+    segments' distal ends stay there instead."""
     for k in range(prox.shape[0]):
         p0[0, k, 0] = jb[0, prox[k], 0]
         p0[0, k, 1] = jb[0, prox[k], 1]
-        p1[0, k, 0] = jb[0, dist[k], 0]
-        p1[0, k, 1] = jb[0, dist[k], 1]
+        if fixed.shape[0] == prox.shape[0]:
+            p1[0, k, 0] = fixed[k, 0]
+            p1[0, k, 1] = fixed[k, 1]
+        else:
+            p1[0, k, 0] = jb[0, dist[k], 0]
+            p1[0, k, 1] = jb[0, dist[k], 1]
     return candidate_terms(p0, p1, radii, 0, cum, 0, y0, y1, caps, first, last, setup, d, a,
                            m0, i0)
 
@@ -293,8 +299,9 @@ def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period
     dist): the current pose (root (2,), angles, fore (10,), spread), what a value v
     sets (SEARCH_POSE_ANGLES: angles[idx] = v + coef; SEARCH_POSE_TORSO_NECK: the
     torso angle idx[0] = v and the root = neck - direction(v) * length;
-    SEARCH_POSE_FORE: fore[idx] = min(v * coef, 1)) and the moving segments' joints
-    prox[k] -> dist[k].
+    SEARCH_POSE_FORE: fore[idx] = min(v * coef, 1); SEARCH_POSE_SPREAD: spread = v,
+    the moving segments' distal ends held at the limb tuple's p1s) and the moving
+    segments' joints prox[k] -> dist[k].
     radii (K,): the moving segments'; one table (cum (1, 2, h, w + 1)), m0, i0
     the counts of what does not move. out (5,): value, score, runner-up,
     evaluations, iterations. Needs divisions >= 3 (the interval must shrink).
@@ -317,6 +324,8 @@ def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period
     f1[0] = fore
     sp = np.full(1, spread)
     jb = np.empty((1, 15, 2))
+    # the spread's candidates keep the moving segments' distal ends where they are
+    fixed = p1s if mode == SEARCH_POSE_SPREAD else np.empty((0, 2))
     torso = 0
     step = width / divisions
     first_step = step
@@ -357,6 +366,8 @@ def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period
                 elif mode == SEARCH_POSE_FORE:
                     for t in range(idx.shape[0]):
                         f1[0, idx[t]] = min(v * coef[t], 1.0)
+                else:  # SEARCH_POSE_SPREAD
+                    sp[0] = v
                 for t in range(10):
                     c1[0, t] = math.cos(ang[t])
                     s1[0, t] = math.sin(ang[t])
@@ -365,8 +376,8 @@ def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period
                 sl[0] = math.sin(left)
                 joints(r1, c1, s1, cl, sl, f1, sp, lengths, shoulder, hip, order, parent, kind,
                        jb)
-                x, q = pose_candidate(jb, prox, dist, p0, p1, radii, cum, y0, y1, caps, first,
-                                      last, setup, d, a, m0, i0)
+                x, q = pose_candidate(jb, prox, dist, fixed, p0, p1, radii, cum, y0, y1, caps,
+                                      first, last, setup, d, a, m0, i0)
             s[b] = math.exp(x) * q
         used += cand.shape[0]
         iterations += 1
@@ -391,11 +402,12 @@ def pose_terms(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip,
     whose segments prox[k] -> dist[k] (joint indices) move. One table."""
     jb = np.empty((1, 15, 2))
     p0, p1, first, last, setup, d = candidate_scratch(prox.shape[0])
+    no_fixed = np.empty((0, 2))
     for b in range(root.shape[0]):
         joints(root[b:b + 1], c[b:b + 1], s[b:b + 1], c_left[b:b + 1], s_left[b:b + 1],
                fore[b:b + 1], spread[b:b + 1], lengths, shoulder, hip, order, parent, kind, jb)
-        x[b], q[b] = pose_candidate(jb, prox, dist, p0, p1, radii[0], cum, y0, y1, caps, first,
-                                    last, setup, d, a, m_base[0], i_base[0])
+        x[b], q[b] = pose_candidate(jb, prox, dist, no_fixed, p0, p1, radii[0], cum, y0, y1,
+                                    caps, first, last, setup, d, a, m_base[0], i_base[0])
 
 
 @numba.njit(cache=True, nogil=True)

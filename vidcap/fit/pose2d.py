@@ -115,6 +115,7 @@ from vidcap.fit.raster import (
     SEARCH_LIMB_RATIO,
     SEARCH_POSE_ANGLES,
     SEARCH_POSE_FORE,
+    SEARCH_POSE_SPREAD,
     SEARCH_POSE_TORSO_NECK,
     NormalisedMask,
     _carray,
@@ -318,6 +319,8 @@ _NO_LIMB = (0.0, 0.0, 0.0, np.zeros(2), np.zeros(2), np.zeros((1, 2)), np.zeros(
 _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), np.zeros(10),
             np.zeros(10), 0.0, np.zeros(10), 0.0, 0.0, *_KERNEL_TABLES, np.zeros(1, np.int64),
             np.zeros(1, np.int64))
+# _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
+_DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
 assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/sin
 
@@ -395,8 +398,9 @@ class _Fitter:
         sums of the pixels a candidate may add to the model, the counts of what does
         not move, and the silhouette's pixels in the rows searched."""
         r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
-        moving_set = set(moving.tolist())
-        still = [k for k in range(10) if self.drawn[k] and k not in moving_set]
+        still = self.drawn.copy()
+        still[moving] = False
+        still = np.flatnonzero(still)
         j = self.joints()
         limb = getattr(ends, "limb", None)
         reach = None
@@ -439,8 +443,10 @@ class _Fitter:
                          _carray(p1s, np.float64), (~np.asarray(own, bool)).astype(np.float64))
             pose_args = _NO_POSE
         else:
-            mode, idx, coef, neck, length = action
+            mode, idx, coef, neck, length = action[:5]
             limb_args = _NO_LIMB
+            if len(action) > 5:  # distal ends held still: where search_1d reads them
+                limb_args = (*_NO_LIMB[:6], _carray(action[5], np.float64), _NO_LIMB[7])
             pose_args = (np.asarray(idx, np.int64), np.asarray(coef, np.float64),
                          np.asarray(neck, np.float64), float(length), self.root.copy(),
                          self.angles.copy(), self.fore.copy(), float(self.spread),
@@ -510,8 +516,9 @@ class _Fitter:
         """End points from whole candidate poses (torso, head, spread, root searches).
 
         ``action``: what ``make`` does, for the compiled search
-        (:meth:`search`): ``(mode, idx, coef, neck, length)`` with ``mode`` one of
-        ``raster.SEARCH_POSE_*``.
+        (:meth:`search`): ``(mode, idx, coef, neck, length[, fixed])`` with ``mode``
+        one of ``raster.SEARCH_POSE_*`` (``fixed`` (K, 2): the moving segments'
+        distal ends, held still by ``SEARCH_POSE_SPREAD``).
         """
         moving = np.asarray(moving, dtype=int)
 
@@ -571,8 +578,7 @@ class _Fitter:
         together = [seg, *with_segments]
         offsets = self.angles[together] - self.angles[seg]
         self.drawn[together] = True
-        moving = [d for d in range(10)
-                  if self.drawn[d] and any(d in DESCENDANTS[s] for s in together)]
+        moving = np.flatnonzero(self.drawn & _DESCENDANT_OF[together].any(axis=0))
         if seg >= 2 and not with_segments:
             length = self.L[seg] * self.fore[seg]
             ends = self._limb_ends(seg, moving, "angle", length)
@@ -757,8 +763,9 @@ class _Fitter:
             p0, _ = general(v)
             return p0, np.broadcast_to(fixed_ends, p0.shape)
 
-        res = interval_search(self.scorer(ends, uppers), 0.0, 1.0, divisions=4, min_step=min_step,
-                              start=start, interval=interval, prefer=0.5)
+        ends.action = (SEARCH_POSE_SPREAD, [0], [0.0], _NOWHERE, 0.0, fixed_ends)
+        res = self.search(ends, uppers, None, 0.0, 1.0, divisions=4, min_step=min_step,
+                          start=start, interval=interval, prefer=0.5)
         self.spread = res.value
         vec = fixed_ends - self.joints()[_PROX[uppers]]
         self.angles[uppers] = image_angle(vec)

@@ -70,10 +70,10 @@ _SEG = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 
 # The kinds of candidate a compiled 1-D search (``_kernels.search_1d``) scores: a limb
 # segment's distal end moved by an angle or a length ratio (its children follow), or a
-# whole pose in which each value sets some angles, the torso about the neck, or some
-# foreshortening ratios (scaled, at most 1).
+# whole pose in which each value sets some angles, the torso about the neck, some
+# foreshortening ratios (scaled, at most 1) or the lateral spread.
 SEARCH_LIMB_ANGLE, SEARCH_LIMB_RATIO = 0, 1
-SEARCH_POSE_ANGLES, SEARCH_POSE_TORSO_NECK, SEARCH_POSE_FORE = 2, 3, 4
+SEARCH_POSE_ANGLES, SEARCH_POSE_TORSO_NECK, SEARCH_POSE_FORE, SEARCH_POSE_SPREAD = 2, 3, 4, 5
 
 
 @dataclass(frozen=True)
