@@ -72,7 +72,7 @@ class SearchResult:
 
 
 def interval_search(
-    score: Callable[[np.ndarray], np.ndarray],
+    score: Callable[[np.ndarray], np.ndarray] | None,
     lo: float,
     hi: float,
     *,
@@ -88,9 +88,9 @@ def interval_search(
 
     Parameters
     ----------
-    score : callable
+    score : callable or None
         Maps candidate values, shape (B,), to scores, shape (B,). Called once per
-        iteration with all of that iteration's candidates.
+        iteration with all of that iteration's candidates (None with ``run``).
     lo, hi : float
         Limits of the value (the joint limits; (0, 1] for foreshortening).
     divisions : int
@@ -213,7 +213,7 @@ def _as_shape(x, shape) -> np.ndarray:
 
 
 def interval_search_many(
-    score: Callable[[np.ndarray], np.ndarray],
+    score: Callable[[np.ndarray], np.ndarray] | None,
     lo,
     hi,
     *,
@@ -229,9 +229,10 @@ def interval_search_many(
 
     Parameters
     ----------
-    score : callable
+    score : callable or None
         Maps candidates, shape (N, B), to scores, shape (N, B): row ``k`` holds
-        search ``k``'s candidates. Called once per iteration for all N searches.
+        search ``k``'s candidates. Called once per iteration for all N searches
+        (not with ``run``).
     lo, hi, start, interval, prefer : array_like, shape (N,) (or scalars)
         As in :func:`interval_search`, per search (a NaN ``prefer``: none).
     divisions, min_step, periodic
