@@ -695,22 +695,7 @@ def many_pick(cand, s, prefer, period, best, best_score):
     where prefer[r] is NaN), then keep it in best / best_score if it scores higher."""
     for r in range(s.shape[0]):
         centre = best[r] if np.isnan(prefer[r]) else prefer[r]
-        top = -np.inf
-        for i in range(s.shape[1]):
-            if s[r, i] > top:
-                top = s[r, i]
-        thr = top - 1e-12
-        k = -1
-        best_gap = np.inf
-        for i in range(s.shape[1]):
-            if s[r, i] >= thr:
-                gap = abs(cand[r, i] - centre)
-                if period > 0:
-                    g = _mod(gap, period)
-                    gap = min(g, period - g)
-                if k < 0 or gap < best_gap:
-                    k = i
-                    best_gap = gap
+        k = search_pick(cand[r], s[r], centre, period)
         if s[r, k] > best_score[r] + 1e-12:
             best_score[r] = s[r, k]
             best[r] = cand[r, k]

@@ -425,7 +425,7 @@ class _Fitter:
         kernels = _kernels()
         moving = np.asarray(moving, dtype=int)
         tables = None
-        if kernels is not None and divisions >= 3 and (limb or action):
+        if kernels is not None and divisions >= 3 and (limb is not None or action is not None):
             tables = self._tables(ends, moving, rows)
         if tables is None or tables[0][1] <= tables[0][0]:
             return interval_search(self.scorer(ends, moving, rows), lo, hi,
@@ -686,14 +686,16 @@ class _Fitter:
         else:
             form, scale = "ratio", direction(self.angles[segs]) * length[:, None]
 
-        def score(values):  # values (N, B); without the compiled search below
-            self.batches += 1
-            return group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a, m_base,
-                                i_base, caps=self.caps)(values)
-
-        run = None
+        run = score = None
         kernels = _kernels()
-        if kernels is not None and divisions >= 3:  # the whole search, one compiled call
+        if kernels is None or divisions < 3:  # batch by batch
+            scores = group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a,
+                                  m_base, i_base, caps=self.caps)
+
+            def score(values):  # values (N, B)
+                self.batches += 1
+                return scores(values)
+        else:  # the whole search, one compiled call
             angle = form == "angle"
             sign, k0, k1 = ((-1.0, _carray(scale, np.float64), _carray(scale, np.float64))
                             if angle else (1.0, np.ascontiguousarray(scale[:, 0]),
