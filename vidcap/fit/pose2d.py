@@ -1347,9 +1347,16 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
             # tracked in a wrong pose too. Carry the new pose backward while it fits
             # those frames better (beyond the seed).
             back = fp
+            fallback = kw.get("fallback", 0.97)
             for b in range(k - 1, start - 1, -1):
-                fb = fit_pose(np.asarray(masks[b], dtype=bool), previous=back, **kw)
+                mb = np.asarray(masks[b], dtype=bool)
+                fb = fit_pose(mb, previous=back, **{**kw, "fallback": 0.0})
                 if not fb.warm or fb.similarity <= sim[b] + back_tie:
+                    break
+                # fit_pose's fallback, only where its outcome matters: a fresh fit
+                # that beats the slipping warm one ends the backward track
+                if (fb.similarity < fallback * back.similarity
+                        and fit_pose(mb, **kw).similarity > fb.similarity):
                     break
                 store(b, fb)
                 back = fb
