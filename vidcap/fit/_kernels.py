@@ -282,7 +282,7 @@ def limb_terms(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, radii, cu
 
 @numba.njit(cache=True, nogil=True)
 def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
-              has_prefer, mode, limb, pose, radii, cum, y0, y1, caps, a, m0, i0, out):
+              has_prefer, mode, limb, pose, radii, still, y0, y1, caps, a, out):
     """A whole ``interval_search`` in one call: its loop, with the same grid, tie-break
     and runner-up kernels, scoring each candidate as :func:`limb_terms` or
     :func:`pose_terms` do, S = exp(-p - n) (1 - p).
@@ -302,11 +302,16 @@ def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period
     SEARCH_POSE_FORE: fore[idx] = min(v * coef, 1); SEARCH_POSE_SPREAD: spread = v,
     the moving segments' distal ends held at the limb tuple's p1s) and the moving
     segments' joints prox[k] -> dist[k].
-    radii (K,): the moving segments'; one table (cum (1, 2, h, w + 1)), m0, i0
-    the counts of what does not move. out (5,): value, score, runner-up,
+    radii (K,): the moving segments'. ``still`` = (p0, p1, radii, sil, sil_cum, f0, f1):
+    the segments that do not move and the silhouette, drawn into the search's one
+    table here (:func:`base_tables`, rows y0..y1, filled in f0..f1); ``a`` the
+    silhouette's pixels in rows y0..y1. out (5,): value, score, runner-up,
     evaluations, iterations. Needs divisions >= 3 (the interval must shrink).
     """
     sign, k0, k1, start, old_end, p0s, p1s, notown = limb
+    sp0, sp1, s_radii, sil, sil_cum, f0, f1 = still
+    cum = np.zeros((1, 2, sil.shape[0], sil.shape[1] + 1), np.int32)
+    m0, i0 = base_tables(sp0, sp1, s_radii, sil, sil_cum, y0, y1, f0, f1, caps, cum[0])
     (idx, coef, neck, length, root, angles, fore, spread, lengths, shoulder, hip, order,
      parent, kind, prox, dist) = pose
     cap = 64 * (divisions + 2)

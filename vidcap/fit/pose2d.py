@@ -348,6 +348,7 @@ class _Fitter:
         self.drawn = np.zeros(10, dtype=bool)
         self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
         self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil]))
+        self._sil_c = _carray(self.sil, np.bool_)  # what the kernels read
         self._similarity = None
         self.batches = 0
         self._joints = None
@@ -393,10 +394,10 @@ class _Fitter:
             self._all_masks = (key, m)
         return self._all_masks[1]
 
-    def _tables(self, ends, moving, rows):
-        """The still segments of a search, drawn once (not per candidate): row prefix
-        sums of the pixels a candidate may add to the model, the counts of what does
-        not move, and the silhouette's pixels in the rows searched."""
+    def _still(self, ends, moving, rows):
+        """What a search adds its candidates to: the rows searched, the rows its
+        candidates can reach, the segments that do not move ((K, 2) ends, (K,) radii)
+        and the silhouette's pixels in those rows."""
         r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
         still = self.drawn.copy()
         still[moving] = False
@@ -409,10 +410,16 @@ class _Fitter:
             # fixed proximal joint: the table is needed only in those rows
             y, ext = limb[2][1], float(self.L[moving].sum() + self.R.max()) + 4.0
             reach = (int(np.floor(y - ext)), int(np.ceil(y + ext)) + 1)
-        cum, m_base, i_base = base_tables(j[_PROX[still]], j[_DIST[still]], self.R[still],
-                                          self.sil, rows=(r0, r1), reach=reach,
-                                          sil_cum=self._sil_cum[1], caps=self.caps)
         a = int(self.sil_rows[r1] - self.sil_rows[r0])
+        return (r0, r1), reach, j[_PROX[still]], j[_DIST[still]], self.R[still], a
+
+    def _tables(self, ends, moving, rows):
+        """The still segments of a search, drawn once (not per candidate): row prefix
+        sums of the pixels a candidate may add to the model, the counts of what does
+        not move, and the silhouette's pixels in the rows searched."""
+        (r0, r1), reach, p0, p1, radii, a = self._still(ends, moving, rows)
+        cum, m_base, i_base = base_tables(p0, p1, radii, self.sil, rows=(r0, r1), reach=reach,
+                                          sil_cum=self._sil_cum[1], caps=self.caps)
         return (r0, r1), cum, a, np.array([m_base], np.int64), np.array([i_base], np.int64)
 
     def search(self, ends, moving, rows, lo, hi, *, divisions, min_step, start=None,
@@ -424,14 +431,19 @@ class _Fitter:
         action = getattr(ends, "action", None)
         kernels = _kernels()
         moving = np.asarray(moving, dtype=int)
-        tables = None
+        still = None
         if kernels is not None and divisions >= 3 and (limb is not None or action is not None):
-            tables = self._tables(ends, moving, rows)
-        if tables is None or tables[0][1] <= tables[0][0]:
+            still = self._still(ends, moving, rows)
+        if still is None or still[0][1] <= still[0][0]:
             return interval_search(self.scorer(ends, moving, rows), lo, hi,
                                    divisions=divisions, min_step=min_step, start=start,
                                    interval=interval, periodic=periodic, prefer=prefer)
-        (r0, r1), cum, a, m_base, i_base = tables
+        (r0, r1), reach, s_p0, s_p1, s_radii, a = still
+        # the still segments are drawn into the search's table inside the kernel, in
+        # the rows its candidates can reach (base_tables' arguments)
+        f0, f1 = (r0, r1) if reach is None else (max(r0, reach[0]), min(r1, reach[1]))
+        still_args = (_carray(s_p0, np.float64), _carray(s_p1, np.float64),
+                      _carray(s_radii, np.float64), self._sil_c, self._sil_cum[1], f0, f1)
         if limb is not None:
             form, scale, p_start, old_end, p0s, p1s, own = limb
             angle = form == "angle"
@@ -459,8 +471,8 @@ class _Fitter:
             out = np.empty(5)
             kernels.search_1d(lo_, hi_, divisions_, min_step_, centre, warm, width,
                               period, gap_period, 0.0 if np.isnan(pref) else pref,
-                              not np.isnan(pref), mode, limb_args, pose_args, radii, cum, r0,
-                              r1, bool(self.caps), a, int(m_base[0]), int(i_base[0]), out)
+                              not np.isnan(pref), mode, limb_args, pose_args, radii,
+                              still_args, r0, r1, bool(self.caps), a, out)
             return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
 
         self.batches += 1
