@@ -162,6 +162,13 @@ def test_pose_joints_batch_equals_pose_joints_bit_for_bit(monkeypatch):
     got = raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip)
     assert got.shape == (b, 15, 2)
     np.testing.assert_array_equal(got, want)
+    # the one-pose kernel (the fitter's current pose) takes cos/sin itself (libm):
+    # the same joints up to the last bit where numpy's differ
+    one = np.empty((1, 15, 2))
+    for k in range(b):
+        raster._kernels().pose_one(root[k], angles[k], fore[k], float(spread[k]), lengths,
+                                   float(sh), float(hip), *raster._KERNEL_TABLES, one)
+        np.testing.assert_allclose(one[0], want[k], rtol=0, atol=1e-9)
     monkeypatch.setattr(raster, "_kernels", lambda: None)
     np.testing.assert_array_equal(
         raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip), want)

@@ -479,6 +479,21 @@ def joints(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, ord
 
 
 @numba.njit(cache=True, nogil=True)
+def pose_one(root, angles, fore, spread, lengths, shoulder, hip, order, parent, kind, out):
+    """:func:`joints` of one pose (root (2,), angles, fore (10,), spread) into out
+    (1, 15, 2), its cos and sin taken here (libm; numpy's in ``pose_joints_batch``)."""
+    c = np.empty((1, 10))
+    s = np.empty((1, 10))
+    for t in range(10):
+        c[0, t] = math.cos(angles[t])
+        s[0, t] = math.sin(angles[t])
+    left = angles[0] + np.pi / 2  # the torso's (segment 0) angle + pi/2
+    joints(root.reshape((1, 2)), c, s, np.full(1, math.cos(left)), np.full(1, math.sin(left)),
+           fore.reshape((1, 10)), np.full(1, spread), lengths, shoulder, hip, order, parent,
+           kind, out)
+
+
+@numba.njit(cache=True, nogil=True)
 def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
     """Row prefix sums of the pixels outside a drawn model, and on the silhouette.
 

@@ -349,6 +349,7 @@ class _Fitter:
         self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
         self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil]))
         self._sil_c = _carray(self.sil, np.bool_)  # what the kernels read
+        self._L_c = _carray(self.L, np.float64)
         self._similarity = None
         self.batches = 0
         self._joints = None
@@ -363,9 +364,16 @@ class _Fitter:
         return self._joints[1]
 
     def _pose_joints(self) -> np.ndarray:
-        return pose_joints_batch(self.root[None], self.angles[None], self.fore[None],
-                                 np.array([self.spread], dtype=float), self.L, self.shoulder,
-                                 self.hip)[0]
+        kernels = _kernels()
+        if kernels is None:
+            return pose_joints_batch(self.root[None], self.angles[None], self.fore[None],
+                                     np.array([self.spread], dtype=float), self.L,
+                                     self.shoulder, self.hip)[0]
+        out = np.empty((1, 15, 2))  # one pose: one compiled call, no batch set-up
+        kernels.pose_one(_carray(self.root, np.float64), _carray(self.angles, np.float64),
+                         _carray(self.fore, np.float64), float(self.spread), self._L_c,
+                         float(self.shoulder), float(self.hip), *_KERNEL_TABLES, out)
+        return out[0]
 
     def model(self, segments=None) -> np.ndarray:
         seg = np.flatnonzero(self.drawn) if segments is None else segments
