@@ -84,6 +84,7 @@ vector from the segment's proximal to its distal joint; the same convention as
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -323,6 +324,20 @@ _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), n
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
 assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/sin
+
+
+@functools.lru_cache(maxsize=4)
+def _arm_grid(step_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every (upper, lower) arm angle pair ``step_deg`` apart whose elbow bend is within
+    the flexion limit: the candidates of :meth:`_Fitter.search_arm_grid`, radians,
+    each (N,) (read-only: shared by every call)."""
+    a = np.deg2rad(np.arange(0.0, 360.0, step_deg))
+    ua, la = (g.ravel() for g in np.meshgrid(a, a, indexing="ij"))
+    bend = np.abs(np.angle(np.exp(1j * (la - ua))))
+    keep = bend <= _MAX_BEND + 1e-9
+    ua, la = ua[keep], la[keep]
+    ua.flags.writeable = la.flags.writeable = False
+    return ua, la
 
 
 class _Fitter:
@@ -1027,10 +1042,7 @@ class _Fitter:
             prior = (self._hang(), self._hang())
         prior = np.asarray(prior, dtype=float)
         self.drawn[[up, lo]] = True
-        a = np.deg2rad(np.arange(0.0, 360.0, step_deg))
-        ua, la = (g.ravel() for g in np.meshgrid(a, a, indexing="ij"))
-        bend = np.abs(np.angle(np.exp(1j * (la - ua))))
-        ua, la = ua[bend <= _MAX_BEND + 1e-9], la[bend <= _MAX_BEND + 1e-9]
+        ua, la = _arm_grid(float(step_deg))
         shoulder = self.joints()[J[f"{s}_shoulder"]]
         len_u, len_l = self.L[up] * self.fore[up], self.L[lo] * self.fore[lo]
 
