@@ -211,6 +211,8 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
         f.search_group(uppers, interval=0.3)
         f.search_group(leaves, interval=0.3)
         f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
+        f.search_arm_grid("l")  # whole-arm grid: candidates scored in one compiled pass
+        f.search_arm_grid("r")
         return out, (*f.state()[:3], f.scores.copy(), f.margins.copy())
 
     def fitter():
@@ -224,11 +226,14 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     calls = []
     search_1d, group_search = kernels.search_1d, kernels.group_search
     monkeypatch.setattr(kernels, "search_1d", lambda *a: calls.append(a[11]) or search_1d(*a))
+    arm_pair_terms = kernels.arm_pair_terms
     monkeypatch.setattr(kernels, "group_search",
                         lambda *a: calls.append("group") or group_search(*a))
+    monkeypatch.setattr(kernels, "arm_pair_terms",
+                        lambda *a: calls.append("arms") or arm_pair_terms(*a))
     compiled, st_c = run(fitter())
     # every kind of candidate was scored by a compiled search
-    assert set(calls) == {0, 1, 2, 3, 4, 5, "group"}
+    assert set(calls) == {0, 1, 2, 3, 4, 5, "group", "arms"}
     monkeypatch.setattr(pose2d, "_kernels", lambda: None)
     python, st_p = run(fitter())
     for a, b in zip(compiled, python, strict=True):

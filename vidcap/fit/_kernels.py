@@ -281,6 +281,28 @@ def limb_terms(ca, cb, sign, k0, k1, start, old_end, p0s, p1s, notown, radii, cu
 
 
 @numba.njit(cache=True, nogil=True)
+def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, m0, i0, x, q):
+    """:func:`similarity_terms` of whole-arm candidates: candidate b's elbow is
+    shoulder + du[b] * len_u and its wrist elbow + dl[b] * len_l (du, dl (B, 2): the
+    upper and lower arm's directions), the floats of the numpy end-point code; the
+    upper and lower arm (radii (2,)) against one table."""
+    p0, p1, first, last, setup, d = candidate_scratch(2)
+    for b in range(du.shape[0]):
+        ex = shoulder[0] + du[b, 0] * len_u
+        ey = shoulder[1] + du[b, 1] * len_u
+        p0[0, 0, 0] = shoulder[0]
+        p0[0, 0, 1] = shoulder[1]
+        p1[0, 0, 0] = ex
+        p1[0, 0, 1] = ey
+        p0[0, 1, 0] = ex
+        p0[0, 1, 1] = ey
+        p1[0, 1, 0] = ex + dl[b, 0] * len_l
+        p1[0, 1, 1] = ey + dl[b, 1] * len_l
+        x[b], q[b] = candidate_terms(p0, p1, radii, 0, cum, 0, y0, y1, caps, first, last,
+                                     setup, d, a, m0, i0)
+
+
+@numba.njit(cache=True, nogil=True)
 def search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
               has_prefer, mode, limb, pose, radii, still, y0, y1, caps, a, out):
     """A whole ``interval_search`` in one call: its loop, with the same grid, tie-break

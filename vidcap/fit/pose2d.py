@@ -327,17 +327,20 @@ assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/s
 
 
 @functools.lru_cache(maxsize=4)
-def _arm_grid(step_deg: float) -> tuple[np.ndarray, np.ndarray]:
+def _arm_grid(step_deg: float):
     """Every (upper, lower) arm angle pair ``step_deg`` apart whose elbow bend is within
     the flexion limit: the candidates of :meth:`_Fitter.search_arm_grid`, radians,
-    each (N,) (read-only: shared by every call)."""
+    each (N,), and their directions (:func:`direction`), each (N, 2) (read-only:
+    shared by every call)."""
     a = np.deg2rad(np.arange(0.0, 360.0, step_deg))
     ua, la = (g.ravel() for g in np.meshgrid(a, a, indexing="ij"))
     bend = np.abs(np.angle(np.exp(1j * (la - ua))))
     keep = bend <= _MAX_BEND + 1e-9
     ua, la = ua[keep], la[keep]
-    ua.flags.writeable = la.flags.writeable = False
-    return ua, la
+    du, dl = direction(ua), direction(la)
+    for x in (ua, la, du, dl):
+        x.flags.writeable = False
+    return ua, la, du, dl
 
 
 class _Fitter:
@@ -1042,19 +1045,30 @@ class _Fitter:
             prior = (self._hang(), self._hang())
         prior = np.asarray(prior, dtype=float)
         self.drawn[[up, lo]] = True
-        ua, la = _arm_grid(float(step_deg))
+        ua, la, du, dl = _arm_grid(float(step_deg))
         shoulder = self.joints()[J[f"{s}_shoulder"]]
         len_u, len_l = self.L[up] * self.fore[up], self.L[lo] * self.fore[lo]
 
         def ends(idx):
             k = idx.astype(int)
-            elbow = shoulder + direction(ua[k]) * len_u
-            wrist = elbow + direction(la[k]) * len_l
+            elbow = shoulder + du[k] * len_u
+            wrist = elbow + dl[k] * len_l
             p0 = np.stack([np.broadcast_to(shoulder, elbow.shape), elbow], axis=1)
             p1 = np.stack([elbow, wrist], axis=1)
             return p0, p1
 
-        score = self.scorer(ends, [up, lo])(np.arange(len(ua), dtype=float))
+        kernels = _kernels()
+        if kernels is None:
+            score = self.scorer(ends, [up, lo])(np.arange(len(ua), dtype=float))
+        else:  # the candidates' ends built inside the compiled pass (the same floats)
+            (r0, r1), cum, a, m_base, i_base = self._tables(ends, np.array([up, lo]), None)
+            score, q = np.empty(len(ua)), np.empty(len(ua))
+            kernels.arm_pair_terms(du, dl, _carray(shoulder, np.float64), float(len_u),
+                                   float(len_l), _carray(self.R[[up, lo]], np.float64), cum,
+                                   r0, r1, bool(self.caps), a, int(m_base[0]), int(i_base[0]),
+                                   score, q)
+            np.exp(score, out=score)  # S = exp(-p - n) (1 - p), as _similarity_terms
+            score *= q
         n_sil = max(int(self.sil_rows[-1]), 1)
         tie = tie_px * 2.0 * float(score.max()) / n_sil
 
