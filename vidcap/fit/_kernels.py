@@ -141,16 +141,26 @@ def merge_runs(first, last, n):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
-    """Add candidate b's merged-span weights (table t, rows y0..y1-1) to out (C,)."""
+    """Add candidate b's merged-span weights (table t, rows y0..y1-1) to out (C,).
+
+    setup (K, 11) is scratch: :func:`span_setup` per segment, then the rows it can reach.
+    """
     n_k = p0.shape[1]
     w = cum.shape[3] - 1
     n_c = cum.shape[1]
     for k in range(n_k):
         span_setup(p0[b, k, 0], p0[b, k, 1], p1[b, k, 0], p1[b, k, 1], radii[k], setup[k])
+        # rows the segment can cover (as row_range; elsewhere its span is empty)
+        rad = radii[k]
+        setup[k, 9] = np.floor(min(p0[b, k, 1], p1[b, k, 1]) - rad) - 1.0
+        setup[k, 10] = np.ceil(max(p0[b, k, 1], p1[b, k, 1]) + rad) + 2.0
     for y in range(y0, y1):
         m = 0
+        fy = float(y)
         for k in range(n_k):
-            lo, hi = span_row(setup[k], p1[b, k, 0], p1[b, k, 1], float(y), caps)
+            if fy < setup[k, 9] or fy >= setup[k, 10]:
+                continue
+            lo, hi = span_row(setup[k], p1[b, k, 0], p1[b, k, 1], fy, caps)
             f = int(min(max(lo, 0.0), w))
             e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
             if e <= f:
@@ -171,7 +181,7 @@ def counts(p0, p1, radii, table, cum, y0, y1, caps, out):
     n_b, n_k = p0.shape[0], p0.shape[1]
     first = np.empty(n_k, np.int64)
     last = np.empty(n_k, np.int64)
-    setup = np.empty((n_k, 9))
+    setup = np.empty((n_k, 11))
     for b in range(n_b):
         for c in range(cum.shape[1]):
             out[b, c] = 0
@@ -184,7 +194,7 @@ def candidate_scratch(n_k):
     """Scratch for scoring one candidate of K segments: ends p0, p1 (1, K, 2), span runs
     first, last (K,), span set-up (K, 9), counts d (2,)."""
     return (np.empty((1, n_k, 2)), np.empty((1, n_k, 2)), np.empty(n_k, np.int64),
-            np.empty(n_k, np.int64), np.empty((n_k, 9)), np.zeros(2, np.int64))
+            np.empty(n_k, np.int64), np.empty((n_k, 11)), np.zeros(2, np.int64))
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
