@@ -230,7 +230,7 @@ def test_base_tables_compiled_and_numpy_paths_agree_with_drawn_model(caps, monke
         assert (m2, i2) == (m, i)
 
 
-def test_group_tables_compiled_and_numpy_paths_agree(monkeypatch):
+def test_group_tables_leave_out_each_searched_pair():
     """group_tables: each table is the model without the searched segment (and child)."""
     from vidcap.fit import raster
 
@@ -240,13 +240,41 @@ def test_group_tables_compiled_and_numpy_paths_agree(monkeypatch):
     sil = rng.random((h, w)) < 0.5
     segs, child = np.array([2, 3, 6]), np.array([3, 3, 7])
     got = raster.group_tables(masks, segs, child, sil)
-    monkeypatch.setattr(raster, "_kernels", lambda: None)
-    want = raster.group_tables(masks, segs, child, sil)
-    for g, x in zip(got, want, strict=True):
-        np.testing.assert_array_equal(g, x)
     others = np.delete(masks, [2, 3], axis=0).any(axis=0)  # segment 2 with its child 3
     assert got[1][0] == np.count_nonzero(others)
     assert got[2][0] == np.count_nonzero(others & sil)
+    row = 7  # its table counts, left of each column, the pixels outside that model
+    np.testing.assert_array_equal(got[0][0, 0, row, 1:], np.cumsum(~others[row]))
+    np.testing.assert_array_equal(got[0][0, 1, row, 1:], np.cumsum(~others[row] & sil[row]))
+
+
+@pytest.mark.parametrize("caps", [False, True])
+def test_group_span_tables_equal_group_tables_of_the_drawn_model(caps):
+    """The span-counted group tables equal group_tables of the drawn segments, also
+    with segments reaching past the image and limited table rows."""
+    from vidcap.fit import raster
+
+    rng = np.random.default_rng(11)
+    h, w = 60, 45
+    sil = rng.random((h, w)) < 0.5
+    segs, child = np.array([2, 3, 6, 1, 9]), np.array([3, 3, 7, 1, 9])
+    for _ in range(20):
+        p0 = rng.uniform(-10, [w + 10, h + 10], (10, 2))
+        p1 = p0 + rng.normal(0, 15, (10, 2))
+        radii = rng.uniform(0.5, 6, 10)
+        # each table's rows hold its pair (the tables' contract), with a random margin
+        # that may reach past the image
+        ys = np.stack([p0[:, 1], p1[:, 1]], 1)
+        lo = np.minimum(ys[segs].min(1), ys[child].min(1)) - radii[[segs, child]].max(0)
+        hi = np.maximum(ys[segs].max(1), ys[child].max(1)) + radii[[segs, child]].max(0)
+        rows = np.stack([np.floor(lo) - 2 - rng.integers(0, 8, 5),
+                         np.ceil(hi) + 3 + rng.integers(0, 8, 5)], 1).astype(np.int64)
+        masks = raster.draw_segments(p0[:, None], p1[:, None], radii[:, None], (h, w),
+                                     caps=caps)
+        want = raster.group_tables(masks, segs, child, sil, rows=rows)
+        got = raster.group_span_tables(p0, p1, radii, segs, child, sil, rows=rows, caps=caps)
+        for g, x in zip(got, want, strict=True):
+            np.testing.assert_array_equal(g, x)
 
 
 def test_shift_overlaps_compiled_and_numpy_paths_agree(monkeypatch):
@@ -336,7 +364,7 @@ def test_group_similarity_compiled_equals_numpy_path(form, monkeypatch):
     np.testing.assert_array_equal(got, want)
 
 
-def test_group_tables_reach_rows_give_the_same_counts(monkeypatch):
+def test_group_tables_reach_rows_give_the_same_counts():
     """Tables filled only in the rows a search reaches: same counts, zeros elsewhere."""
     from vidcap.fit import raster
 
@@ -356,6 +384,3 @@ def test_group_tables_reach_rows_give_the_same_counts(monkeypatch):
     np.testing.assert_array_equal(got[0][0, :, 5:17], full[0][0, :, 5:17])
     assert not got[0][0, :, :5].any() and not got[0][0, :, 17:].any()
     np.testing.assert_array_equal(got[0][1, :, 12:], full[0][1, :, 12:])
-    monkeypatch.setattr(raster, "_kernels", lambda: None)
-    for g, x in zip(got, raster.group_tables(masks, segs, child, sil, rows=rows), strict=True):
-        np.testing.assert_array_equal(g, x)

@@ -664,24 +664,39 @@ def search_runner(values, scores, best, period, far):
 
 
 @numba.njit(cache=True, nogil=True)
-def group_tables(masks, segs, child, sil, rows, cum, m_base, i_base):
+def group_span_tables(p0, p1, radii, caps, segs, child, sil, rows, cum, m_base, i_base):
     """Per searched segment n: the model without segs[n] (and child[n]) as row sums.
 
-    masks (10, h, w) bool: every segment drawn; a pixel is in base n if more segments
-    cover it than the pair's own (child[n] == segs[n]: a leaf, counted once).
-    cum[n, 0] / cum[n, 1]: row prefix sums of pixels not in base n / of those on the
-    silhouette, filled for rows rows[n, 0] <= y < rows[n, 1] only (the rows search
-    n's candidates can reach; the pair covers nothing outside them, so there base n
-    is every covered pixel); m_base[n], i_base[n]: base n's pixels / those on the
-    silhouette, over the whole image.
+    The model is the segments p0, p1 (S, 2), radii (S,), counted from their row spans:
+    the pixels :func:`draw` would set (the same spans, rows and rounding). A pixel is
+    in base n if more segments cover it than the pair's own (child[n] == segs[n]: a
+    leaf, counted once). cum[n, 0] / cum[n, 1]: row prefix sums of pixels not in base
+    n / of those on the silhouette (h, w), filled for rows rows[n, 0] <= y < rows[n, 1]
+    only (the rows search n's candidates can reach; the pair covers nothing outside
+    them, so there base n is every covered pixel); m_base[n], i_base[n]: base n's
+    pixels / those on the silhouette, over the whole image. The integers of
+    ``raster.group_tables`` of the drawn masks.
     """
-    n_s, h, w = masks.shape
+    n_seg = p0.shape[0]
+    h, w = sil.shape
+    span_f = np.zeros((h, n_seg), np.int64)  # per row, segment k covers [f, e)
+    span_e = np.zeros((h, n_seg), np.int64)
+    setup = np.empty(9)
+    one = np.empty(1)
     cover = np.zeros((h, w), np.int64)
-    for k in range(n_s):
-        for y in range(h):
-            for x in range(w):
-                if masks[k, y, x]:
-                    cover[y, x] += 1
+    for k in range(n_seg):
+        span_setup(p0[k, 0], p0[k, 1], p1[k, 0], p1[k, 1], radii[k], setup)
+        one[0] = radii[k]
+        i0, i1 = row_range(p0[k:k + 1].reshape(1, 1, 2), p1[k:k + 1].reshape(1, 1, 2), one, 0,
+                           0, h)
+        for y in range(i0, i1):
+            lo, hi = span_row(setup, p1[k, 0], p1[k, 1], float(y), caps)
+            f = int(min(max(lo, 0.0), w))
+            e = int(min(max(hi + 1.0, float(f)), w))
+            span_f[y, k] = f
+            span_e[y, k] = e
+            for x in range(f, e):
+                cover[y, x] += 1
     covered = np.zeros(h, np.int64)  # per row: covered pixels, and those on the silhouette
     covered_sil = np.zeros(h, np.int64)
     for y in range(h):
@@ -702,10 +717,12 @@ def group_tables(masks, segs, child, sil, rows, cum, m_base, i_base):
         for y in range(y0, y1):
             m -= covered[y]
             i -= covered_sil[y]
+            fs, es = span_f[y, s], span_e[y, s]
+            fc, ec = span_f[y, c], span_e[y, c]
             c0 = 0
             c1 = 0
-            for x in range(w):  # branch-free: masks are noisy at their edges
-                own = np.int64(masks[s, y, x]) + pair * np.int64(masks[c, y, x])
+            for x in range(w):  # branch-free: spans are noisy at their edges
+                own = np.int64(fs <= x < es) + pair * np.int64(fc <= x < ec)
                 inside = np.int64(cover[y, x] > own)
                 on = np.int64(sil[y, x])
                 m += inside

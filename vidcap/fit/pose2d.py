@@ -124,9 +124,8 @@ from vidcap.fit.raster import (
     base_tables,
     direction,
     draw_pose,
-    draw_segments,
     group_scorer,
-    group_tables,
+    group_span_tables,
     image_angle,
     limb_scorer,
     model_dimensions,
@@ -371,7 +370,6 @@ class _Fitter:
         self._similarity = None
         self.batches = 0
         self._joints = None
-        self._all_masks = None
 
     # -- pose --------------------------------------------------------------------
     def joints(self) -> np.ndarray:
@@ -411,15 +409,6 @@ class _Fitter:
         return self._similarity[1]
 
     # -- scoring -----------------------------------------------------------------
-    def _all_segment_masks(self, joints: np.ndarray):
-        """Masks of all ten segments at their current places, (10, h, w), one call."""
-        key = joints.tobytes()
-        if self._all_masks is None or self._all_masks[0] != key:
-            m = draw_segments(joints[_PROX][:, None], joints[_DIST][:, None],
-                              self.R[:, None], (self.h, self.w), caps=self.caps)
-            self._all_masks = (key, m)
-        return self._all_masks[1]
-
     def _still(self, ends, moving, rows):
         """What a search adds its candidates to: the rows searched, the rows its
         candidates can reach, the segments that do not move ((K, 2) ends, (K,) radii)
@@ -711,8 +700,9 @@ class _Fitter:
         # ratios are at most 1): its table needs only those rows (+ margins)
         reach = self.L[segs] + np.where(child != segs, self.L[child], 0.0) + self.R.max() + 4
         rows = np.stack([np.floor(own0[:, 1] - reach), np.ceil(own0[:, 1] + reach) + 1], 1)
-        cum, m_base, i_base = group_tables(self._all_segment_masks(j), segs, child, self.sil,
-                                           rows=rows.astype(np.int64))
+        cum, m_base, i_base = group_span_tables(j[_PROX], j[_DIST], self.R, segs, child,
+                                                self._sil_c, rows=rows.astype(np.int64),
+                                                caps=self.caps)
         a = int(self.sil_rows[-1])
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
         leaf = child == segs

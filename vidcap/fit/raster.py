@@ -915,6 +915,9 @@ def base_tables(p0, p1, radii, sil, *, rows=None, reach=None, sil_cum=None,
 def group_tables(masks, segs, child, sil, *, rows=None):
     """:func:`base_tables` for a group search: one table per segment searched.
 
+    The numpy reference of what the fit uses, :func:`group_span_tables` (which counts
+    the segments' spans instead of taking drawn masks).
+
     Parameters
     ----------
     masks : numpy.ndarray, shape (10, h, w), bool
@@ -940,17 +943,10 @@ def group_tables(masks, segs, child, sil, *, rows=None):
     n = len(segs)
     h, w = sil.shape
     cum = np.zeros((n, 2, h, w + 1), dtype=np.int32)
-    kernels = _kernels()
     segs = np.asarray(segs, dtype=np.int64)
     child = np.asarray(child, dtype=np.int64)
     rows = (np.tile(np.array([0, h], np.int64), (n, 1)) if rows is None
             else np.asarray(rows, dtype=np.int64))
-    if kernels is not None:
-        m_base = np.zeros(n, np.int64)
-        i_base = np.zeros(n, np.int64)
-        kernels.group_tables(_carray(masks, np.bool_), segs, child, _carray(sil, np.bool_),
-                   _carray(rows, np.int64), cum, m_base, i_base)
-        return cum, m_base, i_base
     # pixels covered by more segments than the pair's own
     own = masks[segs].astype(np.uint8)
     own += masks[child] & (child != segs)[:, None, None]
@@ -962,6 +958,47 @@ def group_tables(masks, segs, child, sil, *, rows=None):
     cum[np.broadcast_to(outside[:, None], cum.shape[:3])] = 0
     return (cum, np.count_nonzero(base, axis=(1, 2)).astype(np.int64),
             np.count_nonzero(base & sil, axis=(1, 2)).astype(np.int64))
+
+
+def group_span_tables(p0, p1, radii, segs, child, sil, *, rows=None, caps: bool = True):
+    """:func:`group_tables` of the model with segments ``p0`` -> ``p1``, without drawing it.
+
+    Parameters
+    ----------
+    p0, p1 : numpy.ndarray, shape (10, 2)
+        Every segment's ends (pixels).
+    radii : numpy.ndarray, shape (10,)
+        Their half-widths.
+    segs, child, sil, rows
+        As in :func:`group_tables`.
+    caps : bool
+        Capsules (true) or rectangles (false).
+
+    Returns
+    -------
+    cum, m_base, i_base
+        Exactly :func:`group_tables` of the masks :func:`draw_segments` would draw
+        (the compiled path counts the segments' row spans; the fallback draws them).
+    """
+    h, w = sil.shape
+    segs = np.asarray(segs, dtype=np.int64)
+    child = np.asarray(child, dtype=np.int64)
+    kernels = _kernels()
+    if kernels is None:
+        masks = draw_segments(np.asarray(p0)[:, None], np.asarray(p1)[:, None],
+                              np.asarray(radii)[:, None], (h, w), caps=caps)
+        return group_tables(masks, segs, child, sil, rows=rows)
+    n = len(segs)
+    rows = (np.tile(np.array([0, h], np.int64), (n, 1)) if rows is None
+            else np.asarray(rows, dtype=np.int64))
+    cum = np.zeros((n, 2, h, w + 1), dtype=np.int32)
+    m_base = np.zeros(n, np.int64)
+    i_base = np.zeros(n, np.int64)
+    kernels.group_span_tables(_carray(p0, np.float64), _carray(p1, np.float64),
+                              _carray(radii, np.float64), bool(caps), segs, child,
+                              _carray(sil, np.bool_), _carray(rows, np.int64), cum, m_base,
+                              i_base)
+    return cum, m_base, i_base
 
 
 def shift_overlaps(sil: np.ndarray, model: np.ndarray, n: int) -> np.ndarray:
@@ -999,6 +1036,7 @@ __all__ = [
     "draw_segments",
     "group_scorer",
     "group_similarity",
+    "group_span_tables",
     "group_tables",
     "image_angle",
     "limb_scorer",
