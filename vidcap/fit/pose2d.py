@@ -321,6 +321,7 @@ _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), n
             np.zeros(1, np.int64))
 # _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
+_FALLBACK = 0.97  # fit_pose's default: a warm fit below this share of the last S slipped
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
 assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/sin
 
@@ -1231,7 +1232,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
 def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
              refine: bool = True, spread: bool = True, verify_crossing: bool = True,
              caps: bool = False, warm_threshold: float = 0.55,
-             fallback: float = 0.97, warm_step_deg: float = 2.0,
+             fallback: float = _FALLBACK, warm_step_deg: float = 2.0,
              challenge: bool = False, arm_grid: bool = True,
              spread_value: float | None = None) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
@@ -1383,7 +1384,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
             # tracked in a wrong pose too. Carry the new pose backward while it fits
             # those frames better (beyond the seed).
             back = fp
-            fallback = kw.get("fallback", 0.97)
+            fallback = kw.get("fallback", _FALLBACK)
             for b in range(k - 1, start - 1, -1):
                 mb = np.asarray(masks[b], dtype=bool)
                 fb = fit_pose(mb, previous=back, **{**kw, "fallback": 0.0})
