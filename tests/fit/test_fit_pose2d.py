@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
-from vidcap.fit.pose2d import Pose2D, fit_pose, fit_sequence
+from vidcap.fit.pose2d import Pose2D, body_heights, fit_pose, fit_sequence
 from vidcap.fit.raster import draw_pose, draw_segments, model_dimensions, pose_joints
 from vidcap.fit.search import interval_search
 from vidcap.fit.similarity import similarity
@@ -13,8 +13,8 @@ H = 240.0  # body height of the synthetic figures, pixels
 L, R, SH, HP = model_dimensions(H)
 
 
-def _figure(angles_deg, *, fore=None, spread=0.5, shape=(320, 240)):
-    root = np.array([shape[1] / 2, 30 + (77 / 175) * H])
+def _figure(angles_deg, *, fore=None, spread=0.5, shape=(320, 240), top=30.0):
+    root = np.array([shape[1] / 2, top + (77 / 175) * H])
     f = np.ones(10) if fore is None else np.asarray(fore, float)
     j = pose_joints(root, np.deg2rad(angles_deg), f, spread, L, SH, HP)
     return draw_pose(j, R, shape, caps=False), j
@@ -82,6 +82,50 @@ def test_raised_foreshortened_arm():
     assert _angle_err_deg(fp.angles[k], np.deg2rad(160)) < 5
     # the whole arm is 0.7 of its length: the wrist lands within 3 % of the height
     assert np.hypot(*(fp.joints[JOINT_INDEX["l_wrist"]] - truth[JOINT_INDEX["l_wrist"]])) < 0.03 * H
+
+
+def test_body_heights_leave_out_poorly_fitted_frames():
+    n = 120
+    heights = np.full(n, 200.0) + np.linspace(-4, 4, n)  # walking slowly nearer
+    sim = np.full(n, 0.9)
+    heights[40:60], sim[40:60] = 150.0, 0.5  # a crouch: shorter, fitted worse
+    heights[80:95], sim[80:95] = 240.0, 0.8  # raised arms: taller, fitted worse
+    heights[100:104], sim[100:104] = np.nan, 0.0  # nobody in view
+    heights[115:], sim[115:] = 160.0, 0.6  # the clip ends in a crouch
+    body = body_heights(heights, sim, 61)
+    truth = 200.0 + np.linspace(-4, 4, n)
+    assert np.isfinite(body).all()  # a frame with nobody takes its neighbours' height
+    assert np.max(np.abs(body - truth)) < 1.5
+    # the plain running median is pulled toward the crouch
+    plain = body_heights(heights, np.ones(n), 61)
+    assert abs(plain[50] - truth[50]) > 3 * abs(body[50] - truth[50]) + 0.5
+    # more than half the window crouched: then the crouch is taken for the body
+    assert body_heights(heights, sim, 31)[50] == pytest.approx(150.0)
+
+
+def test_sequence_refits_frames_taller_than_the_body():
+    # arms raised sideways (front view) until the hands are above the head: from
+    # frame 10 the silhouette is taller than the body, and the seed's rule (the
+    # model as tall as the silhouette) makes the model too large
+    frames, truths = [], []
+    for t in range(20):
+        a = min(t, 14) / 14.0 * 175.0  # abduction, degrees
+        angles = [90, 90, 270 - a, 270 - a, 270 + a, 270 + a, 268, 270, 272, 270]
+        m, j = _figure(angles, spread=1.0, shape=(400, 260), top=100.0)
+        frames.append(m)
+        truths.append(j)
+    masks, truths = np.stack(frames), np.stack(truths)
+    tall = np.array([np.ptp(np.flatnonzero(r)) + 1 > 1.05 * H for r in masks.any(axis=2)])
+    assert 6 <= tall.sum() <= 10
+    fixed = fit_sequence(masks)
+    seed = fit_sequence(masks, body_window=0)
+    err = np.median(np.linalg.norm(fixed.joints2d - truths, axis=-1) / H, axis=1)
+    err_seed = np.median(np.linalg.norm(seed.joints2d - truths, axis=-1) / H, axis=1)
+    assert np.all(err[tall] < 0.015)
+    assert np.median(err_seed[tall]) > 3 * np.median(err[tall])
+    assert np.all(fixed.similarity[tall] > seed.similarity[tall])
+    # the frames as tall as the body are left as they were
+    assert np.array_equal(fixed.joints2d[~tall], seed.joints2d[~tall])
 
 
 def test_crossed_lower_legs_detected_and_swapped():

@@ -107,6 +107,23 @@ def test_normalise_round_trip():
                        atol=0.6)
     with pytest.raises(ValueError):
         normalise_mask(np.zeros((5, 5), bool))
+    assert n.body is None and n.body_height == 60
+
+
+def test_normalise_to_a_given_body_height():
+    # a crouch: the 300 px silhouette of a 400 px tall body
+    mask = np.zeros((480, 640), bool)
+    mask[100:400, 300:360] = True
+    n = normalise_mask(mask, height=80, body_height=400.0)
+    assert n.body_height == 80 and n.bottom - n.top + 1 == 60
+    assert n.scale == pytest.approx(0.2)
+    pts = np.array([[300.0, 100.0], [359.0, 399.0]])
+    assert np.allclose(n.to_original(n.to_normalised(pts)), pts)
+    ys, xs = np.nonzero(n.mask)
+    assert np.allclose(n.to_normalised(pts), [[xs.min(), ys.min()], [xs.max(), ys.max()]],
+                       atol=0.6)
+    with pytest.raises(ValueError, match="body_height"):
+        normalise_mask(mask, body_height=0.0)
 
 
 @pytest.mark.parametrize("caps", [True, False])

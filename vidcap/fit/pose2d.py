@@ -202,7 +202,8 @@ class FramePose:
     warm : bool
         True if the frame was fitted from the previous frame's pose.
     height_px : float
-        Body height in original-frame pixels (the silhouette's height).
+        Body height in original-frame pixels the model was scaled to (the
+        silhouette's height, unless ``body_height`` was given).
     """
 
     joints: np.ndarray
@@ -350,10 +351,12 @@ class _Fitter:
         self.norm = norm
         self.sil = norm.mask
         self.h, self.w = self.sil.shape
-        # Body height = silhouette height, less the round ends of the head and the
-        # lower legs when segments are drawn as capsules (they reach beyond the joints).
+        # Body height = silhouette height (or the body's, when given apart from it),
+        # less the round ends of the head and the lower legs when segments are drawn
+        # as capsules (they reach beyond the joints).
         ends = (SEGMENTS[S["head"]].width_ratio + SEGMENTS[S["l_lower_leg"]].width_ratio) / 2
-        self.H = norm.height / (1.0 + ends) if caps else norm.height
+        body = norm.body_height
+        self.H = body / (1.0 + ends) if caps else body
         self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H)
         self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
         self.caps = caps
@@ -832,6 +835,11 @@ class _Fitter:
         """Pelvis from the Table 3.1 ratios and the silhouette's horizontal middle."""
         neck_y = self.top + self.L[S["head"]]
         pelvis_y = neck_y + self.L[S["torso"]]
+        if self.norm.height > 1.02 * self.H:
+            # a silhouette taller than the body (raised arms): stand on its bottom
+            legs = self.L[S["l_upper_leg"]] + self.L[S["l_lower_leg"]]
+            pelvis_y = self.norm.bottom - legs
+            neck_y = pelvis_y - self.L[S["torso"]]
 
         band = self.sil[int(round(neck_y)) : int(round(pelvis_y)) + 1]
         rows, starts, ends = row_runs(band)
@@ -1165,6 +1173,10 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         f.fore = np.array(previous.foreshortening, dtype=float)
         f.spread = float(previous.spread) if spread else fixed_spread
         f.drawn[:] = True
+        if norm.height > 1.02 * f.H:
+            # a silhouette taller than the body (raised arms): the head need not be at
+            # its top (a shorter one, a crouch, still has the head on top)
+            f.search_root(1, 0.25 * f.H)
         warm = f.similarity() >= warm_threshold
     if warm:
         # Tracking: every search starts from the previous frame's pose with a narrow
@@ -1234,7 +1246,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
              caps: bool = False, warm_threshold: float = 0.55,
              fallback: float = _FALLBACK, warm_step_deg: float = 2.0,
              challenge: bool = False, arm_grid: bool = True,
-             spread_value: float | None = None) -> FramePose:
+             spread_value: float | None = None,
+             body_height: float | None = None) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
     Parameters
@@ -1286,7 +1299,7 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     ValueError
         If ``mask`` is empty.
     """
-    norm = normalise_mask(mask, height=height)
+    norm = normalise_mask(mask, height=height, body_height=body_height)
     kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
               warm_step_deg=warm_step_deg, arm_grid=arm_grid, spread_value=spread_value)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
@@ -1306,14 +1319,15 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         crossed=bool(crossed),
         similarity=f.similarity(),
         warm=bool(warm),
-        height_px=norm.height / norm.scale,
+        height_px=norm.body_height / norm.scale,
     )
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
                  progress=None, reinit_every: int = 10, spread_window: int = 15,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
-                 back_tie: float | None = 0.002, **kw) -> Pose2D:
+                 back_tie: float | None = 0.002, body_window: int = 91,
+                 body_tolerance: float = 0.05, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -1344,6 +1358,16 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         frames is refitted warm from its own pose with the spread fixed at that
         median, and the refit kept unless its similarity is more than
         ``spread_tie`` lower. 0 window: off.
+    body_window, body_tolerance
+        The body's height in pixels (tracked mode, beyond the seed): the seed
+        scales the model to each silhouette's height, which assumes an upright
+        body; a crouch makes the silhouette shorter and raised arms make it
+        taller. After the pass, the body's height is estimated per frame as the
+        median silhouette height of the well-fitted frames (similarity at least
+        the window's median) within ``body_window`` frames; a frame whose
+        silhouette height is more than ``body_tolerance`` (a fraction) from it is
+        refitted at that height, warm from the frame before, and the refit kept
+        if its similarity is higher. 0 window: off.
     **kw
         Passed to :func:`fit_pose` (``height``, ``refine``, ``spread``, ...).
 
@@ -1368,6 +1392,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
         sim[k], warm[k] = fp.similarity, fp.warm
 
+    height = np.full(n, np.nan)  # the height the model was scaled to, original px
     prev = None
     start = 0  # first frame of the current track
     for k in it:
@@ -1379,6 +1404,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         challenge = bool(reinit_every) and k % reinit_every == 0
         fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
         store(k, fp)
+        height[k] = fp.height_px
         if tracked and prev is not None and not fp.warm and back_tie is not None:
             # A fresh fit replaced the track: the frames before it were probably
             # tracked in a wrong pose too. Carry the new pose backward while it fits
@@ -1399,16 +1425,90 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                 back = fb
             start = k
         prev = fp
+    arrays = (joints, angles, fore, scores, margins, spread, sim, warm)
+    body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
+    if tracked and body_window > 1 and n > 2:
+        body = _refit_body_height(masks, body_window, body_tolerance, kw, height, *arrays)
     if tracked and spread_window > 1 and kw.get("spread", True) and n > 2:
-        _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw,
+        _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw, body,
                        joints, angles, fore, scores, margins, spread, sim)
     return Pose2D(JOINT_NAMES, joints, angles, fore, scores, margins, spread, sim, warm,
                   bool(tracked))
 
 
-def _smooth_spread(masks, window, jump, tie, kw, joints, angles, fore, scores, margins,
-                   spread, sim):
-    """Refit frames whose spread jumps away from the running median (in place)."""
+def body_heights(heights: np.ndarray, similarity: np.ndarray, window: int) -> np.ndarray:
+    """The body's standing height per frame, from the silhouettes' heights.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray, shape (F,)
+        Silhouette height per frame, pixels (NaN: no silhouette).
+    similarity : numpy.ndarray, shape (F,)
+        S of each frame's fit at that height.
+    window : int
+        Frames (centred; truncated at the clip's ends).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,)
+        The median height over the window's well-fitted frames (S at least the
+        window's median S): a body whose silhouette is not as tall as it (a
+        crouch, raised arms) fits worse at that height, so those frames drop out
+        while they are fewer than half the window. NaN where the window has no
+        frame.
+    """
+    h = np.asarray(heights, dtype=float)
+    s = np.where(np.isfinite(h), np.asarray(similarity, dtype=float), np.nan)
+    half = max(1, int(window) // 2)
+    pad = np.full(half, np.nan)
+
+    def windows(x):  # (F, 2 half + 1), NaN beyond the clip
+        return np.lib.stride_tricks.sliding_window_view(np.concatenate([pad, x, pad]),
+                                                        2 * half + 1)
+
+    out = np.full(h.shape, np.nan)
+    have = np.isfinite(windows(s)).any(axis=1)
+    if not have.any():
+        return out
+    sw, hw = windows(s)[have], windows(h)[have]
+    good = sw >= np.nanmedian(sw, axis=1, keepdims=True)
+    out[have] = np.nanmedian(np.where(good, hw, np.nan), axis=1)
+    return out
+
+
+def _refit_body_height(masks, window, tolerance, kw, height, joints, angles, fore, scores,
+                       margins, spread, sim, warm):
+    """Refit frames whose silhouette is not as tall as the body (in place); returns
+    the body height (px) each refitted frame was fitted at, NaN elsewhere."""
+    body = body_heights(height, sim, window)
+    off = np.isfinite(height) & np.isfinite(body) & (np.abs(height / body - 1) > tolerance)
+    used = np.full(len(height), np.nan)
+    prev = None
+    for k in range(len(height)):
+        if not np.isfinite(height[k]):
+            prev = None
+            continue
+        if off[k]:
+            fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=prev,
+                          **{**kw, "body_height": float(body[k])})
+            if fp.similarity > sim[k]:
+                joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
+                scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
+                sim[k], warm[k] = fp.similarity, fp.warm
+                used[k] = body[k]
+                prev = fp
+                continue
+        prev = FramePose(joints=joints[k], angles=angles[k], foreshortening=fore[k],
+                         scores=scores[k], margins=margins[k], spread=float(spread[k]),
+                         crossed=False, similarity=float(sim[k]), warm=bool(warm[k]),
+                         height_px=float(height[k]))
+    return used
+
+
+def _smooth_spread(masks, window, jump, tie, kw, body, joints, angles, fore, scores,
+                   margins, spread, sim):
+    """Refit frames whose spread jumps away from the running median (in place), each at
+    the height it was fitted at (``body``: px, NaN for the silhouette's)."""
     from scipy.ndimage import median_filter
 
     ok = np.isfinite(spread)
@@ -1421,12 +1521,13 @@ def _smooth_spread(masks, window, jump, tie, kw, joints, angles, fore, scores, m
         own = FramePose(joints=joints[k], angles=angles[k], foreshortening=fore[k],
                         scores=scores[k], margins=margins[k], spread=float(med[k]),
                         crossed=False, similarity=float(sim[k]), warm=True, height_px=0.0)
+        at = float(body[k]) if np.isfinite(body[k]) else None
         fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=own,
-                      **{**kw, "spread_value": float(med[k])})
+                      **{**kw, "spread_value": float(med[k]), "body_height": at})
         if fp.similarity >= sim[k] - tie:
             joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
             scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
             sim[k] = fp.similarity
 
 
-__all__ = ["FramePose", "Pose2D", "fit_normalised", "fit_pose", "fit_sequence"]
+__all__ = ["FramePose", "Pose2D", "body_heights", "fit_normalised", "fit_pose", "fit_sequence"]

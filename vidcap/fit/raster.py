@@ -94,6 +94,9 @@ class NormalisedMask:
         ``original = normalised / scale_xy + offset``.
     top, bottom : int
         Rows of the silhouette's first and last pixel in the normalised image.
+    body : float or None
+        The body's standing height (top of head to ankles) in normalised pixels when
+        it was given apart from the silhouette's (None: the silhouette's height).
     """
 
     mask: np.ndarray
@@ -102,11 +105,18 @@ class NormalisedMask:
     offset: np.ndarray
     top: int
     bottom: int
+    body: float | None = None
 
     @property
     def height(self) -> float:
-        """Height of the silhouette in normalised pixels (top of head to ankles)."""
+        """Height of the silhouette in normalised pixels."""
         return float(self.bottom - self.top + 1)
+
+    @property
+    def body_height(self) -> float:
+        """The body's standing height in normalised pixels, which the model is scaled
+        to: ``body`` if given, else the silhouette's height (an upright body)."""
+        return self.height if self.body is None else float(self.body)
 
     def to_original(self, points: np.ndarray) -> np.ndarray:
         """Map normalised ``(..., 2)`` points ``(x, y)`` to original-frame pixels."""
@@ -117,7 +127,8 @@ class NormalisedMask:
         return (np.asarray(points, dtype=float) - self.offset) * self.scale_xy
 
 
-def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25) -> NormalisedMask:
+def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25,
+                   body_height: float | None = None) -> NormalisedMask:
     """Crop a silhouette to its bounding box and resize it to a fixed height.
 
     Parameters
@@ -125,10 +136,14 @@ def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25) 
     mask : numpy.ndarray, shape (H, W), bool
         The silhouette in the original frame.
     height : int
-        Height of the silhouette's bounding box after resizing, in pixels.
+        Height of the silhouette's bounding box after resizing, in pixels; with
+        ``body_height``, the height the body is resized to instead.
     margin : float
         Empty border added on every side, as a fraction of ``height``, so a model
         that overreaches the silhouette is still counted as negative error.
+    body_height : float, optional
+        The body's standing height in original pixels, when it is known apart from
+        this silhouette (a crouch makes the silhouette shorter, raised arms taller).
 
     Returns
     -------
@@ -148,17 +163,24 @@ def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25) 
         raise ValueError("mask is empty")
     r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
     crop = mask[r0:r1, c0:c1].astype(np.float32)
-    s = height / (r1 - r0)
+    if body_height is None:
+        n_rows, body = height, None
+    else:
+        if not body_height > 0:
+            raise ValueError(f"body_height must be positive, got {body_height}")
+        n_rows, body = max(1, int(round((r1 - r0) * height / body_height))), float(height)
+    s = n_rows / (r1 - r0)
     w = max(1, int(round((c1 - c0) * s)))
     interp = cv2.INTER_AREA if s < 1 else cv2.INTER_LINEAR
-    small = cv2.resize(crop, (w, height), interpolation=interp) >= 0.5
-    pad = int(round(margin * height))
-    out = np.zeros((height + 2 * pad, w + 2 * pad), dtype=bool)
-    out[pad : pad + height, pad : pad + w] = small
+    small = cv2.resize(crop, (w, n_rows), interpolation=interp) >= 0.5
+    pad = int(round(margin * max(height, n_rows)))
+    out = np.zeros((n_rows + 2 * pad, w + 2 * pad), dtype=bool)
+    out[pad : pad + n_rows, pad : pad + w] = small
     # Pixel centres: original x_o = c0 + (x_n - pad + 0.5) / s - 0.5.
     sx = w / (c1 - c0)
     offset = np.array([c0 - 0.5 - (pad - 0.5) / sx, r0 - 0.5 - (pad - 0.5) / s])
-    return NormalisedMask(out, float(s), np.array([sx, s]), offset, pad, pad + height - 1)
+    return NormalisedMask(out, float(s), np.array([sx, s]), offset, pad, pad + n_rows - 1,
+                          body)
 
 
 def direction(angles: np.ndarray) -> np.ndarray:
