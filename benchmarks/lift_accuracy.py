@@ -25,7 +25,14 @@ sample clips against their truth: 3D MPJPE after root alignment (also allowing t
 body's left/right limbs to be swapped per frame: in a side view the image cannot tell
 which leg is which), 2D joint error, orientation agreement.
 
-Run:  python benchmarks/lift_accuracy.py [--frames 82] [--synth] [--end-to-end]
+With --approach, also a subject whose distance from the camera changes: the clips'
+true 2D joints are scaled per frame about the image centre (its size from 1 to 2x, or
+from 1 to 0.6x, over the clip: walking toward or away from the camera, weak
+perspective) and lifted with the true signs and orientation, at the clip's single
+scale (``estimate_scale``) and at per-frame scales (``estimate_scales``, what the
+pipeline uses).
+
+Run:  python benchmarks/lift_accuracy.py [--frames 82] [--synth] [--end-to-end] [--approach]
 """
 
 from __future__ import annotations
@@ -42,7 +49,13 @@ sys.path.insert(0, str(ROOT))
 
 from vidcap.annotations import Annotations  # noqa: E402
 from vidcap.body import SEGMENT_NAMES, BodyModel  # noqa: E402
-from vidcap.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation  # noqa: E402
+from vidcap.lift import (  # noqa: E402
+    estimate_scale,
+    estimate_scales,
+    lift,
+    torso_width_ratio,
+    yaw_from_orientation,
+)
 from vidcap.pipeline import plane_passages  # noqa: E402
 from vidcap.proposals import propose_orientation, propose_signs  # noqa: E402
 from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
@@ -233,9 +246,31 @@ def end_to_end(samples: Path, body):
         e2_sw = np.linalg.norm(swap_sides(j2) - t["joints2d"], axis=-1).mean(1)
         rows.append((video.name, len(ours), e.mean() / body.height * 100,
                      np.minimum(e, e_sw).mean() / body.height * 100,
-                     np.minimum(e2, e2_sw).mean() / (res.lifted.scale * body.height) * 100,
+                     np.minimum(e2, e2_sw).mean() / (np.mean(res.lifted.scale) * body.height) * 100,
                      float(np.mean(res.lifted.orientation == t["orientation"]) * 100), secs))
     return rows
+
+
+def approach(truth, body, gain_end):
+    """MPJPE (% of height) with true signs at one scale and per-frame scales, and the
+    per-frame scales' largest error (%), when the image grows linearly to gain_end."""
+    j2 = truth["joints2d"]
+    n = len(j2)
+    gain = np.linspace(1.0, gain_end, n)[:, None, None]
+    centre = np.array([320.0, 240.0])
+    jg = centre + gain * (j2 - centre)
+    true3 = truth_in_camera_frame(truth)
+    signs = truth["depth_signs"].astype(int)
+    s0 = estimate_scale(j2, body)
+    rho = torso_width_ratio(j2, s0, body)  # the unscaled clip's: isolates the scale
+    yaw = yaw_from_orientation(truth["orientation"], rho)
+    out = []
+    for scale in (estimate_scale(jg, body), estimate_scales(jg, body)):
+        out.append(mpjpe(lift(jg, signs, yaw, body=body, scale=scale).joints3d, true3,
+                         body.height))
+    per = np.broadcast_to(estimate_scales(jg, body), (n,))
+    out.append(float(np.max(np.abs(per / (s0 * gain[:, 0, 0]) - 1)) * 100))
+    return out
 
 
 def main(argv=None):
@@ -249,6 +284,8 @@ def main(argv=None):
                          "however little it turns the body")
     ap.add_argument("--end-to-end", action="store_true",
                     help="also run the whole pipeline on sample_videos/ against their truth")
+    ap.add_argument("--approach", action="store_true",
+                    help="also a subject walking toward / away from the camera (per-frame scale)")
     args = ap.parse_args(argv)
     body = BodyModel()
     motions = {
@@ -260,6 +297,7 @@ def main(argv=None):
         motions = {n: dict(name_or_path=n) for n in ("walk", "arms", "jacks")}
         yaws = (90.0, 45.0, 20.0)
     rows = []
+    approach_rows = []
     t0 = time.perf_counter()
     for mname, kw in motions.items():
         motion = make_motion(**kw, body=body, fps=30.0, rng=np.random.default_rng(0))
@@ -268,6 +306,9 @@ def main(argv=None):
             clip = prepare_clip(motion, body=body, yaw_deg=yaw, rng=np.random.default_rng(1))
             truth = truth_arrays(clip, np.zeros((motion.n_frames, 1, 1), bool))
             rows.append((mname, yaw, evaluate(truth, body, orient_first=args.orient_first)))
+            if args.approach:
+                for g in (2.0, 0.6):
+                    approach_rows.append((mname, yaw, g, approach(truth, body, g)))
     head = ("motion", "yaw", "frames", "MPJPE true %", "MPJPE prop %", "signs ok % (all)",
             "ok out of plane %", "ok near plane %", "out of plane share %",
             "all / out, true orient %", "orient ok %", "events (orient)", "MPJPE after %",
@@ -291,6 +332,13 @@ def main(argv=None):
               f"depth events {dev:.1f}")
     print(f"\n(targets: MPJPE with true signs <= 5 %, signs >= 90 %, events <= 6 on 82 frames;"
           f" seed 004: 60 inputs; {time.perf_counter() - t0:.1f} s)")
+    if approach_rows:
+        print("\nDistance changing (true 2D joints scaled per frame, true signs):")
+        print("motion | yaw | image size at the end | MPJPE one scale % | "
+              "MPJPE per-frame scales % | per-frame scale error, max %")
+        print("--- | --- | --- | --- | --- | ---")
+        for m, yaw, g, (e1, e2, es) in approach_rows:
+            print(f"{m} | {yaw:.0f} | {g:.1f}x | {e1:.2f} | {e2:.2f} | {es:.1f}")
     if args.end_to_end:
         rows = end_to_end(ROOT / "sample_videos", body)
         print("\nEnd to end (vidcap's pipeline on sample_videos/, no annotations, no smoothing):")

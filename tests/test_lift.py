@@ -9,6 +9,7 @@ from vidcap.lift import (
     assign_sides,
     depth_magnitudes,
     estimate_scale,
+    estimate_scales,
     lift,
     swap_sides,
     torso_width_ratio,
@@ -324,3 +325,51 @@ def test_shin_follows_a_slightly_abducted_thigh():
     hinge = propose_signs(j2, yaw, scale=200.0, leg_twist_weight=1.0).signs[:, k]
     np.testing.assert_array_equal(hinge, signs[:, k])
     assert np.any(propose_signs(j2, yaw, scale=200.0).signs[:, k] != signs[:, k])  # off
+
+
+def _approaching(yaw_deg, n, s0, s1):
+    """The posed walk seen at a scale changing linearly from s0 to s1 px/m (a subject
+    walking toward or away from the camera): (2D joints, camera joints, signs, scales)."""
+    _, cam, signs, _ = posed_clip(yaw_deg, n)
+    s = np.linspace(s0, s1, n)
+    j2 = np.stack([320.0 + s[:, None] * cam[..., 0], 400.0 - s[:, None] * cam[..., 1]], -1)
+    return j2, cam, signs, s
+
+
+@pytest.mark.parametrize("n, s0, s1",
+                         [(120, 150.0, 300.0), (300, 360.0, 120.0), (60, 200.0, 260.0)])
+def test_per_frame_scale_of_a_subject_walking_toward_the_camera(n, s0, s1):
+    j2, cam, signs, truth = _approaching(90.0, n, s0, s1)
+    scales = estimate_scales(j2)
+    assert np.shape(scales) == (n,)
+    assert np.max(np.abs(scales / truth - 1)) < 0.02
+    yaw = np.full(n, np.pi / 2)
+    e_frame = _mpjpe(lift(j2, signs, yaw, scale=scales).joints3d, cam)
+    e_single = _mpjpe(lift(j2, signs, yaw, scale=estimate_scale(j2)).joints3d, cam)
+    assert e_frame < 0.02 * 1.75 and e_frame < 0.25 * e_single
+    # the root in metres is (u - c) / s per frame (c: where the camera's axis meets
+    # the image), so the walk across the image is found again in metres
+    pel = JOINT_INDEX["pelvis"]
+    root = lift(j2, signs, yaw, scale=scales, principal_point=(320.0, 400.0)).joints3d[:, pel]
+    np.testing.assert_allclose(root[:, 0], cam[:, pel, 0] - cam[0, pel, 0], atol=0.02, rtol=0.01)
+
+
+def test_constant_distance_keeps_one_scale():
+    j2, _, _, _ = _approaching(45.0, 120, 200.0, 200.0)
+    assert estimate_scales(j2) == estimate_scale(j2)
+    # a change below min_change is taken for the estimate's own wander
+    j2, _, _, _ = _approaching(90.0, 120, 200.0, 212.0)
+    assert estimate_scales(j2) == estimate_scale(j2)
+    assert np.ndim(estimate_scales(j2, min_change=0.02)) == 1
+
+
+def test_per_frame_scale_arrays():
+    j2, _, signs, _ = _approaching(90.0, 30, 200.0, 200.0)
+    yaw = np.full(30, np.pi / 2)
+    one = lift(j2, signs, yaw, scale=200.0).joints3d
+    per = lift(j2, signs, yaw, scale=np.full(30, 200.0)).joints3d
+    np.testing.assert_allclose(per, one, atol=1e-12)
+    with pytest.raises(ValueError, match="scale must be"):
+        lift(j2, signs, yaw, scale=np.full(29, 200.0))
+    with pytest.raises(ValueError, match="positive"):
+        lift(j2, signs, yaw, scale=np.zeros(30))

@@ -154,7 +154,7 @@ class AnnotateSession:
         from scipy.ndimage import median_filter
 
         from vidcap.annotations import Annotations
-        from vidcap.lift import estimate_scale, torso_width_ratio
+        from vidcap.lift import estimate_scales, torso_width_ratio
         from vidcap.pipeline import fill_gaps, lift_pose
 
         self.clip = clip
@@ -172,7 +172,9 @@ class AnnotateSession:
         self._lock = threading.RLock()
         # what lift_pose derives from the 2D joints alone (for the quick re-lift)
         self._filled = fill_gaps(clip.joints2d)
-        scale = estimate_scale(self._filled, clip.body)
+        params = inspect.signature(lift_pose).parameters
+        window = max(3, int(round(params["scale_window_s"].default * clip.fps)) | 1)
+        scale = estimate_scales(self._filled, clip.body, window=window)  # as lift_pose does
         rho = torso_width_ratio(self._filled, scale, clip.body)
         if clip.spread is not None:
             spread = np.asarray(clip.spread, float)
@@ -198,14 +200,15 @@ class AnnotateSession:
 
         c = self.clip
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
-                         image_sides=c.image_sides, spread=c.spread, track=c.track)
+                         image_sides=c.image_sides, spread=c.spread, track=c.track,
+                         frame_size=c.size)
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
         from vidcap.pipeline import plane_passages
 
         self._result = res
-        self.scale = float(res.scale)
+        self.scale = res.scale  # one number, or one per frame
         self.checks = res.checks
         self.doubt = sign_doubt(res.margin, res.zeta, self.clip.body)
         self.proposed_orientation = np.asarray(res.proposed_orientation).astype(str)
@@ -233,7 +236,9 @@ class AnnotateSession:
             self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
             image_sides=self.clip.image_sides)
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
-        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale).joints3d
+        centre = (0.5 * self.clip.size[0], 0.5 * self.clip.size[1])
+        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale,
+                        principal_point=centre).joints3d
         (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,
          self.joints2d, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
                                                       orientation, yaw, j2, signs, joints3d)

@@ -71,8 +71,8 @@ class Lift3D:
         Joint positions in metres in the camera-aligned world (X right, Y up, Z toward
         the camera), pelvis of frame 0 at X = 0, Y = 0 (see :func:`vidcap.motion`
         for root placement on the floor).
-    scale : float
-        Pixels per metre used.
+    scale : float or numpy.ndarray, shape (F,)
+        Pixels per metre used (per frame where the subject's distance changes).
     yaw : numpy.ndarray, shape (F,)
         Body yaw in radians (0 = facing the camera, +pi/2 = facing image right).
     clamped : numpy.ndarray, shape (F, 10), bool
@@ -82,7 +82,7 @@ class Lift3D:
     """
 
     joints3d: np.ndarray
-    scale: float
+    scale: float | np.ndarray
     yaw: np.ndarray
     clamped: np.ndarray
     excess: np.ndarray
@@ -95,6 +95,29 @@ def _check_joints2d(joints2d) -> np.ndarray:
     if not np.isfinite(j).all():
         raise ValueError("joints2d has non-finite values")
     return j
+
+
+def _frame_scale(scale, n_frames: int) -> np.ndarray:
+    """``scale`` (pixels per metre: one, or one per frame) as an (F,) array."""
+    s = np.asarray(scale, dtype=float)
+    if s.ndim == 0:
+        s = np.full(n_frames, float(s))
+    if s.shape != (n_frames,):
+        raise ValueError(f"scale must be a number or ({n_frames},), got shape {s.shape}")
+    if not np.all(s > 0):
+        raise ValueError("scale must be positive")
+    return s
+
+
+def _chain_ratio(j: np.ndarray, body: BodyModel) -> np.ndarray:
+    """Per frame, the image length of head + torso + mean leg over the model's, px/m."""
+    px = np.linalg.norm(segment_vectors(j), axis=-1)  # (F, 10)
+    m = body.segment_lengths()
+    i = SEGMENT_INDEX
+    legs = ("l_upper_leg", "l_lower_leg", "r_upper_leg", "r_lower_leg")
+    chain_px = px[:, i["head"]] + px[:, i["torso"]] + 0.5 * sum(px[:, i[s]] for s in legs)
+    chain_m = m[i["head"]] + m[i["torso"]] + 0.5 * sum(m[i[s]] for s in legs)
+    return chain_px / chain_m
 
 
 def estimate_scale(joints2d, body: BodyModel | None = None, *, quantile: float = 0.9) -> float:
@@ -121,27 +144,88 @@ def estimate_scale(joints2d, body: BodyModel | None = None, *, quantile: float =
     """
     body = body or BodyModel()
     j = _check_joints2d(joints2d)
-    px = np.linalg.norm(segment_vectors(j), axis=-1)  # (F, 10)
-    m = body.segment_lengths()
-    i = SEGMENT_INDEX
-    legs = ("l_upper_leg", "l_lower_leg", "r_upper_leg", "r_lower_leg")
-    chain_px = px[:, i["head"]] + px[:, i["torso"]] + 0.5 * sum(px[:, i[s]] for s in legs)
-    chain_m = m[i["head"]] + m[i["torso"]] + 0.5 * sum(m[i[s]] for s in legs)
-    s = float(np.quantile(chain_px / chain_m, quantile))
+    s = float(np.quantile(_chain_ratio(j, body), quantile))
     if not s > 0:
         raise ValueError("cannot estimate the image scale: the figure has no height")
     return s
 
 
-def depth_magnitudes(joints2d, scale: float, body: BodyModel | None = None):
+def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91,
+                    quantile: float = 0.9, min_change: float = 0.1):
+    """Scale per frame, for a subject whose distance from the camera changes.
+
+    Scaled orthography (Eq. 2.1) holds per frame (weak perspective): a subject
+    walking toward the camera grows in the image. The per-frame ratio of
+    :func:`estimate_scale` is the scale where the chain lies in the image plane and
+    less where it is foreshortened or bent, so the scale is its upper ``quantile``
+    as a smooth function of time: a quantile regression of its logarithm on
+    quadratic B-splines with a knot every ``window`` frames (a linear programme).
+    When that changes by less than ``min_change`` over the clip (a fraction), the
+    subject keeps its distance within what the estimate can tell (on fitted joints
+    gait and pose move it by up to about 5 %) and the clip's single scale is
+    returned.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints in pixels.
+    body : BodyModel, optional
+    window : int
+        Frames between knots (about 3 s at 30 fps by default; a shorter clip is one
+        quadratic piece).
+    quantile : float
+        As in :func:`estimate_scale`.
+    min_change : float
+        Smallest max / min - 1 of the per-frame scales taken as a real change.
+
+    Returns
+    -------
+    float or numpy.ndarray, shape (F,)
+        Pixels per metre: one number, or one per frame.
+    """
+    from scipy.interpolate import BSpline
+    from scipy.optimize import linprog
+    from scipy.sparse import eye, hstack
+
+    body = body or BodyModel()
+    j = _check_joints2d(joints2d)
+    single = estimate_scale(j, body, quantile=quantile)
+    F = j.shape[0]
+    n_pieces = max(1, int(np.floor((F - 1) / max(int(window), 2))))
+    ratio = _chain_ratio(j, body)
+    good = ratio > 0
+    if good.sum() < 4 * (n_pieces + 3):
+        return single
+    t = np.arange(F, dtype=float)
+    k = 2  # quadratic pieces: smooth, with few wiggles where the pose, not the distance, changes
+    inner = np.linspace(0.0, F - 1.0, n_pieces + 1)
+    knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
+    basis = BSpline.design_matrix(t, knots, k)  # (F, n_pieces + 3), sparse
+    y = np.log(ratio[good])
+    b = basis[good]
+    n, m = b.shape
+    # min q sum(u+) + (1 - q) sum(u-)  s.t.  B beta + u+ - u- = y,  u+, u- >= 0
+    cost = np.r_[np.zeros(m), np.full(n, quantile), np.full(n, 1.0 - quantile)]
+    a_eq = hstack([b, eye(n), -eye(n)], format="csr")
+    bounds = [(None, None)] * m + [(0.0, None)] * (2 * n)
+    res = linprog(cost, A_eq=a_eq, b_eq=y, bounds=bounds, method="highs")
+    if not res.success:
+        return single
+    s = np.exp(basis @ res.x[:m])
+    if not np.all(np.isfinite(s) & (s > 0)) or s.max() / s.min() - 1.0 < min_change:
+        return single
+    return s
+
+
+def depth_magnitudes(joints2d, scale, body: BodyModel | None = None):
     """|dZ| of every segment (Eq. 2.2) and whether it was clamped.
 
     Parameters
     ----------
     joints2d : array_like, shape (F, 15, 2)
         Image joints, pixels.
-    scale : float
-        Pixels per metre.
+    scale : float or array_like, shape (F,)
+        Pixels per metre (per frame: :func:`estimate_scales`).
     body : BodyModel, optional
 
     Returns
@@ -155,14 +239,17 @@ def depth_magnitudes(joints2d, scale: float, body: BodyModel | None = None):
     body = body or BodyModel()
     j = _check_joints2d(joints2d)
     lengths = body.segment_lengths()
-    proj = np.linalg.norm(segment_vectors(j), axis=-1) / scale  # metres in the image plane
+    s = _frame_scale(scale, j.shape[0])[:, None]
+    proj = np.linalg.norm(segment_vectors(j), axis=-1) / s  # metres in the image plane
     ratio = proj / lengths
     dz = np.sqrt(np.clip(lengths**2 - proj**2, 0.0, None))
     return dz, ratio
 
 
-def torso_width_ratio(joints2d, scale: float, body: BodyModel | None = None) -> np.ndarray:
+def torso_width_ratio(joints2d, scale, body: BodyModel | None = None) -> np.ndarray:
     """Horizontal foreshortening of the torso from the image shoulder and hip spans.
+
+    ``scale``: pixels per metre, one or (F,).
 
     Returns
     -------
@@ -175,7 +262,7 @@ def torso_width_ratio(joints2d, scale: float, body: BodyModel | None = None) -> 
     i = JOINT_INDEX
     span = (np.abs(j[:, i["l_shoulder"], 0] - j[:, i["r_shoulder"], 0])
             + np.abs(j[:, i["l_hip"], 0] - j[:, i["r_hip"], 0]))
-    full = 2.0 * (body.shoulder_half_width + body.hip_half_width) * scale
+    full = 2.0 * (body.shoulder_half_width + body.hip_half_width) * _frame_scale(scale, len(j))
     return np.clip(span / full, 0.0, 1.0)
 
 
@@ -258,7 +345,8 @@ def lift(
     yaw,
     *,
     body: BodyModel | None = None,
-    scale: float | None = None,
+    scale=None,
+    principal_point=None,
 ) -> Lift3D:
     """Lift body-side named 2D joints to 3D with depth signs (seed 004 Eq. 2.2).
 
@@ -274,8 +362,14 @@ def lift(
         Body yaw in radians (:func:`yaw_from_orientation`).
     body : BodyModel, optional
         Subject's lengths (default 1.75 m).
-    scale : float, optional
-        Pixels per metre; default :func:`estimate_scale`.
+    scale : float or array_like, shape (F,), optional
+        Pixels per metre, one or per frame (:func:`estimate_scales`); default
+        :func:`estimate_scale`.
+    principal_point : (float, float), optional
+        Where the camera's axis meets the image, pixels (the frame's centre). Only
+        used with per-frame scales: the root's position in metres is then ``(u -
+        c) / s`` per frame (weak perspective); default the pelvis' median image
+        position.
 
     Returns
     -------
@@ -289,11 +383,14 @@ def lift(
         raise ValueError(f"signs must be (F, 10) = ({F}, 10), got {sg.shape}")
     sg = np.where(sg < 0, -1.0, 1.0)
     yaw = np.broadcast_to(np.asarray(yaw, dtype=float), (F,))
-    s = estimate_scale(j2, body) if scale is None else float(scale)
+    per_frame = scale is not None and np.ndim(scale) > 0
+    s = estimate_scale(j2, body) if scale is None else (
+        _frame_scale(scale, F) if per_frame else float(scale))
+    sf = s[:, None, None] if per_frame else s
     lengths = body.segment_lengths()
 
     # image vectors in metres, Y up
-    vec = segment_vectors(j2) / s
+    vec = segment_vectors(j2) / sf
     vec[..., 1] *= -1.0
     proj = np.linalg.norm(vec, axis=-1)
     ratio = proj / lengths
@@ -305,7 +402,12 @@ def lift(
 
     J = np.zeros((F, len(JOINT_NAMES), 3))
     ji, si = JOINT_INDEX, SEGMENT_INDEX
-    pel = j2[:, ji["pelvis"]] / s
+    if per_frame:  # weak perspective: u - c = s X per frame
+        c = (np.median(j2[:, ji["pelvis"]], axis=0) if principal_point is None
+             else np.asarray(principal_point, dtype=float))
+        pel = (j2[:, ji["pelvis"]] - c) / s[:, None]
+    else:
+        pel = j2[:, ji["pelvis"]] / s
     J[:, ji["pelvis"], 0] = pel[:, 0] - pel[0, 0]
     J[:, ji["pelvis"], 1] = -(pel[:, 1] - pel[0, 1])
     J[:, ji["neck"]] = J[:, ji["pelvis"]] + seg3[:, si["torso"]]
@@ -332,12 +434,16 @@ def lift(
     return Lift3D(joints3d=J, scale=s, yaw=np.array(yaw), clamped=clamped, excess=excess)
 
 
-def project(joints3d, scale: float, origin=(0.0, 0.0)) -> np.ndarray:
+def project(joints3d, scale, origin=(0.0, 0.0)) -> np.ndarray:
     """Scaled orthographic projection (Eq. 2.1) back to pixels, (F, J, 3) -> (F, J, 2).
 
-    ``u = origin_u + s X``, ``v = origin_v - s Y`` (image y down).
+    ``u = origin_u + s X``, ``v = origin_v - s Y`` (image y down); ``scale`` one
+    number or one per frame, (F,).
     """
     p = np.asarray(joints3d, dtype=float)
+    scale = np.asarray(scale, dtype=float)
+    if scale.ndim:
+        scale = scale.reshape((-1,) + (1,) * (p.ndim - 2))
     out = np.empty(p.shape[:-1] + (2,))
     out[..., 0] = origin[0] + scale * p[..., 0]
     out[..., 1] = origin[1] - scale * p[..., 1]

@@ -30,7 +30,7 @@ from vidcap.errors import AnnotationError, VidcapError
 from vidcap.fileio import savez_atomic
 from vidcap.lift import (
     assign_sides,
-    estimate_scale,
+    estimate_scales,
     lift,
     torso_width_ratio,
     yaw_from_orientation,
@@ -85,7 +85,8 @@ class LiftResult:
     joints3d : (F, 15, 3) m, camera-aligned world (X right, Y up, Z toward camera).
     proposed_signs, signs : (F, 10) int8, proposed and final (user events applied).
     proposed_orientation, orientation : (F,) str.
-    yaw : (F,) rad. scale : px per metre. clamped : (F, 10) bool.
+    yaw : (F,) rad. scale : px per metre, one number or (F,) (the subject's distance
+    changes). clamped : (F, 10) bool.
     checks : ranked list of (frame, segment) pairs to check (see
         :meth:`vidcap.proposals.SignProposal.checks`).
     margin, zeta : (F, 10) sign confidence and out-of-plane amount.
@@ -98,7 +99,7 @@ class LiftResult:
     proposed_orientation: np.ndarray
     orientation: np.ndarray
     yaw: np.ndarray
-    scale: float
+    scale: float | np.ndarray
     clamped: np.ndarray
     checks: list
     margin: np.ndarray
@@ -171,6 +172,8 @@ def lift_pose(
     track=None,
     smooth_2d: float = 0.0,
     yaw_window_s: float = 1.0,
+    scale_window_s: float = 3.0,
+    frame_size: tuple[int, int] | None = None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -195,6 +198,11 @@ def lift_pose(
         (0 = none): Eq. 2.2 amplifies image noise where a segment is nearly in plane.
     yaw_window_s : float
         Running-median window (seconds) of the torso's horizontal foreshortening.
+    scale_window_s : float
+        Window (seconds) of the per-frame scale (:func:`vidcap.lift.estimate_scales`).
+    frame_size : (int, int), optional
+        (width, height) of the frames in pixels: their centre is the camera's axis
+        when the scale changes per frame.
 
     Returns
     -------
@@ -204,7 +212,8 @@ def lift_pose(
     annotations = annotations or Annotations()
     j2 = fill_gaps(joints2d)
     F = len(j2)
-    scale = estimate_scale(j2, body)
+    # one scale, or one per frame when the subject's distance changes (weak perspective)
+    scale = estimate_scales(j2, body, window=max(3, int(round(scale_window_s * fps)) | 1))
     if smooth_2d > 0 and F > 2:
         j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     if spread is None:
@@ -224,7 +233,8 @@ def lift_pose(
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=scale, body=body, fixed=user_signs) \
         if (user_signs != 0).any() else free
-    out = lift(j2, final.signs, yaw, body=body, scale=scale)
+    centre = None if frame_size is None else (0.5 * frame_size[0], 0.5 * frame_size[1])
+    out = lift(j2, final.signs, yaw, body=body, scale=scale, principal_point=centre)
     return LiftResult(
         joints2d=j2, joints3d=out.joints3d, proposed_signs=free.signs, signs=final.signs,
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
@@ -304,7 +314,8 @@ class ConvertResult:
             segment_names=np.array(SEGMENT_NAMES), joints2d=lr.joints2d,
             joints3d=lr.joints3d, proposed_signs=lr.proposed_signs, signs=lr.signs,
             proposed_orientation=lr.proposed_orientation.astype(str),
-            orientation=lr.orientation.astype(str), yaw=lr.yaw, scale=np.float64(lr.scale),
+            orientation=lr.orientation.astype(str), yaw=lr.yaw,
+            scale=np.asarray(lr.scale, dtype=np.float64),
             scores=self.scores, similarity=self.similarity, clamped=lr.clamped,
             margin=np.minimum(lr.margin, 1e6), zeta=lr.zeta, fps=np.float64(self.fps),
             check_frame=np.array([c["frame"] for c in lr.checks], dtype=int),
@@ -461,7 +472,8 @@ def run(
     track = person_track(bbox, masks)
     _check_events(ann, len(masks), ann_source)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
-                       image_sides=True, spread=hit["spread"], track=track)
+                       image_sides=True, spread=hit["spread"], track=track,
+                       frame_size=(info.width, info.height))
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(hit["similarity"], min_score=keyframe_score)

@@ -154,7 +154,7 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
     L = body.segment_lengths()
     dz, _ = depth_magnitudes(j2, scale, body)
     zeta = dz / L
-    vec = segment_vectors(j2) / scale
+    vec = segment_vectors(j2) / np.reshape(scale, (-1, 1, 1))  # one scale or one per frame
     vec[..., 1] *= -1.0
     fwd, left = body_axes(yaw)  # (F, 3)
 
@@ -213,7 +213,7 @@ def propose_signs(
     joints2d,
     yaw,
     *,
-    scale: float,
+    scale,
     body: BodyModel | None = None,
     fixed=None,
     flip_cost: float = 3.0,
@@ -237,8 +237,8 @@ def propose_signs(
         Image joints in pixels, named by the body's sides.
     yaw : array_like, shape (F,)
         Body yaw in radians (0 = facing the camera, +pi/2 = facing image right).
-    scale : float
-        Pixels per metre.
+    scale : float or array_like, shape (F,)
+        Pixels per metre (one, or per frame: :func:`vidcap.lift.estimate_scales`).
     body : BodyModel, optional
     fixed : array_like of int, shape (F, 10), optional
         User signs (+1/-1), 0 where free.
@@ -359,7 +359,7 @@ def propose_signs(
 def propose_orientation(
     joints2d,
     *,
-    scale: float,
+    scale,
     fps: float,
     body: BodyModel | None = None,
     sides_known: bool = False,
@@ -394,8 +394,8 @@ def propose_orientation(
     ----------
     joints2d : array_like, shape (F, 15, 2)
         Image joints, pixels.
-    scale : float
-        Pixels per metre.
+    scale : float or array_like, shape (F,)
+        Pixels per metre (one, or per frame).
     fps : float
         Frames per second of the clip.
     body : BodyModel, optional
