@@ -154,8 +154,8 @@ class AnnotateSession:
         from scipy.ndimage import median_filter
 
         from vidcap.annotations import Annotations
-        from vidcap.lift import estimate_scales, torso_width_ratio
-        from vidcap.pipeline import fill_gaps, lift_pose
+        from vidcap.lift import torso_width_ratio
+        from vidcap.pipeline import fill_gaps, frame_scales, lift_pose
 
         self.clip = clip
         self.path = Path(annotations_path)
@@ -172,9 +172,7 @@ class AnnotateSession:
         self._lock = threading.RLock()
         # what lift_pose derives from the 2D joints alone (for the quick re-lift)
         self._filled = fill_gaps(clip.joints2d)
-        params = inspect.signature(lift_pose).parameters
-        window = max(3, int(round(params["scale_window_s"].default * clip.fps)) | 1)
-        scale = estimate_scales(self._filled, clip.body, window=window)  # as lift_pose does
+        scale = frame_scales(self._filled, clip.fps, clip.body)  # as lift_pose does
         rho = torso_width_ratio(self._filled, scale, clip.body)
         if clip.spread is not None:
             spread = np.asarray(clip.spread, float)

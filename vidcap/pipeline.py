@@ -161,6 +161,17 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
     return orientation, yaw, j2
 
 
+#: Knot spacing (seconds) of the per-frame scale (:func:`vidcap.lift.estimate_scales`).
+SCALE_WINDOW_S = 3.0
+
+
+def frame_scales(joints2d, fps: float, body: BodyModel | None = None, *,
+                 window_s: float = SCALE_WINDOW_S):
+    """:func:`vidcap.lift.estimate_scales` with its window in seconds: pixels per metre,
+    one number or (F,) for gap-filled (F, 15, 2) joints."""
+    return estimate_scales(joints2d, body, window=max(3, int(round(window_s * fps)) | 1))
+
+
 def lift_pose(
     joints2d,
     *,
@@ -172,7 +183,7 @@ def lift_pose(
     track=None,
     smooth_2d: float = 0.0,
     yaw_window_s: float = 1.0,
-    scale_window_s: float = 3.0,
+    scale_window_s: float = SCALE_WINDOW_S,
     frame_size: tuple[int, int] | None = None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
@@ -213,7 +224,7 @@ def lift_pose(
     j2 = fill_gaps(joints2d)
     F = len(j2)
     # one scale, or one per frame when the subject's distance changes (weak perspective)
-    scale = estimate_scales(j2, body, window=max(3, int(round(scale_window_s * fps)) | 1))
+    scale = frame_scales(j2, fps, body, window_s=scale_window_s)
     if smooth_2d > 0 and F > 2:
         j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     if spread is None:
@@ -552,5 +563,5 @@ def convert(
     return result
 
 
-__all__ = ["ConvertResult", "LiftResult", "StageCache", "convert", "fill_gaps", "lift_pose",
-           "run"]
+__all__ = ["ConvertResult", "LiftResult", "StageCache", "convert", "fill_gaps", "frame_scales",
+           "lift_pose", "run"]

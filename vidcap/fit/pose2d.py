@@ -1377,21 +1377,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         Frames with an empty silhouette get NaN joints and angles and zero scores.
     """
     n = len(masks)
-    joints = np.full((n, 15, 2), np.nan)
-    angles = np.full((n, 10), np.nan)
-    fore = np.full((n, 10), np.nan)
-    scores = np.zeros((n, 10))
-    margins = np.zeros((n, 10))
-    spread = np.full(n, np.nan)
-    sim = np.zeros(n)
-    warm = np.zeros(n, dtype=bool)
+    out = _Frames(n)
+    sim = out.sim
     it = range(n) if progress is None else progress(range(n), total=n)
-
-    def store(k, fp):
-        joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
-        scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
-        sim[k], warm[k] = fp.similarity, fp.warm
-
+    store = out.put
     height = np.full(n, np.nan)  # the height the model was scaled to, original px
     prev = None
     start = 0  # first frame of the current track
@@ -1425,15 +1414,44 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                 back = fb
             start = k
         prev = fp
-    arrays = (joints, angles, fore, scores, margins, spread, sim, warm)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
-        body = _refit_body_height(masks, body_window, body_tolerance, kw, height, *arrays)
+        body = _refit_body_height(masks, body_window, body_tolerance, kw, height, out)
     if tracked and spread_window > 1 and kw.get("spread", True) and n > 2:
-        _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw, body,
-                       joints, angles, fore, scores, margins, spread, sim)
-    return Pose2D(JOINT_NAMES, joints, angles, fore, scores, margins, spread, sim, warm,
-                  bool(tracked))
+        _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw, body, out)
+    return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
+                  out.spread, out.sim, out.warm, bool(tracked))
+
+
+class _Frames:
+    """:func:`fit_sequence`'s per-frame results as arrays, filled frame by frame."""
+
+    def __init__(self, n: int):
+        self.joints = np.full((n, 15, 2), np.nan)
+        self.angles = np.full((n, 10), np.nan)
+        self.fore = np.full((n, 10), np.nan)
+        self.scores = np.zeros((n, 10))
+        self.margins = np.zeros((n, 10))
+        self.spread = np.full(n, np.nan)
+        self.sim = np.zeros(n)
+        self.warm = np.zeros(n, dtype=bool)
+
+    def put(self, k: int, fp: FramePose, *, warm: bool = True) -> None:
+        """Store frame k's fit (``warm``: its warm flag too)."""
+        self.joints[k], self.angles[k], self.fore[k] = fp.joints, fp.angles, fp.foreshortening
+        self.scores[k], self.margins[k], self.spread[k] = fp.scores, fp.margins, fp.spread
+        self.sim[k] = fp.similarity
+        if warm:
+            self.warm[k] = fp.warm
+
+    def get(self, k: int, *, spread: float | None = None, height_px: float = 0.0) -> FramePose:
+        """Frame k's stored fit as a :class:`FramePose` to warm-start from."""
+        return FramePose(joints=self.joints[k], angles=self.angles[k],
+                         foreshortening=self.fore[k], scores=self.scores[k],
+                         margins=self.margins[k],
+                         spread=float(self.spread[k] if spread is None else spread),
+                         crossed=False, similarity=float(self.sim[k]),
+                         warm=bool(self.warm[k]), height_px=float(height_px))
 
 
 def body_heights(heights: np.ndarray, similarity: np.ndarray, window: int) -> np.ndarray:
@@ -1476,11 +1494,10 @@ def body_heights(heights: np.ndarray, similarity: np.ndarray, window: int) -> np
     return out
 
 
-def _refit_body_height(masks, window, tolerance, kw, height, joints, angles, fore, scores,
-                       margins, spread, sim, warm):
+def _refit_body_height(masks, window, tolerance, kw, height, out: _Frames):
     """Refit frames whose silhouette is not as tall as the body (in place); returns
     the body height (px) each refitted frame was fitted at, NaN elsewhere."""
-    body = body_heights(height, sim, window)
+    body = body_heights(height, out.sim, window)
     off = np.isfinite(height) & np.isfinite(body) & (np.abs(height / body - 1) > tolerance)
     used = np.full(len(height), np.nan)
     prev = None
@@ -1491,26 +1508,21 @@ def _refit_body_height(masks, window, tolerance, kw, height, joints, angles, for
         if off[k]:
             fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=prev,
                           **{**kw, "body_height": float(body[k])})
-            if fp.similarity > sim[k]:
-                joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
-                scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
-                sim[k], warm[k] = fp.similarity, fp.warm
+            if fp.similarity > out.sim[k]:
+                out.put(k, fp)
                 used[k] = body[k]
                 prev = fp
                 continue
-        prev = FramePose(joints=joints[k], angles=angles[k], foreshortening=fore[k],
-                         scores=scores[k], margins=margins[k], spread=float(spread[k]),
-                         crossed=False, similarity=float(sim[k]), warm=bool(warm[k]),
-                         height_px=float(height[k]))
+        prev = out.get(k, height_px=height[k])
     return used
 
 
-def _smooth_spread(masks, window, jump, tie, kw, body, joints, angles, fore, scores,
-                   margins, spread, sim):
+def _smooth_spread(masks, window, jump, tie, kw, body, out: _Frames):
     """Refit frames whose spread jumps away from the running median (in place), each at
     the height it was fitted at (``body``: px, NaN for the silhouette's)."""
     from scipy.ndimage import median_filter
 
+    spread = out.spread
     ok = np.isfinite(spread)
     if ok.sum() < 3:
         return
@@ -1518,16 +1530,12 @@ def _smooth_spread(masks, window, jump, tie, kw, body, joints, angles, fore, sco
     med = np.full_like(spread, np.nan)
     med[idx] = median_filter(spread[idx], size=window, mode="nearest")
     for k in np.flatnonzero(ok & (np.abs(spread - med) > jump)):
-        own = FramePose(joints=joints[k], angles=angles[k], foreshortening=fore[k],
-                        scores=scores[k], margins=margins[k], spread=float(med[k]),
-                        crossed=False, similarity=float(sim[k]), warm=True, height_px=0.0)
+        own = out.get(k, spread=med[k])
         at = float(body[k]) if np.isfinite(body[k]) else None
         fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=own,
                       **{**kw, "spread_value": float(med[k]), "body_height": at})
-        if fp.similarity >= sim[k] - tie:
-            joints[k], angles[k], fore[k] = fp.joints, fp.angles, fp.foreshortening
-            scores[k], margins[k], spread[k] = fp.scores, fp.margins, fp.spread
-            sim[k] = fp.similarity
+        if fp.similarity >= out.sim[k] - tie:
+            out.put(k, fp, warm=False)
 
 
 __all__ = ["FramePose", "Pose2D", "body_heights", "fit_normalised", "fit_pose", "fit_sequence"]
