@@ -357,6 +357,8 @@ class _Fitter:
         ends = (SEGMENTS[S["head"]].width_ratio + SEGMENTS[S["l_lower_leg"]].width_ratio) / 2
         body = norm.body_height
         self.H = body / (1.0 + ends) if caps else body
+        # a silhouette taller than the body (raised arms): its top need not be the head
+        self.taller = norm.height > 1.02 * self.H
         self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H)
         self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
         self.caps = caps
@@ -835,8 +837,7 @@ class _Fitter:
         """Pelvis from the Table 3.1 ratios and the silhouette's horizontal middle."""
         neck_y = self.top + self.L[S["head"]]
         pelvis_y = neck_y + self.L[S["torso"]]
-        if self.norm.height > 1.02 * self.H:
-            # a silhouette taller than the body (raised arms): stand on its bottom
+        if self.taller:  # stand on the silhouette's bottom
             legs = self.L[S["l_upper_leg"]] + self.L[S["l_lower_leg"]]
             pelvis_y = self.norm.bottom - legs
             neck_y = pelvis_y - self.L[S["torso"]]
@@ -1173,9 +1174,9 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         f.fore = np.array(previous.foreshortening, dtype=float)
         f.spread = float(previous.spread) if spread else fixed_spread
         f.drawn[:] = True
-        if norm.height > 1.02 * f.H:
-            # a silhouette taller than the body (raised arms): the head need not be at
-            # its top (a shorter one, a crouch, still has the head on top)
+        if f.taller:
+            # the head need not be at the silhouette's top (a shorter silhouette, a
+            # crouch, still has the head on top)
             f.search_root(1, 0.25 * f.H)
         warm = f.similarity() >= warm_threshold
     if warm:
@@ -1378,9 +1379,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     """
     n = len(masks)
     out = _Frames(n)
-    sim = out.sim
     it = range(n) if progress is None else progress(range(n), total=n)
-    store = out.put
     height = np.full(n, np.nan)  # the height the model was scaled to, original px
     prev = None
     start = 0  # first frame of the current track
@@ -1392,7 +1391,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
             continue
         challenge = bool(reinit_every) and k % reinit_every == 0
         fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
-        store(k, fp)
+        out.put(k, fp)
         height[k] = fp.height_px
         if tracked and prev is not None and not fp.warm and back_tie is not None:
             # A fresh fit replaced the track: the frames before it were probably
@@ -1403,14 +1402,14 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
             for b in range(k - 1, start - 1, -1):
                 mb = np.asarray(masks[b], dtype=bool)
                 fb = fit_pose(mb, previous=back, **{**kw, "fallback": 0.0})
-                if not fb.warm or fb.similarity <= sim[b] + back_tie:
+                if not fb.warm or fb.similarity <= out.sim[b] + back_tie:
                     break
                 # fit_pose's fallback, only where its outcome matters: a fresh fit
                 # that beats the slipping warm one ends the backward track
                 if (fb.similarity < fallback * back.similarity
                         and fit_pose(mb, **kw).similarity > fb.similarity):
                     break
-                store(b, fb)
+                out.put(b, fb)
                 back = fb
             start = k
         prev = fp
