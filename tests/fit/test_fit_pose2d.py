@@ -268,11 +268,12 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     kernels = pose2d._kernels()
     assert kernels is not None
     calls = []
-    search_1d, group_search = kernels.search_1d, kernels.group_search
+    search_1d, group_fit, limb_fit = kernels.search_1d, kernels.group_fit, kernels.limb_fit
     monkeypatch.setattr(kernels, "search_1d", lambda *a: calls.append(a[11]) or search_1d(*a))
+    # limb searches set themselves up in the compiled call (a[7]: the candidate kind)
+    monkeypatch.setattr(kernels, "limb_fit", lambda *a: calls.append(a[7]) or limb_fit(*a))
     arm_pair_terms = kernels.arm_pair_terms
-    monkeypatch.setattr(kernels, "group_search",
-                        lambda *a: calls.append("group") or group_search(*a))
+    monkeypatch.setattr(kernels, "group_fit", lambda *a: calls.append("group") or group_fit(*a))
     monkeypatch.setattr(kernels, "arm_pair_terms",
                         lambda *a: calls.append("arms") or arm_pair_terms(*a))
     compiled, st_c = run(fitter())

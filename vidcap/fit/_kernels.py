@@ -887,3 +887,123 @@ def group_search(best, width, lo, hi, clip, period, gap_period, warm, prefer, di
             break
     many_runner(values[:, :used], scores[:, :used], best, period, first_step * 1.01, runner)
     return iterations
+
+
+@numba.njit(cache=True, nogil=True)
+def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, hi, start,
+              interval, has_interval, periodic, warm, prefer, divisions, min_step, angle, sign,
+              k0, k1, best, best_score, runner):
+    """A whole group search (``_Fitter.search_group``) from the model's ends, in one call.
+
+    Sets up what the Python path sets up with numpy (the rows each search's candidates
+    can reach, :func:`group_span_tables`, the pairs' ends and radii, the first
+    intervals as ``interval_search_many`` makes them), with the same floats, then
+    runs :func:`group_search`. jp0, jp1 (10, 2): every segment's ends; seg_radii,
+    lengths (10,); segs, child (N,): the searched segments and the child each moves
+    (itself for a leaf); n_k: 2 if any has a child, else 1. lo, hi, start, interval
+    (N,) as ``interval_search_many`` takes them (``start`` read only when ``warm``,
+    ``interval`` only with ``has_interval``); periodic 0 for none. best, best_score, runner (N,) are written. Returns the
+    number of iterations, or -1 if an interval is empty (nothing written).
+    """
+    n_s = segs.shape[0]
+    h, w = sil.shape
+    wrap = periodic > 0
+    for n in range(n_s):
+        if not hi[n] > lo[n]:
+            return -1
+        if wrap and not hi[n] - lo[n] >= periodic - 1e-12:
+            wrap = False
+    r_max = seg_radii.max()
+    rows = np.empty((n_s, 2), np.int64)
+    own0 = np.empty((n_s, 2))
+    own1 = np.empty((n_s, 2))
+    ch0 = np.empty((n_s, 2))
+    ch1 = np.empty((n_s, 2))
+    leaf = np.empty(n_s, np.bool_)
+    radii = np.empty((n_s, n_k))
+    width = np.empty(n_s)
+    for n in range(n_s):
+        s, c = segs[n], child[n]
+        reach = lengths[s] + (lengths[c] if c != s else 0.0) + r_max + 4
+        rows[n, 0] = np.int64(math.floor(jp0[s, 1] - reach))
+        rows[n, 1] = np.int64(math.ceil(jp0[s, 1] + reach) + 1)
+        for t in range(2):
+            own0[n, t], own1[n, t] = jp0[s, t], jp1[s, t]
+            ch0[n, t], ch1[n, t] = jp0[c, t], jp1[c, t]
+        leaf[n] = c == s
+        radii[n, 0] = seg_radii[s]
+        if n_k == 2:
+            radii[n, 1] = seg_radii[c]
+        width[n] = min(interval[n], hi[n] - lo[n]) if has_interval else hi[n] - lo[n]
+        best[n] = start[n] if warm else 0.5 * (lo[n] + hi[n])
+        if not wrap:
+            best[n] = min(max(best[n], lo[n]), hi[n])
+    cum = np.zeros((n_s, 2, h, w + 1), np.int32)
+    m_base = np.zeros(n_s, np.int64)
+    i_base = np.zeros(n_s, np.int64)
+    group_span_tables(jp0, jp1, seg_radii, caps, segs, child, sil, rows, cum, m_base, i_base)
+    clip = not wrap
+    period = periodic if wrap else 0.0
+    return group_search(best, width, lo, hi, clip, period, periodic,
+                        warm, prefer, divisions, min_step, angle, sign, k0, k1, own0, own1, ch0,
+                        ch1, leaf, n_k, radii, cum, 0, h, caps, a, m_base, i_base, best_score,
+                        runner)
+
+
+@numba.njit(cache=True, nogil=True)
+def limb_fit(jp0, jp1, seg_radii, lengths, drawn, seg, child, mode, sign, k0, k1, no_pose, sil,
+             sil_cum, a, y0, y1, caps, lo, hi, divisions, min_step, best, warm, width, period,
+             gap_period, prefer, has_prefer, out):
+    """A whole limb search (``_Fitter.search_angle`` / ``search_fore`` of one limb
+    segment) from the model's ends, in one call.
+
+    Sets up what the Python path sets up with numpy (the moving segments: ``seg`` and
+    its ``child`` if drawn (-1: none); the still ones: every other drawn segment; the
+    rows the candidates can reach), with the same floats, then runs
+    :func:`search_1d` (``mode`` SEARCH_LIMB_ANGLE or SEARCH_LIMB_RATIO; ``sign, k0,
+    k1`` as its limb tuple; ``no_pose``: its unused pose tuple). jp0, jp1 (10, 2):
+    every segment's ends; drawn (10,) bool. The search's arguments as
+    :func:`search_1d` takes them; out (5,) is written.
+    """
+    n_move = 2 if (child >= 0 and drawn[child]) else 1
+    moving = np.empty(n_move, np.int64)
+    moving[0] = seg
+    if n_move == 2:
+        moving[1] = child
+    n_still = 0
+    for d in range(10):
+        if drawn[d] and d != seg and not (n_move == 2 and d == child):
+            n_still += 1
+    sp0 = np.empty((n_still, 2))
+    sp1 = np.empty((n_still, 2))
+    s_radii = np.empty(n_still)
+    k = 0
+    for d in range(10):
+        if drawn[d] and d != seg and not (n_move == 2 and d == child):
+            sp0[k, 0], sp0[k, 1] = jp0[d, 0], jp0[d, 1]
+            sp1[k, 0], sp1[k, 1] = jp1[d, 0], jp1[d, 1]
+            s_radii[k] = seg_radii[d]
+            k += 1
+    p0s = np.empty((n_move, 2))
+    p1s = np.empty((n_move, 2))
+    radii = np.empty(n_move)
+    notown = np.empty(n_move)
+    total = 0.0
+    for t in range(n_move):
+        m = moving[t]
+        p0s[t, 0], p0s[t, 1] = jp0[m, 0], jp0[m, 1]
+        p1s[t, 0], p1s[t, 1] = jp1[m, 0], jp1[m, 1]
+        radii[t] = seg_radii[m]
+        notown[t] = 0.0 if m == seg else 1.0
+        total += lengths[m]
+    # the candidates stay within the moving segments' full lengths of the fixed
+    # proximal joint: the table is needed only in those rows
+    ext = (total + seg_radii.max()) + 4.0
+    f0 = max(y0, np.int64(math.floor(jp0[seg, 1] - ext)))
+    f1 = min(y1, np.int64(math.ceil(jp0[seg, 1] + ext)) + 1)
+    start = jp0[seg].copy()
+    old_end = jp1[seg].copy()
+    limb = (sign, k0, k1, start, old_end, p0s, p1s, notown)
+    still = (sp0, sp1, s_radii, sil, sil_cum, f0, f1)
+    search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
+              has_prefer, mode, limb, no_pose, radii, still, y0, y1, caps, a, out)

@@ -321,6 +321,8 @@ _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), n
             np.zeros(10), 0.0, np.zeros(10), 0.0, 0.0, *_KERNEL_TABLES, np.zeros(1, np.int64),
             np.zeros(1, np.int64))
 # _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
+#: each segment's child limb segment (-1: none)
+_CHILD = tuple(DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else -1 for s in range(10))
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
 _FALLBACK = 0.97  # fit_pose's default: a warm fit below this share of the last S slipped
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
@@ -342,6 +344,30 @@ def _arm_grid(step_deg: float):
     for x in (ua, la, du, dl):
         x.flags.writeable = False
     return ua, la, du, dl
+
+
+@dataclass(frozen=True)
+class _GroupConstants:
+    """What :meth:`_Fitter.search_group` needs of its segments alone (cached)."""
+
+    segs: np.ndarray  # (N,) int64
+    child: np.ndarray  # (N,) int64: the child each moves (itself for a leaf)
+    n_k: int  # 2 if any has a child, else 1
+    limits: np.ndarray  # (N, 2) angle limits, radians (thighs: _THIGH_WIDE)
+    arm: np.ndarray  # (N,) bool: an arm segment (hangs down on ties)
+
+
+@functools.lru_cache(maxsize=32)
+def _group_constants(segs: tuple[int, ...]) -> _GroupConstants:
+    s = np.array(segs, dtype=np.int64)
+    child = np.array([DESCENDANTS[x][1] if len(DESCENDANTS[x]) > 1 else x for x in segs],
+                     dtype=np.int64)
+    limits = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[x]
+                       else _LIMITS[SEGMENT_NAMES[x]] for x in segs], dtype=float)
+    arm = np.array([SEGMENT_NAMES[x].endswith("arm") for x in segs])
+    for x in (s, child, limits, arm):
+        x.flags.writeable = False
+    return _GroupConstants(s, child, 1 if bool((child == s).all()) else 2, limits, arm)
 
 
 class _Fitter:
@@ -373,6 +399,7 @@ class _Fitter:
         self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil]))
         self._sil_c = _carray(self.sil, np.bool_)  # what the kernels read
         self._L_c = _carray(self.L, np.float64)
+        self._R_c = _carray(self.R, np.float64)
         self._similarity = None
         self.batches = 0
         self._joints = None
@@ -382,8 +409,14 @@ class _Fitter:
         """Joints of the current pose, (15, 2), cached until the pose changes."""
         key = (self.root.tobytes(), self.angles.tobytes(), self.fore.tobytes(), self.spread)
         if self._joints is None or self._joints[0] != key:
-            self._joints = (key, self._pose_joints())
+            j = self._pose_joints()
+            self._joints = (key, j, j[_PROX], j[_DIST])
         return self._joints[1]
+
+    def ends(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every segment's proximal and distal joint, each (10, 2), for the current pose."""
+        self.joints()
+        return self._joints[2], self._joints[3]
 
     def _pose_joints(self) -> np.ndarray:
         kernels = _kernels()
@@ -569,6 +602,37 @@ class _Fitter:
         ends.action = action
         return ends
 
+    def _limb_search(self, seg, form, scale, rows, lo, hi, **search):
+        """:meth:`search` of one limb segment's angle (``form='angle'``, ``scale`` its
+        drawn length) or foreshortening (``'ratio'``, ``scale`` its full (2,) vector)
+        as one compiled call that also sets the search up (:func:`_kernels.limb_fit`);
+        None where that call does not apply (then :meth:`search` does it)."""
+        kernels = _kernels()
+        if kernels is None or search["divisions"] < 3:
+            return None
+        r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
+        if r1 <= r0:
+            return None
+        jp0, jp1 = self.ends()
+        if form == "angle":
+            mode, sign, k0, k1 = SEARCH_LIMB_ANGLE, -1.0, float(scale), float(scale)
+        else:
+            mode, sign, k0, k1 = SEARCH_LIMB_RATIO, 1.0, float(scale[0]), float(scale[1])
+        a = int(self.sil_rows[r1] - self.sil_rows[r0])
+        child = _CHILD[seg]
+
+        def run(lo_, hi_, centre, warm, width, period, gap_period, pref, divisions_, min_step_):
+            out = np.empty(5)
+            kernels.limb_fit(jp0, jp1, self._R_c, self._L_c, self.drawn, seg, child, mode,
+                             sign, k0, k1, _NO_POSE, self._sil_c, self._sil_cum[1], a, r0, r1,
+                             bool(self.caps), lo_, hi_, divisions_, min_step_, centre, warm,
+                             width, period, gap_period, 0.0 if np.isnan(pref) else pref,
+                             not np.isnan(pref), out)
+            return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
+
+        self.batches += 1
+        return interval_search(None, lo, hi, run=run, **search)
+
     def _limb_ends(self, seg, moving, form, scale):
         """End points when one limb segment's distal end moves (its children follow).
 
@@ -608,11 +672,27 @@ class _Fitter:
         lim_lo, lim_hi = _LIMITS[name]
         lo = lim_lo if lo is None else lo
         hi = lim_hi if hi is None else hi
+        periodic = TWO_PI if hi - lo >= TWO_PI - 1e-9 else None
+        if start is not None and periodic is None:
+            # keep a warm start's interval inside the limits (angles are periodic)
+            start = _into_range(start, lo, hi)
+        if prefer is not None and periodic is None:
+            prefer = _into_range(prefer, lo, hi)
+        limb = seg >= 2 and not with_segments
+        if limb:
+            self.drawn[seg] = True
+            res = self._limb_search(seg, "angle", self.L[seg] * self.fore[seg], rows, lo, hi,
+                                    divisions=divisions, min_step=min_step, start=start,
+                                    interval=interval, periodic=periodic, prefer=prefer)
+            if res is not None:
+                self.angles[seg] = np.mod(res.value, TWO_PI)
+                self.scores[seg], self.margins[seg] = res.score, res.margin
+                return res
         together = [seg, *with_segments]
         offsets = self.angles[together] - self.angles[seg]
         self.drawn[together] = True
         moving = np.flatnonzero(self.drawn & _DESCENDANT_OF[together].any(axis=0))
-        if seg >= 2 and not with_segments:
+        if limb:
             length = self.L[seg] * self.fore[seg]
             ends = self._limb_ends(seg, moving, "angle", length)
         else:
@@ -622,12 +702,6 @@ class _Fitter:
 
             ends = self._general_ends(make, moving, (SEARCH_POSE_ANGLES, together, offsets,
                                                      _NOWHERE, 0.0))
-        periodic = TWO_PI if hi - lo >= TWO_PI - 1e-9 else None
-        if start is not None and periodic is None:
-            # keep a warm start's interval inside the limits (angles are periodic)
-            start = _into_range(start, lo, hi)
-        if prefer is not None and periodic is None:
-            prefer = _into_range(prefer, lo, hi)
         res = self.search(ends, moving, rows, lo, hi, divisions=divisions, min_step=min_step,
                           start=start, interval=interval, periodic=periodic, prefer=prefer)
         self.angles[together] = np.mod(res.value + offsets, TWO_PI)
@@ -659,8 +733,16 @@ class _Fitter:
                               min_step=1.0 / length, prefer=1.0)
             self.fore[together] = np.minimum(res.value * base, 1.0)
             return res
+        step = 1.0 / length
         if seg >= 2:
             u = direction(self.angles[seg]) * self.L[seg]
+            res = self._limb_search(seg, "ratio", u, None, step, 1.0, divisions=divisions,
+                                    min_step=step, start=start, interval=interval,
+                                    prefer=1.0)
+            if res is not None:
+                self.fore[seg], self.scores[seg], self.margins[seg] = (res.value, res.score,
+                                                                       res.margin)
+                return res
             ends = self._limb_ends(seg, moving, "ratio", u)
         else:
             def make(v, root, ang, fore, spread):
@@ -669,7 +751,6 @@ class _Fitter:
 
             ends = self._general_ends(make, moving, (SEARCH_POSE_FORE, [seg], [1.0], _NOWHERE,
                                                      0.0))
-        step = 1.0 / length
         res = self.search(ends, moving, None, step, 1.0, divisions=divisions, min_step=step,
                           start=start, interval=interval, prefer=1.0)
         self.fore[seg] = res.value
@@ -694,12 +775,80 @@ class _Fitter:
             Segments other than the torso (a segment moves itself and, for an upper
             limb, its lower limb).
         """
-        segs = np.asarray(segs, dtype=int)
+        consts = _group_constants(tuple(int(x) for x in segs))
+        segs = consts.segs
         n = len(segs)
         self.drawn[:] = True
+        length = self.L[segs]
+        if kind == "angle":
+            lo_a = consts.limits[:, 0] if lo is None else lo
+            hi_a = consts.limits[:, 1] if hi is None else hi
+            st = np.array(self.angles[segs] if start is None else start, dtype=float)
+            full = hi_a - lo_a >= TWO_PI - 1e-9
+            # a full circle is searched as the circle centred on the start (no wrap);
+            # a limited range with the start unwrapped into it
+            st = np.where(full, st, _into_range(st, lo_a, hi_a))
+            lo_a = np.where(full, st - np.pi, lo_a)
+            hi_a = np.where(full, st + np.pi, hi_a)
+            if prefer is None:  # hidden arms hang down on ties
+                prefer = np.where(consts.arm, self._hang(), np.nan)
+            form, scale, periodic = "angle", length * self.fore[segs], TWO_PI
+        else:
+            step = 1.0 / np.maximum(length, 1.0)
+            lo_a, hi_a, min_step, prefer = step, np.ones(n), float(step.min()), 1.0
+            st = self.fore[segs] if start is None else start
+            form, periodic = "ratio", None
+            scale = direction(self.angles[segs]) * length[:, None]
+        kernels = _kernels()
+        if kernels is not None and divisions >= 3:  # the whole search, one compiled call
+            value = self._group_fit(kernels, consts, form, scale, lo_a, hi_a, st, interval,
+                                    periodic, prefer, divisions, min_step)
+        else:  # batch by batch
+            value = self._group_batches(consts, form, scale, lo_a, hi_a, st, interval,
+                                        periodic, prefer, divisions, min_step)
+        value, best, runner = value
+        if kind == "angle":
+            self.angles[segs] = np.mod(value, TWO_PI)
+        else:
+            self.fore[segs] = value
+        self.scores[segs] = best
+        self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)
+
+    def _group_fit(self, kernels, consts, form, scale, lo, hi, start, interval, periodic,
+                   prefer, divisions, min_step):
+        """:meth:`search_group`'s search as one compiled call (:func:`_kernels.group_fit`)."""
+        n = len(consts.segs)
+        f64 = np.float64
+        if form == "angle":
+            sign, k0 = -1.0, _carray(scale, f64)
+            k1 = k0
+        else:
+            sign, k0, k1 = 1.0, _carray(scale[:, 0], f64), _carray(scale[:, 1], f64)
+        best, best_score, runner = np.empty(n), np.empty(n), np.empty(n)
+
+        def full(x, default):
+            if x is None:
+                return np.full(n, default)
+            return np.full(n, float(x)) if np.ndim(x) == 0 else _carray(x, f64)
+
+        it = kernels.group_fit(
+            *self.ends(), self._R_c, self._L_c, consts.segs, consts.child, consts.n_k,
+            self._sil_c, bool(self.caps), int(self.sil_rows[-1]), full(lo, 0.0), full(hi, 0.0),
+            full(start, 0.0), full(interval, 0.0), interval is not None,
+            0.0 if periodic is None else float(periodic), True, full(prefer, np.nan),
+            int(divisions), float(min_step), form == "angle", sign, k0, k1, best, best_score,
+            runner)
+        self.batches += 1
+        if it < 0:
+            raise ValueError("empty search interval")
+        return best, best_score, runner
+
+    def _group_batches(self, consts, form, scale, lo, hi, start, interval, periodic, prefer,
+                       divisions, min_step):
+        """:meth:`search_group`'s search batch by batch (without the compiled kernels, or
+        with fewer than 3 divisions)."""
+        segs, child = consts.segs, consts.child
         j = self.joints()
-        child = np.array([DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else s for s in segs])
-        pair = np.stack([segs, child], 1)  # (N, 2); a leaf is paired with itself
         own0, own1 = j[_PROX[segs]], j[_DIST[segs]]
         # every candidate of search n (and the pair as it is) lies within the segment's
         # and its child's full lengths of the segment's proximal joint (angles turn it,
@@ -712,69 +861,18 @@ class _Fitter:
         a = int(self.sil_rows[-1])
         ch0, ch1 = j[_PROX[child]], j[_DIST[child]]
         leaf = child == segs
-        k = 1 if bool(leaf.all()) else 2
-        radii = np.ascontiguousarray(self.R[pair][:, :k])  # (N, k)
-        length = self.L[segs]
-        if kind == "angle":
-            form, scale = "angle", length * self.fore[segs]
-        else:
-            form, scale = "ratio", direction(self.angles[segs]) * length[:, None]
+        radii = np.ascontiguousarray(self.R[np.stack([segs, child], 1)][:, :consts.n_k])
+        scores = group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a,
+                              m_base, i_base, caps=self.caps)
 
-        run = score = None
-        kernels = _kernels()
-        if kernels is None or divisions < 3:  # batch by batch
-            scores = group_scorer(form, scale, own0, own1, ch0, ch1, leaf, radii, cum, a,
-                                  m_base, i_base, caps=self.caps)
+        def score(values):  # values (N, B)
+            self.batches += 1
+            return scores(values)
 
-            def score(values):  # values (N, B)
-                self.batches += 1
-                return scores(values)
-        else:  # the whole search, one compiled call
-            angle = form == "angle"
-            sign, k0, k1 = ((-1.0, _carray(scale, np.float64), _carray(scale, np.float64))
-                            if angle else (1.0, np.ascontiguousarray(scale[:, 0]),
-                                           np.ascontiguousarray(scale[:, 1])))
-            group = (angle, sign, k0, k1, _carray(own0, np.float64), _carray(own1, np.float64),
-                     _carray(ch0, np.float64), _carray(ch1, np.float64), _carray(leaf, np.bool_),
-                     k, radii, cum, 0, cum.shape[2], bool(self.caps), a, m_base, i_base)
-
-            def run(centre, width, lo_, hi_, clip, period, gap_period, warm, pref, divisions_,
-                    min_step_):
-                self.batches += 1
-                best, runner = np.empty(len(centre)), np.empty(len(centre))
-                it = kernels.group_search(centre, width, lo_, hi_, clip, period, gap_period,
-                                          warm, pref, divisions_, min_step_, *group, best,
-                                          runner)
-                return best, runner, int(it)
-
-        if kind == "angle":
-            lims = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[s]
-                             else _LIMITS[SEGMENT_NAMES[s]] for s in segs])
-            lo_a = lims[:, 0] if lo is None else lo
-            hi_a = lims[:, 1] if hi is None else hi
-            st = np.array(self.angles[segs] if start is None else start, dtype=float)
-            full = hi_a - lo_a >= TWO_PI - 1e-9
-            # a full circle is searched as the circle centred on the start (no wrap);
-            # a limited range with the start unwrapped into it
-            st = np.where(full, st, _into_range(st, lo_a, hi_a))
-            lo_a = np.where(full, st - np.pi, lo_a)
-            hi_a = np.where(full, st + np.pi, hi_a)
-            if prefer is None:  # hidden arms hang down on ties
-                prefer = np.where([SEGMENT_NAMES[s].endswith("arm") for s in segs],
-                                  self._hang(), np.nan)
-            value, best, runner, _ = interval_search_many(
-                score, lo_a, hi_a, divisions=divisions, min_step=min_step, start=st,
-                interval=interval, prefer=prefer, periodic=TWO_PI, run=run)
-            self.angles[segs] = np.mod(value, TWO_PI)
-        else:
-            step = 1.0 / np.maximum(length, 1.0)
-            value, best, runner, _ = interval_search_many(
-                score, step, np.ones(n), divisions=divisions, min_step=float(step.min()),
-                start=self.fore[segs] if start is None else start, interval=interval,
-                prefer=1.0, run=run)
-            self.fore[segs] = value
-        self.scores[segs] = best
-        self.margins[segs] = np.where(np.isfinite(runner), best - runner, best)
+        value, best, runner, _ = interval_search_many(
+            score, lo, hi, divisions=divisions, min_step=min_step, start=start,
+            interval=interval, prefer=prefer, periodic=periodic)
+        return value, best, runner
 
     def search_spread(self, *, start=None, interval=None, min_step=0.05):
         """Lateral spread of shoulders and hips in [0, 1] (beyond the seed).
