@@ -780,15 +780,22 @@ def many_runner(values, scores, best, period, far, out):
 @numba.njit(cache=True, nogil=True)
 def shift_overlap(sil, model, n, out):
     """out[t] = pixels where model[y, x] and sil[y, x + t - n], for t in 0..2n (columns
-    outside sil count as empty): the overlap of the model moved right by t - n."""
+    outside sil count as empty): the overlap of the model moved right by t - n.
+
+    Visits each model pixel once (every shift of it at once), not every pixel of
+    the image once per shift: the model covers a small part of the image.
+    """
     h, w = sil.shape
     for t in range(2 * n + 1):
-        d = t - n
-        c = 0
-        for y in range(h):
-            for x in range(max(0, -d), min(w, w - d)):
-                c += np.int64(model[y, x] & sil[y, x + d])
-        out[t] = c
+        out[t] = 0
+    for y in range(h):
+        for x in range(w):
+            if model[y, x]:
+                # shifts d = t - n with 0 <= x + d < w
+                t0 = max(0, n - x)
+                t1 = min(2 * n + 1, w - x + n)
+                for t in range(t0, t1):
+                    out[t] += np.int64(sil[y, x + t - n])
 
 
 @numba.njit(cache=True, nogil=True)
