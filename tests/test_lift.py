@@ -373,3 +373,19 @@ def test_per_frame_scale_arrays():
         lift(j2, signs, yaw, scale=np.full(29, 200.0))
     with pytest.raises(ValueError, match="positive"):
         lift(j2, signs, yaw, scale=np.zeros(30))
+
+
+def test_bspline_design_matches_scipy():
+    """estimate_scales' own B-spline basis equals scipy's (which it avoids importing)."""
+    from scipy.interpolate import BSpline
+
+    from vidcap.lift import _bspline_design
+
+    for n_frames, n_pieces in ((2, 1), (60, 1), (301, 3), (1000, 10)):
+        t = np.arange(n_frames, dtype=float)
+        inner = np.linspace(0.0, n_frames - 1.0, n_pieces + 1)
+        knots = np.r_[[0.0, 0.0], inner, [inner[-1]] * 2]
+        ours = _bspline_design(t, knots, 2).toarray()
+        np.testing.assert_allclose(ours, BSpline.design_matrix(t, knots, 2).toarray(),
+                                   atol=1e-14)
+        np.testing.assert_allclose(ours.sum(axis=1), 1.0)  # a partition of unity

@@ -150,6 +150,39 @@ def estimate_scale(joints2d, body: BodyModel | None = None, *, quantile: float =
     return s
 
 
+def _bspline_design(t: np.ndarray, knots: np.ndarray, k: int):
+    """The B-spline design matrix, as ``scipy.interpolate.BSpline.design_matrix``.
+
+    Row i holds the k + 1 basis functions of degree k that are non-zero at t[i]
+    (Cox-de Boor, "The NURBS Book" algorithm A2.2, vectorised over t); written out
+    here because importing ``scipy.interpolate`` costs ~0.35 s, which every
+    ``vidcap convert`` would pay. t (F,) within [knots[k], knots[-k-1]]; returns a
+    CSR matrix (F, len(knots) - k - 1).
+    """
+    from scipy.sparse import csr_matrix
+
+    t = np.asarray(t, dtype=float)
+    n_basis = len(knots) - k - 1
+    # the knot span of each t: knots[span] <= t < knots[span + 1] (the last one closed)
+    span = np.clip(np.searchsorted(knots, t, side="right") - 1, k, n_basis - 1)
+    values = np.zeros((len(t), k + 1))
+    values[:, 0] = 1.0
+    left = np.empty((len(t), k + 1))
+    right = np.empty((len(t), k + 1))
+    for j in range(1, k + 1):
+        left[:, j] = t - knots[span + 1 - j]
+        right[:, j] = knots[span + j] - t
+        saved = np.zeros(len(t))
+        for r in range(j):
+            temp = values[:, r] / (right[:, r + 1] + left[:, j - r])
+            values[:, r] = saved + right[:, r + 1] * temp
+            saved = left[:, j - r] * temp
+        values[:, j] = saved
+    cols = span[:, None] - k + np.arange(k + 1)[None, :]
+    rows = np.repeat(np.arange(len(t)), k + 1)
+    return csr_matrix((values.ravel(), (rows, cols.ravel())), shape=(len(t), n_basis))
+
+
 def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91,
                     quantile: float = 0.9, min_change: float = 0.1):
     """Scale per frame, for a subject whose distance from the camera changes.
@@ -183,7 +216,6 @@ def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91
     float or numpy.ndarray, shape (F,)
         Pixels per metre: one number, or one per frame.
     """
-    from scipy.interpolate import BSpline
     from scipy.optimize import linprog
     from scipy.sparse import eye, hstack
 
@@ -200,7 +232,7 @@ def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91
     k = 2  # quadratic pieces: smooth, with few wiggles where the pose, not the distance, changes
     inner = np.linspace(0.0, F - 1.0, n_pieces + 1)
     knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
-    basis = BSpline.design_matrix(t, knots, k)  # (F, n_pieces + 3), sparse
+    basis = _bspline_design(t, knots, k)  # (F, n_pieces + 3), sparse
     y = np.log(ratio[good])
     b = basis[good]
     n, m = b.shape

@@ -386,7 +386,13 @@ def run(
     """
     from vidcap.background import estimate_background, load_plate
     from vidcap.fileio import progress as bar
-    from vidcap.fit.parallel import FitPool, chunk_bounds, default_jobs, fit_sequence_chunked
+    from vidcap.fit.parallel import (
+        FitPool,
+        StreamedFit,
+        chunk_bounds,
+        default_jobs,
+        fit_sequence_chunked,
+    )
     from vidcap.silhouette import extract_silhouettes
     from vidcap.video import probe
 
@@ -437,9 +443,18 @@ def run(
     pose_path = cache.path("pose2d", _key("pose2d", k_sil, expected))
     pool = (FitPool(min(jobs, len(expected)))
             if len(expected) > 1 and not (pose_path and pose_path.exists()) else None)
+    # and each chunk of frames is fitted as soon as its silhouettes are there
+    streamed = StreamedFit(pool, info.n_frames or 0, jobs=jobs) if pool is not None else None
+    so_far = []
+
+    def arrived(_start, chunk_masks):
+        so_far.extend(chunk_masks)
+        streamed.feed(so_far)
+
     try:
         if hit is None:
-            sil = extract_silhouettes(video, plate_model, progress=progress)
+            sil = extract_silhouettes(video, plate_model, progress=progress,
+                                      on_masks=None if streamed is None else arrived)
             masks, bbox, n_other = sil.masks, sil.bbox, sil.n_other_blobs
             cache.save("silhouettes", k_sil, packed=np.packbits(masks, axis=-1),
                        shape=np.array(masks.shape), bbox=bbox, n_other=n_other)
@@ -469,7 +484,10 @@ def run(
             def wrap(it, total):
                 return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
 
-            pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, pool=pool)
+            if streamed is not None:
+                pose = streamed.finish(masks, progress=wrap)
+            else:
+                pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap)
             hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
                    "similarity": pose.similarity}
             cache.save("pose2d", k_pose, **hit)

@@ -399,7 +399,7 @@ def extract_silhouettes(
     other_fraction: float = 0.2, close_size: int | None = None, chunk_size: int = 64,
     progress: bool | None = None, require_person: bool = True,
     work_scale: int | None = None, edge_band: int | None = None,
-    edge_fraction: float = 0.3,
+    edge_fraction: float = 0.3, on_masks=None,
 ) -> Silhouettes:
     """Separate the person from the background in every frame.
 
@@ -450,6 +450,11 @@ def extract_silhouettes(
         body, which the interior mean blurs) favour a lower share: 0.3 keeps
         ido_walk's median IoU at 0.93 (0.88 at 0.5) and the synthetic H.264 clips
         at 0.98-0.99 (0.88 before, see benchmarks/RESULTS.md).
+    on_masks : callable, optional
+        Called as ``on_masks(start, masks)`` after each chunk with its frames' masks
+        (a list of (H, W) bool arrays, frames ``start`` on; final: nothing later
+        changes them), so a caller can start on them (the pipeline fits the first
+        chunk of frames while the rest are still being extracted).
 
     Returns
     -------
@@ -493,6 +498,8 @@ def extract_silhouettes(
                     others.append(np.column_stack(
                         [np.full(len(r.others), start + j), r.others]))
             gains_all.append(gains)
+            if on_masks is not None:
+                on_masks(start, masks[start:])
             start += len(chunk)
             pbar.update(len(chunk))
     finally:

@@ -131,3 +131,41 @@ def test_a_pool_started_ahead_gives_the_same_fit(walk_masks):
             np.testing.assert_array_equal(got.joints2d, want.joints2d)
             np.testing.assert_array_equal(got.similarity, want.similarity)
     assert pool.executor._shutdown_thread
+
+
+def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeypatch):
+    """Chunks sent as their frames arrive (StreamedFit.feed) give the fit of all frames
+    at once, also when the clip turns out shorter than planned; the last chunk waits
+    for finish()."""
+    from vidcap.fit import parallel
+    from vidcap.fit.parallel import FitPool, StreamedFit
+
+    want = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
+    sent = []
+    submit = StreamedFit._submit
+
+    def spy(self, chunk, frames):
+        sent.append((chunk, len(frames)))
+        submit(self, chunk, frames)
+
+    monkeypatch.setattr(StreamedFit, "_submit", spy)
+    with FitPool(2) as pool:
+        stream = StreamedFit(pool, len(walk_masks), min_chunk=20)
+        assert len(stream.bounds) == 2
+        so_far = []
+        for k in range(0, len(walk_masks), 7):  # frames arrive 7 at a time
+            so_far.extend(walk_masks[k:k + 7])
+            stream.feed(so_far)
+        # the first chunk left as soon as its frames were there, the last one waits
+        first_end = stream.bounds[0][2]
+        assert sent == [(stream.bounds[0], 7 * -(-first_end // 7))]
+        got = stream.finish(walk_masks)
+        for key, value in want.arrays().items():
+            np.testing.assert_array_equal(got.arrays()[key], value, err_msg=key)
+        # planned for more frames than came: the chunks are planned again
+        short = walk_masks[:45]
+        stream = StreamedFit(pool, len(walk_masks), min_chunk=20)
+        stream.feed(list(short))
+        got = stream.finish(short)
+        want_short = parallel.fit_sequence_chunked(short, jobs=2, min_chunk=20)
+        np.testing.assert_array_equal(got.joints2d, want_short.joints2d)

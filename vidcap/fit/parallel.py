@@ -167,6 +167,8 @@ def warm_up() -> None:
 
 # ----------------------------------------------------------------------------- workers
 _QUEUE = None
+#: How much lower than its parent a worker runs (``os.nice`` increment).
+_WORKER_NICENESS = 5
 
 
 def _init_worker(q, warm: bool = False) -> None:
@@ -175,6 +177,12 @@ def _init_worker(q, warm: bool = False) -> None:
     # one core each: no BLAS or OpenMP threads competing with the other workers
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = "1"
+    # below the parent: it makes the frames the workers wait for (the pipeline's
+    # silhouettes), so while it runs it should not share a core with them
+    try:
+        os.nice(_WORKER_NICENESS)
+    except (AttributeError, OSError):  # pragma: no cover - not POSIX
+        pass
     if warm:
         warm_up()
 
@@ -277,23 +285,85 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         As from ``fit_sequence``; tracked labels reconciled across chunks.
     """
     masks = np.asarray(masks, dtype=bool)
-    n = len(masks)
     if jobs is None:
         jobs = pool.jobs if pool is not None else default_jobs()
     jobs = max(1, int(jobs))
-    align = int(kw.get("reinit_every", 10)) or 1
-    bounds = chunk_bounds(n, jobs, overlap=overlap if tracked else 0, align=align,
-                          min_chunk=min_chunk)
-    if jobs == 1 or len(bounds) < 2:
-        return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
     own = pool is None
     if own:
-        pool = FitPool(min(jobs, len(bounds)), warm=False)
-    q, executor = pool.queue, pool.executor
-    width = masks.shape[-1]
+        n_chunks = len(_bounds(len(masks), jobs, tracked, overlap, min_chunk, kw))
+        if jobs == 1 or n_chunks < 2:
+            return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
+        pool = FitPool(min(jobs, n_chunks), warm=False)
     try:
-        futures = [executor.submit(_fit_chunk, np.packbits(masks[s:e], axis=-1), width, b - s,
-                                   tracked, kw) for s, b, e in bounds]
+        fit = StreamedFit(pool, len(masks), jobs=jobs, tracked=tracked, overlap=overlap,
+                          min_chunk=min_chunk, **kw)
+        return fit.finish(masks, progress=progress)
+    finally:
+        if own:
+            pool.close()
+
+
+def _bounds(n, jobs, tracked, overlap, min_chunk, kw):
+    """:func:`chunk_bounds` as :func:`fit_sequence_chunked` calls it."""
+    align = int(kw.get("reinit_every", 10)) or 1
+    return chunk_bounds(n, jobs, overlap=overlap if tracked else 0, align=align,
+                        min_chunk=min_chunk)
+
+
+class StreamedFit:
+    """:func:`fit_sequence_chunked` for frames that arrive over time.
+
+    Each chunk but the last goes to a worker as soon as its frames are there
+    (:meth:`feed`), so the fit of the first chunks runs while later frames are still
+    being made (the pipeline extracts silhouettes meanwhile); :meth:`finish` sends
+    the rest and joins the chunks. The result equals ``fit_sequence_chunked`` of all
+    the frames with the same pool and options.
+
+    Parameters
+    ----------
+    pool : FitPool
+    n_frames : int
+        Frames expected (chunks are planned for it; if the clip turns out to have
+        another number, :meth:`finish` plans again and refits what no longer fits
+        the plan).
+    jobs, tracked, overlap, min_chunk, **kw
+        As in :func:`fit_sequence_chunked` (``jobs`` default: the pool's size).
+    """
+
+    def __init__(self, pool: FitPool, n_frames: int, *, jobs: int | None = None,
+                 tracked: bool = True, overlap: int = 10, min_chunk: int = 60, **kw):
+        self.pool, self.tracked, self.kw = pool, bool(tracked), kw
+        self.jobs = max(1, int(pool.jobs if jobs is None else jobs))
+        self.overlap, self.min_chunk = overlap, min_chunk
+        self.bounds = _bounds(int(n_frames), self.jobs, self.tracked, overlap, min_chunk, kw)
+        self.futures = {}  # (start, begin, end) -> Future
+
+    def _submit(self, chunk, masks) -> None:
+        s, b, e = chunk
+        frames = np.asarray(masks[s:e], dtype=bool)
+        self.futures[chunk] = self.pool.executor.submit(
+            _fit_chunk, np.packbits(frames, axis=-1), frames.shape[-1], b - s, self.tracked,
+            self.kw)
+
+    def feed(self, masks) -> None:
+        """Send every planned chunk but the last whose frames are all in ``masks`` (the
+        frames so far, from frame 0: a list or array of (H, W) bool)."""
+        for chunk in self.bounds[:-1]:
+            if chunk not in self.futures and chunk[2] <= len(masks):
+                self._submit(chunk, masks)
+
+    def finish(self, masks, *, progress=None) -> Pose2D:
+        """Fit what is left of all ``masks`` (F, H, W) and join the chunks."""
+        masks = np.asarray(masks, dtype=bool)
+        n = len(masks)
+        bounds = _bounds(n, self.jobs, self.tracked, self.overlap, self.min_chunk, self.kw)
+        if len(bounds) < 2:
+            return fit_sequence(masks, tracked=self.tracked, progress=progress, **self.kw)
+        for chunk in bounds:
+            if chunk not in self.futures:
+                self._submit(chunk, masks)
+        futures = [self.futures[c] for c in bounds]
+        q = self.pool.queue
 
         def finished():
             done = 0
@@ -310,9 +380,11 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         for _ in (finished() if progress is None else progress(finished(), total=n)):
             pass
         parts = [f.result() for f in futures]
-    finally:
-        if own:
-            pool.close()
+        return _join(bounds, parts, n, self.tracked)
+
+
+def _join(bounds, parts, n, tracked) -> Pose2D:
+    """The chunks' fits as one :class:`Pose2D` (labels reconciled over the overlaps)."""
     out = {k: np.empty((n, *np.shape(v)[1:]), dtype=np.asarray(v).dtype)
            for k, v in parts[0].items() if k in _PER_FRAME}
     for (s, b, e), part in zip(bounds, parts, strict=True):
@@ -328,5 +400,5 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
                   tuple(str(x) for x in parts[0]["segment_names"]))
 
 
-__all__ = ["MAX_JOBS", "FitPool", "chunk_bounds", "default_jobs", "fit_sequence_chunked",
-           "reconcile_labels", "swap_labels", "warm_up"]
+__all__ = ["MAX_JOBS", "FitPool", "StreamedFit", "chunk_bounds", "default_jobs",
+           "fit_sequence_chunked", "reconcile_labels", "swap_labels", "warm_up"]
