@@ -321,6 +321,7 @@ _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), n
             np.zeros(10), 0.0, np.zeros(10), 0.0, 0.0, *_KERNEL_TABLES, np.zeros(1, np.int64),
             np.zeros(1, np.int64))
 # _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
+_TABLE_0 = np.zeros(1, np.int64)  # one candidate counted against table 0
 #: each segment's child limb segment (-1: none)
 _CHILD = tuple(DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else -1 for s in range(10))
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
@@ -397,6 +398,7 @@ class _Fitter:
         self.drawn = np.zeros(10, dtype=bool)
         self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
         self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil]))
+        self._sil_cum4 = self._sil_cum[None]  # as one table of the counting kernel
         self._sil_c = _carray(self.sil, np.bool_)  # what the kernels read
         self._L_c = _carray(self.L, np.float64)
         self._R_c = _carray(self.R, np.float64)
@@ -436,13 +438,22 @@ class _Fitter:
 
     def similarity(self) -> float:
         """S of the drawn model against the whole silhouette, counted from row spans."""
-        seg = np.flatnonzero(self.drawn)
-        j = self.joints()
-        key = (j.tobytes(), seg.tobytes())
+        self.joints()
+        key = (self._joints[0], self.drawn.tobytes())  # the pose and what is drawn
         if self._similarity is None or self._similarity[0] != key:
+            seg = np.flatnonzero(self.drawn)
+            kernels = _kernels()
             # channel 0 counts model pixels, channel 1 model pixels on the silhouette
-            d = span_counts(j[None, _PROX[seg]], j[None, _DIST[seg]], self.R[seg],
-                            self._sil_cum, caps=self.caps)[0]
+            if kernels is None or not seg.size:
+                j = self.joints()
+                d = span_counts(j[None, _PROX[seg]], j[None, _DIST[seg]], self.R[seg],
+                                self._sil_cum, caps=self.caps)[0]
+            else:  # the same compiled count, without span_counts' argument checks
+                jp0, jp1 = self.ends()
+                d = np.zeros((1, 2), np.int64)
+                kernels.counts(jp0[seg][None], jp1[seg][None], self.R[seg][None], _TABLE_0,
+                               self._sil_cum4, 0, self.h, bool(self.caps), d)
+                d = d[0]
             s = float(similarity_from_counts(int(self.sil_rows[-1]), d[0], d[1]))
             self._similarity = (key, s)
         return self._similarity[1]
