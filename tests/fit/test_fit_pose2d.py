@@ -246,6 +246,7 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
             out.append(f.search_angle(s[seg], start=f.angles[s[seg]] - 0.2, interval=0.3,
                                       prefer=f.angles[s[seg]]))
             out.append(f.search_fore(s[seg]))
+        out.append(f.search_fore(s["l_upper_leg"], unit=True))
         out.append(f.search_fore(s["head"]))
         out.append(f.search_spread(start=0.3, interval=0.4, min_step=0.1))
         # group searches (lockstep; their own compiled call)

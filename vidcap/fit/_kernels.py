@@ -909,9 +909,8 @@ def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, 
     lengths (10,); segs, child (N,): the searched segments and the child each moves
     (itself for a leaf); n_k: 2 if any has a child, else 1. lo, hi, start, interval
     (N,) as ``interval_search_many`` takes them (``start`` read only when ``warm``,
-    ``interval`` only with ``has_interval``); periodic 0 for none. best, best_score,
-    runner (N,) are written. Returns the number of iterations, or -1 if an interval
-    is empty (nothing written).
+    ``interval`` only with ``has_interval``); periodic 0 for none. best, best_score, runner (N,) are written. Returns the
+    number of iterations, or -1 if an interval is empty (nothing written).
     """
     n_s = segs.shape[0]
     h, w = sil.shape

@@ -720,11 +720,30 @@ class _Fitter:
         self.margins[together] = res.margin
         return res
 
-    def search_fore(self, seg, *, start=None, interval=None, divisions=5):
-        """Algorithm 6 on segment ``seg`` (its descendants move with its end)."""
+    def search_fore(self, seg, *, start=None, interval=None, divisions=5, unit=False):
+        """Algorithm 6 on segment ``seg`` (its descendants move with its end).
+
+        ``unit``: scale the segment and its child limb segment together (a whole
+        limb's foreshortening, beyond the seed).
+        """
         self.drawn[seg] = True
         moving = [d for d in DESCENDANTS[seg] if self.drawn[d]]
         length = max(self.L[seg], 1.0)
+        if unit:
+            together = list(DESCENDANTS[seg])
+            base = self.fore[together].copy()
+            length = max(float((self.L[together] * base).sum()), 1.0)
+
+            def make(v, root, ang, fore, spread):
+                fore[:, together] = np.minimum(v[:, None] * base, 1.0)
+                return root, ang, fore, spread
+
+            ends = self._general_ends(make, moving, (SEARCH_POSE_FORE, together, base,
+                                                     _NOWHERE, 0.0))
+            res = self.search(ends, moving, None, 1.0 / length, 1.0, divisions=divisions,
+                              min_step=1.0 / length, prefer=1.0)
+            self.fore[together] = np.minimum(res.value * base, 1.0)
+            return res
         step = 1.0 / length
         if seg >= 2:
             u = direction(self.angles[seg]) * self.L[seg]
@@ -1065,14 +1084,22 @@ class _Fitter:
             kw = dict(start=self.fore[seg], interval=interval) if warm else {}
             self.search_fore(seg, **kw)
 
-    def refine_limbs(self, half_width=_THIRTY_DEGREES):
-        """Algorithm 1 again on every limb segment against the whole silhouette
-        (beyond the seed, which avoids Algorithm 1 on the arms for fear of occlusion;
-        ties on the arms go to hanging down, and :meth:`search_arm_grid` then looks
-        at every whole-arm pose). A whole-arm search within 90 degrees of the contour
-        estimate used to come first: with the grid it was redundant, and fresh fits
-        scored 1.4 points of PCK@0.05 better without it (10 clips, fifth session).
+    def refine_limbs(self, half_width=_THIRTY_DEGREES, *, whole_arms=False):
+        """Algorithm 1 again on every limb segment against the whole silhouette.
+
+        ``whole_arms``: first search each whole arm (lower arm rigidly attached) within
+        90 degrees of the contour estimate (ties: hanging down), and its length, to undo
+        a contour curve that went astray (beyond the seed, which avoids Algorithm 1 on
+        the arms for fear of occlusion; the contour estimate is the tie-breaker).
         """
+        if whole_arms:
+            for s in ("l", "r"):
+                up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+                self.angles[lo] = self.angles[up]  # a straight arm first
+                self.fore[[up, lo]] = 1.0
+                self.search_angle(up, with_segments=(lo,), start=self.angles[up],
+                                  interval=np.pi, prefer=self._hang())
+                self.search_fore(up, unit=True)
         for seg_name in ("upper_leg", "lower_leg", "upper_arm", "lower_arm"):
             for s in ("l", "r"):
                 seg = S[f"{s}_{seg_name}"]
@@ -1311,7 +1338,7 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
         if refine:
             f.drawn[:] = True
             f.search_root(0, 0.05 * f.H)
-            f.refine_limbs()
+            f.refine_limbs(whole_arms=True)
             if arm_grid:
                 for s in ("l", "r"):
                     f.search_arm_grid(s)
