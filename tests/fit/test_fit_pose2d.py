@@ -268,9 +268,9 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     kernels = pose2d._kernels()
     assert kernels is not None
     calls = []
-    search_1d, group_fit, limb_fit = kernels.search_1d, kernels.group_fit, kernels.limb_fit
-    monkeypatch.setattr(kernels, "search_1d", lambda *a: calls.append(a[11]) or search_1d(*a))
-    # limb searches set themselves up in the compiled call (a[7]: the candidate kind)
+    pose_fit, group_fit, limb_fit = kernels.pose_fit, kernels.group_fit, kernels.limb_fit
+    # each search sets itself up in its compiled call (a[7]: the kind of candidate)
+    monkeypatch.setattr(kernels, "pose_fit", lambda *a: calls.append(a[7]) or pose_fit(*a))
     monkeypatch.setattr(kernels, "limb_fit", lambda *a: calls.append(a[7]) or limb_fit(*a))
     arm_pair_terms = kernels.arm_pair_terms
     monkeypatch.setattr(kernels, "group_fit", lambda *a: calls.append("group") or group_fit(*a))

@@ -909,8 +909,9 @@ def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, 
     lengths (10,); segs, child (N,): the searched segments and the child each moves
     (itself for a leaf); n_k: 2 if any has a child, else 1. lo, hi, start, interval
     (N,) as ``interval_search_many`` takes them (``start`` read only when ``warm``,
-    ``interval`` only with ``has_interval``); periodic 0 for none. best, best_score, runner (N,) are written. Returns the
-    number of iterations, or -1 if an interval is empty (nothing written).
+    ``interval`` only with ``has_interval``); periodic 0 for none. best, best_score,
+    runner (N,) are written. Returns the number of iterations, or -1 if an interval
+    is empty (nothing written).
     """
     n_s = segs.shape[0]
     h, w = sil.shape
@@ -957,6 +958,30 @@ def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, 
                         runner)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def still_segments(jp0, jp1, seg_radii, drawn, moving):
+    """The drawn segments not in ``moving`` (K,), in index order: their ends (S, 2) and
+    radii (S,), from every segment's ends jp0, jp1 (10, 2) and radii (10,)."""
+    is_moving = np.zeros(10, np.bool_)
+    for t in range(moving.shape[0]):
+        is_moving[moving[t]] = True
+    n_still = 0
+    for d in range(10):
+        if drawn[d] and not is_moving[d]:
+            n_still += 1
+    sp0 = np.empty((n_still, 2))
+    sp1 = np.empty((n_still, 2))
+    s_radii = np.empty(n_still)
+    k = 0
+    for d in range(10):
+        if drawn[d] and not is_moving[d]:
+            sp0[k, 0], sp0[k, 1] = jp0[d, 0], jp0[d, 1]
+            sp1[k, 0], sp1[k, 1] = jp1[d, 0], jp1[d, 1]
+            s_radii[k] = seg_radii[d]
+            k += 1
+    return sp0, sp1, s_radii
+
+
 @numba.njit(cache=True, nogil=True)
 def limb_fit(jp0, jp1, seg_radii, lengths, drawn, seg, child, mode, sign, k0, k1, no_pose, sil,
              sil_cum, a, y0, y1, caps, lo, hi, divisions, min_step, best, warm, width, period,
@@ -977,20 +1002,7 @@ def limb_fit(jp0, jp1, seg_radii, lengths, drawn, seg, child, mode, sign, k0, k1
     moving[0] = seg
     if n_move == 2:
         moving[1] = child
-    n_still = 0
-    for d in range(10):
-        if drawn[d] and d != seg and not (n_move == 2 and d == child):
-            n_still += 1
-    sp0 = np.empty((n_still, 2))
-    sp1 = np.empty((n_still, 2))
-    s_radii = np.empty(n_still)
-    k = 0
-    for d in range(10):
-        if drawn[d] and d != seg and not (n_move == 2 and d == child):
-            sp0[k, 0], sp0[k, 1] = jp0[d, 0], jp0[d, 1]
-            sp1[k, 0], sp1[k, 1] = jp1[d, 0], jp1[d, 1]
-            s_radii[k] = seg_radii[d]
-            k += 1
+    sp0, sp1, s_radii = still_segments(jp0, jp1, seg_radii, drawn, moving)
     p0s = np.empty((n_move, 2))
     p1s = np.empty((n_move, 2))
     radii = np.empty(n_move)
@@ -1014,3 +1026,37 @@ def limb_fit(jp0, jp1, seg_radii, lengths, drawn, seg, child, mode, sign, k0, k1
     still = (sp0, sp1, s_radii, sil, sil_cum, f0, f1)
     search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
               has_prefer, mode, limb, no_pose, radii, still, y0, y1, caps, a, out)
+
+
+@numba.njit(cache=True, nogil=True)
+def pose_fit(jp0, jp1, seg_radii, drawn, moving, seg_prox, seg_dist, mode, idx, coef, neck,
+             length, fixed, root, angles, fore, spread, lengths, shoulder, hip, order, parent,
+             kind, no_limb, sil, sil_cum, a, y0, y1, caps, lo, hi, divisions, min_step, best,
+             warm, width, period, gap_period, prefer, has_prefer, out):
+    """A whole pose search (``_Fitter.search`` of a pose action: the torso, the head,
+    the spread, a whole arm, a torso's or head's foreshortening) in one call.
+
+    Sets up what the Python path sets up with numpy (the still segments: every drawn
+    segment not in ``moving`` (K,); the moving segments' joints seg_prox[moving],
+    seg_dist[moving] and radii), then runs :func:`search_1d` with the pose tuple
+    (idx, coef, neck, length, root, angles, fore, spread, lengths, shoulder, hip,
+    order, parent, kind, prox, dist). ``fixed`` (K, 2): the moving segments' distal
+    ends held still (SEARCH_POSE_SPREAD; else (1, 2), unused); ``no_limb``: the
+    unused limb tuple but for its held ends. jp0, jp1 (10, 2): every segment's ends.
+    """
+    n_move = moving.shape[0]
+    sp0, sp1, s_radii = still_segments(jp0, jp1, seg_radii, drawn, moving)
+    prox = np.empty(n_move, np.int64)
+    dist = np.empty(n_move, np.int64)
+    radii = np.empty(n_move)
+    for t in range(n_move):
+        prox[t] = seg_prox[moving[t]]
+        dist[t] = seg_dist[moving[t]]
+        radii[t] = seg_radii[moving[t]]
+    sign, k0, k1, start, old_end, p0s, _, notown = no_limb
+    limb = (sign, k0, k1, start, old_end, p0s, fixed, notown)
+    pose = (idx, coef, neck, length, root, angles, fore, spread, lengths, shoulder, hip, order,
+            parent, kind, prox, dist)
+    still = (sp0, sp1, s_radii, sil, sil_cum, y0, y1)
+    search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
+              has_prefer, mode, limb, pose, radii, still, y0, y1, caps, a, out)

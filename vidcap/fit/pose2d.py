@@ -322,6 +322,7 @@ _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), n
             np.zeros(1, np.int64))
 # _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
 _TABLE_0 = np.zeros(1, np.int64)  # one candidate counted against table 0
+_PROX64, _DIST64 = _PROX.astype(np.int64), _DIST.astype(np.int64)  # as the kernels take them
 #: each segment's child limb segment (-1: none)
 _CHILD = tuple(DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else -1 for s in range(10))
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
@@ -490,54 +491,35 @@ class _Fitter:
     def search(self, ends, moving, rows, lo, hi, *, divisions, min_step, start=None,
                interval=None, periodic=None, prefer=None):
         """:func:`interval_search` of the candidates ``ends`` describes (see
-        :meth:`scorer`), as one compiled call when ``ends`` carries what the kernel
-        needs (a limb's end, or a pose ``action``), else with :meth:`scorer`."""
-        limb = getattr(ends, "limb", None)
+        :meth:`scorer`): one compiled call that also sets the search up when ``ends``
+        carries a pose ``action`` (:func:`_kernels.pose_fit`; a limb segment's own
+        searches are :meth:`_limb_search`), else with :meth:`scorer`."""
         action = getattr(ends, "action", None)
         kernels = _kernels()
-        moving = np.asarray(moving, dtype=int)
-        still = None
-        if kernels is not None and divisions >= 3 and (limb is not None or action is not None):
-            still = self._still(ends, moving, rows)
-        if still is None or still[0][1] <= still[0][0]:
+        moving = np.asarray(moving, dtype=np.int64)
+        r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
+        if kernels is None or divisions < 3 or action is None or r1 <= r0:
             return interval_search(self.scorer(ends, moving, rows), lo, hi,
                                    divisions=divisions, min_step=min_step, start=start,
                                    interval=interval, periodic=periodic, prefer=prefer)
-        (r0, r1), reach, s_p0, s_p1, s_radii, a = still
-        # the still segments are drawn into the search's table inside the kernel, in
-        # the rows its candidates can reach (base_tables' arguments)
-        f0, f1 = (r0, r1) if reach is None else (max(r0, reach[0]), min(r1, reach[1]))
-        still_args = (_carray(s_p0, np.float64), _carray(s_p1, np.float64),
-                      _carray(s_radii, np.float64), self._sil_c, self._sil_cum[1], f0, f1)
-        if limb is not None:
-            form, scale, p_start, old_end, p0s, p1s, own = limb
-            angle = form == "angle"
-            mode = SEARCH_LIMB_ANGLE if angle else SEARCH_LIMB_RATIO
-            sign, k0, k1 = ((-1.0, float(scale), float(scale)) if angle
-                            else (1.0, float(scale[0]), float(scale[1])))
-            limb_args = (sign, k0, k1, _carray(p_start, np.float64),
-                         _carray(old_end, np.float64), _carray(p0s, np.float64),
-                         _carray(p1s, np.float64), (~np.asarray(own, bool)).astype(np.float64))
-            pose_args = _NO_POSE
-        else:
-            mode, idx, coef, neck, length = action[:5]
-            limb_args = _NO_LIMB
-            if len(action) > 5:  # distal ends held still: where search_1d reads them
-                limb_args = (*_NO_LIMB[:6], _carray(action[5], np.float64), _NO_LIMB[7])
-            pose_args = (np.asarray(idx, np.int64), np.asarray(coef, np.float64),
-                         np.asarray(neck, np.float64), float(length), self.root.copy(),
-                         self.angles.copy(), self.fore.copy(), float(self.spread),
-                         _carray(self.L, np.float64), float(self.shoulder), float(self.hip),
-                         *_KERNEL_TABLES, _PROX[moving].astype(np.int64),
-                         _DIST[moving].astype(np.int64))
-        radii = _carray(self.R[moving], np.float64)
+        mode, idx, coef, neck, length = action[:5]
+        # the spread's candidates hold the moving segments' distal ends still
+        fixed = _carray(action[5], np.float64) if len(action) > 5 else _NO_LIMB[6]
+        jp0, jp1 = self.ends()
+        a = int(self.sil_rows[r1] - self.sil_rows[r0])
+        f64 = np.float64
+        pose = (np.asarray(idx, np.int64), np.asarray(coef, f64), np.asarray(neck, f64),
+                float(length), fixed, _carray(self.root, f64), _carray(self.angles, f64),
+                _carray(self.fore, f64), float(self.spread), self._L_c, float(self.shoulder),
+                float(self.hip), *_KERNEL_TABLES)
 
         def run(lo_, hi_, centre, warm, width, period, gap_period, pref, divisions_, min_step_):
             out = np.empty(5)
-            kernels.search_1d(lo_, hi_, divisions_, min_step_, centre, warm, width,
-                              period, gap_period, 0.0 if np.isnan(pref) else pref,
-                              not np.isnan(pref), mode, limb_args, pose_args, radii,
-                              still_args, r0, r1, bool(self.caps), a, out)
+            kernels.pose_fit(jp0, jp1, self._R_c, self.drawn, moving, _PROX64, _DIST64, mode,
+                             *pose, _NO_LIMB, self._sil_c, self._sil_cum[1], a, r0, r1,
+                             bool(self.caps), lo_, hi_, divisions_, min_step_, centre, warm,
+                             width, period, gap_period, 0.0 if np.isnan(pref) else pref,
+                             not np.isnan(pref), out)
             return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
 
         self.batches += 1
