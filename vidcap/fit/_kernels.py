@@ -899,7 +899,7 @@ def group_search(best, width, lo, hi, clip, period, gap_period, warm, prefer, di
 @numba.njit(cache=True, nogil=True)
 def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, hi, start,
               interval, has_interval, periodic, warm, prefer, divisions, min_step, angle, sign,
-              k0, k1, best, best_score, runner):
+              k0, k1, current, best, best_score, runner):
     """A whole group search (``_Fitter.search_group``) from the model's ends, in one call.
 
     Sets up what the Python path sets up with numpy (the rows each search's candidates
@@ -911,7 +911,8 @@ def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, 
     (N,) as ``interval_search_many`` takes them (``start`` read only when ``warm``,
     ``interval`` only with ``has_interval``); periodic 0 for none. best, best_score,
     runner (N,) are written. Returns the number of iterations, or -1 if an interval
-    is empty (nothing written).
+    is empty (nothing written). ``current`` (N,): each searched value as it is now
+    (the pose the ends show).
     """
     n_s = segs.shape[0]
     h, w = sil.shape
@@ -946,6 +947,21 @@ def group_fit(jp0, jp1, seg_radii, lengths, segs, child, n_k, sil, caps, a, lo, 
         best[n] = start[n] if warm else 0.5 * (lo[n] + hi[n])
         if not wrap:
             best[n] = min(max(best[n], lo[n]), hi[n])
+        # Tighter rows: every candidate lies within dmax of the first centre (the
+        # intervals shrink by 2 / divisions, so the centres wander at most
+        # width / 2 * divisions / (divisions - 2)), which moves the segment's end
+        # (and the child with it) by at most disp pixels from where it is now.
+        dmax = 0.5 * width[n] * divisions / (divisions - 2.0)
+        if angle:
+            gap = abs(best[n] - current[n]) % (2.0 * np.pi)
+            gap = min(gap, 2.0 * np.pi - gap) + dmax
+            disp = k0[n] * min(gap, 2.0)  # the chord 2 l sin(gap / 2) <= l min(gap, 2)
+        else:
+            disp = math.sqrt(k0[n] * k0[n] + k1[n] * k1[n]) * (abs(best[n] - current[n]) + dmax)
+        y_lo = min(min(jp0[s, 1], jp1[s, 1]), min(jp0[c, 1], jp1[c, 1]))
+        y_hi = max(max(jp0[s, 1], jp1[s, 1]), max(jp0[c, 1], jp1[c, 1]))
+        rows[n, 0] = max(rows[n, 0], np.int64(math.floor(y_lo - disp - r_max - 4.0)))
+        rows[n, 1] = min(rows[n, 1], np.int64(math.ceil(y_hi + disp + r_max + 4.0)) + 1)
     cum = np.zeros((n_s, 2, h, w + 1), np.int32)
     m_base = np.zeros(n_s, np.int64)
     i_base = np.zeros(n_s, np.int64)

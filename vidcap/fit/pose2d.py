@@ -811,6 +811,7 @@ class _Fitter:
                    prefer, divisions, min_step):
         """:meth:`search_group`'s search as one compiled call (:func:`_kernels.group_fit`)."""
         n = len(consts.segs)
+        current = (self.angles if form == "angle" else self.fore)[consts.segs]
         f64 = np.float64
         if form == "angle":
             sign, k0 = -1.0, _carray(scale, f64)
@@ -829,8 +830,8 @@ class _Fitter:
             self._sil_c, bool(self.caps), int(self.sil_rows[-1]), full(lo, 0.0), full(hi, 0.0),
             full(start, 0.0), full(interval, 0.0), interval is not None,
             0.0 if periodic is None else float(periodic), True, full(prefer, np.nan),
-            int(divisions), float(min_step), form == "angle", sign, k0, k1, best, best_score,
-            runner)
+            int(divisions), float(min_step), form == "angle", sign, k0, k1, current, best,
+            best_score, runner)
         self.batches += 1
         if it < 0:
             raise ValueError("empty search interval")
