@@ -288,3 +288,25 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
         assert (a.evaluations, a.iterations) == (b.evaluations, b.iterations)
     for x, y in zip(st_c, st_p, strict=True):  # root, angles, fore, scores, margins
         np.testing.assert_allclose(x, y, atol=1e-12)
+
+
+def test_place_torso_compiled_and_numpy_paths_agree(monkeypatch):
+    """The torso's x from the widest run of each row between neck and pelvis (ties: the
+    rightmost), compiled and numpy, on random silhouettes with many equal-width runs."""
+    import vidcap.fit.pose2d as pose2d
+    from vidcap.fit.raster import normalise_mask
+
+    rng = np.random.default_rng(3)
+    masks = np.zeros((30, 120, 90), bool)
+    masks[:, 10:110, 30:60] = rng.random((30, 100, 30)) < 0.7  # ragged runs, ties
+    roots = {}
+    for path in ("compiled", "numpy"):
+        if path == "numpy":
+            monkeypatch.setattr(pose2d, "_kernels", lambda: None)
+        out = []
+        for mask in masks:
+            f = pose2d._Fitter(normalise_mask(mask, height=80), caps=False)
+            f.place_torso()
+            out.append(f.root.copy())
+        roots[path] = np.array(out)
+    np.testing.assert_array_equal(roots["compiled"], roots["numpy"])

@@ -1076,3 +1076,31 @@ def pose_fit(jp0, jp1, seg_radii, drawn, moving, seg_prox, seg_dist, mode, idx, 
     still = (sp0, sp1, s_radii, sil, sil_cum, y0, y1)
     search_1d(lo, hi, divisions, min_step, best, warm, width, period, gap_period, prefer,
               has_prefer, mode, limb, pose, radii, still, y0, y1, caps, a, out)
+
+
+@numba.njit(cache=True, nogil=True)
+def widest_run_middles(band, out):
+    """Per row of ``band`` (h, w) bool that has a run of True: the middle column of its
+    widest run (ties: the rightmost), as ``row_runs`` and a sort by width would pick
+    it, into out[:count]; returns count."""
+    h, w = band.shape
+    count = 0
+    for y in range(h):
+        best_w = 0
+        mid = 0.0
+        x = 0
+        while x < w:
+            if band[y, x]:
+                start = x
+                while x < w and band[y, x]:
+                    x += 1
+                width = x - start
+                if width >= best_w:
+                    best_w = width
+                    mid = 0.5 * (start + (x - 1))
+            else:
+                x += 1
+        if best_w > 0:
+            out[count] = mid
+            count += 1
+    return count

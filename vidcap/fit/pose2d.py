@@ -935,6 +935,14 @@ class _Fitter:
             neck_y = pelvis_y - self.L[S["torso"]]
 
         band = self.sil[int(round(neck_y)) : int(round(pelvis_y)) + 1]
+        kernels = _kernels()
+        if kernels is not None:  # the same middles, one compiled pass
+            mid = np.empty(band.shape[0])
+            count = kernels.widest_run_middles(_carray(band, np.bool_), mid)
+            x = (float(np.median(mid[:count])) if count
+                 else float(np.median(np.nonzero(self.sil)[1])))
+            self.root = np.array([x, pelvis_y])
+            return
         rows, starts, ends = row_runs(band)
         if rows.size:
             widest = np.zeros(band.shape[0], dtype=int)
