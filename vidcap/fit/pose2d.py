@@ -320,11 +320,11 @@ _NO_LIMB = (0.0, 0.0, 0.0, np.zeros(2), np.zeros(2), np.zeros((1, 2)), np.zeros(
 _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), np.zeros(10),
             np.zeros(10), 0.0, np.zeros(10), 0.0, 0.0, *_KERNEL_TABLES, np.zeros(1, np.int64),
             np.zeros(1, np.int64))
-# _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
 _TABLE_0 = np.zeros(1, np.int64)  # one candidate counted against table 0
 _PROX64, _DIST64 = _PROX.astype(np.int64), _DIST.astype(np.int64)  # as the kernels take them
 #: each segment's child limb segment (-1: none)
 _CHILD = tuple(DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else -1 for s in range(10))
+# _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
 _FALLBACK = 0.97  # fit_pose's default: a warm fit below this share of the last S slipped
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
@@ -460,11 +460,17 @@ class _Fitter:
         return self._similarity[1]
 
     # -- scoring -----------------------------------------------------------------
+    def _rows(self, rows) -> tuple[int, int]:
+        """A search's rows ``(r0, r1)``: all of them (None), or ``rows`` within the image."""
+        if rows is None:
+            return 0, self.h
+        return max(0, int(rows[0])), min(self.h, int(rows[1]))
+
     def _still(self, ends, moving, rows):
         """What a search adds its candidates to: the rows searched, the rows its
         candidates can reach, the segments that do not move ((K, 2) ends, (K,) radii)
         and the silhouette's pixels in those rows."""
-        r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
+        r0, r1 = self._rows(rows)
         still = self.drawn.copy()
         still[moving] = False
         still = np.flatnonzero(still)
@@ -497,7 +503,7 @@ class _Fitter:
         action = getattr(ends, "action", None)
         kernels = _kernels()
         moving = np.asarray(moving, dtype=np.int64)
-        r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
+        r0, r1 = self._rows(rows)
         if kernels is None or divisions < 3 or action is None or r1 <= r0:
             return interval_search(self.scorer(ends, moving, rows), lo, hi,
                                    divisions=divisions, min_step=min_step, start=start,
@@ -603,7 +609,7 @@ class _Fitter:
         kernels = _kernels()
         if kernels is None or search["divisions"] < 3:
             return None
-        r0, r1 = (0, self.h) if rows is None else (max(0, int(rows[0])), min(self.h, int(rows[1])))
+        r0, r1 = self._rows(rows)
         if r1 <= r0:
             return None
         jp0, jp1 = self.ends()
@@ -794,12 +800,13 @@ class _Fitter:
             scale = direction(self.angles[segs]) * length[:, None]
         kernels = _kernels()
         if kernels is not None and divisions >= 3:  # the whole search, one compiled call
-            value = self._group_fit(kernels, consts, form, scale, lo_a, hi_a, st, interval,
-                                    periodic, prefer, divisions, min_step)
+            value, best, runner = self._group_fit(kernels, consts, form, scale, lo_a, hi_a, st,
+                                                  interval, periodic, prefer, divisions,
+                                                  min_step)
         else:  # batch by batch
-            value = self._group_batches(consts, form, scale, lo_a, hi_a, st, interval,
-                                        periodic, prefer, divisions, min_step)
-        value, best, runner = value
+            value, best, runner = self._group_batches(consts, form, scale, lo_a, hi_a, st,
+                                                      interval, periodic, prefer, divisions,
+                                                      min_step)
         if kind == "angle":
             self.angles[segs] = np.mod(value, TWO_PI)
         else:
