@@ -295,8 +295,19 @@ def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, 
     """:func:`similarity_terms` of whole-arm candidates: candidate b's elbow is
     shoulder + du[b] * len_u and its wrist elbow + dl[b] * len_l (du, dl (B, 2): the
     upper and lower arm's directions), the floats of the numpy end-point code; the
-    upper and lower arm (radii (2,)) against one table."""
+    upper and lower arm (radii (2,)) against one table.
+
+    The candidates of one upper arm direction (consecutive rows of du) share its row
+    spans: they are computed once per direction, not once per candidate (the same
+    spans :func:`count_one` computes, so the same counts).
+    """
+    h = cum.shape[2]
+    w = cum.shape[3] - 1
+    n_c = cum.shape[1]
     p0, p1, first, last, setup, d = candidate_scratch(2)
+    up_f = np.zeros(h, np.int64)  # the current upper arm's run on each row: [f, e)
+    up_e = np.zeros(h, np.int64)
+    prev_x, prev_y = np.nan, np.nan
     for b in range(du.shape[0]):
         ex = shoulder[0] + du[b, 0] * len_u
         ey = shoulder[1] + du[b, 1] * len_u
@@ -308,8 +319,43 @@ def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, 
         p0[0, 1, 1] = ey
         p1[0, 1, 0] = ex + dl[b, 0] * len_l
         p1[0, 1, 1] = ey + dl[b, 1] * len_l
-        x[b], q[b] = candidate_terms(p0, p1, radii, 0, cum, 0, y0, y1, caps, first, last,
-                                     setup, d, a, m0, i0)
+        if not (du[b, 0] == prev_x and du[b, 1] == prev_y):  # a new upper arm
+            prev_x, prev_y = du[b, 0], du[b, 1]
+            span_setup(shoulder[0], shoulder[1], ex, ey, radii[0], setup[0])
+            top = np.floor(min(shoulder[1], ey) - radii[0]) - 1.0
+            bottom = np.ceil(max(shoulder[1], ey) + radii[0]) + 2.0
+            for y in range(y0, y1):
+                up_f[y] = 0
+                up_e[y] = 0
+                fy = float(y)
+                if fy < top or fy >= bottom:
+                    continue
+                lo, hi = span_row(setup[0], ex, ey, fy, caps)
+                f = int(min(max(lo, 0.0), w))
+                up_f[y] = f
+                up_e[y] = int(min(max(hi + 1.0, float(f)), w))
+        # the lower arm, row by row as count_one does
+        span_setup(ex, ey, p1[0, 1, 0], p1[0, 1, 1], radii[1], setup[1])
+        top = np.floor(min(ey, p1[0, 1, 1]) - radii[1]) - 1.0
+        bottom = np.ceil(max(ey, p1[0, 1, 1]) + radii[1]) + 2.0
+        r0, r1 = row_range(p0, p1, radii, 0, y0, y1)
+        d[0] = 0
+        d[1] = 0
+        for y in range(r0, r1):
+            m = 0
+            if up_e[y] > up_f[y]:
+                m = insert_run(first, last, m, up_f[y], up_e[y])
+            fy = float(y)
+            if not (fy < top or fy >= bottom):
+                lo, hi = span_row(setup[1], p1[0, 1, 0], p1[0, 1, 1], fy, caps)
+                f = int(min(max(lo, 0.0), w))
+                e = int(min(max(hi + 1.0, float(f)), w))
+                if e > f:
+                    m = insert_run(first, last, m, f, e)
+            for r in range(merge_runs(first, last, m)):
+                for c in range(n_c):
+                    d[c] += cum[0, c, y, last[r]] - cum[0, c, y, first[r]]
+        x[b], q[b] = _terms(a, m0 + d[0], i0 + d[1])
 
 
 @numba.njit(cache=True, nogil=True)
