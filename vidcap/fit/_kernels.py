@@ -87,6 +87,15 @@ def span_row(q, x1, y1, y, caps):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def span_cols(q, x1, y1, y, caps, w):
+    """:func:`span_row` as the columns ``[f, e)`` of an image w pixels wide (ints; e <= f:
+    the segment covers nothing on the row)."""
+    lo, hi = span_row(q, x1, y1, y, caps)
+    f = int(min(max(lo, 0.0), w))
+    return f, int(min(max(hi + 1.0, float(f)), w))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def row_range(p0, p1, radii, b, y0, y1):
     """Rows y0 <= y < y1 that candidate b's segments may cover (a conservative window).
 
@@ -160,9 +169,7 @@ def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
         for k in range(n_k):
             if fy < setup[k, 9] or fy >= setup[k, 10]:
                 continue
-            lo, hi = span_row(setup[k], p1[b, k, 0], p1[b, k, 1], fy, caps)
-            f = int(min(max(lo, 0.0), w))
-            e = int(min(max(hi + 1.0, float(f)), w))  # exclusive end
+            f, e = span_cols(setup[k], p1[b, k, 0], p1[b, k, 1], fy, caps, w)
             if e <= f:
                 continue
             m = insert_run(first, last, m, f, e)
@@ -330,10 +337,7 @@ def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, 
                 fy = float(y)
                 if fy < top or fy >= bottom:
                     continue
-                lo, hi = span_row(setup[0], ex, ey, fy, caps)
-                f = int(min(max(lo, 0.0), w))
-                up_f[y] = f
-                up_e[y] = int(min(max(hi + 1.0, float(f)), w))
+                up_f[y], up_e[y] = span_cols(setup[0], ex, ey, fy, caps, w)
         # the lower arm, row by row as count_one does
         span_setup(ex, ey, p1[0, 1, 0], p1[0, 1, 1], radii[1], setup[1])
         top = np.floor(min(ey, p1[0, 1, 1]) - radii[1]) - 1.0
@@ -347,9 +351,7 @@ def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, 
                 m = insert_run(first, last, m, up_f[y], up_e[y])
             fy = float(y)
             if not (fy < top or fy >= bottom):
-                lo, hi = span_row(setup[1], p1[0, 1, 0], p1[0, 1, 1], fy, caps)
-                f = int(min(max(lo, 0.0), w))
-                e = int(min(max(hi + 1.0, float(f)), w))
+                f, e = span_cols(setup[1], p1[0, 1, 0], p1[0, 1, 1], fy, caps, w)
                 if e > f:
                     m = insert_run(first, last, m, f, e)
             for r in range(merge_runs(first, last, m)):
@@ -605,9 +607,7 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
         for k in range(n_k):
             if y < reach[k, 0] or y >= reach[k, 1]:
                 continue  # the segment does not reach this row
-            lo, hi = span_row(setup[k], p1[k, 0], p1[k, 1], float(y), caps)
-            f = int(min(max(lo, 0.0), w))
-            e = int(min(max(hi + 1.0, float(f)), w))
+            f, e = span_cols(setup[k], p1[k, 0], p1[k, 1], float(y), caps, w)
             if e <= f:
                 continue
             if table:
@@ -736,9 +736,7 @@ def group_span_tables(p0, p1, radii, caps, segs, child, sil, rows, cum, m_base, 
         i0, i1 = row_range(p0[k:k + 1].reshape(1, 1, 2), p1[k:k + 1].reshape(1, 1, 2), one, 0,
                            0, h)
         for y in range(i0, i1):
-            lo, hi = span_row(setup, p1[k, 0], p1[k, 1], float(y), caps)
-            f = int(min(max(lo, 0.0), w))
-            e = int(min(max(hi + 1.0, float(f)), w))
+            f, e = span_cols(setup, p1[k, 0], p1[k, 1], float(y), caps, w)
             span_f[y, k] = f
             span_e[y, k] = e
             for x in range(f, e):
