@@ -348,6 +348,12 @@ def _arm_grid(step_deg: float):
     return ua, la, du, dl
 
 
+def _searched(out: np.ndarray) -> tuple[float, float, float, int, int]:
+    """A compiled search's out (5,) as ``run`` returns it to :func:`interval_search`:
+    value, score, runner-up, evaluations, iterations."""
+    return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
+
+
 @dataclass(frozen=True)
 class _GroupConstants:
     """What :meth:`_Fitter.search_group` needs of its segments alone (cached)."""
@@ -362,8 +368,7 @@ class _GroupConstants:
 @functools.lru_cache(maxsize=32)
 def _group_constants(segs: tuple[int, ...]) -> _GroupConstants:
     s = np.array(segs, dtype=np.int64)
-    child = np.array([DESCENDANTS[x][1] if len(DESCENDANTS[x]) > 1 else x for x in segs],
-                     dtype=np.int64)
+    child = np.array([x if _CHILD[x] < 0 else _CHILD[x] for x in segs], dtype=np.int64)
     limits = np.array([_THIGH_WIDE if "upper_leg" in SEGMENT_NAMES[x]
                        else _LIMITS[SEGMENT_NAMES[x]] for x in segs], dtype=float)
     arm = np.array([SEGMENT_NAMES[x].endswith("arm") for x in segs])
@@ -526,7 +531,7 @@ class _Fitter:
                              bool(self.caps), lo_, hi_, divisions_, min_step_, centre, warm,
                              width, period, gap_period, 0.0 if np.isnan(pref) else pref,
                              not np.isnan(pref), out)
-            return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
+            return _searched(out)
 
         self.batches += 1
         return interval_search(None, lo, hi, divisions=divisions, min_step=min_step,
@@ -627,7 +632,7 @@ class _Fitter:
                              bool(self.caps), lo_, hi_, divisions_, min_step_, centre, warm,
                              width, period, gap_period, 0.0 if np.isnan(pref) else pref,
                              not np.isnan(pref), out)
-            return float(out[0]), float(out[1]), float(out[2]), int(out[3]), int(out[4])
+            return _searched(out)
 
         self.batches += 1
         return interval_search(None, lo, hi, run=run, **search)
