@@ -88,3 +88,38 @@ def test_run_says_when_more_than_one_person_is_in_view(tmp_path):
     write_video(lone, frames[:12], 12.0)
     run(lone, progress=False, log=said.append)
     assert not any("more than one person" in m for m in said)
+
+
+def test_lift_pose_reads_segments_at_the_model_height_of_each_frame():
+    # The 2D fitter scales its model to each silhouette, which is a few per cent
+    # shorter with the feet apart: every segment of those frames is drawn that much
+    # shorter. Read at one scale for the clip that is depth in every segment; read at
+    # the frame's model height (Pose2D.model_height) it is not.
+    from vidcap.body import BodyModel
+    from vidcap.pipeline import model_scales
+
+    body = BodyModel()
+    j2, j3, signs, fps = posed_clip(90.0, 60, scale=200.0)
+    shrink = 0.975 + 0.025 * np.cos(np.arange(60) / 3.0)  # 0.95 .. 1.0
+    top = j2[:, JOINT_INDEX["head_top"]][:, None]
+    drawn = top + (j2 - top) * shrink[:, None, None]  # the model hangs from the head
+    heights = 200.0 * body.height * shrink
+    ann = Annotations()
+    ann.add_orientation(0, "right")  # facing image right: the test is about depth
+    exact = lift_pose(j2, fps=fps, annotations=ann, image_sides=False)
+    one = lift_pose(drawn, fps=fps, annotations=ann, image_sides=False)
+    per = lift_pose(drawn, fps=fps, annotations=ann, image_sides=False,
+                    model_height=heights)
+    np.testing.assert_allclose(per.segment_scale, heights / body.height)
+    e_exact, e_one, e_per = (_mpjpe(r.joints3d, j3) for r in (exact, one, per))
+    assert e_per < e_exact + 0.005  # metres
+    assert e_one > e_per + 0.02
+    # gaps (no fit) take their neighbours' scale; nothing usable: None (one scale)
+    gappy = heights.copy()
+    gappy[10:13] = np.nan
+    s = model_scales(gappy, 60, body)
+    between = np.interp(11, [9, 13], heights[[9, 13]])
+    assert np.isfinite(s).all() and s[11] == pytest.approx(between / body.height)
+    assert model_scales(np.full(60, np.nan), 60, body) is None
+    with pytest.raises(ValueError, match="model_height"):
+        model_scales(heights[:5], 60, body)

@@ -59,6 +59,9 @@ class ClipData:
         Torso horizontal foreshortening from the 2D fit (see :func:`vidcap.pipeline.lift_pose`).
     track : numpy.ndarray, shape (F,), optional
         Horizontal image position of the subject (walking direction).
+    model_height : numpy.ndarray, shape (F,), optional
+        Body height in pixels the 2D model was drawn at per frame (see
+        :func:`vidcap.pipeline.model_scales`).
     body : vidcap.body.BodyModel, optional
         The subject (default 1.75 m).
     size : tuple of int
@@ -74,6 +77,7 @@ class ClipData:
     image_sides: bool = True
     spread: np.ndarray | None = None
     track: np.ndarray | None = None
+    model_height: np.ndarray | None = None
     body: BodyModel | None = None
     size: tuple[int, int] = field(default=(0, 0))
 
@@ -155,7 +159,7 @@ class AnnotateSession:
 
         from vidcap.annotations import Annotations
         from vidcap.lift import torso_width_ratio
-        from vidcap.pipeline import fill_gaps, frame_scales, lift_pose
+        from vidcap.pipeline import fill_gaps, frame_scales, lift_pose, model_scales
 
         self.clip = clip
         self.path = Path(annotations_path)
@@ -173,7 +177,9 @@ class AnnotateSession:
         # what lift_pose derives from the 2D joints alone (for the quick re-lift)
         self._filled = fill_gaps(clip.joints2d)
         scale = frame_scales(self._filled, clip.fps, clip.body)  # as lift_pose does
-        rho = torso_width_ratio(self._filled, scale, clip.body)
+        self._segment_scale = model_scales(clip.model_height, len(self._filled), clip.body)
+        rho = torso_width_ratio(self._filled, scale if self._segment_scale is None
+                                else self._segment_scale, clip.body)
         if clip.spread is not None:
             spread = np.asarray(clip.spread, float)
             rho = np.where(np.isfinite(spread), spread, rho)
@@ -199,7 +205,7 @@ class AnnotateSession:
         c = self.clip
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
                          image_sides=c.image_sides, spread=c.spread, track=c.track,
-                         frame_size=c.size)
+                         frame_size=c.size, model_height=c.model_height)
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
@@ -235,8 +241,8 @@ class AnnotateSession:
             image_sides=self.clip.image_sides)
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
         centre = (0.5 * self.clip.size[0], 0.5 * self.clip.size[1])
-        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale,
-                        principal_point=centre).joints3d
+        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale, principal_point=centre,
+                        segment_scale=self._segment_scale).joints3d
         (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,
          self.joints2d, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
                                                       orientation, yaw, j2, signs, joints3d)
@@ -486,6 +492,8 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     return ClipData(video=video, fps=res.fps, read_frame=read_frame, joints2d=joints2d[:n],
                     masks=res.masks[:n], fit_score=np.asarray(res.similarity)[:n],
                     image_sides=True, spread=None if spread is None else spread[:n],
-                    track=None if track is None else track[:n], body=BodyModel(height=height))
+                    track=None if track is None else track[:n],
+                    model_height=None if res.model_height is None else res.model_height[:n],
+                    body=BodyModel(height=height))
 
 

@@ -78,7 +78,7 @@ class Lift3D:
     clamped : numpy.ndarray, shape (F, 10), bool
         Segments whose image length exceeded the model length (depth set to 0).
     excess : numpy.ndarray, shape (F, 10)
-        Image length / (scale * model length) - 1 where positive, else 0.
+        Image length / (segment scale * model length) - 1 where positive, else 0.
     """
 
     joints3d: np.ndarray
@@ -379,6 +379,7 @@ def lift(
     body: BodyModel | None = None,
     scale=None,
     principal_point=None,
+    segment_scale=None,
 ) -> Lift3D:
     """Lift body-side named 2D joints to 3D with depth signs (seed 004 Eq. 2.2).
 
@@ -402,6 +403,12 @@ def lift(
         used with per-frame scales: the root's position in metres is then ``(u -
         c) / s`` per frame (weak perspective); default the pelvis' median image
         position.
+    segment_scale : float or array_like, shape (F,), optional
+        Pixels per metre at which each frame's segments are read, when that differs
+        from ``scale`` (which then places the root only): a 2D fit draws its model at
+        each frame's silhouette height, so its segments are that frame's model
+        lengths times their foreshortening (see
+        :func:`vidcap.pipeline.model_scales`). Default ``scale``.
 
     Returns
     -------
@@ -419,6 +426,8 @@ def lift(
     s = estimate_scale(j2, body) if scale is None else (
         _frame_scale(scale, F) if per_frame else float(scale))
     sf = s[:, None, None] if per_frame else s
+    if segment_scale is not None:
+        sf = _frame_scale(segment_scale, F)[:, None, None]
     lengths = body.segment_lengths()
 
     # image vectors in metres, Y up

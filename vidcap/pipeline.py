@@ -86,7 +86,8 @@ class LiftResult:
     proposed_signs, signs : (F, 10) int8, proposed and final (user events applied).
     proposed_orientation, orientation : (F,) str.
     yaw : (F,) rad. scale : px per metre, one number or (F,) (the subject's distance
-    changes). clamped : (F, 10) bool.
+    changes): where the root is. segment_scale : (F,) px per metre the segments were
+    read at (:func:`model_scales`), or None (``scale``). clamped : (F, 10) bool.
     checks : ranked list of (frame, segment) pairs to check (see
         :meth:`vidcap.proposals.SignProposal.checks`).
     margin, zeta : (F, 10) sign confidence and out-of-plane amount.
@@ -104,6 +105,7 @@ class LiftResult:
     checks: list
     margin: np.ndarray
     zeta: np.ndarray
+    segment_scale: np.ndarray | None = None
 
 
 def fill_gaps(joints2d) -> np.ndarray:
@@ -172,6 +174,43 @@ def frame_scales(joints2d, fps: float, body: BodyModel | None = None, *,
     return estimate_scales(joints2d, body, window=max(3, int(round(window_s * fps)) | 1))
 
 
+def model_scales(model_height, n_frames: int, body: BodyModel | None = None):
+    """Pixels per metre at which the 2D fit drew its model in each frame.
+
+    The fitter scales its model to each frame's silhouette (seed 004 section 4.2),
+    and a walker's silhouette is a few per cent shorter with the feet apart than in
+    mid-stance, so every drawn segment is that much shorter there. Read against one
+    scale for the clip, Eq. 2.2 turns that into depth in every segment (sqrt(1 -
+    0.96^2) = 0.28 of its length); read against the frame's own model scale, a
+    segment's ratio is the foreshortening the fit found.
+
+    Parameters
+    ----------
+    model_height : array_like, shape (F,), or None
+        :attr:`vidcap.fit.pose2d.Pose2D.model_height`: body height in pixels per
+        frame, NaN where there was no fit (interpolated here).
+    n_frames : int
+    body : BodyModel, optional
+        The subject (its height in metres).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,), or None
+        None when ``model_height`` is None or has no usable value.
+    """
+    if model_height is None:
+        return None
+    body = body or BodyModel()
+    h = np.asarray(model_height, dtype=float).reshape(-1)
+    if h.shape != (n_frames,):
+        raise ValueError(f"model_height must be ({n_frames},), got shape {h.shape}")
+    ok = np.isfinite(h) & (h > 0)
+    if not ok.any():
+        return None
+    t = np.arange(n_frames)
+    return np.interp(t, t[ok], h[ok]) / body.height
+
+
 def lift_pose(
     joints2d,
     *,
@@ -185,6 +224,7 @@ def lift_pose(
     yaw_window_s: float = 1.0,
     scale_window_s: float = SCALE_WINDOW_S,
     frame_size: tuple[int, int] | None = None,
+    model_height=None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -214,6 +254,10 @@ def lift_pose(
     frame_size : (int, int), optional
         (width, height) of the frames in pixels: their centre is the camera's axis
         when the scale changes per frame.
+    model_height : array_like, shape (F,), optional
+        The height in pixels the 2D model was drawn at per frame
+        (:attr:`vidcap.fit.pose2d.Pose2D.model_height`): segments are then read at
+        that frame's scale (:func:`model_scales`), the root at the clip's.
 
     Returns
     -------
@@ -225,31 +269,35 @@ def lift_pose(
     F = len(j2)
     # one scale, or one per frame when the subject's distance changes (weak perspective)
     scale = frame_scales(j2, fps, body, window_s=scale_window_s)
+    seg_scale = model_scales(model_height, F, body)
+    geometry = scale if seg_scale is None else seg_scale  # what segments are read at
     if smooth_2d > 0 and F > 2:
         j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     if spread is None:
-        rho = torso_width_ratio(j2, scale, body)
+        rho = torso_width_ratio(j2, geometry, body)
     else:
         rho = np.asarray(spread, float)
-        rho = np.where(np.isfinite(rho), rho, torso_width_ratio(j2, scale, body))
+        rho = np.where(np.isfinite(rho), rho, torso_width_ratio(j2, geometry, body))
     # the body turns slowly: a running median over ~1 s removes single-frame misfits
     rho = median_filter(rho, size=max(1, int(round(yaw_window_s * fps)) | 1), mode="nearest")
-    proposed_orient = propose_orientation(j2, scale=scale, fps=fps, body=body,
+    proposed_orient = propose_orientation(j2, scale=geometry, fps=fps, body=body,
                                           sides_known=not image_sides, track=track,
                                           window_s=yaw_window_s, turn_window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides)
-    free = propose_signs(j2, yaw, scale=scale, body=body)
+    free = propose_signs(j2, yaw, scale=geometry, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
-    final = propose_signs(j2, yaw, scale=scale, body=body, fixed=user_signs) \
+    final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \
         if (user_signs != 0).any() else free
     centre = None if frame_size is None else (0.5 * frame_size[0], 0.5 * frame_size[1])
-    out = lift(j2, final.signs, yaw, body=body, scale=scale, principal_point=centre)
+    out = lift(j2, final.signs, yaw, body=body, scale=scale, principal_point=centre,
+               segment_scale=seg_scale)
     return LiftResult(
         joints2d=j2, joints3d=out.joints3d, proposed_signs=free.signs, signs=final.signs,
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
         clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
+        segment_scale=seg_scale,
     )
 
 
@@ -311,6 +359,8 @@ class ConvertResult:
     spread: np.ndarray | None = None
     #: Horizontal centre of the person per frame in pixels, gaps interpolated, (F,).
     track: np.ndarray | None = None
+    #: Body height in pixels the 2D model was drawn at per frame (NaN: no fit), (F,).
+    model_height: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -480,6 +530,8 @@ def run(
         chunks = chunk_bounds(len(masks), jobs)
         k_pose = _key("pose2d", k_sil) if len(chunks) < 2 else _key("pose2d", k_sil, chunks)
         hit = cache.load("pose2d", k_pose)
+        if hit is not None and "model_height" not in hit:
+            hit = None  # written before the model's height was kept: fit again
         if hit is None:
             def wrap(it, total):
                 return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
@@ -489,7 +541,7 @@ def run(
             else:
                 pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap)
             hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
-                   "similarity": pose.similarity}
+                   "similarity": pose.similarity, "model_height": pose.model_height}
             cache.save("pose2d", k_pose, **hit)
         timings["pose2d"] = time.perf_counter() - t0
     finally:
@@ -502,7 +554,8 @@ def run(
     _check_events(ann, len(masks), ann_source)
     lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track,
-                       frame_size=(info.width, info.height))
+                       frame_size=(info.width, info.height),
+                       model_height=hit["model_height"])
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(hit["similarity"], min_score=keyframe_score)
@@ -516,6 +569,7 @@ def run(
         motion=mres.motion, jitter_before=mres.jitter_before,
         jitter_after=mres.jitter_after, timings=timings,
         image_joints2d=hit["joints2d"], spread=hit["spread"], track=track,
+        model_height=hit["model_height"],
     )
 
 

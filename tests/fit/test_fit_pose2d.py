@@ -126,6 +126,11 @@ def test_sequence_refits_frames_taller_than_the_body():
     assert np.all(fixed.similarity[tall] > seed.similarity[tall])
     # the frames as tall as the body are left as they were
     assert np.array_equal(fixed.joints2d[~tall], seed.joints2d[~tall])
+    # and the model's height is the body's in the refitted frames, not the silhouette's
+    sil = masks.any(axis=2).sum(axis=1).astype(float)
+    np.testing.assert_allclose(fixed.model_height[tall], H, rtol=0.02)
+    assert np.all(seed.model_height[tall] > 1.05 * H)
+    np.testing.assert_allclose(seed.model_height, sil, rtol=0.01)
 
 
 def test_crossed_lower_legs_detected_and_swapped():
@@ -175,6 +180,16 @@ def test_sequence_tracked_and_per_frame(tmp_path):
     back = Pose2D.load(path)
     assert back.joint_names == JOINT_NAMES and back.tracked
     assert np.array_equal(back.joints2d, tracked.joints2d, equal_nan=True)
+    # the model's height per frame: each fitted frame's silhouette height (upright
+    # figures), NaN where there was none; kept through the file
+    heights = np.array([np.ptp(np.flatnonzero(m.any(axis=1))) + 1 if m.any() else np.nan
+                        for m in masks])
+    np.testing.assert_allclose(tracked.model_height, heights, rtol=0.02)
+    assert np.array_equal(back.model_height, tracked.model_height, equal_nan=True)
+    # a file from before model_height was kept still loads, without it
+    old = tmp_path / "old.npz"
+    np.savez(old, **{k: v for k, v in tracked.arrays().items() if k != "model_height"})
+    assert Pose2D.load(old).model_height is None
 
 
 def test_bad_pose_file(tmp_path):

@@ -56,7 +56,7 @@ _PAIRS = {
 }
 _PER_SEGMENT = ("angles", "foreshortening", "scores", "margins")
 _PER_FRAME = ("joints2d", "angles", "foreshortening", "scores", "margins", "spread",
-              "similarity", "warm")
+              "similarity", "warm", "model_height")
 
 
 def default_jobs() -> int:
@@ -397,7 +397,8 @@ def _join(bounds, parts, n, tracked) -> Pose2D:
     return Pose2D(tuple(str(x) for x in parts[0]["joint_names"]), out["joints2d"],
                   out["angles"], out["foreshortening"], out["scores"], out["margins"],
                   out["spread"], out["similarity"], out["warm"], bool(tracked),
-                  tuple(str(x) for x in parts[0]["segment_names"]))
+                  tuple(str(x) for x in parts[0]["segment_names"]),
+                  model_height=out.get("model_height"))
 
 
 __all__ = ["MAX_JOBS", "FitPool", "StreamedFit", "chunk_bounds", "default_jobs",

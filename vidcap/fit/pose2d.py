@@ -253,6 +253,14 @@ class Pose2D:
         Whether labels follow limbs over time (True) or are per-frame image sides.
     segment_names : tuple of str, (10,)
         :data:`vidcap.body.SEGMENT_NAMES`.
+    model_height : numpy.ndarray, shape (F,), or None
+        The body height, original-frame pixels, the model was drawn at in each frame
+        (:attr:`FramePose.height_px`; NaN without a silhouette; None when unknown, as in
+        files written before it was kept). Every segment's drawn length is its Table
+        3.1 share of it times its foreshortening, so the 3D stage reads each
+        segment's foreshortening against it rather than against one scale for the
+        clip: the silhouette's height changes over a gait cycle, and so does the
+        model's.
     """
 
     joint_names: tuple
@@ -266,6 +274,7 @@ class Pose2D:
     warm: np.ndarray
     tracked: bool
     segment_names: tuple = field(default=SEGMENT_NAMES)
+    model_height: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -286,6 +295,7 @@ class Pose2D:
             "similarity": self.similarity,
             "warm": self.warm,
             "tracked": np.array(self.tracked),
+            **({} if self.model_height is None else {"model_height": self.model_height}),
         }
 
     def save(self, path) -> None:
@@ -308,6 +318,7 @@ class Pose2D:
                     margins=d["margins"], spread=d["spread"], similarity=d["similarity"],
                     warm=d["warm"], tracked=bool(d["tracked"]),
                     segment_names=tuple(str(s) for s in d["segment_names"]),
+                    model_height=d["model_height"] if "model_height" in d.files else None,
                 )
         except (OSError, KeyError, ValueError) as exc:
             raise InputFileError(f"not a pose2d file ({exc})", path) from exc
@@ -1531,7 +1542,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     if tracked and spread_window > 1 and kw.get("spread", True) and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw, body, out)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
-                  out.spread, out.sim, out.warm, bool(tracked))
+                  out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
 
 
 class _Frames:
@@ -1546,12 +1557,14 @@ class _Frames:
         self.spread = np.full(n, np.nan)
         self.sim = np.zeros(n)
         self.warm = np.zeros(n, dtype=bool)
+        self.height = np.full(n, np.nan)  # the body height the model was drawn at, px
 
     def put(self, k: int, fp: FramePose, *, warm: bool = True) -> None:
         """Store frame k's fit (``warm``: its warm flag too)."""
         self.joints[k], self.angles[k], self.fore[k] = fp.joints, fp.angles, fp.foreshortening
         self.scores[k], self.margins[k], self.spread[k] = fp.scores, fp.margins, fp.spread
         self.sim[k] = fp.similarity
+        self.height[k] = fp.height_px
         if warm:
             self.warm[k] = fp.warm
 
