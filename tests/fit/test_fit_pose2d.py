@@ -325,3 +325,48 @@ def test_place_torso_compiled_and_numpy_paths_agree(monkeypatch):
             out.append(f.root.copy())
         roots[path] = np.array(out)
     np.testing.assert_array_equal(roots["compiled"], roots["numpy"])
+
+
+def _fitter_at(mask, joints, angles_deg, spread):
+    """A fitter on ``mask`` holding the pose ``angles_deg`` (the figure's root)."""
+    from vidcap.fit.pose2d import _Fitter
+    from vidcap.fit.raster import normalise_mask
+
+    norm = normalise_mask(mask)
+    f = _Fitter(norm, caps=False)
+    f.root = norm.to_normalised(joints[JOINT_INDEX["pelvis"]])
+    f.angles, f.fore, f.spread = np.deg2rad(angles_deg), np.ones(10), float(spread)
+    f.drawn[:] = True
+    return f, norm
+
+
+def test_fresh_fit_keeps_a_tracks_limb_names_in_a_side_view():
+    from vidcap.fit.pose2d import _keep_labels
+
+    # side view, legs apart: the track calls the forward leg "l"; a fresh fit named by
+    # image side calls it "r". Swapping the names back draws the same pixels.
+    track = [92, 90, 260, 280, 275, 290, 245, 265, 290, 285]
+    named_by_image = [92, 90, 275, 290, 260, 280, 290, 285, 245, 265]
+    mask, joints = _figure(track, spread=0.0)
+    f, norm = _fitter_at(mask, joints, named_by_image, 0.0)
+    s0 = f.similarity()
+    _keep_labels(f, norm.to_normalised(joints), tie=0.002)
+    np.testing.assert_allclose(np.rad2deg(f.angles), track)
+    assert f.similarity() == pytest.approx(s0)
+    # a front view: each leg hangs from its own hip, so the image-side names stand
+    # even against a reference that calls them the other way
+    front = [90, 90, 250, 270, 290, 270, 268, 270, 280, 282]
+    mask, joints = _figure(front, spread=1.0)
+    f, norm = _fitter_at(mask, joints, front, 1.0)
+    s0 = f.similarity()
+    ref = norm.to_normalised(joints)
+    left = [JOINT_INDEX[f"l_{j}"] for j in ("hip", "knee", "ankle")]
+    right = [JOINT_INDEX[f"r_{j}"] for j in ("hip", "knee", "ankle")]
+    ref[left + right] = ref[right + left]
+    j = f.joints()
+    # the reference asks for the swap ...
+    assert (np.linalg.norm(j[right + left] - ref[left + right], axis=-1).sum()
+            < np.linalg.norm(j[left + right] - ref[left + right], axis=-1).sum())
+    _keep_labels(f, ref, tie=0.002)  # ... which is refused: it fits worse
+    np.testing.assert_allclose(np.rad2deg(f.angles), front)
+    assert f.similarity() == pytest.approx(s0)

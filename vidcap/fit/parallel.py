@@ -38,22 +38,12 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from vidcap.body import JOINT_INDEX, SEGMENT_NAMES
-from vidcap.fit.pose2d import Pose2D, fit_sequence
+from vidcap.fit.pose2d import LIMB_PAIRS, Pose2D, fit_sequence
 
 #: Most worker processes :func:`default_jobs` picks.
 MAX_JOBS = 8
 
-_SEG = {name: i for i, name in enumerate(SEGMENT_NAMES)}
-#: (joints, segments) of the image-left and image-right member of each limb pair.
-_PAIRS = {
-    "arms": tuple(
-        ([JOINT_INDEX[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")],
-         [_SEG[f"{s}_{p}_arm"] for p in ("upper", "lower")]) for s in "lr"),
-    "legs": tuple(
-        ([JOINT_INDEX[f"{s}_{j}"] for j in ("hip", "knee", "ankle")],
-         [_SEG[f"{s}_{p}_leg"] for p in ("upper", "lower")]) for s in "lr"),
-}
+_PAIRS = LIMB_PAIRS
 _PER_SEGMENT = ("angles", "foreshortening", "scores", "margins")
 _PER_FRAME = ("joints2d", "angles", "foreshortening", "scores", "margins", "spread",
               "similarity", "warm", "model_height")

@@ -58,8 +58,10 @@ Beyond the seed:
   :meth:`_Fitter.search_group`). Limbs then keep their labels through crossings. A
   warm fit losing more than 3 % of the previous frame's S is redone from scratch
   and the better kept, and every 10th frame a fresh fit challenges the track (so a
-  wrong but stable track is left). ``tracked=False`` (``--per-frame``) fits every
-  frame independently, as the seed does.
+  wrong but stable track is left). In a side view (spread < 0.3) a fresh fit that
+  takes over keeps the track's limb names (:func:`_keep_labels`): its image-side
+  names would swap the legs against the frames before after every crossing.
+  ``tracked=False`` (``--per-frame``) fits every frame independently, as the seed does.
 * Temporal priors in tracked mode (:func:`fit_sequence`): when a fresh fit replaces
   the track, the frames before it are re-tracked backward from it while that fits
   them better (a track that began in a wrong pose is corrected from where the right
@@ -338,6 +340,19 @@ _CHILD = tuple(DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else -1 for s in ran
 # _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
 _FALLBACK = 0.97  # fit_pose's default: a warm fit below this share of the last S slipped
+#: Spread below which shoulders and hips nearly coincide in the image (a side view), so
+#: a fresh fit's image-side limb names mean nothing and a track's are kept
+#: (:func:`_keep_labels`); above it a limb's name says which hip or shoulder it hangs
+#: from, which the image shows.
+_SIDE_SPREAD = 0.3
+_LABEL_TIE = 0.002  # S a fresh fit may lose to keep a track's limb names
+#: (joints, segments) of the image-left and image-right member of each limb pair.
+LIMB_PAIRS = {
+    "arms": tuple(([J[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")],
+                   [S[f"{s}_{p}_arm"] for p in ("upper", "lower")]) for s in "lr"),
+    "legs": tuple(([J[f"{s}_{j}"] for j in ("hip", "knee", "ankle")],
+                   [S[f"{s}_{p}_leg"] for p in ("upper", "lower")]) for s in "lr"),
+}
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
 assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/sin
 
@@ -1266,6 +1281,37 @@ def _untangle_thighs(f: _Fitter, *, tie: float) -> None:
         f.set_state(kept)
 
 
+def _keep_labels(f: _Fitter, reference: np.ndarray, *, tie: float) -> None:
+    """Give a fresh fit's limbs the labels a track gave them (in place).
+
+    A fresh fit names limbs by image side; a track keeps the names it started with
+    through crossings, so where a fresh fit takes over a track (a slipping warm fit,
+    the periodic challenge) its pairs can come out swapped against the frames
+    before, and the 3D stage, which reads one limb as the body's left for the whole
+    clip, would put that leg on the other hip from then on. Each pair (arms, legs)
+    is swapped when the swapped labelling's joints are closer to ``reference`` (15,
+    2), the previous frame's joints in this fit's pixels, and the swapped pose fits
+    within ``tie`` as well (with the shoulders or hips apart, a limb drawn from the
+    other one is a different pose).
+    """
+    j = f.joints()
+    for (jl, sl), (jr, sr) in LIMB_PAIRS.values():
+        both = jl + jr
+        keep = np.linalg.norm(j[both] - reference[both], axis=-1).sum()
+        swap = np.linalg.norm(j[jr + jl] - reference[both], axis=-1).sum()
+        if not swap < keep:
+            continue
+        kept, s_kept = f.state(), f.similarity()
+        for a in (f.angles, f.fore, f.scores, f.margins):
+            a[sl + sr] = a[sr + sl]
+        if f.similarity() < s_kept - tie:
+            # each limb now hangs from the other shoulder (hip): settle it there
+            f.search_group([sl[0], sr[0]], interval=np.deg2rad(16))
+            f.search_group([sl[1], sr[1]], interval=np.deg2rad(16))
+        if f.similarity() < s_kept - tie:
+            f.set_state(kept)
+
+
 def _swap_lower_legs(f: _Fitter):
     a, b = S["l_lower_leg"], S["r_lower_leg"]
     f.angles[[a, b]] = f.angles[[b, a]]
@@ -1432,6 +1478,9 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         # the track is slipping: fit this frame from scratch, keep the better fit
         g, g_crossed, _ = fit_normalised(norm, **kw)
         if g.similarity() > f.similarity():
+            if max(previous.spread, g.spread) < _SIDE_SPREAD:
+                # a side view: no image cue names the limbs, the track's names stand
+                _keep_labels(g, norm.to_normalised(previous.joints), tie=_LABEL_TIE)
             f, crossed, warm = g, g_crossed, False
     return FramePose(
         joints=norm.to_original(f.joints()),
