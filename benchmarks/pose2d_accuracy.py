@@ -9,7 +9,10 @@ height in pixels (head top to ankles).
 During 2D fitting ``l_*`` means the image-left limb, not the performer's left, so
 each limb pair (arms: shoulder/elbow/wrist, legs: hip/knee/ankle) is matched to the
 truth with whichever assignment (as labelled or swapped) is closer in that frame.
-The share of frames where the swap was needed is reported as "swapped".
+The share of frames where the swap was needed is reported as "armsw"/"legsw", and
+"flips" counts how often a pair's labelling changes over the clip (frames where the
+limbs overlap too closely to tell are skipped): a tracked fit should keep its labels,
+as the 3D stage reads one limb of each pair as the body's left for the whole clip.
 
 "PCK.05 seen" leaves out the elbows and wrists whose true position lies inside the
 torso's outline (within the torso cylinder's radius of the pelvis-neck line): an arm
@@ -72,6 +75,27 @@ def side_agnostic_errors(pred: np.ndarray, truth: np.ndarray):
         err[np.ix_(swap, b)] = e_ab[swap]
         swapped[:, k] = swap
     return err, swapped
+
+
+def label_flips(pred: np.ndarray, truth: np.ndarray, height_px: np.ndarray,
+                clear: float = 0.05) -> int:
+    """How often a limb pair's labels change over a clip, summed over arms and legs.
+
+    Per frame a pair reads as labelled like the truth or swapped, whichever is closer;
+    frames where the two readings are within ``clear`` of the body height (summed over
+    the pair's joints: limbs overlapping, either reading fits) are skipped, and a flip
+    is a change between consecutive remaining frames. ``height_px`` (F,) or (F, 1).
+    """
+    h = np.asarray(height_px, dtype=float).reshape(-1)
+    flips = 0
+    for a, b in (ARMS, LEGS):
+        keep = (np.linalg.norm(pred[:, a] - truth[:, a], axis=-1).sum(1)
+                + np.linalg.norm(pred[:, b] - truth[:, b], axis=-1).sum(1))
+        swap = (np.linalg.norm(pred[:, a] - truth[:, b], axis=-1).sum(1)
+                + np.linalg.norm(pred[:, b] - truth[:, a], axis=-1).sum(1))
+        sure = np.isfinite(keep) & np.isfinite(swap) & (np.abs(keep - swap) > clear * h)
+        flips += int(np.count_nonzero(np.diff((swap < keep)[sure].astype(int))))
+    return flips
 
 
 def body_height_px(truth_joints: np.ndarray) -> np.ndarray:
@@ -196,7 +220,8 @@ def main(argv=None) -> int:
                 frac = err / hpx
                 s = summarise(frac, hidden)
                 mode = "tracked" if tracked else "per-frame"
-                rows.append((name, f"{yaw:g}", mode, s, sw.mean(0), pose.warm.mean(), dt))
+                flips = label_flips(pose.joints2d, tj, hpx)
+                rows.append((name, f"{yaw:g}", mode, s, sw.mean(0), flips, pose.warm.mean(), dt))
                 per_joint[(name, yaw, mode)] = np.nanmedian(frac, axis=0)
     print(f"2D joint error / body height, {args.frames} frames per clip, 640x480, "
           f"silhouettes normalised to {args.height} px, "
@@ -204,11 +229,11 @@ def main(argv=None) -> int:
           f"{', seed order only' if args.no_refine else ''}")
     print(f"{'motion':8} {'yaw':>4} {'mode':9} {'median':>7} {'p90':>7} {'PCK.05':>7} "
           f"{'PCK.1':>7} {'PCK.05 seen':>11} {'hidden':>6} {'armsw':>6} {'legsw':>6} "
-          f"{'warm':>5} {'ms/fr':>6}")
-    for name, yaw, mode, s, sw, warm, dt in rows:
+          f"{'flips':>5} {'warm':>5} {'ms/fr':>6}")
+    for name, yaw, mode, s, sw, flips, warm, dt in rows:
         print(f"{name:8} {yaw:>4} {mode:9} {s['median']:7.3f} {s['p90']:7.3f} {s['pck05']:7.1%} "
               f"{s['pck10']:7.1%} {s['pck05_seen']:11.1%} {s['hidden']:6.1%} {sw[0]:6.0%} "
-              f"{sw[1]:6.0%} {warm:5.0%} {dt * 1e3:6.1f}")
+              f"{sw[1]:6.0%} {flips:5d} {warm:5.0%} {dt * 1e3:6.1f}")
     print("\nMedian error per joint (fraction of height), all clips, tracked:")
     keys = [k for k in per_joint if k[2] == "tracked"]
     for yaw in sorted({k[1] for k in keys}, reverse=True):
