@@ -51,7 +51,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from pose2d_accuracy import label_flips  # noqa: E402
 
 from vidcap.annotations import Annotations  # noqa: E402
-from vidcap.body import JOINT_INDEX, SEGMENT_NAMES, BodyModel  # noqa: E402
+from vidcap.body import SEGMENT_NAMES, BodyModel  # noqa: E402
 from vidcap.lift import (  # noqa: E402
     estimate_scale,
     estimate_scales,
@@ -224,31 +224,20 @@ def evaluate(truth, body, *, max_events=60, orient_first=False):
     }
 
 
-_PAIR_JOINTS = {part: tuple([JOINT_INDEX[f"{s}_{j}"] for j in names] for s in "lr")
-                for part, names in (("arms", ("shoulder", "elbow", "wrist")),
-                                    ("legs", ("hip", "knee", "ankle")))}
-
-
-def _swap_pairs(joints, arms: bool, legs: bool):
-    """(F, 15, D) joints with the arms' and/or the legs' labels exchanged."""
-    out = joints.copy()
-    for part, on in (("arms", arms), ("legs", legs)):
-        if on:
-            left, right = _PAIR_JOINTS[part]
-            out[:, left + right] = joints[:, right + left]
-    return out
-
-
 def _pairs_swapped_error(res, arms: bool, legs: bool, true3, body) -> float:
     """Mean root-aligned 3D joint error (m) of ``res`` (a pipeline result) lifted again
-    with its 2D arms' and/or legs' labels exchanged: what a user who fixes each pair's
-    sides once for the clip gets (a leg's hip is chosen by its label)."""
+    with a user's ``sides`` event at frame 0 for the arms and/or the legs: what a user
+    who fixes each pair's sides once for the clip gets."""
     from vidcap.pipeline import lift_pose
 
-    j2 = _swap_pairs(res.image_joints2d, arms, legs)
+    ann = Annotations()
+    for pair, on in (("arms", arms), ("legs", legs)):
+        if on:
+            ann.add_sides(0, pair, True)
     size = (res.masks.shape[2], res.masks.shape[1])
-    a = lift_pose(j2, fps=res.fps, body=body, image_sides=True, spread=res.spread,
-                  track=res.track, frame_size=size, model_height=res.model_height).joints3d
+    a = lift_pose(res.image_joints2d, fps=res.fps, body=body, annotations=ann,
+                  image_sides=True, spread=res.spread, track=res.track, frame_size=size,
+                  model_height=res.model_height).joints3d
     return float(np.linalg.norm((a - a[:, :1]) - (true3 - true3[:, :1]), axis=-1).mean())
 
 

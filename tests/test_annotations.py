@@ -19,6 +19,8 @@ def _sample():
     a.add_depth(20, "l_lower_arm", "auto")
     a.add_depth(3, "torso", +1)
     a.add_joint(7, "l_wrist", 12.5, 40.0)
+    a.add_sides(0, "legs", True)
+    a.add_sides(25, "legs", False)
     return a
 
 
@@ -27,7 +29,7 @@ def test_round_trip(tmp_path):
     p = tmp_path / "clip.vidcap.json"
     a.save(p)
     b = Annotations.load(p, n_frames=50)
-    assert a == b and b.n_user_inputs == 7
+    assert a == b and b.n_user_inputs == 9
     assert json.loads(p.read_text())["version"] == 1
 
 
@@ -40,6 +42,9 @@ def test_resolve_carries_forward():
     assert set(signs[3:, SEGMENT_INDEX["torso"]]) == {1}
     assert orient[0] == "right" and orient[29] == "right" and orient[30] == "back_right"
     assert np.isfinite(joints).sum() == 2 and tuple(joints[7, 5]) == (12.5, 40.0)
+    sides = _sample().sides(40)  # (F, 2): arms, legs
+    assert sides.shape == (40, 2) and not sides[:, 0].any()
+    assert sides[:25, 1].all() and not sides[25:, 1].any()
 
 
 def test_depth_event_ends_where_the_segment_next_enters_the_image_plane():
@@ -71,6 +76,10 @@ def test_depth_event_ends_where_the_segment_next_enters_the_image_plane():
          ' "u": 1, "v": 2}]}', "unknown joint 'nose'"),
         ('{"version": 1, "events": [{"frame": 1, "type": "joint", "joint": "neck",'
          ' "u": "a", "v": 2}]}', "'u' and 'v' must be finite numbers"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "sides", "pair": "hands",'
+         ' "value": "swapped"}]}', "unknown limb pair 'hands'"),
+        ('{"version": 1, "events": [{"frame": 1, "type": "sides", "pair": "legs",'
+         ' "value": true}]}', "sides value True is not swapped or as_fitted"),
         ('{"version": 1, "events": [{"frame": 1, "type": "spin"}]}', "'type' must be one of"),
         ('{"version": 1, "events": [{"frame": 1, "type": "orientation"}]}', "lacks ['value']"),
         ('{"version": 1, "events": [{"frame": 1, "type": "orientation", "value": "left",'
@@ -122,6 +131,10 @@ def test_api_rejects_bad_values():
         a.add_orientation(-1, "left")
     with pytest.raises(ValueError):
         a.add_joint(0, "neck", np.nan, 1)
+    with pytest.raises(ValueError, match="limb pair"):
+        a.add_sides(0, "feet", True)
+    with pytest.raises(ValueError, match="True or False"):
+        a.add_sides(0, "legs", "yes")
     a.add_depth(4, "head", 1)
     a.add_depth(4, "head", -1)  # replaces
     assert a.n_user_inputs == 1 and a.remove(4, "depth", "head") and len(a) == 0

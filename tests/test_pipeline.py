@@ -123,3 +123,30 @@ def test_lift_pose_reads_segments_at_the_model_height_of_each_frame():
     assert model_scales(np.full(60, np.nan), 60, body) is None
     with pytest.raises(ValueError, match="model_height"):
         model_scales(heights[:5], 60, body)
+
+
+def test_a_sides_event_swaps_a_limb_pair_from_its_frame_on():
+    # side view: nothing in the image tells the near leg from the far one; a 2D stage
+    # that named them the other way round is put right by one sides event
+    from vidcap.pipeline import swap_pairs
+
+    j2, j3, signs, fps = posed_clip(90.0, 40)
+    ann = Annotations()
+    ann.add_orientation(0, "right")
+    wrong = swap_pairs(j2, np.tile([False, True], (40, 1)))  # legs named the other way
+    good = lift_pose(j2, fps=fps, annotations=ann, image_sides=False)
+    bad = lift_pose(wrong, fps=fps, annotations=ann, image_sides=False)
+    ann.add_sides(0, "legs", True)
+    fixed = lift_pose(wrong, fps=fps, annotations=ann, image_sides=False)
+    np.testing.assert_allclose(fixed.joints2d, good.joints2d)
+    assert _mpjpe(fixed.joints3d, j3) < _mpjpe(good.joints3d, j3) + 1e-9
+    assert _mpjpe(bad.joints3d, j3) > _mpjpe(good.joints3d, j3) + 0.02
+    # from frame 20 on only
+    late = Annotations()
+    late.add_orientation(0, "right")
+    late.add_sides(20, "legs", True)
+    part = lift_pose(wrong, fps=fps, annotations=late, image_sides=False)
+    np.testing.assert_allclose(part.joints2d[:20], wrong[:20])
+    np.testing.assert_allclose(part.joints2d[20:], j2[20:])
+    with pytest.raises(ValueError, match="swapped must be"):
+        swap_pairs(j2, np.zeros((3, 2), bool))

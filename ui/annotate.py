@@ -112,6 +112,7 @@ class AnnotateApp:
         st.playing = False
         st.orientations = list(ORIENTATIONS)
         st.orientation = ""
+        st.sides_swapped = []
         st.segments = []
         st.n_inputs = s.n_user_inputs
         st.load_error = s.load_error or ""
@@ -166,6 +167,7 @@ class AnnotateApp:
             st.segments = info["segments"]
             st.orientation = info["orientation"]
             st.orientation_user = info["orientation_user"]
+            st.sides_swapped = info["sides_swapped"]
             st.fit_score = info["fit_score"]
             st.user_joints = info["user_joints"]
             st.joints_display = np.round(j2, 1).tolist()  # page pixels, for tests and tools
@@ -216,6 +218,10 @@ class AnnotateApp:
             # choosing the proposed label also counts: it confirms it from this frame on
             if label and (label != self.state.orientation or not self.state.orientation_user):
                 self._edit(self.session.set_orientation, int(self.state.frame), label)
+
+        @server.trigger("flip_sides")
+        def flip_sides(pair):
+            self._edit(self.session.flip_sides, int(self.state.frame), pair)
 
         @server.trigger("drag_start")
         def drag_start(x, y):
@@ -420,6 +426,17 @@ class AnnotateApp:
                             update_modelValue="trigger('set_orientation', [$event])")
                         html.Div("{{ orientation_user ? 'set by you' : 'proposed' }}",
                                  classes="text-caption")
+                        # in a side view no silhouette tells the near limb from the far
+                        # one: which leg (arm) is the left is the 2D stage's guess
+                        with html.Div(classes="mt-1 text-no-wrap"):
+                            for pair in ("legs", "arms"):
+                                v3.VBtn(f"swap {pair}", size="x-small", classes="mr-1",
+                                        id=f"swap-{pair}",
+                                        variant=(f"sides_swapped.includes('{pair}') ? 'flat'"
+                                                 " : 'outlined'",),
+                                        title=f"left and right {pair} exchanged from this "
+                                              "frame on (click again to undo)",
+                                        click=f"trigger('flip_sides', ['{pair}'])")
                 with v3.VTable(density="compact", id="segments-table"):
                     with html.Tbody():
                         with html.Tr(v_for="s in segments", key="s.name"):

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vidcap.annotations import PAIRS
 from vidcap.body import (
     JOINT_INDEX,
     JOINT_NAMES,
@@ -238,7 +239,7 @@ class AnnotateSession:
         user_orient = np.asarray(user_orient).astype(str)
         orientation, yaw, j2 = apply_user_view(
             self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
-            image_sides=self.clip.image_sides)
+            image_sides=self.clip.image_sides, user_sides=self.annotations.sides(self.n_frames))
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
         centre = (0.5 * self.clip.size[0], 0.5 * self.clip.size[1])
         joints3d = lift(j2, signs, yaw, body=body, scale=self.scale, principal_point=centre,
@@ -311,6 +312,8 @@ class AnnotateSession:
             "orientation": str(self.orientation[f]),
             "orientation_user": bool(self.user_orient[f] != ""),
             "fit_score": round(float(self.clip.fit_score[f]), 3),
+            "sides_swapped": [p for p, on in zip(PAIRS, self.annotations.sides(f + 1)[f],
+                                                 strict=True) if on],
             "user_joints": [JOINT_NAMES[i] for i in
                             np.flatnonzero(np.isfinite(self.user_joints[f]).all(-1))],
         }
@@ -326,10 +329,10 @@ class AnnotateSession:
         return f
 
     # ------------------------------------------------------------------ edits
-    def _edited(self, t0: float) -> float:
+    def _edited(self, t0: float, *, full: bool = False) -> float:
         with self._lock:
             self._version += 1
-            if self.defer_refresh:
+            if self.defer_refresh and not full:
                 self._quick()
                 self.stale = True
             else:
@@ -363,6 +366,24 @@ class AnnotateSession:
         with self._lock:
             self.annotations.add_orientation(self._check_frame(frame), label)
         return self._edited(t0)
+
+    def set_sides(self, frame: int, pair: str, swapped: bool) -> float:
+        """From ``frame`` on, ``pair`` ('arms' or 'legs') is left-right ``swapped`` or as
+        the 2D stage named it. Returns milliseconds taken.
+
+        Always the full 3D stage: the proposed depth signs belong to the limbs, which
+        the swap renames.
+        """
+        t0 = time.perf_counter()
+        with self._lock:
+            self.annotations.add_sides(self._check_frame(frame), pair, bool(swapped))
+        return self._edited(t0, full=True)
+
+    def flip_sides(self, frame: int, pair: str) -> float:
+        """Swap ``pair`` from ``frame`` on against what is shown now."""
+        current = bool(self.annotations.sides(self.n_frames)[self._check_frame(frame),
+                                                             PAIRS.index(pair)])
+        return self.set_sides(frame, pair, not current)
 
     def set_joint(self, frame: int, joint: str, u: float, v: float) -> float:
         """At ``frame``, ``joint`` is at pixel (u, v). Returns milliseconds taken."""

@@ -13,7 +13,8 @@ File format (JSON, UTF-8)::
         {"frame": 0,  "type": "orientation", "value": "right"},
         {"frame": 12, "type": "depth", "segment": "l_lower_arm", "value": "toward"},
         {"frame": 40, "type": "depth", "segment": "l_lower_arm", "value": "auto"},
-        {"frame": 30, "type": "joint", "joint": "l_wrist", "u": 123.5, "v": 240.0}
+        {"frame": 30, "type": "joint", "joint": "l_wrist", "u": 123.5, "v": 240.0},
+        {"frame": 0,  "type": "sides", "pair": "legs", "value": "swapped"}
       ]
     }
 
@@ -27,6 +28,11 @@ File format (JSON, UTF-8)::
   through the image plane, the only place its direction can change.
 * ``joint``: at ``frame`` only, joint ``joint`` is at pixel ``(u, v)`` (x right,
   y down): the manual fix for occluded joints (section 4.1).
+* ``sides`` (beyond the seed): from ``frame`` on, the ``pair`` (``arms`` or ``legs``)
+  the 3D stage names left and right is ``swapped`` or ``as_fitted``, until the next
+  sides event of that pair. In a side view nothing in a silhouette tells the near
+  leg from the far one, so the 2D stage's choice of which leg is the left one is a
+  guess, kept for the whole track: one event fixes it.
 
 Frames count from 0. Segment and joint names are those of :mod:`vidcap.body`, with
 true (body) sides.
@@ -51,15 +57,20 @@ _KEYS = {
     "orientation": {"frame", "type", "value"},
     "depth": {"frame", "type", "segment", "value"},
     "joint": {"frame", "type", "joint", "u", "v"},
+    "sides": {"frame", "type", "pair", "value"},
 }
+#: The limb pairs a sides event names, in the column order of :meth:`Annotations.sides`.
+PAIRS = ("arms", "legs")
+_SIDES_VALUES = ("as_fitted", "swapped")
 
 
 @dataclass(frozen=True)
 class Event:
     """One annotation event (see the module docstring).
 
-    ``key`` is the segment (depth), joint (joint) or ``""`` (orientation); ``value``
-    is ``+1/-1/0`` (depth), a label (orientation) or ``(u, v)`` pixels (joint).
+    ``key`` is the segment (depth), joint (joint), pair (sides) or ``""``
+    (orientation); ``value`` is ``+1/-1/0`` (depth), a label (orientation), ``(u, v)``
+    pixels (joint) or a bool, swapped (sides).
     """
 
     frame: int
@@ -74,6 +85,9 @@ class Event:
         if self.type == "depth":
             word = {1: "toward", -1: "away", 0: "auto"}[self.value]
             return {"frame": self.frame, "type": "depth", "segment": self.key, "value": word}
+        if self.type == "sides":
+            return {"frame": self.frame, "type": "sides", "pair": self.key,
+                    "value": _SIDES_VALUES[bool(self.value)]}
         u, v = self.value
         return {"frame": self.frame, "type": "joint", "joint": self.key, "u": u, "v": v}
 
@@ -141,6 +155,15 @@ class Annotations:
             raise ValueError("joint position must be finite pixels")
         self._put(Event(self._frame(frame), "joint", joint, (u, v)))
 
+    def add_sides(self, frame: int, pair: str, swapped: bool) -> None:
+        """From ``frame`` on, the 3D stage's left and right ``pair`` (``'arms'`` or
+        ``'legs'``) are ``swapped`` (True) or as the 2D stage named them (False)."""
+        if pair not in PAIRS:
+            raise ValueError(f"unknown limb pair {pair!r}; expected one of {PAIRS}")
+        if not isinstance(swapped, (bool, np.bool_)):
+            raise ValueError(f"swapped must be True or False, got {swapped!r}")
+        self._put(Event(self._frame(frame), "sides", pair, bool(swapped)))
+
     def remove(self, frame: int, type: str, key: str = "") -> bool:
         """Remove the event at ``frame`` of ``type`` for ``key``; return whether one was."""
         return self._events.pop((int(frame), type, key), None) is not None
@@ -199,6 +222,8 @@ class Annotations:
         for e in evs:
             if e.type == "orientation":
                 orient[e.frame:] = e.value
+            elif e.type == "sides":
+                continue  # see sides()
             elif e.type == "joint":
                 joints[e.frame, JOINT_INDEX[e.key]] = e.value
             else:
@@ -213,6 +238,22 @@ class Annotations:
                         stop = e.frame + 1 + int(hits[0])
                 signs[e.frame:stop, k] = e.value
         return signs, orient.astype(str), joints
+
+    def sides(self, n_frames: int) -> np.ndarray:
+        """Which limb pairs the user swapped, per frame.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (F, 2)
+            Columns :data:`PAIRS` (arms, legs): True where the pair's left and right
+            are to be exchanged (each sides event holds until the pair's next one).
+        """
+        F = int(n_frames)
+        out = np.zeros((F, len(PAIRS)), dtype=bool)
+        for e in self.events:  # sorted by frame: later events overwrite
+            if e.type == "sides" and e.frame < F:
+                out[e.frame:, PAIRS.index(e.key)] = e.value
+        return out
 
     # ------------------------------------------------------------------ files
     def to_json(self) -> dict:
@@ -301,6 +342,12 @@ class Annotations:
                 if ev["value"] not in _DEPTH_VALUES:
                     fail(f"{where}: depth value {ev['value']!r} is not toward, away or auto")
                 e = Event(frame, typ, ev["segment"], _DEPTH_VALUES[ev["value"]])
+            elif typ == "sides":
+                if ev["pair"] not in PAIRS:
+                    fail(f"{where}: unknown limb pair {ev['pair']!r} (expected arms or legs)")
+                if ev["value"] not in _SIDES_VALUES:
+                    fail(f"{where}: sides value {ev['value']!r} is not swapped or as_fitted")
+                e = Event(frame, typ, ev["pair"], ev["value"] == "swapped")
             else:
                 if ev["joint"] not in JOINT_INDEX:
                     fail(f"{where}: unknown joint {ev['joint']!r}"

@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
-from vidcap.annotations import Annotations, default_path
-from vidcap.body import JOINT_NAMES, SEGMENT_NAMES, BodyModel
+from vidcap.annotations import PAIRS, Annotations, default_path
+from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_NAMES, BodyModel
 from vidcap.errors import AnnotationError, VidcapError
 from vidcap.fileio import savez_atomic
 from vidcap.lift import (
@@ -130,7 +130,7 @@ def fill_gaps(joints2d) -> np.ndarray:
 
 
 def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,
-                    *, image_sides: bool = True):
+                    *, image_sides: bool = True, user_sides=None):
     """Orientation, yaw and side-named 2D joints once the user's events are applied.
 
     Parameters
@@ -147,6 +147,9 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         The user's joint positions, NaN where none.
     image_sides : bool
         ``joints2d`` names limbs by image side (the 2D fitter's naming).
+    user_sides : array_like of bool, shape (F, 2), optional
+        :meth:`vidcap.annotations.Annotations.sides`: frames where the user swapped
+        the arms' (column 0) or legs' (column 1) left and right.
 
     Returns
     -------
@@ -159,8 +162,38 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
                            proposed_orientation).astype(str)
     yaw = yaw_from_orientation(orientation, spread)
     j2 = assign_sides(joints2d, yaw) if image_sides else joints2d
+    if user_sides is not None:
+        j2 = swap_pairs(j2, user_sides)
     j2 = np.where(np.isfinite(user_joints), user_joints, j2)
     return orientation, yaw, j2
+
+
+def swap_pairs(joints2d, swapped) -> np.ndarray:
+    """Exchange the left and right arms and/or legs where ``swapped`` says so.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, D)
+    swapped : array_like of bool, shape (F, 2)
+        Per frame: swap the arms (column 0), the legs (column 1)
+        (:data:`vidcap.annotations.PAIRS`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, 15, D)
+        A copy.
+    """
+    j = np.array(joints2d, dtype=float)
+    sw = np.asarray(swapped, dtype=bool)
+    if sw.shape != (len(j), len(PAIRS)):
+        raise ValueError(f"swapped must be ({len(j)}, {len(PAIRS)}), got {sw.shape}")
+    for col, pair in enumerate(PAIRS):
+        names = ("shoulder", "elbow", "wrist") if pair == "arms" else ("hip", "knee", "ankle")
+        left = [JOINT_INDEX[f"l_{n}"] for n in names]
+        right = [JOINT_INDEX[f"r_{n}"] for n in names]
+        rows = np.flatnonzero(sw[:, col])
+        j[np.ix_(rows, left + right)] = j[np.ix_(rows, right + left)]
+    return j
 
 
 #: Knot spacing (seconds) of the per-frame scale (:func:`vidcap.lift.estimate_scales`).
@@ -285,7 +318,8 @@ def lift_pose(
                                           window_s=yaw_window_s, turn_window_s=yaw_window_s)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
-                                      image_sides=image_sides)
+                                      image_sides=image_sides,
+                                      user_sides=annotations.sides(F))
     free = propose_signs(j2, yaw, scale=geometry, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \

@@ -69,6 +69,15 @@ def test_triggers_edit_and_save(app, tmp_path):
     assert [(e["frame"], e["type"]) for e in events] == [(4, "orientation"), (5, "depth")]
     _call(app, "set_depth", "tail", 1)  # refused, reported, nothing written
     assert "refused" in st.message and st.n_inputs == 2
+    # the legs' left and right exchanged from this frame on, and back
+    legs = [JOINT_NAMES.index(f"{s}_{j}") for s in "lr" for j in ("hip", "knee", "ankle")]
+    shown = np.array(st.joints_display)
+    _call(app, "flip_sides", "legs")
+    assert st.sides_swapped == ["legs"] and st.n_inputs == 3
+    np.testing.assert_allclose(np.array(st.joints_display)[legs], shown[legs[3:] + legs[:3]])
+    _call(app, "flip_sides", "legs")
+    assert st.sides_swapped == [] and st.n_inputs == 3  # the same event, now as fitted
+    np.testing.assert_allclose(np.array(st.joints_display), shown)
 
 
 def test_keys_and_attention(app):

@@ -205,3 +205,24 @@ def test_quick_relift_agrees_with_the_full_stage_for_user_signs(walk_clip, tmp_p
     k = SEGMENT_INDEX["l_upper_arm"]
     assert lazy.signs[6, k] == -1
     np.testing.assert_allclose(quick[6], lazy.joints3d[6], atol=1e-9)
+
+
+def test_sides_edit_swaps_the_legs_from_that_frame_on(walk_clip, tmp_path):
+    path = tmp_path / "a.json"
+    s = AnnotateSession(walk_clip, path, defer_refresh=True)
+    before = s.joints2d.copy()
+    s.flip_sides(12, "legs")
+    left = [JOINT_INDEX[f"l_{j}"] for j in ("hip", "knee", "ankle")]
+    right = [JOINT_INDEX[f"r_{j}"] for j in ("hip", "knee", "ankle")]
+    np.testing.assert_allclose(s.joints2d[:12], before[:12])
+    np.testing.assert_allclose(s.joints2d[12:, left], before[12:, right])
+    np.testing.assert_allclose(s.joints2d[12:, right], before[12:, left])
+    assert not s.stale  # the full stage ran: the proposals follow the renamed legs
+    assert s.frame_info(12)["sides_swapped"] == ["legs"]
+    assert s.frame_info(11)["sides_swapped"] == []
+    assert _events(path) == [{"frame": 12, "type": "sides", "pair": "legs",
+                              "value": "swapped"}]
+    s.flip_sides(30, "legs")  # and back from frame 30
+    np.testing.assert_allclose(s.joints2d[30:], before[30:])
+    with pytest.raises(ValueError, match="limb pair"):
+        s.set_sides(3, "feet", True)
