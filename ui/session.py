@@ -380,10 +380,19 @@ class AnnotateSession:
         return self._edited(t0, full=True)
 
     def flip_sides(self, frame: int, pair: str) -> float:
-        """Swap ``pair`` from ``frame`` on against what is shown now."""
-        current = bool(self.annotations.sides(self.n_frames)[self._check_frame(frame),
-                                                             PAIRS.index(pair)])
-        return self.set_sides(frame, pair, not current)
+        """Swap ``pair`` from ``frame`` on against what is shown now; flipping back at
+        the same frame removes the event rather than adding an "as fitted" one."""
+        f = self._check_frame(frame)
+        if pair not in PAIRS:
+            raise ValueError(f"unknown limb pair {pair!r}; expected one of {PAIRS}")
+        col = PAIRS.index(pair)
+        t0 = time.perf_counter()
+        with self._lock:
+            want = not bool(self.annotations.sides(f + 1)[f, col])
+            self.annotations.remove(f, "sides", pair)
+            if bool(self.annotations.sides(f + 1)[f, col]) != want:
+                self.annotations.add_sides(f, pair, want)
+        return self._edited(t0, full=True)
 
     def set_joint(self, frame: int, joint: str, u: float, v: float) -> float:
         """At ``frame``, ``joint`` is at pixel (u, v). Returns milliseconds taken."""

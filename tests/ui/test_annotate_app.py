@@ -76,7 +76,7 @@ def test_triggers_edit_and_save(app, tmp_path):
     assert st.sides_swapped == ["legs"] and st.n_inputs == 3
     np.testing.assert_allclose(np.array(st.joints_display)[legs], shown[legs[3:] + legs[:3]])
     _call(app, "flip_sides", "legs")
-    assert st.sides_swapped == [] and st.n_inputs == 3  # the same event, now as fitted
+    assert st.sides_swapped == [] and st.n_inputs == 2  # flipped back: no event left
     np.testing.assert_allclose(np.array(st.joints_display), shown)
 
 

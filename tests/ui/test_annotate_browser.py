@@ -140,6 +140,14 @@ def test_annotate_flip_step_drag(browser, stage_cache, tmp_path):
         _wait_state(page, "window.trame.state.get('user_joints').includes('r_wrist')")
         _screenshot(page, "annotate.png")
 
+        # 4. swap the legs from this frame on, and back
+        page.click("#swap-legs")
+        page.wait_for_selector("#inputs-count:has-text('inputs: 3')")
+        _wait_state(page, "window.trame.state.get('sides_swapped').includes('legs')")
+        page.click("#swap-legs")
+        _wait_state(page, "window.trame.state.get('sides_swapped').length == 0")
+        page.wait_for_selector("#inputs-count:has-text('inputs: 2')")
+
         # the Review tab lists flagged frames; clicking one opens it
         page.click("#tab-review")
         chip = page.locator("#flagged-list .v-chip").first
