@@ -370,3 +370,28 @@ def test_fresh_fit_keeps_a_tracks_limb_names_in_a_side_view():
     _keep_labels(f, ref, tie=0.002)  # ... which is refused: it fits worse
     np.testing.assert_allclose(np.rad2deg(f.angles), front)
     assert f.similarity() == pytest.approx(s0)
+
+
+def test_challenge_comes_reinit_every_frames_after_the_last_fresh_fit(monkeypatch):
+    import vidcap.fit.pose2d as pose2d
+
+    still, _ = _figure([92, 90, 265, 270, 275, 270, 270, 265, 270, 262], spread=0.2)
+    moved, _ = _figure([92, 90, 200, 150, 340, 30, 250, 280, 290, 262], spread=0.2)
+    masks = np.stack([still] * 6 + [moved] + [still] * 23)
+    calls = []
+    real = pose2d.fit_pose
+
+    def spy(mask, **kw):
+        fp = real(mask, **kw)
+        calls.append((bool(kw.get("challenge")), fp.warm))
+        return fp
+
+    monkeypatch.setattr(pose2d, "fit_pose", spy)
+    fit_sequence(masks, reinit_every=10, back_tie=None, body_window=0, spread_window=0)
+    challenged = [k for k, (c, _) in enumerate(calls) if c]
+    fresh = [k for k, (c, w) in enumerate(calls) if not w]
+    # frame 0 starts cold; the jump at frame 6 (and back at 7) is refitted from scratch,
+    # which counts as a challenge: the next ones come 10 frames after the last of those
+    assert 6 in fresh and challenged[0] == 0
+    last = max(k for k in fresh if k < 10)
+    assert challenged[1:] == list(range(last + 10, 30, 10))

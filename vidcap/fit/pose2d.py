@@ -57,8 +57,8 @@ Beyond the seed:
   ratios in lockstep (one batch per iteration for a whole group,
   :meth:`_Fitter.search_group`). Limbs then keep their labels through crossings. A
   warm fit losing more than 3 % of the previous frame's S is redone from scratch
-  and the better kept, and every 10th frame a fresh fit challenges the track (so a
-  wrong but stable track is left). In a side view (spread < 0.3) a fresh fit that
+  and the better kept, and 10 frames after the last fresh fit another one challenges
+  the track (so a wrong but stable track is left). In a side view (spread < 0.3) a fresh fit that
   takes over keeps the track's limb names (:func:`_keep_labels`): its image-side
   names would swap the legs against the frames before after every crossing.
   ``tracked=False`` (``--per-frame``) fits every frame independently, as the seed does.
@@ -1453,8 +1453,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
         spans +-4 steps around the previous angle, then refines by a quarter).
     challenge : bool
         Also fit a warm-started frame from scratch and keep the better fit (how a
-        track escapes a wrong but stable pose; :func:`fit_sequence` does this every
-        ``reinit_every`` frames).
+        track escapes a wrong but stable pose; :func:`fit_sequence` does this
+        ``reinit_every`` frames after the last fresh fit).
     arm_grid : bool
         With ``refine``, search each whole arm over every (upper, lower) angle pair
         in fresh (not warm-started) fits; near-ties go to a hanging arm
@@ -1514,8 +1514,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         Wraps the frame iterator (e.g. :func:`vidcap.fileio.progress`); called as
         ``progress(iterable, total=F)``.
     reinit_every : int
-        In tracked mode every this many frames the frame is also fitted from scratch
-        and the better fit kept (0: never).
+        In tracked mode a frame this many frames after the last one fitted from
+        scratch (a challenge, or a fresh fit that took over a slipping track) is also
+        fitted from scratch and the better fit kept (0: never).
     back_tie : float or None
         Tracked mode: when a fresh fit replaces the track at a frame, the frames
         before it (back to where that track began) are refitted warm from the new
@@ -1555,14 +1556,18 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     height = np.full(n, np.nan)  # the height the model was scaled to, original px
     prev = None
     start = 0  # first frame of the current track
+    last_fresh = -reinit_every  # the last frame fitted from scratch (the first one is)
     for k in it:
         m = np.asarray(masks[k], dtype=bool)
         if not m.any():
             prev = None
             start = k + 1
             continue
-        challenge = bool(reinit_every) and k % reinit_every == 0
+        # a fresh fit that took over (a slipping track) challenged the track as well
+        challenge = bool(reinit_every) and k - last_fresh >= reinit_every
         fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
+        if challenge or not fp.warm:
+            last_fresh = k
         out.put(k, fp)
         height[k] = fp.height_px
         if tracked and prev is not None and not fp.warm and back_tie is not None:
