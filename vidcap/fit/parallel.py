@@ -43,7 +43,6 @@ from vidcap.fit.pose2d import LIMB_PAIRS, Pose2D, fit_sequence
 #: Most worker processes :func:`default_jobs` picks.
 MAX_JOBS = 8
 
-_PAIRS = LIMB_PAIRS
 _PER_SEGMENT = ("angles", "foreshortening", "scores", "margins")
 _PER_FRAME = ("joints2d", "angles", "foreshortening", "scores", "margins", "spread",
               "similarity", "warm", "model_height")
@@ -113,7 +112,7 @@ def reconcile_labels(prev: dict, cur: dict) -> dict:
     """
     out = {}
     a, b = np.asarray(prev["joints2d"], float), np.asarray(cur["joints2d"], float)
-    for name, ((jl, _), (jr, _)) in _PAIRS.items():
+    for name, ((jl, _), (jr, _)) in LIMB_PAIRS.items():
         both = jl + jr
         keep = np.nansum(np.linalg.norm(a[:, both] - b[:, both], axis=-1))
         swap = np.nansum(np.linalg.norm(a[:, both] - b[:, jr + jl], axis=-1))
@@ -127,7 +126,7 @@ def swap_labels(arrays: dict, swaps: dict) -> dict:
     Returns a new dict; ``swaps`` is what :func:`reconcile_labels` returns.
     """
     out = {k: (np.array(v, copy=True) if k in _PER_FRAME else v) for k, v in arrays.items()}
-    for name, ((jl, sl), (jr, sr)) in _PAIRS.items():
+    for name, ((jl, sl), (jr, sr)) in LIMB_PAIRS.items():
         if not swaps.get(name):
             continue
         out["joints2d"][:, jl + jr] = arrays["joints2d"][:, jr + jl]
