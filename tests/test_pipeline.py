@@ -150,3 +150,18 @@ def test_a_sides_event_swaps_a_limb_pair_from_its_frame_on():
     np.testing.assert_allclose(part.joints2d[20:], j2[20:])
     with pytest.raises(ValueError, match="swapped must be"):
         swap_pairs(j2, np.zeros((3, 2), bool))
+
+
+def test_lift_pose_reports_how_much_longer_a_clamped_segment_was():
+    from vidcap.body import BodyModel
+
+    j2, j3, signs, fps = posed_clip(90.0, 10, scale=200.0)
+    k = SEGMENT_INDEX["l_lower_arm"]
+    length = BodyModel().segment_lengths()[k]
+    elbow, wrist = j2[4, JOINT_INDEX["l_elbow"]], j2[4, JOINT_INDEX["l_wrist"]]
+    far = elbow + (wrist - elbow) / np.linalg.norm(wrist - elbow) * 1.5 * length * 200.0
+    ann = Annotations()
+    ann.add_joint(4, "l_wrist", *far)  # the forearm drawn 1.5 times the model's length
+    res = lift_pose(j2, fps=fps, annotations=ann, image_sides=False)
+    assert res.clamped[4, k] and res.excess[4, k] == pytest.approx(0.5, abs=0.05)
+    assert np.all(res.excess[np.arange(10) != 4] < 0.02)

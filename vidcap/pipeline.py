@@ -87,7 +87,8 @@ class LiftResult:
     proposed_orientation, orientation : (F,) str.
     yaw : (F,) rad. scale : px per metre, one number or (F,) (the subject's distance
     changes): where the root is. segment_scale : (F,) px per metre the segments were
-    read at (:func:`model_scales`), or None (``scale``). clamped : (F, 10) bool.
+    read at (:func:`model_scales`), or None (``scale``). clamped : (F, 10) bool;
+    excess : (F, 10) how much longer than the model a clamped segment was (0 elsewhere).
     checks : ranked list of (frame, segment) pairs to check (see
         :meth:`vidcap.proposals.SignProposal.checks`).
     margin, zeta : (F, 10) sign confidence and out-of-plane amount.
@@ -106,6 +107,7 @@ class LiftResult:
     margin: np.ndarray
     zeta: np.ndarray
     segment_scale: np.ndarray | None = None
+    excess: np.ndarray | None = None
 
 
 def fill_gaps(joints2d) -> np.ndarray:
@@ -331,7 +333,7 @@ def lift_pose(
         joints2d=j2, joints3d=out.joints3d, proposed_signs=free.signs, signs=final.signs,
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
         clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
-        segment_scale=seg_scale,
+        segment_scale=seg_scale, excess=out.excess,
     )
 
 
