@@ -1286,7 +1286,7 @@ def _keep_labels(f: _Fitter, reference: np.ndarray, *, tie: float) -> None:
 
     A fresh fit names limbs by image side; a track keeps the names it started with
     through crossings, so where a fresh fit takes over a track (a slipping warm fit,
-    the periodic challenge) its pairs can come out swapped against the frames
+    a challenge) its pairs can come out swapped against the frames
     before, and the 3D stage, which reads one limb as the body's left for the whole
     clip, would put that leg on the other hip from then on. Each pair (arms, legs)
     is swapped when the swapped labelling's joints are closer to ``reference`` (15,
@@ -1553,7 +1553,6 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     n = len(masks)
     out = _Frames(n)
     it = range(n) if progress is None else progress(range(n), total=n)
-    height = np.full(n, np.nan)  # the height the model was scaled to, original px
     prev = None
     start = 0  # first frame of the current track
     last_fresh = -reinit_every  # the last frame fitted from scratch (the first one is)
@@ -1569,7 +1568,6 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
-        height[k] = fp.height_px
         if tracked and prev is not None and not fp.warm and back_tie is not None:
             # A fresh fit replaced the track: the frames before it were probably
             # tracked in a wrong pose too. Carry the new pose backward while it fits
@@ -1592,7 +1590,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         prev = fp
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
-        body = _refit_body_height(masks, body_window, body_tolerance, kw, height, out)
+        # the heights the main pass scaled the model to (the silhouettes', unless given)
+        body = _refit_body_height(masks, body_window, body_tolerance, kw, out.height.copy(),
+                                  out)
     if tracked and spread_window > 1 and kw.get("spread", True) and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, kw, body, out)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
