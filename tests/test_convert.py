@@ -37,6 +37,9 @@ def test_convert_writes_a_bvh_readable_by_us_and_bvhio(converted):
     assert c.FrameCount == info.n_frames
     assert c.FrameTime == pytest.approx(1.0 / info.fps, rel=1e-4)
     assert "frames at 25 fps" in r.stdout
+    # a side view: the output says how to put the legs on the right hips
+    assert "side view in" in r.stdout and '"type": "sides"' in r.stdout
+    assert "walk_side.vidcap.json" in r.stdout
 
 
 def test_converted_figure_is_upright_and_walks_the_right_way(converted):

@@ -43,6 +43,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args) -> int:
     """Run ``vidcap convert``."""
+    import numpy as np
+
+    from vidcap.annotations import default_path
     from vidcap.pipeline import convert
 
     if not (args.height > 0):
@@ -68,6 +71,16 @@ def run(args) -> int:
         if long.any():
             print(f"  {int(long.any(axis=1).sum())} frames had a segment more than "
                   f"{CLAMP_NOTICE:.0%} longer in the image than the model (depth clamped to 0)")
+        side = np.isin(lr.orientation, ("left", "right"))
+        if side.mean() >= 0.5:
+            # no silhouette tells the near leg from the far one: which is the left one is
+            # the 2D stage's guess, and one event fixes a wrong guess
+            print(f"  side view in {int(side.sum())} of {len(side)} frames: which leg (and arm) "
+                  "is the left one is a guess here.\n  If `vidcap review` shows the legs on "
+                  f"the wrong hips, add this event to the \"events\" of "
+                  f"{default_path(args.video).name}\n"
+                  '    {"frame": 0, "type": "sides", "pair": "legs", "value": "swapped"}\n'
+                  '  or use "swap legs" in vidcap annotate.')
         if lr.checks:
             print("  check these depth signs first (frame, segment, proposed):")
             for c in lr.checks[:5]:
