@@ -127,6 +127,12 @@ SEGMENTS: tuple[Segment, ...] = (
 )
 SEGMENT_NAMES: tuple[str, ...] = tuple(s.name for s in SEGMENTS)
 SEGMENT_INDEX = MappingProxyType({s.name: i for i, s in enumerate(SEGMENTS)})
+#: Joints (proximal first) of the left and of the right member of each limb pair.
+LIMB_PAIR_JOINTS = MappingProxyType({
+    pair: tuple([JOINT_INDEX[f"{side}_{j}"] for j in joints] for side in "lr")
+    for pair, joints in (("arms", ("shoulder", "elbow", "wrist")),
+                         ("legs", ("hip", "knee", "ankle")))
+})
 #: (S, 2) joint indices (proximal, distal) of every segment.
 SEGMENT_JOINTS = np.array(
     [(JOINT_INDEX[s.proximal], JOINT_INDEX[s.distal]) for s in SEGMENTS], dtype=np.intp

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d, median_filter
 
 from vidcap.annotations import PAIRS, Annotations, default_path
-from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_NAMES, BodyModel
+from vidcap.body import JOINT_NAMES, LIMB_PAIR_JOINTS, SEGMENT_NAMES, BodyModel
 from vidcap.errors import AnnotationError, VidcapError
 from vidcap.fileio import savez_atomic
 from vidcap.lift import (
@@ -190,9 +190,7 @@ def swap_pairs(joints2d, swapped) -> np.ndarray:
     if sw.shape != (len(j), len(PAIRS)):
         raise ValueError(f"swapped must be ({len(j)}, {len(PAIRS)}), got {sw.shape}")
     for col, pair in enumerate(PAIRS):
-        names = ("shoulder", "elbow", "wrist") if pair == "arms" else ("hip", "knee", "ankle")
-        left = [JOINT_INDEX[f"l_{n}"] for n in names]
-        right = [JOINT_INDEX[f"r_{n}"] for n in names]
+        left, right = LIMB_PAIR_JOINTS[pair]
         rows = np.flatnonzero(sw[:, col])
         j[np.ix_(rows, left + right)] = j[np.ix_(rows, right + left)]
     return j

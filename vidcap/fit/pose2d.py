@@ -97,6 +97,7 @@ from vidcap.body import (
     IMAGE_ANGLE_LIMITS_DEG,
     JOINT_INDEX,
     JOINT_NAMES,
+    LIMB_PAIR_JOINTS,
     SEGMENT_NAMES,
     SEGMENTS,
 )
@@ -348,10 +349,9 @@ _SIDE_SPREAD = 0.3
 _LABEL_TIE = 0.002  # S a fresh fit may lose to keep a track's limb names
 #: (joints, segments) of the image-left and image-right member of each limb pair.
 LIMB_PAIRS = {
-    "arms": tuple(([J[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")],
-                   [S[f"{s}_{p}_arm"] for p in ("upper", "lower")]) for s in "lr"),
-    "legs": tuple(([J[f"{s}_{j}"] for j in ("hip", "knee", "ankle")],
-                   [S[f"{s}_{p}_leg"] for p in ("upper", "lower")]) for s in "lr"),
+    pair: tuple((joints, [S[f"{side}_{p}_{pair[:-1]}"] for p in ("upper", "lower")])
+                for side, joints in zip("lr", LIMB_PAIR_JOINTS[pair], strict=True))
+    for pair in ("arms", "legs")
 }
 _NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
 assert _SEG["torso"] == 0  # search_1d places the shoulders from angle 0's cos/sin
