@@ -133,6 +133,20 @@ def test_sequence_refits_frames_taller_than_the_body():
     np.testing.assert_allclose(seed.model_height, sil, rtol=0.01)
 
 
+def test_fit_pose_of_a_normalised_silhouette_equals_fit_pose_of_the_mask():
+    """fit_sequence refits frames from their normalised silhouettes: the same fit."""
+    from vidcap.fit.raster import normalise_mask
+
+    mask, _ = _figure([92, 88, 250, 275, 290, 265, 265, 275, 275, 265])
+    a = fit_pose(mask, height=60)
+    b = fit_pose(normalise_mask(mask, height=60))
+    np.testing.assert_array_equal(a.joints, b.joints)
+    assert a.similarity == b.similarity
+    warm = fit_pose(normalise_mask(mask, height=60), previous=a)
+    assert warm.warm
+    np.testing.assert_array_equal(warm.joints, fit_pose(mask, previous=a, height=60).joints)
+
+
 def test_crossed_lower_legs_detected_and_swapped():
     # straight legs from spread hips crossing at the knees (seed Figure 3.7): the
     # image-left hip's leg ends at the image-right ankle

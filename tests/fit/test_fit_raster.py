@@ -10,6 +10,7 @@ from vidcap.fit.raster import (
     model_dimensions,
     normalise_mask,
     pose_joints,
+    row_prefix_sums,
     segment_spans,
 )
 
@@ -108,6 +109,20 @@ def test_normalise_round_trip():
     with pytest.raises(ValueError):
         normalise_mask(np.zeros((5, 5), bool))
     assert n.body is None and n.body_height == 60
+
+
+def test_count_tables_equal_prefix_sums_of_the_mask():
+    """The tables a normalised silhouette caches for the fitter: the row prefix sums of
+    [ones, mask] and the silhouette's pixels above each row."""
+    rng = np.random.default_rng(5)
+    mask = np.zeros((200, 150), bool)
+    mask[20:180, 40:110] = rng.random((160, 70)) < 0.6
+    n = normalise_mask(mask, height=70)
+    rows, prefix = n.count_tables
+    np.testing.assert_array_equal(prefix, row_prefix_sums(np.stack([np.ones_like(n.mask),
+                                                                    n.mask])))
+    np.testing.assert_array_equal(rows, np.r_[0, np.cumsum(n.mask.sum(axis=1))])
+    assert n.count_tables[1] is prefix  # computed once
 
 
 def test_normalise_to_a_given_body_height():

@@ -135,7 +135,6 @@ from vidcap.fit.raster import (
     normalise_mask,
     pose_joints_batch,
     pose_scorer,
-    row_prefix_sums,
     shift_overlaps,
     span_counts,
     span_similarity,
@@ -341,6 +340,8 @@ _CHILD = tuple(DESCENDANTS[s][1] if len(DESCENDANTS[s]) > 1 else -1 for s in ran
 # _DESCENDANT_OF[s, d]: segment d moves with segment s (s itself included)
 _DESCENDANT_OF = np.array([[d in DESCENDANTS[s] for d in range(10)] for s in range(10)])
 _FALLBACK = 0.97  # fit_pose's default: a warm fit below this share of the last S slipped
+#: Normalised silhouettes :func:`fit_sequence` keeps for backward re-tracking (frames)
+_NORMS_KEPT = 64
 #: Spread below which shoulders and hips nearly coincide in the image (a side view), so
 #: a fresh fit's image-side limb names mean nothing and a track's are kept
 #: (:func:`_keep_labels`); above it a limb's name says which hip or shoulder it hangs
@@ -403,6 +404,13 @@ def _group_constants(segs: tuple[int, ...]) -> _GroupConstants:
     return _GroupConstants(s, child, 1 if bool((child == s).all()) else 2, limits, arm)
 
 
+def _median(values: np.ndarray) -> float:
+    """``np.median`` of a short 1-D array (the same value, without its set-up cost)."""
+    v = np.sort(values)
+    mid = v.size // 2
+    return float(v[mid] if v.size % 2 else (v[mid - 1] + v[mid]) / 2)
+
+
 class _Fitter:
     """Fitting state for one normalised silhouette (all lengths in normalised px)."""
 
@@ -428,8 +436,7 @@ class _Fitter:
         self.scores = np.zeros(10)
         self.margins = np.zeros(10)
         self.drawn = np.zeros(10, dtype=bool)
-        self.sil_rows = np.concatenate([[0], np.cumsum(np.count_nonzero(self.sil, axis=1))])
-        self._sil_cum = row_prefix_sums(np.stack([np.ones_like(self.sil), self.sil]))
+        self.sil_rows, self._sil_cum = norm.count_tables  # shared by every fit of this mask
         self._sil_cum4 = self._sil_cum[None]  # as one table of the counting kernel
         self._sil_c = _carray(self.sil, np.bool_)  # what the kernels read
         self._L_c = _carray(self.L, np.float64)
@@ -977,7 +984,7 @@ class _Fitter:
         if kernels is not None:  # the same middles, one compiled pass
             mid = np.empty(band.shape[0])
             count = kernels.widest_run_middles(_carray(band, np.bool_), mid)
-            x = (float(np.median(mid[:count])) if count
+            x = (_median(mid[:count]) if count
                  else float(np.median(np.nonzero(self.sil)[1])))
             self.root = np.array([x, pelvis_y])
             return
@@ -1411,9 +1418,9 @@ def fit_normalised(norm: NormalisedMask, *, previous: FramePose | None = None,
     return f, crossed, warm
 
 
-def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int = 80,
-             refine: bool = True, spread: bool = True, verify_crossing: bool = True,
-             caps: bool = False, warm_threshold: float = 0.55,
+def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = None,
+             height: int = 80, refine: bool = True, spread: bool = True,
+             verify_crossing: bool = True, caps: bool = False, warm_threshold: float = 0.55,
              fallback: float = _FALLBACK, warm_step_deg: float = 2.0,
              challenge: bool = False, arm_grid: bool = True,
              spread_value: float | None = None,
@@ -1422,8 +1429,10 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
 
     Parameters
     ----------
-    mask : numpy.ndarray, shape (H, W), bool
-        The silhouette in the original frame.
+    mask : numpy.ndarray, shape (H, W), bool, or NormalisedMask
+        The silhouette in the original frame, or already normalised by
+        :func:`vidcap.fit.raster.normalise_mask` (then ``height`` and ``body_height``
+        are not used: a sequence fit reuses a frame's for its refits).
     previous : FramePose, optional
         The previous frame's pose. If it still covers this silhouette with
         similarity >= ``warm_threshold``, every search starts from it with narrow
@@ -1469,7 +1478,8 @@ def fit_pose(mask: np.ndarray, *, previous: FramePose | None = None, height: int
     ValueError
         If ``mask`` is empty.
     """
-    norm = normalise_mask(mask, height=height, body_height=body_height)
+    norm = (mask if isinstance(mask, NormalisedMask)
+            else normalise_mask(mask, height=height, body_height=body_height))
     kw = dict(refine=refine, spread=spread, verify_crossing=verify_crossing, caps=caps,
               warm_step_deg=warm_step_deg, arm_grid=arm_grid, spread_value=spread_value)
     f, crossed, warm = fit_normalised(norm, previous=previous, warm_threshold=warm_threshold,
@@ -1556,6 +1566,20 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     prev = None
     start = 0  # first frame of the current track
     last_fresh = -reinit_every  # the last frame fitted from scratch (the first one is)
+    # frames' normalised silhouettes, reused by backward re-tracking (bounded memory)
+    norms: dict[int, NormalisedMask] = {}
+    size = dict(height=kw.get("height", 80), body_height=kw.get("body_height"))
+    fit_kw = {key: v for key, v in kw.items() if key not in size}
+
+    def normalised(k: int) -> NormalisedMask:
+        norm = norms.get(k)
+        if norm is None:
+            norm = normalise_mask(np.asarray(masks[k], dtype=bool), **size)
+            if len(norms) >= _NORMS_KEPT:
+                del norms[min(norms)]
+            norms[k] = norm
+        return norm
+
     for k in it:
         m = np.asarray(masks[k], dtype=bool)
         if not m.any():
@@ -1564,7 +1588,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
             continue
         # a fresh fit that took over (a slipping track) challenged the track as well
         challenge = bool(reinit_every) and k - last_fresh >= reinit_every
-        fp = fit_pose(m, previous=prev if tracked else None, challenge=challenge, **kw)
+        fp = fit_pose(normalised(k), previous=prev if tracked else None, challenge=challenge,
+                      **fit_kw)
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
@@ -1575,14 +1600,14 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
             back = fp
             fallback = kw.get("fallback", _FALLBACK)
             for b in range(k - 1, start - 1, -1):
-                mb = np.asarray(masks[b], dtype=bool)
-                fb = fit_pose(mb, previous=back, **{**kw, "fallback": 0.0})
+                nb = normalised(b)
+                fb = fit_pose(nb, previous=back, **{**fit_kw, "fallback": 0.0})
                 if not fb.warm or fb.similarity <= out.sim[b] + back_tie:
                     break
                 # fit_pose's fallback, only where its outcome matters: a fresh fit
                 # that beats the slipping warm one ends the backward track
                 if (fb.similarity < fallback * back.similarity
-                        and fit_pose(mb, **kw).similarity > fb.similarity):
+                        and fit_pose(nb, **fit_kw).similarity > fb.similarity):
                     break
                 out.put(b, fb)
                 back = fb

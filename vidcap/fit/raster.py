@@ -118,6 +118,29 @@ class NormalisedMask:
         to: ``body`` if given, else the silhouette's height (an upright body)."""
         return self.height if self.body is None else float(self.body)
 
+    @functools.cached_property
+    def count_tables(self) -> tuple[np.ndarray, np.ndarray]:
+        """What the fitter counts pixels from, computed once per silhouette.
+
+        Returns
+        -------
+        row_totals : numpy.ndarray, shape (h + 1,), int64
+            Silhouette pixels in rows ``[0, y)``.
+        prefix : numpy.ndarray, shape (2, h, w + 1), int32
+            :func:`row_prefix_sums` of ``[ones, mask]``: channel 0 counts pixels,
+            channel 1 silhouette pixels. Shared: not to be written to (left
+            writeable because the compiled kernels are specialised for writeable
+            arrays).
+        """
+        h, w = self.mask.shape
+        prefix = np.empty((2, h, w + 1), np.int32)
+        prefix[0] = np.arange(w + 1, dtype=np.int32)  # the prefix sums of a row of ones
+        prefix[1, :, 0] = 0
+        np.cumsum(self.mask, axis=1, dtype=np.int32, out=prefix[1, :, 1:])
+        row_totals = np.zeros(h + 1, np.int64)
+        np.cumsum(prefix[1, :, -1], out=row_totals[1:])
+        return row_totals, prefix
+
     def to_original(self, points: np.ndarray) -> np.ndarray:
         """Map normalised ``(..., 2)`` points ``(x, y)`` to original-frame pixels."""
         return np.asarray(points, dtype=float) / self.scale_xy + self.offset
@@ -186,7 +209,10 @@ def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25,
 def direction(angles: np.ndarray) -> np.ndarray:
     """Unit pixel-space direction ``(x, y)`` of image-plane angles (y up), shape (..., 2)."""
     a = np.asarray(angles, dtype=float)
-    return np.stack([np.cos(a), -np.sin(a)], axis=-1)
+    out = np.empty((*a.shape, 2))  # filled in place: np.stack's set-up dominated here
+    np.cos(a, out=out[..., 0])
+    np.negative(np.sin(a, out=out[..., 1]), out=out[..., 1])
+    return out
 
 
 def image_angle(vectors: np.ndarray) -> np.ndarray:
