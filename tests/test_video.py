@@ -10,7 +10,15 @@ import numpy as np
 import pytest
 
 from vidcap.errors import VideoError
-from vidcap.video import VideoWriter, iter_chunks, probe, read_frames, write_video
+from vidcap.video import (
+    VideoWriter,
+    iter_chunks,
+    iter_frame_lists,
+    iter_frames,
+    probe,
+    read_frames,
+    write_video,
+)
 
 
 def _frames(n=12, h=48, w=64, seed=0):
@@ -47,6 +55,19 @@ def test_chunks_cover_every_frame_in_order(tmp_path):
     chunks = list(iter_chunks(out, chunk_size=4))
     assert [len(c) for c in chunks] == [4, 4, 2]
     np.testing.assert_array_equal(np.concatenate(chunks), read_frames(out))
+    lists = list(iter_frame_lists(out, chunk_size=4))
+    assert [len(c) for c in lists] == [4, 4, 2]
+    np.testing.assert_array_equal(np.stack(sum(lists, [])), read_frames(out))
+
+
+def test_only_the_chosen_frames_are_returned(tmp_path):
+    frames = _frames(n=10)
+    out = tmp_path / "o.mp4"
+    write_video(out, frames, fps=10)
+    every = read_frames(out)
+    got = list(iter_frames(out, only={7, 2, 5}))
+    np.testing.assert_array_equal(np.stack(got), every[[2, 5, 7]])
+    assert len(list(iter_frames(out, start=3, only={1, 2, 4}))) == 1  # both apply
 
 
 def test_failed_write_leaves_no_file(tmp_path):

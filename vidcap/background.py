@@ -167,7 +167,6 @@ def load_plate(path: str | os.PathLike) -> BackgroundModel:
 # --------------------------------------------------------------------------- sampling
 def sample_frames(
     source, *, n_samples: int = 32, rng: np.random.Generator | None = None,
-    chunk_size: int = 64,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Pick ``n_samples`` frames spread evenly over a video.
 
@@ -179,8 +178,6 @@ def sample_frames(
         How many frames at most.
     rng : numpy.random.Generator, optional
         Jitters the sample positions inside their stride; ``None`` = evenly spaced.
-    chunk_size : int
-        Frames decoded at a time (a file is never held in memory whole).
 
     Returns
     -------
@@ -191,7 +188,7 @@ def sample_frames(
         n = len(source)
         idx = _sample_indices(n, n_samples, rng)
         return np.ascontiguousarray(source[idx]), idx
-    from vidcap.video import iter_chunks, iter_frames, probe
+    from vidcap.video import iter_frames, probe
 
     info = probe(source)
     idx = _sample_indices(info.n_frames, n_samples, rng)
@@ -206,14 +203,12 @@ def sample_frames(
             got_idx.append(int(idx[j]))
         start = got_idx[-1] + 1 if got_idx else 0
     else:
-        wanted = set(idx.tolist())
-        for chunk in iter_chunks(source, chunk_size=chunk_size):
-            for j in range(len(chunk)):
-                if start + j in wanted:
-                    got.append(chunk[j].copy())
-                    got_idx.append(start + j)
-            start += len(chunk)
-    if start < info.n_frames and len(got) < min(n_samples, start):
+        wanted = idx.tolist()
+        for j, frame in enumerate(iter_frames(source, stop=wanted[-1] + 1, only=set(wanted))):
+            got.append(frame)
+            got_idx.append(wanted[j])
+        start = got_idx[-1] + 1 if got_idx else 0
+    if 0 < len(got) < len(idx):
         # The container over-stated its frame count: resample what exists.
         return sample_frames(source_frames_cache(source, start), n_samples=n_samples, rng=rng)
     if not got:

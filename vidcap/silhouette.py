@@ -362,8 +362,9 @@ def iter_silhouettes(
 
     Yields
     ------
-    frames : numpy.ndarray, shape (n, H, W, 3), uint8
-        The chunk's frames.
+    frames : sequence of numpy.ndarray, each (H, W, 3), uint8
+        The chunk's frames (a list for a video file: stacking them would copy every
+        frame once more for nothing).
     results : list of FrameSilhouette
     gains : numpy.ndarray, shape (n, 3)
     """
@@ -372,19 +373,21 @@ def iter_silhouettes(
             source = source[None]
         chunks = (source[i:i + chunk_size] for i in range(0, len(source), chunk_size))
     else:
-        from vidcap.video import iter_chunks
+        from vidcap.video import iter_frame_lists
 
-        chunks = iter_chunks(source, chunk_size=chunk_size)
+        chunks = iter_frame_lists(source, chunk_size=chunk_size)
     params = None
     for chunk in chunks:
-        if chunk.shape[1:3] != background.plate.shape[:2]:
+        h, w = chunk[0].shape[:2]
+        if (h, w) != background.plate.shape[:2]:
             raise VidcapError(
                 f"the background is {background.plate.shape[1]}x{background.plate.shape[0]} "
-                f"but the video is {chunk.shape[2]}x{chunk.shape[1]} pixels",
+                f"but the video is {w}x{h} pixels",
                 None if isinstance(source, np.ndarray) else source)
         if params is None:
-            params = _params_for(background, chunk, threshold, local_factor, shadows,
-                                 min_area, other_fraction, close_size, work_scale,
+            # (the noise is measured on the first 8 frames)
+            params = _params_for(background, np.asarray(chunk[:8]), threshold, local_factor,
+                                 shadows, min_area, other_fraction, close_size, work_scale,
                                  edge_band, edge_fraction)
         out = [silhouette_frame(frame, params) for frame in chunk]
         yield chunk, [r for r, _ in out], np.array([g for _, g in out])

@@ -135,7 +135,8 @@ def probe(path: str | os.PathLike, *, count: bool = False) -> VideoInfo:
 
 
 def iter_frames(
-    path: str | os.PathLike, *, start: int = 0, stop: int | None = None, step: int = 1
+    path: str | os.PathLike, *, start: int = 0, stop: int | None = None, step: int = 1,
+    only=None,
 ) -> Iterator[np.ndarray]:
     """Decode frames one at a time.
 
@@ -145,6 +146,10 @@ def iter_frames(
         The video.
     start, stop, step : int
         Which frames (0-based, ``stop`` exclusive), as in ``range``.
+    only : collection of int, optional
+        Of those, only these frame indices (the others are decoded, as they must
+        be, but not converted to arrays: the colour conversion is most of a frame's
+        cost).
 
     Yields
     ------
@@ -169,7 +174,7 @@ def iter_frames(
         for i, frame in enumerate(container.decode(stream)):
             if stop is not None and i >= stop:
                 break
-            if i < start or (i - start) % step:
+            if i < start or (i - start) % step or (only is not None and i not in only):
                 continue
             n += 1
             yield frame.to_ndarray(format="bgr24")
@@ -182,6 +187,21 @@ def iter_frames(
         raise VideoError("no decodable video frames", path)
 
 
+def iter_frame_lists(
+    path: str | os.PathLike, *, chunk_size: int = 64, start: int = 0, stop: int | None = None
+) -> Iterator[list[np.ndarray]]:
+    """Decode frames in lists of up to ``chunk_size`` consecutive (H, W, 3) uint8 BGR
+    frames, so a long video never sits in memory whole (and no frame is copied)."""
+    buf: list[np.ndarray] = []
+    for frame in iter_frames(path, start=start, stop=stop):
+        buf.append(frame)
+        if len(buf) == chunk_size:
+            yield buf
+            buf = []
+    if buf:
+        yield buf
+
+
 def iter_chunks(
     path: str | os.PathLike, *, chunk_size: int = 64, start: int = 0, stop: int | None = None
 ) -> Iterator[np.ndarray]:
@@ -192,14 +212,8 @@ def iter_chunks(
     numpy.ndarray, shape (n, H, W, 3), uint8
         Up to ``chunk_size`` consecutive BGR frames.
     """
-    buf: list[np.ndarray] = []
-    for frame in iter_frames(path, start=start, stop=stop):
-        buf.append(frame)
-        if len(buf) == chunk_size:
-            yield np.stack(buf)
-            buf = []
-    if buf:
-        yield np.stack(buf)
+    for frames in iter_frame_lists(path, chunk_size=chunk_size, start=start, stop=stop):
+        yield np.stack(frames)
 
 
 def read_frames(
