@@ -34,3 +34,17 @@ def test_batch_shapes_and_extremes():
 def test_shape_mismatch_raises():
     with pytest.raises(ValueError):
         similarity(np.zeros((5, 5), bool), np.zeros((2, 4, 5), bool))
+
+
+def test_scalar_counts_equal_the_array_path_bit_for_bit():
+    """The fitter scores one model at a time with Python ints: the same S as numpy's."""
+    rng = np.random.default_rng(4)
+    a = rng.integers(0, 5000, 2000)
+    m = rng.integers(0, 5000, 2000)
+    i = (rng.random(2000) * np.minimum(a, m)).astype(np.int64)
+    vector = similarity_from_counts(a, m, i)
+    scalar = [similarity_from_counts(int(x), int(y), int(z))
+              for x, y, z in zip(a, m, i, strict=True)]
+    assert all(type(s) is float for s in scalar)
+    np.testing.assert_array_equal(np.array(scalar), vector)
+    assert similarity_from_counts(0, 0, 0) == 1.0

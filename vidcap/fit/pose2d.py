@@ -493,7 +493,7 @@ class _Fitter:
                 kernels.counts(jp0[seg][None], jp1[seg][None], self.R[seg][None], _TABLE_0,
                                self._sil_cum4, 0, self.h, bool(self.caps), d)
                 d = d[0]
-            s = float(similarity_from_counts(int(self.sil_rows[-1]), d[0], d[1]))
+            s = similarity_from_counts(int(self.sil_rows[-1]), int(d[0]), int(d[1]))
             self._similarity = (key, s)
         return self._similarity[1]
 
