@@ -181,10 +181,11 @@ def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25,
     if mask.ndim != 2:
         raise ValueError(f"mask must be (H, W), got shape {mask.shape}")
     rows = np.flatnonzero(mask.any(axis=1))
-    cols = np.flatnonzero(mask.any(axis=0))
     if rows.size == 0:
         raise ValueError("mask is empty")
-    r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+    r0, r1 = rows[0], rows[-1] + 1
+    cols = np.flatnonzero(mask[r0:r1].any(axis=0))  # only the rows with the silhouette
+    c0, c1 = cols[0], cols[-1] + 1
     crop = mask[r0:r1, c0:c1].astype(np.float32)
     if body_height is None:
         n_rows, body = height, None
