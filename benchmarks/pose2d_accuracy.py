@@ -47,16 +47,18 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX, SEGMENTS  # noqa: E402
+from vidcap.body import (  # noqa: E402
+    JOINT_INDEX,
+    JOINT_NAMES,
+    LIMB_PAIR_JOINTS,
+    SEGMENT_INDEX,
+    SEGMENTS,
+)
 from vidcap.fit.parallel import fit_sequence_chunked  # noqa: E402
 
 MOTION_DIR = REPO.parent / "shared" / "data" / "motion"
 
-_PAIRS = [
-    [JOINT_INDEX[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist")] for s in "lr"
-] + [[JOINT_INDEX[f"{s}_{j}"] for j in ("hip", "knee", "ankle")] for s in "lr"]
-ARMS = (_PAIRS[0], _PAIRS[1])
-LEGS = (_PAIRS[2], _PAIRS[3])
+ARMS, LEGS = LIMB_PAIR_JOINTS["arms"], LIMB_PAIR_JOINTS["legs"]  # (left, right) joints
 
 
 def side_agnostic_errors(pred: np.ndarray, truth: np.ndarray):
