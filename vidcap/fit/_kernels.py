@@ -741,16 +741,24 @@ def group_span_tables(p0, p1, radii, caps, segs, child, sil, rows, cum, m_base, 
             span_e[y, k] = e
             for x in range(f, e):
                 cover[y, x] += 1
-    covered = np.zeros(h, np.int64)  # per row: covered pixels, and those on the silhouette
-    covered_sil = np.zeros(h, np.int64)
+    # Per row: prefix sums of the pixels no segment covers, and of those on the
+    # silhouette: every table's row away from its own pair's spans.
+    free = np.zeros((2, h, w + 1), np.int32)
+    all_m = 0
+    all_i = 0
     for y in range(h):
+        c0 = 0
+        c1 = 0
         for x in range(w):
+            on = np.int64(sil[y, x])
             if cover[y, x] > 0:
-                covered[y] += 1
-                if sil[y, x]:
-                    covered_sil[y] += 1
-    all_m = covered.sum()
-    all_i = covered_sil.sum()
+                all_m += 1
+                all_i += on
+            else:
+                c0 += 1
+                c1 += on
+            free[0, y, x + 1] = c0
+            free[1, y, x + 1] = c1
     for n in range(segs.shape[0]):
         s, c = segs[n], child[n]
         pair = np.int64(c != s)
@@ -759,22 +767,37 @@ def group_span_tables(p0, p1, radii, caps, segs, child, sil, rows, cum, m_base, 
         m = all_m
         i = all_i
         for y in range(y0, y1):
-            m -= covered[y]
-            i -= covered_sil[y]
             fs, es = span_f[y, s], span_e[y, s]
             fc, ec = span_f[y, c], span_e[y, c]
-            c0 = 0
-            c1 = 0
-            for x in range(w):  # branch-free: spans are noisy at their edges
+            # the columns the pair covers (own > 0 only there): base n differs from the
+            # free pixels only inside them, and its prefix sums by a constant after them
+            lo = w
+            hi = 0
+            if fs < es:
+                lo, hi = fs, es
+            if pair and fc < ec:
+                lo, hi = min(lo, fc), max(hi, ec)
+            for x in range(w + 1):
+                cum[n, 0, y, x] = free[0, y, x]
+                cum[n, 1, y, x] = free[1, y, x]
+            d0 = 0
+            d1 = 0
+            for x in range(lo, hi):  # branch-free: spans are noisy at their edges
                 own = np.int64(fs <= x < es) + pair * np.int64(fc <= x < ec)
-                inside = np.int64(cover[y, x] > own)
+                cv = cover[y, x]
                 on = np.int64(sil[y, x])
-                m += inside
-                i += inside & on
-                c0 += 1 - inside
-                c1 += (1 - inside) & on
-                cum[n, 0, y, x + 1] = c0
-                cum[n, 1, y, x + 1] = c1
+                # a pixel only the pair covers leaves base n (it was not free before)
+                mine = np.int64(cv > 0) - np.int64(cv > own)
+                m -= mine
+                i -= mine & on
+                d0 += mine
+                d1 += mine & on
+                cum[n, 0, y, x + 1] += d0
+                cum[n, 1, y, x + 1] += d1
+            if d0:
+                for x in range(max(hi, 0) + 1, w + 1):
+                    cum[n, 0, y, x] += d0
+                    cum[n, 1, y, x] += d1
         m_base[n] = m
         i_base[n] = i
 
