@@ -581,12 +581,12 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
     :func:`draw` sets; for rows f0 <= y < f1 (within y0..y1): cum[0, y, x] counts
     pixels of row y left of x not in the model, cum[1, y, x] those also on the
     silhouette (h, w) bool (sil_cum (h, w + 1): its row prefix sums). Returns (model
-    pixels, model pixels on the silhouette) in rows y0 <= y < y1 (outside f0..f1
-    counted from the merged spans, without visiting pixels).
+    pixels, model pixels on the silhouette) in rows y0 <= y < y1, counted from the
+    merged spans; the tables' rows are filled from them too, without visiting pixels
+    of the silhouette.
     """
     n_k = p0.shape[0]
     w = sil.shape[1]
-    cov = np.zeros(w, np.int64)
     m = 0
     i = 0
     setup = np.empty((n_k, 9))
@@ -600,9 +600,6 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
         reach[k, 0], reach[k, 1] = row_range(p0[k:k + 1].reshape(1, 1, 2),
                                              p1[k:k + 1].reshape(1, 1, 2), one, 0, y0, y1)
     for y in range(y0, y1):
-        table = f0 <= y < f1
-        if table:
-            cov[:] = 0
         n = 0
         for k in range(n_k):
             if y < reach[k, 0] or y >= reach[k, 1]:
@@ -610,27 +607,33 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
             f, e = span_cols(setup[k], p1[k, 0], p1[k, 1], float(y), caps, w)
             if e <= f:
                 continue
-            if table:
-                for x in range(f, e):
-                    cov[x] = 1
-                continue
             n = insert_run(first, last, n, f, e)
-        if not table:
-            for r in range(merge_runs(first, last, n)):
-                m += last[r] - first[r]
-                i += sil_cum[y, last[r]] - sil_cum[y, first[r]]
+        n = merge_runs(first, last, n)
+        for r in range(n):
+            m += last[r] - first[r]
+            i += sil_cum[y, last[r]] - sil_cum[y, first[r]]
+        if not f0 <= y < f1:
             continue
-        c0 = 0
-        c1 = 0
-        for x in range(w):  # branch-free
-            on = np.int64(sil[y, x])
-            out = 1 - cov[x]
-            m += cov[x]
-            i += cov[x] & on
-            c0 += out
-            c1 += out & on
-            cum[0, y, x + 1] = c0
-            cum[1, y, x + 1] = c1
+        # the table's row from the model's runs: between them the prefix sums follow
+        # the columns and the silhouette's own, inside them they stay
+        gone = 0  # model pixels left of the column, and those on the silhouette
+        gone_sil = 0
+        col = 0
+        for r in range(n + 1):
+            stop = first[r] if r < n else w
+            for x in range(col, stop + 1):
+                cum[0, y, x] = x - gone
+                cum[1, y, x] = sil_cum[y, x] - gone_sil
+            if r == n:
+                break
+            c0 = stop - gone
+            c1 = sil_cum[y, stop] - gone_sil
+            for x in range(stop + 1, last[r] + 1):
+                cum[0, y, x] = c0
+                cum[1, y, x] = c1
+            gone += last[r] - stop
+            gone_sil += sil_cum[y, last[r]] - sil_cum[y, stop]
+            col = last[r] + 1
     return m, i
 
 
