@@ -957,12 +957,13 @@ class _Fitter:
         sil = self.sil
         r0, r1 = 0, self.h
         if rows is not None:
-            r0, r1 = max(0, int(rows[0])), min(self.h, int(rows[1]))
+            r0 = min(max(0, int(rows[0])), self.h)
+            r1 = max(r0, min(self.h, int(rows[1])))
             sil, model = sil[r0:r1], model[r0:r1]
         sil = sil if axis == 0 else sil.T
         mod = model if axis == 0 else model.T
         i = shift_overlaps(sil, mod, n)  # (2n+1,)
-        n_sil = int(self.sil_rows[max(r1, r0)] - self.sil_rows[r0])  # counted once per mask
+        n_sil = int(self.sil_rows[r1] - self.sil_rows[r0])  # counted once per mask
         scores = similarity_from_counts(n_sil, np.count_nonzero(mod), i)
         shifts = np.arange(-n, n + 1)
         best = np.flatnonzero(scores >= scores.max() - 1e-12)
