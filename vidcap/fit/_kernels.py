@@ -797,8 +797,8 @@ def group_span_tables(p0, p1, radii, caps, segs, child, sil, rows, cum, m_base, 
                 d1 += mine & on
                 cum[n, 0, y, x + 1] += d0
                 cum[n, 1, y, x + 1] += d1
-            if d0:
-                for x in range(max(hi, 0) + 1, w + 1):
+            if d0:  # (then the pair covers columns lo..hi - 1: the tail starts after hi)
+                for x in range(hi + 1, w + 1):
                     cum[n, 0, y, x] += d0
                     cum[n, 1, y, x] += d1
         m_base[n] = m
