@@ -48,6 +48,33 @@ def test_write_then_read_round_trip(tmp_path):
     assert np.abs(back.astype(int) - frames).mean() < 6  # lossy, but close
 
 
+def test_frames_converted_on_one_thread_are_pyav_defaults_pixels(tmp_path):
+    """iter_frames converts on one thread (PyAV >= 17 would use one per CPU): the
+    pixels must be exactly PyAV's default conversion."""
+    out = tmp_path / "c.mp4"
+    write_video(out, _frames(n=6, h=96, w=128), fps=10)
+    with av.open(str(out)) as c:
+        ref = [f.to_ndarray(format="bgr24") for f in c.decode(video=0)]
+    got = list(iter_frames(out))
+    assert len(got) == len(ref) == 6
+    for a, b in zip(got, ref, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_frame_conversion_without_the_threads_argument(monkeypatch):
+    """PyAV < 17 has no ``threads`` argument: the conversion falls back to its default."""
+    import vidcap.video as V
+
+    class OldFrame:
+        def to_ndarray(self, format):  # noqa: A002 - PyAV's name
+            return np.full((2, 3, 3), 7 if format == "bgr24" else 0, np.uint8)
+
+    monkeypatch.setattr(V, "_REFORMAT_THREADS", None)
+    assert (V._to_bgr(OldFrame()) == 7).all()
+    assert V._REFORMAT_THREADS is False
+    assert (V._to_bgr(OldFrame()) == 7).all()
+
+
 def test_chunks_cover_every_frame_in_order(tmp_path):
     frames = _frames(n=10)
     out = tmp_path / "c.mp4"
