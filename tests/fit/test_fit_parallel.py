@@ -36,6 +36,14 @@ def test_chunk_bounds_tile_the_clip_aligned_with_overlap():
     assert 1 <= default_jobs() <= 8
 
 
+def test_chunk_bounds_per_job_splits_further_down_to_min_chunk():
+    b = chunk_bounds(300, 2, per_job=2)
+    assert [x[1] for x in b] == [0, 80, 160, 240] and b[-1][2] == 300
+    # no chunk shorter than min_chunk: 300 frames hold 5 of 60 at most
+    assert len(chunk_bounds(300, 2, per_job=4)) == 5
+    assert chunk_bounds(300, 1, per_job=2) == [(0, 0, 150), (140, 150, 300)]
+
+
 def _arrays(rng, n=6):
     return {"joints2d": rng.normal(size=(n, 15, 2)) * 50,
             **{k: rng.normal(size=(n, 10)) for k in ("angles", "foreshortening", "scores",

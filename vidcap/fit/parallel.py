@@ -58,7 +58,7 @@ def default_jobs() -> int:
 
 
 def chunk_bounds(n_frames: int, jobs: int, *, overlap: int = 10, align: int = 10,
-                 min_chunk: int = 60) -> list[tuple[int, int, int]]:
+                 min_chunk: int = 60, per_job: int = 1) -> list[tuple[int, int, int]]:
     """How :func:`fit_sequence_chunked` splits a clip.
 
     Parameters
@@ -75,6 +75,10 @@ def chunk_bounds(n_frames: int, jobs: int, *, overlap: int = 10, align: int = 10
     min_chunk : int
         Fewest output frames per chunk; a clip shorter than two such chunks is one
         chunk (fitted serially).
+    per_job : int
+        Chunks per worker (at most): more, shorter chunks let a streamed fit
+        (:class:`StreamedFit`) start sooner and leave less to fit after the last
+        frame arrives, at the cost of ``overlap`` frames fitted twice per chunk.
 
     Returns
     -------
@@ -84,7 +88,7 @@ def chunk_bounds(n_frames: int, jobs: int, *, overlap: int = 10, align: int = 10
     """
     jobs = max(1, int(jobs))
     align = max(1, int(align))
-    n_chunks = min(jobs, n_frames // max(1, min_chunk))
+    n_chunks = min(jobs * max(1, int(per_job)), n_frames // max(1, min_chunk))
     if n_chunks < 2:
         return [(0, 0, n_frames)]
     size = int(math.ceil(n_frames / n_chunks / align)) * align
@@ -242,7 +246,7 @@ def _context():
 
 def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True,
                          progress=None, overlap: int = 10, min_chunk: int = 60,
-                         pool: FitPool | None = None, **kw) -> Pose2D:
+                         per_job: int = 1, pool: FitPool | None = None, **kw) -> Pose2D:
     """:func:`vidcap.fit.pose2d.fit_sequence` in chunks on ``jobs`` worker processes.
 
     Parameters
@@ -262,6 +266,8 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         of a serial pass).
     min_chunk : int
         Fewest output frames per chunk.
+    per_job : int
+        Chunks per worker, at most (:func:`chunk_bounds`).
     pool : FitPool, optional
         Workers started beforehand (``jobs`` defaults to its size); default: a pool
         made for this call.
@@ -279,24 +285,24 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     jobs = max(1, int(jobs))
     own = pool is None
     if own:
-        n_chunks = len(_bounds(len(masks), jobs, tracked, overlap, min_chunk, kw))
+        n_chunks = len(_bounds(len(masks), jobs, tracked, overlap, min_chunk, per_job, kw))
         if jobs == 1 or n_chunks < 2:
             return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
         pool = FitPool(min(jobs, n_chunks), warm=False)
     try:
         fit = StreamedFit(pool, len(masks), jobs=jobs, tracked=tracked, overlap=overlap,
-                          min_chunk=min_chunk, **kw)
+                          min_chunk=min_chunk, per_job=per_job, **kw)
         return fit.finish(masks, progress=progress)
     finally:
         if own:
             pool.close()
 
 
-def _bounds(n, jobs, tracked, overlap, min_chunk, kw):
+def _bounds(n, jobs, tracked, overlap, min_chunk, per_job, kw):
     """:func:`chunk_bounds` as :func:`fit_sequence_chunked` calls it."""
     align = int(kw.get("reinit_every", 10)) or 1
     return chunk_bounds(n, jobs, overlap=overlap if tracked else 0, align=align,
-                        min_chunk=min_chunk)
+                        min_chunk=min_chunk, per_job=per_job)
 
 
 class StreamedFit:
@@ -315,16 +321,18 @@ class StreamedFit:
         Frames expected (chunks are planned for it; if the clip turns out to have
         another number, :meth:`finish` plans again and refits what no longer fits
         the plan).
-    jobs, tracked, overlap, min_chunk, **kw
+    jobs, tracked, overlap, min_chunk, per_job, **kw
         As in :func:`fit_sequence_chunked` (``jobs`` default: the pool's size).
     """
 
     def __init__(self, pool: FitPool, n_frames: int, *, jobs: int | None = None,
-                 tracked: bool = True, overlap: int = 10, min_chunk: int = 60, **kw):
+                 tracked: bool = True, overlap: int = 10, min_chunk: int = 60,
+                 per_job: int = 1, **kw):
         self.pool, self.tracked, self.kw = pool, bool(tracked), kw
         self.jobs = max(1, int(pool.jobs if jobs is None else jobs))
-        self.overlap, self.min_chunk = overlap, min_chunk
-        self.bounds = _bounds(int(n_frames), self.jobs, self.tracked, overlap, min_chunk, kw)
+        self.overlap, self.min_chunk, self.per_job = overlap, min_chunk, per_job
+        self.bounds = _bounds(int(n_frames), self.jobs, self.tracked, overlap, min_chunk,
+                              per_job, kw)
         self.futures = {}  # (start, begin, end) -> Future
 
     def _submit(self, chunk, masks) -> None:
@@ -345,7 +353,8 @@ class StreamedFit:
         """Fit what is left of all ``masks`` (F, H, W) and join the chunks."""
         masks = np.asarray(masks, dtype=bool)
         n = len(masks)
-        bounds = _bounds(n, self.jobs, self.tracked, self.overlap, self.min_chunk, self.kw)
+        bounds = _bounds(n, self.jobs, self.tracked, self.overlap, self.min_chunk,
+                         self.per_job, self.kw)
         if len(bounds) < 2:
             return fit_sequence(masks, tracked=self.tracked, progress=progress, **self.kw)
         for chunk in bounds:
