@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,6 +42,11 @@ from vidcap.proposals import propose_orientation, propose_signs
 #: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
 #: (a depth annotation is carried forward until the segment next enters it).
 NEAR_PLANE = 0.15
+
+#: Chunks per fitting process in ``run``: the fit of each chunk starts as soon as its
+#: silhouettes are out, so shorter chunks leave less of the fit to wait for after the
+#: last frame is extracted (each chunk after the first costs ``overlap`` extra frames).
+_CHUNKS_PER_JOB = 2
 
 
 def plane_passages(zeta, *, near: float = NEAR_PLANE, window: int = 5) -> np.ndarray:
@@ -523,12 +529,14 @@ def run(
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     # the 2D fit's worker processes start now and load their compiled kernels while
     # this process extracts the silhouettes (unless the fit is cached or serial)
-    expected = chunk_bounds(info.n_frames or 0, jobs)
+    per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
+    expected = chunk_bounds(info.n_frames or 0, jobs, per_job=per_job)
     pose_path = cache.path("pose2d", _key("pose2d", k_sil, expected))
     pool = (FitPool(min(jobs, len(expected)))
             if len(expected) > 1 and not (pose_path and pose_path.exists()) else None)
     # and each chunk of frames is fitted as soon as its silhouettes are there
-    streamed = StreamedFit(pool, info.n_frames or 0, jobs=jobs) if pool is not None else None
+    streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
+                if pool is not None else None)
     so_far = []
 
     def arrived(_start, chunk_masks):
@@ -561,7 +569,7 @@ def run(
         # 3. 2D pose
         t0 = time.perf_counter()
         # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
-        chunks = chunk_bounds(len(masks), jobs)
+        chunks = chunk_bounds(len(masks), jobs, per_job=per_job)
         k_pose = _key("pose2d", k_sil) if len(chunks) < 2 else _key("pose2d", k_sil, chunks)
         hit = cache.load("pose2d", k_pose)
         if hit is not None and "model_height" not in hit:
@@ -571,9 +579,12 @@ def run(
                 return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
 
             if streamed is not None:
+                # this process only waits for the workers now: meanwhile, load what
+                # the lift needs (a core is free while the last chunk is fitted)
+                _preload_lift()
                 pose = streamed.finish(masks, progress=wrap)
             else:
-                pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap)
+                pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job)
             hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
                    "similarity": pose.similarity, "model_height": pose.model_height}
             cache.save("pose2d", k_pose, **hit)
@@ -605,6 +616,24 @@ def run(
         image_joints2d=hit["joints2d"], spread=hit["spread"], track=track,
         model_height=hit["model_height"],
     )
+
+
+def _preload_lift() -> threading.Thread:
+    """Import ``scipy.optimize`` (for :func:`vidcap.lift.estimate_scales`, ~0.2 s once
+    per process) on a daemon thread; an import error is left to the lift to report.
+
+    Only once this process forks no more workers: a fork must not copy a thread
+    midway through an import.
+    """
+    def load():
+        try:
+            import scipy.optimize  # noqa: F401
+        except Exception:  # noqa: BLE001 - the lift itself reports it
+            pass
+
+    thread = threading.Thread(target=load, name="vidcap-preload", daemon=True)
+    thread.start()
+    return thread
 
 
 def person_track(bbox, masks) -> np.ndarray | None:
