@@ -48,8 +48,8 @@ class ClipData:
     joints2d : numpy.ndarray, shape (F, 15, 2)
         2D joints as the 2D stage gives them, pixels (x right, y down); NaN in frames
         without a person.
-    masks : numpy.ndarray of bool, shape (F, H, W), or None
-        Silhouettes.
+    masks : numpy.ndarray of bool, shape (F, H, W), vidcap.masks.MaskStack, or None
+        Silhouettes (read one frame at a time, ``masks[f]``).
     fit_score : numpy.ndarray, shape (F,)
         Quality of the 2D fit per frame in [0, 1] (the model/silhouette similarity);
         frames below :attr:`AnnotateSession.low_fit` are flagged.

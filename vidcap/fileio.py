@@ -6,6 +6,7 @@ import contextlib
 import os
 import sys
 import tempfile
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -55,10 +56,27 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> None:
 
 
 def savez_atomic(path: str | os.PathLike, **arrays) -> None:
-    """``numpy.savez_compressed`` to ``path`` atomically."""
+    """``numpy.savez_compressed`` to ``path`` atomically.
+
+    A value with a ``frame_shape`` (a :class:`vidcap.masks.MaskStack`) is written as
+    its full (F, H, W) bool array one frame at a time, so it never sits in memory
+    whole; ``numpy.load`` reads it back as an ordinary array.
+    """
+    from numpy.lib import format as npy
+
     with atomic_path(path, suffix=".npz") as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
+        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED,
+                             allowZip64=True) as zf:
+            for name, value in arrays.items():
+                with zf.open(f"{name}.npy", "w", force_zip64=True) as fh:
+                    if hasattr(value, "frame_shape"):
+                        header = {"descr": npy.dtype_to_descr(np.dtype(bool)),
+                                  "fortran_order": False, "shape": tuple(value.shape)}
+                        npy.write_array_header_2_0(fh, header)
+                        for k in range(len(value)):
+                            fh.write(np.ascontiguousarray(value[k], dtype=bool).tobytes())
+                    else:
+                        npy.write_array(fh, np.asanyarray(value), allow_pickle=True)
 
 
 def progress(iterable=None, *, total=None, desc: str = "", unit: str = "it", enabled=None):

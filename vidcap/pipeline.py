@@ -36,6 +36,7 @@ from vidcap.lift import (
     torso_width_ratio,
     yaw_from_orientation,
 )
+from vidcap.masks import MaskStack, frames_with_pixels
 from vidcap.motion import build_motion, keyframes_by_confidence
 from vidcap.proposals import propose_orientation, propose_signs
 
@@ -384,7 +385,7 @@ class ConvertResult:
 
     video: str
     fps: float
-    masks: np.ndarray
+    masks: MaskStack
     bbox: np.ndarray
     scores: np.ndarray
     similarity: np.ndarray
@@ -526,6 +527,8 @@ def run(
     t0 = time.perf_counter()
     k_sil = _key("silhouettes", ident, k_plate)
     hit = cache.load("silhouettes", k_sil)
+    if hit is not None and "mask_boxes" not in hit:
+        hit = None  # written before the masks were stored cropped: extract again
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     # the 2D fit's worker processes start now and load their compiled kernels while
     # this process extracts the silhouettes (unless the fit is cached or serial)
@@ -537,22 +540,23 @@ def run(
     # and each chunk of frames is fitted as soon as its silhouettes are there
     streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
                 if pool is not None else None)
-    so_far = []
+    so_far = []  # [MaskStack of the frames so far]
 
     def arrived(_start, chunk_masks):
-        so_far.extend(chunk_masks)
-        streamed.feed(so_far)
+        if not so_far:
+            so_far.append(MaskStack(chunk_masks.frame_shape))
+        so_far[0].extend(chunk_masks)
+        streamed.feed(so_far[0])
 
     try:
         if hit is None:
             sil = extract_silhouettes(video, plate_model, progress=progress,
                                       on_masks=None if streamed is None else arrived)
             masks, bbox, n_other = sil.masks, sil.bbox, sil.n_other_blobs
-            cache.save("silhouettes", k_sil, packed=np.packbits(masks, axis=-1),
-                       shape=np.array(masks.shape), bbox=bbox, n_other=n_other)
+            cache.save("silhouettes", k_sil, bbox=bbox, n_other=n_other, **masks.to_arrays())
         else:
-            shape = tuple(hit["shape"])
-            masks = np.unpackbits(hit["packed"], axis=-1, count=shape[-1]).astype(bool)
+            masks = MaskStack.from_arrays(hit["mask_shape"], hit["mask_boxes"],
+                                          hit["mask_bits"], hit["mask_sizes"])
             bbox = hit["bbox"]
             n_other = hit["n_other"] if "n_other" in hit else np.zeros(len(masks), np.int64)
         timings["silhouettes"] = time.perf_counter() - t0
@@ -643,7 +647,7 @@ def person_track(bbox, masks) -> np.ndarray | None:
     ----------
     bbox : array_like, shape (F, 4)
         ``x0, y0, x1, y1`` per frame (pixels).
-    masks : numpy.ndarray, shape (F, H, W) bool
+    masks : MaskStack or numpy.ndarray, shape (F, H, W) bool
         Frames with an empty mask count as gaps.
 
     Returns
@@ -654,7 +658,7 @@ def person_track(bbox, masks) -> np.ndarray | None:
     bb = np.asarray(bbox, float)
     if bb.ndim != 2 or bb.shape[1] != 4:
         return None
-    track = np.where(np.asarray(masks).any(axis=(1, 2)), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
+    track = np.where(frames_with_pixels(masks), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
     ok = np.isfinite(track)
     if not ok.any():
         return None

@@ -25,6 +25,7 @@ import numpy as np
 
 from vidcap.background import BackgroundModel, _threshold_from_sigma
 from vidcap.errors import VidcapError
+from vidcap.masks import MaskStack
 
 __all__ = [
     "NoPersonError",
@@ -66,8 +67,10 @@ class Silhouettes:
 
     Attributes
     ----------
-    masks : numpy.ndarray, shape (F, H, W), bool
-        The person's blob, holes filled, at the video's resolution.
+    masks : MaskStack, shape (F, H, W), bool
+        The person's blob, holes filled, at the video's resolution (``masks[k]`` is
+        frame k's (H, W) mask; only each frame's box is stored, see
+        :mod:`vidcap.masks`; ``numpy.asarray(masks)`` gives the full array).
     bbox : numpy.ndarray, shape (F, 4), int
         ``x0, y0, x1, y1`` in pixels, x right, y down, **x1 and y1 exclusive**
         (``mask[y0:y1, x0:x1]`` holds the whole blob); all -1 where no person.
@@ -91,7 +94,7 @@ class Silhouettes:
         Per-channel brightness of each frame relative to the plate.
     """
 
-    masks: np.ndarray
+    masks: MaskStack
     bbox: np.ndarray
     heights: np.ndarray
     areas: np.ndarray
@@ -455,7 +458,7 @@ def extract_silhouettes(
         at 0.98-0.99 (0.88 before, see benchmarks/RESULTS.md).
     on_masks : callable, optional
         Called as ``on_masks(start, masks)`` after each chunk with its frames' masks
-        (a list of (H, W) bool arrays, frames ``start`` on; final: nothing later
+        (a :class:`MaskStack` of frames ``start`` on; final: nothing later
         changes them), so a caller can start on them (the pipeline fits the first
         chunk of frames while the rest are still being extracted).
 
@@ -480,7 +483,8 @@ def extract_silhouettes(
             total = probe(source).n_frames
         except VidcapError:
             total = None
-    masks, bbox, areas, others, fracs, gains_all = [], [], [], [], [], []
+    masks = None  # MaskStack, made with the first frame
+    bbox, areas, others, fracs, gains_all = [], [], [], [], []
     n_other = []
     start = 0
     pbar = bar(total=total, desc="silhouettes", unit="frame", enabled=progress)
@@ -492,7 +496,11 @@ def extract_silhouettes(
                 edge_band=edge_band, edge_fraction=edge_fraction):
             for j, r in enumerate(res):
                 thr = r.threshold
-                masks.append(r.mask)
+                if masks is None:
+                    masks = MaskStack(r.mask.shape)
+                x0, y0, x1, y1 = (int(v) for v in r.bbox)
+                # only the person's box is kept, bit-packed (the frame is not)
+                masks.append(r.mask, None if x0 < 0 else (y0, y1, x0, x1))
                 bbox.append(r.bbox)
                 areas.append(r.area)
                 fracs.append(r.foreground_fraction)
@@ -515,7 +523,7 @@ def extract_silhouettes(
             "no frame differs from the background: nobody to extract (a static scene, "
             "or a background plate that shows the person?)", name)
     return Silhouettes(
-        masks=np.stack(masks),
+        masks=masks,
         bbox=bbox,
         heights=np.where(found, bbox[:, 3] - bbox[:, 1], 0),
         areas=np.array(areas, np.int64),

@@ -65,6 +65,7 @@ def run(args) -> int:
     """Fit the model and write the .npz atomically."""
     from vidcap.fileio import progress
     from vidcap.fit.pose2d import fit_sequence
+    from vidcap.masks import frames_with_pixels
     from vidcap.video import probe
 
     if args.height < 16:
@@ -75,7 +76,7 @@ def run(args) -> int:
         raise InputFileError(
             f"masks are {masks.shape[2]}x{masks.shape[1]} but the video is "
             f"{info.width}x{info.height}", args.masks)
-    if not masks.any():
+    if not frames_with_pixels(masks).any():
         raise InputFileError("no silhouette in any frame", args.masks or args.video)
     pose = fit_sequence(
         masks, tracked=not args.per_frame, height=args.height, refine=not args.no_refine,

@@ -39,6 +39,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from vidcap.fit.pose2d import LIMB_PAIRS, Pose2D, fit_sequence
+from vidcap.masks import MaskStack, mask_frames
 
 #: Most worker processes :func:`default_jobs` picks.
 MAX_JOBS = 8
@@ -223,9 +224,11 @@ class FitPool:
         self.executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _fit_chunk(packed: np.ndarray, width: int, skip: int, tracked: bool, kw: dict) -> dict:
-    """Fit one chunk in a worker; reports each frame from ``skip`` on to the queue."""
-    masks = np.unpackbits(packed, axis=-1, count=width).astype(bool)
+def _fit_chunk(packed, width: int, skip: int, tracked: bool, kw: dict) -> dict:
+    """Fit one chunk in a worker; reports each frame from ``skip`` on to the queue.
+    ``packed``: a :class:`MaskStack`, or (F, H, ceil(W / 8)) packed bits of W columns."""
+    masks = (packed if isinstance(packed, MaskStack)
+             else np.unpackbits(packed, axis=-1, count=width).astype(bool))
 
     def report(it, total):
         for k in it:
@@ -251,7 +254,7 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
 
     Parameters
     ----------
-    masks : numpy.ndarray, shape (F, H, W), bool
+    masks : numpy.ndarray, shape (F, H, W), bool, or MaskStack
         Silhouettes in original-frame pixels.
     jobs : int, optional
         Worker processes (default :func:`default_jobs`). 1, or a clip shorter than
@@ -279,7 +282,7 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     Pose2D
         As from ``fit_sequence``; tracked labels reconciled across chunks.
     """
-    masks = np.asarray(masks, dtype=bool)
+    masks = mask_frames(masks)
     if jobs is None:
         jobs = pool.jobs if pool is not None else default_jobs()
     jobs = max(1, int(jobs))
@@ -337,21 +340,24 @@ class StreamedFit:
 
     def _submit(self, chunk, masks) -> None:
         s, b, e = chunk
-        frames = np.asarray(masks[s:e], dtype=bool)
+        if isinstance(masks, MaskStack):  # already small: sent as it is
+            frames, width = masks[s:e], masks.shape[-1]
+        else:
+            full = np.asarray(masks[s:e], dtype=bool)
+            frames, width = np.packbits(full, axis=-1), full.shape[-1]
         self.futures[chunk] = self.pool.executor.submit(
-            _fit_chunk, np.packbits(frames, axis=-1), frames.shape[-1], b - s, self.tracked,
-            self.kw)
+            _fit_chunk, frames, width, b - s, self.tracked, self.kw)
 
     def feed(self, masks) -> None:
         """Send every planned chunk but the last whose frames are all in ``masks`` (the
-        frames so far, from frame 0: a list or array of (H, W) bool)."""
+        frames so far, from frame 0: a MaskStack, a list or an array of (H, W) bool)."""
         for chunk in self.bounds[:-1]:
             if chunk not in self.futures and chunk[2] <= len(masks):
                 self._submit(chunk, masks)
 
     def finish(self, masks, *, progress=None) -> Pose2D:
         """Fit what is left of all ``masks`` (F, H, W) and join the chunks."""
-        masks = np.asarray(masks, dtype=bool)
+        masks = mask_frames(masks)
         n = len(masks)
         bounds = _bounds(n, self.jobs, self.tracked, self.overlap, self.min_chunk,
                          self.per_job, self.kw)

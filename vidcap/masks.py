@@ -1,0 +1,182 @@
+"""A video's silhouettes kept small: each frame's bounding box, bit-packed.
+
+A full (F, H, W) bool stack costs one byte per pixel and frame: 2 GB a minute of
+1080p at 30 fps. The person covers a small box of the frame, so
+:class:`MaskStack` keeps only that box of each frame, eight pixels to a byte
+(typically 50-100x smaller), and hands out full frames one at a time. It stands in
+for the (F, H, W) array wherever frames are read one by one (``len``, ``stack[k]``,
+slices, ``shape``); ``numpy.asarray(stack)``, numpy operators and the other array
+methods build the whole array, for short clips (tests, benchmarks, scripts).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+
+
+class MaskStack(Sequence):
+    """Silhouettes (F, H, W) bool, stored as each frame's bounding-box crop.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        Frame height and width, pixels.
+    boxes : numpy.ndarray, shape (F, 4), int
+        ``y0, y1, x0, x1`` of each frame's crop (empty, ``y0 == y1``, for a frame
+        without any pixel set).
+    bits : list of numpy.ndarray
+        Each crop, ``numpy.packbits(crop, axis=-1)``, shape (y1 - y0, ceil((x1 - x0) / 8)).
+    """
+
+    dtype = np.dtype(bool)
+    ndim = 3
+
+    def __init__(self, shape, boxes=None, bits=None):
+        self.frame_shape = (int(shape[0]), int(shape[1]))
+        self.boxes = (np.zeros((0, 4), np.int64) if boxes is None
+                      else np.asarray(boxes, np.int64).reshape(-1, 4))
+        self.bits = [] if bits is None else list(bits)
+        if len(self.bits) != len(self.boxes):
+            raise ValueError(f"{len(self.boxes)} boxes but {len(self.bits)} crops")
+
+    # -- building -----------------------------------------------------------------
+    @classmethod
+    def from_masks(cls, masks: Iterable[np.ndarray], shape=None) -> MaskStack:
+        """A stack of full-frame masks, each (H, W) (``shape``: for no masks at all)."""
+        out = None if shape is None else cls(shape)
+        for m in masks:
+            m = np.asarray(m, dtype=bool)
+            if out is None:
+                out = cls(m.shape)
+            out.append(m)
+        if out is None:
+            raise ValueError("no masks and no frame shape")
+        return out
+
+    def append(self, mask: np.ndarray, box=None) -> None:
+        """Add one frame's full (H, W) mask; ``box`` (``y0, y1, x0, x1``), when known,
+        must hold every set pixel (it saves finding it)."""
+        mask = np.asarray(mask, dtype=bool)
+        if mask.shape != self.frame_shape:
+            raise ValueError(f"a {mask.shape} mask in a stack of {self.frame_shape} frames")
+        if box is None:
+            rows = np.flatnonzero(mask.any(axis=1))
+            if rows.size:
+                cols = np.flatnonzero(mask[rows[0]:rows[-1] + 1].any(axis=0))
+                box = (rows[0], rows[-1] + 1, cols[0], cols[-1] + 1)
+            else:
+                box = (0, 0, 0, 0)
+        y0, y1, x0, x1 = (int(v) for v in box)
+        self.boxes = np.vstack([self.boxes, [[y0, y1, x0, x1]]])
+        self.bits.append(np.packbits(mask[y0:y1, x0:x1], axis=-1))
+
+    def extend(self, other: MaskStack) -> None:
+        """Append every frame of another stack of the same frame size."""
+        if other.frame_shape != self.frame_shape:
+            raise ValueError(f"{other.frame_shape} frames added to {self.frame_shape} ones")
+        self.boxes = np.vstack([self.boxes, other.boxes])
+        self.bits.extend(other.bits)
+
+    # -- reading --------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return (len(self.boxes), *self.frame_shape)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the crops (what the full stack would take: ``numpy.prod(shape)``)."""
+        return int(sum(b.nbytes for b in self.bits) + self.boxes.nbytes)
+
+    def __len__(self) -> int:
+        return len(self.boxes)
+
+    def crop(self, k: int) -> tuple[np.ndarray, tuple[int, int]]:
+        """Frame ``k``'s crop (h, w) bool and its top-left corner ``(y0, x0)``."""
+        y0, y1, x0, x1 = (int(v) for v in self.boxes[k])
+        crop = np.unpackbits(self.bits[k], axis=-1, count=x1 - x0).view(bool)
+        return crop.reshape(y1 - y0, x1 - x0), (y0, x0)
+
+    def __getitem__(self, key):
+        if isinstance(key, tuple) and key:  # (frames, rows, columns): only those frames
+            first, rest = key[0], key[1:]
+            if isinstance(first, (int, np.integer)):
+                return self[first][rest]
+            if isinstance(first, slice):
+                return np.asarray(self[first])[(slice(None), *rest)]
+            return np.asarray(self)[key]
+        if isinstance(key, slice):
+            idx = range(len(self))[key]
+            return MaskStack(self.frame_shape, self.boxes[key], [self.bits[i] for i in idx])
+        if isinstance(key, (int, np.integer)):
+            k = int(key)
+            if not -len(self) <= k < len(self):
+                raise IndexError(f"frame {k} of a stack of {len(self)}")
+            k %= len(self)
+            out = np.zeros(self.frame_shape, bool)
+            crop, (y0, x0) = self.crop(k)
+            out[y0:y0 + crop.shape[0], x0:x0 + crop.shape[1]] = crop
+            return out
+        raise TypeError(f"MaskStack indices are frames or slices, not {type(key).__name__}")
+
+    def __getattr__(self, name):
+        # the rest of numpy's array interface (``.sum``, ``.mean``, ``.astype`` ...)
+        # works on the full array, built for the call: fine for short clips only
+        if name.startswith("_") or not hasattr(np.ndarray, name):
+            raise AttributeError(f"'MaskStack' object has no attribute '{name}'")
+        return getattr(np.asarray(self), name)
+
+    def any_per_frame(self) -> np.ndarray:
+        """(F,) bool: which frames have any pixel set."""
+        b = self.boxes
+        return (b[:, 1] > b[:, 0]) & (b[:, 3] > b[:, 2]) & np.array(
+            [bool(x.any()) for x in self.bits], bool)
+
+    def __array__(self, dtype=None, copy=None):
+        out = np.zeros(self.shape, bool)
+        for k in range(len(self)):
+            crop, (y0, x0) = self.crop(k)
+            out[k, y0:y0 + crop.shape[0], x0:x0 + crop.shape[1]] = crop
+        return out if dtype is None else out.astype(dtype, copy=False)
+
+    # -- storing ----------------------------------------------------------------------
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """The stack as three flat arrays (for an ``.npz``): see :meth:`from_arrays`."""
+        sizes = np.array([b.size for b in self.bits], np.int64)
+        flat = (np.concatenate([b.reshape(-1) for b in self.bits]) if self.bits
+                else np.zeros(0, np.uint8))
+        return {"mask_shape": np.array(self.frame_shape, np.int64),
+                "mask_boxes": self.boxes.copy(), "mask_bits": flat, "mask_sizes": sizes}
+
+    @classmethod
+    def from_arrays(cls, mask_shape, mask_boxes, mask_bits, mask_sizes) -> MaskStack:
+        """Inverse of :meth:`to_arrays`."""
+        boxes = np.asarray(mask_boxes, np.int64).reshape(-1, 4)
+        sizes = np.asarray(mask_sizes, np.int64)
+        flat = np.asarray(mask_bits, np.uint8)
+        if len(sizes) != len(boxes) or sizes.sum() != flat.size:
+            raise ValueError("mask arrays do not agree")
+        ends = np.cumsum(sizes)
+        bits = []
+        for (y0, y1, x0, x1), a, b in zip(boxes, ends - sizes, ends, strict=True):
+            bits.append(flat[a:b].reshape(y1 - y0, (x1 - x0 + 7) // 8))
+        return cls(tuple(np.asarray(mask_shape).tolist()), boxes, bits)
+
+
+def mask_frames(masks) -> Sequence:
+    """``masks`` as something read frame by frame: a :class:`MaskStack` stays one, a
+    list of frames stays a list, anything else becomes a bool array (F, H, W)."""
+    if isinstance(masks, (MaskStack, list)):
+        return masks
+    return np.asarray(masks, dtype=bool)
+
+
+def frames_with_pixels(masks) -> np.ndarray:
+    """(F,) bool: which frames of a stack or an (F, H, W) array have any pixel set."""
+    if isinstance(masks, MaskStack):
+        return masks.any_per_frame()
+    return np.asarray(masks, dtype=bool).reshape(len(masks), -1).any(axis=1)
+
+
+__all__ = ["MaskStack", "frames_with_pixels", "mask_frames"]
