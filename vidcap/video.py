@@ -35,9 +35,14 @@ class VideoInfo:
     fps : float
         Average frame rate, frames per second.
     width, height : int
-        Frame size in pixels.
+        Frame size in pixels, as shown (after ``rotation``).
     codec : str
         FFmpeg's name of the video codec.
+    rotation : int
+        Degrees counter-clockwise (0, 90, 180 or 270) by which the container's
+        display matrix turns the stored frames to show them upright (phones store
+        portrait video as landscape frames plus this); :func:`iter_frames` yields
+        them turned.
     """
 
     path: str
@@ -46,6 +51,7 @@ class VideoInfo:
     width: int
     height: int
     codec: str
+    rotation: int = 0
 
     @property
     def duration(self) -> float:
@@ -116,22 +122,42 @@ def probe(path: str | os.PathLike, *, count: bool = False) -> VideoInfo:
         fps = _fps(stream)
         w, h = stream.codec_context.width, stream.codec_context.height
         codec = stream.codec_context.name
+        turns = 0
         if count or n <= 0:
             n = 0
             try:
-                for _ in container.decode(stream):
+                for frame in container.decode(stream):
+                    if n == 0:
+                        turns = _quarter_turns(frame)
                     n += 1
             except av.error.FFmpegError as exc:
                 if n == 0:
                     raise VideoError(f"no decodable frame ({_ffmpeg_reason(exc)})", path)\
                         from None
+        else:
+            try:  # the display matrix comes with the decoded frames
+                turns = next((_quarter_turns(f) for f in container.decode(stream)), 0)
+            except av.error.FFmpegError:
+                turns = 0  # reported by whatever decodes the file next
         if n <= 0:
             raise VideoError("the video stream has no frames", path)
         if not fps > 0:
             fps = 25.0
     finally:
         container.close()
-    return VideoInfo(str(path), n, fps, int(w), int(h), codec)
+    if turns % 2:
+        w, h = h, w
+    return VideoInfo(str(path), n, fps, int(w), int(h), codec, 90 * turns)
+
+
+def _quarter_turns(frame) -> int:
+    """Quarter turns counter-clockwise (0-3) that show a decoded frame upright: its
+    display matrix's rotation, rounded to a multiple of 90 degrees (flips and other
+    angles are left alone; a PyAV without ``VideoFrame.rotation``: 0)."""
+    try:
+        return int(round(float(getattr(frame, "rotation", 0) or 0) / 90.0)) % 4
+    except (TypeError, ValueError, OverflowError):  # a singular matrix (NaN)
+        return 0
 
 
 def iter_frames(
@@ -154,7 +180,8 @@ def iter_frames(
     Yields
     ------
     numpy.ndarray, shape (H, W, 3), uint8
-        BGR frames.
+        BGR frames, upright: turned as the container's display matrix says (a phone's
+        portrait video), so (H, W) is :func:`probe`'s ``(height, width)``.
 
     Raises
     ------
@@ -168,16 +195,20 @@ def iter_frames(
         raise ValueError("start must be >= 0 and step >= 1")
     container = _open(path)
     n = 0
+    turns = None
     try:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
         for i, frame in enumerate(container.decode(stream)):
+            if turns is None:
+                turns = _quarter_turns(frame)
             if stop is not None and i >= stop:
                 break
             if i < start or (i - start) % step or (only is not None and i not in only):
                 continue
             n += 1
-            yield _to_bgr(frame)
+            img = _to_bgr(frame)
+            yield np.ascontiguousarray(np.rot90(img, turns)) if turns else img
     except av.error.FFmpegError as exc:
         raise VideoError(f"decoding failed after {n} frames ({_ffmpeg_reason(exc)})", path)\
             from None
