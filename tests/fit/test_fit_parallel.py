@@ -177,3 +177,24 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
         got = stream.finish(short)
         want_short = parallel.fit_sequence_chunked(short, jobs=2, min_chunk=20)
         np.testing.assert_array_equal(got.joints2d, want_short.joints2d)
+
+
+def test_masks_as_a_stack_of_crops_fit_exactly_as_full_frames(walk_masks):
+    """fit_sequence (and the chunked fit) on a MaskStack normalise each frame from its
+    crop: every result equals the fit of the full (F, H, W) array."""
+    from vidcap.fit.pose2d import fit_sequence
+    from vidcap.fit.raster import normalise_mask
+    from vidcap.masks import MaskStack
+
+    m = walk_masks[:24].copy()
+    m[5] = False  # an empty frame
+    stack = MaskStack.from_masks(m)
+    crop, origin = stack.crop(3)
+    a, b = normalise_mask(m[3]), normalise_mask(crop, origin=origin)
+    np.testing.assert_array_equal(a.mask, b.mask)
+    np.testing.assert_array_equal(a.offset, b.offset)
+    full = fit_sequence(m).arrays()
+    cropped = fit_sequence(stack).arrays()
+    for key, v in full.items():
+        if isinstance(v, np.ndarray) and v.dtype.kind in "fb":
+            np.testing.assert_array_equal(cropped[key], v, err_msg=key)

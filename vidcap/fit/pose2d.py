@@ -141,6 +141,7 @@ from vidcap.fit.raster import (
 )
 from vidcap.fit.search import interval_search, interval_search_many
 from vidcap.fit.similarity import similarity_from_counts
+from vidcap.masks import MaskStack
 
 S = {name: i for i, name in enumerate(SEGMENT_NAMES)}
 J = JOINT_INDEX
@@ -1577,15 +1578,14 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     def normalised(k: int) -> NormalisedMask:
         norm = norms.get(k)
         if norm is None:
-            norm = normalise_mask(np.asarray(masks[k], dtype=bool), **size)
+            norm = _normalise_frame(masks, k, **size)
             if len(norms) >= _NORMS_KEPT:
                 del norms[min(norms)]
             norms[k] = norm
         return norm
 
     for k in it:
-        m = np.asarray(masks[k], dtype=bool)
-        if not m.any():
+        if not _frame_has_pixels(masks, k):
             prev = None
             start = k + 1
             continue
@@ -1700,6 +1700,29 @@ def body_heights(heights: np.ndarray, similarity: np.ndarray, window: int) -> np
     return out
 
 
+def _normalise_frame(masks, k: int, *, height: int = 80,
+                     body_height: float | None = None) -> NormalisedMask:
+    """Frame ``k`` of ``masks`` normalised: a :class:`MaskStack` frame from its crop
+    (the same result as from the full frame, without building it)."""
+    if isinstance(masks, MaskStack):
+        crop, origin = masks.crop(k)
+        return normalise_mask(crop, height=height, body_height=body_height, origin=origin)
+    return normalise_mask(np.asarray(masks[k], dtype=bool), height=height,
+                          body_height=body_height)
+
+
+def _frame_has_pixels(masks, k: int) -> bool:
+    if isinstance(masks, MaskStack):
+        return bool(masks.bits[k].any())
+    return bool(np.asarray(masks[k]).any())
+
+
+def _fit_options(kw: dict) -> dict:
+    """``fit_sequence``'s keywords for :func:`fit_pose` on a normalised mask (the
+    normalisation's own, ``height`` and ``body_height``, are used already)."""
+    return {key: v for key, v in kw.items() if key not in ("height", "body_height")}
+
+
 def _refit_body_height(masks, window, tolerance, kw, height, out: _Frames):
     """Refit frames whose silhouette is not as tall as the body (in place); returns
     the body height (px) each refitted frame was fitted at, NaN elsewhere."""
@@ -1712,8 +1735,9 @@ def _refit_body_height(masks, window, tolerance, kw, height, out: _Frames):
             prev = None
             continue
         if off[k]:
-            fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=prev,
-                          **{**kw, "body_height": float(body[k])})
+            norm = _normalise_frame(masks, k, height=kw.get("height", 80),
+                                    body_height=float(body[k]))
+            fp = fit_pose(norm, previous=prev, **_fit_options(kw))
             if fp.similarity > out.sim[k]:
                 out.put(k, fp)
                 used[k] = body[k]
@@ -1738,8 +1762,8 @@ def _smooth_spread(masks, window, jump, tie, kw, body, out: _Frames):
     for k in np.flatnonzero(ok & (np.abs(spread - med) > jump)):
         own = out.get(k, spread=med[k])
         at = float(body[k]) if np.isfinite(body[k]) else None
-        fp = fit_pose(np.asarray(masks[k], dtype=bool), previous=own,
-                      **{**kw, "spread_value": float(med[k]), "body_height": at})
+        norm = _normalise_frame(masks, k, height=kw.get("height", 80), body_height=at)
+        fp = fit_pose(norm, previous=own, **{**_fit_options(kw), "spread_value": float(med[k])})
         if fp.similarity >= out.sim[k] - tie:
             out.put(k, fp, warm=False)
 

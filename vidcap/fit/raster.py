@@ -151,13 +151,14 @@ class NormalisedMask:
 
 
 def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25,
-                   body_height: float | None = None) -> NormalisedMask:
+                   body_height: float | None = None, origin=(0, 0)) -> NormalisedMask:
     """Crop a silhouette to its bounding box and resize it to a fixed height.
 
     Parameters
     ----------
     mask : numpy.ndarray, shape (H, W), bool
-        The silhouette in the original frame.
+        The silhouette in the original frame (or a part of the frame holding all of
+        it, see ``origin``).
     height : int
         Height of the silhouette's bounding box after resizing, in pixels; with
         ``body_height``, the height the body is resized to instead.
@@ -167,6 +168,10 @@ def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25,
     body_height : float, optional
         The body's standing height in original pixels, when it is known apart from
         this silhouette (a crouch makes the silhouette shorter, raised arms taller).
+    origin : (int, int)
+        Original-frame ``(y, x)`` of ``mask``'s top-left pixel, when ``mask`` is a crop
+        of the frame (:meth:`vidcap.masks.MaskStack.crop`): the result is the same as
+        for the whole frame.
 
     Returns
     -------
@@ -202,6 +207,7 @@ def normalise_mask(mask: np.ndarray, *, height: int = 80, margin: float = 0.25,
     out[pad : pad + n_rows, pad : pad + w] = small
     # Pixel centres: original x_o = c0 + (x_n - pad + 0.5) / s - 0.5.
     sx = w / (c1 - c0)
+    c0, r0 = c0 + int(origin[1]), r0 + int(origin[0])  # from here on, frame pixels
     offset = np.array([c0 - 0.5 - (pad - 0.5) / sx, r0 - 0.5 - (pad - 0.5) / s])
     return NormalisedMask(out, float(s), np.array([sx, s]), offset, pad, pad + n_rows - 1,
                           body)
