@@ -74,3 +74,19 @@ def test_stored_arrays_pickle_extend_and_npz_round_trip(tmp_path):
         np.testing.assert_array_equal(z["masks"], m)
         np.testing.assert_array_equal(z["other"], np.arange(4))
     assert MaskStack.from_masks([], shape=(4, 5)).shape == (0, 4, 5)
+
+
+def test_masks_read_from_an_npz_frame_by_frame(tmp_path):
+    from vidcap.masks import read_npz_masks
+
+    m = _masks(2)
+    np.savez_compressed(tmp_path / "a.npz", masks=m, other=np.arange(3))
+    np.testing.assert_array_equal(np.asarray(read_npz_masks(tmp_path / "a.npz")), m)
+    # 0/1 integers and Fortran order read as the same masks
+    np.savez(tmp_path / "b.npz", masks=np.asfortranarray(m.astype(np.uint8)))
+    np.testing.assert_array_equal(np.asarray(read_npz_masks(tmp_path / "b.npz")), m)
+    with pytest.raises(KeyError):
+        read_npz_masks(tmp_path / "a.npz", key="nope")
+    np.savez(tmp_path / "c.npz", masks=m[0])
+    with pytest.raises(ValueError, match="frames, height, width"):
+        read_npz_masks(tmp_path / "c.npz")

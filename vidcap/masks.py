@@ -164,6 +164,50 @@ class MaskStack(Sequence):
         return cls(tuple(np.asarray(mask_shape).tolist()), boxes, bits)
 
 
+def read_npz_masks(path, key: str = "masks") -> MaskStack:
+    """Read an (F, H, W) array of an ``.npz`` file as a :class:`MaskStack`, one frame
+    at a time (the whole array is never in memory); nonzero is set.
+
+    Raises
+    ------
+    KeyError
+        The file has no array ``key``.
+    ValueError
+        The array is not 3-D, or is not a plain numeric array.
+    OSError, zipfile.BadZipFile
+        The file cannot be read.
+    """
+    import zipfile
+
+    from numpy.lib import format as npy
+
+    with zipfile.ZipFile(path) as zf:
+        name = f"{key}.npy"
+        if name not in zf.namelist():
+            raise KeyError(key)
+        with zf.open(name) as fh:
+            version = npy.read_magic(fh)
+            shape, fortran, dtype = (npy.read_array_header_1_0(fh) if version == (1, 0)
+                                     else npy.read_array_header_2_0(fh))
+            if len(shape) != 3:
+                raise ValueError(f"'{key}' must be (frames, height, width), got {shape}")
+            if dtype.kind not in "biuf" or dtype.hasobject:
+                raise ValueError(f"'{key}' holds {dtype}, not numbers")
+            out = MaskStack(shape[1:])
+            if fortran:  # frames are not contiguous in the file: read it whole
+                with np.load(path, allow_pickle=False) as z:
+                    for frame in z[key]:
+                        out.append(frame != 0)
+                return out
+            size = shape[1] * shape[2]
+            for k in range(shape[0]):
+                buf = fh.read(size * dtype.itemsize)
+                if len(buf) != size * dtype.itemsize:
+                    raise ValueError(f"'{key}' ends after {k} of its {shape[0]} frames")
+                out.append(np.frombuffer(buf, dtype).reshape(shape[1:]) != 0)
+    return out
+
+
 def mask_frames(masks) -> Sequence:
     """``masks`` as something read frame by frame: a :class:`MaskStack` stays one, a
     list of frames stays a list, anything else becomes a bool array (F, H, W)."""
@@ -179,4 +223,4 @@ def frames_with_pixels(masks) -> np.ndarray:
     return np.asarray(masks, dtype=bool).reshape(len(masks), -1).any(axis=1)
 
 
-__all__ = ["MaskStack", "frames_with_pixels", "mask_frames"]
+__all__ = ["MaskStack", "frames_with_pixels", "mask_frames", "read_npz_masks"]

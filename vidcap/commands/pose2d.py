@@ -32,21 +32,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="skip the extra Algorithm 1 pass over the limbs")
 
 
-def load_masks(path) -> np.ndarray:
-    """Read ``masks`` (F, H, W) from an .npz file; raise InputFileError naming it."""
+def load_masks(path):
+    """Read ``masks`` (F, H, W) from an .npz file, frame by frame, as a
+    :class:`vidcap.masks.MaskStack`; raise InputFileError naming the file."""
+    import zipfile
+
+    from vidcap.masks import read_npz_masks
+
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as d:
-            if "masks" not in d:
-                raise InputFileError(f"no 'masks' array (has: {', '.join(d.files)})", path)
-            masks = np.asarray(d["masks"]).astype(bool)
-    except InputFileError:
-        raise
-    except (OSError, ValueError) as exc:
-        raise InputFileError(f"cannot read masks ({exc})", path) from exc
-    if masks.ndim != 3:
-        raise InputFileError(f"'masks' must be (frames, height, width), got {masks.shape}", path)
-    return masks
+        return read_npz_masks(path)
+    except KeyError:
+        try:
+            with np.load(path, allow_pickle=False) as d:
+                names = ", ".join(d.files) or "nothing"
+        except (OSError, ValueError):
+            names = "unreadable"
+        raise InputFileError(f"no 'masks' array (has: {names})", path) from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputFileError(f"cannot read masks ({exc})", path) from None
 
 
 def compute_masks(video) -> np.ndarray:

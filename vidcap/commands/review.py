@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from vidcap.errors import InputFileError, UsageError
+from vidcap.masks import read_npz_masks
 
 NAME = "review"
 HELP = "write a review video: frame | silhouette with the 2D model | 3D pose"
@@ -39,10 +41,12 @@ def _load(path) -> dict:
             if missing:
                 raise InputFileError(f"not a `vidcap convert --save` file (lacks {missing})",
                                      path)
-            return {k: z[k] for k in z.files}
+            out = {k: z[k] for k in z.files if k != "masks"}
+        out["masks"] = read_npz_masks(path)  # frame by frame: a long clip's are big
+        return out
     except InputFileError:
         raise
-    except (OSError, ValueError, EOFError) as exc:
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         raise InputFileError(f"cannot read ({exc})", path) from None
 
 
