@@ -138,7 +138,8 @@ def test_a_pool_started_ahead_gives_the_same_fit(walk_masks):
             got = fit_sequence_chunked(walk_masks, min_chunk=20, pool=pool)
             np.testing.assert_array_equal(got.joints2d, want.joints2d)
             np.testing.assert_array_equal(got.similarity, want.similarity)
-    assert pool.executor._shutdown_thread
+    with pytest.raises(RuntimeError):  # closed
+        pool.executor.submit(int)
 
 
 def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeypatch):
@@ -198,3 +199,32 @@ def test_masks_as_a_stack_of_crops_fit_exactly_as_full_frames(walk_masks):
     for key, v in full.items():
         if isinstance(v, np.ndarray) and v.dtype.kind in "fb":
             np.testing.assert_array_equal(cropped[key], v, err_msg=key)
+
+
+def _failing_chunk(packed, width, skip, tracked, kw):
+    if skip:  # the second chunk
+        raise ValueError("a bad chunk")
+    return _REAL_FIT_CHUNK(packed, width, skip, tracked, kw)
+
+
+def _dying_chunk(packed, width, skip, tracked, kw):
+    import os
+
+    if skip:
+        os._exit(3)  # a worker killed mid-chunk (out of memory, a signal)
+    return _REAL_FIT_CHUNK(packed, width, skip, tracked, kw)
+
+
+def test_a_failing_or_dying_worker_is_an_error_not_a_hang(walk_masks, monkeypatch):
+    import time
+
+    from vidcap.fit import parallel
+
+    monkeypatch.setattr(parallel, "_fit_chunk", _failing_chunk)
+    with pytest.raises(ValueError, match="a bad chunk"):
+        fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
+    monkeypatch.setattr(parallel, "_fit_chunk", _dying_chunk)
+    t0 = time.perf_counter()
+    with pytest.raises(RuntimeError, match="stopped"):
+        fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
+    assert time.perf_counter() - t0 < 60

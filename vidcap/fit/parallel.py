@@ -20,11 +20,14 @@ relabelled (:func:`reconcile_labels`) to whichever labelling agrees better with 
 chunk before it over the overlap frames, so labels follow limbs across the whole
 clip as in one serial pass.
 
-Workers are processes (``concurrent.futures.ProcessPoolExecutor``), forked on Linux;
-masks are sent bit-packed. A :class:`FitPool` starts them ahead of the fit so they
-load the compiled kernels (~0.5-0.8 s of CPU each) while the caller does other
-work. Each worker reports every frame it finishes, so one progress bar advances
-smoothly over the whole clip.
+Workers are processes. Where ``os.fork`` is (Linux, macOS), one process loads the
+compiled kernels (numba's start-up, ~1 s of CPU) and forks the workers, which inherit
+them, so the start-up is paid once instead of once per worker; elsewhere they are a
+``concurrent.futures.ProcessPoolExecutor``'s, each loading its own. Masks are sent as
+:class:`vidcap.masks.MaskStack` crops (or bit-packed). A :class:`FitPool` starts the
+workers ahead of the fit, so they get ready while the caller does other work. Each
+worker reports every frame it finishes, so one progress bar advances smoothly over the
+whole clip.
 """
 
 from __future__ import annotations
@@ -185,13 +188,171 @@ def _ready() -> bool:
     return True
 
 
+# --------------------------------------------------------- workers forked from a warm one
+def _worker_loop(tasks, results) -> None:
+    """Run ``(id, fn, args)`` tasks until a None; each result goes back as
+    ``(id, True, value)`` or ``(id, False, exception)``."""
+    while True:
+        try:
+            item = tasks.get()
+        except EOFError:  # the parent has gone (it held the last writing end)
+            return
+        if item is None:
+            return
+        tid, fn, args = item
+        try:
+            out = (tid, True, fn(*args))
+        except BaseException as exc:  # noqa: BLE001 - reported to the caller's future
+            out = (tid, False, exc)
+        try:
+            results.put(out)
+        except Exception as exc:  # noqa: BLE001 - e.g. an exception that does not pickle
+            results.put((tid, False, RuntimeError(f"a fitting worker's result could not "
+                                                  f"be sent back ({exc!r})")))
+
+
+def _zygote(tasks, results, progress, jobs: int, warm: bool) -> None:
+    """Load the kernels once, then fork the ``jobs`` workers (they inherit them) and
+    wait for them, telling the parent when one stops abnormally."""
+    import signal
+
+    # Ctrl-C is the parent's to handle: it stops the workers as it closes the pool
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _init_worker(progress, warm)
+    # only the parent writes tasks: when it goes, the workers' reads end (EOF)
+    tasks._writer.close()
+    pids = []
+    for _ in range(jobs):
+        pid = os.fork()
+        if pid == 0:  # a worker
+            code = 1
+            try:
+                results._reader.close()
+                _worker_loop(tasks, results)
+                code = 0
+            finally:
+                os._exit(code)
+        pids.append(pid)
+    tasks._reader.close()
+    results._reader.close()
+    try:
+        # nothing was written to ``results`` before the forks (no queue thread copied)
+        results.put(("pids", pids))
+        for _ in pids:
+            pid, status = os.wait()
+            if status:
+                results.put(("died", pid, status))
+        results.put(("exit",))
+    except (BrokenPipeError, EOFError):  # the parent has gone: nobody to tell
+        pass
+
+
+class _ForkedPool:
+    """The part of ``ProcessPoolExecutor`` :class:`StreamedFit` uses (``submit``,
+    ``shutdown``), with the workers forked from one process that has loaded the
+    compiled kernels, so numba's start-up (~1 s of CPU) is paid once, not per worker.
+    Needs ``os.fork``."""
+
+    def __init__(self, jobs: int, progress, ctx, *, warm: bool = True):
+        import itertools
+        import threading
+
+        self.jobs = jobs
+        self._tasks, self._results = ctx.SimpleQueue(), ctx.SimpleQueue()
+        self._proc = ctx.Process(target=_zygote, name="vidcap-fit",
+                                 args=(self._tasks, self._results, progress, jobs, warm),
+                                 daemon=True)
+        self._proc.start()
+        self._futures: dict = {}
+        self._ids = itertools.count()
+        self._lock = threading.Lock()
+        self._pids: list[int] = []
+        self._closed = False
+        self._collector = threading.Thread(target=self._collect, name="vidcap-fit-results",
+                                           daemon=True)
+        self._collector.start()
+
+    def submit(self, fn, *args):
+        from concurrent.futures import Future
+
+        if self._closed:
+            raise RuntimeError("the fitting pool is closed")
+        fut = Future()
+        fut.set_running_or_notify_cancel()
+        tid = next(self._ids)
+        with self._lock:
+            self._futures[tid] = fut
+        self._tasks.put((tid, fn, args))
+        return fut
+
+    def _fail_all(self, exc: BaseException) -> None:
+        with self._lock:
+            pending, self._futures = self._futures, {}
+        for fut in pending.values():
+            if not fut.done():
+                fut.set_exception(exc)
+
+    def _collect(self) -> None:
+        while True:
+            try:
+                msg = self._results.get()
+            except (EOFError, OSError):
+                msg = ("exit",)
+            if msg[0] == "pids":
+                self._pids = list(msg[1])
+            elif msg[0] == "died":
+                self._fail_all(RuntimeError(
+                    f"a fitting worker stopped abnormally (process {msg[1]}, wait status "
+                    f"{msg[2]})"))
+            elif msg[0] == "exit":
+                self._fail_all(RuntimeError("the fitting workers have stopped"))
+                return
+            else:
+                tid, ok, value = msg
+                with self._lock:
+                    fut = self._futures.pop(tid, None)
+                if fut is not None:
+                    (fut.set_result if ok else fut.set_exception)(value)
+
+    def check(self) -> None:
+        """Fail the pending futures if the workers' parent process has gone."""
+        if not self._proc.is_alive():
+            self._fail_all(RuntimeError(f"the fitting workers have stopped (exit code "
+                                        f"{self._proc.exitcode})"))
+
+    def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
+        import signal
+
+        if not self._closed:
+            self._closed = True
+            with self._lock:
+                busy = any(not f.done() for f in self._futures.values())
+            if cancel_futures and busy:  # nobody will read these: stop the workers now
+                if not self._pids:  # not forked yet
+                    self._proc.terminate()
+                for pid in self._pids:
+                    try:
+                        os.kill(pid, signal.SIGTERM)
+                    except OSError:
+                        pass
+            if self._proc.is_alive():
+                for _ in range(self.jobs):
+                    self._tasks.put(None)
+        if wait:
+            self._proc.join()
+            self._collector.join(timeout=5.0)
+
+
 class FitPool:
     """Worker processes for :func:`fit_sequence_chunked`, started ahead of the fit.
 
     The workers start (and load the compiled kernels, :func:`warm_up`) as soon as the
     pool is created, so a caller can create it, do other work (the pipeline extracts
     silhouettes) and then fit without waiting for the workers to get ready. Use as a
-    context manager; pass it as ``pool=`` to :func:`fit_sequence_chunked`.
+    context manager; pass it as ``pool=`` to :func:`fit_sequence_chunked`. Where
+    ``os.fork`` is, the kernels are loaded once and the workers forked from that
+    process (see the module docstring); a worker that dies fails the fit with an error
+    rather than leaving it waiting, and the workers end when the caller's process does.
 
     Parameters
     ----------
@@ -206,6 +367,10 @@ class FitPool:
         self.jobs = max(1, int(jobs))
         ctx = _context()
         self.queue = ctx.Queue()
+        if ctx.get_start_method() == "fork" and hasattr(os, "fork"):
+            # one process loads the kernels and forks the workers, which inherit them
+            self.executor = _ForkedPool(self.jobs, self.queue, ctx, warm=warm)
+            return
         self.executor = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx,
                                             initializer=_init_worker,
                                             initargs=(self.queue, warm))
@@ -377,6 +542,9 @@ class StreamedFit:
                 except queue_mod.Empty:
                     if all(f.done() for f in futures):
                         break
+                    check = getattr(self.pool.executor, "check", None)
+                    if check is not None:  # dead workers take their chunks with them
+                        check()
                     continue
                 yield done - 1
             yield from range(done, n)  # reports still in flight when the last chunk ended
