@@ -503,52 +503,55 @@ def run(
         annotations = Annotations.load(annotations)  # frames are checked once decoded
     ann = annotations or Annotations()
 
-    # 1. background plate
+    # a given plate is read first: a bad file is reported before any worker starts
     t0 = time.perf_counter()
+    plate_model = load_plate(background) if background is not None else None
+    t_plate = time.perf_counter() - t0
     ident = _video_identity(video)
-    if background is not None:
-        plate_model = load_plate(background)
-        k_plate = _key("plate-file", _video_identity(Path(background)))
-    else:
-        k_plate = _key("plate", ident)
-        hit = cache.load("plate", k_plate)
-        if hit is None:
-            log("estimating the background plate")
-            plate_model = estimate_background(video, rng=np.random.default_rng(0),
-                                              progress=progress)
-            cache.save("plate", k_plate, plate=plate_model.plate)
-        else:
-            from vidcap.background import BackgroundModel
-
-            plate_model = BackgroundModel.from_plate(hit["plate"])
-    timings["plate"] = time.perf_counter() - t0
-
-    # 2. silhouettes
-    t0 = time.perf_counter()
+    k_plate = (_key("plate-file", _video_identity(Path(background))) if background is not None
+               else _key("plate", ident))
     k_sil = _key("silhouettes", ident, k_plate)
-    hit = cache.load("silhouettes", k_sil)
-    if hit is not None and "mask_boxes" not in hit:
-        hit = None  # written before the masks were stored cropped: extract again
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
-    # the 2D fit's worker processes start now and load their compiled kernels while
-    # this process extracts the silhouettes (unless the fit is cached or serial)
+    # the 2D fit's worker processes start first and load their compiled kernels while
+    # this process estimates the plate and extracts the silhouettes (unless the fit is
+    # cached or serial)
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
     expected = chunk_bounds(info.n_frames or 0, jobs, per_job=per_job)
     pose_path = cache.path("pose2d", _key("pose2d", k_sil, expected))
     pool = (FitPool(min(jobs, len(expected)))
             if len(expected) > 1 and not (pose_path and pose_path.exists()) else None)
-    # and each chunk of frames is fitted as soon as its silhouettes are there
-    streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
-                if pool is not None else None)
-    so_far = []  # [MaskStack of the frames so far]
-
-    def arrived(_start, chunk_masks):
-        if not so_far:
-            so_far.append(MaskStack(chunk_masks.frame_shape))
-        so_far[0].extend(chunk_masks)
-        streamed.feed(so_far[0])
-
     try:
+        # 1. background plate
+        t0 = time.perf_counter()
+        if plate_model is None:
+            hit = cache.load("plate", k_plate)
+            if hit is None:
+                log("estimating the background plate")
+                plate_model = estimate_background(video, rng=np.random.default_rng(0),
+                                                  progress=progress)
+                cache.save("plate", k_plate, plate=plate_model.plate)
+            else:
+                from vidcap.background import BackgroundModel
+
+                plate_model = BackgroundModel.from_plate(hit["plate"])
+        timings["plate"] = t_plate + time.perf_counter() - t0
+
+        # 2. silhouettes
+        t0 = time.perf_counter()
+        hit = cache.load("silhouettes", k_sil)
+        if hit is not None and "mask_boxes" not in hit:
+            hit = None  # written before the masks were stored cropped: extract again
+        # each chunk of frames is fitted as soon as its silhouettes are there
+        streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
+                    if pool is not None else None)
+        so_far = []  # [MaskStack of the frames so far]
+
+        def arrived(_start, chunk_masks):
+            if not so_far:
+                so_far.append(MaskStack(chunk_masks.frame_shape))
+            so_far[0].extend(chunk_masks)
+            streamed.feed(so_far[0])
+
         if hit is None:
             sil = extract_silhouettes(video, plate_model, progress=progress,
                                       on_masks=None if streamed is None else arrived)

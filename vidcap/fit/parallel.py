@@ -268,6 +268,7 @@ class _ForkedPool:
         self._lock = threading.Lock()
         self._pids: list[int] = []
         self._closed = False
+        self._submitted = False
         self._collector = threading.Thread(target=self._collect, name="vidcap-fit-results",
                                            daemon=True)
         self._collector.start()
@@ -282,6 +283,7 @@ class _ForkedPool:
         tid = next(self._ids)
         with self._lock:
             self._futures[tid] = fut
+            self._submitted = True
         self._tasks.put((tid, fn, args))
         return fut
 
@@ -327,7 +329,8 @@ class _ForkedPool:
             self._closed = True
             with self._lock:
                 busy = any(not f.done() for f in self._futures.values())
-            if cancel_futures and busy:  # nobody will read these: stop the workers now
+            if cancel_futures and (busy or not self._submitted):
+                # nobody will read these (or no work came): stop the workers now
                 if not self._pids:  # not forked yet
                     self._proc.terminate()
                 for pid in self._pids:
@@ -340,6 +343,10 @@ class _ForkedPool:
                     self._tasks.put(None)
         if wait:
             self._proc.join()
+            if self._collector.is_alive():  # a stopped zygote said nothing: wake it
+                self._collector.join(timeout=0.2)
+                if self._collector.is_alive():
+                    self._results.put(("exit",))
             self._collector.join(timeout=5.0)
 
 
