@@ -35,11 +35,13 @@ class MaskStack(Sequence):
 
     def __init__(self, shape, boxes=None, bits=None):
         self.frame_shape = (int(shape[0]), int(shape[1]))
-        self.boxes = (np.zeros((0, 4), np.int64) if boxes is None
-                      else np.asarray(boxes, np.int64).reshape(-1, 4))
+        # one (y0, y1, x0, x1) tuple per frame: appending a frame is O(1)
+        self._boxes = ([] if boxes is None
+                       else [tuple(int(v) for v in b) for b in np.reshape(boxes, (-1, 4))])
+        self._boxes_array = None  # ``boxes``, built when asked for
         self.bits = [] if bits is None else list(bits)
-        if len(self.bits) != len(self.boxes):
-            raise ValueError(f"{len(self.boxes)} boxes but {len(self.bits)} crops")
+        if len(self.bits) != len(self._boxes):
+            raise ValueError(f"{len(self._boxes)} boxes but {len(self.bits)} crops")
 
     # -- building -----------------------------------------------------------------
     @classmethod
@@ -69,32 +71,41 @@ class MaskStack(Sequence):
             else:
                 box = (0, 0, 0, 0)
         y0, y1, x0, x1 = (int(v) for v in box)
-        self.boxes = np.vstack([self.boxes, [[y0, y1, x0, x1]]])
+        self._boxes.append((y0, y1, x0, x1))
+        self._boxes_array = None
         self.bits.append(np.packbits(mask[y0:y1, x0:x1], axis=-1))
 
     def extend(self, other: MaskStack) -> None:
         """Append every frame of another stack of the same frame size."""
         if other.frame_shape != self.frame_shape:
             raise ValueError(f"{other.frame_shape} frames added to {self.frame_shape} ones")
-        self.boxes = np.vstack([self.boxes, other.boxes])
+        self._boxes.extend(other._boxes)
+        self._boxes_array = None
         self.bits.extend(other.bits)
 
     # -- reading --------------------------------------------------------------------
     @property
+    def boxes(self) -> np.ndarray:
+        """(F, 4) int64: ``y0, y1, x0, x1`` of each frame's crop."""
+        if self._boxes_array is None or len(self._boxes_array) != len(self._boxes):
+            self._boxes_array = np.array(self._boxes, np.int64).reshape(-1, 4)
+        return self._boxes_array
+
+    @property
     def shape(self) -> tuple[int, int, int]:
-        return (len(self.boxes), *self.frame_shape)
+        return (len(self._boxes), *self.frame_shape)
 
     @property
     def nbytes(self) -> int:
         """Bytes held by the crops (what the full stack would take: ``numpy.prod(shape)``)."""
-        return int(sum(b.nbytes for b in self.bits) + self.boxes.nbytes)
+        return int(sum(b.nbytes for b in self.bits) + 32 * len(self._boxes))
 
     def __len__(self) -> int:
-        return len(self.boxes)
+        return len(self._boxes)
 
     def crop(self, k: int) -> tuple[np.ndarray, tuple[int, int]]:
         """Frame ``k``'s crop (h, w) bool and its top-left corner ``(y0, x0)``."""
-        y0, y1, x0, x1 = (int(v) for v in self.boxes[k])
+        y0, y1, x0, x1 = self._boxes[k]
         crop = np.unpackbits(self.bits[k], axis=-1, count=x1 - x0).view(bool)
         return crop.reshape(y1 - y0, x1 - x0), (y0, x0)
 
@@ -108,7 +119,10 @@ class MaskStack(Sequence):
             return np.asarray(self)[key]
         if isinstance(key, slice):
             idx = range(len(self))[key]
-            return MaskStack(self.frame_shape, self.boxes[key], [self.bits[i] for i in idx])
+            out = MaskStack(self.frame_shape)
+            out._boxes = self._boxes[key]
+            out.bits = [self.bits[i] for i in idx]
+            return out
         if isinstance(key, (int, np.integer)):
             k = int(key)
             if not -len(self) <= k < len(self):

@@ -544,13 +544,14 @@ def run(
         # each chunk of frames is fitted as soon as its silhouettes are there
         streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
                     if pool is not None else None)
-        so_far = []  # [MaskStack of the frames so far]
+        so_far = None  # MaskStack of the frames so far
 
         def arrived(_start, chunk_masks):
-            if not so_far:
-                so_far.append(MaskStack(chunk_masks.frame_shape))
-            so_far[0].extend(chunk_masks)
-            streamed.feed(so_far[0])
+            nonlocal so_far
+            if so_far is None:
+                so_far = MaskStack(chunk_masks.frame_shape)
+            so_far.extend(chunk_masks)
+            streamed.feed(so_far)
 
         if hit is None:
             sil = extract_silhouettes(video, plate_model, progress=progress,
@@ -625,7 +626,7 @@ def run(
     )
 
 
-def _preload_lift() -> threading.Thread:
+def _preload_lift() -> None:
     """Import ``scipy.optimize`` (for :func:`vidcap.lift.estimate_scales`, ~0.2 s once
     per process) on a daemon thread; an import error is left to the lift to report.
 
@@ -638,9 +639,7 @@ def _preload_lift() -> threading.Thread:
         except Exception:  # noqa: BLE001 - the lift itself reports it
             pass
 
-    thread = threading.Thread(target=load, name="vidcap-preload", daemon=True)
-    thread.start()
-    return thread
+    threading.Thread(target=load, name="vidcap-preload", daemon=True).start()
 
 
 def person_track(bbox, masks) -> np.ndarray | None:
