@@ -218,7 +218,10 @@ def _zygote(tasks, results, progress, jobs: int, warm: bool) -> None:
 
     # Ctrl-C is the parent's to handle: it stops the workers as it closes the pool
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _init_worker(progress, warm)
+    try:
+        _init_worker(progress, warm)
+    except Exception:  # noqa: BLE001 - each chunk then reports the failure itself
+        pass
     # only the parent writes tasks: when it goes, the workers' reads end (EOF)
     tasks._writer.close()
     pids = []
