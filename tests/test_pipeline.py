@@ -165,3 +165,30 @@ def test_lift_pose_reports_how_much_longer_a_clamped_segment_was():
     res = lift_pose(j2, fps=fps, annotations=ann, image_sides=False)
     assert res.clamped[4, k] and res.excess[4, k] == pytest.approx(0.5, abs=0.05)
     assert np.all(res.excess[np.arange(10) != 4] < 0.02)
+
+
+def test_a_failure_while_the_fit_workers_start_ends_them_at_once(tmp_path):
+    """A clip long enough for the fit's worker processes (which start before the
+    silhouettes) and a plate of the wrong size: the error comes at once, no worker is
+    left running and no output is written."""
+    import multiprocessing
+    import time
+
+    import cv2
+
+    from vidcap.pipeline import convert
+    from vidcap.video import write_video
+
+    rng = np.random.default_rng(0)
+    frames = rng.integers(0, 255, size=(130, 48, 64, 3), dtype=np.uint8)
+    video = tmp_path / "clip.mp4"
+    write_video(video, frames, fps=25)
+    plate = tmp_path / "plate.png"
+    cv2.imwrite(str(plate), np.zeros((40, 40, 3), np.uint8))
+    t0 = time.perf_counter()
+    with pytest.raises(VidcapError, match="background is 40x40"):
+        convert(video, tmp_path / "out.bvh", background=plate, cache_dir=None,
+                progress=False, jobs=2)
+    assert time.perf_counter() - t0 < 4.0  # (it used to wait 5 s for a stopped worker)
+    assert not multiprocessing.active_children()
+    assert not list(tmp_path.glob("*.bvh"))
