@@ -127,10 +127,8 @@ class MaskStack(Sequence):
             k = int(key)
             if not -len(self) <= k < len(self):
                 raise IndexError(f"frame {k} of a stack of {len(self)}")
-            k %= len(self)
             out = np.zeros(self.frame_shape, bool)
-            crop, (y0, x0) = self.crop(k)
-            out[y0:y0 + crop.shape[0], x0:x0 + crop.shape[1]] = crop
+            self._paste(k % len(self), out)
             return out
         raise TypeError(f"MaskStack indices are frames or slices, not {type(key).__name__}")
 
@@ -150,13 +148,17 @@ class MaskStack(Sequence):
     def __array__(self, dtype=None, copy=None):
         out = np.zeros(self.shape, bool)
         for k in range(len(self)):
-            crop, (y0, x0) = self.crop(k)
-            out[k, y0:y0 + crop.shape[0], x0:x0 + crop.shape[1]] = crop
+            self._paste(k, out[k])
         return out if dtype is None else out.astype(dtype, copy=False)
+
+    def _paste(self, k: int, frame: np.ndarray) -> None:
+        """Set frame ``k``'s pixels in ``frame`` (H, W), which is all False."""
+        crop, (y0, x0) = self.crop(k)
+        frame[y0:y0 + crop.shape[0], x0:x0 + crop.shape[1]] = crop
 
     # -- storing ----------------------------------------------------------------------
     def to_arrays(self) -> dict[str, np.ndarray]:
-        """The stack as three flat arrays (for an ``.npz``): see :meth:`from_arrays`."""
+        """The stack as four flat arrays (for an ``.npz``): see :meth:`from_arrays`."""
         sizes = np.array([b.size for b in self.bits], np.int64)
         flat = (np.concatenate([b.reshape(-1) for b in self.bits]) if self.bits
                 else np.zeros(0, np.uint8))

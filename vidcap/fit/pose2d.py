@@ -1573,7 +1573,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     # frames' normalised silhouettes, reused by backward re-tracking (bounded memory)
     norms: dict[int, NormalisedMask] = {}
     size = dict(height=kw.get("height", 80), body_height=kw.get("body_height"))
-    fit_kw = {key: v for key, v in kw.items() if key not in size}
+    fit_kw = _fit_options(kw)
 
     def normalised(k: int) -> NormalisedMask:
         norm = norms.get(k)
