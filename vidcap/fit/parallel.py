@@ -24,7 +24,7 @@ Workers are processes. Where ``os.fork`` is (Linux, macOS), one process loads th
 compiled kernels (numba's start-up, ~1 s of CPU) and forks the workers, which inherit
 them, so the start-up is paid once instead of once per worker; elsewhere they are a
 ``concurrent.futures.ProcessPoolExecutor``'s, each loading its own. Masks are sent as
-:class:`vidcap.masks.MaskStack` crops (or bit-packed). A :class:`FitPool` starts the
+:class:`vidcap.masks.MaskStack` crops. A :class:`FitPool` starts the
 workers ahead of the fit, so they get ready while the caller does other work. Each
 worker reports every frame it finishes, so one progress bar advances smoothly over the
 whole clip.
@@ -399,11 +399,8 @@ class FitPool:
         self.executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _fit_chunk(packed, width: int, skip: int, tracked: bool, kw: dict) -> dict:
-    """Fit one chunk in a worker; reports each frame from ``skip`` on to the queue.
-    ``packed``: a :class:`MaskStack`, or (F, H, ceil(W / 8)) packed bits of W columns."""
-    masks = (packed if isinstance(packed, MaskStack)
-             else np.unpackbits(packed, axis=-1, count=width).astype(bool))
+def _fit_chunk(masks: MaskStack, skip: int, tracked: bool, kw: dict) -> dict:
+    """Fit one chunk in a worker; reports each frame from ``skip`` on to the queue."""
 
     def report(it, total):
         for k in it:
@@ -515,13 +512,10 @@ class StreamedFit:
 
     def _submit(self, chunk, masks) -> None:
         s, b, e = chunk
-        if isinstance(masks, MaskStack):  # already small: sent as it is
-            frames, width = masks[s:e], masks.shape[-1]
-        else:
-            full = np.asarray(masks[s:e], dtype=bool)
-            frames, width = np.packbits(full, axis=-1), full.shape[-1]
+        # sent as bit-packed crops, whatever the frames came as
+        frames = masks[s:e] if isinstance(masks, MaskStack) else MaskStack.from_masks(masks[s:e])
         self.futures[chunk] = self.pool.executor.submit(
-            _fit_chunk, frames, width, b - s, self.tracked, self.kw)
+            _fit_chunk, frames, b - s, self.tracked, self.kw)
 
     def feed(self, masks) -> None:
         """Send every planned chunk but the last whose frames are all in ``masks`` (the
