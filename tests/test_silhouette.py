@@ -8,7 +8,7 @@ import pytest
 
 from tests._synthframes import background, clip
 from vidcap.background import BackgroundModel, estimate_background
-from vidcap.silhouette import NoPersonError, extract_silhouettes
+from vidcap.silhouette import NoPersonError, extract_silhouettes, is_monochrome
 
 
 def _iou(a, b):
@@ -63,6 +63,27 @@ def test_threshold_override_and_shadows():
     assert extract_silhouettes(frame[None], bg, threshold=700, require_person=False).found[0] \
         == np.False_
 
+
+
+def test_grey_video_keeps_a_person_darker_than_the_background():
+    """In grey video every pixel has the plate's (absent) colour, so the shadow test
+    would cut out a person 5-40 % darker than the background; it is off there."""
+    rng = np.random.default_rng(14)
+    plate = cv2.cvtColor(cv2.cvtColor(background(80, 100, rng), cv2.COLOR_BGR2GRAY),
+                         cv2.COLOR_GRAY2BGR)
+    frame = plate.copy()
+    frame[20:60, 40:55] = (plate[20:60, 40:55] * 0.75).astype(np.uint8)  # grey clothes
+    assert is_monochrome(frame[None]) and not is_monochrome(background(80, 100, rng)[None])
+    bg = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    sil = extract_silhouettes(frame[None], bg)
+    assert sil.masks[0, 22:58, 42:53].mean() > 0.98
+    # the same darkening in a colour video is a shadow (the test above), and still dropped
+    colour = background(80, 100, rng)
+    shade = colour.copy()
+    shade[20:60, 40:55] = (colour[20:60, 40:55] * 0.75).astype(np.uint8)
+    shade[10:70, 70:85] = (30, 200, 30)  # a person, so there is a blob to keep
+    sil = extract_silhouettes(shade[None], BackgroundModel.from_plate(colour, noise_sigma=2.0))
+    assert sil.masks[0, 22:58, 42:53].mean() < 0.1
 
 def test_holes_filled_largest_blob_kept_others_reported():
     plate = np.full((100, 120, 3), 128, np.uint8)

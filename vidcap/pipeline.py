@@ -348,6 +348,11 @@ def _video_identity(video: Path) -> dict:
     return {"path": str(video.resolve()), "size": st.st_size, "mtime_ns": st.st_mtime_ns}
 
 
+#: Bumped when the silhouette stage's results change for the same video and options
+#: (2: no shadow test on grey video), so caches written by older versions are redone.
+_SILHOUETTE_VERSION = 2
+
+
 def _key(*parts) -> str:
     text = json.dumps(parts, sort_keys=True, default=str)
     return hashlib.sha1(text.encode()).hexdigest()[:16]
@@ -510,7 +515,7 @@ def run(
     ident = _video_identity(video)
     k_plate = (_key("plate-file", _video_identity(Path(background))) if background is not None
                else _key("plate", ident))
-    k_sil = _key("silhouettes", ident, k_plate)
+    k_sil = _key("silhouettes", _SILHOUETTE_VERSION, ident, k_plate)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     # the 2D fit's worker processes start first and load their compiled kernels while
     # this process estimates the plate and extracts the silhouettes (unless the fit is
