@@ -101,6 +101,29 @@ def test_annotation_beyond_the_clip_names_the_annotations_file(tmp_path):
     assert not out.exists()
 
 
+
+def test_frames_before_the_person_enters(tmp_path):
+    """The first frames show only the background (the person enters later) and a few
+    in the middle too: convert says which, fills them, and the BVH has every frame."""
+    if not WALK.exists():
+        pytest.skip("sample_videos/ not present")
+    from vidcap.video import read_frames, write_video
+
+    frames = read_frames(WALK)
+    n = len(frames)
+    empty = np.median(frames, axis=0).astype(np.uint8)
+    frames[:10] = empty
+    frames[25:30] = empty
+    video = tmp_path / "enters.mp4"
+    write_video(video, list(frames), probe(WALK).fps)
+    out = tmp_path / "enters.bvh"
+    r = run_cli("convert", video, "-o", out, "--no-cache")
+    assert r.returncode == 0, r.stderr
+    assert f"no person in 15 of {n} frames (0-9, 25-29)" in r.stdout
+    motion = read_bvh(out)
+    assert motion.n_frames == n
+    assert np.isfinite(motion.root_positions).all() and np.isfinite(motion.rotations).all()
+
 def test_annotations_override_the_proposals(tmp_path, converted):
     _, npz, _ = converted
     video = tmp_path / "clip.mp4"

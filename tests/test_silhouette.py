@@ -85,6 +85,20 @@ def test_grey_video_keeps_a_person_darker_than_the_background():
     sil = extract_silhouettes(shade[None], BackgroundModel.from_plate(colour, noise_sigma=2.0))
     assert sil.masks[0, 22:58, 42:53].mean() < 0.1
 
+
+def test_frame_with_only_noise_specks_has_no_person():
+    """Specks above the threshold that the 3x3 median removes leave an empty frame
+    (the person has not entered yet): no person found, no error."""
+    rng = np.random.default_rng(15)
+    plate = background(80, 100, rng)
+    frames = np.stack([plate] * 3)
+    frames[0, 10, 10] = 255 - plate[10, 10]  # isolated single pixels
+    frames[0, 50, 70] = 255 - plate[50, 70]
+    frames[2, 20:60, 40:55] = (30, 200, 30)  # then the person
+    sil = extract_silhouettes(frames, BackgroundModel.from_plate(plate, noise_sigma=2.0))
+    assert sil.foreground_fraction[0] > 0  # the specks were above the threshold
+    assert sil.found.tolist() == [False, False, True] and not sil.masks[0].any()
+
 def test_holes_filled_largest_blob_kept_others_reported():
     plate = np.full((100, 120, 3), 128, np.uint8)
     frame = plate.copy()

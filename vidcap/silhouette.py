@@ -199,9 +199,10 @@ def silhouette_frame(frame: np.ndarray, p: _Params) -> tuple[FrameSilhouette, np
     n_fg = cv2.countNonZero(fg)
     frac = n_fg / fg.size
     fg = cv2.medianBlur(fg, 3)
-    if p.shadows and n_fg:
+    # (the median can leave nothing: a frame without the person, noise specks only)
+    x, y, w, h = cv2.boundingRect(fg) if n_fg else (0, 0, 0, 0)
+    if p.shadows and w and h:
         # Only inside the (de-specked) foreground's bounding rectangle.
-        x, y, w, h = cv2.boundingRect(fg)
         f = cv2.split(frame[y:y + h, x:x + w].astype(np.float32))
         b = [q[y:y + h, x:x + w] for q in p.plate_planes]
         if scaled:
