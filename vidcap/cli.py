@@ -5,7 +5,10 @@ Each sub-command lives in its own module under :mod:`vidcap.commands` and expose
 * ``NAME``: the sub-command's name,
 * ``HELP``: a one-line description,
 * ``add_arguments(parser)``: fill an :class:`argparse.ArgumentParser`,
-* ``run(args) -> int``: do the work and return the exit code.
+* ``run(args) -> int``: do the work and return the exit code,
+
+and optionally ``OUTPUT_FILES`` / ``INPUT_FILES``, the names of its file arguments:
+each output is checked before the work starts (not a folder, not an input, writable).
 
 Modules are discovered at start-up, so adding a command never touches this file.
 User errors (:class:`vidcap.errors.VidcapError`) print one line
@@ -39,6 +42,19 @@ def _command_modules():
     return sorted(modules, key=lambda m: getattr(m, "ORDER", 100))
 
 
+def _check_outputs(args) -> None:
+    """Fail before any work when an output file named on the command line cannot be
+    written (a command module's ``OUTPUT_FILES`` and ``INPUT_FILES``: argument names)."""
+    from vidcap.fileio import check_output_file
+
+    module = args._module
+    inputs = [getattr(args, name, None) for name in getattr(module, "INPUT_FILES", ())]
+    for name in getattr(module, "OUTPUT_FILES", ()):
+        value = getattr(args, name, None)
+        if value is not None:
+            check_output_file(value, inputs)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the top-level parser with every available sub-command."""
     parser = argparse.ArgumentParser(
@@ -53,7 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     for module in _command_modules():
         p = sub.add_parser(module.NAME, help=module.HELP, description=module.HELP)
         module.add_arguments(p)
-        p.set_defaults(_run=module.run)
+        p.set_defaults(_run=module.run, _module=module)
     return parser
 
 
@@ -65,6 +81,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_USER_ERROR
     try:
+        _check_outputs(args)
         return int(args._run(args) or 0)
     except VidcapError as exc:
         if args.debug:

@@ -13,6 +13,42 @@ from pathlib import Path
 import numpy as np
 
 
+def check_output_file(path: str | os.PathLike, inputs=()) -> None:
+    """Raise a one-line error now if ``path`` cannot be written as an output file.
+
+    Commands call this before any work, so a typo in ``-o`` costs nothing: the path
+    is a folder, or lies under a file, or is one of the command's ``inputs`` (writing
+    a BVH over the video it came from), or its folder cannot be written.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The output file.
+    inputs : iterable of str or path-like
+        The command's input files (``None`` entries are skipped).
+
+    Raises
+    ------
+    vidcap.errors.UsageError
+    """
+    from vidcap.errors import UsageError
+
+    p = Path(path)
+    if p.is_dir():
+        raise UsageError("is a folder: give a file name to write", path)
+    for src in inputs:
+        if src is not None and p.exists() and Path(src).exists() and p.samefile(src):
+            raise UsageError("is also an input of this command: writing it would destroy "
+                             "the input", path)
+    folder = p.absolute().parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent  # atomic_path creates the missing folders
+    if not folder.is_dir():
+        raise UsageError(f"cannot write here: {folder} is a file, not a folder", path)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"cannot write here: no permission to write in {folder}", path)
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
@@ -29,6 +65,7 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
         writers that pick a format from the name, such as FFmpeg, still do so).
     """
     final = Path(path)
+    check_output_file(final)
     final.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(
         prefix=f".{final.name}.", suffix=final.suffix if suffix is None else suffix,

@@ -86,7 +86,16 @@ def run(args) -> int:
     if not videos:
         raise UsageError("no input videos")
     outdir = Path(args.outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    try:
+        outdir.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        what = ("is a file" if outdir.exists() else
+                "cannot be created: part of the path is a file")
+        raise UsageError(f"{what}; OUTDIR must be a folder (created if missing)",
+                         args.outdir) from None
+    except PermissionError:
+        raise UsageError("cannot create the output folder: permission denied",
+                         args.outdir) from None
     stems: dict[str, int] = {}
     todo, rows = [], []
     for v in videos:

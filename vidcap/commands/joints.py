@@ -10,6 +10,8 @@ import numpy as np
 NAME = "joints"
 HELP = "joint centres (sphere fits) and a BVH skeleton from C3D marker trajectories"
 ORDER = 60
+OUTPUT_FILES = ("output", "centres", "report")
+INPUT_FILES = ("trial",)
 
 
 def add_arguments(parser) -> None:

@@ -12,6 +12,8 @@ from vidcap.errors import InputFileError, UsageError
 NAME = "pose2d"
 HELP = "fit the 2D body model to every frame's silhouette (seed 004 section 3.1.4) -> .npz"
 ORDER = 40
+OUTPUT_FILES = ("output",)
+INPUT_FILES = ("video", "masks")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

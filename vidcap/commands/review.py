@@ -14,6 +14,8 @@ from vidcap.masks import read_npz_masks
 NAME = "review"
 HELP = "write a review video: frame | silhouette with the 2D model | 3D pose"
 ORDER = 12
+OUTPUT_FILES = ("output",)
+INPUT_FILES = ("video", "from_npz")
 
 _KEYS = ("masks", "joints2d", "bvh_joints3d")
 

@@ -8,6 +8,8 @@ from pathlib import Path
 NAME = "silhouettes"
 HELP = "estimate the background and extract the person's silhouette in every frame (.npz)"
 ORDER = 30
+OUTPUT_FILES = ("output", "plate_out")
+INPUT_FILES = ("video", "background")
 
 
 def add_arguments(parser) -> None:

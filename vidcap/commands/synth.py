@@ -11,6 +11,8 @@ from vidcap.errors import UsageError
 NAME = "synth"
 HELP = "render a ground-truth clip (video + truth .npz) of the body model performing a motion"
 ORDER = 90
+OUTPUT_FILES = ("output", "truth", "bvh")
+INPUT_FILES = ("motion", "amc", "background")
 
 
 def parse_size(text: str) -> tuple[int, int]:

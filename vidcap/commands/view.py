@@ -7,6 +7,8 @@ from vidcap.errors import UsageError
 NAME = "view"
 HELP = "show a BVH skeleton or C3D marker cloud in 3D (or save a PNG with --screenshot)"
 ORDER = 60
+OUTPUT_FILES = ("screenshot",)
+INPUT_FILES = ("file", "centres")
 
 
 def _size(text: str) -> tuple[int, int]:

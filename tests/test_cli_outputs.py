@@ -1,0 +1,66 @@
+"""Output paths are checked before any work: a folder, a path under a file, an input."""
+
+from __future__ import annotations
+
+import pytest
+
+from vidcap.cli import main
+from vidcap.errors import UsageError
+from vidcap.fileio import atomic_path, check_output_file
+
+
+@pytest.fixture
+def video(tmp_path):
+    # the checks run before the input is opened, so any file stands in for the video
+    p = tmp_path / "clip.mp4"
+    p.write_bytes(b"not decoded by these tests")
+    return p
+
+
+def _error(capsys, argv):
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    return code, err
+
+
+def test_output_that_is_a_folder(tmp_path, video, capsys):
+    folder = tmp_path / "out.bvh"
+    folder.mkdir()
+    code, err = _error(capsys, ["convert", video, "-o", folder])
+    assert code == 2 and len(err) == 1
+    assert err[0] == f"vidcap: error: {folder}: is a folder: give a file name to write"
+    # the same for a second output of the command, and for other commands
+    code, err = _error(capsys, ["convert", video, "-o", tmp_path / "a.bvh", "--save", folder])
+    assert code == 2 and "is a folder" in err[0]
+    code, err = _error(capsys, ["synth", "--frames", "3", "-o", folder])
+    assert code == 2 and "is a folder" in err[0]
+    assert list(folder.iterdir()) == [] and not (tmp_path / "a.bvh").exists()
+
+
+def test_output_over_an_input_is_refused(video, capsys):
+    before = video.read_bytes()
+    code, err = _error(capsys, ["convert", video, "-o", video])
+    assert code == 2 and err == [f"vidcap: error: {video}: is also an input of this command: "
+                                 "writing it would destroy the input"]
+    assert video.read_bytes() == before
+
+
+def test_output_under_a_file(tmp_path, video, capsys):
+    code, err = _error(capsys, ["pose2d", video, "-o", video / "sub" / "p.npz"])
+    assert code == 2 and err[0].endswith(f"cannot write here: {video} is a file, not a folder")
+
+
+def test_batch_outdir_that_is_a_file(video, capsys):
+    code, err = _error(capsys, ["batch", video, "-o", video])
+    assert code == 2 and err == [f"vidcap: error: {video}: is a file; OUTDIR must be a folder "
+                                 "(created if missing)"]
+
+
+def test_missing_folders_are_fine_and_atomic_path_checks_too(tmp_path):
+    check_output_file(tmp_path / "new" / "deeper" / "x.bvh")  # created on writing
+    with atomic_path(tmp_path / "new" / "x.txt") as tmp:
+        tmp.write_text("ok")
+    assert (tmp_path / "new" / "x.txt").read_text() == "ok"
+    with pytest.raises(UsageError, match="is a folder"):
+        with atomic_path(tmp_path / "new"):
+            pass
