@@ -102,27 +102,35 @@ def test_annotation_beyond_the_clip_names_the_annotations_file(tmp_path):
 
 
 
-def test_frames_before_the_person_enters(tmp_path):
-    """The first frames show only the background (the person enters later) and a few
-    in the middle too: convert says which, fills them, and the BVH has every frame."""
+def test_frames_before_the_person_enters_and_after_leaving(tmp_path):
+    """The first frames show only the background (the person enters later), a few in
+    the middle too, and at the end the person walks out of the (cropped) picture:
+    convert says which frames it left out, fills them, and the BVH has every frame."""
     if not WALK.exists():
         pytest.skip("sample_videos/ not present")
     from vidcap.video import read_frames, write_video
 
+    width = 380  # of 480: the walker's last frames are cut off on the right
     frames = read_frames(WALK)
     n = len(frames)
     empty = np.median(frames, axis=0).astype(np.uint8)
     frames[:10] = empty
     frames[25:30] = empty
     video = tmp_path / "enters.mp4"
-    write_video(video, list(frames), probe(WALK).fps)
-    out = tmp_path / "enters.bvh"
-    r = run_cli("convert", video, "-o", out, "--no-cache")
+    write_video(video, list(np.ascontiguousarray(frames[:, :, :width])), probe(WALK).fps)
+    out, npz = tmp_path / "enters.bvh", tmp_path / "enters.npz"
+    r = run_cli("convert", video, "-o", out, "--no-cache", "--save", npz)
     assert r.returncode == 0, r.stderr
     assert f"no person in 15 of {n} frames (0-9, 25-29)" in r.stdout
     motion = read_bvh(out)
     assert motion.n_frames == n
     assert np.isfinite(motion.root_positions).all() and np.isfinite(motion.rotations).all()
+    # left out: the frames where most of the true silhouette is beyond the crop
+    truth = np.load(TRUTH)["masks"]
+    visible = truth[:, :, :width].sum((1, 2)) / truth.sum((1, 2))
+    outside = np.load(npz)["outside"]
+    assert outside.any() and "mostly outside the picture" in r.stdout
+    assert (visible[outside] < 0.8).all() and outside[visible < 0.5].all()
 
 def test_annotations_override_the_proposals(tmp_path, converted):
     _, npz, _ = converted

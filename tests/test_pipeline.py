@@ -8,7 +8,8 @@ from vidcap.annotations import Annotations
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
 from vidcap.errors import VidcapError
 from vidcap.lift import swap_sides
-from vidcap.pipeline import StageCache, fill_gaps, lift_pose
+from vidcap.masks import MaskStack, pixel_counts, touches_border
+from vidcap.pipeline import StageCache, fill_gaps, lift_pose, partly_outside, person_track
 
 
 def _mpjpe(a, b):
@@ -48,6 +49,31 @@ def test_fill_gaps():
     with pytest.raises(VidcapError, match="no person"):
         fill_gaps(np.full((3, 15, 2), np.nan))
 
+
+
+def test_frames_mostly_outside_the_picture_are_left_out():
+    """A 20x40 'person' slides out at the right: the frames that touch the border
+    with less than 70 % of the usual area are left out; a stack and an array agree."""
+    masks = np.zeros((12, 60, 80), bool)
+    for k in range(12):
+        x = 10 + 6 * k
+        masks[k, 10:50, x:x + 20] = True  # clipped by the frame from k = 9 on
+    masks[3, 10:50, 10:14] = False  # gait: a thinner frame clear of the border counts
+    stack = MaskStack.from_masks(masks)
+    area = masks.sum((1, 2))
+    for m in (masks, stack):
+        assert (pixel_counts(m) == area).all()
+        assert touches_border(m).tolist() == [False] * 9 + [True] * 3
+        out = partly_outside(m)
+        # k = 9, 10, 11 keep 16, 10, 4 of their 20 columns
+        assert out.tolist() == [False] * 10 + [True] * 2
+    track = person_track(np.array([[10 + 6 * k, 10, 30 + 6 * k, 50] for k in range(12)]),
+                         masks, exclude=out)
+    assert track[10] == track[11] == track[9]  # held from the last frame kept
+    # the whole clip cut off (the feet below the frame, say): no reference, none left out
+    cut = np.zeros((8, 60, 80), bool)
+    cut[:, 30:, 30:50] = True
+    assert not partly_outside(cut).any()
 
 def test_stage_cache_round_trip_and_damage(tmp_path):
     c = StageCache(tmp_path)

@@ -232,6 +232,24 @@ def mask_frames(masks) -> Sequence:
     return np.asarray(masks, dtype=bool)
 
 
+def pixel_counts(masks) -> np.ndarray:
+    """(F,) int64: set pixels per frame of a stack or an (F, H, W) array."""
+    if isinstance(masks, MaskStack):
+        return np.array([int(np.bitwise_count(b).sum()) for b in masks.bits], np.int64)
+    return np.asarray(masks, dtype=bool).reshape(len(masks), -1).sum(axis=1)
+
+
+def touches_border(masks) -> np.ndarray:
+    """(F,) bool: frames whose mask reaches the first or last row or column."""
+    if isinstance(masks, MaskStack):
+        b = masks.boxes
+        h, w = masks.frame_shape
+        full = (b[:, 1] > b[:, 0]) & (b[:, 3] > b[:, 2])
+        return full & ((b[:, 0] == 0) | (b[:, 1] == h) | (b[:, 2] == 0) | (b[:, 3] == w))
+    m = np.asarray(masks, dtype=bool)
+    return (m[:, 0].any(-1) | m[:, -1].any(-1) | m[:, :, 0].any(-1) | m[:, :, -1].any(-1))
+
+
 def frames_with_pixels(masks) -> np.ndarray:
     """(F,) bool: which frames of a stack or an (F, H, W) array have any pixel set."""
     if isinstance(masks, MaskStack):
@@ -239,4 +257,5 @@ def frames_with_pixels(masks) -> np.ndarray:
     return np.asarray(masks, dtype=bool).reshape(len(masks), -1).any(axis=1)
 
 
-__all__ = ["MaskStack", "frames_with_pixels", "mask_frames", "read_npz_masks"]
+__all__ = ["MaskStack", "frames_with_pixels", "mask_frames", "pixel_counts",
+           "read_npz_masks", "touches_border"]

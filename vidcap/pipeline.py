@@ -407,6 +407,9 @@ class ConvertResult:
     track: np.ndarray | None = None
     #: Body height in pixels the 2D model was drawn at per frame (NaN: no fit), (F,).
     model_height: np.ndarray | None = None
+    #: Frames left out as mostly outside the image (:func:`partly_outside`), (F,) bool;
+    #: their ``image_joints2d`` are NaN.
+    outside: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -430,6 +433,8 @@ class ConvertResult:
             check_sign=np.array([c["sign"] for c in lr.checks], dtype=int),
             check_priority=np.array([c["priority"] for c in lr.checks], dtype=float),
             bvh_joints3d=self.motion.positions(),
+            outside=(np.zeros(self.n_frames, bool) if self.outside is None
+                     else np.asarray(self.outside, bool)),
         )
 
 
@@ -608,12 +613,18 @@ def run(
 
     # 4. 3D lift and 5. motion
     t0 = time.perf_counter()
-    track = person_track(bbox, masks)
+    outside = partly_outside(masks)
+    joints2d, model_height = hit["joints2d"], hit["model_height"]
+    if outside.any():  # filled from the neighbouring frames, like frames without a fit
+        joints2d, model_height = joints2d.copy(), np.array(model_height, float)
+        joints2d[outside] = np.nan
+        model_height[outside] = np.nan
+    track = person_track(bbox, masks, exclude=outside)
     _check_events(ann, len(masks), ann_source)
-    lifted = lift_pose(hit["joints2d"], fps=info.fps, body=body, annotations=ann,
+    lifted = lift_pose(joints2d, fps=info.fps, body=body, annotations=ann,
                        image_sides=True, spread=hit["spread"], track=track,
                        frame_size=(info.width, info.height),
-                       model_height=hit["model_height"])
+                       model_height=model_height)
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(hit["similarity"], min_score=keyframe_score)
@@ -626,8 +637,8 @@ def run(
         scores=hit["scores"], similarity=hit["similarity"], lifted=lifted,
         motion=mres.motion, jitter_before=mres.jitter_before,
         jitter_after=mres.jitter_after, timings=timings,
-        image_joints2d=hit["joints2d"], spread=hit["spread"], track=track,
-        model_height=hit["model_height"],
+        image_joints2d=joints2d, spread=hit["spread"], track=track,
+        model_height=model_height, outside=outside,
     )
 
 
@@ -647,7 +658,41 @@ def _preload_lift() -> None:
     threading.Thread(target=load, name="vidcap-preload", daemon=True).start()
 
 
-def person_track(bbox, masks) -> np.ndarray | None:
+def partly_outside(masks, *, min_share: float = 0.7, min_reference: int = 5) -> np.ndarray:
+    """Frames where much of the person is outside the image, (F,) bool.
+
+    A silhouette that reaches the image's border and covers less than ``min_share``
+    of the person's usual area (the median over the frames that do not reach it) is
+    a person walking out of (or into) the picture. The 2D model fitted to what is
+    left of them is mostly guesswork (a synthetic walk leaving the frame: 2D error
+    8-80 % of the body's height in those frames, against 1-2 % before), so the
+    pipeline fills such frames from their neighbours, as frames without a person.
+    Gait moves the area by about 15 %; a person cut for the whole clip (feet below
+    the frame) has no reference and nothing is dropped.
+
+    Parameters
+    ----------
+    masks : MaskStack or numpy.ndarray, shape (F, H, W) bool
+    min_share : float
+        Share of the usual area below which a border-touching frame is dropped.
+    min_reference : int
+        Fewest frames clear of the border that make a usable reference area.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F,)
+    """
+    from vidcap.masks import pixel_counts, touches_border
+
+    area = pixel_counts(masks)
+    edge = touches_border(masks)
+    clear = (area > 0) & ~edge
+    if clear.sum() < min_reference:
+        return np.zeros(len(area), bool)
+    return edge & (area < min_share * np.median(area[clear]))
+
+
+def person_track(bbox, masks, *, exclude=None) -> np.ndarray | None:
     """Horizontal centre of the person's box per frame, gaps interpolated.
 
     Parameters
@@ -656,6 +701,8 @@ def person_track(bbox, masks) -> np.ndarray | None:
         ``x0, y0, x1, y1`` per frame (pixels).
     masks : MaskStack or numpy.ndarray, shape (F, H, W) bool
         Frames with an empty mask count as gaps.
+    exclude : array_like of bool, shape (F,), optional
+        More frames to treat as gaps (:func:`partly_outside`).
 
     Returns
     -------
@@ -665,7 +712,10 @@ def person_track(bbox, masks) -> np.ndarray | None:
     bb = np.asarray(bbox, float)
     if bb.ndim != 2 or bb.shape[1] != 4:
         return None
-    track = np.where(frames_with_pixels(masks), 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
+    seen = frames_with_pixels(masks)
+    if exclude is not None:
+        seen = seen & ~np.asarray(exclude, bool)
+    track = np.where(seen, 0.5 * (bb[:, 0] + bb[:, 2]), np.nan)
     ok = np.isfinite(track)
     if not ok.any():
         return None

@@ -68,6 +68,11 @@ def run(args) -> int:
               f"{', '.join(sorted(set(lr.orientation)))}; jitter {res.jitter_before:.1f} -> "
               f"{res.jitter_after:.1f} m/s^2")
         missing = ~np.isfinite(res.image_joints2d).all(axis=(1, 2))
+        outside = res.outside if res.outside is not None else np.zeros(len(missing), bool)
+        if outside.any():
+            print(f"  person mostly outside the picture in {int(outside.sum())} frames "
+                  f"({_runs(outside)}): left out like frames without a person")
+        missing &= ~outside
         if missing.any():
             print(f"  no person in {int(missing.sum())} of {len(missing)} frames "
                   f"({_runs(missing)}): poses interpolated across them, held at the ends")
