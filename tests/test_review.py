@@ -46,3 +46,21 @@ def test_small_videos_are_reviewed_enlarged_by_a_whole_factor():
     assert mid[k * 30, k * 12, 0] == 110 and mid[k * 30, k * 25, 0] == 25
     (same,) = review_frames([frame], mask, joints2d, joints3d, min_height=0)
     assert same.shape == (h, 3 * w, 3)
+
+
+def test_filled_frames_are_framed_in_orange():
+    """A frame whose pose was filled from its neighbours gets the orange border on the
+    silhouette panel; a fitted one does not."""
+    from vidcap.review import review_frames
+
+    h, w = 120, 90
+    frames = [np.zeros((h, w, 3), np.uint8)] * 2
+    masks = np.zeros((2, h, w), bool)
+    masks[0, 20:100, 35:55] = True
+    joints2d = np.full((2, 15, 2), 45.0)
+    joints3d = np.repeat(BodyModel().rest_positions()[None], 2, axis=0)
+    fitted, filled = review_frames(frames, masks, joints2d, joints3d, min_height=0,
+                                   filled=np.array([False, True]))
+    orange = np.array([0, 165, 255])
+    assert (filled[h // 2, w] == orange).all()  # left edge of the middle panel
+    assert not (fitted[h // 2, w] == orange).all()

@@ -101,7 +101,8 @@ def review_scale(frame_height: int, min_height: int) -> int:
 
 
 def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=None,
-                  low_score: float = 0.5, height: float = 1.75, min_height: int = 360):
+                  low_score: float = 0.5, height: float = 1.75, min_height: int = 360,
+                  filled=None):
     """Yield the three-panel review images, (k H, 3 k W, 3) uint8 BGR each.
 
     Parameters
@@ -113,6 +114,9 @@ def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=
         Per-segment 2D fit scores; below ``low_score`` a segment is marked.
     similarity : (F,), optional
         Whole-model fit; below ``low_score`` the frame is marked "LOW".
+    filled : (F,) bool, optional
+        Frames whose pose was not fitted but filled from the neighbouring frames (no
+        person, or mostly outside the picture): marked "FILLED" instead.
     min_height : int
         Panels of a smaller video are enlarged by the whole-number factor
         ``k = ceil(min_height / H)`` (:func:`review_scale`; pixels repeated, so the
@@ -143,7 +147,11 @@ def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=
             fs = max(0.4, h / 600)
             cv2.putText(img, f"{f}", (8, int(24 * fs * 1.6)), cv2.FONT_HERSHEY_SIMPLEX, fs,
                         (255, 255, 255), 2, cv2.LINE_AA)
-            if similarity is not None and similarity[f] < low_score:
+            if filled is not None and filled[f]:
+                cv2.putText(img, "FILLED", (w + 8, int(24 * fs * 1.6)),
+                            cv2.FONT_HERSHEY_SIMPLEX, fs, (0, 165, 255), 2, cv2.LINE_AA)
+                cv2.rectangle(img, (w, 0), (2 * w - 1, h - 1), (0, 165, 255), 2)
+            elif similarity is not None and similarity[f] < low_score:
                 cv2.putText(img, "LOW", (w + 8, int(24 * fs * 1.6)), cv2.FONT_HERSHEY_SIMPLEX,
                             fs, (0, 0, 255), 2, cv2.LINE_AA)
                 cv2.rectangle(img, (w, 0), (2 * w - 1, h - 1), (0, 0, 255), 2)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.errors import InputFileError, UsageError
-from vidcap.masks import read_npz_masks
+from vidcap.masks import frames_with_pixels, read_npz_masks
 
 NAME = "review"
 HELP = "write a review video: frame | silhouette with the 2D model | 3D pose"
@@ -70,12 +70,15 @@ def run(args) -> int:
         res = run_pipeline(args.video, height=args.height)
         d = {"masks": res.masks, "joints2d": res.lifted.joints2d,
              "bvh_joints3d": res.motion.positions(), "scores": res.scores,
-             "similarity": res.similarity}
+             "similarity": res.similarity, "outside": res.outside}
     n = len(d["masks"])
+    filled = ~frames_with_pixels(d["masks"])
+    if d.get("outside") is not None:  # (saved by versions that leave such frames out)
+        filled |= np.asarray(d["outside"], bool)
     frames = (f for i, f in enumerate(iter_frames(args.video)) if i < n)
     imgs = review_frames(frames, d["masks"], d["joints2d"], d["bvh_joints3d"],
                          scores=d.get("scores"), similarity=d.get("similarity"),
-                         height=args.height, min_height=args.min_height)
+                         height=args.height, min_height=args.min_height, filled=filled)
     if args.png:
         out = Path(args.png)
         out.mkdir(parents=True, exist_ok=True)
