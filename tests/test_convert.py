@@ -132,6 +132,26 @@ def test_frames_before_the_person_enters_and_after_leaving(tmp_path):
     assert outside.any() and "mostly outside the picture" in r.stdout
     assert (visible[outside] < 0.8).all() and outside[visible < 0.5].all()
 
+
+def test_a_moving_box_is_reported_as_a_poor_fit(tmp_path, converted):
+    """Something that is not a person still converts, but the output says the body
+    model does not fit it; a walking person's conversion says nothing of the kind."""
+    from vidcap.video import write_video
+
+    rng = np.random.default_rng(0)
+    plate = rng.integers(60, 200, (240, 320, 3)).astype(np.uint8)
+    frames = []
+    for k in range(40):
+        f = plate.copy()
+        f[60:140, 20 + 6 * k:60 + 6 * k] = (30, 30, 200)  # a 40x80 box sliding right
+        frames.append(f)
+    video = tmp_path / "box.mp4"
+    write_video(video, frames, 25.0)
+    r = run_cli("convert", video, "-o", tmp_path / "box.bvh", "--no-cache")
+    assert r.returncode == 0, r.stderr
+    assert "fits the silhouettes poorly (median similarity 0." in r.stdout
+    assert "fits the silhouettes poorly" not in converted[2].stdout
+
 def test_annotations_override_the_proposals(tmp_path, converted):
     _, npz, _ = converted
     video = tmp_path / "clip.mp4"

@@ -348,6 +348,8 @@ def _video_identity(video: Path) -> dict:
     return {"path": str(video.resolve()), "size": st.st_size, "mtime_ns": st.st_mtime_ns}
 
 
+#: Median 2D-fit similarity (Eq. 3.1) below which a result is reported as a poor fit.
+POOR_FIT = 0.5
 #: Bumped when the silhouette stage's results change for the same video and options
 #: (2: no shadow test on grey video), so caches written by older versions are redone.
 _SILHOUETTE_VERSION = 2
@@ -414,6 +416,32 @@ class ConvertResult:
     @property
     def n_frames(self) -> int:
         return len(self.masks)
+
+    def notices(self) -> list[str]:
+        """What the user should know about this result, one sentence each: frames
+        without a person, frames left out as mostly outside the picture, and a body
+        model that fits the silhouettes poorly overall (median similarity below
+        :data:`POOR_FIT`: a person gives 0.7-0.9, a moving box 0.36)."""
+        out = []
+        missing = ~np.isfinite(self.image_joints2d).all(axis=(1, 2))
+        outside = (np.zeros(len(missing), bool) if self.outside is None
+                   else np.asarray(self.outside, bool))
+        if outside.any():
+            out.append(f"person mostly outside the picture in {int(outside.sum())} frames "
+                       f"({frame_runs(outside)}): left out like frames without a person")
+        missing &= ~outside
+        if missing.any():
+            out.append(f"no person in {int(missing.sum())} of {len(missing)} frames "
+                       f"({frame_runs(missing)}): poses interpolated across them, held "
+                       "at the ends")
+        s = np.asarray(self.similarity, float)[~missing & ~outside]
+        s = s[np.isfinite(s)]
+        if s.size and np.median(s) < POOR_FIT:
+            out.append(f"the body model fits the silhouettes poorly (median similarity "
+                       f"{np.median(s):.2f}; one whole person gives 0.7-0.9): is it one "
+                       "person, seen whole, in front of a background with nothing else "
+                       "moving?")
+        return out
 
     def save_npz(self, path: str | os.PathLike) -> None:
         """Write the ``--save`` arrays atomically."""
@@ -656,6 +684,14 @@ def _preload_lift() -> None:
             pass
 
     threading.Thread(target=load, name="vidcap-preload", daemon=True).start()
+
+
+def frame_runs(flags, limit: int = 4) -> str:
+    """``'0-14, 30-37'``: the runs of True in ``flags`` (F,), the first ``limit``."""
+    f = np.r_[False, np.asarray(flags, bool), False].astype(int)
+    starts, stops = np.flatnonzero(np.diff(f) == 1), np.flatnonzero(np.diff(f) == -1) - 1
+    parts = [f"{a}" if a == b else f"{a}-{b}" for a, b in zip(starts, stops, strict=True)]
+    return ", ".join(parts[:limit]) + (", ..." if len(parts) > limit else "")
 
 
 def partly_outside(masks, *, min_share: float = 0.7, min_reference: int = 5) -> np.ndarray:

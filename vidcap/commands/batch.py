@@ -68,6 +68,7 @@ def _one(video: str, out: str, height: float) -> dict:
         # files already run in parallel processes: each fits its frames serially
         res = convert(video, out, height=height, progress=False, jobs=1)
         row["frames"] = res.n_frames
+        row["message"] = " ".join("; ".join(res.notices()).split())
     except Exception as exc:  # noqa: BLE001 - a bad file must never stop the others
         row["status"] = "failed"
         row["message"] = " ".join(str(exc).split()) or type(exc).__name__

@@ -67,15 +67,8 @@ def run(args) -> int:
         print(f"{args.output}: {res.n_frames} frames at {res.fps:g} fps; orientation "
               f"{', '.join(sorted(set(lr.orientation)))}; jitter {res.jitter_before:.1f} -> "
               f"{res.jitter_after:.1f} m/s^2")
-        missing = ~np.isfinite(res.image_joints2d).all(axis=(1, 2))
-        outside = res.outside if res.outside is not None else np.zeros(len(missing), bool)
-        if outside.any():
-            print(f"  person mostly outside the picture in {int(outside.sum())} frames "
-                  f"({_runs(outside)}): left out like frames without a person")
-        missing &= ~outside
-        if missing.any():
-            print(f"  no person in {int(missing.sum())} of {len(missing)} frames "
-                  f"({_runs(missing)}): poses interpolated across them, held at the ends")
+        for notice in res.notices():
+            print(f"  {notice}")
         # the normalised silhouette's width is whole pixels, which stretches a fitted
         # segment by up to about 1 %: only more than that says the model does not fit
         long = lr.excess > CLAMP_NOTICE if lr.excess is not None else lr.clamped
@@ -100,12 +93,3 @@ def run(args) -> int:
                       f"(frames {c['run'][0]}-{c['run'][1]})")
     return 0
 
-
-def _runs(flags, limit: int = 4) -> str:
-    """'0-14, 30-37' for the runs of True in ``flags`` (the first ``limit``)."""
-    import numpy as np
-
-    f = np.r_[False, np.asarray(flags, bool), False].astype(int)
-    starts, stops = np.flatnonzero(np.diff(f) == 1), np.flatnonzero(np.diff(f) == -1) - 1
-    parts = [f"{a}" if a == b else f"{a}-{b}" for a, b in zip(starts, stops, strict=True)]
-    return ", ".join(parts[:limit]) + (", ..." if len(parts) > limit else "")
