@@ -52,7 +52,8 @@ class ClipData:
         Silhouettes (read one frame at a time, ``masks[f]``).
     fit_score : numpy.ndarray, shape (F,)
         Quality of the 2D fit per frame in [0, 1] (the model/silhouette similarity);
-        frames below :attr:`AnnotateSession.low_fit` are flagged.
+        frames below :attr:`AnnotateSession.low_fit` are flagged; 0 for a frame that
+        was not fitted (no person, or mostly outside the picture).
     image_sides : bool
         ``l_*`` in ``joints2d`` is the image's left limb (the 2D fitter's naming); False
         when the joints are named by the body's sides (ground truth).
@@ -443,8 +444,11 @@ class AnnotateSession:
                             "reason": f"{c['segment'].replace('_', ' ')}: depth doubtful"})
         bad = np.flatnonzero(self.clip.fit_score < self.low_fit)
         for f in bad[np.argsort(self.clip.fit_score[bad], kind="stable")]:
-            out.append({"frame": int(f), "segment": "",
-                        "reason": f"2D fit poor ({self.clip.fit_score[f]:.2f})"})
+            score = self.clip.fit_score[f]
+            reason = (f"2D fit poor ({score:.2f})" if score > 0 else
+                      "not fitted (no person, or mostly outside the picture): pose filled "
+                      "from the frames around")
+            out.append({"frame": int(f), "segment": "", "reason": reason})
         return out
 
     def next_attention(self, frame: int) -> dict | None:
@@ -519,8 +523,11 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
         return cv2.imdecode(jpegs[i], cv2.IMREAD_COLOR)
 
     track = res.track
+    fit_score = np.asarray(res.similarity, float)
+    if res.outside is not None:  # left out of the fit (mostly outside the picture)
+        fit_score = np.where(res.outside, 0.0, fit_score)
     return ClipData(video=video, fps=res.fps, read_frame=read_frame, joints2d=joints2d[:n],
-                    masks=res.masks[:n], fit_score=np.asarray(res.similarity)[:n],
+                    masks=res.masks[:n], fit_score=fit_score[:n],
                     image_sides=True, spread=None if spread is None else spread[:n],
                     track=None if track is None else track[:n],
                     model_height=None if res.model_height is None else res.model_height[:n],

@@ -108,6 +108,21 @@ def test_attention_list_and_cycling(walk_clip, tmp_path):
                    for x in s.flagged())
 
 
+
+def test_frames_not_fitted_are_flagged_as_filled(tmp_path):
+    """A fit score of 0 marks a frame the pipeline did not fit (filled from its
+    neighbours); the list says so rather than calling it a poor fit."""
+    from tests.ui.clips import truth_clip
+
+    clip = truth_clip("walk_side", poor_fit=(5,))
+    clip.fit_score[[7, 8]] = 0.0
+    items = [it for it in AnnotateSession(clip, tmp_path / "a.json").flagged()
+             if not it["segment"]]
+    reasons = {it["frame"]: it["reason"] for it in items}
+    assert reasons[5] == "2D fit poor (0.30)"
+    assert reasons[7].startswith("not fitted") and reasons[8].startswith("not fitted")
+    assert [it["frame"] for it in items][:2] == [7, 8]  # the least trustworthy first
+
 def test_malformed_file_is_kept_and_backed_up(walk_clip, tmp_path):
     path = tmp_path / "a.json"
     text = '{"version": 1, "events": [{"frame": 2, "type": "depth", "segment": "tail"}'
