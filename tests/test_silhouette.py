@@ -82,8 +82,14 @@ def test_grey_video_keeps_a_person_darker_than_the_background():
     shade = colour.copy()
     shade[20:60, 40:55] = (colour[20:60, 40:55] * 0.75).astype(np.uint8)
     shade[10:70, 70:85] = (30, 200, 30)  # a person, so there is a blob to keep
-    sil = extract_silhouettes(shade[None], BackgroundModel.from_plate(colour, noise_sigma=2.0))
+    colour_bg = BackgroundModel.from_plate(colour, noise_sigma=2.0)
+    sil = extract_silhouettes(shade[None], colour_bg)
     assert sil.masks[0, 22:58, 42:53].mean() < 0.1
+    # ... also when the video opens on black frames (a fade-in): the plate decides
+    black = np.zeros_like(colour)
+    sil = extract_silhouettes(np.stack([black] * 8 + [shade]), colour_bg,
+                              require_person=False)
+    assert sil.masks[8, 22:58, 42:53].mean() < 0.1
 
 
 def test_frame_with_only_noise_specks_has_no_person():

@@ -423,8 +423,11 @@ class ConvertResult:
         model that fits the silhouettes poorly overall (median similarity below
         :data:`POOR_FIT`: a person gives 0.7-0.9, a moving box 0.36)."""
         out = []
-        missing = ~np.isfinite(self.image_joints2d).all(axis=(1, 2))
-        outside = (np.zeros(len(missing), bool) if self.outside is None
+        n = self.n_frames
+        j2 = self.image_joints2d
+        missing = (np.zeros(n, bool) if j2 is None
+                   else ~np.isfinite(j2).all(axis=(1, 2)))
+        outside = (np.zeros(n, bool) if self.outside is None
                    else np.asarray(self.outside, bool))
         if outside.any():
             out.append(f"person mostly outside the picture in {int(outside.sum())} frames "
@@ -701,7 +704,7 @@ def partly_outside(masks, *, min_share: float = 0.7, min_reference: int = 5) -> 
     of the person's usual area (the median over the frames that do not reach it) is
     a person walking out of (or into) the picture. The 2D model fitted to what is
     left of them is mostly guesswork (a synthetic walk leaving the frame: 2D error
-    8-80 % of the body's height in those frames, against 1-2 % before), so the
+    6-81 % of the body's height in those frames, against 1-2 % before), so the
     pipeline fills such frames from their neighbours, as frames without a person.
     Gait moves the area by about 15 %; a person cut for the whole clip (feet below
     the frame) has no reference and nothing is dropped.

@@ -344,11 +344,12 @@ def _params_for(background, frames_for_noise, threshold, local_factor, shadows, 
         work_scale = 2 if min(background.plate.shape[:2]) >= MIN_SIDE_FOR_HALF else 1
     if edge_band is None:
         edge_band = EDGE_BAND
-    if shadows and is_monochrome(frames_for_noise):
+    if shadows and is_monochrome(background.plate):
         # The shadow test looks for pixels darker than the plate *with the plate's
         # colour*; in a grey video every pixel has it, so a person darker than the
         # background by 5-40 % would be cut out as shadow (a third of the figure on
-        # a synthetic walk: IoU 0.93 -> 0.65). Without colour, shadows stay in.
+        # a synthetic walk: IoU 0.93 -> 0.65). Without colour, shadows stay in. The
+        # plate decides, not the first frames, which may be black (a fade-in).
         shadows = False
     return _Params(background, thr, local_factor, shadows, min_area, other_fraction,
                    close_size, work_scale, edge_band, edge_fraction)
@@ -458,8 +459,8 @@ def extract_silhouettes(
         Per-pixel threshold is ``max(threshold, local_factor * noise_map)``.
     shadows : bool
         Drop pixels that look like shadows (darker, same chromaticity). Off by
-        itself for grey video (:func:`is_monochrome` on the first frames), where
-        every pixel has the background's chromaticity.
+        itself when the background plate is grey (:func:`is_monochrome`): in grey
+        video every pixel has the background's chromaticity.
     min_area : int, optional
         Smallest blob that counts as a person, pixels (default 0.2% of the frame).
     other_fraction : float

@@ -92,4 +92,3 @@ def run(args) -> int:
                 print(f"    {c['frame']:5d}  {c['segment']:<12s} {word:<6s} "
                       f"(frames {c['run'][0]}-{c['run'][1]})")
     return 0
-
