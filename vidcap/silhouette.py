@@ -362,7 +362,7 @@ def is_monochrome(frames, *, max_spread: int = 4) -> bool:
     Monochrome cameras (infrared, many machine-vision and surveillance cameras) and
     grey encodings decode to three equal channels; a colour encoder's chroma noise on
     grey content stays within a level or two. Faded colour video is well above
-    (``ido_walk.avi``: 22 at the 99th percentile).
+    (the plate of ``ido_walk.avi``: 21 at the 99th percentile).
 
     Parameters
     ----------
