@@ -211,6 +211,17 @@ def test_info_on_a_good_clip(tmp_path, cli):
     assert "7 frames" in r.stdout and "64x48" in r.stdout
 
 
+def test_info_lists_every_file_and_reports_the_bad_ones(bad_videos, tmp_path, cli):
+    good = tmp_path / "ok.mp4"
+    write_video(good, _frames(7), fps=12)
+    r = cli("info", bad_videos["text"], good, tmp_path / "missing.mp4")
+    assert r.returncode == 2
+    assert r.stdout.strip().splitlines() == [f"{good}: 7 frames, 12 fps, 64x48, h264, 0.58 s"]
+    errors = r.stderr.strip().splitlines()
+    assert [e.split(": ")[2] for e in errors] == [str(bad_videos["text"]),
+                                                  str(tmp_path / "missing.mp4")]
+
+
 def test_outputs_get_ordinary_file_permissions(tmp_path):
     import os
 

@@ -18,10 +18,24 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    """Run ``vidcap info``: one line per video; a bad file is reported in its place
+    (``vidcap: error: ...``) and the others still listed; exit 2 if any was bad."""
+    import sys
+
+    from vidcap.errors import VidcapError
+
+    bad = 0
     for path in args.videos:
-        info = probe(path, count=args.count)
+        try:
+            info = probe(path, count=args.count)
+        except VidcapError as exc:
+            if len(args.videos) == 1:
+                raise
+            print(f"vidcap: error: {exc}", file=sys.stderr)
+            bad += 1
+            continue
         print(
             f"{path}: {info.n_frames} frames, {info.fps:g} fps, {info.width}x{info.height}, "
-            f"{info.codec}, {info.duration:.2f} s"
+            f"{info.codec}, {info.duration:.2f} s", flush=True
         )
-    return 0
+    return 2 if bad else 0
