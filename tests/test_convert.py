@@ -216,6 +216,18 @@ def test_review_frames_are_three_panels_wide(tmp_path, converted):
     assert not np.array_equal(img[:, :w], third)
 
 
+def test_review_refuses_results_of_another_video(tmp_path, converted):
+    from vidcap.video import write_video
+
+    _, npz, _ = converted
+    other = tmp_path / "other.mp4"
+    write_video(other, [np.zeros((48, 64, 3), np.uint8)] * 3, 25.0)
+    r = run_cli("review", other, "--from", npz, "-o", tmp_path / "r.mp4")
+    assert r.returncode == 2 and not (tmp_path / "r.mp4").exists()
+    assert r.stderr.strip().splitlines()[-1] == (
+        f"vidcap: error: {npz}: saved for a 480x360 video, but {other} is 64x48")
+
+
 def test_second_run_uses_the_stage_cache(converted):
     from vidcap.pipeline import convert
 

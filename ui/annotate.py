@@ -64,7 +64,8 @@ class AnnotateApp:
         import pyvista as pv
         from trame.app import get_server
 
-        from ui.view import Points3D, Scene, _quiet_vtk
+        from ui.view import Points3D, Scene
+        from vidcap.review import quiet_vtk
 
         self.session = session
         session.defer_refresh = True  # edits answer at once; re-proposals run in a worker
@@ -79,7 +80,7 @@ class AnnotateApp:
         j3 = self._floor(session.joints3d)
         self._points3d = Points3D(JOINT_NAMES, j3, np.asarray(SEGMENT_JOINTS), session.clip.fps, 1)
         if not os.environ.get("DISPLAY"):
-            _quiet_vtk()
+            quiet_vtk()
         self.plotter = pv.Plotter(off_screen=True, window_size=[420, 320])
         self.scene = Scene(self._points3d, plotter=self.plotter, view_direction=(0.6, 0.3, 1.0),
                            follow=True)

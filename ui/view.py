@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.errors import InputFileError, UsageError
+from vidcap.review import quiet_vtk
 
 #: Colours of the scene (RGB 0-1).
 BONE_COLOUR = (0.16, 0.42, 0.80)
@@ -264,7 +265,7 @@ class Scene:
         self.bone_rgb = None
         self.frame = 0
         if (off_screen or pv.OFF_SCREEN) and not os.environ.get("DISPLAY"):
-            _quiet_vtk()
+            quiet_vtk()
         self.plotter = plotter if plotter is not None else pv.Plotter(
             off_screen=pv.OFF_SCREEN if off_screen is None else off_screen,
             window_size=list(window_size))
@@ -424,16 +425,6 @@ class Scene:
                 time.sleep(1.0 / 60.0)
         finally:
             self.plotter.close()
-
-
-def _quiet_vtk() -> None:
-    """Hide VTK's harmless "bad X server connection" warning before it falls back to EGL."""
-    try:
-        from vtkmodules.vtkCommonCore import vtkLogger
-
-        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
-    except ImportError:  # pragma: no cover - older VTK
-        pass
 
 
 def _save_png(img: np.ndarray, path) -> None:

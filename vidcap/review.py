@@ -7,6 +7,8 @@ depth is visible, with a floor grid.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS, SEGMENT_NAMES
@@ -44,12 +46,24 @@ def draw_2d(mask, joints2d, *, low=None) -> np.ndarray:
     return img
 
 
+def quiet_vtk() -> None:
+    """Hide VTK's harmless "bad X server connection" warning before it falls back to EGL."""
+    try:
+        from vtkmodules.vtkCommonCore import vtkLogger
+
+        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
+    except ImportError:  # pragma: no cover - older VTK
+        pass
+
+
 class PoseRenderer:
     """Off-screen pyvista renderer of the 3D skeleton, one (H, W, 3) BGR image per pose."""
 
     def __init__(self, size: tuple[int, int], *, azimuth_deg: float = 40.0, height: float = 1.75):
         import pyvista as pv
 
+        if not os.environ.get("DISPLAY"):  # no X: VTK warns, then uses EGL
+            quiet_vtk()
         pv.OFF_SCREEN = True
         w, h = size
         self.pl = pv.Plotter(off_screen=True, window_size=(w + (w % 2), h + (h % 2)))

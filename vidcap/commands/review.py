@@ -72,6 +72,16 @@ def run(args) -> int:
              "bvh_joints3d": res.motion.positions(), "scores": res.scores,
              "similarity": res.similarity, "outside": res.outside}
     n = len(d["masks"])
+    if args.from_npz:
+        # results of another video (or of another cut of it) would be drawn over
+        # frames they do not belong to: refuse them
+        h, w = d["masks"].shape[1:]
+        if (w, h) != (info.width, info.height):
+            raise InputFileError(f"saved for a {w}x{h} video, but {args.video} is "
+                                 f"{info.width}x{info.height}", args.from_npz)
+        if info.n_frames and abs(info.n_frames - n) > 1:
+            raise InputFileError(f"saved for {n} frames, but {args.video} has "
+                                 f"{info.n_frames}", args.from_npz)
     filled = ~frames_with_pixels(d["masks"])
     if d.get("outside") is not None:  # (saved by versions that leave such frames out)
         filled |= np.asarray(d["outside"], bool)
