@@ -64,3 +64,12 @@ def test_missing_folders_are_fine_and_atomic_path_checks_too(tmp_path):
     with pytest.raises(UsageError, match="is a folder"):
         with atomic_path(tmp_path / "new"):
             pass
+
+
+@pytest.mark.parametrize("value", ["2", "-0.1"])
+def test_keyframes_threshold_must_be_a_similarity(video, capsys, value):
+    code, err = _error(capsys, ["convert", video, "-o", video.with_suffix(".bvh"),
+                                "--keyframes", value])
+    assert code == 2
+    assert err == [f"vidcap: error: --keyframes is a fit similarity between 0 and 1, got "
+                   f"{float(value)}"]

@@ -54,6 +54,8 @@ def run(args) -> int:
         raise UsageError(f"--height must be positive metres, got {args.height}")
     if args.smooth < 0:
         raise UsageError(f"--smooth must not be negative, got {args.smooth}")
+    if args.keyframes is not None and not 0.0 <= args.keyframes <= 1.0:
+        raise UsageError(f"--keyframes is a fit similarity between 0 and 1, got {args.keyframes}")
     if args.jobs is not None and args.jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
     log = (lambda m: None) if args.quiet else (lambda m: print(f"vidcap: {m}", file=sys.stderr))
