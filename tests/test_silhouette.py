@@ -121,6 +121,28 @@ def test_holes_filled_largest_blob_kept_others_reported():
     assert (f, x0, y0, x1, y1) == (0, 80, 30, 100, 70)
 
 
+
+def test_the_person_is_followed_not_the_largest_blob():
+    """Two figures of about the same size: the one taken in the first frame is kept
+    while their areas trade places every frame; one twice as large takes over."""
+    rng = np.random.default_rng(16)
+    plate = background(160, 200, rng)
+    frames, a_boxes = [], []
+    for k in range(12):
+        f = plate.copy()
+        ha, hb = (62, 58) if k % 2 == 0 else (58, 62)  # the larger one alternates
+        if k >= 9:
+            hb = 2 * ha + 10  # B comes much closer (taller, same width x 2)
+        f[20:20 + ha, 30 + 2 * k:45 + 2 * k] = (30, 200, 30)  # A, walking right
+        f[150 - hb:150, 140 - 2 * k:155 - 2 * k + (15 if k >= 9 else 0)] = (200, 30, 30)
+        frames.append(f)
+        a_boxes.append((30 + 2 * k, 20, 45 + 2 * k, 20 + ha))
+    sil = extract_silhouettes(np.stack(frames), BackgroundModel.from_plate(plate,
+                                                                           noise_sigma=2.0))
+    on_a = [abs(int(sil.bbox[k, 0]) - a_boxes[k][0]) <= 2 for k in range(12)]
+    assert on_a == [True] * 9 + [False] * 3
+    assert (sil.n_other_blobs == 1).all()  # the other figure is still reported
+
 def test_given_plate_measures_its_own_threshold():
     rng = np.random.default_rng(14)
     plate = background(80, 100, rng)

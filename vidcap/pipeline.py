@@ -351,8 +351,9 @@ def _video_identity(video: Path) -> dict:
 #: Median 2D-fit similarity (Eq. 3.1) below which a result is reported as a poor fit.
 POOR_FIT = 0.5
 #: Bumped when the silhouette stage's results change for the same video and options
-#: (2: no shadow test on grey video), so caches written by older versions are redone.
-_SILHOUETTE_VERSION = 2
+#: (2: no shadow test on grey video; 3: the person followed, not the largest blob), so
+#: caches written by older versions are redone.
+_SILHOUETTE_VERSION = 3
 
 
 def _key(*parts) -> str:
@@ -611,7 +612,8 @@ def run(
             # extra blob in a frame or two is a plate artefact, not a person, and is not
             # told)
             log(f"more than one person-sized blob in {crowded} of {len(masks)} frames "
-                f"(up to {int(n_other.max()) + 1} at once); the largest is followed")
+                f"(up to {int(n_other.max()) + 1} at once); one is followed from frame to frame "
+                "(the largest at first)")
         if len(masks) != info.n_frames and info.n_frames:
             log(f"decoded {len(masks)} frames (container says {info.n_frames})")
 

@@ -9,8 +9,10 @@ lighting drift), the L1 colour difference ``sum_c |frame_c - plate_c|`` (grey
 levels, 0..765) is compared with a per-pixel threshold ``max(threshold,
 local_factor * noise_map)``, pixels that are merely darker with the background's
 chromaticity (shadows) are dropped, a 3x3 median removes specks, a closing joins
-fragments, and the largest connected blob - holes filled - is the person. Other
-person-sized blobs are reported, not silently dropped.
+fragments, and the largest connected blob - holes filled - is the person (from the
+second frame on, a blob of similar size that overlaps the person's previous box is
+followed instead: two people do not trade places). Other person-sized blobs are
+reported, not silently dropped.
 
 All image operations are OpenCV on uint8, so a 640x480 frame takes ~1-2 ms.
 """
@@ -181,8 +183,36 @@ def _gain(frame: np.ndarray, p: _Params) -> np.ndarray:
     return np.clip(np.median(ratio, axis=0), 0.25, 4.0).astype(np.float32)
 
 
-def silhouette_frame(frame: np.ndarray, p: _Params) -> tuple[FrameSilhouette, np.ndarray]:
-    """One frame (internal; use :func:`extract_silhouettes`)."""
+#: A blob at least this share of the largest one's area may be followed instead of it.
+FOLLOW_SHARE = 0.5
+
+
+def _follow(contours, areas, order, prev_box, p: _Params) -> int:
+    """Index of the blob to take as the person: of the blobs at least
+    :data:`FOLLOW_SHARE` of the largest, the one whose box overlaps ``prev_box`` (the
+    person's in the previous frame, full-resolution ``x0, y0, x1, y1``) most, if it
+    overlaps it by an IoU above 0.2; else the largest. Two people of similar size
+    then do not trade places from frame to frame; one much larger still takes over.
+    """
+    best, best_iou = order[0], 0.2
+    px0, py0, px1, py1 = (float(v) for v in prev_box)
+    for i in order:
+        if areas[i] < max(p.min_area, FOLLOW_SHARE * areas[order[0]]):
+            break  # (sorted by area)
+        x, y, w, h = cv2.boundingRect(_to_full(contours[i], p))
+        ix = max(0.0, min(px1, x + w) - max(px0, x))
+        iy = max(0.0, min(py1, y + h) - max(py0, y))
+        inter = ix * iy
+        iou = inter / ((px1 - px0) * (py1 - py0) + w * h - inter)
+        if iou > best_iou:
+            best, best_iou = i, iou
+    return best
+
+
+def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
+                     ) -> tuple[FrameSilhouette, np.ndarray]:
+    """One frame (internal; use :func:`extract_silhouettes`). ``prev_box``: the
+    person's box in the previous frame where one was found (:func:`_follow`)."""
     full_frame = frame
     if p.work_size is not None:
         frame = cv2.resize(frame, p.work_size, interpolation=cv2.INTER_AREA)
@@ -228,6 +258,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params) -> tuple[FrameSilhouette, np
         areas = np.array([cv2.contourArea(c) for c in contours]) * px
         order = np.argsort(areas)[::-1]
         best = order[0]
+        if prev_box is not None and len(order) > 1:
+            best = _follow(contours, areas, order, prev_box, p)
         if areas[best] >= p.min_area:
             c = _to_full(contours[best], p)
             cv2.drawContours(mask, [c], 0, 1, cv2.FILLED)
@@ -238,8 +270,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params) -> tuple[FrameSilhouette, np
             x, y, w, h = cv2.boundingRect(mask)
             bbox = np.array([x, y, x + w, y + h], np.int64)
             area = int(cv2.countNonZero(mask))
-            keep = [i for i in order[1:]
-                    if areas[i] >= max(p.min_area, p.other_fraction * areas[best])]
+            keep = [i for i in order if i != best
+                    and areas[i] >= max(p.min_area, p.other_fraction * areas[best])]
             rows = []
             for i in keep:
                 x, y, w, h = cv2.boundingRect(_to_full(contours[i], p))
@@ -415,6 +447,7 @@ def iter_silhouettes(
 
         chunks = iter_frame_lists(source, chunk_size=chunk_size)
     params = None
+    prev_box = None
     for chunk in chunks:
         h, w = chunk[0].shape[:2]
         if (h, w) != background.plate.shape[:2]:
@@ -427,8 +460,14 @@ def iter_silhouettes(
             params = _params_for(background, np.asarray(chunk[:8]), threshold, local_factor,
                                  shadows, min_area, other_fraction, close_size, work_scale,
                                  edge_band, edge_fraction)
-        out = [silhouette_frame(frame, params) for frame in chunk]
-        yield chunk, [r for r, _ in out], np.array([g for _, g in out])
+        results, gains = [], []
+        for frame in chunk:
+            r, g = silhouette_frame(frame, params, prev_box)
+            if r.bbox[0] >= 0:
+                prev_box = r.bbox  # the person is followed, not the largest blob
+            results.append(r)
+            gains.append(g)
+        yield chunk, results, np.array(gains)
     if params is None:
         raise VidcapError("the video has no frames",
                           None if isinstance(source, np.ndarray) else source)
