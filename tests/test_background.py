@@ -152,3 +152,25 @@ def test_static_torso_is_flagged_never_seen_and_inpainted():
     err_fz = np.median(_plate_error(fz.plate[always], truth[always]))
     err_med = np.median(_plate_error(med.plate[always], truth[always]))
     assert err_fz < 0.5 * err_med
+
+
+def test_masked_median_equals_a_partition_for_every_sample_count():
+    """The few-sample path (a sorting network of min / max) and the partition give
+    the same per-pixel median of the included samples, for 1-12 samples."""
+    from vidcap.background import _masked_median
+
+    rng = np.random.default_rng(3)
+    for k in range(1, 13):
+        x = rng.integers(0, 256, (k, 9, 11, 3), dtype=np.uint8)
+        excl = rng.random((k, 9, 11)) < 0.3
+        excl[:, 0, 0] = True  # a pixel with no sample included
+        for e in (None, excl):
+            got = _masked_median(x, e)
+            for yy in range(9):
+                for xx in range(11):
+                    keep = np.ones(k, bool) if e is None else ~e[:, yy, xx]
+                    if not keep.any():
+                        continue
+                    s = np.sort(x[keep, yy, xx], axis=0)
+                    # the included samples' middle rank (the lower one for an even count)
+                    assert (got[yy, xx] == s[(keep.sum() - 1) // 2]).all(), (k, yy, xx)

@@ -373,7 +373,9 @@ def _params_for(background, frames_for_noise, threshold, local_factor, shadows, 
     if work_scale is None:
         # Large frames: a person 200+ rows tall at half resolution loses nothing
         # the fitter uses, and every image operation is four times cheaper.
-        work_scale = 2 if min(background.plate.shape[:2]) >= MIN_SIDE_FOR_HALF else 1
+        # Larger still (1440p, 4K): shrunk to a shorter side of 480-720 pixels.
+        short = min(background.plate.shape[:2])
+        work_scale = max(2, short // MIN_SIDE_FOR_HALF) if short >= MIN_SIDE_FOR_HALF else 1
     if edge_band is None:
         edge_band = EDGE_BAND
     if shadows and is_monochrome(background.plate):
@@ -515,8 +517,9 @@ def extract_silhouettes(
     work_scale : int, optional
         Difference, threshold, shadow test and clean-up run on frames shrunk by
         this factor (area averaging); the person's outline is scaled back and the
-        mask drawn at the video's resolution. Default: 2 when the frame's shorter
-        side is at least ``MIN_SIDE_FOR_HALF`` (480) pixels, else 1.
+        mask drawn at the video's resolution. Default: 1 when the frame's shorter
+        side is below ``MIN_SIDE_FOR_HALF`` (480) pixels, else ``max(2, side //
+        480)`` (2 up to 1080p, 4 at 4K).
     edge_band : int, optional
         Pixels (full resolution) either side of the outline that are re-decided
         at full resolution by the person's own contrast: a pixel stays when its
