@@ -23,6 +23,9 @@ from vidcap.body import JOINT_NAMES, ORIENTATIONS, SEGMENT_JOINTS
 
 #: Width in pixels of the frame picture on the page (small clips are scaled up).
 DISPLAY_WIDTH = 640
+#: Wider videos (1080p, 4K) are shown shrunk to this width: the page sends every frame
+#: as a JPEG, and a 4K one is megabytes.
+MAX_DISPLAY_WIDTH = 1280
 #: Radius in display pixels within which a mouse press picks a joint up.
 PICK_RADIUS = 14
 
@@ -72,7 +75,8 @@ class AnnotateApp:
         self.server = server or get_server(f"vidcap-annotate-{id(self)}", client_type="vue3")
         self.state, self.ctrl = self.server.state, self.server.controller
         w, h = session.clip.size
-        self.display_scale = max(1.0, DISPLAY_WIDTH / w) if w < DISPLAY_WIDTH else 1.0
+        self.display_scale = (DISPLAY_WIDTH / w if w < DISPLAY_WIDTH
+                              else min(1.0, MAX_DISPLAY_WIDTH / w))
         self._drag: str | None = None
         self._play_task = None
 

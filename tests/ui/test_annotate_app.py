@@ -40,6 +40,41 @@ def test_page_state_for_a_frame(app):
                                app.session.joints2d[0], atol=0.06)
 
 
+def test_wide_videos_are_shown_shrunk_and_clicks_map_back(walk_clip, tmp_path, monkeypatch):
+    """A 4K-wide clip is shown 1280 px wide (not 3840): the joints on the page and a
+    click on one of them are in the shrunk picture's pixels, edits in the video's."""
+    import dataclasses
+
+    import pyvista as pv
+
+    from ui.annotate import MAX_DISPLAY_WIDTH
+
+    monkeypatch.setattr(pv, "OFF_SCREEN", True)
+    w0, h0 = walk_clip.size
+    k = 8  # 480 x 360 -> 3840 x 2880
+    big = dataclasses.replace(
+        walk_clip, joints2d=walk_clip.joints2d * k, size=(w0 * k, h0 * k),
+        read_frame=lambda i: np.repeat(np.repeat(walk_clip.read_frame(i), k, 0), k, 1),
+        masks=None)
+    app = AnnotateApp(AnnotateSession(big, tmp_path / "a.json"))
+    try:
+        assert app.display_scale == MAX_DISPLAY_WIDTH / (w0 * k)
+        import base64
+
+        import cv2
+
+        jpeg = base64.b64decode(app.state.frame_src.split(",", 1)[1])
+        shown = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+        assert shown.shape[1] == MAX_DISPLAY_WIDTH
+        np.testing.assert_allclose(np.array(app.state.joints_display) / app.display_scale,
+                                   big.joints2d[0], atol=0.06 * k)
+        x, y = app.state.joints_display[JOINT_NAMES.index("l_ankle")]
+        _call(app, "drag_start", x, y)
+        assert app.state.drag_joint == "l_ankle"
+    finally:
+        app.plotter.close()
+
+
 def test_triggers_edit_and_save(app, tmp_path):
     st = app.state
     _call(app, "goto", 4)
