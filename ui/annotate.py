@@ -18,14 +18,11 @@ import sys
 import numpy as np
 
 from ui import render
-from ui.session import AnnotateSession
+from ui.session import MAX_DISPLAY_WIDTH, AnnotateSession
 from vidcap.body import JOINT_NAMES, ORIENTATIONS, SEGMENT_JOINTS
 
 #: Width in pixels of the frame picture on the page (small clips are scaled up).
 DISPLAY_WIDTH = 640
-#: Wider videos (1080p, 4K) are shown shrunk to this width: the page sends every frame
-#: as a JPEG, and a 4K one is megabytes.
-MAX_DISPLAY_WIDTH = 1280
 #: Radius in display pixels within which a mouse press picks a joint up.
 PICK_RADIUS = 14
 
@@ -153,7 +150,7 @@ class AnnotateApp:
         user_joints = np.isfinite(s.user_joints[f]).all(-1)
         frame = s.clip.read_frame(f)
         scale = self.display_scale
-        big = render.fit_width(frame, round(frame.shape[1] * scale))
+        big = render.fit_width(frame, round(s.clip.size[0] * scale))  # frames may come shrunk
         j2 = s.joints2d[f] * scale
         overlay = render.draw_model(big, j2, signs, low_confidence=low, user_signs=user_signs,
                                     user_joints=user_joints)

@@ -44,7 +44,8 @@ class ClipData:
     fps : float
         Frames per second.
     read_frame : callable
-        ``read_frame(i) -> (H, W, 3) uint8`` BGR frame ``i``.
+        ``read_frame(i) -> (H, W, 3) uint8`` BGR frame ``i``, at the video's size or
+        shrunk (same aspect; ``size`` is the video's).
     joints2d : numpy.ndarray, shape (F, 15, 2)
         2D joints as the 2D stage gives them, pixels (x right, y down); NaN in frames
         without a person.
@@ -99,6 +100,11 @@ class ClipData:
     def n_frames(self) -> int:
         """Number of frames F."""
         return self.joints2d.shape[0]
+
+
+#: Frames are shown (and kept for the page) at most this wide: the page sends every
+#: frame as a JPEG, and a 4K one is megabytes.
+MAX_DISPLAY_WIDTH = 1280
 
 
 def sign_doubt(margin: np.ndarray, zeta: np.ndarray, body: BodyModel, *,
@@ -494,7 +500,8 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     Returns
     -------
     ClipData
-        Frames are kept in memory as JPEG (about 30 kB each) and decoded on demand.
+        Frames are kept in memory as JPEG (about 30 kB each), at most
+        :data:`MAX_DISPLAY_WIDTH` wide, and decoded on demand.
 
     Raises
     ------
@@ -514,7 +521,13 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                        progress=progress, log=log)
     joints2d, spread = res.image_joints2d, res.spread
     jpegs = []
+    size = (0, 0)
     for frame in iter_frames(video):
+        h, w = frame.shape[:2]
+        size = (w, h)
+        if w > MAX_DISPLAY_WIDTH:  # kept at the size the page shows (4K: 1/9 the memory)
+            frame = cv2.resize(frame, (MAX_DISPLAY_WIDTH, round(h * MAX_DISPLAY_WIDTH / w)),
+                               interpolation=cv2.INTER_AREA)
         ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
         jpegs.append(buf)
     n = min(len(jpegs), res.n_frames)
@@ -531,6 +544,6 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     image_sides=True, spread=None if spread is None else spread[:n],
                     track=None if track is None else track[:n],
                     model_height=None if res.model_height is None else res.model_height[:n],
-                    body=BodyModel(height=height))
+                    body=BodyModel(height=height), size=size)
 
 
