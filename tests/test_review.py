@@ -64,3 +64,25 @@ def test_filled_frames_are_framed_in_orange():
     orange = np.array([0, 165, 255])
     assert (filled[h // 2, w] == orange).all()  # left edge of the middle panel
     assert not (fitted[h // 2, w] == orange).all()
+
+
+def test_tall_videos_are_reviewed_shrunk():
+    """A frame taller than max_height is shown shrunk (area averaging), silhouette and
+    2D model with it, so a 4K video does not give an 11520 px wide review."""
+    from vidcap.review import review_frames
+
+    h, w = 800, 600
+    frame = np.zeros((h, w, 3), np.uint8)
+    frame[400:, :] = 200  # bottom half bright
+    mask = np.zeros((1, h, w), bool)
+    mask[0, 100:700, 250:350] = True
+    joints2d = np.full((1, 15, 2), 300.0)
+    joints3d = BodyModel().rest_positions()[None]
+    (img,) = review_frames([frame], mask, joints2d, joints3d, max_height=200)
+    assert img.shape == (200, 3 * 150, 3)
+    assert img[150, 20].min() == 200 and img[50, 20].max() == 0  # the input, shrunk by 4
+    mid = img[:, 150:300]
+    # the silhouette shrunk with it: grey at the person's place, dark beside it
+    assert mid[40, 75, 0] == 110 and mid[40, 20, 0] == 25  # (rows 25-175, cols 62-87)
+    (same,) = review_frames([frame], mask, joints2d, joints3d, max_height=0)
+    assert same.shape == (h, 3 * w, 3)

@@ -116,7 +116,7 @@ def review_scale(frame_height: int, min_height: int) -> int:
 
 def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=None,
                   low_score: float = 0.5, height: float = 1.75, min_height: int = 360,
-                  filled=None):
+                  filled=None, max_height: int = 720):
     """Yield the three-panel review images, (k H, 3 k W, 3) uint8 BGR each.
 
     Parameters
@@ -136,6 +136,10 @@ def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=
         ``k = ceil(min_height / H)`` (:func:`review_scale`; pixels repeated, so the
         input is shown as it is), so a 180x144 clip is not reviewed at thumbnail
         size. 0 or a frame at least this tall: ``k = 1``.
+    max_height : int
+        Panels of a taller video are shrunk to this height (area averaging), so a
+        1080p or 4K video gives a review a player can show (a 4K one was 11520 px
+        wide). 0: never shrunk.
     """
     import cv2
 
@@ -144,18 +148,28 @@ def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=
     try:
         for f, frame in enumerate(frames):
             if renderer is None:
-                k = review_scale(frame.shape[0], min_height)
-                renderer = PoseRenderer((k * frame.shape[1], k * frame.shape[0]),
-                                        height=height)
+                fh, fw = frame.shape[:2]
+                k = review_scale(fh, min_height)
+                shrink = bool(max_height) and fh > max_height
+                # (even sizes: the video encoder's 4:2:0 chroma needs them)
+                size = ((2 * round(fw * max_height / fh / 2), max_height) if shrink
+                        else (k * fw, k * fh))
+                renderer = PoseRenderer(size, height=height)
             mask = np.asarray(masks[f], bool)
-            if k > 1:
+            j2 = np.asarray(joints2d[f], float)
+            if shrink:
+                sx, sy = size[0] / fw, size[1] / fh
+                frame = cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
+                mask = cv2.resize(mask.view(np.uint8), size, interpolation=cv2.INTER_AREA) > 0
+                j2 = (j2 + 0.5) * (sx, sy) - 0.5  # pixel centres
+            elif k > 1:
                 frame = cv2.resize(frame, None, fx=k, fy=k, interpolation=cv2.INTER_NEAREST)
                 mask = mask.repeat(k, 0).repeat(k, 1)
+                j2 = k * j2 + (k - 1) / 2  # pixel centres: (x, y) -> k x + (k - 1) / 2
             h, w = frame.shape[:2]
             low = None if scores is None else np.asarray(scores[f]) < low_score
             left = frame.copy()
-            # pixel centres: original (x, y) -> k x + (k - 1) / 2
-            mid = draw_2d(mask, k * np.asarray(joints2d[f], float) + (k - 1) / 2, low=low)
+            mid = draw_2d(mask, j2, low=low)
             right = renderer.render(joints3d[f])
             img = np.concatenate([left, mid, right], axis=1)
             fs = max(0.4, h / 600)

@@ -33,6 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-height", type=int, default=360, metavar="PX",
                         help="enlarge the panels of smaller videos by a whole factor to at "
                              "least PX pixels tall (default 360; 0: never)")
+    parser.add_argument("--max-height", type=int, default=720, metavar="PX",
+                        help="shrink the panels of taller videos to PX pixels tall, so the "
+                             "review stays playable (default 720; 0: never)")
 
 
 def _load(path) -> dict:
@@ -59,6 +62,8 @@ def run(args) -> int:
     from vidcap.review import review_frames
     from vidcap.video import iter_frames, probe
 
+    if args.max_height < 0 or args.min_height < 0:
+        raise UsageError("--min-height and --max-height are pixels (0 or more)")
     if not args.output and not args.png:
         raise UsageError("give -o review.mp4 or --png DIR")
     info = probe(args.video)
@@ -88,7 +93,8 @@ def run(args) -> int:
     frames = (f for i, f in enumerate(iter_frames(args.video)) if i < n)
     imgs = review_frames(frames, d["masks"], d["joints2d"], d["bvh_joints3d"],
                          scores=d.get("scores"), similarity=d.get("similarity"),
-                         height=args.height, min_height=args.min_height, filled=filled)
+                         height=args.height, min_height=args.min_height, filled=filled,
+                         max_height=args.max_height)
     if args.png:
         out = Path(args.png)
         out.mkdir(parents=True, exist_ok=True)
