@@ -448,13 +448,19 @@ class AnnotateSession:
             if self.user_signs[c["frame"], k] == 0:
                 out.append({"frame": int(c["frame"]), "segment": c["segment"],
                             "reason": f"{c['segment'].replace('_', ' ')}: depth doubtful"})
-        bad = np.flatnonzero(self.clip.fit_score < self.low_fit)
-        for f in bad[np.argsort(self.clip.fit_score[bad], kind="stable")]:
-            score = self.clip.fit_score[f]
-            reason = (f"2D fit poor ({score:.2f})" if score > 0 else
-                      "not fitted (no person, or mostly outside the picture): pose filled "
-                      "from the frames around")
-            out.append({"frame": int(f), "segment": "", "reason": reason})
+        from vidcap.pipeline import true_runs
+
+        # frames not fitted at all (score 0): one item per run, at its first frame
+        for a, b in true_runs(self.clip.fit_score <= 0):
+            where = f"frame {a}" if a == b else f"frames {a}-{b}"
+            out.append({"frame": int(a), "segment": "",
+                        "reason": f"{where} not fitted (no person, or mostly outside the "
+                                  "picture): pose filled from the frames around"})
+        score = self.clip.fit_score
+        bad = np.flatnonzero((score < self.low_fit) & (score > 0))
+        for f in bad[np.argsort(score[bad], kind="stable")]:
+            out.append({"frame": int(f), "segment": "",
+                        "reason": f"2D fit poor ({score[f]:.2f})"})
         return out
 
     def next_attention(self, frame: int) -> dict | None:

@@ -691,11 +691,16 @@ def _preload_lift() -> None:
     threading.Thread(target=load, name="vidcap-preload", daemon=True).start()
 
 
-def frame_runs(flags, limit: int = 4) -> str:
-    """``'0-14, 30-37'``: the runs of True in ``flags`` (F,), the first ``limit``."""
+def true_runs(flags) -> list[tuple[int, int]]:
+    """The runs of True in ``flags`` (F,) as (first, last) frame pairs."""
     f = np.r_[False, np.asarray(flags, bool), False].astype(int)
     starts, stops = np.flatnonzero(np.diff(f) == 1), np.flatnonzero(np.diff(f) == -1) - 1
-    parts = [f"{a}" if a == b else f"{a}-{b}" for a, b in zip(starts, stops, strict=True)]
+    return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
+
+
+def frame_runs(flags, limit: int = 4) -> str:
+    """``'0-14, 30-37'``: the runs of True in ``flags`` (F,), the first ``limit``."""
+    parts = [f"{a}" if a == b else f"{a}-{b}" for a, b in true_runs(flags)]
     return ", ".join(parts[:limit]) + (", ..." if len(parts) > limit else "")
 
 
