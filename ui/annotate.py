@@ -12,7 +12,6 @@ that needs attention.
 from __future__ import annotations
 
 import asyncio
-import os
 import sys
 
 import numpy as np
@@ -80,8 +79,7 @@ class AnnotateApp:
         # live 3D pose: the whole clip frames the camera and the floor
         j3 = self._floor(session.joints3d)
         self._points3d = Points3D(JOINT_NAMES, j3, np.asarray(SEGMENT_JOINTS), session.clip.fps, 1)
-        if not os.environ.get("DISPLAY"):
-            quiet_vtk()
+        quiet_vtk()
         self.plotter = pv.Plotter(off_screen=True, window_size=[420, 320])
         self.scene = Scene(self._points3d, plotter=self.plotter, view_direction=(0.6, 0.3, 1.0),
                            follow=True)

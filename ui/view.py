@@ -264,7 +264,7 @@ class Scene:
         #: Optional per-frame bone colours (F, B, 3) uint8 RGB for the main data.
         self.bone_rgb = None
         self.frame = 0
-        if (off_screen or pv.OFF_SCREEN) and not os.environ.get("DISPLAY"):
+        if off_screen or pv.OFF_SCREEN:
             quiet_vtk()
         self.plotter = plotter if plotter is not None else pv.Plotter(
             off_screen=pv.OFF_SCREEN if off_screen is None else off_screen,

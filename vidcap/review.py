@@ -47,7 +47,10 @@ def draw_2d(mask, joints2d, *, low=None) -> np.ndarray:
 
 
 def quiet_vtk() -> None:
-    """Hide VTK's harmless "bad X server connection" warning before it falls back to EGL."""
+    """Without an X display, hide VTK's harmless "bad X server connection" warning
+    before it falls back to EGL (with one, VTK's warnings stay)."""
+    if os.environ.get("DISPLAY"):
+        return
     try:
         from vtkmodules.vtkCommonCore import vtkLogger
 
@@ -62,8 +65,7 @@ class PoseRenderer:
     def __init__(self, size: tuple[int, int], *, azimuth_deg: float = 40.0, height: float = 1.75):
         import pyvista as pv
 
-        if not os.environ.get("DISPLAY"):  # no X: VTK warns, then uses EGL
-            quiet_vtk()
+        quiet_vtk()
         pv.OFF_SCREEN = True
         w, h = size
         self.pl = pv.Plotter(off_screen=True, window_size=(w + (w % 2), h + (h % 2)))
@@ -117,7 +119,8 @@ def review_scale(frame_height: int, min_height: int) -> int:
 def review_frames(frames, masks, joints2d, joints3d, *, scores=None, similarity=None,
                   low_score: float = 0.5, height: float = 1.75, min_height: int = 360,
                   filled=None, max_height: int = 720):
-    """Yield the three-panel review images, (k H, 3 k W, 3) uint8 BGR each.
+    """Yield the three-panel review images, (k H, 3 k W, 3) uint8 BGR each (H, W
+    shrunk to ``max_height`` for a tall video).
 
     Parameters
     ----------
