@@ -263,3 +263,21 @@ def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
     assert read_bvh(tmp_path / "a.bvh").n_frames == 130
     r = run_cli("convert", video, "-o", tmp_path / "c.bvh", "--jobs", "0")
     assert r.returncode == 2 and "--jobs" in r.stderr
+
+
+def test_view_side_on_a_real_side_view_walk(tmp_path, shared_data):
+    """Weizmann's ido walks across the picture, seen from his right side. Told
+    ``--view side``, every frame is a side view facing the walking direction (image
+    right), and the wavering-view notice is not printed."""
+    video = shared_data("video/ido_walk.avi")
+    npz = tmp_path / "ido.npz"
+    r = run_cli("convert", video, "-o", tmp_path / "ido.bvh", "--view", "side",
+                "--save", npz, "--no-cache", "--jobs", "1")
+    assert r.returncode == 0, r.stderr
+    with np.load(npz) as z:
+        assert set(z["orientation"]) == {"right"}
+        np.testing.assert_allclose(z["yaw"], np.pi / 2)
+    assert "--view side" not in r.stdout
+    bad = run_cli("convert", video, "-o", tmp_path / "x.bvh", "--view", "sideways")
+    assert bad.returncode == 2 and "invalid choice: 'sideways'" in bad.stderr
+    assert not (tmp_path / "x.bvh").exists()

@@ -9,7 +9,16 @@ from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
 from vidcap.errors import VidcapError
 from vidcap.lift import swap_sides
 from vidcap.masks import MaskStack, pixel_counts, touches_border
-from vidcap.pipeline import StageCache, fill_gaps, lift_pose, partly_outside, person_track
+from vidcap.pipeline import (
+    VIEWS,
+    ConvertResult,
+    StageCache,
+    constrain_orientation,
+    fill_gaps,
+    lift_pose,
+    partly_outside,
+    person_track,
+)
 
 
 def _mpjpe(a, b):
@@ -39,6 +48,70 @@ def test_lift_pose_applies_user_signs_and_joints():
     assert res.signs[3, k] == -free.proposed_signs[3, k]
     np.testing.assert_array_equal(res.proposed_signs, free.proposed_signs)
     np.testing.assert_allclose(res.joints2d[7, JOINT_INDEX["l_wrist"]], [11.0, 22.0])
+
+
+def test_constrain_orientation_keeps_the_facing_within_the_view():
+    labels = np.array(["right", "front_right", "back_left", "left"])
+    assert list(constrain_orientation(labels, "auto")) == list(labels)
+    assert list(constrain_orientation(labels, "side")) == ["right", "right", "left", "left"]
+    assert list(constrain_orientation(labels, "front")) == [
+        "front_right", "front_right", "front_left", "front_left"]
+    assert list(constrain_orientation(labels, "back")) == [
+        "back_right", "back_right", "back_left", "back_left"]
+    assert set(constrain_orientation(labels, "back_right")) == {"back_right"}
+    with pytest.raises(ValueError, match="unknown view 'sideways'"):
+        constrain_orientation(labels, "sideways")
+
+
+def test_cli_view_choices_are_the_pipelines():
+    from vidcap.commands.convert import VIEW_CHOICES
+
+    assert set(VIEW_CHOICES) == set(VIEWS) and len(VIEW_CHOICES) == len(VIEWS)
+
+
+def test_lift_pose_view_side_turns_a_three_quarter_reading_into_a_side_view():
+    """A walk seen at 45 degrees reads as three-quarter; told ``side``, the lift puts
+    the body at -/+90 degrees (facing still proposed); an orientation event of the
+    user's still wins from its frame."""
+    j2, _, _, fps = posed_clip(45.0, 40)
+    auto = lift_pose(j2, fps=fps, image_sides=False)
+    assert set(auto.proposed_orientation) == {"front_right"}
+    side = lift_pose(j2, fps=fps, image_sides=False, view="side")
+    assert set(side.orientation) == {"right"}
+    np.testing.assert_allclose(side.yaw, np.pi / 2)
+    # the facing comes from the proposal, not from the view
+    mirrored = j2.copy()
+    mirrored[..., 0] *= -1.0
+    assert set(lift_pose(swap_sides(mirrored), fps=fps, image_sides=False,
+                         view="side").orientation) == {"left"}
+    ann = Annotations()
+    ann.add_orientation(25, "back_right")
+    told = lift_pose(j2, fps=fps, annotations=ann, image_sides=False, view="front")
+    assert set(told.orientation[:25]) == {"front_right"}
+    assert set(told.orientation[25:]) == {"back_right"}
+
+
+def _result_with(proposed, view="auto"):
+    """A ConvertResult holding only what :meth:`ConvertResult.notices` reads."""
+    from types import SimpleNamespace
+
+    n = len(proposed)
+    return ConvertResult(
+        video="v.mp4", fps=25.0, masks=np.zeros((n, 2, 2), bool), bbox=np.zeros((n, 4)),
+        scores=np.zeros((n, 10)), similarity=np.full(n, 0.8),
+        lifted=SimpleNamespace(proposed_orientation=np.asarray(proposed)), motion=None,
+        jitter_before=0.0, jitter_after=0.0, image_joints2d=np.zeros((n, 15, 2)),
+        view=view)
+
+
+def test_a_wavering_view_is_reported_with_the_option_that_fixes_it():
+    mixed = ["right"] * 19 + ["front_right"] * 24
+    notes = _result_with(mixed).notices()
+    assert any("side view in 19 frames" in m and "--view side" in m for m in notes)
+    # told, or nearly all one sector (a turn through the side view takes a few frames)
+    assert not any("--view" in m for m in _result_with(mixed, view="side").notices())
+    few = ["right"] * 5 + ["front_right"] * 38
+    assert not any("--view" in m for m in _result_with(few).notices())
 
 
 def test_fill_gaps():

@@ -12,6 +12,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+from vidcap.commands.convert import VIEW_CHOICES
 from vidcap.errors import UsageError
 
 NAME = "batch"
@@ -31,6 +32,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="parallel processes (default: half the CPUs)")
     parser.add_argument("--height", type=float, default=1.75, metavar="M",
                         help="subjects' height in metres (default 1.75)")
+    parser.add_argument("--view", default="auto", choices=VIEW_CHOICES, metavar="VIEW",
+                        help="how the camera sees every subject (as in vidcap convert: side, "
+                        "front, back or one orientation; default auto)")
     parser.add_argument("--force", action="store_true",
                         help="redo outputs that are newer than their inputs")
 
@@ -57,7 +61,7 @@ def expand_inputs(items) -> list[Path]:
     return unique
 
 
-def _one(video: str, out: str, height: float) -> dict:
+def _one(video: str, out: str, height: float, view: str = "auto") -> dict:
     """Convert one video in a worker; never raises."""
     from vidcap.pipeline import convert
 
@@ -66,7 +70,7 @@ def _one(video: str, out: str, height: float) -> dict:
            "status": "ok", "message": ""}
     try:
         # files already run in parallel processes: each fits its frames serially
-        res = convert(video, out, height=height, progress=False, jobs=1)
+        res = convert(video, out, height=height, progress=False, jobs=1, view=view)
         row["frames"] = res.n_frames
         row["message"] = " ".join("; ".join(res.notices()).split())
     except Exception as exc:  # noqa: BLE001 - a bad file must never stop the others
@@ -111,7 +115,7 @@ def run(args) -> int:
             todo.append((str(v), str(out)))
     bar = progress(total=len(todo), desc="batch", unit="video")
     with ProcessPoolExecutor(max_workers=min(args.jobs, max(1, len(todo)))) as pool:
-        futs = [pool.submit(_one, v, o, args.height) for v, o in todo]
+        futs = [pool.submit(_one, v, o, args.height, args.view) for v, o in todo]
         for f in as_completed(futs):
             rows.append(f.result())
             bar.update(1)

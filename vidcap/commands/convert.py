@@ -12,6 +12,10 @@ HELP = "convert a single-camera video of one person into BVH motion"
 ORDER = 10
 OUTPUT_FILES = ("output", "save")
 INPUT_FILES = ("video", "annotations", "background")
+#: ``--view`` values (:data:`vidcap.pipeline.VIEWS`, spelled here so that ``--help``
+#: does not import the pipeline).
+VIEW_CHOICES = ("auto", "side", "front", "back", "left", "right", "back_left", "back_right",
+                "front_left", "front_right")
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
 
@@ -32,6 +36,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--keyframes", type=float, metavar="MIN_SIMILARITY",
                         help="key only frames whose 2D fit similarity is at least this and "
                         "interpolate the rest (default: every frame)")
+    parser.add_argument("--view", default="auto", choices=VIEW_CHOICES, metavar="VIEW",
+                        help="how the camera sees the subject for the whole clip: side, front "
+                        "or back (which way the subject faces is still read per frame), or "
+                        "one orientation (left, right, front_left, front_right, back_left, "
+                        "back_right); default auto: read per frame. Orientation events in "
+                        "the annotations override it from their frames")
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "
                         "signs, orientation and scores")
@@ -63,6 +73,7 @@ def run(args) -> int:
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
         annotations=args.annotations, background=args.background, height=args.height,
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
+        view=args.view,
     )
     if not args.quiet:
         lr = res.lifted
