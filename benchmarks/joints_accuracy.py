@@ -5,7 +5,9 @@ Run: /work/venv/bin/python benchmarks/joints_accuracy.py
 1. PiG_Motion3_FF.c3d (+ PiG_Calibration3_FF.c3d pooled): hip/knee centres vs the
    file's own Vicon Plug-in-Gait outputs LFEP/RFEP (hip) and LFEO/RFEO (knee).
 2. 07_01.c3d: bone lengths vs the subject's skeleton ../shared/data/motion/07.asf.
-3. Synthetic truth: markers rigidly on 131_01.bvh / 07_07.amc, 1 mm and 5 mm noise.
+3. kinematics_tennis_serve.c3d (full-body Plug-in-Gait, no reference skeleton): left
+   against right bone lengths, and which joints fell back.
+4. Synthetic truth: markers rigidly on 131_01.bvh / 07_07.amc, 1 mm and 5 mm noise.
 """
 
 from __future__ import annotations
@@ -69,6 +71,21 @@ def bones():
         print(f"{a + '-' + b:22s} {ours:7.0f} {ref:7.0f} {ours - ref:+7.0f}")
 
 
+def symmetry():
+    sol = solve_joints(read_c3d(DATA / "c3d/kinematics_tennis_serve.c3d"))
+    print(f"\n## kinematics_tennis_serve.c3d ({sol.markerset.name}): left vs right bone "
+          "lengths (mm)")
+    print(f"{'bone':16s} {'left':>7s} {'right':>7s} {'diff':>7s}")
+    for a, b in [("hip", "knee"), ("knee", "ankle"), ("shoulder", "elbow"),
+                 ("elbow", "wrist")]:
+        lr = [np.median(np.linalg.norm(sol.position(f"{s}_{a}") - sol.position(f"{s}_{b}"),
+                                       axis=1)) * 1e3 for s in "lr"]
+        print(f"{a + '-' + b:16s} {lr[0]:7.0f} {lr[1]:7.0f} {lr[0] - lr[1]:+7.0f}")
+    for rep in sol.reports:
+        if rep.flagged:
+            print(f"fallback: {rep.joint}: {rep.note}")
+
+
 def synthetic():
     motions = {"131_01.bvh": (read_bvh(DATA / "motion/131_01.bvh"), BVH_131),
                "07_07.amc": (read_asf_amc(DATA / "motion/07.asf", DATA / "motion/07_07.amc"),
@@ -92,4 +109,5 @@ def synthetic():
 if __name__ == "__main__":
     pig()
     bones()
+    symmetry()
     synthetic()

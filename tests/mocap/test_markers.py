@@ -13,11 +13,13 @@ from vidcap.errors import C3DError
 from vidcap.mocap.c3d import clean_labels, read_c3d
 from vidcap.mocap.markerset import (
     MarkerSetError,
+    SegmentSpec,
     builtin_markersets,
     detect_markerset,
     parse_markerset,
 )
 from vidcap.mocap.skeleton import (
+    _fit_joint,
     frame_from_three,
     kabsch,
     lab_to_yup,
@@ -70,10 +72,13 @@ def test_malformed_c3d_is_one_line_error(shared_data, tmp_path):
 # ----------------------------------------------------------------------------- marker sets
 def test_builtin_sets_and_detection(shared_data):
     sets = builtin_markersets()
-    assert {"cmu41", "pig_lower"} <= set(sets)
+    assert {"cmu41", "pig_lower", "pig_full"} <= set(sets)
     assert detect_markerset(read_c3d(shared_data("c3d/07_01.c3d")).labels).name == "cmu41"
     assert detect_markerset(read_c3d(shared_data("c3d/PiG_Motion3_FF.c3d")).labels).name \
         == "pig_lower"
+    # a full-body Plug-in-Gait file is the full set, not its lower half
+    assert detect_markerset(read_c3d(shared_data("c3d/kinematics_tennis_serve.c3d")).labels) \
+        .name == "pig_full"
     with pytest.raises(MarkerSetError, match="no built-in marker set"):
         detect_markerset(["A", "B", "C"])
 
@@ -194,6 +199,54 @@ def test_too_little_motion_is_flagged_with_fallback(motions):
     rep = sol.report("l_knee")
     assert rep.flagged and rep.method == "fallback" and "fallback" in rep.note
     assert np.isfinite(sol.position("l_knee")).all()
+
+
+def test_rotation_about_the_bone_is_not_taken_for_a_hinge():
+    """Markers of a child turning about the bone's own length (a circle about an axis
+    along the limb): the hinge rule would slide the centre up the limb to the parent
+    joint (a thigh of a few cm); the joint is flagged and its fallback used instead.
+    The same markers turning about an axis across the bone keep the rule."""
+    rng = np.random.default_rng(5)
+    centre = np.array([0.0, -0.42, 0.0])  # knee in the thigh's frame; the hip is the origin
+    offsets = np.array([[0.05, -0.15, 0.0], [-0.03, -0.30, 0.04], [0.0, -0.38, -0.05]])
+    t = np.linspace(0.0, np.deg2rad(70.0), 200)
+
+    def turned(axis):
+        from scipy.spatial.transform import Rotation
+
+        rot = Rotation.from_rotvec(t[:, None] * np.asarray(axis, float))
+        return [centre + rot.apply(o) + rng.normal(0, 5e-4, (len(t), 3)) for o in offsets]
+
+    spec = SegmentSpec("l_lower_leg", "l_upper_leg", "l_knee", ("A", "B", "C"),
+                       fallback=("KNE",))
+    fallback = np.array([0.05, -0.42, 0.0])  # a lateral knee marker
+    kw = dict(noise_mm=None, min_cap_deg=10.0, planar_cond=50.0, anchor=np.zeros(3),
+              max_axial_std_mm=2.0, hinge_ratio=3.0)
+    v, axis, rep = _fit_joint(spec, "l_upper_leg", turned([0, 1, 0]), fallback, len(t), **kw)
+    assert rep.flagged and rep.method == "fallback" and "from the bone" in rep.note
+    np.testing.assert_allclose(v, fallback)
+    v, axis, rep = _fit_joint(spec, "l_upper_leg", turned([1, 0, 0]), fallback, len(t), **kw)
+    assert not rep.flagged and "axis-rule" in rep.method
+    assert np.linalg.norm(v - centre) < 0.01
+
+
+def test_full_body_plug_in_gait_gives_a_plausible_skeleton(shared_data):
+    """kineticstoolkit's tennis serve (full-body Plug-in-Gait): every joint of the set,
+    limbs of adult length and left/right alike. The right knee barely flexes about a
+    medio-lateral axis; before the hinge rule was guarded, it slid 21 cm up the thigh
+    (thigh 173 mm, shank 761 mm)."""
+    sol = solve_joints(read_c3d(shared_data("c3d/kinematics_tennis_serve.c3d")))
+    assert sol.markerset.name == "pig_full" and len(sol.joint_names) == 20
+
+    def bone(a, b):
+        return float(np.nanmedian(np.linalg.norm(sol.position(a) - sol.position(b), axis=1)))
+
+    for upper, lower, lo, hi in (("hip", "knee", 0.33, 0.50), ("knee", "ankle", 0.33, 0.50),
+                                 ("shoulder", "elbow", 0.24, 0.36),
+                                 ("elbow", "wrist", 0.20, 0.30)):
+        left, right = bone(f"l_{upper}", f"l_{lower}"), bone(f"r_{upper}", f"r_{lower}")
+        assert lo < left < hi and lo < right < hi, (upper, lower, left, right)
+        assert abs(left - right) < 0.05, (upper, lower, left, right)
 
 
 # ----------------------------------------------------------------------------- CLI

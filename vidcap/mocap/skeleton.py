@@ -503,6 +503,30 @@ def _weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
     return v[:, 0], float(std)
 
 
+def _axis_along_bone(axis, anchor, child_sets, *, max_deg: float = 45.0) -> float | None:
+    """The angle (degrees) between a hinge axis and the bone, when it is under ``max_deg``.
+
+    The bone runs from ``anchor`` (the parent's proximal joint, parent frame, metres)
+    to the centroid of the child's markers (``child_sets``: arrays (N_k, 3) in the
+    parent frame). A knee, elbow, ankle or wrist flexes about an axis across its bone;
+    an axis along it means the motion is rotation about the limb's length (or noise
+    in a parent frame built from few markers), where the hinge rule would put the
+    centre next to the parent joint. None when the axis is across the bone or when
+    anything needed is missing.
+    """
+    if axis is None or anchor is None or not np.isfinite(anchor).all():
+        return None
+    pts = [np.asarray(y, float) for y in child_sets if len(y)]
+    if not pts:
+        return None
+    bone = np.concatenate(pts).mean(axis=0) - anchor
+    norm = float(np.linalg.norm(bone)) * float(np.linalg.norm(axis))
+    if not np.isfinite(norm) or norm <= 0:
+        return None
+    angle = float(np.degrees(np.arccos(min(1.0, abs(float(bone @ axis)) / norm))))
+    return angle if angle < max_deg else None
+
+
 def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_local,
                frames_used: int, *, noise_mm, min_cap_deg, planar_cond, anchor,
                max_axial_std_mm, hinge_ratio, frame_cov=None) -> tuple:
@@ -556,8 +580,18 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
         thin = np.sqrt(max(lam[0], 0.0)) < hinge_ratio * sigma
         if thin and kind != "hinge":
             axis_w = vec[:, 0]
-        if (anchor is not None and np.isfinite(anchor).all()
-                and (kind == "hinge" or thin or axial_std * 1e3 > max_axial_std_mm)):
+        rule = (anchor is not None and np.isfinite(anchor).all()
+                and (kind == "hinge" or thin or axial_std * 1e3 > max_axial_std_mm))
+        along = _axis_along_bone(axis_w, anchor, usable) if rule else None
+        if along is not None:
+            # The rule below is for a bone flexing about an axis across it; an axis
+            # within 45 degrees of the bone (rotation about the bone's own length, or
+            # a badly defined parent frame) would slide the centre along the limb
+            # toward the parent joint: no hinge to trust, so the fallback stands in.
+            flagged = True
+            note = (f"motion about an axis {along:.0f} deg from the bone, not across it: "
+                    "the centre is not observable")
+        elif rule:
             # Motion (nearly) about one axis: the centre's position along that axis is not
             # observable. Place it at the point of the axis nearest the parent's proximal
             # joint (for a long bone flexing about an axis across it - knee, elbow, ankle,
@@ -604,8 +638,13 @@ def _rigid_residual_var(frames: list[_SegFrames], pts: list[np.ndarray]) -> floa
     return ss / dof if dof > 0 else 0.0
 
 
-def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float):
-    """The SCoRE/SARA centre in (parent, child) frames and the updated report."""
+def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float,
+                  child_points: np.ndarray):
+    """The SCoRE/SARA centre in (parent, child) frames and the updated report.
+
+    ``child_points`` (N, 3): the child's markers in the parent's frame (metres), which
+    tell the bone's direction from ``anchor`` (:func:`_axis_along_bone`).
+    """
     from dataclasses import replace
 
     lam, null, s2 = sc["eig"], sc["null"], sc["s2"]
@@ -614,7 +653,8 @@ def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float):
     std = (float(np.sqrt(s2 / lam[0]) * n_p) if lam[0] > 1e-12 * lam[-1]
            else float("inf"))
     hinge = anchor is not None and np.isfinite(anchor).all() and n_p > 0.3 and (
-        rep.kind == "hinge" or std * 1e3 > max_axial_std_mm)
+        rep.kind == "hinge" or std * 1e3 > max_axial_std_mm) and (
+        _axis_along_bone(null[:3] / n_p, anchor, [child_points]) is None)
     if hinge:
         # SARA: the axis is the null direction; the point on it nearest the parent's
         # proximal joint (the hinge rule, see solve_joints)
@@ -799,7 +839,8 @@ def solve_joints(
                        np.concatenate([f.r for f in raw]), np.concatenate([f.o for f in raw]),
                        **kw)
             if sc["x"] is not None:
-                v, v_child, axis, rep = _refine_score(sc, rep, anchor, max_axial_std_mm)
+                v, v_child, axis, rep = _refine_score(sc, rep, anchor, max_axial_std_mm,
+                                                      np.concatenate(sets_c))
         fitted_v[s.joint] = v
         axes[s.joint] = axis
         reports.append(rep)
