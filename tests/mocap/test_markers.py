@@ -83,6 +83,28 @@ def test_builtin_sets_and_detection(shared_data):
         detect_markerset(["A", "B", "C"])
 
 
+def test_plug_in_gait_with_a_sacrum_marker(shared_data):
+    """Labs that place one SACR marker instead of LPSI/RPSI: the same Plug-in-Gait set
+    is detected, nothing is reported missing, and the hips land within 1 cm of the
+    four-marker fit (SACR made here as the LPSI/RPSI midpoint)."""
+    import dataclasses
+
+    trial = read_c3d(shared_data("c3d/PiG_Motion3_FF.c3d"))
+    labels = list(trial.labels)
+    back = [labels.index("LPSI"), labels.index("RPSI")]
+    keep = [k for k in range(len(labels)) if k not in back]
+    sacr = trial.positions[:, back].mean(axis=1, keepdims=True)
+    variant = dataclasses.replace(
+        trial, labels=tuple(labels[k] for k in keep) + ("SACR",),
+        positions=np.concatenate([trial.positions[:, keep], sacr], axis=1))
+    both, one = solve_joints(trial), solve_joints(variant)
+    assert one.markerset.name == "pig_lower" and one.missing_markers == {}
+    for j in ("l_hip", "r_hip", "l_knee", "r_knee"):
+        assert rms_mm(one.position(j), both.position(j)) < 10.0, j
+    with pytest.raises(MarkerSetError, match="optional names markers not in"):
+        parse_markerset("[segments.p]\nmarkers=['A','B','C']\noptional=['D']")
+
+
 def test_markerset_errors_and_missing_markers():
     with pytest.raises(MarkerSetError, match="at least 3"):
         parse_markerset("[segments.p]\nmarkers=['A','B']")

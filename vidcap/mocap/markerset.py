@@ -21,6 +21,8 @@ A marker set is a small TOML file (the built-in ones live in
     fallback = ["LKNE"]               # optional: markers whose centroid stands in for
                                       # the joint centre when the joint barely moves
     end = { joint = "l_toe", markers = ["LTOE"] }   # optional extra leaf joint
+    optional = ["SACR"]               # optional: markers of this segment that files may
+                                      # lack without a warning (a protocol's variants)
 
 Joint names follow ``design.md`` (``l_hip``, ``l_knee``...); extra joints
 (``spine``, ``l_toe``...) are allowed. Segments are listed parents first.
@@ -72,6 +74,10 @@ class SegmentSpec:
     end_markers : tuple of str
     origin : tuple of str
         Root only: child joints whose mean is the root joint's position.
+    optional : tuple of str
+        Markers of ``markers`` that a file may lack without it being reported or
+        counting against the set's detection (one protocol's variants: Plug-in-Gait's
+        SACR in place of LPSI/RPSI).
     """
 
     name: str
@@ -85,6 +91,7 @@ class SegmentSpec:
     end_joint: str | None = None
     end_markers: tuple[str, ...] = ()
     origin: tuple[str, ...] = ()
+    optional: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -118,8 +125,9 @@ class MarkerSet:
         return tuple(out)
 
     def segment_markers(self) -> tuple[str, ...]:
-        """Markers attached to segments (what matters for detection)."""
-        return tuple(m for s in self.segments for m in s.markers)
+        """Markers attached to segments that every file should have (what matters for
+        detection): optional ones left out."""
+        return tuple(m for s in self.segments for m in s.markers if m not in s.optional)
 
     def joints(self) -> tuple[str, ...]:
         """Every joint: one per segment, then the end joints."""
@@ -142,7 +150,8 @@ class MarkerSet:
         kept: list[SegmentSpec] = []
         names: set[str] = set()
         for s in self.segments:
-            gone = [m for m in (*s.markers, *s.end_markers) if m not in available]
+            gone = [m for m in (*s.markers, *s.end_markers)
+                    if m not in available and m not in s.optional]
             if gone:
                 missing[s.name] = gone
             if s.parent is not None and s.parent not in names:
@@ -155,6 +164,7 @@ class MarkerSet:
                 s.name, s.parent, s.joint, mk, s.tip, s.rest, s.side,
                 tuple(m for m in s.fallback if m in available),
                 s.end_joint if end else None, end, s.origin,
+                tuple(m for m in s.optional if m in available),
             ))
             names.add(s.name)
         return MarkerSet(self.name, self.description, tuple(kept), self.source), missing
@@ -207,6 +217,10 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
             raise MarkerSetError(f"segments.{name}: no markers", source)
         if i == 0 and len(markers) < 3:
             raise MarkerSetError(f"root segment {name} needs at least 3 markers", source)
+        optional = _strs(t.get("optional"), f"segments.{name}.optional", source)
+        if set(optional) - set(markers):
+            raise MarkerSetError(f"segments.{name}.optional names markers not in its "
+                                 f"markers: {sorted(set(optional) - set(markers))}", source)
         rest = str(t.get("rest", "-y")).lower()
         if rest not in _DIRS:
             raise MarkerSetError(f"segments.{name}.rest must be one of {sorted(_DIRS)}", source)
@@ -228,6 +242,7 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
             end_joint=end_joint,
             end_markers=_strs(end.get("markers"), f"segments.{name}.end.markers", source),
             origin=_strs(t.get("origin"), f"segments.{name}.origin", source),
+            optional=optional,
         ))
         seen_seg.add(name)
     return MarkerSet(str(doc.get("name", Path(source).stem)), str(doc.get("description", "")),
@@ -274,9 +289,10 @@ def load_markerset(name_or_path: str | os.PathLike) -> MarkerSet:
 def detect_markerset(labels, *, path=None) -> MarkerSet:
     """Pick the built-in marker set that fits the labels.
 
-    A set is a candidate when all its root markers are present and at least 75 % of
-    its segment markers are. The candidate covering the largest share of its markers
-    wins; then the one with more markers. A tie is ambiguous.
+    A set is a candidate when at least 3 of its root markers are present (what the
+    root's frame needs) and at least 75 % of its non-optional segment markers are.
+    The candidate covering the largest share of its markers wins; then the one with
+    more markers. A tie is ambiguous.
 
     Raises
     ------
@@ -287,7 +303,7 @@ def detect_markerset(labels, *, path=None) -> MarkerSet:
     scored = []
     for ms in builtin_markersets().values():
         seg = ms.segment_markers()
-        if not all(m in have for m in ms.root.markers):
+        if sum(m in have for m in ms.root.markers) < 3:
             continue
         share = sum(m in have for m in seg) / len(seg)
         if share >= 0.75:
