@@ -389,3 +389,50 @@ def test_bspline_design_matches_scipy():
         np.testing.assert_allclose(ours, BSpline.design_matrix(t, knots, 2).toarray(),
                                    atol=1e-14)
         np.testing.assert_allclose(ours.sum(axis=1), 1.0)  # a partition of unity
+
+
+def _bent_forward_with_arm(bend_deg, swing_deg):
+    """Camera-frame joints of a body facing the camera (yaw 0), its torso bent forward
+    (toward the camera) by ``bend_deg`` about the pelvis, the left arm straight, pointing
+    down from the shoulder and swung ``swing_deg`` forward in the world, a little inward."""
+    from scipy.spatial.transform import Rotation
+
+    from tests.posed import posed_clip
+
+    _, j3, _, _ = posed_clip(0.0, 4)
+    ji, L = JOINT_INDEX, BodyModel().segment_lengths()
+    j3 = j3.copy()
+    upper = [ji[n] for n in ("neck", "head_top", "l_shoulder", "r_shoulder", "l_elbow",
+                             "l_wrist", "r_elbow", "r_wrist")]
+    pel = j3[:, ji["pelvis"]][:, None]
+    # rotating about -X (image left) turns the torso's top toward +Z, the camera
+    bend = Rotation.from_rotvec([-np.deg2rad(bend_deg), 0.0, 0.0])
+    j3[:, upper] = pel + bend.apply((j3[:, upper] - pel).reshape(-1, 3)).reshape(4, -1, 3)
+    a = np.deg2rad(swing_deg)
+    inward = -np.sign(j3[0, ji["l_shoulder"], 0] - j3[0, ji["neck"], 0])
+    u = np.array([0.15 * inward, -np.cos(a), np.sin(a)])
+    u /= np.linalg.norm(u)
+    j3[:, ji["l_elbow"]] = j3[:, ji["l_shoulder"]] + L[SEGMENT_INDEX["l_upper_arm"]] * u
+    j3[:, ji["l_wrist"]] = j3[:, ji["l_elbow"]] + L[SEGMENT_INDEX["l_lower_arm"]] * u
+    return j3
+
+
+def test_arm_in_front_of_a_bent_torso_is_not_inside_it():
+    """The torso the arms may not enter is sectioned across its own axis. Bent 40 degrees
+    toward the camera, the torso lies well behind the neck's vertical at elbow height:
+    an arm swung 25 degrees forward is in front of it, the same arm swung back (the
+    other depth sign) would be inside it. Upright, both states are clear of the torso
+    (a vertical column under the neck, as the check used to be, could not tell)."""
+    from tests.posed import project
+    from vidcap.proposals import _CHAINS, _chain_costs
+
+    chain = [c for c, (segs, _, _) in enumerate(_CHAINS) if segs[0] == "l_upper_arm"][0]
+    weights = dict(hinge_weight=0.0, range_weight=0.0, midline_weight=1.0, lean_weight=0.0,
+                   torso_depth=0.6)
+    for bend, differs in ((40.0, True), (0.0, False)):
+        j3 = _bent_forward_with_arm(bend, 25.0)
+        unary, _, _ = _chain_costs(project(j3), np.zeros(4), scale=200.0, body=BodyModel(),
+                                   **weights)
+        true_state, other = unary[chain, :, 0], unary[chain, :, 3]  # (+, +) and (-, -)
+        assert np.all(true_state == 0.0), bend
+        assert np.all(other > 0.05) if differs else np.all(other == 0.0), (bend, other)

@@ -158,6 +158,13 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
     vec[..., 1] *= -1.0
     fwd, left = body_axes(yaw)  # (F, 3)
 
+    # the torso's axis (pelvis -> neck, unit, (F, 1, 3)) with its depth taken leaning
+    # forward, the way bodies bend (its own sign is chosen with the torso's chain)
+    kt = SEGMENT_INDEX["torso"]
+    t_axis = np.concatenate([vec[:, kt], dz[:, kt, None]], -1)
+    t_axis[:, 2] *= np.where(fwd[:, 2] < 0.0, -1.0, 1.0)
+    t_axis = (t_axis / np.maximum(np.linalg.norm(t_axis, axis=-1, keepdims=True), 1e-12))[:, None]
+
     C, S = len(_CHAINS), 4
     unary = np.zeros((C, F, S))
     lateral = {}  # chain -> (F, S, 2): lateral offsets (body left) of its two distal joints
@@ -196,12 +203,17 @@ def _chain_costs(j2, yaw, *, scale, body, hinge_weight, range_weight, midline_we
             cost += hinge_weight * fold + range_weight * behind + midline_weight * cross
             if kind == "arm":  # elbow and wrist may not enter the torso (elliptic section)
                 r = body.radius("torso")
-                p1 = side * w0 * lf + up * l_up  # relative to the torso axis, shoulder height
+                p1 = side * w0 * lf + up * l_up  # relative to the neck
                 p2 = p1 + lo * l_lo
                 Lt = L[SEGMENT_INDEX["torso"]]
                 for p in (p1, p2):
-                    below = (p[..., 1] > -Lt) & (p[..., 1] < 0.0)
-                    e = (np.sum(p * lf, -1) / r) ** 2 + (np.sum(p * f, -1) / (torso_depth * r)) ** 2
+                    # sections across the torso's own axis, not the vertical: a torso
+                    # bent 30 degrees forward lies well behind the neck's vertical at the
+                    # elbows' height, where an arm hanging from the shoulder is free
+                    h = np.sum(p * t_axis, -1)  # along the axis, < 0 below the neck
+                    q = p - h[..., None] * t_axis
+                    e = (np.sum(q * lf, -1) / r) ** 2 + (np.sum(q * f, -1) / (torso_depth * r)) ** 2
+                    below = (h > -Lt) & (h < 0.0)
                     cost += midline_weight * np.where(below, _relu(1.0 - e), 0.0)
         if len(ks) == 1:  # one segment: only the states whose (unused) second sign is +1
             cost[:, _STATES[:, 1] < 0] = _BIG
