@@ -131,12 +131,18 @@ def arms_inside_torso(truth, body):
     fwd, left = body_axes(np.deg2rad(truth["yaw_deg"]))
     r, torso = body.radius("torso"), body.segment_lengths()[SEGMENT_NAMES.index("torso")]
     out = np.zeros((len(j3), len(SEGMENT_NAMES)), bool)
+    neck = j3[:, JOINT_NAMES.index("neck")]
+    axis = neck - j3[:, JOINT_NAMES.index("pelvis")]
+    axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
     for side in ("l", "r"):
         rel = j3[:, [JOINT_NAMES.index(f"{side}_elbow"), JOINT_NAMES.index(f"{side}_wrist")]]
-        rel = rel - j3[:, JOINT_NAMES.index("neck")][:, None]
+        rel = rel - neck[:, None]
+        # sections across the true torso axis (a bent torso is not under the neck)
+        h = np.einsum("fjc,fc->fj", rel, axis)
+        rel = rel - h[..., None] * axis[:, None]
         e = (np.einsum("fjc,fc->fj", rel, left) / r) ** 2 + (
             np.einsum("fjc,fc->fj", rel, fwd) / (depth * r)) ** 2
-        level = (rel[..., 1] > -torso) & (rel[..., 1] < 0.0)
+        level = (h > -torso) & (h < 0.0)
         hit = ((e < 1.0) & level).any(axis=1)
         for seg in ("upper_arm", "lower_arm"):
             out[:, SEGMENT_NAMES.index(f"{side}_{seg}")] = hit

@@ -278,14 +278,51 @@ def _check_retarget(src, table_name, out):
 def test_retarget_cmu_bvh(shared_data):
     src = read_bvh(shared_data("motion/131_01.bvh"))
     src = src.frames(0, 600)
-    _check_retarget(src, "cmu_bvh", retarget(src))
+    _check_retarget(src, "cmu_bvh", retarget(src, solid_torso=False))
 
 
 def test_retarget_cmu_asf(shared_data):
     from vidcap.asf import read_asf_amc
 
     src = read_asf_amc(shared_data("motion/07.asf"), shared_data("motion/07_07.amc"))
-    _check_retarget(src, "cmu_asf", retarget(src))
+    _check_retarget(src, "cmu_asf", retarget(src, solid_torso=False))
+
+
+def _inside_torso(pos, body):
+    """(F, 4) bool: elbows and wrists strictly inside the torso cylinder."""
+    pel = pos[:, JOINT_INDEX["pelvis"]]
+    axis = pos[:, JOINT_INDEX["neck"]] - pel
+    length = np.linalg.norm(axis, axis=-1)
+    axis /= length[:, None]
+    out = []
+    for name in ("l_elbow", "l_wrist", "r_elbow", "r_wrist"):
+        d = pos[:, JOINT_INDEX[name]] - pel
+        h = np.sum(d * axis, -1)
+        rho = np.linalg.norm(d - h[:, None] * axis, axis=-1)
+        out.append((h > 0) & (h < length) & (rho < body.radius("torso") - 1e-6))
+    return np.stack(out, -1)
+
+
+def test_retarget_keeps_the_arms_out_of_our_torso(shared_data):
+    """131_01's performer rests a hand on the belly (source frames 250-280): on our
+    wider torso the retargeted wrist went 2 cm inside it. The default retarget turns
+    such an arm out to the surface; nothing else moves, and bones keep their lengths."""
+    body = BodyModel()
+    src = read_bvh(shared_data("motion/131_01.bvh")).frames(200, 330)
+    exact = retarget(src, body, solid_torso=False).positions()
+    solid = retarget(src, body).positions()
+    hit = _inside_torso(exact, body)
+    assert hit.sum() >= 10  # the case is real
+    assert not _inside_torso(solid, body).any()
+    arms = [JOINT_INDEX[n] for n in ("l_elbow", "l_wrist", "r_elbow", "r_wrist")]
+    rest = [k for k in range(len(JOINT_NAMES)) if k not in arms]
+    np.testing.assert_allclose(solid[:, rest], exact[:, rest], atol=1e-9)
+    moved = np.linalg.norm(solid[:, arms] - exact[:, arms], axis=-1)
+    assert moved[~hit.any(axis=1)].max() < 1e-9  # frames without contact are untouched
+    assert 0.0 < moved.max() < 0.1  # a turn to the surface, not a new pose
+    segs = _seg_vectors(solid)
+    np.testing.assert_allclose(np.linalg.norm(segs, axis=-1),
+                               np.linalg.norm(_seg_vectors(exact), axis=-1), atol=1e-9)
 
 
 def test_retarget_our_own_skeleton_is_identity():

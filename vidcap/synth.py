@@ -31,6 +31,13 @@ minimal rotation (no twist added) that turns our rest bone onto the source's bon
 direction, expressed in its parent's frame. The root translation is the source's
 pelvis scaled by our leg length over the source's leg length, shifted so that the
 lowest ankle over the clip stands on the floor (y = 0).
+
+Our torso is a 40 cm cylinder with the shoulders on its surface; the performer's is
+narrower and flatter. A hand resting on the belly, or an elbow against the flank,
+lands inside our torso: a pose no body can take, whose arm no camera can see and
+whose depth direction means nothing. :func:`keep_arms_out_of_torso` turns such an
+arm out to the cylinder's surface (the smallest rotation at the shoulder, then at
+the elbow), so the truth is a pose of the model itself.
 """
 
 from __future__ import annotations
@@ -230,6 +237,7 @@ def retarget(
     body: BodyModel | None = None,
     *,
     source: str | os.PathLike | None = None,
+    solid_torso: bool = True,
 ) -> Motion:
     """Retarget a motion on any mappable skeleton onto our body by bone directions.
 
@@ -241,6 +249,9 @@ def retarget(
         Target body (default: 1.75 m).
     source : str or path-like, optional
         The motion's file, named in errors.
+    solid_torso : bool
+        Turn arms that would pass through our (wider) torso out to its surface
+        (:func:`keep_arms_out_of_torso`); False keeps every bone direction exactly.
 
     Returns
     -------
@@ -267,9 +278,74 @@ def retarget(
     if not src_leg > 0:
         raise MotionFileError("the source's legs have zero length", source)
     out = joints_to_motion(pts, motion.fps, body=body)
+    if solid_torso:
+        out = joints_to_motion(keep_arms_out_of_torso(out.positions(), body), motion.fps,
+                               body=body)
     scaled = Motion(out.skeleton, out.root_positions * (body.pelvis_height / src_leg),
                     out.rotations, out.fps)
     return _floor_motion(scaled)
+
+
+def keep_arms_out_of_torso(joints3d, body: BodyModel | None = None, *,
+                           iterations: int = 8) -> np.ndarray:
+    """Turn elbows and wrists that lie inside the torso cylinder out to its surface.
+
+    A point is inside when it is nearer the pelvis-neck axis than the torso's radius,
+    between the pelvis and the neck. The upper arm turns about the shoulder toward
+    the nearest surface point (the forearm moving with it), then the forearm about
+    the elbow; bone lengths are kept, so a few passes settle a point that the first
+    turn left just short of the surface.
+
+    Parameters
+    ----------
+    joints3d : array_like, shape (F, 15, 3)
+        Joints of ``body``'s skeleton, metres (bone lengths the model's).
+    body : BodyModel, optional
+    iterations : int
+        Passes of the turn per joint.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, 15, 3)
+        A copy with the arms moved where needed; every other joint as given.
+    """
+    body = body or BodyModel()
+    j = np.array(joints3d, dtype=float)
+    J = JOINT_INDEX
+    pel, neck = j[:, J["pelvis"]], j[:, J["neck"]]
+    axis = neck - pel
+    length = np.linalg.norm(axis, axis=-1)
+    axis = axis / np.maximum(length, 1e-12)[:, None]
+    r = body.radius("torso")
+
+    def radial(x):
+        d = x - pel
+        h = np.sum(d * axis, -1)
+        q = d - h[:, None] * axis
+        return h, q, np.linalg.norm(q, axis=-1)
+
+    for side in "lr":
+        sh, el, wr = J[f"{side}_shoulder"], J[f"{side}_elbow"], J[f"{side}_wrist"]
+        _, q_sh, rho_sh = radial(j[:, sh])
+        outward = q_sh / np.maximum(rho_sh, 1e-12)[:, None]  # the arm's own side
+        for pivot, point in ((sh, el), (el, wr)):
+            bone = np.linalg.norm(j[:, point] - j[:, pivot], axis=-1)
+            for _ in range(iterations):
+                h, q, rho = radial(j[:, point])
+                inside = (h > 0.0) & (h < length) & (rho < r)
+                if not inside.any():
+                    break
+                away = np.where((rho > 1e-9)[:, None], q / np.maximum(rho, 1e-12)[:, None],
+                                outward)
+                # aimed a hair outside: the turned bone, shorter than the way to the
+                # aim, falls a little short of it
+                surface = pel + h[:, None] * axis + (r * (1.0 + 1e-3)) * away
+                turned = j[:, pivot] + bone[:, None] * _unit(surface - j[:, pivot])
+                moved = np.where(inside[:, None], turned - j[:, point], 0.0)
+                j[:, point] += moved
+                if point == el:  # the forearm keeps its direction
+                    j[:, wr] += moved
+    return j
 
 
 # --------------------------------------------------------------------------- procedural
