@@ -46,3 +46,26 @@ def run_cli(
 def cli():
     """The :func:`run_cli` helper as a fixture."""
     return run_cli
+
+
+def write_timed_video(path: Path, frames, times_s) -> None:
+    """Write BGR frames to an H.264 MP4 shown at the given times (seconds): a
+    variable-rate video, as phones record or as a dropped frame leaves one."""
+    from fractions import Fraction
+
+    import av
+    import numpy as np
+
+    ms = Fraction(1, 1000)
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("libx264", rate=30)
+        stream.height, stream.width = frames[0].shape[:2]
+        stream.pix_fmt = "yuv420p"
+        stream.codec_context.time_base = ms
+        for img, t in zip(frames, times_s, strict=True):
+            vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(img), format="bgr24")
+            vf.pts, vf.time_base = int(round(t * 1000)), ms
+            for packet in stream.encode(vf):
+                out.mux(packet)
+        for packet in stream.encode():
+            out.mux(packet)

@@ -6,7 +6,7 @@ import shutil
 import numpy as np
 import pytest
 
-from tests.conftest import REPO, run_cli
+from tests.conftest import REPO, run_cli, write_timed_video
 from vidcap.body import JOINT_INDEX
 from vidcap.bvh import read_bvh
 from vidcap.video import probe
@@ -281,3 +281,24 @@ def test_view_side_on_a_real_side_view_walk(tmp_path, shared_data):
     bad = run_cli("convert", video, "-o", tmp_path / "x.bvh", "--view", "sideways")
     assert bad.returncode == 2 and "invalid choice: 'sideways'" in bad.stderr
     assert not (tmp_path / "x.bvh").exists()
+
+
+def test_variable_rate_video_gives_a_bvh_in_step_with_it(converted, tmp_path):
+    """walk_side with 10 of its frames dropped (every other one of frames 10-29), the
+    rest shown at their own times: the BVH is resampled at the camera's 25 fps over
+    the clip's 1.64 s (42 frames, not 32 frames at the 19 fps average), and the
+    pelvis walks as in the whole clip's BVH."""
+    from vidcap.video import read_frames
+
+    keep = [i for i in range(42) if not (10 <= i < 30 and i % 2)]
+    video = tmp_path / "dropped.mp4"
+    write_timed_video(video, read_frames(WALK)[keep], np.array(keep) / 25.0)
+    out = tmp_path / "dropped.bvh"
+    r = run_cli("convert", video, "-o", out, "--no-cache", "--jobs", "1")
+    assert r.returncode == 0, r.stderr
+    assert "variable frame rate (frames 40-80 ms apart)" in r.stdout
+    m, whole = read_bvh(out), read_bvh(converted[0])
+    assert m.n_frames == 42 and m.fps == pytest.approx(25.0)
+    i = JOINT_INDEX["pelvis"]
+    a, b = m.positions()[:, i, 0], whole.positions()[:, i, 0]
+    assert np.abs((a - a[0]) - (b - b[0])).max() < 0.08  # metres, over a 1.1 m walk

@@ -436,3 +436,27 @@ def test_arm_in_front_of_a_bent_torso_is_not_inside_it():
         true_state, other = unary[chain, :, 0], unary[chain, :, 3]  # (+, +) and (-, -)
         assert np.all(true_state == 0.0), bend
         assert np.all(other > 0.05) if differs else np.all(other == 0.0), (bend, other)
+
+
+def test_motion_resampled_at_its_frames_own_times():
+    """Frames taken at uneven times (a variable-rate video) resample onto an even grid
+    by their times: a root moving at 1 m/s and a joint turning at 1 rad/s come out at
+    their positions and angles of the new times."""
+    from scipy.spatial.transform import Rotation
+
+    from vidcap.kinematics import Motion
+
+    sk = BodyModel().skeleton()
+    times = np.array([0.0, 0.04, 0.08, 0.16, 0.24, 0.28, 0.32])
+    root = np.stack([times, np.zeros(7), np.zeros(7)], 1)
+    rot = np.tile([0.0, 0.0, 0.0, 1.0], (7, sk.n_joints, 1))
+    rot[:, JOINT_INDEX["l_elbow"]] = Rotation.from_rotvec(
+        times[:, None] * np.array([[1.0, 0.0, 0.0]])).as_quat()
+    m = Motion(sk, root, rot, 1 / 0.04).resampled(25.0, times=times)
+    t = np.arange(9) * 0.04
+    assert m.n_frames == 9 and m.fps == 25.0
+    np.testing.assert_allclose(m.root_positions[:, 0], t, atol=1e-12)
+    angle = Rotation.from_quat(m.rotations[:, JOINT_INDEX["l_elbow"]]).magnitude()
+    np.testing.assert_allclose(angle, t, atol=1e-9)
+    with pytest.raises(ValueError, match="increasing"):
+        Motion(sk, root, rot, 25.0).resampled(25.0, times=times[::-1])

@@ -9,14 +9,17 @@ import av
 import numpy as np
 import pytest
 
+from tests.conftest import write_timed_video
 from vidcap.errors import VideoError
 from vidcap.video import (
     VideoWriter,
+    frame_times,
     iter_chunks,
     iter_frame_lists,
     iter_frames,
     probe,
     read_frames,
+    variable_rate,
     write_video,
 )
 
@@ -109,6 +112,25 @@ def test_frames_come_out_upright_as_the_display_matrix_says(tmp_path, degrees):
         assert np.abs(f.astype(int) - upright).mean() < 8  # lossy, but the same picture
     if degrees == 180:  # the same shape as stored, but not the stored picture
         assert np.abs(frames[0].astype(int) - stored).mean() > 30
+
+
+def test_frame_times_of_even_and_uneven_videos(tmp_path):
+    even = tmp_path / "even.mp4"
+    write_video(even, _frames(12), 25.0)
+    t = frame_times(even)
+    np.testing.assert_allclose(t, np.arange(12) / 25.0, atol=1e-9)
+    assert not variable_rate(t, probe(even).fps)
+    # frames 4 and 6 dropped: shown at their own times, 80 ms after the one before
+    keep = [0, 1, 2, 3, 5, 7, 8, 9, 10, 11]
+    uneven = tmp_path / "uneven.mp4"
+    write_timed_video(uneven, _frames(12)[keep], np.array(keep) / 25.0)
+    t = frame_times(uneven)
+    np.testing.assert_allclose(t, np.array(keep) / 25.0, atol=1e-6)
+    assert len(t) == probe(uneven, count=True).n_frames == len(read_frames(uneven))
+    assert variable_rate(t, probe(uneven).fps)
+    # a slow drift is uneven too: 2 % slow over 100 frames is two frames late
+    assert variable_rate(np.arange(100) * 1.02 / 25.0, 25.0)
+    assert not variable_rate(np.arange(100) * 1.002 / 25.0, 25.0)
 
 
 def test_chunks_cover_every_frame_in_order(tmp_path):

@@ -180,14 +180,29 @@ class Motion:
             out[name] = world_p[:, j] + world_r[:, j] @ off
         return out
 
-    def resampled(self, fps: float) -> Motion:
-        """This motion resampled to ``fps``: root linearly, rotations by slerp."""
+    def resampled(self, fps: float, *, times=None) -> Motion:
+        """This motion resampled to ``fps``: root linearly, rotations by slerp.
+
+        Parameters
+        ----------
+        fps : float
+            The new frame rate.
+        times : array_like, shape (F,), optional
+            When each frame was taken, seconds, increasing (a variable-rate video's
+            timestamps); default ``arange(F) / self.fps``. The new frames are evenly
+            spaced from the first time to the last.
+        """
         from scipy.spatial.transform import Slerp
 
-        duration = (self.n_frames - 1) / self.fps
+        if times is None:
+            t_old = np.arange(self.n_frames) / self.fps
+        else:
+            t_old = np.asarray(times, dtype=float)
+            if t_old.shape != (self.n_frames,) or (np.diff(t_old) <= 0).any():
+                raise ValueError(f"times must be ({self.n_frames},) and increasing")
+        duration = t_old[-1] - t_old[0]
         n_new = int(np.floor(duration * fps + 1e-9)) + 1
-        t_old = np.arange(self.n_frames) / self.fps
-        t_new = np.arange(n_new) / fps
+        t_new = np.minimum(t_old[0] + np.arange(n_new) / fps, t_old[-1])  # no rounding past
         root = np.stack([np.interp(t_new, t_old, self.root_positions[:, k]) for k in range(3)], 1)
         rot = np.empty((n_new, self.skeleton.n_joints, 4))
         if self.n_frames == 1:

@@ -14,6 +14,7 @@ is cheap and always rerun, since it depends on the user's annotations.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -464,10 +465,34 @@ class ConvertResult:
     outside: np.ndarray | None = None
     #: What the user said of the view (:data:`VIEWS`).
     view: str = "auto"
+    #: When each frame was shown, seconds from the first (the container's timestamps),
+    #: (F,); None where the container keeps none.
+    frame_times: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
         return len(self.masks)
+
+    @property
+    def variable_rate(self) -> bool:
+        """Whether the video's frames are unevenly spaced in time
+        (:func:`vidcap.video.variable_rate`: a phone's variable frame rate, dropped
+        frames)."""
+        from vidcap.video import variable_rate
+
+        t = self.frame_times
+        return t is not None and len(t) == self.n_frames and variable_rate(t, self.fps)
+
+    @functools.cached_property
+    def bvh_motion(self):
+        """The motion the BVH gets: :attr:`motion` (one frame per video frame), or, for
+        a variable-rate video, :attr:`motion` resampled evenly over the frames' own
+        times at the rate of their median interval (the camera's rate when it dropped
+        frames, not the lower average), so the BVH plays in step with the video."""
+        if not self.variable_rate:
+            return self.motion
+        rate = 1.0 / float(np.median(np.diff(self.frame_times)))
+        return self.motion.resampled(rate, times=self.frame_times)
 
     def notices(self) -> list[str]:
         """What the user should know about this result, one sentence each: frames
@@ -496,6 +521,12 @@ class ConvertResult:
                        f"{np.median(s):.2f}; one whole person gives 0.7-0.9): is it one "
                        "person, seen whole, in front of a background with nothing else "
                        "moving?")
+        if self.variable_rate:
+            gaps = np.diff(self.frame_times) * 1e3
+            out.append(f"variable frame rate (frames {gaps.min():.0f}-{gaps.max():.0f} ms "
+                       f"apart): the BVH is resampled evenly at {self.bvh_motion.fps:.3g} "
+                       f"fps ({self.bvh_motion.n_frames} frames for the video's {n}), so it "
+                       "keeps time with the video")
         side = np.isin(np.asarray(self.lifted.proposed_orientation).astype(str),
                        ("left", "right"))
         if self.view == "auto" and n and min(side.mean(), 1.0 - side.mean()) >= MIXED_VIEW:
@@ -529,6 +560,8 @@ class ConvertResult:
             bvh_joints3d=self.motion.positions(),
             outside=(np.zeros(self.n_frames, bool) if self.outside is None
                      else np.asarray(self.outside, bool)),
+            frame_times=(np.arange(self.n_frames) / self.fps if self.frame_times is None
+                         else np.asarray(self.frame_times, dtype=np.float64)),
         )
 
 
@@ -593,7 +626,7 @@ def run(
         fit_sequence_chunked,
     )
     from vidcap.silhouette import extract_silhouettes
-    from vidcap.video import probe
+    from vidcap.video import frame_times, probe
 
     log = log or (lambda msg: None)
     if view not in VIEWS:  # before any work
@@ -740,6 +773,7 @@ def run(
         jitter_after=mres.jitter_after, timings=timings,
         image_joints2d=joints2d, spread=hit["spread"], track=track,
         model_height=model_height, outside=outside, view=view,
+        frame_times=frame_times(video),
     )
 
 
@@ -867,7 +901,7 @@ def convert(
     elif cache_dir is False:
         cache_dir = None
     result = run(video, cache_dir=cache_dir, **options)
-    write_bvh(out_bvh, result.motion)
+    write_bvh(out_bvh, result.bvh_motion)
     if save is not None:
         result.save_npz(save)
     return result

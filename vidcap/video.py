@@ -150,6 +150,77 @@ def probe(path: str | os.PathLike, *, count: bool = False) -> VideoInfo:
     return VideoInfo(str(path), n, fps, int(w), int(h), codec, 90 * turns)
 
 
+def frame_times(path: str | os.PathLike) -> np.ndarray | None:
+    """Presentation time of every frame, from the container's timestamps.
+
+    Only the packets are read, not decoded (a few ms for a minute of video).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The video.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,), or None
+        Seconds from the first frame, increasing, in the order :func:`iter_frames`
+        yields the frames; None where the container keeps no usable timestamps (a
+        packet without one, or two frames at the same time).
+
+    Raises
+    ------
+    VideoError
+        The file cannot be opened or has no video stream.
+    """
+    import av
+
+    container = _open(path)
+    try:
+        stream = container.streams.video[0]
+        pts = []
+        for packet in container.demux(stream):
+            if packet.size == 0:  # the demuxer's end-of-stream flush packet
+                continue
+            if packet.pts is None:
+                return None
+            pts.append(int(packet.pts))
+        tb = stream.time_base
+    except av.error.FFmpegError:
+        return None  # reported by whatever decodes the file next
+    finally:
+        container.close()
+    if not pts or tb is None:
+        return None
+    t = np.sort(np.asarray(pts, dtype=np.int64))
+    if len(t) > 1 and not (np.diff(t) > 0).all():
+        return None
+    return (t - t[0]) * float(tb)
+
+
+def variable_rate(times, fps: float, *, tolerance: float = 0.5) -> bool:
+    """Whether frames at ``times`` are not evenly spaced at ``fps``.
+
+    True when some interval differs from ``1 / fps`` by more than ``tolerance``
+    frame intervals, or the last frame is more than one interval away from where
+    an even rate would put it (a slow drift).
+
+    Parameters
+    ----------
+    times : array_like, shape (F,)
+        Seconds (:func:`frame_times`).
+    fps : float
+        The nominal rate.
+    tolerance : float
+        Allowed deviation of one interval, in frame intervals.
+    """
+    t = np.asarray(times, dtype=float)
+    if len(t) < 2 or not fps > 0:
+        return False
+    step = 1.0 / fps
+    drift = abs((t[-1] - t[0]) - (len(t) - 1) * step)
+    return bool(np.abs(np.diff(t) - step).max() > tolerance * step or drift > step)
+
+
 def _quarter_turns(frame) -> int:
     """Quarter turns counter-clockwise (0-3) that show a decoded frame upright: its
     display matrix's rotation, rounded to a multiple of 90 degrees (flips and other

@@ -77,7 +77,8 @@ def run(args) -> int:
     )
     if not args.quiet:
         lr = res.lifted
-        print(f"{args.output}: {res.n_frames} frames at {res.fps:g} fps; orientation "
+        bvh = res.bvh_motion
+        print(f"{args.output}: {bvh.n_frames} frames at {bvh.fps:.4g} fps; orientation "
               f"{', '.join(sorted(set(lr.orientation)))}; jitter {res.jitter_before:.1f} -> "
               f"{res.jitter_after:.1f} m/s^2")
         for notice in res.notices():
