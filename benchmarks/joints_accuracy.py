@@ -7,7 +7,10 @@ Run: /work/venv/bin/python benchmarks/joints_accuracy.py
 2. 07_01.c3d: bone lengths vs the subject's skeleton ../shared/data/motion/07.asf.
 3. kinematics_tennis_serve.c3d (full-body Plug-in-Gait, no reference skeleton): left
    against right bone lengths, and which joints fell back.
-4. Synthetic truth: markers rigidly on 131_01.bvh / 07_07.amc, 1 mm and 5 mm noise.
+4. Qualisys.c3d (anatomical landmark names): hinge centres against the midpoints of the
+   landmark pairs that define them anatomically (femoral epicondyles for the knee,
+   malleoli for the ankle, humeral epicondyles for the elbow, styloids for the wrist).
+5. Synthetic truth: markers rigidly on 131_01.bvh / 07_07.amc, 1 mm and 5 mm noise.
 """
 
 from __future__ import annotations
@@ -86,6 +89,31 @@ def symmetry():
             print(f"fallback: {rep.joint}: {rep.note}")
 
 
+def landmarks():
+    trial = read_c3d(DATA / "c3d/Qualisys.c3d")
+    sol = solve_joints(trial)
+    print(f"\n## Qualisys.c3d ({sol.markerset.name}): centres vs landmark midpoints (mm, per "
+          "frame); the offset split along / across the landmark line")
+    print(f"{'joint':8s} {'landmarks':16s} {'median':>7s} {'p90':>7s} {'along':>6s} "
+          f"{'across':>6s} {'width':>6s} method")
+    pairs = {"knee": ("FLE", "FME"), "ankle": ("FAL", "TAM"), "elbow": ("HLE", "HME"),
+             "wrist": ("RSP", "UHE")}
+    for name, (a, b) in pairs.items():
+        for s, p in (("l", "L"), ("r", "R")):
+            pa, pb = trial.marker(f"{p}_{a}"), trial.marker(f"{p}_{b}")
+            line = (pa - pb) / np.linalg.norm(pa - pb, axis=1, keepdims=True)
+            off = sol.position(f"{s}_{name}") - (pa + pb) / 2
+            along = np.abs(np.sum(off * line, 1))
+            across = np.linalg.norm(off - along[:, None] * line * np.sign(
+                np.sum(off * line, 1))[:, None], axis=1)
+            d = np.linalg.norm(off, axis=1) * 1e3
+            rep = sol.report(f"{s}_{name}")
+            print(f"{s + '_' + name:8s} {p + '_' + a + '/' + b:16s} {np.median(d):7.1f} "
+                  f"{np.percentile(d, 90):7.1f} {np.median(along) * 1e3:6.0f} "
+                  f"{np.median(across) * 1e3:6.0f} "
+                  f"{np.median(np.linalg.norm(pa - pb, axis=1)) * 1e3:6.0f} {rep.method}")
+
+
 def synthetic():
     motions = {"131_01.bvh": (read_bvh(DATA / "motion/131_01.bvh"), BVH_131),
                "07_07.amc": (read_asf_amc(DATA / "motion/07.asf", DATA / "motion/07_07.amc"),
@@ -110,4 +138,5 @@ if __name__ == "__main__":
     pig()
     bones()
     symmetry()
+    landmarks()
     synthetic()

@@ -21,6 +21,7 @@ from vidcap.mocap.markerset import (
 from vidcap.mocap.skeleton import (
     _fit_joint,
     frame_from_three,
+    hip_regression,
     kabsch,
     lab_to_yup,
     solution_to_motion,
@@ -269,6 +270,70 @@ def test_full_body_plug_in_gait_gives_a_plausible_skeleton(shared_data):
         left, right = bone(f"l_{upper}", f"l_{lower}"), bone(f"r_{upper}", f"r_{lower}")
         assert lo < left < hi and lo < right < hi, (upper, lower, left, right)
         assert abs(left - right) < 0.05, (upper, lower, left, right)
+
+
+def test_hip_regression_matches_harrington_in_any_pose():
+    """Harrington et al. (2007): from the mid-ASIS point, 0.24 PD + 9.9 mm back,
+    0.30 PW + 10.9 mm down, 0.33 PW + 7.3 mm to each side, whatever the pelvis' pose."""
+    from scipy.spatial.transform import Rotation
+
+    pw, pd = 0.25, 0.18
+    # pelvis frame: x anterior, y superior, z right; ASIS at x = 0, PSIS behind them
+    marks = np.array([[0.0, 0.0, -pw / 2], [0.0, 0.0, pw / 2],
+                      [-pd, 0.0, -0.05], [-pd, 0.0, 0.05]])
+    right = np.array([-0.24 * pd - 0.0099, -0.30 * pw - 0.0109, 0.33 * pw + 0.0073])
+    left = right * [1.0, 1.0, -1.0]
+    rot = Rotation.from_rotvec([[0.3, -1.2, 0.4], [0.0, 0.0, 0.0]])
+    shift = np.array([[1.0, 2.0, 0.5], [0.0, 0.0, 0.0]])
+
+    def posed(p):  # the point in both poses, (2, 3)
+        return rot.apply(np.tile(p, (2, 1))) + shift
+
+    got = hip_regression(posed(marks[0]), posed(marks[1]), [posed(marks[2]), posed(marks[3])])
+    np.testing.assert_allclose(got[0], posed(left), atol=1e-12)
+    np.testing.assert_allclose(got[1], posed(right), atol=1e-12)
+    # one sacrum marker at the PSIS midpoint gives the same centres
+    sacrum = hip_regression(posed(marks[0]), posed(marks[1]), [posed(marks[2:].mean(0))])
+    np.testing.assert_allclose(sacrum[1], posed(right), atol=1e-12)
+
+
+def test_gait_hips_come_from_the_pelvis_where_the_thigh_barely_swung(shared_data):
+    """PiG_Motion3_FF, a walk: the thighs swing about 17 deg (sd) in the sagittal plane
+    and 2-4 deg across it, where the sphere fit put the hips 27 cm apart, 5-6 cm from
+    Vicon's own hip centres (LFEP/RFEP, a regression too). Across the swing the centre
+    now comes from the pelvis landmarks: hips within 25 mm of Vicon's, 15-21 cm apart.
+    CMU's set names no pelvis landmarks, and its walk keeps the fitted hips."""
+    trial = read_c3d(shared_data("c3d/PiG_Motion3_FF.c3d"))
+    sol = solve_joints(trial)
+    for joint, ref in (("l_hip", "LFEP"), ("r_hip", "RFEP")):
+        assert "regression" in sol.report(joint).method
+        assert rms_mm(sol.position(joint), trial.marker(ref)) < 25.0, joint
+    width = np.linalg.norm(sol.position("l_hip") - sol.position("r_hip"), axis=1)
+    assert 0.15 < np.median(width) < 0.21
+    cmu = solve_joints(read_c3d(shared_data("c3d/07_01.c3d")))
+    assert "regression" not in cmu.report("l_hip").method
+
+
+def test_anatomical_landmark_set_on_qualisys(shared_data):
+    """ezc3d's Qualisys file (ISB-style landmark names) is read with the built-in
+    'anatomical' set: all 20 joints; knees and elbows turn about one axis, and their
+    centres lie on it at the epicondyles' midpoint, within 25 mm of it across the axis
+    (the fit's part); left and right limbs within 2 cm of each other."""
+    trial = read_c3d(shared_data("c3d/Qualisys.c3d"))
+    sol = solve_joints(trial)
+    assert sol.markerset.name == "anatomical" and len(sol.joint_names) == 20
+    for joint, (a, b) in (("knee", ("FLE", "FME")), ("elbow", ("HLE", "HME"))):
+        for s, p in (("l", "L"), ("r", "R")):
+            rep = sol.report(f"{s}_{joint}")
+            assert "axis-rule" in rep.method and f"{p}_{a}/{p}_{b} midpoint" in rep.note
+            mid = (trial.marker(f"{p}_{a}") + trial.marker(f"{p}_{b}")) / 2
+            assert rms_mm(sol.position(f"{s}_{joint}"), mid) < 25.0, (s, joint)
+
+    def bone(a, b):
+        return float(np.median(np.linalg.norm(sol.position(a) - sol.position(b), axis=1)))
+
+    for a, b in (("hip", "knee"), ("knee", "ankle")):
+        assert abs(bone(f"l_{a}", f"l_{b}") - bone(f"r_{a}", f"r_{b}")) < 0.02, (a, b)
 
 
 # ----------------------------------------------------------------------------- CLI

@@ -21,8 +21,14 @@ A marker set is a small TOML file (the built-in ones live in
     fallback = ["LKNE"]               # optional: markers whose centroid stands in for
                                       # the joint centre when the joint barely moves
     end = { joint = "l_toe", markers = ["LTOE"] }   # optional extra leaf joint
+    axis_anchor = ["LFLE", "LFME"]    # optional: the parent's landmarks that straddle a
+                                      # hinge joint (its centre along the axis)
     optional = ["SACR"]               # optional: markers of this segment that files may
                                       # lack without a warning (a protocol's variants)
+    hip_regression = { asis = ["LASI", "RASI"], psis = ["LPSI", "RPSI"], sacrum = "SACR",
+                       hips = ["l_hip", "r_hip"] }   # root only, optional: pelvis
+                                      # landmarks for the hips' regression (skeleton.py);
+                                      # sacrum, optional, stands in for the PSIS pair
 
 Joint names follow ``design.md`` (``l_hip``, ``l_knee``...); extra joints
 (``spine``, ``l_toe``...) are allowed. Segments are listed parents first.
@@ -78,6 +84,16 @@ class SegmentSpec:
         Markers of ``markers`` that a file may lack without it being reported or
         counting against the set's detection (one protocol's variants: Plug-in-Gait's
         SACR in place of LPSI/RPSI).
+    hip_asis, hip_psis : tuple of str
+        Root only: the left and right anterior and posterior superior iliac spine
+        markers, for the hip-centre regression of
+        :func:`vidcap.mocap.skeleton.hip_regression`; empty when the set has none. Once
+        restricted to a file (:meth:`MarkerSet.restricted`), ``hip_psis`` may be the
+        one sacrum marker that stands in for the pair.
+    hip_sacrum : tuple of str
+        Root only: a sacrum marker (one name) that stands in for ``hip_psis``.
+    hip_joints : tuple of str
+        The (left, right) hip joints the regression is for.
     """
 
     name: str
@@ -92,6 +108,11 @@ class SegmentSpec:
     end_markers: tuple[str, ...] = ()
     origin: tuple[str, ...] = ()
     optional: tuple[str, ...] = ()
+    hip_asis: tuple[str, ...] = ()
+    hip_psis: tuple[str, ...] = ()
+    hip_joints: tuple[str, ...] = ()
+    hip_sacrum: tuple[str, ...] = ()
+    axis_anchor: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -160,11 +181,19 @@ class MarkerSet:
             if not mk:
                 continue
             end = tuple(m for m in s.end_markers if m in available)
+            # the regression needs both ASIS and the PSIS pair or, instead, the sacrum
+            psis = s.hip_psis if all(m in available for m in s.hip_psis) else tuple(
+                m for m in s.hip_sacrum if m in available)
+            regress = (bool(s.hip_asis) and all(m in available for m in s.hip_asis)
+                       and bool(psis))
             kept.append(SegmentSpec(
                 s.name, s.parent, s.joint, mk, s.tip, s.rest, s.side,
                 tuple(m for m in s.fallback if m in available),
                 s.end_joint if end else None, end, s.origin,
                 tuple(m for m in s.optional if m in available),
+                s.hip_asis if regress else (), psis if regress else (),
+                s.hip_joints if regress else (), s.hip_sacrum,
+                s.axis_anchor if all(m in available for m in s.axis_anchor) else (),
             ))
             names.add(s.name)
         return MarkerSet(self.name, self.description, tuple(kept), self.source), missing
@@ -218,6 +247,19 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
         if i == 0 and len(markers) < 3:
             raise MarkerSetError(f"root segment {name} needs at least 3 markers", source)
         optional = _strs(t.get("optional"), f"segments.{name}.optional", source)
+        reg = t.get("hip_regression") or {}
+        if not isinstance(reg, dict) or (reg and i > 0):
+            raise MarkerSetError(f"segments.{name}.hip_regression must be a table, on the "
+                                 "root segment", source)
+        asis = _strs(reg.get("asis"), f"segments.{name}.hip_regression.asis", source)
+        psis = _strs(reg.get("psis"), f"segments.{name}.hip_regression.psis", source)
+        hips = _strs(reg.get("hips"), f"segments.{name}.hip_regression.hips", source)
+        sacrum = _strs(reg.get("sacrum"), f"segments.{name}.hip_regression.sacrum", source)
+        if reg and (len(asis) != 2 or len(psis) != 2 or len(hips) != 2 or len(sacrum) > 1
+                    or set(asis + psis + sacrum) - set(markers)):
+            raise MarkerSetError(f"segments.{name}.hip_regression needs asis and psis "
+                                 "(left, right) among the segment's markers, hips (left, "
+                                 "right) and at most one sacrum marker", source)
         if set(optional) - set(markers):
             raise MarkerSetError(f"segments.{name}.optional names markers not in its "
                                  f"markers: {sorted(set(optional) - set(markers))}", source)
@@ -242,7 +284,9 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
             end_joint=end_joint,
             end_markers=_strs(end.get("markers"), f"segments.{name}.end.markers", source),
             origin=_strs(t.get("origin"), f"segments.{name}.origin", source),
-            optional=optional,
+            optional=optional, hip_asis=asis, hip_psis=psis, hip_joints=hips,
+            hip_sacrum=sacrum,
+            axis_anchor=_strs(t.get("axis_anchor"), f"segments.{name}.axis_anchor", source),
         ))
         seen_seg.add(name)
     return MarkerSet(str(doc.get("name", Path(source).stem)), str(doc.get("description", "")),

@@ -13,6 +13,13 @@ The procedure, for a marker set (:mod:`vidcap.mocap.markerset`) and one or more 
    markers, the solved centre counting as a point (case 2) - or from one marker,
    the centre and the hinge axis (case 1).
 
+Hips from a trial with little hip motion (a walk swings the thigh in one plane): the
+fitted centre is then not observable across that plane and soft tissue pulls it 5-6
+cm laterally (Plug-in-Gait and Qualisys gait trials in ``../shared``). Where the
+marker set names the pelvis landmarks (``hip_regression``), the centre's components
+along directions in which the thigh swung less than :data:`MIN_SWING_DEG` come from
+the Harrington et al. (2007) regression (:func:`hip_regression`) instead.
+
 Gaps: a frame where the primary three points of a segment are not all present is
 filled by a least-squares rigid fit (Kabsch) of the segment's template (the median
 local coordinates of all its points) to whichever >= 3 points are present. Samples
@@ -35,6 +42,61 @@ from vidcap.mocap.markerset import MarkerSet, MarkerSetError, SegmentSpec, detec
 from vidcap.mocap.spherefit import PLANAR_COND, mgdk
 
 _EPS = 1e-9
+
+#: A hip centre's component along a direction in which the thigh's markers swung by
+#: less than this (angular standard deviation about the centre, degrees) comes from
+#: the regression when the marker set has one: over a few degrees the sphere fit
+#: reads soft-tissue motion as the centre's position.
+MIN_SWING_DEG = 10.0
+
+
+def hip_regression(asis_left, asis_right, psis) -> tuple[np.ndarray, np.ndarray]:
+    """Hip joint centres from pelvis landmarks (Harrington et al., J Biomech 40:595, 2007).
+
+    In the pelvis frame at the mid-ASIS point (x anterior, y superior, z right):
+    ``x = -0.24 PD - 9.9 mm``, ``y = -0.30 PW - 10.9 mm``, ``z = +-(0.33 PW + 7.3 mm)``,
+    with PW the inter-ASIS distance and PD the mid-ASIS to mid-PSIS distance.
+
+    Parameters
+    ----------
+    asis_left, asis_right : numpy.ndarray, shape (F, 3)
+        Anterior superior iliac spine markers, metres.
+    psis : sequence of numpy.ndarray, each (F, 3)
+        The two posterior superior iliac spine markers, or one sacrum marker.
+
+    Returns
+    -------
+    left, right : numpy.ndarray, shape (F, 3)
+        Hip centres in the markers' frame, metres (NaN where a marker is missing).
+    """
+    la, ra = np.asarray(asis_left, float), np.asarray(asis_right, float)
+    mid_a = (la + ra) / 2
+    mid_p = np.mean([np.asarray(p, float) for p in psis], axis=0)
+    z = ra - la
+    pw = np.linalg.norm(z, axis=-1)
+    z = z / pw[:, None]
+    back = mid_a - mid_p
+    pd = np.linalg.norm(back, axis=-1)
+    x = _unit(back - np.sum(back * z, -1)[:, None] * z)
+    y = np.cross(z, x)
+    ax, ay, az = -0.24 * pd - 0.0099, -0.30 * pw - 0.0109, 0.33 * pw + 0.0073
+    base = mid_a + ax[:, None] * x + ay[:, None] * y
+    return base - az[:, None] * z, base + az[:, None] * z
+
+
+def _swing_spread(sets: list[np.ndarray], centre: np.ndarray):
+    """Eigenvalues (ascending) and eigenvectors of the pooled within-marker covariance
+    of the unit directions from ``centre`` to each marker: how far the segment swung
+    about the centre along each direction (sin of the angular standard deviation)."""
+    acc, n = np.zeros((3, 3)), 0
+    for y in sets:
+        if len(y) < 2:
+            continue
+        d = _unit(np.asarray(y, float) - centre)
+        d = d - d.mean(axis=0)
+        acc += d.T @ d
+        n += len(d)
+    return np.linalg.eigh(acc / max(n, 1))
 
 
 @dataclass(frozen=True)
@@ -529,7 +591,8 @@ def _axis_along_bone(axis, anchor, child_sets, *, max_deg: float = 45.0) -> floa
 
 def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_local,
                frames_used: int, *, noise_mm, min_cap_deg, planar_cond, anchor,
-               max_axial_std_mm, hinge_ratio, frame_cov=None) -> tuple:
+               max_axial_std_mm, hinge_ratio, frame_cov=None, anchor_what="",
+               bone_guard=True) -> tuple:
     """Fit one joint centre in the parent's frame; returns (v (3,), axis or None, report).
 
     ``frame_cov`` (3, 3), in units of σ²: the extra noise the parent's frame adds to a
@@ -582,7 +645,8 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
             axis_w = vec[:, 0]
         rule = (anchor is not None and np.isfinite(anchor).all()
                 and (kind == "hinge" or thin or axial_std * 1e3 > max_axial_std_mm))
-        along = _axis_along_bone(axis_w, anchor, usable) if rule else None
+        # (an anchor at the joint itself, landmarks straddling it, cannot slide it away)
+        along = _axis_along_bone(axis_w, anchor, usable) if rule and bone_guard else None
         if along is not None:
             # The rule below is for a bone flexing about an axis across it; an axis
             # within 45 degrees of the bone (rotation about the bone's own length, or
@@ -601,7 +665,7 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
             kind = "hinge"
             method += "+axis-rule"
             note = (f"centre along the hinge axis (std {axial_std * 1e3:.0f} mm from the fit) "
-                    f"placed nearest the {parent} proximal joint")
+                    f"placed nearest {anchor_what or f'the {parent} proximal joint'}")
     if flagged:
         v = fallback_local
         what = (f"centroid of {', '.join(spec.fallback)}" if spec.fallback
@@ -638,8 +702,39 @@ def _rigid_residual_var(frames: list[_SegFrames], pts: list[np.ndarray]) -> floa
     return ss / dof if dof > 0 else 0.0
 
 
+def _regress_hip(v, rep: JointReport, spec: SegmentSpec, root: SegmentSpec, trials,
+                 frames, sets) -> tuple[np.ndarray, JointReport, bool]:
+    """The hip centre ``v`` (root frame) with its poorly swung components taken from
+    :func:`hip_regression` (see :data:`MIN_SWING_DEG`); the report says which."""
+    from dataclasses import replace
+
+    side = root.hip_joints.index(spec.joint)
+    local = []
+    for ti, t in enumerate(trials):
+        idx = [t.index(m) for m in (*root.hip_asis, *root.hip_psis)]
+        pts = t.positions[:, idx]
+        hip = hip_regression(pts[:, 0], pts[:, 1], list(pts[:, 2:].transpose(1, 0, 2)))[side]
+        pf = frames[ti][root.name]
+        local.append(_to_local(pf.r, pf.o, hip[:, None])[:, 0])
+    reg = _nanmedian_rows(np.concatenate(local))
+    lam, vec = _swing_spread(sets, v)
+    weak = np.degrees(np.arcsin(np.sqrt(np.clip(lam, 0.0, 1.0)))) < MIN_SWING_DEG
+    if not weak.any() or not np.isfinite(reg).all():
+        return v, rep, False
+    e = vec[:, weak]
+    v = v + e @ (e.T @ (reg - v))
+    swing = ", ".join(f"{a:.0f}" for a in np.degrees(np.arcsin(np.sqrt(np.clip(lam, 0, 1)))))
+    note = (f"{int(weak.sum())} of 3 directions from the pelvis-landmark regression "
+            f"(Harrington 2007): the thigh swung {swing} deg (sd) about the fitted centre, "
+            f"under {MIN_SWING_DEG:g} deg there; regression {np.linalg.norm(reg - v) * 1e3:.0f}"
+            " mm from the result")
+    rep = replace(rep, method=rep.method + "+regression", note=note,
+                  center_local_m=[float(a) for a in v])
+    return v, rep, True
+
+
 def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float,
-                  child_points: np.ndarray):
+                  child_points: np.ndarray, anchor_what: str = "", bone_guard: bool = True):
     """The SCoRE/SARA centre in (parent, child) frames and the updated report.
 
     ``child_points`` (N, 3): the child's markers in the parent's frame (metres), which
@@ -654,7 +749,7 @@ def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float,
            else float("inf"))
     hinge = anchor is not None and np.isfinite(anchor).all() and n_p > 0.3 and (
         rep.kind == "hinge" or std * 1e3 > max_axial_std_mm) and (
-        _axis_along_bone(null[:3] / n_p, anchor, [child_points]) is None)
+        not bone_guard or _axis_along_bone(null[:3] / n_p, anchor, [child_points]) is None)
     if hinge:
         # SARA: the axis is the null direction; the point on it nearest the parent's
         # proximal joint (the hinge rule, see solve_joints)
@@ -664,7 +759,7 @@ def _refine_score(sc: dict, rep: JointReport, anchor, max_axial_std_mm: float,
         axis = null[:3] / n_p
         kind, method = "hinge", "score+sara+axis-rule"
         note = (f"SARA axis; centre along it (std {std * 1e3:.0f} mm from the fit) placed "
-                f"nearest the {rep.parent_segment} proximal joint")
+                f"nearest {anchor_what or f'the {rep.parent_segment} proximal joint'}")
     else:
         x = sc["x"] if lam[0] > 1e-9 * lam[-1] else sc["x_min"]
         axis = np.asarray(rep.axis, dtype=float) if rep.axis is not None else None
@@ -798,11 +893,18 @@ def solve_joints(
         fallback_local = _nanmedian_rows(np.concatenate(fb))
         pspec = ms.segment(s.parent)
         n_siblings = sum(1 for q in ms.segments if q.parent == s.parent)
-        anchor = None
-        if pspec.parent is not None and n_siblings == 1 and hinge_rule:
-            pf0 = frames[0][s.parent]
+        anchor, anchor_what = None, ""
+        pf0 = frames[0][s.parent]
+        if s.axis_anchor and hinge_rule:
+            # landmarks straddling the joint (epicondyles, malleoli, styloids): their
+            # midpoint is the joint's anatomical centre along its axis
+            anchor = _nanmedian_rows(np.nanmean(
+                _to_local(pf0.r, pf0.o, markers_of(trials[0], s.axis_anchor)), axis=1))
+            anchor_what = f"the {'/'.join(s.axis_anchor)} midpoint"
+        elif pspec.parent is not None and n_siblings == 1 and hinge_rule:
             anchor = _nanmedian_rows(
                 _to_local(pf0.r, pf0.o, centres[0][pspec.joint][:, None])[:, 0])
+            anchor_what = f"the {s.parent} proximal joint"
         # the noise the parent's frame adds to the child's markers in its coordinates
         # (mean over the markers of the propagated covariance, units of σ²)
         pf0 = frames[0][s.parent]
@@ -814,6 +916,7 @@ def solve_joints(
         v, axis, rep = _fit_joint(s, s.parent, sets_c, fallback_local, used,
                                   noise_mm=noise_mm, min_cap_deg=min_cap_deg,
                                   planar_cond=planar_cond, anchor=anchor,
+                                  anchor_what=anchor_what, bone_guard=not s.axis_anchor,
                                   max_axial_std_mm=max_axial_std_mm,
                                   hinge_ratio=hinge_ratio, frame_cov=frame_cov)
         # 1b. With >= 3 markers the child has frames of its own: refine symmetrically
@@ -840,7 +943,12 @@ def solve_joints(
                        **kw)
             if sc["x"] is not None:
                 v, v_child, axis, rep = _refine_score(sc, rep, anchor, max_axial_std_mm,
-                                                      np.concatenate(sets_c))
+                                                      np.concatenate(sets_c), anchor_what,
+                                                      not s.axis_anchor)
+        if s.parent == root.name and s.joint in root.hip_joints and not rep.flagged:
+            v, rep, moved = _regress_hip(v, rep, s, root, trials, frames, sets_c)
+            if moved:
+                v_child = None  # the parent's prediction only: the child's is the fit's
         fitted_v[s.joint] = v
         axes[s.joint] = axis
         reports.append(rep)
