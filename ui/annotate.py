@@ -127,6 +127,7 @@ class AnnotateApp:
         st.frame_src = st.sil_src = st.review_frame_src = st.review_sil_src = ""
         st.review_side_src = ""
         st.fit_score = 0.0
+        st.filled = False
         st.video_name = s.clip.video.name
         st.joint_names = list(JOINT_NAMES)
         st.joints_display = []
@@ -169,6 +170,7 @@ class AnnotateApp:
             st.orientation_user = info["orientation_user"]
             st.sides_swapped = info["sides_swapped"]
             st.fit_score = info["fit_score"]
+            st.filled = info["filled"]
             st.user_joints = info["user_joints"]
             st.joints_display = np.round(j2, 1).tolist()  # page pixels, for tests and tools
             st.n_inputs = s.n_user_inputs
@@ -388,6 +390,11 @@ class AnnotateApp:
                             ' $event.offsetY])"',
                             f'@mouseup="trigger(\'drag_end\', [{drag_x}, {drag_y}])"',
                         ])
+                    v3.VChip(
+                        "FILLED: not fitted (no person, or mostly outside the picture); "
+                        "pose from the frames around", v_if="filled", id="filled-badge",
+                        color="orange", variant="elevated", size="small",
+                        style="position: absolute; left: 8px; top: 8px; line-height: normal")
                     html.Div(
                         v_if="drag_joint", id="drag-dot",
                         style=("'position: absolute; pointer-events: none; width: 14px;"

@@ -319,6 +319,9 @@ class AnnotateSession:
             "orientation": str(self.orientation[f]),
             "orientation_user": bool(self.user_orient[f] != ""),
             "fit_score": round(float(self.clip.fit_score[f]), 3),
+            # not fitted (no person, or mostly outside the picture): the pose shown is
+            # filled from the frames around it, as the review video marks it
+            "filled": bool(self.clip.fit_score[f] <= 0),
             "sides_swapped": [p for p, on in zip(PAIRS, self.annotations.sides(f + 1)[f],
                                                  strict=True) if on],
             "user_joints": [JOINT_NAMES[i] for i in

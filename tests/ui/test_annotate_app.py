@@ -135,3 +135,26 @@ def test_keys_and_attention(app):
     assert st.frame in {it["frame"] for it in first} and st.message.startswith("frame ")
     _call(app, "goto", 10_000)
     assert st.frame == app.session.n_frames - 1
+
+
+def test_frames_not_fitted_carry_a_filled_badge(tmp_path, monkeypatch):
+    """A frame the pipeline did not fit (fit score 0: its pose is filled from the
+    frames around) says so on the page, as the review video marks it FILLED."""
+    import pyvista as pv
+
+    from tests.ui.clips import truth_clip
+
+    monkeypatch.setattr(pv, "OFF_SCREEN", True)
+    clip = truth_clip("walk_side")
+    clip.fit_score[[7, 8]] = 0.0
+    a = AnnotateApp(AnnotateSession(clip, tmp_path / "a.json"))
+    try:
+        assert a.state.filled is False  # frame 0 was fitted
+        a.state.frame = 7
+        a._update_frame()
+        assert a.state.filled is True
+        a.state.frame = 9
+        a._update_frame()
+        assert a.state.filled is False
+    finally:
+        a.plotter.close()
