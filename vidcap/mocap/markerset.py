@@ -21,14 +21,21 @@ A marker set is a small TOML file (the built-in ones live in
     fallback = ["LKNE"]               # optional: markers whose centroid stands in for
                                       # the joint centre when the joint barely moves
     end = { joint = "l_toe", markers = ["LTOE"] }   # optional extra leaf joint
-    axis_anchor = ["LFLE", "LFME"]    # optional: the parent's landmarks that straddle a
-                                      # hinge joint (its centre along the axis)
-    optional = ["SACR"]               # optional: markers of this segment that files may
-                                      # lack without a warning (a protocol's variants)
+
+Optional keys beyond these (Plug-in-Gait and the ``anatomical`` set use them)::
+
+    [segments.pelvis]
+    markers = ["LASI", "RASI", "LPSI", "RPSI", "SACR"]
+    optional = ["LPSI", "RPSI", "SACR"]   # markers a file may lack without a warning
+                                          # (a protocol's variants)
     hip_regression = { asis = ["LASI", "RASI"], psis = ["LPSI", "RPSI"], sacrum = "SACR",
-                       hips = ["l_hip", "r_hip"] }   # root only, optional: pelvis
-                                      # landmarks for the hips' regression (skeleton.py);
-                                      # sacrum, optional, stands in for the PSIS pair
+                       hips = ["l_hip", "r_hip"] }   # root only: pelvis landmarks for the
+                                          # hips' regression (skeleton.py); the sacrum
+                                          # may stand in for the PSIS pair
+
+    [segments.l_lower_leg]            # the segment whose joint (the knee) it places
+    axis_anchor = ["L_FLE", "L_FME"]  # the parent's landmarks that straddle a hinge
+                                      # joint: its centre along the axis
 
 Joint names follow ``design.md`` (``l_hip``, ``l_knee``...); extra joints
 (``spine``, ``l_toe``...) are allowed. Segments are listed parents first.

@@ -657,7 +657,8 @@ def _fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_
                     "the centre is not observable")
         elif rule:
             # Motion (nearly) about one axis: the centre's position along that axis is not
-            # observable. Place it at the point of the axis nearest the parent's proximal
+            # observable. Place it at the point of the axis nearest the anchor: landmarks
+            # straddling the joint where the set names them, else the parent's proximal
             # joint (for a long bone flexing about an axis across it - knee, elbow, ankle,
             # wrist - that is where the bone's long axis meets the hinge axis).
             center = center + ((anchor - center) @ axis_w) * axis_w
@@ -907,7 +908,6 @@ def solve_joints(
             anchor_what = f"the {s.parent} proximal joint"
         # the noise the parent's frame adds to the child's markers in its coordinates
         # (mean over the markers of the propagated covariance, units of σ²)
-        pf0 = frames[0][s.parent]
         covs = [point_covariance(pf0.template, y.mean(axis=0), pf0.weights)
                 for y in sets_c if len(y)]
         frame_cov = np.mean(covs, axis=0) if covs else None
