@@ -325,6 +325,28 @@ def test_retarget_keeps_the_arms_out_of_our_torso(shared_data):
                                np.linalg.norm(_seg_vectors(exact), axis=-1), atol=1e-9)
 
 
+def test_retarget_humanik_names_like_cmu(shared_data, tmp_path):
+    """The same 131_01 motion with its joints named as MotionBuilder's HumanIK (Mixamo,
+    the widely shared CMU conversion, capture suits) names them: LeftArm for the
+    shoulder, LeftUpLeg for the hip, the head's top at its End Site. It maps as
+    'humanik' and retargets to the same poses as the CMU names."""
+    import re
+
+    text = shared_data("motion/131_01.bvh").read_text()
+    renames = [("Shoulder", "Arm"), ("Collar", "Shoulder"), ("Elbow", "ForeArm"),
+               ("Wrist", "Hand"), ("Hip", "UpLeg"), ("Knee", "Leg"), ("Ankle", "Foot"),
+               ("Toe", "ToeBase")]
+    for old, new in renames:  # in this order: Shoulder -> Arm before Collar -> Shoulder
+        text = re.sub(rf"\b(Left|Right){old}\b", rf"\g<1>{new}", text)
+    assert "JOINT LeftArm" in text and "JOINT LeftUpLeg" in text
+    path = tmp_path / "humanik.bvh"
+    path.write_text(text)
+    src = read_bvh(path).frames(0, 240)
+    assert detect_joint_map(src.skeleton) == "humanik"
+    want = retarget(read_bvh(shared_data("motion/131_01.bvh")).frames(0, 240))
+    np.testing.assert_allclose(retarget(src).positions(), want.positions(), atol=1e-9)
+
+
 def test_retarget_our_own_skeleton_is_identity():
     body = BodyModel(height=1.6)
     m = make_motion("arms", body=body, n_frames=20, rng=np.random.default_rng(0))

@@ -68,17 +68,18 @@ BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "jacks", "arms")
 
 # --------------------------------------------------------------------------- joint maps
 #: How each of our 15 joints is found in a source skeleton, per naming scheme.
-#: Each entry maps our joint name to a source joint name; ``"<name>@end"`` means the
-#: End Site of that joint (or its first child when it has none). Source names are
-#: matched case-insensitively, ignoring a namespace prefix such as ``mixamorig:``.
-#: The first scheme whose names are all present is used (:func:`detect_joint_map`).
+#: Each entry maps our joint name to a source joint name, or to a tuple of names of
+#: which the first present is used; ``"<name>@end"`` means the End Site of that joint
+#: (or its first child when it has none). Source names are matched
+#: case-insensitively, ignoring a namespace prefix such as ``mixamorig:``. The first
+#: scheme whose joints are all present is used (:func:`detect_joint_map`).
 #:
-#: =========== ============== ============== ===================
-#: ours        CMU BVH        CMU ASF/AMC    Mixamo
-#: =========== ============== ============== ===================
+#: =========== ============== ============== ==========================
+#: ours        CMU BVH        CMU ASF/AMC    HumanIK
+#: =========== ============== ============== ==========================
 #: pelvis      Hips           root           Hips
 #: neck        Neck           upperneck      Neck
-#: head_top    Head@end       head@end       HeadTop_End
+#: head_top    Head@end       head@end       HeadTop_End or Head@end
 #: l_shoulder  LeftShoulder   lhumerus       LeftArm
 #: l_elbow     LeftElbow      lradius        LeftForeArm
 #: l_wrist     LeftWrist      lwrist         LeftHand
@@ -86,10 +87,13 @@ BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "jacks", "arms")
 #: l_knee      LeftKnee       ltibia         LeftLeg
 #: l_ankle     LeftAnkle      lfoot          LeftFoot
 #: (right side likewise: Right*, r*)
-#: =========== ============== ============== ===================
+#: =========== ============== ============== ==========================
 #:
 #: CMU BVH's ``Neck`` joint and ASF's ``upperneck`` (the near end of the bone) sit at
-#: shoulder height, where our neck joint is (the top of the torso cylinder).
+#: shoulder height, where our neck joint is (the top of the torso cylinder). The
+#: HumanIK names (MotionBuilder's) are those of Mixamo, of the widely shared CMU
+#: conversion (``LHipJoint``, ``LeftUpLeg``, ``Spine1``, ``Neck1``...) and of many
+#: capture suits' BVH exports; their ``Neck`` is the base of the neck too.
 JOINT_MAPS = MappingProxyType(
     {
         "vidcap": MappingProxyType({n: n for n in JOINT_NAMES}),
@@ -112,9 +116,9 @@ JOINT_MAPS = MappingProxyType(
                 "r_hip": "rfemur", "r_knee": "rtibia", "r_ankle": "rfoot",
             }
         ),
-        "mixamo": MappingProxyType(
+        "humanik": MappingProxyType(
             {
-                "pelvis": "Hips", "neck": "Neck", "head_top": "HeadTop_End",
+                "pelvis": "Hips", "neck": "Neck", "head_top": ("HeadTop_End", "Head@end"),
                 "l_shoulder": "LeftArm", "l_elbow": "LeftForeArm", "l_wrist": "LeftHand",
                 "r_shoulder": "RightArm", "r_elbow": "RightForeArm", "r_wrist": "RightHand",
                 "l_hip": "LeftUpLeg", "l_knee": "LeftLeg", "l_ankle": "LeftFoot",
@@ -129,9 +133,15 @@ def _norm_name(name: str) -> str:
     return name.rsplit(":", 1)[-1].strip().lower()
 
 
+def _alternatives(spec) -> tuple[str, ...]:
+    """A :data:`JOINT_MAPS` value as its tuple of alternative source names."""
+    return (spec,) if isinstance(spec, str) else tuple(spec)
+
+
 def _missing_names(skeleton: Skeleton, table) -> list[str]:
     have = {_norm_name(n) for n in skeleton.joint_names}
-    return [s for s in table.values() if _norm_name(s.split("@")[0]) not in have]
+    return [_alternatives(s)[0] for s in table.values()
+            if not any(_norm_name(a.split("@")[0]) in have for a in _alternatives(s))]
 
 
 def detect_joint_map(skeleton: Skeleton, *, source: str | os.PathLike | None = None) -> str:
@@ -173,7 +183,7 @@ def source_joint_positions(
     ----------
     motion : Motion
         The source motion (any skeleton), metres.
-    table : mapping of str to str
+    table : mapping of str to str or tuple of str
         One of :data:`JOINT_MAPS` (ours -> source names).
 
     Returns
@@ -186,7 +196,8 @@ def source_joint_positions(
     world_r, world_p = motion.world_transforms()
     out = np.empty((motion.n_frames, len(JOINT_NAMES), 3))
     for j, ours in enumerate(JOINT_NAMES):
-        spec = table[ours]
+        names = _alternatives(table[ours])
+        spec = next((a for a in names if _norm_name(a.split("@")[0]) in index), names[0])
         name, _, end = spec.partition("@")
         k = index.get(_norm_name(name))
         if k is None:
