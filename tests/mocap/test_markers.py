@@ -375,3 +375,51 @@ def test_cli_every_shared_file_converts_or_fails_cleanly(cli, shared_data, tmp_p
 def test_cli_list_markersets(cli):
     r = cli("joints", "--list-markersets")
     assert r.returncode == 0 and "cmu41" in r.stdout and "pig_lower" in r.stdout
+
+
+# ----------------------------------------------------------------------------- draft sets
+@pytest.mark.parametrize("which", ["131", "07"])
+def test_draft_markerset_recovers_segments_parents_and_joints(motions, which):
+    """Markers rigid on the ten segments of a real motion (1 mm noise), no names given:
+    the draft groups them into the ten segments, joins each to its true parent, and
+    solving with it puts the knees and elbows within 5 mm of the truth."""
+    from vidcap.mocap.draft import draft_markerset
+
+    motion, layout = motions[which]
+    data, truth_set, truth = attach_markers(motion, layout, np.random.default_rng(0),
+                                            noise_m=0.001)
+    draft = parse_markerset(draft_markerset(data))
+    true_of = {frozenset(s.markers): s for s in truth_set.segments}
+    assert len(draft.segments) == len(truth_set.segments)
+    named = {}
+    for s in draft.segments:
+        t = true_of[frozenset(s.markers)]  # KeyError: a group that is not a segment
+        named[s.name] = t
+        if s.parent is None:
+            assert t.parent is None
+        else:
+            assert named[s.parent].name == t.parent, (t.name, named[s.parent].name)
+    sol = solve_joints(data, draft)
+    for s in draft.segments:
+        if named[s.name].joint in ("l_knee", "r_knee", "l_elbow", "r_elbow"):
+            assert rms_mm(sol.position(s.joint), truth[named[s.name].joint]) < 5.0, s.joint
+
+
+def test_cli_draft_markerset_for_an_unknown_set(cli, shared_data, tmp_path):
+    """OptiTrack's rigid clusters (Foot/Knee/Leg_Marker1..) match no built-in set: the
+    error says how to draft one, the draft is a marker set vidcap joints accepts."""
+    trial = shared_data("c3d/walkingOptiTrack.c3d")
+    r = cli("joints", trial, "-o", tmp_path / "x.bvh", timeout=60)
+    assert r.returncode == 2 and "--draft-markerset" in r.stderr
+    draft = tmp_path / "draft.toml"
+    r = cli("joints", trial, "--draft-markerset", draft, timeout=60)
+    assert r.returncode == 0, r.stderr
+    text = draft.read_text()
+    assert text.count("[segments.") == 3 and "sphere fit: RMS" in text
+    r = cli("joints", trial, "--markerset", draft, "-o", tmp_path / "d.bvh", timeout=60)
+    assert r.returncode == 0, r.stderr
+    from vidcap.bvh import read_bvh
+
+    assert read_bvh(tmp_path / "d.bvh", units="m").n_frames == read_c3d(trial).n_frames
+    r = cli("joints", trial, "--draft-markerset", draft, "--rigid-mm", "0")
+    assert r.returncode == 2 and "--rigid-mm" in r.stderr

@@ -10,7 +10,7 @@ import numpy as np
 NAME = "joints"
 HELP = "joint centres (sphere fits) and a BVH skeleton from C3D marker trajectories"
 ORDER = 60
-OUTPUT_FILES = ("output", "centres", "report")
+OUTPUT_FILES = ("output", "centres", "report", "draft_markerset")
 INPUT_FILES = ("trial",)
 
 
@@ -29,6 +29,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--report", metavar="OUT.json", help="JSON fit-quality report per joint")
     parser.add_argument("--list-markersets", action="store_true",
                         help="list the built-in marker sets and exit")
+    parser.add_argument("--draft-markerset", metavar="OUT.toml",
+                        help="write a draft marker set read from the trial (rigid groups of "
+                        "markers, joined where they turn about a point) for an unknown "
+                        "marker set, and exit: rename and check it, then pass --markerset")
+    parser.add_argument("--rigid-mm", type=float, default=None, metavar="MM",
+                        help="with --draft-markerset: largest spread (standard deviation, "
+                        "mm) of a distance between two markers of one segment (default 6)")
 
 
 def centres_csv(sol) -> str:
@@ -71,6 +78,17 @@ def run(args) -> int:
         return 0
     if not args.trial:
         raise UsageError("give a TRIAL.c3d (or --list-markersets)")
+    if args.rigid_mm is not None and not args.rigid_mm > 0:
+        raise UsageError(f"--rigid-mm must be positive, got {args.rigid_mm}")
+    if args.draft_markerset:
+        from vidcap.mocap.draft import MAX_SD_MM, draft_markerset
+
+        text = draft_markerset(read_c3d(args.trial), max_sd_mm=args.rigid_mm or MAX_SD_MM)
+        write_text_atomic(args.draft_markerset, text)
+        n = text.count("[segments.")
+        print(f"{args.draft_markerset}: draft marker set, {n} segments: rename the joints, "
+              "check the parents and rest directions, then use --markerset")
+        return 0
     if not (args.output or args.centres or args.report):
         raise UsageError("nothing to write: give -o OUT.bvh, --centres OUT.csv or --report")
     if args.noise_mm is not None and not args.noise_mm > 0:

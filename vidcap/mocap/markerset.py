@@ -362,7 +362,8 @@ def detect_markerset(labels, *, path=None) -> MarkerSet:
     if not scored:
         raise MarkerSetError(
             "no built-in marker set matches the marker labels; pass --markerset FILE.toml "
-            "(see vidcap joints --list-markersets)", path,
+            "(see vidcap joints --list-markersets; --draft-markerset FILE.toml drafts one "
+            "from the trial)", path,
         )
     scored.sort(key=lambda s: (s[0], s[1]), reverse=True)
     if len(scored) > 1 and scored[0][:2] == scored[1][:2]:

@@ -31,6 +31,7 @@ markers and trials.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 
@@ -889,7 +890,9 @@ def solve_joints(
                 sets[k].append(y[ok[:, k], k])
             fbn = s.fallback or s.markers
             fy = _to_local(pf.r, pf.o, markers_of(t, fbn))
-            fb.append(np.nanmean(fy, axis=1) if np.isfinite(fy).any() else fy[:, 0])
+            with warnings.catch_warnings():  # frames without any of them stay NaN
+                warnings.simplefilter("ignore", RuntimeWarning)
+                fb.append(np.nanmean(fy, axis=1) if np.isfinite(fy).any() else fy[:, 0])
         sets_c = [np.concatenate(a) for a in sets]
         fallback_local = _nanmedian_rows(np.concatenate(fb))
         pspec = ms.segment(s.parent)
