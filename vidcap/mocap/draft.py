@@ -93,19 +93,26 @@ def rigid_groups(data: MarkerData, *, max_sd_mm: float = MAX_SD_MM,
     list of list of str
         Groups of marker labels, largest first (label order within a group).
     """
+    return _grouped(data, max_sd_mm, min_present)[0]
+
+
+def _grouped(data: MarkerData, max_sd_mm: float, min_present: float):
+    """:func:`rigid_groups` and, per group, its largest distance spread (m)."""
     from scipy.cluster.hierarchy import fcluster, linkage
     from scipy.spatial.distance import squareform
 
     present = np.isfinite(data.positions).all(axis=2).mean(axis=0) >= min_present
     labels = [m for m, ok in zip(data.labels, present, strict=True) if ok]
     if len(labels) < 2:
-        return [labels] if labels else []
+        return ([labels], [0.0]) if labels else ([], [])
     sd = distance_spread(data.positions[:, present])
     sd = np.where(np.isfinite(sd), sd, 1e3)  # never seen together: never one segment
     z = linkage(squareform(sd, checks=False), method="complete")
     ids = fcluster(z, t=max_sd_mm * 1e-3, criterion="distance")
-    groups = [[m for m, g in zip(labels, ids, strict=True) if g == k] for k in np.unique(ids)]
-    return sorted(groups, key=len, reverse=True)
+    order = sorted(np.unique(ids), key=lambda k: -int(np.count_nonzero(ids == k)))
+    groups = [[m for m, g in zip(labels, ids, strict=True) if g == k] for k in order]
+    spread = [float(sd[np.ix_(ids == k, ids == k)].max()) for k in order]
+    return groups, spread
 
 
 def _joint_residual(child: np.ndarray, frames) -> tuple[float, float]:
@@ -183,17 +190,11 @@ def draft_markerset(data: MarkerData, *, max_sd_mm: float = MAX_SD_MM) -> str:
     MarkerSetError
         No rigid group of three markers (no root frame).
     """
-    groups = rigid_groups(data, max_sd_mm=max_sd_mm)
+    groups, spread = _grouped(data, max_sd_mm, 0.5)
     root, links = segment_tree(data, groups)
     name = {root: "seg1"}
     for i, (c, _, _, _) in enumerate(links):
         name[c] = f"seg{i + 2}"
-    sd = distance_spread(data.positions[:, [data.index(m) for g in groups for m in g]])
-    offset = np.cumsum([0] + [len(g) for g in groups])
-
-    def spread_mm(k):
-        block = sd[offset[k]:offset[k + 1], offset[k]:offset[k + 1]]
-        return 1e3 * float(block.max()) if len(groups[k]) > 1 else 0.0
 
     def markers(k):
         return "[" + ", ".join(f'"{m}"' for m in groups[k]) + "]"
@@ -225,7 +226,7 @@ def draft_markerset(data: MarkerData, *, max_sd_mm: float = MAX_SD_MM) -> str:
             lines.append(f'parent = "{name[p]}"')
             lines.append(f'joint = "{name[p]}_{name[k]}"  # sphere fit: RMS {rms * 1e3:.1f} mm, '
                          f"markers {rad * 1e3:.0f} mm from the centre")
-        lines.append(f"markers = {markers(k)}  # rigid within {spread_mm(k):.1f} mm")
+        lines.append(f"markers = {markers(k)}  # rigid within {spread[k] * 1e3:.1f} mm")
         if children.get(k):
             lines.append(f'tip = "{name[k]}_{name[children[k][0]]}"')
         lines.append('rest = "-y"  # guess: the T-pose direction of the tip')
