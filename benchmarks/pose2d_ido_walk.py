@@ -23,7 +23,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from vidcap.body import SEGMENT_JOINTS, SEGMENT_NAMES  # noqa: E402
-from vidcap.fit.pose2d import fit_sequence  # noqa: E402
+from vidcap.fit.pose2d import fit_pose, fit_sequence  # noqa: E402
 from vidcap.video import read_frames  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data" / "video"
@@ -60,6 +60,20 @@ def main(argv=None) -> int:
     print(f"{'mode':10} {'median S':>9} {'min S':>7} {'warm':>6}")
     for mode, s, pose in rows:
         print(f"{mode:10} {np.median(s):9.3f} {s.min():7.3f} {pose.warm.mean():6.0%}")
+    # how much the fit cares whether the body is seen from the side or the front: S of
+    # per-frame fits with the shoulders' and hips' spread fixed at 0 (side) and at 1
+    # (front), here and on the synthetic side view of sample_videos/ (same run)
+    print("\nS of per-frame fits, spread fixed at 0 (side) and 1 (front):")
+    print(f"{'clip':22} {'side better':>11} {'front better':>12} {'max |gap|':>9}")
+    truth = REPO / "sample_videos" / "walk_side_truth.npz"
+    clips = [("ido_walk (real side)", masks)]
+    if truth.exists():
+        clips.append(("walk_side (synthetic)", np.load(truth)["masks"]))
+    for label, ms in clips:
+        gap = np.array([fit_pose(m, spread_value=0.0).similarity
+                        - fit_pose(m, spread_value=1.0).similarity for m in ms if m.any()])
+        print(f"{label:22} {np.mean(gap > 0):11.0%} {np.mean(gap < 0):12.0%} "
+              f"{np.abs(gap).max():9.3f}")
     pose = rows[1][2]
     picks = list(range(0, len(frames), args.every))
     scale, tiles = 3, []
