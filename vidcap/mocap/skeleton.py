@@ -710,6 +710,11 @@ def _regress_hip(v, rep: JointReport, spec: SegmentSpec, root: SegmentSpec, tria
     :func:`hip_regression` (see :data:`MIN_SWING_DEG`); the report says which."""
     from dataclasses import replace
 
+    lam, vec = _swing_spread(sets, v)
+    swing_deg = np.degrees(np.arcsin(np.sqrt(np.clip(lam, 0.0, 1.0))))
+    weak = swing_deg < MIN_SWING_DEG
+    if not weak.any():  # swung enough every way: the fit stands, no regression needed
+        return v, rep, False
     side = root.hip_joints.index(spec.joint)
     local = []
     for ti, t in enumerate(trials):
@@ -719,13 +724,11 @@ def _regress_hip(v, rep: JointReport, spec: SegmentSpec, root: SegmentSpec, tria
         pf = frames[ti][root.name]
         local.append(_to_local(pf.r, pf.o, hip[:, None])[:, 0])
     reg = _nanmedian_rows(np.concatenate(local))
-    lam, vec = _swing_spread(sets, v)
-    weak = np.degrees(np.arcsin(np.sqrt(np.clip(lam, 0.0, 1.0)))) < MIN_SWING_DEG
-    if not weak.any() or not np.isfinite(reg).all():
+    if not np.isfinite(reg).all():
         return v, rep, False
     e = vec[:, weak]
     v = v + e @ (e.T @ (reg - v))
-    swing = ", ".join(f"{a:.0f}" for a in np.degrees(np.arcsin(np.sqrt(np.clip(lam, 0, 1)))))
+    swing = ", ".join(f"{a:.0f}" for a in swing_deg)
     note = (f"{int(weak.sum())} of 3 directions from the pelvis-landmark regression "
             f"(Harrington 2007): the thigh swung {swing} deg (sd) about the fitted centre, "
             f"under {MIN_SWING_DEG:g} deg there; regression {np.linalg.norm(reg - v) * 1e3:.0f}"
