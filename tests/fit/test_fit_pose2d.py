@@ -409,3 +409,61 @@ def test_challenge_comes_reinit_every_frames_after_the_last_fresh_fit(monkeypatc
     assert 6 in fresh and challenged[0] == 0
     last = max(k for k in fresh if k < 10)
     assert challenged[1:] == list(range(last + 10, 30, 10))
+
+
+def test_leg_grid_finds_a_leg_raised_beyond_the_track():
+    # side view: the previous frame stands on straight legs; in this one the image-left
+    # knee is lifted forward (thigh 240 deg, shin 250), beyond the track's +-8 degree
+    # search. The warm fit (the fresh-fit fallback off) loses the leg unless the
+    # whole-leg grid is searched.
+    stand, _ = _figure([90, 90, 265, 275, 265, 275, 268, 272, 272, 268], spread=0.0)
+    lifted, truth = _figure([90, 90, 265, 275, 265, 275, 240, 250, 272, 268], spread=0.0)
+    previous = fit_pose(stand)
+    knee, ankle = JOINT_INDEX["l_knee"], JOINT_INDEX["l_ankle"]
+
+    def leg_error(fp):  # either label may hold the lifted leg in a side view
+        return min(np.linalg.norm(fp.joints[[k, a]] - truth[[knee, ankle]], axis=1).max()
+                   for k, a in ((knee, ankle), (JOINT_INDEX["r_knee"], JOINT_INDEX["r_ankle"])))
+
+    found = fit_pose(lifted, previous=previous, fallback=0.0)
+    assert found.warm
+    assert leg_error(found) / H < 0.03
+    missed = fit_pose(lifted, previous=previous, fallback=0.0, leg_grid=False)
+    assert leg_error(missed) / H > 0.1
+
+
+def test_tracked_thighs_may_cross():
+    # three-quarter view (spread 0.7): each knee has swung past the other hip's, so the
+    # thighs cross in the image. A fit tracked from this pose keeps each leg on its hip
+    # (the seed's image-side rule would hang the legs the other way round).
+    from dataclasses import replace
+
+    angles = [90, 90, 250, 290, 270, 270, 300, 270, 240, 270]
+    mask, truth = _figure(angles, spread=0.7)
+    fresh = fit_pose(mask, body_height=H)  # the bent legs make the silhouette shorter
+    previous = replace(fresh, angles=np.mod(np.deg2rad(angles), 2 * np.pi),
+                       foreshortening=np.ones(10), spread=0.7, joints=truth)
+    fp = fit_pose(mask, previous=previous, body_height=H)
+    assert fp.warm
+    for name in ("l_hip", "l_knee", "r_hip", "r_knee"):
+        assert np.linalg.norm(fp.joints[JOINT_INDEX[name]] - truth[JOINT_INDEX[name]]) / H < 0.03
+
+
+def test_window_median_keeps_ends_and_turns():
+    from scipy.ndimage import median_filter
+
+    from vidcap.fit.pose2d import _window_median
+
+    # a clip whose first 4 frames were misread: judged by the frames after them
+    x = np.r_[np.full(4, 0.1), np.full(26, 0.8)]
+    assert np.all(_window_median(x, 15) == 0.8)
+    assert median_filter(x, size=15, mode="nearest")[0] == 0.1  # what padding did
+    # a steady turn passes unchanged away from the ends; a short misread run stands out
+    ramp = np.linspace(0.0, 1.0, 40)
+    inner = slice(15, 25)  # a whole window from the ends (there: the first/last window's)
+    np.testing.assert_allclose(_window_median(ramp, 31)[inner], ramp[inner])
+    bumped = ramp.copy()
+    bumped[17:22] = 0.0  # read as a side view for 5 frames
+    # the misread frames stand out from the median by more than the refit's 0.25
+    assert np.all(np.abs(_window_median(bumped, 31)[17:22]) > 0.25)
+    assert _window_median(np.array([0.3, 0.5]), 31).shape == (2,)
