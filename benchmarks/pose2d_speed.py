@@ -78,6 +78,8 @@ def main(argv=None) -> int:
     r = args.repeat
     t_cold = cpu(lambda: fit_sequence(masks, tracked=False, height=args.height), r) / n
     t_track = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height), r) / n
+    t_no_legs = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height,
+                                         leg_grid=False), r) / n
     warm = fit_sequence(masks, tracked=True, height=args.height).warm
     prev = fit_pose(masks[0], height=args.height)
     t_warm = cpu(lambda: fit_pose(masks[1], previous=prev, height=args.height), 5 * r)
@@ -90,6 +92,7 @@ def main(argv=None) -> int:
         ("normalise silhouette", t_norm),
         ("fit, per frame (seed order)", t_cold),
         (f"fit, tracked ({warm.mean():.0%} frames warm)", t_track),
+        ("fit, tracked, no whole-leg grid", t_no_legs),
         ("fit, one warm frame", t_warm),
         ("seed 004 (C#, 2.7 GHz Celeron)", 1.0),
     ]
