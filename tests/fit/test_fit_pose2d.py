@@ -467,3 +467,29 @@ def test_window_median_keeps_ends_and_turns():
     # the misread frames stand out from the median by more than the refit's 0.25
     assert np.all(np.abs(_window_median(bumped, 31)[17:22]) > 0.25)
     assert _window_median(np.array([0.3, 0.5]), 31).shape == (2,)
+
+
+def test_spread_prior_refits_a_misread_frame():
+    # a clip at spread 0.8 (three-quarter view) whose frame 0 was read at spread 0 (its
+    # limbs fitted for a side view): the median of the frames after it (the window is
+    # not padded with copies of frame 0) refits it at 0.8, and the hips move out to where
+    # the other frames have them
+    from vidcap.fit.pose2d import _Frames, _smooth_spread
+
+    angles = [92, 90, 250, 290, 265, 275, 262, 275, 280, 266]
+    masks = []
+    for k in range(12):
+        a = list(angles)
+        a[6] += k  # a slow step
+        masks.append(_figure(a, spread=0.8)[0])
+    masks = np.array(masks)
+    out = _Frames(len(masks))
+    for k in range(1, len(masks)):
+        out.put(k, fit_pose(masks[k], spread_value=0.8))
+    out.put(0, fit_pose(masks[0], spread_value=0.0))
+    hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
+    assert np.linalg.norm(out.joints[0][hips] - out.joints[1][hips], axis=1).max() / H > 0.04
+    _smooth_spread(masks, 31, 0.25, 0.01, {}, np.full(len(masks), np.nan), out)
+    assert out.spread[0] == pytest.approx(0.8)
+    # where the fits of the frames after it put them (the model's own placement)
+    assert np.linalg.norm(out.joints[0][hips] - out.joints[1][hips], axis=1).max() / H < 0.01

@@ -1627,13 +1627,14 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         barely shows it (the torso cylinder looks the same from every side), so
         per-frame estimates wander. After the pass, a frame whose spread is more
         than ``spread_jump`` from the running median over ``spread_window``
-        frames (shifted inside the clip at its ends) is refitted warm from its own
-        pose with the spread fixed at that median, and the refit kept unless its
-        similarity is more than ``spread_tie`` lower. 0 window: off. A median
-        passes a steady turn through unchanged (but within half a window of the
-        clip's ends, where a turn reads as the first or last window's median and
-        the similarity check decides), so the window (about 1 s at 30 fps) only
-        has to be longer than twice the runs of misread frames.
+        frames (shifted inside the clip at its ends) is refitted with the spread
+        fixed at that median, warm from its own pose and from scratch, and the
+        better refit kept unless its similarity is more than ``spread_tie``
+        lower. 0 window: off. A median passes a steady turn through unchanged
+        (but within half a window of the clip's ends, where a turn reads as the
+        first or last window's median and the similarity check decides), so the
+        window (about 1 s at 30 fps) only has to be longer than twice the runs
+        of misread frames.
     body_window, body_tolerance
         The body's height in pixels (tracked mode, beyond the seed): the seed
         scales the model to each silhouette's height, which assumes an upright
@@ -1860,7 +1861,12 @@ def _smooth_spread(masks, window, jump, tie, kw, body, out: _Frames):
         own = out.get(k, spread=med[k])
         at = float(body[k]) if np.isfinite(body[k]) else None
         norm = _normalise_frame(masks, k, height=kw.get("height", 80), body_height=at)
-        fp = fit_pose(norm, previous=own, **{**_fit_options(kw), "spread_value": float(med[k])})
+        options = {**_fit_options(kw), "spread_value": float(med[k])}
+        fp = fit_pose(norm, previous=own, **options)
+        # the limbs were found for the other spread; from scratch they may sit better
+        fresh = fit_pose(norm, **options)
+        if fresh.similarity > fp.similarity:
+            fp = fresh
         if fp.similarity >= out.sim[k] - tie:
             out.put(k, fp, warm=False)
 
