@@ -1628,13 +1628,14 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         per-frame estimates wander. After the pass, a frame whose spread is more
         than ``spread_jump`` from the running median over ``spread_window``
         frames (shifted inside the clip at its ends) is refitted with the spread
-        fixed at that median, warm from its own pose and from scratch, and the
-        better refit kept unless its similarity is more than ``spread_tie``
-        lower. 0 window: off. A median passes a steady turn through unchanged
-        (but within half a window of the clip's ends, where a turn reads as the
-        first or last window's median and the similarity check decides), so the
-        window (about 1 s at 30 fps) only has to be longer than twice the runs
-        of misread frames.
+        fixed at that median (warm from its own pose, from scratch, and within
+        a run of such frames warm from the one before), and the best refit
+        kept unless its similarity is more than ``spread_tie`` lower. 0 window:
+        off. A median passes a steady turn through unchanged (but within half a
+        window of the clip's ends, where a turn reads as the first or last
+        window's median and the similarity check decides), so the window (about
+        1 s at 30 fps) only has to be longer than twice the runs of misread
+        frames.
     body_window, body_tolerance
         The body's height in pixels (tracked mode, beyond the seed): the seed
         scales the model to each silhouette's height, which assumes an upright
@@ -1849,7 +1850,14 @@ def _window_median(values: np.ndarray, window: int) -> np.ndarray:
 
 def _smooth_spread(masks, window, jump, tie, kw, body, out: _Frames):
     """Refit frames whose spread jumps away from the running median (in place), each at
-    the height it was fitted at (``body``: px, NaN for the silhouette's)."""
+    the height it was fitted at (``body``: px, NaN for the silhouette's).
+
+    Each such frame is fitted at the median's spread warm from its own pose, from
+    scratch (its limbs were found for the other spread), and, inside a run of such
+    frames, warm from the frame before once that was refitted (a run is tracked at
+    the new spread, as the main pass would have); the best is kept unless it fits
+    more than ``tie`` worse than the frame's fit.
+    """
     spread = out.spread
     ok = np.isfinite(spread)
     if ok.sum() < 3:
@@ -1857,18 +1865,19 @@ def _smooth_spread(masks, window, jump, tie, kw, body, out: _Frames):
     idx = np.flatnonzero(ok)
     med = np.full_like(spread, np.nan)
     med[idx] = _window_median(spread[idx], window)
+    refitted = -2
     for k in np.flatnonzero(ok & (np.abs(spread - med) > jump)):
-        own = out.get(k, spread=med[k])
         at = float(body[k]) if np.isfinite(body[k]) else None
         norm = _normalise_frame(masks, k, height=kw.get("height", 80), body_height=at)
         options = {**_fit_options(kw), "spread_value": float(med[k])}
-        fp = fit_pose(norm, previous=own, **options)
-        # the limbs were found for the other spread; from scratch they may sit better
-        fresh = fit_pose(norm, **options)
-        if fresh.similarity > fp.similarity:
-            fp = fresh
+        starts = [out.get(k, spread=med[k]), None]
+        if refitted == k - 1:
+            starts.append(out.get(k - 1, spread=med[k]))
+        fp = max((fit_pose(norm, previous=s, **options) for s in starts),
+                 key=lambda c: c.similarity)
         if fp.similarity >= out.sim[k] - tie:
             out.put(k, fp, warm=False)
+            refitted = k
 
 
 __all__ = ["FramePose", "Pose2D", "body_heights", "fit_normalised", "fit_pose", "fit_sequence"]
