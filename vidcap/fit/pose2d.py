@@ -1870,11 +1870,13 @@ def _smooth_spread(masks, window, jump, tie, kw, body, out: _Frames):
         at = float(body[k]) if np.isfinite(body[k]) else None
         norm = _normalise_frame(masks, k, height=kw.get("height", 80), body_height=at)
         options = {**_fit_options(kw), "spread_value": float(med[k])}
-        starts = [out.get(k, spread=med[k]), None]
+        # warm from its own pose, challenged by a fresh fit (which, in a side view,
+        # takes the track's limb names, as in the main pass)
+        fp = fit_pose(norm, previous=out.get(k, spread=med[k]), challenge=True, **options)
         if refitted == k - 1:
-            starts.append(out.get(k - 1, spread=med[k]))
-        fp = max((fit_pose(norm, previous=s, **options) for s in starts),
-                 key=lambda c: c.similarity)
+            chained = fit_pose(norm, previous=out.get(k - 1, spread=med[k]), **options)
+            if chained.similarity > fp.similarity:
+                fp = chained
         if fp.similarity >= out.sim[k] - tie:
             out.put(k, fp, warm=False)
             refitted = k
