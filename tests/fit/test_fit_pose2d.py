@@ -286,6 +286,9 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
         f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
         f.search_arm_grid("l")  # whole-arm grid: candidates scored in one compiled pass
         f.search_arm_grid("r")
+        f.angles[s["l_upper_leg"]] += 0.6  # a leg the whole-leg grid has to bring back
+        f.search_leg_grid("l")
+        f.search_leg_grid("r")
         return out, (*f.state()[:3], f.scores.copy(), f.margins.copy())
 
     def fitter():
