@@ -373,10 +373,11 @@ def _pair_grid(step_deg: float, legs: bool = False):
     radians, each (N,), and their directions (:func:`direction`), each (N, 2)
     (read-only: shared by every call)."""
     if legs:
-        up = np.deg2rad(np.arange(180.0, 360.0 + 1e-9, step_deg))
-        up = up[(up >= _THIGH_WIDE[0] - 1e-9) & (up <= _THIGH_WIDE[1] + 1e-9)]
-        lim = _LIMITS["l_lower_leg"]
-        low = up[(up >= lim[0] - 1e-9) & (up <= lim[1] + 1e-9)]
+        def within(lim):  # whole degrees from the limits, as the arms' grid
+            lo, hi = np.round(np.rad2deg(lim), 6)
+            return np.deg2rad(np.arange(lo, hi + 1e-9, step_deg))
+
+        up, low = within(_THIGH_WIDE), within(_LIMITS["l_lower_leg"])
     else:
         up = low = np.deg2rad(np.arange(0.0, 360.0, step_deg))
     ua, la = (g.ravel() for g in np.meshgrid(up, low, indexing="ij"))
