@@ -31,7 +31,7 @@ motions, hands above the head), tracked, with the body-height pass
 each silhouette, the seed's rule); "off" is the share of frames whose silhouette height
 is more than 5 % from the body's.
 
-``--held-out`` fits 36 other clips (other stretches of both motions, the built-in
+``--held-out`` fits 29 other clips (other stretches of both motions, the built-in
 ``walk``, ``jacks`` and ``arms``, yaws 30-150), tracked, with the whole-leg grid and
 the 31-frame spread window each turned off in turn: single 60-frame clips move by a
 few points with any change to the search, so the mean over clips nobody tuned on is
