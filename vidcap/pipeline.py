@@ -150,6 +150,12 @@ VIEWS: tuple[str, ...] = ("auto", "side", "front", "back", *ORIENTATIONS)
 MIXED_VIEW = 0.2
 
 
+def _check_view(view: str) -> None:
+    """Raise ValueError unless ``view`` is one of :data:`VIEWS`."""
+    if view not in VIEWS:
+        raise ValueError(f"unknown view {view!r}; expected one of {list(VIEWS)}")
+
+
 def constrain_orientation(labels, view: str = "auto") -> np.ndarray:
     """The orientation labels within what the user said of the view.
 
@@ -172,8 +178,7 @@ def constrain_orientation(labels, view: str = "auto") -> np.ndarray:
         ``view`` is not one of :data:`VIEWS`.
     """
     labels = np.asarray(labels).astype(str)
-    if view not in VIEWS:
-        raise ValueError(f"unknown view {view!r}; expected one of {list(VIEWS)}")
+    _check_view(view)
     if view == "auto":
         return labels
     if view in ORIENTATIONS:
@@ -630,8 +635,7 @@ def run(
     from vidcap.video import frame_times, probe
 
     log = log or (lambda msg: None)
-    if view not in VIEWS:  # before any work
-        raise ValueError(f"unknown view {view!r}; expected one of {list(VIEWS)}")
+    _check_view(view)  # before any work
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
