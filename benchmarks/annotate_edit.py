@@ -23,8 +23,8 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(REPO), str(REPO / "tests" / "ui")]
 
 from clips import truth_clip  # noqa: E402
+from vidcap.ui.session import AnnotateSession, ClipData  # noqa: E402
 
-from ui.session import AnnotateSession, ClipData  # noqa: E402
 from vidcap.lift import lift  # noqa: E402
 
 TARGET_MS = 100.0

@@ -1,12 +1,12 @@
 """Interactive apps of vidcap (the ``ui`` extra: trame, vuetify 3, pyvista's trame views).
 
-* :mod:`ui.view`: ``vidcap view`` - a BVH skeleton over a ground grid or a C3D marker
+* :mod:`vidcap.ui.view`: ``vidcap view`` - a BVH skeleton over a ground grid or a C3D marker
   cloud (with fitted joint centres), in a window or offscreen to a PNG;
-* :mod:`ui.annotate`: ``vidcap annotate`` - the web page for depth directions,
+* :mod:`vidcap.ui.annotate`: ``vidcap annotate`` - the web page for depth directions,
   orientation and occluded joints, with a live 3D pose and a Review tab;
-* :mod:`ui.session`: the state behind that page (stage results, annotations, re-lifting),
+* :mod:`vidcap.ui.session`: the state behind that page (stage results, annotations, re-lifting),
   usable without a browser;
-* :mod:`ui.render`: the pictures the page shows.
+* :mod:`vidcap.ui.render`: the pictures the page shows.
 
 The library never imports this package; the commands import it lazily.
 """

@@ -2,7 +2,7 @@
 occluded joints for one clip, with a live 3D pose, and a Review tab.
 
 Start it with ``vidcap annotate VIDEO`` (or :func:`serve`). Everything the page
-shows comes from an :class:`ui.session.AnnotateSession`; every edit goes through it,
+shows comes from an :class:`vidcap.ui.session.AnnotateSession`; every edit goes through it,
 is re-lifted at once and saved atomically.
 
 Keyboard: Left/Right step a frame, Space plays/pauses, N jumps to the next frame
@@ -15,9 +15,9 @@ import asyncio
 import sys
 
 import numpy as np
+from vidcap.ui import render
+from vidcap.ui.session import MAX_DISPLAY_WIDTH, AnnotateSession
 
-from ui import render
-from ui.session import MAX_DISPLAY_WIDTH, AnnotateSession
 from vidcap.body import JOINT_NAMES, ORIENTATIONS, SEGMENT_JOINTS
 
 #: Width in pixels of the frame picture on the page (small clips are scaled up).
@@ -62,8 +62,8 @@ class AnnotateApp:
     def __init__(self, session: AnnotateSession, *, server=None):
         import pyvista as pv
         from trame.app import get_server
+        from vidcap.ui.view import Points3D, Scene
 
-        from ui.view import Points3D, Scene
         from vidcap.review import quiet_vtk
 
         self.session = session
@@ -187,7 +187,7 @@ class AnnotateApp:
 
     def _after_edit(self, ms: float) -> None:
         s, st = self.session, self.state
-        from ui.view import Points3D
+        from vidcap.ui.view import Points3D
 
         self._points3d = Points3D(JOINT_NAMES, self._floor(s.joints3d), self._points3d.bones,
                                   s.clip.fps, 1)

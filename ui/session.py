@@ -1,7 +1,7 @@
 """The state behind the annotate page: one clip, its cached stage results, the
 user's annotations, and the lifted pose, re-lifted after every edit.
 
-The page (:mod:`ui.annotate`) only talks to :class:`AnnotateSession`. The session
+The page (:mod:`vidcap.ui.annotate`) only talks to :class:`AnnotateSession`. The session
 holds a :class:`ClipData` (the pipeline's heavy, cached stages: frames, silhouettes,
 2D fit; built by :func:`load_clip` with :func:`vidcap.pipeline.run`) and reruns the
 3D stage, :func:`vidcap.pipeline.lift_pose`, with the user's annotations after every

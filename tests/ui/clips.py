@@ -1,6 +1,6 @@
 """Test-only stage results for the annotate page, made from a sample clip's ground truth.
 
-The pipeline gives the page a :class:`ui.session.ClipData`; these tests build one from
+The pipeline gives the page a :class:`vidcap.ui.session.ClipData`; these tests build one from
 ``sample_videos/<clip>_truth.npz`` instead (true 2D joints and silhouettes), so the page
 and the session can be tested exactly, independently of the fitters' accuracy.
 Nothing here is used by the library or the CLI.
@@ -11,8 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from vidcap.ui.session import ClipData
 
-from ui.session import ClipData
 from vidcap.video import read_frames
 
 REPO = Path(__file__).resolve().parents[2]

@@ -10,8 +10,9 @@ import pytest
 pytest.importorskip("trame")
 pytest.importorskip("trame_pyvista")
 
-from ui.annotate import AnnotateApp  # noqa: E402
-from ui.session import AnnotateSession  # noqa: E402
+from vidcap.ui.annotate import AnnotateApp  # noqa: E402
+from vidcap.ui.session import AnnotateSession  # noqa: E402
+
 from vidcap.body import JOINT_NAMES  # noqa: E402
 
 
@@ -66,8 +67,7 @@ def _check_wide(big, width, tmp_path):
     import base64
 
     import cv2
-
-    from ui.session import MAX_DISPLAY_WIDTH
+    from vidcap.ui.session import MAX_DISPLAY_WIDTH
 
     app = AnnotateApp(AnnotateSession(big, tmp_path / "a.json"))
     try:

@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 import pytest
+from vidcap.ui.session import AnnotateSession, backup_path
 
-from ui.session import AnnotateSession, backup_path
 from vidcap.annotations import Annotations
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
 
@@ -197,7 +197,7 @@ def test_refresh_dropped_when_an_edit_comes_in(walk_clip, tmp_path):
 def test_frames_without_a_fit_are_filled_and_drawn(walk_clip, tmp_path):
     from dataclasses import replace
 
-    from ui import render
+    from vidcap.ui import render
 
     j2 = walk_clip.joints2d.copy()
     j2[[0, 1, 20]] = np.nan

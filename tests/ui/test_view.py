@@ -18,7 +18,8 @@ from scipy.spatial.transform import Rotation
 
 pv = pytest.importorskip("pyvista")
 
-from ui import view as uiview  # noqa: E402
+from vidcap.ui import view as uiview  # noqa: E402
+
 from vidcap.body import JOINT_NAMES, BodyModel  # noqa: E402
 from vidcap.bvh import write_bvh  # noqa: E402
 from vidcap.errors import InputFileError, UsageError  # noqa: E402
@@ -208,7 +209,7 @@ def test_missing_ui_extra_is_one_clear_line(monkeypatch):
 
     monkeypatch.setitem(sys.modules, "trame", None)  # as if the extra were not installed
     with pytest.raises(UsageError, match=r"trame is not installed.*pip install 'vidcap\[ui\]'"):
-        require("ui.annotate", needs=("trame",))
+        require("vidcap.ui.annotate", needs=("trame",))
 
 
 def test_player_plays_in_real_time(sample_bvh):

@@ -1,4 +1,4 @@
-"""Lazy access to the optional ``ui`` package for the interactive commands."""
+"""Lazy access to the optional ``vidcap.ui`` package for the interactive commands."""
 
 from __future__ import annotations
 
@@ -11,19 +11,19 @@ INSTALL_HINT = "pip install 'vidcap[ui]'"
 
 
 def require(module: str, *, needs: tuple[str, ...] = ()):
-    """Import ``module`` (e.g. ``'ui.view'``); a missing extra becomes one clear error.
+    """Import ``module`` (e.g. ``'vidcap.ui.view'``); a missing extra becomes one clear error.
 
     Parameters
     ----------
     module : str
-        Module of the ``ui`` package to import.
+        Module of the ``vidcap.ui`` package to import.
     needs : tuple of str
         Third-party packages the module needs (checked first, so the error names them).
 
     Raises
     ------
     UsageError
-        If ``ui`` or one of ``needs`` cannot be imported.
+        If ``vidcap.ui`` or one of ``needs`` cannot be imported.
     """
     for name in (*needs, module):
         try:

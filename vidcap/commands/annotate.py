@@ -40,8 +40,8 @@ def run(args) -> int:
     video = Path(args.video)
     if not video.is_file():
         raise UsageError("no such video file", video)
-    annotate = require("ui.annotate", needs=UI_PACKAGES)
-    from ui.session import AnnotateSession, default_annotations_path, load_clip
+    annotate = require("vidcap.ui.annotate", needs=UI_PACKAGES)
+    from vidcap.ui.session import AnnotateSession, default_annotations_path, load_clip
 
     if not 0.5 <= args.height <= 2.5:
         raise UsageError(f"--height must be 0.5..2.5 metres, got {args.height}")

@@ -36,7 +36,7 @@ def run(args) -> int:
     from vidcap.commands._ui import require
 
     size = _size(args.size)
-    view = require("ui.view", needs=("pyvista",))
+    view = require("vidcap.ui.view", needs=("pyvista",))
     view.view(args.file, screenshot=args.screenshot, frame=args.frame, centres=args.centres,
               window_size=size)
     if args.screenshot:
