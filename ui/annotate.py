@@ -485,49 +485,56 @@ class AnnotateApp:
                      click="trigger('goto', [item.frame])")
 
     # ------------------------------------------------------------------ running
-    def start(self, *, host: str = "127.0.0.1", port: int = 0, open_browser: bool = True,
-              **kwargs):
-        """Serve the page (blocks until stopped)."""
+    def start(self, *, token: str, port: int = 0, **kwargs):
+        """Serve the page on 127.0.0.1 to requests holding ``token`` (blocks until stopped).
+
+        See :mod:`ui.access` for what is refused.
+        """
+        from ui import access
+
         self._update_flagged()
-        return self.server.start(host=host, port=port, open_browser=open_browser, timeout=0,
-                                 show_connection_info=False, **kwargs)
+        access.protect(self.server, token)
+        return self.server.start(host=access.LOOPBACK, port=port, open_browser=False,
+                                 timeout=0, show_connection_info=False, **kwargs)
 
 
-def serve(session: AnnotateSession, *, host: str = "127.0.0.1", port: int = 0,
-          open_browser: bool = True) -> None:
-    """Build the page for ``session`` and serve it until interrupted.
+def serve(session: AnnotateSession, *, port: int = 0, open_browser: bool = True) -> None:
+    """Build the page for ``session`` and serve it on 127.0.0.1 until interrupted.
+
+    The address printed (and opened) carries a fresh random token; requests without it,
+    or from another ``Host`` or ``Origin``, are refused (:mod:`ui.access`).
 
     Parameters
     ----------
     session : AnnotateSession
-    host : str
-        Interface to listen on (only 127.0.0.1 unless asked otherwise).
     port : int
         TCP port (0 = a free one).
     open_browser : bool
         Open the system's browser on the page.
     """
+    import webbrowser
+
     import pyvista as pv
+
+    from ui import access
 
     pv.OFF_SCREEN = True
     app = AnnotateApp(session)
-    shown = "127.0.0.1" if host in ("127.0.0.1", "localhost") else host
+    token = access.new_token()
 
     @app.ctrl.on_server_ready.add
-    def _ready(**kwargs):
-        actual = kwargs.get("port", port)
-        try:
-            actual = app.server.port
-        except AttributeError:
-            pass
-        print(f"vidcap annotate: http://{shown}:{actual}/  (annotations: {session.path};"
-              " Ctrl+C to stop)", flush=True)
+    def _ready(**_):
+        url = access.page_url(app.server.port, token)
+        print(f"vidcap annotate: {url}  (annotations: {session.path}; Ctrl+C to stop)",
+              flush=True)
+        if open_browser:
+            webbrowser.open(url)
 
     if session.load_error:
         print(f"vidcap annotate: error: {session.load_error}; your file is kept, a copy is in"
               f" {session.backup}", file=sys.stderr, flush=True)
     argv, sys.argv = sys.argv, sys.argv[:1]  # trame parses sys.argv too: give it nothing
     try:
-        app.start(host=host, port=port, open_browser=open_browser)
+        app.start(token=token, port=port)
     finally:
         sys.argv = argv

@@ -1,7 +1,7 @@
 """End-to-end: the annotate page in a real (headless Debian) Chromium, driven by Playwright.
 
 Starts ``vidcap annotate sample_videos/walk_side.mp4 --no-browser`` in a subprocess on a
-free port, flips a depth, steps frames with the
+free port, opens the address it prints (with its token), flips a depth, steps frames with the
 keyboard, drags a joint, and checks the annotations file holds exactly those events.
 Screenshots go to ``test-artifacts/`` (and to ``docs/`` with ``VIDCAP_UPDATE_DOCS=1``).
 """
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -43,7 +44,7 @@ def stage_cache(tmp_path_factory):
 
 
 @contextmanager
-def annotate_server(annotations: Path, cache: Path, *, timeout: float = 120.0):
+def annotate_server(annotations: Path, cache: Path, *, timeout: float = 300.0):
     """``vidcap annotate`` on the sample walk; yield (url, process, log); always kill it."""
     port = _free_port()
     env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""))
@@ -57,15 +58,15 @@ def annotate_server(annotations: Path, cache: Path, *, timeout: float = 120.0):
         while True:
             if proc.poll() is not None:
                 pytest.fail(f"annotate server exited ({proc.returncode}):\n{log.read_text()}")
-            try:
-                socket.create_connection(("127.0.0.1", port), 0.2).close()
+            found = re.search(r"vidcap annotate: (http://\S+)", log.read_text())
+            if found:
                 break
-            except OSError:
-                if time.monotonic() - t0 > timeout:
-                    pytest.fail(f"annotate server did not listen in {timeout} s:\n"
-                                f"{log.read_text()}")
-                time.sleep(0.2)
-        yield f"http://127.0.0.1:{port}/", proc, log
+            if time.monotonic() - t0 > timeout:
+                pytest.fail(f"annotate server did not start in {timeout} s:\n{log.read_text()}")
+            time.sleep(0.2)
+        url = found.group(1)
+        assert url.startswith(f"http://127.0.0.1:{port}/") and "secret=" in url
+        yield url, proc, log
     finally:
         proc.kill()
         proc.wait(10)

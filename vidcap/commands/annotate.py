@@ -22,10 +22,8 @@ def add_arguments(parser) -> None:
                              " (default: VIDEO_STEM.vidcap.json beside the video)")
     parser.add_argument("--port", type=int, default=0,
                         help="TCP port of the page (default: a free one, printed)")
-    parser.add_argument("--host", default="127.0.0.1",
-                        help="interface to listen on (default 127.0.0.1: this computer only)")
     parser.add_argument("--no-browser", action="store_true",
-                        help="do not open a browser; just print the page's address")
+                        help="do not open a browser; print the page's address (with its token)")
     parser.add_argument("--height", type=float, default=1.75,
                         help="the subject's height in metres (default 1.75)")
     parser.add_argument("--cache-dir", metavar="DIR",
@@ -51,8 +49,5 @@ def run(args) -> int:
 
     clip = load_clip(video, cache_dir=args.cache_dir, height=args.height, log=log)
     session = AnnotateSession(clip, args.annotations or default_annotations_path(video))
-    if args.host not in ("127.0.0.1", "localhost", "::1"):
-        print(f"vidcap annotate: warning: listening on {args.host}: other computers can reach"
-              " the page and edit the annotations")
-    annotate.serve(session, host=args.host, port=args.port, open_browser=not args.no_browser)
+    annotate.serve(session, port=args.port, open_browser=not args.no_browser)
     return 0
