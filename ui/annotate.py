@@ -488,9 +488,9 @@ class AnnotateApp:
     def start(self, *, token: str, port: int = 0, **kwargs):
         """Serve the page on 127.0.0.1 to requests holding ``token`` (blocks until stopped).
 
-        See :mod:`ui.access` for what is refused.
+        See :mod:`vidcap.ui.access` for what is refused.
         """
-        from ui import access
+        from vidcap.ui import access
 
         self._update_flagged()
         access.protect(self.server, token)
@@ -502,7 +502,7 @@ def serve(session: AnnotateSession, *, port: int = 0, open_browser: bool = True)
     """Build the page for ``session`` and serve it on 127.0.0.1 until interrupted.
 
     The address printed (and opened) carries a fresh random token; requests without it,
-    or from another ``Host`` or ``Origin``, are refused (:mod:`ui.access`).
+    or from another ``Host`` or ``Origin``, are refused (:mod:`vidcap.ui.access`).
 
     Parameters
     ----------
@@ -515,8 +515,7 @@ def serve(session: AnnotateSession, *, port: int = 0, open_browser: bool = True)
     import webbrowser
 
     import pyvista as pv
-
-    from ui import access
+    from vidcap.ui import access
 
     pv.OFF_SCREEN = True
     app = AnnotateApp(session)

@@ -16,7 +16,7 @@ pytest.importorskip("trame")
 pytest.importorskip("trame_pyvista")
 aiohttp = pytest.importorskip("aiohttp")
 
-from ui import access  # noqa: E402
+from vidcap.ui import access  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
@@ -24,8 +24,8 @@ SERVE = f"""
 import sys
 sys.path.insert(0, {str(HERE)!r})
 from clips import truth_clip
-from ui.annotate import serve
-from ui.session import AnnotateSession
+from vidcap.ui.annotate import serve
+from vidcap.ui.session import AnnotateSession
 serve(AnnotateSession(truth_clip("walk_side"), sys.argv[1]), open_browser=False)
 """
 
