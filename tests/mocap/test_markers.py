@@ -11,6 +11,7 @@ import pytest
 
 from vidcap.errors import C3DError
 from vidcap.mocap.c3d import clean_labels, read_c3d
+from vidcap.mocap.jointfit import fit_joint as _fit_joint
 from vidcap.mocap.markerset import (
     MarkerSetError,
     SegmentSpec,
@@ -19,7 +20,6 @@ from vidcap.mocap.markerset import (
     parse_markerset,
 )
 from vidcap.mocap.skeleton import (
-    _fit_joint,
     frame_from_three,
     hip_regression,
     kabsch,

@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vidcap.errors import FitError, VidcapError
+from vidcap.mocap import _sphere_moments
 from vidcap.mocap import spherefit as sf
 from vidcap.mocap.spherefit import (
     IncrementalGDK,
@@ -146,7 +147,7 @@ def test_compiled_kernels_match_numpy_paths(monkeypatch):
     stack[7, [0, 11]] = np.nan
     stack[9, 3:] = np.nan  # too few rows left: NaN fit with errors='nan'
     fast = gdke(big), gdke(stack, errors="nan")
-    monkeypatch.setattr(sf, "_kernels", lambda: None)
+    monkeypatch.setattr(_sphere_moments, "_kernels", lambda: None)
     slow = gdke(big), gdke(stack, errors="nan")
     for a, b in zip(fast, slow, strict=True):
         np.testing.assert_allclose(a.center, b.center, rtol=1e-9, atol=1e-12)

@@ -118,7 +118,7 @@ def _grouped(data: MarkerData, max_sd_mm: float, min_present: float):
 def _joint_residual(child: np.ndarray, frames) -> tuple[float, float]:
     """RMS residual (m) of one MGDK sphere about the child's markers (F, m, 3) seen in
     the parent's frames, and the mean radius (m); inf when it cannot be fitted."""
-    from vidcap.mocap.skeleton import _to_local
+    from vidcap.mocap.frames import to_local as _to_local
     from vidcap.mocap.spherefit import mgdk
 
     y = _to_local(frames.r, frames.o, child)
@@ -152,7 +152,7 @@ def segment_tree(data: MarkerData, groups: list[list[str]]):
         In the order they were attached (parents before children); groups that
         could not be attached (no parent with three markers fits them) are absent.
     """
-    from vidcap.mocap.skeleton import _frames_from_points
+    from vidcap.mocap.frames import frames_from_points as _frames_from_points
 
     pos = [data.positions[:, [data.index(m) for m in g]] for g in groups]
     with warnings.catch_warnings():  # frames where a whole group is missing: NaN
