@@ -2,7 +2,7 @@
 
 "page edit": what the page waits for: the annotation event, resolving all events, re-lifting
 the clip with the current proposals, the atomic save. "+ re-proposal": the page then runs
-the full 3D stage (``vidcap.pipeline.lift_pose``: orientation and depth-sign proposals with
+the full 3D stage (``vidcap.lifting.lift_pose``: orientation and depth-sign proposals with
 the user's signs as constraints, linear in the clip length) in a worker thread and redraws.
 
 Run from the repository root: ``python benchmarks/annotate_edit.py``. Uses the sample clip's

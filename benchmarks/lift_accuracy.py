@@ -60,7 +60,7 @@ from vidcap.lift import (  # noqa: E402
     torso_width_ratio,
     yaw_from_orientation,
 )
-from vidcap.pipeline import plane_passages  # noqa: E402
+from vidcap.lifting import plane_passages  # noqa: E402
 from vidcap.proposals import propose_orientation, propose_signs  # noqa: E402
 from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
 
@@ -273,7 +273,7 @@ def _pairs_swapped_error(res, arms: bool, legs: bool, true3, body) -> float:
     """Mean root-aligned 3D joint error (m) of ``res`` (a pipeline result) lifted again
     with a user's ``sides`` event at frame 0 for the arms and/or the legs: what a user
     who fixes each pair's sides once for the clip gets."""
-    from vidcap.pipeline import lift_pose
+    from vidcap.lifting import lift_pose
 
     ann = Annotations()
     for pair, on in (("arms", arms), ("legs", legs)):

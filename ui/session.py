@@ -4,7 +4,7 @@ user's annotations, and the lifted pose, re-lifted after every edit.
 The page (:mod:`vidcap.ui.annotate`) only talks to :class:`AnnotateSession`. The session
 holds a :class:`ClipData` (the pipeline's heavy, cached stages: frames, silhouettes,
 2D fit; built by :func:`load_clip` with :func:`vidcap.pipeline.run`) and reruns the
-3D stage, :func:`vidcap.pipeline.lift_pose`, with the user's annotations after every
+3D stage, :func:`vidcap.lifting.lift_pose`, with the user's annotations after every
 edit, exactly as ``vidcap convert`` does.
 """
 
@@ -59,12 +59,12 @@ class ClipData:
         ``l_*`` in ``joints2d`` is the image's left limb (the 2D fitter's naming); False
         when the joints are named by the body's sides (ground truth).
     spread : numpy.ndarray, shape (F,), optional
-        Torso horizontal foreshortening from the 2D fit (see :func:`vidcap.pipeline.lift_pose`).
+        Torso horizontal foreshortening from the 2D fit (see :func:`vidcap.lifting.lift_pose`).
     track : numpy.ndarray, shape (F,), optional
         Horizontal image position of the subject (walking direction).
     model_height : numpy.ndarray, shape (F,), optional
         Body height in pixels the 2D model was drawn at per frame (see
-        :func:`vidcap.pipeline.model_scales`).
+        :func:`vidcap.lifting.model_scales`).
     body : vidcap.body.BodyModel, optional
         The subject (default 1.75 m).
     size : tuple of int
@@ -153,7 +153,7 @@ class AnnotateSession:
         Why the annotations file could not be read. The file is then copied to
         :attr:`backup` and not written until the user makes an edit.
     joints2d, joints3d, signs, orientation, yaw : numpy.ndarray
-        The current result (as :class:`vidcap.pipeline.LiftResult`): body-side 2D joints
+        The current result (as :class:`vidcap.lifting.LiftResult`): body-side 2D joints
         with the user's fixes (F, 15, 2), 3D joints (F, 15, 3), depth signs (F, 10),
         orientation labels (F,), yaw (F,).
     user_signs, user_orient, user_joints : numpy.ndarray
@@ -167,7 +167,7 @@ class AnnotateSession:
 
         from vidcap.annotations import Annotations
         from vidcap.lift import torso_width_ratio
-        from vidcap.pipeline import fill_gaps, frame_scales, lift_pose, model_scales
+        from vidcap.lifting import fill_gaps, frame_scales, lift_pose, model_scales
 
         self.clip = clip
         self.path = Path(annotations_path)
@@ -208,7 +208,7 @@ class AnnotateSession:
 
     # ------------------------------------------------------------------ derived state
     def _lift_pose(self, annotations):
-        from vidcap.pipeline import lift_pose
+        from vidcap.lifting import lift_pose
 
         c = self.clip
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
@@ -216,8 +216,8 @@ class AnnotateSession:
                          frame_size=c.size, model_height=c.model_height)
 
     def _take(self, res) -> None:
-        """Adopt a full 3D-stage result (:class:`vidcap.pipeline.LiftResult`)."""
-        from vidcap.pipeline import plane_passages
+        """Adopt a full 3D-stage result (:class:`vidcap.lifting.LiftResult`)."""
+        from vidcap.lifting import plane_passages
 
         self._result = res
         self.scale = res.scale  # one number, or one per frame
@@ -236,9 +236,9 @@ class AnnotateSession:
 
     def _quick(self) -> None:
         """The user's events with the last proposals: the 3D stage of
-        :func:`vidcap.pipeline.lift_pose` without re-proposing (no dynamic programming)."""
+        :func:`vidcap.lifting.lift_pose` without re-proposing (no dynamic programming)."""
         from vidcap.lift import lift
-        from vidcap.pipeline import apply_user_view
+        from vidcap.lifting import apply_user_view
 
         res, body = self._result, self.clip.body
         user_signs, user_orient, user_joints = self.annotations.resolve(
@@ -451,7 +451,7 @@ class AnnotateSession:
             if self.user_signs[c["frame"], k] == 0:
                 out.append({"frame": int(c["frame"]), "segment": c["segment"],
                             "reason": f"{c['segment'].replace('_', ' ')}: depth doubtful"})
-        from vidcap.pipeline import true_runs
+        from vidcap.result import true_runs
 
         # frames not fitted at all (score 0): one item per run, at its first frame
         for a, b in true_runs(self.clip.fit_score <= 0):

@@ -408,7 +408,7 @@ def lift(
         from ``scale`` (which then places the root only): a 2D fit draws its model at
         each frame's silhouette height, so its segments are that frame's model
         lengths times their foreshortening (see
-        :func:`vidcap.pipeline.model_scales`). Default ``scale``.
+        :func:`vidcap.lifting.model_scales`). Default ``scale``.
 
     Returns
     -------

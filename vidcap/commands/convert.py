@@ -12,7 +12,7 @@ HELP = "convert a single-camera video of one person into BVH motion"
 ORDER = 10
 OUTPUT_FILES = ("output", "save")
 INPUT_FILES = ("video", "annotations", "background")
-#: ``--view`` values (:data:`vidcap.pipeline.VIEWS`, spelled here so that ``--help``
+#: ``--view`` values (:data:`vidcap.lifting.VIEWS`, spelled here so that ``--help``
 #: does not import the pipeline).
 VIEW_CHOICES = ("auto", "side", "front", "back", "left", "right", "back_left", "back_right",
                 "front_left", "front_right")
