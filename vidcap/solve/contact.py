@@ -1,0 +1,63 @@
+"""Foot contact from the 2D joints: which frames each foot is planted in.
+
+A foot is planted where its ankle barely moves in the image (speed below
+``max_speed`` metres per second at the frame's scale, after a light temporal
+smoothing of the fitted joints) and is near the lower of the two ankles (within
+``max_height`` metres of it in the image). Contact is only used on a clip that walks
+or stands: the slower foot below ``still_speed`` in a quarter of the frames and at
+least one foot planted in ``min_share`` of the frames; otherwise (a jump, jumping
+jacks: both feet move together) no frame is taken as planted.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import binary_closing, binary_opening, gaussian_filter1d
+
+from vidcap.body import JOINT_INDEX
+
+_ANKLES = (JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"])
+
+
+def foot_contacts(joints2d, scale, fps: float, *, max_speed: float = 0.45,
+                  max_height: float = 0.05, min_share: float = 0.6,
+                  still_speed: float = 0.2, min_run: int = 3) -> np.ndarray:
+    """Planted feet, (F, 2) bool (left, right ankle).
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Pixels, image y down.
+    scale : float or array_like, shape (F,)
+        Pixels per metre.
+    fps : float
+    max_speed : float
+        Image speed (m/s) below which an ankle can be planted.
+    max_height : float
+        How far (m) above the lower ankle a planted one may be.
+    min_share : float
+        Share of frames with a planted foot for the clip to count as walking or
+        standing; below it no contact is returned.
+    still_speed : float
+        The image speed (m/s) the slower foot stays below in a quarter of the
+        frames of a clip that walks or
+        stands.
+    min_run : int
+        Shortest run of planted frames kept (and gaps this short are closed).
+    """
+    j = np.asarray(joints2d, dtype=float)
+    F = j.shape[0]
+    s = np.broadcast_to(np.asarray(scale, dtype=float), (F,))[:, None]
+    if F < 3:
+        return np.zeros((F, 2), bool)
+    ank = gaussian_filter1d(j[:, _ANKLES], 1.0, axis=0, mode="nearest")  # (F, 2, 2)
+    speed = np.linalg.norm(np.gradient(ank, axis=0), axis=-1) * fps / s
+    lowest = ank[:, :, 1].max(axis=1, keepdims=True)  # image y down: the larger is lower
+    height = (lowest - ank[:, :, 1]) / s
+    planted = (speed < max_speed) & (height < max_height)
+    structure = np.ones((max(1, int(min_run)), 1), bool)
+    planted = binary_opening(binary_closing(planted, structure), structure)
+    still = np.quantile(speed.min(axis=1), 0.25) < still_speed
+    if not still or planted.any(axis=1).mean() < min_share:
+        return np.zeros((F, 2), bool)
+    return planted
