@@ -137,6 +137,21 @@ def _unit_scale(units, path) -> float:
     return _UNITS[u]
 
 
+#: Farther than this from the lab origin no marker of a human motion can be, metres.
+MAX_COORDINATE_M = 1e3
+
+
+def _check_coordinates(xyz: np.ndarray, params, path) -> None:
+    """Refuse coordinates no lab records (a 10^38 m marker): an absurd scale or unit."""
+    big = np.abs(np.nan_to_num(xyz)).max(initial=0.0)
+    if big > MAX_COORDINATE_M:
+        scale = _param(params, "POINT", "SCALE", [None])
+        units = _param(params, "POINT", "UNITS", [None])
+        raise C3DError(f"marker coordinates reach {big:.3g} m: POINT:SCALE"
+                       f" ({scale[0] if len(scale) else None}) or POINT:UNITS"
+                       f" ({units[0] if len(units) else None}) is wrong", path)
+
+
 def read_c3d(path: str | os.PathLike) -> MarkerData:
     """Read the marker trajectories of a C3D file.
 
@@ -156,9 +171,15 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
         The file is missing, cannot be parsed by ezc3d (the parser's reason is in the
         message), or holds no 3D points.
     """
+    from vidcap.mocap.c3dcheck import check_c3d
+
     path = Path(path)
     if not path.is_file():
         raise C3DError("no such file", path)
+    try:
+        check_c3d(path)  # ezc3d trusts the declared sizes: a bad one crashes the process
+    except C3DError as exc:
+        raise C3DError(f"not a readable C3D file ({exc.problem})", path) from None
     try:
         import ezc3d
 
@@ -193,6 +214,7 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
         if res.shape == (1, M, xyz.shape[0]):
             missing |= (res[0] < 0).T
     xyz[missing] = np.nan
+    _check_coordinates(xyz, params, path)
     ysc = _param(params, "POINT", "Y_SCREEN", None)
     up = (0.0, 1.0, 0.0) if ysc is not None and len(ysc) and str(ysc[0]).strip().upper() == "+Y" \
         else (0.0, 0.0, 1.0)
