@@ -30,6 +30,8 @@ from vidcap.errors import MotionFileError
 from vidcap.kinematics import Motion, Skeleton
 
 _INCH_M = 0.0254
+#: Longer than this no bone of a human is, metres.
+MAX_BONE_M = 10.0
 
 
 def _read(path) -> list[str]:
@@ -134,16 +136,27 @@ def read_asf_amc(
         Missing or malformed files, or an AMC naming a bone the ASF lacks.
     """
     units, root, bones, hierarchy = _parse_asf(asf_path)
-    scale = _INCH_M / float(units.get("length", 1.0))
+    try:
+        length_unit = float(units.get("length", 1.0))
+    except (TypeError, ValueError):
+        length_unit = float("nan")
+    if not (np.isfinite(length_unit) and length_unit > 0):
+        raise MotionFileError(f":units length {units.get('length')!r} is not a positive"
+                              " number", asf_path)
+    scale = _INCH_M / length_unit
     deg = str(units.get("angle", "deg")).lower().startswith("deg")
 
     # Joint order: depth-first from the root, parents before children.
-    names, parents = ["root"], [-1]
+    names, parents, seen = ["root"], [-1], {"root"}
     stack = [(c, 0) for c in reversed(hierarchy.get("root", []))]
     while stack:
         name, parent = stack.pop()
         if name not in bones:
             raise MotionFileError(f"hierarchy names unknown bone {name!r}", asf_path)
+        if name in seen:  # a cycle, or a bone with two parents: the walk would not end
+            raise MotionFileError(f":hierarchy reaches bone {name!r} twice (a cycle or two"
+                                  " parents)", asf_path)
+        seen.add(name)
         idx = len(names)
         names.append(name)
         parents.append(parent)
@@ -152,7 +165,14 @@ def read_asf_amc(
     vec = np.zeros((J, 3))  # each bone's rest vector, metres
     for j, n in enumerate(names[1:], 1):
         b = bones[n]
-        vec[j] = b["direction"] / np.linalg.norm(b["direction"]) * b["length"] * scale
+        norm = float(np.linalg.norm(b["direction"]))
+        if not (np.isfinite(norm) and norm > 0):
+            raise MotionFileError(f"bone {n!r} has direction {list(b['direction'])}"
+                                  " (not a direction)", asf_path)
+        if not (np.isfinite(b["length"]) and 0 <= b["length"] * scale <= MAX_BONE_M):
+            raise MotionFileError(f"bone {n!r} has length {b['length']!r}: outside 0.."
+                                  f"{MAX_BONE_M:g} m", asf_path)
+        vec[j] = b["direction"] / norm * b["length"] * scale
     offsets = np.zeros((J, 3))
     offsets[0] = root["position"] * scale
     for j in range(1, J):
@@ -215,9 +235,12 @@ def _parse_amc(path, known: set[str]) -> list[dict[str, list[float]]]:
         if toks[0] not in known:
             raise MotionFileError(f"line {lineno}: bone {toks[0]!r} is not in the ASF", path)
         try:
-            frames[-1][toks[0]] = [float(t) for t in toks[1:]]
+            values = [float(t) for t in toks[1:]]
         except ValueError:
             raise MotionFileError(f"line {lineno}: not a number in {s!r}", path) from None
+        if not all(abs(v) < 1e6 for v in values):  # also NaN; angles and inches alike
+            raise MotionFileError(f"line {lineno}: value out of range in {s[:80]!r}", path)
+        frames[-1][toks[0]] = values
     return frames
 
 

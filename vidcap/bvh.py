@@ -175,6 +175,10 @@ def _default_end_site(sk: Skeleton, j: int) -> np.ndarray:
 _TOKEN = re.compile(r"\S+")
 
 
+#: Larger than this no BVH angle (degrees) or offset (any unit) is.
+MAX_VALUE = 1e7
+
+
 def read_bvh(path: str | os.PathLike, *, units: str | float = "auto") -> Motion:
     """Read a BVH file into a :class:`Motion` in metres.
 
@@ -204,7 +208,10 @@ def read_bvh(path: str | os.PathLike, *, units: str | float = "auto") -> Motion:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise MotionFileError(f"cannot read BVH file: {exc.strerror or exc}", path) from None
-    return parse_bvh(text, source=path, units=units)
+    try:
+        return parse_bvh(text, source=path, units=units)
+    except RecursionError:
+        raise MotionFileError("joints nested too deeply to be a skeleton", path) from None
 
 
 def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -> Motion:
@@ -233,6 +240,8 @@ def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -
             ) from None
         if len(vals) != n:
             raise MotionFileError("malformed hierarchy: file ends inside an OFFSET", source)
+        if not all(abs(v) <= MAX_VALUE for v in vals):  # also NaN
+            raise MotionFileError(f"OFFSET {vals} beyond {MAX_VALUE:g}", source)
         pos += n
         return vals
 
@@ -284,13 +293,16 @@ def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -
     if not m:
         raise MotionFileError("MOTION section lacks 'Frames:' and 'Frame Time:'", source)
     n_frames, frame_time = int(m.group(1)), float(m.group(2))
-    if frame_time <= 0:
-        raise MotionFileError(f"Frame Time must be positive, got {frame_time}", source)
+    if not 1e-5 <= frame_time <= 10:  # 100 kHz .. 0.1 Hz; also NaN
+        raise MotionFileError(f"Frame Time {frame_time} s is outside 1e-05..10 s", source)
     try:
         values = np.array(motion_part[m.end():].split(), dtype=float)
     except ValueError:
         raise MotionFileError("MOTION data contains something that is not a number", source)\
             from None
+    if not np.isfinite(values).all() or np.abs(values).max(initial=0) > MAX_VALUE:
+        raise MotionFileError(f"MOTION data holds a value beyond {MAX_VALUE:g} (or not"
+                              " finite)", source)
     if n_frames == 0 or values.size < n_frames * n_channels:
         have = values.size // max(n_channels, 1)
         raise MotionFileError(

@@ -79,7 +79,25 @@ def _open(path: str | os.PathLike):
         kinds = sorted({s.type for s in container.streams}) or ["no streams"]
         container.close()
         raise VideoError(f"has no video stream (only {', '.join(kinds)})", p)
+    if container.streams.video[0].codec_context is None:  # FFmpeg has no such decoder
+        container.close()
+        raise VideoError(f"cannot decode: codec {_fourcc(p)!r} not supported", p)
     return container
+
+
+def _fourcc(path: Path) -> str:
+    """The video codec's FourCC as the container names it (AVI ``strf``/``strh``, MP4
+    and MOV ``stsd``), for the error when FFmpeg has no decoder (PyAV cannot say)."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 20)
+    i = head.find(b"strf")
+    if i >= 0 and len(head) >= i + 28:
+        tag = head[i + 24:i + 28]  # BITMAPINFOHEADER.biCompression
+    elif (i := head.find(b"stsd")) >= 0 and len(head) >= i + 20:
+        tag = head[i + 16:i + 20]  # the first sample entry's format
+    else:
+        return "unknown"
+    return tag.decode("latin-1") if tag.isascii() and tag.strip(b"\0") else tag.hex()
 
 
 def _ffmpeg_reason(exc) -> str:
@@ -90,6 +108,32 @@ def _ffmpeg_reason(exc) -> str:
 def _fps(stream) -> float:
     rate = stream.average_rate or stream.guessed_rate or stream.base_rate
     return float(rate) if rate else 0.0
+
+
+#: Frame rates a camera records at; outside them the header is not believed.
+FPS_RANGE = (0.5, 1000.0)
+
+
+def _sane_fps(fps: float) -> bool:
+    return FPS_RANGE[0] <= fps <= FPS_RANGE[1]
+
+
+def _rate_from_packets(container, stream, path) -> tuple[int, float]:
+    """(frame count, frame rate) from the packets' timestamps, for an absurd header.
+
+    Raises VideoError when the timestamps give no believable rate either.
+    """
+    pts = [p.pts for p in container.demux(stream) if p.size and p.pts is not None]
+    header = _fps(stream)
+    if len(pts) < 2:
+        raise VideoError(f"frame rate {header:g} fps in the header, and no timestamps to"
+                         " tell the real one", path)
+    span = (max(pts) - min(pts)) * float(stream.time_base or 0)
+    fps = (len(pts) - 1) / span if span > 0 else 0.0
+    if not _sane_fps(fps):
+        raise VideoError(f"frame rate {header:g} fps in the header and {fps:g} fps from the"
+                         f" timestamps: outside {FPS_RANGE[0]:g}..{FPS_RANGE[1]:g} fps", path)
+    return len(pts), fps
 
 
 def probe(path: str | os.PathLike, *, count: bool = False) -> VideoInfo:
@@ -129,20 +173,26 @@ def probe(path: str | os.PathLike, *, count: bool = False) -> VideoInfo:
                 for frame in container.decode(stream):
                     if n == 0:
                         turns = _quarter_turns(frame)
+                        w, h = frame.width, frame.height  # what decodes, not the header
                     n += 1
             except av.error.FFmpegError as exc:
                 if n == 0:
                     raise VideoError(f"no decodable frame ({_ffmpeg_reason(exc)})", path)\
                         from None
         else:
-            try:  # the display matrix comes with the decoded frames
-                turns = next((_quarter_turns(f) for f in container.decode(stream)), 0)
+            try:  # the display matrix and the true size come with the decoded frames
+                first = next(iter(container.decode(stream)), None)
             except av.error.FFmpegError:
-                turns = 0  # reported by whatever decodes the file next
+                first = None  # reported by whatever decodes the file next
+            if first is not None:
+                turns, w, h = _quarter_turns(first), first.width, first.height
         if n <= 0:
             raise VideoError("the video stream has no frames", path)
         if not fps > 0:
             fps = 25.0
+        if not _sane_fps(fps) or n > os.path.getsize(path):  # no frame takes under a byte
+            container.seek(0)
+            n, fps = _rate_from_packets(container, stream, path)
     finally:
         container.close()
     if turns % 2:
