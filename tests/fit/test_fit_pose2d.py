@@ -240,7 +240,7 @@ def test_spread_value_fixes_the_spread():
 
 
 def test_into_range_scalar_path_equals_array_path():
-    from vidcap.fit.pose2d import _into_range
+    from vidcap.fit.limits import into_range as _into_range
 
     rng = np.random.default_rng(0)
     angles = rng.uniform(-20, 20, 500)
@@ -256,48 +256,61 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     """Each kind of search run as one compiled call (limb angle and ratio, pose angles,
     torso about the neck, foreshortening) ends where interval_search with the Python
     scorer does, with the same score, margin and number of candidates."""
-    import vidcap.fit.pose2d as pose2d
+    import vidcap.fit.engine as engine
+    from vidcap.fit.engine import _MaskEngine
+    from vidcap.fit.foreshortening import search_fore
+    from vidcap.fit.grids import search_arm_grid, search_leg_grid
+    from vidcap.fit.moves import search_angle, search_group, search_spread
     from vidcap.fit.raster import normalise_mask
+    from vidcap.fit.state import FitState
+    from vidcap.fit.torso import place_torso, search_torso_about_neck
 
     mask, _ = _figure([96, 84, 240, 300, 200, 330, 262, 280, 300, 250],
                       fore=[1, 1, 0.8, 1, 0.7, 1, 1, 0.9, 1, 1])
     norm = normalise_mask(mask, height=80)
     s = SEGMENT_INDEX
 
-    def run(f):
+    def run(fitter):
+        eng, st = fitter
         out = []
-        out.append(f.search_angle(s["torso"], with_segments=(s["head"],)))
-        out.append(f.search_angle(s["head"], start=f.angles[s["head"]] + 0.3,
-                                  interval=np.deg2rad(40)))
-        out.append(f.search_torso_about_neck(start=f.angles[s["torso"]], interval=0.5))
+
+        def put(step):
+            nonlocal st
+            st, res = step
+            out.append(res)
+
+        put(search_angle(eng, st, s["torso"], with_segments=(s["head"],)))
+        put(search_angle(eng, st, s["head"], start=st.angles[s["head"]] + 0.3,
+                         interval=np.deg2rad(40)))
+        put(search_torso_about_neck(eng, st, start=st.angles[s["torso"]], interval=0.5))
         for seg in ("l_upper_arm", "l_lower_arm", "r_lower_leg"):
-            out.append(f.search_angle(s[seg]))
-            out.append(f.search_angle(s[seg], start=f.angles[s[seg]] - 0.2, interval=0.3,
-                                      prefer=f.angles[s[seg]]))
-            out.append(f.search_fore(s[seg]))
-        out.append(f.search_fore(s["l_upper_leg"], unit=True))
-        out.append(f.search_fore(s["head"]))
-        out.append(f.search_spread(start=0.3, interval=0.4, min_step=0.1))
+            put(search_angle(eng, st, s[seg]))
+            put(search_angle(eng, st, s[seg], start=st.angles[s[seg]] - 0.2, interval=0.3,
+                             prefer=st.angles[s[seg]]))
+            put(search_fore(eng, st, s[seg]))
+        put(search_fore(eng, st, s["l_upper_leg"], unit=True))
+        put(search_fore(eng, st, s["head"]))
+        put(search_spread(eng, st, start=0.3, interval=0.4, min_step=0.1))
         # group searches (lockstep; their own compiled call)
         uppers = [s[f"{side}_upper_{p}"] for p in ("arm", "leg") for side in "lr"]
         leaves = [s["head"]] + [s[f"{side}_lower_{p}"] for p in ("arm", "leg") for side in "lr"]
-        f.search_group(uppers, interval=0.3)
-        f.search_group(leaves, interval=0.3)
-        f.search_group(uppers + leaves, kind="fore", interval=0.2, divisions=5)
-        f.search_arm_grid("l")  # whole-arm grid: candidates scored in one compiled pass
-        f.search_arm_grid("r")
-        f.angles[s["l_upper_leg"]] += 0.6  # a leg the whole-leg grid has to bring back
-        f.search_leg_grid("l")
-        f.search_leg_grid("r")
-        return out, (*f.state()[:3], f.scores.copy(), f.margins.copy())
+        st = search_group(eng, st, uppers, interval=0.3)
+        st = search_group(eng, st, leaves, interval=0.3)
+        st = search_group(eng, st, uppers + leaves, kind="fore", interval=0.2, divisions=5)
+        # whole-arm grid: candidates scored in one compiled pass
+        st = search_arm_grid(eng, st, "l")
+        st = search_arm_grid(eng, st, "r")
+        # a leg the whole-leg grid has to bring back
+        st = st.with_entries(angles=(s["l_upper_leg"], st.angles[s["l_upper_leg"]] + 0.6))
+        st = search_leg_grid(eng, st, "l")
+        st = search_leg_grid(eng, st, "r")
+        return out, (st.root, st.angles, st.fore, st.scores, st.margins)
 
     def fitter():
-        f = pose2d._Fitter(norm, caps=False)
-        f.place_torso()
-        f.drawn[:] = True
-        return f
+        eng = _MaskEngine(norm, caps=False)
+        return eng, place_torso(eng, FitState.rest()).drawing(slice(None))
 
-    kernels = pose2d._kernels()
+    kernels = engine.fit_kernels()
     assert kernels is not None
     calls = []
     pose_fit, group_fit, limb_fit = kernels.pose_fit, kernels.group_fit, kernels.limb_fit
@@ -311,7 +324,7 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     compiled, st_c = run(fitter())
     # every kind of candidate was scored by a compiled search
     assert set(calls) == {0, 1, 2, 3, 4, 5, "group", "arms"}
-    monkeypatch.setattr(pose2d, "_kernels", lambda: None)
+    monkeypatch.setattr(engine, "_kernels", lambda: None)
     python, st_p = run(fitter())
     for a, b in zip(compiled, python, strict=True):
         assert a.value == pytest.approx(b.value, abs=1e-12)
@@ -325,8 +338,11 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
 def test_place_torso_compiled_and_numpy_paths_agree(monkeypatch):
     """The torso's x from the widest run of each row between neck and pelvis (ties: the
     rightmost), compiled and numpy, on random silhouettes with many equal-width runs."""
-    import vidcap.fit.pose2d as pose2d
+    import vidcap.fit.engine as engine
+    from vidcap.fit.engine import _MaskEngine
     from vidcap.fit.raster import normalise_mask
+    from vidcap.fit.state import FitState
+    from vidcap.fit.torso import place_torso
 
     rng = np.random.default_rng(3)
     masks = np.zeros((30, 120, 90), bool)
@@ -334,76 +350,79 @@ def test_place_torso_compiled_and_numpy_paths_agree(monkeypatch):
     roots = {}
     for path in ("compiled", "numpy"):
         if path == "numpy":
-            monkeypatch.setattr(pose2d, "_kernels", lambda: None)
+            monkeypatch.setattr(engine, "_kernels", lambda: None)
         out = []
         for mask in masks:
-            f = pose2d._Fitter(normalise_mask(mask, height=80), caps=False)
-            f.place_torso()
-            out.append(f.root.copy())
+            eng = _MaskEngine(normalise_mask(mask, height=80), caps=False)
+            out.append(place_torso(eng, FitState.rest()).root.copy())
         roots[path] = np.array(out)
     np.testing.assert_array_equal(roots["compiled"], roots["numpy"])
 
 
 def _fitter_at(mask, joints, angles_deg, spread):
-    """A fitter on ``mask`` holding the pose ``angles_deg`` (the figure's root)."""
-    from vidcap.fit.pose2d import _Fitter
+    """An engine on ``mask`` and the state holding the pose ``angles_deg`` (the
+    figure's root)."""
+    from dataclasses import replace
+
+    from vidcap.fit.engine import _MaskEngine
     from vidcap.fit.raster import normalise_mask
+    from vidcap.fit.state import FitState
 
     norm = normalise_mask(mask)
-    f = _Fitter(norm, caps=False)
-    f.root = norm.to_normalised(joints[JOINT_INDEX["pelvis"]])
-    f.angles, f.fore, f.spread = np.deg2rad(angles_deg), np.ones(10), float(spread)
-    f.drawn[:] = True
-    return f, norm
+    eng = _MaskEngine(norm, caps=False)
+    st = replace(FitState.rest(spread=float(spread)),
+                 root=norm.to_normalised(joints[JOINT_INDEX["pelvis"]]),
+                 angles=np.deg2rad(angles_deg)).drawing(slice(None))
+    return (eng, st), norm
 
 
 def test_fresh_fit_keeps_a_tracks_limb_names_in_a_side_view():
-    from vidcap.fit.pose2d import _keep_labels
+    from vidcap.fit.labels import keep_labels
 
     # side view, legs apart: the track calls the forward leg "l"; a fresh fit named by
     # image side calls it "r". Swapping the names back draws the same pixels.
     track = [92, 90, 260, 280, 275, 290, 245, 265, 290, 285]
     named_by_image = [92, 90, 275, 290, 260, 280, 290, 285, 245, 265]
     mask, joints = _figure(track, spread=0.0)
-    f, norm = _fitter_at(mask, joints, named_by_image, 0.0)
-    s0 = f.similarity()
-    _keep_labels(f, norm.to_normalised(joints), tie=0.002)
-    np.testing.assert_allclose(np.rad2deg(f.angles), track)
-    assert f.similarity() == pytest.approx(s0)
+    (eng, st), norm = _fitter_at(mask, joints, named_by_image, 0.0)
+    s0 = eng.similarity(st)
+    st = keep_labels(eng, st, norm.to_normalised(joints), tie=0.002)
+    np.testing.assert_allclose(np.rad2deg(st.angles), track)
+    assert eng.similarity(st) == pytest.approx(s0)
     # a front view: each leg hangs from its own hip, so the image-side names stand
     # even against a reference that calls them the other way
     front = [90, 90, 250, 270, 290, 270, 268, 270, 280, 282]
     mask, joints = _figure(front, spread=1.0)
-    f, norm = _fitter_at(mask, joints, front, 1.0)
-    s0 = f.similarity()
+    (eng, st), norm = _fitter_at(mask, joints, front, 1.0)
+    s0 = eng.similarity(st)
     ref = norm.to_normalised(joints)
     left = [JOINT_INDEX[f"l_{j}"] for j in ("hip", "knee", "ankle")]
     right = [JOINT_INDEX[f"r_{j}"] for j in ("hip", "knee", "ankle")]
     ref[left + right] = ref[right + left]
-    j = f.joints()
+    j = eng.joints(st)
     # the reference asks for the swap ...
     assert (np.linalg.norm(j[right + left] - ref[left + right], axis=-1).sum()
             < np.linalg.norm(j[left + right] - ref[left + right], axis=-1).sum())
-    _keep_labels(f, ref, tie=0.002)  # ... which is refused: it fits worse
-    np.testing.assert_allclose(np.rad2deg(f.angles), front)
-    assert f.similarity() == pytest.approx(s0)
+    st = keep_labels(eng, st, ref, tie=0.002)  # ... which is refused: it fits worse
+    np.testing.assert_allclose(np.rad2deg(st.angles), front)
+    assert eng.similarity(st) == pytest.approx(s0)
 
 
 def test_challenge_comes_reinit_every_frames_after_the_last_fresh_fit(monkeypatch):
-    import vidcap.fit.pose2d as pose2d
+    import vidcap.fit.tracking as tracking
 
     still, _ = _figure([92, 90, 265, 270, 275, 270, 270, 265, 270, 262], spread=0.2)
     moved, _ = _figure([92, 90, 200, 150, 340, 30, 250, 280, 290, 262], spread=0.2)
     masks = np.stack([still] * 6 + [moved] + [still] * 23)
     calls = []
-    real = pose2d.fit_pose
+    real = tracking.fit_frame
 
     def spy(mask, **kw):
         fp = real(mask, **kw)
         calls.append((bool(kw.get("challenge")), fp.warm))
         return fp
 
-    monkeypatch.setattr(pose2d, "fit_pose", spy)
+    monkeypatch.setattr(tracking, "fit_frame", spy)
     fit_sequence(masks, reinit_every=10, back_tie=None, body_window=0, spread_window=0)
     challenged = [k for k, (c, _) in enumerate(calls) if c]
     fresh = [k for k, (c, w) in enumerate(calls) if not w]
@@ -455,7 +474,7 @@ def test_tracked_thighs_may_cross():
 def test_window_median_keeps_ends_and_turns():
     from scipy.ndimage import median_filter
 
-    from vidcap.fit.pose2d import _window_median
+    from vidcap.fit.tracking import _window_median
 
     # a clip whose first 4 frames were misread: judged by the frames after them
     x = np.r_[np.full(4, 0.1), np.full(26, 0.8)]
@@ -477,7 +496,8 @@ def test_spread_prior_refits_a_misread_frame():
     # limbs fitted for a side view): the median of the frames after it (the window is
     # not padded with copies of frame 0) refits it at 0.8, and the hips move out to where
     # the other frames have them
-    from vidcap.fit.pose2d import _Frames, _smooth_spread
+    from vidcap.fit.options import FitOptions
+    from vidcap.fit.tracking import _Frames, _smooth_spread
 
     angles = [92, 90, 250, 290, 265, 275, 262, 275, 280, 266]
     masks = []
@@ -492,7 +512,7 @@ def test_spread_prior_refits_a_misread_frame():
     out.put(0, fit_pose(masks[0], spread_value=0.0))
     hips = [JOINT_INDEX["l_hip"], JOINT_INDEX["r_hip"]]
     assert np.linalg.norm(out.joints[0][hips] - out.joints[1][hips], axis=1).max() / H > 0.04
-    _smooth_spread(masks, 31, 0.25, 0.01, {}, np.full(len(masks), np.nan), out)
+    _smooth_spread(masks, 31, 0.25, 0.01, FitOptions(), np.full(len(masks), np.nan), out)
     assert out.spread[0] == pytest.approx(0.8)
     # where the fits of the frames after it put them (the model's own placement)
     assert np.linalg.norm(out.joints[0][hips] - out.joints[1][hips], axis=1).max() / H < 0.01

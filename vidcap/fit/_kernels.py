@@ -1,4 +1,5 @@
-"""Compiled kernels of :mod:`vidcap.fit.raster` (numba; imported lazily from there).
+"""Compiled kernels of :mod:`vidcap.fit.raster` (numba; imported lazily from there,
+and importing nothing of it: the constants both read are in :mod:`vidcap.fit.modes`).
 
 Module-level functions so that numba's on-disk cache (``cache=True``) is reused by
 later processes instead of compiling again. No fastmath: :func:`span_setup` and
@@ -12,7 +13,7 @@ import math
 import numba
 import numpy as np
 
-from vidcap.fit.raster import (
+from vidcap.fit.modes import (
     SEARCH_LIMB_ANGLE,
     SEARCH_LIMB_RATIO,
     SEARCH_POSE_ANGLES,

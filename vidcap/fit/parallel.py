@@ -41,7 +41,9 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from vidcap.fit.pose2d import LIMB_PAIRS, Pose2D, fit_sequence
+from vidcap.fit.labels import LIMB_PAIRS
+from vidcap.fit.result import Pose2D
+from vidcap.fit.tracking import fit_sequence
 from vidcap.masks import MaskStack, mask_frames
 
 #: Most worker processes :func:`default_jobs` picks.

@@ -155,34 +155,15 @@ def interval_search(
         if not wrap:
             begin, end = max(begin, lo), min(end, hi)
         n = math.floor((end - begin) / step + 1e-9) + 1
-        warm = iterations == 0 and start is not None
         # a warm start is itself a candidate, so a search never ends worse than it
         # began (beyond the seed, whose grid may step over the previous value)
-        if kernels is not None:  # the same floats as the numpy lines below
-            cand = np.empty(n + warm)
-            if warm:
-                kernels.search_grid_start(begin, step, best, lo, period, cand)
-            else:
-                kernels.search_grid(begin, step, lo, period, cand)
-        else:
-            cand = begin + step * np.arange(n)
-            if warm:
-                cand = np.append(cand, best)
-            if wrap:
-                cand = lo + np.mod(cand - lo, periodic)
+        warm = iterations == 0 and start is not None
+        cand = _candidates(kernels, begin, step, n, best if warm else None, lo, period)
         s = np.asarray(score(cand), dtype=float)
         iterations += 1
         values.append(cand)
         scores.append(s)
-        centre = best if prefer is None else prefer
-        if kernels is not None:
-            k = kernels.search_pick(cand, s, float(centre), gap_period)
-        else:
-            top = s >= s.max() - 1e-12
-            gap = np.abs(cand[top] - centre)
-            if periodic is not None:
-                gap = np.minimum(np.mod(gap, periodic), periodic - np.mod(gap, periodic))
-            k = int(np.flatnonzero(top)[np.argmin(gap)])
+        k = _pick(kernels, cand, s, best if prefer is None else prefer, gap_period)
         sk = float(s[k])
         if sk > best_score + 1e-12:
             best_score, best = sk, float(cand[k])
@@ -190,17 +171,60 @@ def interval_search(
         step = 2 * step / divisions
         if not width > min_step:
             break
-    values = np.concatenate(values)
-    scores = np.concatenate(scores)
-    if kernels is not None:
-        runner = float(kernels.search_runner(values, scores, best, period, first_step * 1.01))
+    runner = _runner_up(kernels, np.concatenate(values), np.concatenate(scores), best, period,
+                        first_step * 1.01)
+    return SearchResult(best, best_score, runner, int(sum(v.size for v in values)), iterations)
+
+
+# The steps of one iteration of interval_search, each as a compiled/numpy pair that
+# computes the same floats (the compiled helpers repeat the numpy operations).
+def _candidates(kernels, begin, step, n, warm, lo, period):
+    """``n`` candidates ``step`` apart from ``begin`` (wrapped into ``[lo, lo + period)``
+    when ``period`` > 0), and the warm start ``warm`` after them unless it is None."""
+    if kernels is None:
+        return _candidates_numpy(begin, step, n, warm, lo, period)
+    return _candidates_compiled(kernels, begin, step, n, warm, lo, period)
+
+
+def _candidates_compiled(kernels, begin, step, n, warm, lo, period):
+    cand = np.empty(n + (warm is not None))
+    if warm is not None:
+        kernels.search_grid_start(begin, step, warm, lo, period, cand)
     else:
-        dist = np.abs(values - best)
-        if wrap:
-            dist = np.minimum(dist, periodic - dist)
-        far = dist > first_step * 1.01
-        runner = float(scores[far].max()) if far.any() else -np.inf
-    return SearchResult(best, best_score, runner, int(values.size), iterations)
+        kernels.search_grid(begin, step, lo, period, cand)
+    return cand
+
+
+def _candidates_numpy(begin, step, n, warm, lo, period):
+    cand = begin + step * np.arange(n)
+    if warm is not None:
+        cand = np.append(cand, warm)
+    if period:
+        cand = lo + np.mod(cand - lo, period)
+    return cand
+
+
+def _pick(kernels, cand, s, centre, gap_period) -> int:
+    """Index of the best score, ties to the candidate nearest ``centre`` (distances
+    periodic when ``gap_period`` > 0)."""
+    if kernels is not None:
+        return kernels.search_pick(cand, s, float(centre), gap_period)
+    top = s >= s.max() - 1e-12
+    gap = np.abs(cand[top] - centre)
+    if gap_period:
+        gap = np.minimum(np.mod(gap, gap_period), gap_period - np.mod(gap, gap_period))
+    return int(np.flatnonzero(top)[np.argmin(gap)])
+
+
+def _runner_up(kernels, values, scores, best, period, far) -> float:
+    """The best score among ``values`` more than ``far`` from ``best`` (-inf: none)."""
+    if kernels is not None:
+        return float(kernels.search_runner(values, scores, best, period, far))
+    dist = np.abs(values - best)
+    if period:
+        dist = np.minimum(dist, period - dist)
+    keep = dist > far
+    return float(scores[keep].max()) if keep.any() else -np.inf
 
 
 def _as_shape(x, shape) -> np.ndarray:
@@ -267,47 +291,72 @@ def interval_search_many(
     if not wrap:
         best = np.clip(best, lo, hi)
     step = width / divisions
+    kernels = _kernels()
+    if kernels is None and run is None:
+        return _many_numpy(score, lo, hi, best, width, step, wrap, periodic, start is not None,
+                           prefer, divisions, min_step)
+    period = float(periodic) if wrap else 0.0
+    gap_period = float(periodic) if periodic is not None else 0.0
+    lo_c, hi_c = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+    pref = np.full(n_search, np.nan) if prefer is None else np.array(
+        _as_shape(prefer, lo.shape), dtype=float)
+    best = np.array(best, dtype=float)  # a copy: run writes into it
+    if run is not None:
+        score_, runner, iterations = run(best, np.ascontiguousarray(width, dtype=float),
+                                         lo_c, hi_c, not wrap, period, gap_period,
+                                         start is not None, pref, int(divisions),
+                                         float(min_step))
+        return best, score_, runner, iterations
+    return _many_compiled(kernels, score, lo_c, hi_c, best, width, step, wrap, period,
+                          gap_period, start is not None, pref, divisions, min_step)
+
+
+def _many_compiled(kernels, score, lo, hi, best, width, step, wrap, period, gap_period, warm,
+                   pref, divisions, min_step):
+    """:func:`interval_search_many`'s iterations with the compiled grid, pick and
+    runner-up helpers (the same floats as :func:`_many_numpy`); ``best`` (N,) is
+    written in place."""
+    n_search = lo.size
+    first_step = step.copy()
+    best_score = np.full(n_search, -np.inf)
+    values, scores = [], []
+    iterations = 0
+    while True:
+        first = iterations == 0 and warm
+        cand = np.empty((n_search, divisions + 1 + first))
+        kernels.many_grid(best, width, step, lo, hi, not wrap, period, first, cand)
+        s = np.ascontiguousarray(score(cand), dtype=float)
+        iterations += 1
+        values.append(cand)
+        scores.append(s)
+        kernels.many_pick(cand, s, pref, gap_period, best, best_score)
+        width = 2 * width / divisions
+        step = 2 * step / divisions
+        if not np.any(width > min_step):
+            break
+    runner = np.empty(n_search)
+    kernels.many_runner(np.concatenate(values, axis=1), np.concatenate(scores, axis=1), best,
+                        period, first_step * 1.01, runner)
+    return best, best_score, runner, iterations
+
+
+def _many_numpy(score, lo, hi, best, width, step, wrap, periodic, warm, prefer, divisions,
+                min_step):
+    """:func:`interval_search_many`'s iterations in numpy."""
+    n_search = lo.size
     first_step = step.copy()
     best_score = np.full(n_search, -np.inf)
     rows = np.arange(n_search)
+    k = np.arange(divisions + 1)
     values, scores = [], []
     iterations = 0
-    k = np.arange(divisions + 1)
-    kernels = _kernels()
-    if kernels is not None or run is not None:
-        period = float(periodic) if wrap else 0.0
-        gap_period = float(periodic) if periodic is not None else 0.0
-        lo_c, hi_c = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
-        pref = np.full(n_search, np.nan) if prefer is None else np.array(
-            _as_shape(prefer, lo.shape), dtype=float)
-        best = np.array(best, dtype=float)  # a copy: run writes into it
-        if run is not None:
-            score_, runner, iterations = run(best, np.ascontiguousarray(width, dtype=float),
-                                             lo_c, hi_c, not wrap, period, gap_period,
-                                             start is not None, pref, int(divisions),
-                                             float(min_step))
-            return best, score_, runner, iterations
     while True:
-        if kernels is not None:  # the same floats as the numpy code below
-            warm = iterations == 0 and start is not None
-            cand = np.empty((n_search, divisions + 1 + warm))
-            kernels.many_grid(best, width, step, lo_c, hi_c, not wrap, period, warm, cand)
-            s = np.ascontiguousarray(score(cand), dtype=float)
-            iterations += 1
-            values.append(cand)
-            scores.append(s)
-            kernels.many_pick(cand, s, pref, gap_period, best, best_score)
-            width = 2 * width / divisions
-            step = 2 * step / divisions
-            if not np.any(width > min_step):
-                break
-            continue
         begin, end = best - width / 2, best + width / 2
         if not wrap:
             begin, end = np.maximum(begin, lo), np.minimum(end, hi)
         cand = begin[:, None] + step[:, None] * k[None, :]
         cand = np.minimum(cand, end[:, None] + 1e-9 * step[:, None])  # clipped: repeats
-        if iterations == 0 and start is not None:
+        if iterations == 0 and warm:
             cand = np.concatenate([cand, best[:, None]], axis=1)  # the start competes too
         if wrap:
             cand = lo[:, None] + np.mod(cand - lo[:, None], periodic)
@@ -332,10 +381,6 @@ def interval_search_many(
             break
     values = np.concatenate(values, axis=1)
     scores = np.concatenate(scores, axis=1)
-    if kernels is not None:
-        runner = np.empty(n_search)
-        kernels.many_runner(values, scores, best, period, first_step * 1.01, runner)
-        return best, best_score, runner, iterations
     dist = np.abs(values - best[:, None])
     if wrap:
         dist = np.minimum(dist, periodic - dist)
