@@ -124,7 +124,7 @@ def run(
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
-    cache = StageCache(cache_dir)
+    cache = StageCache(cache_dir, log=log)
     timings = {}
     ann, ann_source = _load_annotations(annotations, video, log)
 

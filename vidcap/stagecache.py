@@ -34,11 +34,45 @@ def stage_key(*parts) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
-class StageCache:
-    """``.npz`` stage results in a folder, keyed by parameters (or disabled: ``None``)."""
+#: Name of the member holding the entry's checksum.
+CHECKSUM = "__sha256__"
 
-    def __init__(self, folder: str | os.PathLike | None):
+
+def _frames(value):
+    """The C-order byte blocks of one stored value (a MaskStack frame by frame)."""
+    if hasattr(value, "frame_shape"):
+        return (np.ascontiguousarray(value[k], dtype=bool) for k in range(len(value)))
+    return (np.ascontiguousarray(np.asanyarray(value)),)
+
+
+def checksum(arrays: dict) -> str:
+    """SHA-256 over each array's name, dtype, shape and bytes (sorted by name).
+
+    A :class:`vidcap.masks.MaskStack` hashes as the (F, H, W) bool array it is stored
+    as, one frame at a time.
+    """
+    h = hashlib.sha256()
+    for name in sorted(arrays):
+        value = arrays[name]
+        dtype = np.dtype(bool) if hasattr(value, "frame_shape") else np.asanyarray(value).dtype
+        h.update(f"{name}|{dtype.str}|{tuple(np.shape(value))}|".encode())
+        for block in _frames(value):
+            h.update(memoryview(block).cast("B"))
+    return h.hexdigest()
+
+
+class StageCache:
+    """``.npz`` stage results in a folder, keyed by parameters (or disabled: ``None``).
+
+    Entries are written atomically (a temporary file renamed into place) and carry a
+    SHA-256 of their arrays; an entry that cannot be read, or whose arrays do not match
+    their checksum (a disk filled up, a killed run, a flipped bit), is reported with a
+    one-line notice through ``log`` and recomputed.
+    """
+
+    def __init__(self, folder: str | os.PathLike | None, *, log=None):
         self.folder = None if folder is None else Path(folder)
+        self.log = log or (lambda msg: None)
 
     def path(self, stage: str, key: str) -> Path | None:
         """The entry's file, or None when caching is disabled."""
@@ -53,15 +87,23 @@ class StageCache:
         try:
             with np.load(p, allow_pickle=False) as z:
                 hit = {k: z[k] for k in z.files}
-        except (OSError, ValueError, EOFError):  # a damaged cache entry is just redone
+            stored = str(hit.pop(CHECKSUM))
+            ok = stored == checksum(hit)
+            why = "its checksum does not match its contents"
+        except Exception as exc:  # noqa: BLE001 - any damage (zip, zlib, npy, a missing
+            # checksum) means the same thing: recompute the entry
+            ok, why = False, f"{type(exc).__name__}: {' '.join(str(exc).split())[:80]}"
+        if not ok:
+            self.log(f"notice: cache entry {p} is unreadable ({why}): recomputing it")
             return None
         return hit if all(k in hit for k in required) else None
 
     def save(self, stage: str, key: str, **arrays) -> None:
-        """Store ``arrays`` under (stage, key) atomically; nothing when disabled."""
+        """Store ``arrays`` under (stage, key) atomically, with their checksum; nothing
+        when disabled."""
         p = self.path(stage, key)
         if p is not None:
-            savez_atomic(p, **arrays)
+            savez_atomic(p, **arrays, **{CHECKSUM: np.array(checksum(arrays))})
 
 
 __all__ = ["StageCache", "stage_key", "video_identity"]
