@@ -40,8 +40,8 @@ def test_output_that_is_a_folder(tmp_path, video, capsys):
 def test_output_over_an_input_is_refused(video, capsys):
     before = video.read_bytes()
     code, err = _error(capsys, ["convert", video, "-o", video])
-    assert code == 2 and err == [f"vidcap: error: {video}: is also an input of this command: "
-                                 "writing it would destroy the input"]
+    assert code == 2 and err == [f"vidcap: error: {video}: -o is also an input of this command"
+                                 " (the video): writing it would destroy it"]
     assert video.read_bytes() == before
 
 

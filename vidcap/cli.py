@@ -7,8 +7,10 @@ Each sub-command lives in its own module under :mod:`vidcap.commands` and expose
 * ``add_arguments(parser)``: fill an :class:`argparse.ArgumentParser`,
 * ``run(args) -> int``: do the work and return the exit code,
 
-and optionally ``OUTPUT_FILES`` / ``INPUT_FILES``, the names of its file arguments:
-each output is checked before the work starts (not a folder, not an input, writable).
+and optionally ``OUTPUT_FILES`` / ``INPUT_FILES`` / ``OUTPUT_DIRS``, the names of its
+file arguments, and ``implicit_inputs(args)``: each output is checked before the work
+starts (not a folder, writable, not an input, not another output; see
+:mod:`vidcap.outputguard`).
 
 Modules are discovered at start-up, so adding a command never touches this file.
 User errors (:class:`vidcap.errors.VidcapError`) print one line
@@ -43,16 +45,11 @@ def _command_modules():
 
 
 def _check_outputs(args) -> None:
-    """Fail before any work when an output file named on the command line cannot be
-    written (a command module's ``OUTPUT_FILES`` and ``INPUT_FILES``: argument names)."""
-    from vidcap.fileio import check_output_file
+    """Fail before any work when an output cannot be written, is one of the inputs
+    (explicit or implicit) or is another output (:mod:`vidcap.outputguard`)."""
+    from vidcap.outputguard import guard_command
 
-    module = args._module
-    inputs = [getattr(args, name, None) for name in getattr(module, "INPUT_FILES", ())]
-    for name in getattr(module, "OUTPUT_FILES", ()):
-        value = getattr(args, name, None)
-        if value is not None:
-            check_output_file(value, inputs)
+    guard_command(args._module, args)
 
 
 def build_parser() -> argparse.ArgumentParser:

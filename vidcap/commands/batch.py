@@ -81,9 +81,21 @@ def _one(video: str, out: str, height: float, view: str = "auto") -> dict:
     return row
 
 
+def _stem_counts(videos) -> list[int]:
+    """How many earlier videos share each video's stem (its output's ``_k`` suffix)."""
+    seen: dict[str, int] = {}
+    counts = []
+    for v in videos:
+        counts.append(seen.get(v.stem, 0))
+        seen[v.stem] = counts[-1] + 1
+    return counts
+
+
 def run(args) -> int:
     """Run ``vidcap batch``."""
+    from vidcap.annotations import default_path
     from vidcap.fileio import progress, write_text_atomic
+    from vidcap.outputguard import check_outputs
 
     if args.jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
@@ -101,12 +113,12 @@ def run(args) -> int:
     except PermissionError:
         raise UsageError("cannot create the output folder: permission denied",
                          args.outdir) from None
-    stems: dict[str, int] = {}
+    planned = [outdir / (v.stem + (f"_{k}" if k else "") + ".bvh")
+               for v, k in zip(videos, _stem_counts(videos), strict=True)]
+    check_outputs({"outdir": [*planned, outdir / "summary.csv"]},
+                  {"video": videos, "implicit_annotations": [default_path(v) for v in videos]})
     todo, rows = [], []
-    for v in videos:
-        n = stems.get(v.stem, 0)
-        stems[v.stem] = n + 1
-        out = outdir / (v.stem + (f"_{n}" if n else "") + ".bvh")
+    for v, out in zip(videos, planned, strict=True):
         if (not args.force and out.exists()
                 and out.stat().st_mtime >= v.stat().st_mtime):
             rows.append({"file": str(v), "output": str(out), "frames": "", "seconds": 0.0,

@@ -12,6 +12,13 @@ HELP = "convert a single-camera video of one person into BVH motion"
 ORDER = 10
 OUTPUT_FILES = ("output", "save")
 INPUT_FILES = ("video", "annotations", "background")
+
+
+def implicit_inputs(args) -> dict:
+    """The annotations read by default (``VIDEO_STEM.vidcap.json`` beside the video)."""
+    from vidcap.annotations import default_path
+
+    return {"implicit_annotations": None if args.annotations else default_path(args.video)}
 #: ``--view`` values (:data:`vidcap.lifting.VIEWS`, spelled here so that ``--help``
 #: does not import the pipeline).
 VIEW_CHOICES = ("auto", "side", "front", "back", "left", "right", "back_left", "back_right",

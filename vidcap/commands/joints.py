@@ -11,7 +11,7 @@ NAME = "joints"
 HELP = "joint centres (sphere fits) and a BVH skeleton from C3D marker trajectories"
 ORDER = 60
 OUTPUT_FILES = ("output", "centres", "report", "draft_markerset")
-INPUT_FILES = ("trial",)
+INPUT_FILES = ("trial", "also", "markerset")  # a marker-set name is no file: skipped
 
 
 def add_arguments(parser) -> None:

@@ -16,6 +16,7 @@ HELP = "write a review video: frame | silhouette with the 2D model | 3D pose"
 ORDER = 12
 OUTPUT_FILES = ("output",)
 INPUT_FILES = ("video", "from_npz")
+OUTPUT_DIRS = ("png",)
 
 _KEYS = ("masks", "joints2d", "bvh_joints3d")
 
