@@ -2,8 +2,9 @@
 
 Run: /work/venv/bin/python benchmarks/joints_accuracy.py
 
-1. PiG_Motion3_FF.c3d (+ PiG_Calibration3_FF.c3d pooled): hip/knee centres vs the
-   file's own Vicon Plug-in-Gait outputs LFEP/RFEP (hip) and LFEO/RFEO (knee).
+1. Real trials vs vendor centres: every trial carrying Vicon Plug-in-Gait's joint
+   centres (../shared/data's PiG_Motion3_FF / PiG_Calibration3_FF, and the pyCGM
+   sample trials under $VIDCAP_DATA/mocap/pycgm), with and without ``--static``.
 2. 07_01.c3d: bone lengths vs the subject's skeleton ../shared/data/motion/07.asf.
 3. kinematics_tennis_serve.c3d (full-body Plug-in-Gait, no reference skeleton): left
    against right bone lengths, and which joints fell back.
@@ -15,6 +16,7 @@ Run: /work/venv/bin/python benchmarks/joints_accuracy.py
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -39,20 +41,61 @@ def dist_mm(a, b):
     return d[np.isfinite(d)]
 
 
-def pig():
-    mot = read_c3d(DATA / "c3d/PiG_Motion3_FF.c3d")
-    cal = read_c3d(DATA / "c3d/PiG_Calibration3_FF.c3d")
-    print("\n## PiG_Motion3_FF: fitted centres vs Vicon PiG outputs (mm, per frame)")
-    print(f"{'pooling':18s} {'joint':8s} {'ref':5s} {'median':>7s} {'p90':>7s} {'kind':6s} "
-          f"{'cap deg':>7s} {'axial sd':>8s}")
-    for label, trials in [("motion only", [mot]), ("motion+static", [mot, cal])]:
-        sol = solve_joints(trials)
-        for j, ref in [("l_hip", "LFEP"), ("r_hip", "RFEP"), ("l_knee", "LFEO"),
-                       ("r_knee", "RFEO")]:
-            d = dist_mm(sol.position(j), mot.marker(ref))
-            r = sol.report(j)
-            print(f"{label:18s} {j:8s} {ref:5s} {np.median(d):7.1f} {np.percentile(d, 90):7.1f} "
-                  f"{r.kind:6s} {r.cap_angle_deg:7.1f} {r.axial_std_mm:8.1f}")
+#: Vicon Plug-in-Gait's joint-centre outputs: segment origins and proximal points
+#: (FEP hip, FEO knee, TIO ankle; CLO shoulder, HUO elbow, RAO wrist).
+PIG_REFS = [("hip", "FEP"), ("knee", "FEO"), ("ankle", "TIO"), ("shoulder", "CLO"),
+            ("elbow", "HUO"), ("wrist", "RAO")]
+
+
+def real_trial_list():
+    """(name, trial path, static path or None) of every trial with vendor joint centres:
+    ../shared/data's Plug-in-Gait pair, then $VIDCAP_DATA/mocap/pycgm (benchmarks/DATA.md)."""
+    out = [("PiG_Motion3_FF", DATA / "c3d/PiG_Motion3_FF.c3d", None),
+           ("PiG_Motion3_FF --static", DATA / "c3d/PiG_Motion3_FF.c3d",
+            DATA / "c3d/PiG_Calibration3_FF.c3d"),
+           ("PiG_Calibration3_FF (static)", DATA / "c3d/PiG_Calibration3_FF.c3d", None)]
+    extra = os.environ.get("VIDCAP_DATA")
+    folder = Path(extra) / "mocap" / "pycgm" if extra else None
+    if folder is None or not folder.is_dir():
+        print("(VIDCAP_DATA/mocap/pycgm absent: the pyCGM sample trials are skipped; "
+              "see benchmarks/DATA.md)")
+        return out
+    move, still = folder / "Test_Files_Movement_trial.c3d", folder / "Test_Files_Static_trial.c3d"
+    out += [("pyCGM Movement_trial", move, None),
+            ("pyCGM Movement_trial --static", move, still)]
+    for f in sorted(folder.glob("*Static*.c3d")):
+        out.append((f"pyCGM {f.stem.split('_', 1)[1]} (static)", f, None))
+    return out
+
+
+def real_trials():
+    """Every trial with vendor joint centres: per joint median/p90 distance (mm) to the
+    vendor's centres and the method that placed it; the hip/knee/ankle targets."""
+    print("\n## Real trials vs vendor centres (Vicon Plug-in-Gait outputs; mm per frame)")
+    print(f"{'trial':34s} {'joint':10s} {'ref':5s} {'median':>7s} {'p90':>7s} method")
+    worst, worst_lr = 0.0, 0.0
+    for name, path, static in real_trial_list():
+        trial = read_c3d(path)
+        sol = solve_joints(trial, static=None if static is None else read_c3d(static))
+        for joint, suffix in PIG_REFS:
+            meds = []
+            for side in "lr":
+                jn, ref = f"{side}_{joint}", f"{side.upper()}{suffix}"
+                if jn not in sol.joint_names or ref not in trial.labels:
+                    continue
+                d = dist_mm(sol.position(jn), trial.marker(ref))
+                if not len(d):
+                    continue
+                meds.append(np.median(d))
+                print(f"{name:34s} {jn:10s} {ref:5s} {np.median(d):7.1f} "
+                      f"{np.percentile(d, 90):7.1f} {sol.report(jn).method}")
+            if joint in ("hip", "knee", "ankle") and meds:
+                worst = max(worst, max(meds))
+                if len(meds) == 2:
+                    worst_lr = max(worst_lr, abs(meds[0] - meds[1]))
+    print(f"targets: every hip/knee/ankle median <= 20 mm: worst {worst:.1f} mm "
+          f"{'PASS' if worst <= 20 else 'FAIL'}; left and right within 10 mm: worst "
+          f"{worst_lr:.1f} mm {'PASS' if worst_lr <= 10 else 'FAIL'}")
 
 
 def bones():
@@ -85,8 +128,8 @@ def symmetry():
                                        axis=1)) * 1e3 for s in "lr"]
         print(f"{a + '-' + b:16s} {lr[0]:7.0f} {lr[1]:7.0f} {lr[0] - lr[1]:+7.0f}")
     for rep in sol.reports:
-        if rep.flagged:
-            print(f"fallback: {rep.joint}: {rep.note}")
+        if rep.warning():
+            print(f"poorly placed: {rep.joint}: {rep.warning()}")
 
 
 def landmarks():
@@ -135,7 +178,7 @@ def synthetic():
 
 
 if __name__ == "__main__":
-    pig()
+    real_trials()
     bones()
     symmetry()
     landmarks()

@@ -11,7 +11,7 @@ NAME = "joints"
 HELP = "joint centres (sphere fits) and a BVH skeleton from C3D marker trajectories"
 ORDER = 60
 OUTPUT_FILES = ("output", "centres", "report", "draft_markerset")
-INPUT_FILES = ("trial", "also", "markerset")  # a marker-set name is no file: skipped
+INPUT_FILES = ("trial", "also", "markerset", "static")  # a marker-set name is no file: skipped
 
 
 def add_arguments(parser) -> None:
@@ -23,6 +23,10 @@ def add_arguments(parser) -> None:
                         help="built-in marker set name or a TOML file (default: detect)")
     parser.add_argument("--noise-mm", type=float, default=None, metavar="MM",
                         help="marker noise standard deviation in mm: unbiased fits (UGDK)")
+    parser.add_argument("--static", metavar="STATIC.c3d",
+                        help="a static trial of the subject: calibrates the joints placed "
+                        "by definition (anatomical, pelvis regression) once, as constant "
+                        "points of their parent segments")
     parser.add_argument("-o", "--output", metavar="OUT.bvh", help="BVH file to write")
     parser.add_argument("--centres", metavar="OUT.csv",
                         help="CSV of joint centres in the C3D lab frame (metres)")
@@ -52,11 +56,12 @@ def centres_csv(sol) -> str:
     return "frame,time_s,joint,x_m,y_m,z_m\n" + "\n".join(rows) + "\n"
 
 
-def report_dict(sol, trials, noise_mm) -> dict:
+def report_dict(sol, trials, noise_mm, static=None) -> dict:
     """The ``--report`` JSON content."""
     return {
         "markerset": sol.markerset.name,
         "trials": [t.path for t in trials],
+        "static": None if static is None else static.path,
         "frames": int(sol.positions.shape[0]),
         "fps": sol.fps,
         "noise_mm": noise_mm,
@@ -103,24 +108,25 @@ def run(args) -> int:
         trials.append(read_c3d(p))
         steps.update()
     ms = load_markerset(args.markerset) if args.markerset else None
-    sol = solve_joints(trials, ms, noise_mm=args.noise_mm)
+    static = read_c3d(args.static) if args.static else None
+    sol = solve_joints(trials, ms, noise_mm=args.noise_mm, static=static)
     steps.update()
     for seg, gone in sol.missing_markers.items():
         print(f"vidcap: warning: {trials[0].path}: marker set {sol.markerset.name}: segment "
               f"{seg}: markers absent from the file: {', '.join(gone)}", file=sys.stderr)
     for r in sol.reports:
-        if r.flagged:
-            print(f"vidcap: warning: joint {r.joint}: {r.note}", file=sys.stderr)
+        if r.warning():
+            print(f"vidcap: warning: joint {r.joint}: {r.warning()}", file=sys.stderr)
     if args.output:
         write_bvh(args.output, solution_to_motion(sol))
     if args.centres:
         write_text_atomic(args.centres, centres_csv(sol))
     if args.report:
-        write_text_atomic(args.report,
-                          json.dumps(report_dict(sol, trials, args.noise_mm), indent=2) + "\n")
+        report = report_dict(sol, trials, args.noise_mm, static)
+        write_text_atomic(args.report, json.dumps(report, indent=2) + "\n")
     steps.update()
     steps.close()
-    n_bad = sum(r.flagged for r in sol.reports)
+    n_bad = sum(bool(r.warning()) for r in sol.reports)
     print(f"{trials[0].path}: {sol.markerset.name}, {len(sol.joint_names)} joints, "
-          f"{sol.positions.shape[0]} frames, {n_bad} flagged")
+          f"{sol.positions.shape[0]} frames, {n_bad} poorly placed")
     return 0

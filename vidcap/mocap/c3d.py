@@ -49,6 +49,10 @@ class MarkerData:
     up : tuple of float
         The lab's vertical: ``+Y`` when ``POINT:Y_SCREEN`` says so, else ``+Z`` (the
         usual C3D convention).
+    subject : dict of str to float
+        The subject's measurements from the ``PROCESSING`` group, as written there
+        (Vicon's are mm and kg: ``LKneeWidth``, ``RAnkleWidth``, ``MarkerDiameter``,
+        ``LLegLength``...): its single-number entries, empty when the file has none.
     """
 
     labels: tuple[str, ...]
@@ -59,6 +63,7 @@ class MarkerData:
     duplicates: tuple[str, ...] = ()
     prefixes: tuple[str, ...] = field(default=())
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    subject: dict = field(default_factory=dict)
 
     @property
     def n_frames(self) -> int:
@@ -126,6 +131,23 @@ def _param(params, group: str, name: str, default=None):
         return params[group][name]["value"]
     except (KeyError, TypeError):
         return default
+
+
+def _subject(params) -> dict:
+    """The single finite numbers of the PROCESSING group (subject measurements)."""
+    out = {}
+    try:
+        items = list(params["PROCESSING"].items())
+    except (KeyError, TypeError, AttributeError):
+        return out
+    for name, entry in items:
+        try:
+            v = np.asarray(entry["value"], dtype=float)
+        except (KeyError, TypeError, ValueError):
+            continue
+        if v.size == 1 and np.isfinite(v).all():
+            out[str(name)] = float(v.reshape(()))
+    return out
 
 
 def _unit_scale(units, path) -> float:
@@ -228,4 +250,5 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
         duplicates=dups,
         prefixes=prefixes,
         up=up,
+        subject=_subject(params),
     )

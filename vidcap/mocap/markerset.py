@@ -36,6 +36,10 @@ Optional keys beyond these (Plug-in-Gait and the ``anatomical`` set use them)::
     [segments.l_lower_leg]            # the segment whose joint (the knee) it places
     axis_anchor = ["L_FLE", "L_FME"]  # the parent's landmarks that straddle a hinge
                                       # joint: its centre along the axis
+    chord = { wand = "LTHI", marker = "LKNE", width = "LKneeWidth" }
+                                      # Plug-in-Gait's anatomical centre (anatomical.py):
+                                      # from the parent's joint, its wand and the lateral
+                                      # marker, offset by half the PROCESSING width
 
 Joint names follow ``design.md`` (``l_hip``, ``l_knee``...); extra joints
 (``spine``, ``l_toe``...) are allowed. Segments are listed parents first.
@@ -45,7 +49,7 @@ from __future__ import annotations
 
 import os
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
@@ -97,10 +101,25 @@ class SegmentSpec:
         :func:`vidcap.mocap.skeleton.hip_regression`; empty when the set has none. Once
         restricted to a file (:meth:`MarkerSet.restricted`), ``hip_psis`` may be the
         one sacrum marker that stands in for the pair.
+    hip_model : str
+        Root only: ``'harrington'`` (Harrington et al. 2007, from the pelvis alone) or
+        ``'davis'`` (Plug-in-Gait's, from the subject's leg lengths in the C3D or,
+        failing them, the ASIS-to-``hip_ankles`` distances).
+    hip_ankles : tuple of str
+        Root only: the (left, right) lateral malleolus markers for that estimate.
     hip_sacrum : tuple of str
         Root only: a sacrum marker (one name) that stands in for ``hip_psis``.
     hip_joints : tuple of str
         The (left, right) hip joints the regression is for.
+    axis_anchor : tuple of str
+        The parent's landmarks straddling a hinge joint (lateral, medial): their midpoint
+        places the centre along the hinge axis.
+    chord : tuple of str
+        (wand, marker): the markers of Plug-in-Gait's chord construction of this joint
+        (:func:`vidcap.mocap.anatomical.chord_centre`), with the parent's joint;
+        empty when the set has none.
+    chord_width : str
+        The ``PROCESSING`` parameter with the joint's width (mm), e.g. ``LKneeWidth``.
     """
 
     name: str
@@ -119,7 +138,11 @@ class SegmentSpec:
     hip_psis: tuple[str, ...] = ()
     hip_joints: tuple[str, ...] = ()
     hip_sacrum: tuple[str, ...] = ()
+    hip_model: str = "harrington"
+    hip_ankles: tuple[str, ...] = ()
     axis_anchor: tuple[str, ...] = ()
+    chord: tuple[str, ...] = ()
+    chord_width: str = ""
 
 
 @dataclass(frozen=True)
@@ -193,14 +216,16 @@ class MarkerSet:
                 m for m in s.hip_sacrum if m in available)
             regress = (bool(s.hip_asis) and all(m in available for m in s.hip_asis)
                        and bool(psis))
-            kept.append(SegmentSpec(
-                s.name, s.parent, s.joint, mk, s.tip, s.rest, s.side,
-                tuple(m for m in s.fallback if m in available),
-                s.end_joint if end else None, end, s.origin,
-                tuple(m for m in s.optional if m in available),
-                s.hip_asis if regress else (), psis if regress else (),
-                s.hip_joints if regress else (), s.hip_sacrum,
-                s.axis_anchor if all(m in available for m in s.axis_anchor) else (),
+            kept.append(replace(
+                s, markers=mk, fallback=tuple(m for m in s.fallback if m in available),
+                end_joint=s.end_joint if end else None, end_markers=end,
+                optional=tuple(m for m in s.optional if m in available),
+                hip_asis=s.hip_asis if regress else (), hip_psis=psis if regress else (),
+                hip_joints=s.hip_joints if regress else (),
+                axis_anchor=s.axis_anchor if all(m in available for m in s.axis_anchor)
+                else (),
+                chord=s.chord if all(m in available for m in s.chord) else (),
+                hip_ankles=s.hip_ankles if all(m in available for m in s.hip_ankles) else (),
             ))
             names.add(s.name)
         return MarkerSet(self.name, self.description, tuple(kept), self.source), missing
@@ -267,12 +292,23 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
             raise MarkerSetError(f"segments.{name}.hip_regression needs asis and psis "
                                  "(left, right) among the segment's markers, hips (left, "
                                  "right) and at most one sacrum marker", source)
+        model = str(reg.get("model", "harrington"))
+        if model not in ("harrington", "davis"):
+            raise MarkerSetError(f"segments.{name}.hip_regression.model must be 'harrington' "
+                                 "or 'davis'", source)
         if set(optional) - set(markers):
             raise MarkerSetError(f"segments.{name}.optional names markers not in its "
                                  f"markers: {sorted(set(optional) - set(markers))}", source)
         rest = str(t.get("rest", "-y")).lower()
         if rest not in _DIRS:
             raise MarkerSetError(f"segments.{name}.rest must be one of {sorted(_DIRS)}", source)
+        chord_t = t.get("chord") or {}
+        chord = (_strs(chord_t.get("wand"), f"segments.{name}.chord.wand", source)
+                 + _strs(chord_t.get("marker"), f"segments.{name}.chord.marker", source)
+                 ) if isinstance(chord_t, dict) else ()
+        if chord_t and (len(chord) != 2 or i == 0):
+            raise MarkerSetError(f"segments.{name}.chord must be a table with one wand and "
+                                 "one marker, on a non-root segment", source)
         end = t.get("end") or {}
         if not isinstance(end, dict):
             raise MarkerSetError(f"segments.{name}.end must be a table", source)
@@ -292,8 +328,11 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
             end_markers=_strs(end.get("markers"), f"segments.{name}.end.markers", source),
             origin=_strs(t.get("origin"), f"segments.{name}.origin", source),
             optional=optional, hip_asis=asis, hip_psis=psis, hip_joints=hips,
-            hip_sacrum=sacrum,
+            hip_sacrum=sacrum, hip_model=model,
+            hip_ankles=_strs(reg.get("ankles"), f"segments.{name}.hip_regression.ankles",
+                             source),
             axis_anchor=_strs(t.get("axis_anchor"), f"segments.{name}.axis_anchor", source),
+            chord=chord, chord_width=str(chord_t.get("width", "")),
         ))
         seen_seg.add(name)
     return MarkerSet(str(doc.get("name", Path(source).stem)), str(doc.get("description", "")),

@@ -32,11 +32,12 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from vidcap.errors import VidcapError
+from vidcap.mocap.anatomical import chord_centre, chord_offset_mm
 from vidcap.mocap.c3d import MarkerData
 from vidcap.mocap.frames import (
     SegFrames,
@@ -67,6 +68,12 @@ __all__ = [
     "frame_from_three", "hip_regression", "kabsch", "lab_to_yup", "point_covariance",
     "point_variance", "score", "solution_to_motion", "solve_joints",
 ]
+
+
+#: A fitted centre farther than this (mm, in the parent's frame) from the set's
+#: anatomical definition of the joint gives way to the definition: on real trials a
+#: well-conditioned fit that far off reads soft-tissue motion as joint motion.
+AGREE_MM = 20.0
 
 
 @dataclass(frozen=True)
@@ -133,6 +140,9 @@ class JointCentre:
         predictions of the centre; 0 without SCoRE.
     marker_var : float
         Marker noise variance per coordinate (m²) used to weigh them.
+    lab_centres : tuple of numpy.ndarray, each (F, 3), or None
+        Per trial, the centre per frame in the lab when a per-frame definition placed
+        it (:func:`anatomical_centre`) rather than a constant point of the parent.
     """
 
     parent_local: np.ndarray
@@ -142,6 +152,7 @@ class JointCentre:
     own_frames: tuple[SegFrames, ...] | None = None
     mismatch_var: float = 0.0
     marker_var: float = 0.0
+    lab_centres: tuple[np.ndarray, ...] | None = None
 
 
 def _lab_up(trial: MarkerData) -> np.ndarray:
@@ -268,10 +279,10 @@ def refine_symmetric(spec: SegmentSpec, trials: Sequence[MarkerData],
 def regress_hip_centre(spec: SegmentSpec, root: SegmentSpec, trials: Sequence[MarkerData],
                        root_frames_: Sequence[SegFrames], fit: JointCentre,
                        samples: ChildSamples) -> JointCentre:
-    """A hip's poorly swung components from the pelvis regression (:func:`regress_hip`);
-    the other joints, and hips whose thigh swung enough or whose fit was flagged, as
-    they are. A moved centre keeps only the parent's prediction per frame."""
-    if spec.parent != root.name or spec.joint not in root.hip_joints or fit.report.flagged:
+    """A hip's poorly swung components from the pelvis regression (:func:`regress_hip`),
+    all of them when the fit was rejected; the other joints, and hips whose thigh swung
+    enough, as they are. A moved centre keeps only the parent's prediction per frame."""
+    if spec.parent != root.name or spec.joint not in root.hip_joints:
         return fit
     frames = [{root.name: f} for f in root_frames_]
     v, rep, moved = regress_hip(fit.parent_local, fit.report, spec, root, trials, frames,
@@ -318,6 +329,9 @@ def per_frame_centre(spec: SegmentSpec, trial: MarkerData, pf: SegFrames, fit: J
         return _combined_centre(spec, trial, pf, fit, fit.own_frames[trial_index])
     v = fit.parent_local
     c = to_lab(pf.r, pf.o, v)
+    if fit.lab_centres is not None:  # per-frame definition; the constant point in its gaps
+        own = fit.lab_centres[trial_index]
+        c = np.where(np.isfinite(own).all(axis=1, keepdims=True), own, c)
     mk = markers_of(trial, spec.markers)
     if len(spec.markers) >= 3:
         own = fit.own_frames[trial_index] if fit.own_frames else frames_from_points(mk)
@@ -334,6 +348,92 @@ def per_frame_centre(spec: SegmentSpec, trial: MarkerData, pf: SegFrames, fit: J
                  else np.eye(3)[0])
     a_lab = np.einsum("fij,j->fi", pf.r, a_loc)
     return c, frames_from_centre_axis(c, mk[:, 0], a_lab)
+
+
+def poor_fit_reason(report: JointReport, opts: SolveOptions) -> str:
+    """Why the functional fit does not place this joint well ('' when it does): a
+    fallback, a hinge whose centre along the axis a rule placed, or a worst-determined
+    coordinate with a Cramér-Rao standard deviation above ``opts.max_axial_std_mm``."""
+    if report.flagged:
+        return "the fit was rejected"
+    if "axis-rule" in report.method:
+        return (f"a hinge (condition {report.condition:.3g}): its centre along the axis is "
+                f"not observable (std {report.axial_std_mm:.0f} mm)")
+    if not report.axial_std_mm <= opts.max_axial_std_mm:
+        return (f"the centre's worst coordinate has a std of {report.axial_std_mm:.0f} mm "
+                f"(condition {report.condition:.3g})")
+    return ""
+
+
+def anatomical_centre(spec: SegmentSpec, trials: Sequence[MarkerData],
+                      parent_frames: Sequence[SegFrames],
+                      parent_joint_lab: Sequence[np.ndarray] | None, fit: JointCentre,
+                      opts: SolveOptions, parent_joint: str = "") -> JointCentre:
+    """Plug-in-Gait's chord centre (:func:`vidcap.mocap.anatomical.chord_centre`) per
+    frame where the set defines one (``spec.chord``) and the fit is poorly conditioned
+    (:func:`poor_fit_reason`) or lies more than :data:`AGREE_MM` from it (soft tissue
+    read as joint motion); the fit's report keeps its residual, condition and range of
+    motion, its method becomes ``'anatomical'``.
+    """
+    if not spec.chord or parent_joint_lab is None:
+        return fit
+    wand, marker = spec.chord
+    lab, local, sources = [], [], set()
+    for t, pf, prox in zip(trials, parent_frames, parent_joint_lab, strict=True):
+        off_mm, source = chord_offset_mm(spec.chord_width, getattr(t, "subject", {}) or {})
+        sources.add(f"{off_mm:.0f} mm from {source}")
+        c = chord_centre(t.marker(wand), prox, t.marker(marker), off_mm * 1e-3)
+        lab.append(c)
+        local.append(to_local(pf.r, pf.o, c[:, None])[:, 0])
+    v = nanmedian_rows(np.concatenate(local))
+    if not np.isfinite(v).all():
+        return fit
+    reason = poor_fit_reason(fit.report, opts)
+    apart = float(np.linalg.norm(v - fit.parent_local)) * 1e3
+    if not reason and apart > AGREE_MM:
+        reason = (f"its centre lies {apart:.0f} mm from the anatomical one (over "
+                  f"{AGREE_MM:g} mm: soft-tissue motion read as joint motion)")
+    if not reason:
+        return fit
+    note = (f"Plug-in-Gait chord from {wand}, {marker} and the {parent_joint or spec.parent}"
+            f" centre, offset {'; '.join(sorted(sources))}; the fit: {reason}")
+    rep = replace(fit.report, method="anatomical", note=note, flagged=False,
+                  center_local_m=[float(a) for a in v])
+    return JointCentre(v, None, fit.axis, rep, fit.own_frames, lab_centres=tuple(lab))
+
+
+def static_offsets(static: MarkerData, ms: MarkerSet, opts: SolveOptions) -> dict:
+    """The joints a static trial places by definition (``'anatomical'``, ``'regression'``),
+    each as its constant point in the parent segment's frame (3,), metres."""
+    sol = solve_joints(static, ms, **{k: getattr(opts, k) for k in (
+        "noise_mm", "min_cap_deg", "planar_cond", "hinge_rule", "max_axial_std_mm",
+        "hinge_ratio", "score_refine", "noise_correct")})
+    out = {}
+    for rep in sol.reports:
+        if rep.method in ("anatomical", "regression") and rep.parent_segment:
+            v = sol.local_points[rep.parent_segment][rep.joint]
+            if np.isfinite(v).all():
+                out[rep.joint] = np.asarray(v, dtype=float)
+    return out
+
+
+def calibrated_centre(fit: JointCentre, offset: np.ndarray | None, opts: SolveOptions,
+                      static: MarkerData | None) -> JointCentre:
+    """The static trial's offset (:func:`static_offsets`) in place of a joint the trial
+    itself placed by definition or could not fit; a well-conditioned fit stands."""
+    if offset is None:
+        return fit
+    rep = fit.report
+    by_definition = rep.method == "anatomical" or "regression" in rep.method
+    if not by_definition and not poor_fit_reason(rep, opts):
+        return fit
+    moved = float(np.linalg.norm(offset - fit.parent_local)) * 1e3
+    note = (f"constant in the {rep.parent_segment} frame as the static trial "
+            f"{getattr(static, 'path', '')} placed it ({moved:.0f} mm from this trial's "
+            f"{rep.method} centre); {rep.note}")
+    rep = replace(rep, method=f"{rep.method}+static", note=note, flagged=False,
+                  center_local_m=[float(a) for a in offset])
+    return JointCentre(offset, None, fit.axis, rep, fit.own_frames)
 
 
 def root_joint(root: SegmentSpec, rf: SegFrames, parent_locals: dict
@@ -437,6 +537,7 @@ def solve_joints(
     hinge_ratio: float = 3.0,
     score_refine: bool = True,
     noise_correct: bool = True,
+    static: MarkerData | None = None,
 ) -> JointSolution:
     """Joint centres of a marker-set skeleton (seed 000 §2.3-2.6).
 
@@ -483,6 +584,11 @@ def solve_joints(
         :func:`score`), with σ from ``noise_mm`` or else estimated from the child's
         rigid-fit residuals, and the frames' rotation noise predicted from their
         templates (:func:`point_covariance`).
+    static : MarkerData, optional, keyword-only
+        A static (standing) trial of the same subject: the joints it places by an
+        anatomical definition or the pelvis regression (:func:`static_offsets`) keep
+        that position in their parent segment's frame in the trials, wherever the
+        trials' own fit is poorly conditioned (``method`` gains ``+static``).
 
     Returns
     -------
@@ -505,10 +611,14 @@ def solve_joints(
     frames: dict[str, list[SegFrames]] = {root.name: root_frames(trials, root)}
     centres: dict[str, list[np.ndarray]] = {}
     fits: dict[str, JointCentre] = {}
+    offsets = static_offsets(static, ms, opts) if static is not None else {}
     for s in ms.segments[1:]:
         pjoint = ms.segment(s.parent).joint
         fit = solve_segment(s, ms, trials, frames[s.parent],
                             centres.get(pjoint, [None])[0], opts)
+        fit = anatomical_centre(s, trials, frames[s.parent], centres.get(pjoint), fit, opts,
+                                pjoint)
+        fit = calibrated_centre(fit, offsets.get(s.joint), opts, static)
         placed = [per_frame_centre(s, t, pf, fit, ti)
                   for ti, (t, pf) in enumerate(zip(trials, frames[s.parent], strict=True))]
         fits[s.joint] = fit

@@ -9,6 +9,10 @@ import numpy as np
 
 from vidcap.mocap.markerset import MarkerSet
 
+#: A fitted centre whose worst-determined coordinate has a Cramér-Rao standard
+#: deviation above this (mm) is reported as poorly placed.
+POOR_STD_MM = 10.0
+
 
 @dataclass(frozen=True)
 class JointReport:
@@ -23,7 +27,12 @@ class JointReport:
     kind : str
         ``'sphere'``, ``'hinge'``, ``'still'`` (from the fit), ``'root'`` or ``'end'``.
     method : str
-        ``'mgdk'``, ``'mgdk+ugdk'``, ``'fallback'`` (marker centroid), ``'markers'``.
+        What placed the joint: ``'mgdk'``/``'mgdk+ugdk'`` (sphere or hinge fit),
+        ``'score'`` (two-frame fit), ``'+axis-rule'`` (centre along a hinge axis by
+        rule), ``'+regression'``/``'regression'`` (pelvis regression for some or all
+        of a hip's coordinates), ``'anatomical'`` (the marker set's definition, e.g.
+        Plug-in-Gait's chord), ``'+static'`` (from a static trial), ``'fallback'``
+        (marker centroid), ``'markers'`` (root and end joints).
     frames_used : int
         Frames with a parent frame and at least one of the child's markers.
     rms_residual_m : float
@@ -61,12 +70,44 @@ class JointReport:
     note: str = ""
     axial_std_mm: float = float("nan")
 
+    def warning(self) -> str:
+        """One line on why this joint's centre is not to be trusted ('' when it is): a
+        fallback, a hinge centre put along its axis by the parent-joint rule (not seen
+        in the data and no anatomical definition for it), or a fit whose worst-determined
+        coordinate has a standard deviation over :data:`POOR_STD_MM`."""
+        if self.kind in ("root", "end"):
+            return ""
+        if self.method == "fallback":
+            return f"placed by its fallback: {self.note}"
+        if "axis-rule" in self.method and "proximal joint" in self.note:
+            return (f"a hinge: its centre along the axis is not observable (std "
+                    f"{self.axial_std_mm:.0f} mm); placed on the axis nearest the parent's "
+                    "joint by rule")
+        if self.method.split("+")[0] in ("mgdk", "score") and "regression" not in self.method \
+                and not self.axial_std_mm <= POOR_STD_MM:
+            return (f"poorly conditioned fit (condition {self.condition:.3g}, worst coordinate "
+                    f"std {self.axial_std_mm:.0f} mm, range of motion "
+                    f"{self.cap_angle_deg:.0f} deg)")
+        return ""
+
+    def provenance(self) -> dict:
+        """What placed the joint and how far to trust it: ``method``, range of motion
+        (deg), RMS fit residual (mm), condition number, worst-coordinate std (mm) and the
+        :meth:`warning` (JSON-ready)."""
+        def num(x, scale=1.0):
+            return float(x) * scale if x is not None and np.isfinite(x) else None
+
+        return {"method": self.method, "range_of_motion_deg": num(self.cap_angle_deg),
+                "residual_mm": num(self.rms_residual_m, 1e3), "condition": num(self.condition),
+                "axial_std_mm": num(self.axial_std_mm), "warning": self.warning()}
+
     def as_dict(self) -> dict:
-        """JSON-ready dict (NaN/inf become None)."""
+        """JSON-ready dict (NaN/inf become None), with :meth:`provenance`."""
         d = asdict(self)
         for k, v in d.items():
             if isinstance(v, float) and not np.isfinite(v):
                 d[k] = None
+        d["provenance"] = self.provenance()
         return d
 
 
