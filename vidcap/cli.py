@@ -72,6 +72,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the ``vidcap`` command; return the process exit code."""
+    from vidcap import interrupt
+
+    as_command = argv is None  # the process is ours: signals, and how it ends
+    if as_command:
+        interrupt.install()
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
@@ -85,6 +90,8 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"vidcap: error: {exc}", file=sys.stderr)
         return EXIT_USER_ERROR
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # SIGINT, or SIGTERM (interrupt.install)
         print("vidcap: interrupted", file=sys.stderr)
-        return 130
+        if as_command:
+            interrupt.exit_interrupted()  # the workers stopped, no waiting on them
+        return interrupt.EXIT_INTERRUPTED

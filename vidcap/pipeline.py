@@ -150,6 +150,10 @@ def run(
         with _timed(timings, "pose2d"):
             pose = _pose_stage(cache, k_sil, sil.masks, jobs=jobs, per_job=per_job,
                                streamed=streamed, progress=progress)
+    except BaseException:
+        if pool is not None:
+            pool.kill()  # an error or Ctrl-C: the running chunks are nobody's now
+        raise
     finally:
         if pool is not None:
             pool.close()

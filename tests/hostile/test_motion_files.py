@@ -78,3 +78,16 @@ def test_bvh_hostile(tmp_path, kind, named):
     bad.write_text(text)
     _check(tmp_path, bad, ["synth", "--motion", bad, "--frames", "2", "--size", "64x48",
                            "-o", tmp_path / "out" / "c.mp4"], named)
+
+
+def test_view_without_a_display_says_so(tmp_path, shared_data):
+    """No display and no --screenshot: one line saying so (a pyvista traceback on main)."""
+    import os
+
+    bvh = shared_data("motion/131_01.bvh")
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    run = run_capped(["view", bvh], cwd=tmp_path, timeout=60, env=env)
+    assert run.returncode == 2, run.stderr[-800:]
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("vidcap: error: no display"), lines
+    assert "--screenshot" in lines[0] and "Traceback" not in run.stderr

@@ -32,10 +32,24 @@ def add_arguments(parser) -> None:
     parser.add_argument("--size", default="800x600", help="window/PNG size WxH (default 800x600)")
 
 
+def has_display() -> bool:
+    """Whether a window can be opened: an X11 or Wayland display on Linux and the BSDs
+    (macOS and Windows always have one)."""
+    import os
+    import sys
+
+    if sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
+        return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    return True
+
+
 def run(args) -> int:
     from vidcap.commands._ui import require
 
     size = _size(args.size)
+    if not args.screenshot and not has_display():
+        raise UsageError("no display to open a window on (DISPLAY and WAYLAND_DISPLAY are"
+                         " unset): add --screenshot OUT.png to render to a file instead")
     view = require("vidcap.ui.view", needs=("pyvista",))
     view.view(args.file, screenshot=args.screenshot, frame=args.frame, centres=args.centres,
               window_size=size)

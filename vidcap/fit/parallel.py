@@ -355,6 +355,21 @@ class _ForkedPool:
             self._collector.join(timeout=5.0)
 
 
+def _kill_tree(pids) -> None:
+    """SIGKILL processes and everything below them (frozen first: none forks away)."""
+    import signal
+
+    from vidcap.interrupt import descendants
+
+    tree = [q for pid in pids for q in (pid, *descendants(pid))]
+    for sig in (signal.SIGSTOP, signal.SIGKILL):
+        for pid in tree:
+            try:
+                os.kill(pid, sig)
+            except OSError:
+                pass
+
+
 class FitPool:
     """Worker processes for :func:`fit_sequence_chunked`, started ahead of the fit.
 
@@ -393,12 +408,24 @@ class FitPool:
     def __enter__(self) -> FitPool:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type, *_) -> None:
+        if exc_type is not None:
+            self.kill()
         self.close()
 
     def close(self) -> None:
         """Stop the workers (waits for running chunks)."""
         self.executor.shutdown(wait=True, cancel_futures=True)
+
+    def kill(self) -> None:
+        """Stop the workers now, dropping their chunks (an error or Ctrl-C: nobody will
+        read them); :meth:`close` afterwards returns at once."""
+        ex = self.executor
+        if isinstance(ex, _ForkedPool):
+            _kill_tree([ex._proc.pid, *ex._pids])
+        else:  # pragma: no cover - platforms without fork
+            _kill_tree(list(getattr(ex, "_processes", {}) or {}))
+        self.executor.shutdown(wait=False, cancel_futures=True)
 
 
 def _fit_chunk(masks: MaskStack, skip: int, tracked: bool, kw: dict) -> dict:
