@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import sys
 import tempfile
@@ -84,6 +85,26 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
     finally:
         if tmp_path.exists():
             tmp_path.unlink()
+
+
+def remove_atomic_leftovers(path: str | os.PathLike) -> list[Path]:
+    """Delete the temporary files :func:`atomic_path` left beside ``path``.
+
+    A process killed while writing (SIGKILL, a lost cluster worker) cannot clean up;
+    call this once nothing can be writing ``path`` any more.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    final = Path(path)
+    removed = []
+    for tmp in final.parent.glob(f".{glob.escape(final.name)}.*"):
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+            removed.append(tmp)
+    return removed
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> None:

@@ -1,15 +1,20 @@
-"""``vidcap batch``: convert many videos in parallel processes."""
+"""``vidcap batch``: convert many videos in parallel, on this machine or a Dask cluster.
+
+This module plans the batch (which outputs, which are up to date) and writes the
+summary; the work for one clip is :func:`vidcap.batch.job.convert_clip`, run by
+the local process pool (:mod:`vidcap.batch.local`) or by Dask workers
+(:mod:`vidcap.batch.cluster`), so both paths give the same outputs and summary.
+"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import glob
 import io
 import os
 import sys
-import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from vidcap.commands.convert import VIEW_CHOICES
@@ -37,6 +42,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "front, back or one orientation; default auto)")
     parser.add_argument("--force", action="store_true",
                         help="redo outputs that are newer than their inputs")
+    parser.add_argument("--clip-jobs", type=int, default=1, metavar="N",
+                        help="processes each clip's fit uses (default 1: the clips already "
+                        "run in parallel)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        default=os.environ.get("DASK_SCHEDULER_ADDRESS") or None,
+                        help="run the clips on a Dask cluster: tcp://HOST:PORT of its "
+                        "scheduler, or local[:N] for N workers on this machine (default: "
+                        "$DASK_SCHEDULER_ADDRESS; unset: the local process pool of --jobs)")
+    parser.add_argument("--connect-timeout", type=float, default=10.0, metavar="S",
+                        help="seconds to wait for the Dask scheduler and a first worker "
+                        "(default 10)")
 
 
 def expand_inputs(items) -> list[Path]:
@@ -61,26 +77,6 @@ def expand_inputs(items) -> list[Path]:
     return unique
 
 
-def _one(video: str, out: str, height: float, view: str = "auto") -> dict:
-    """Convert one video in a worker; never raises."""
-    from vidcap.pipeline import convert
-
-    t0 = time.perf_counter()
-    row = {"file": video, "output": out, "frames": 0, "seconds": 0.0, "fps": 0.0,
-           "status": "ok", "message": ""}
-    try:
-        # files already run in parallel processes: each fits its frames serially
-        res = convert(video, out, height=height, progress=False, jobs=1, view=view)
-        row["frames"] = res.n_frames
-        row["message"] = " ".join("; ".join(res.notices()).split())
-    except Exception as exc:  # noqa: BLE001 - a bad file must never stop the others
-        row["status"] = "failed"
-        row["message"] = " ".join(str(exc).split()) or type(exc).__name__
-    row["seconds"] = round(time.perf_counter() - t0, 3)
-    row["fps"] = round(row["frames"] / row["seconds"], 2) if row["seconds"] > 0 else 0.0
-    return row
-
-
 def _stem_counts(videos) -> list[int]:
     """How many earlier videos share each video's stem (its output's ``_k`` suffix)."""
     seen: dict[str, int] = {}
@@ -91,49 +87,66 @@ def _stem_counts(videos) -> list[int]:
     return counts
 
 
-def run(args) -> int:
-    """Run ``vidcap batch``."""
-    from vidcap.annotations import default_path
-    from vidcap.fileio import progress, write_text_atomic
-    from vidcap.outputguard import check_outputs
+def output_paths(videos: list[Path], outdir: Path, suffix: str = ".bvh") -> list[Path]:
+    """Each video's output: ``outdir/STEM{suffix}``, ``STEM_1``... for repeated stems."""
+    return [outdir / (v.stem + (f"_{k}" if k else "") + suffix)
+            for v, k in zip(videos, _stem_counts(videos), strict=True)]
 
-    if args.jobs < 1:
-        raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
-    videos = expand_inputs(args.inputs)
-    if not videos:
-        raise UsageError("no input videos")
-    outdir = Path(args.outdir)
+
+def plan(videos: list[Path], outputs: list[Path], force: bool, options: dict):
+    """Split the clips into rows of up-to-date outputs and tasks to run.
+
+    Returns
+    -------
+    rows : list of dict
+        Summary rows of the clips whose output is newer than the input (unless ``force``).
+    tasks : list of ClipTask
+        The clips to convert, with ``options`` for :func:`vidcap.pipeline.convert`.
+    """
+    from vidcap.batch.job import ClipTask
+
+    rows, tasks = [], []
+    for v, out in zip(videos, outputs, strict=True):
+        if (not force and out.exists()
+                and out.stat().st_mtime >= v.stat().st_mtime):
+            rows.append({"file": str(v), "output": str(out), "frames": "", "seconds": 0.0,
+                         "fps": "", "status": "skipped", "message": "output is up to date"})
+        else:
+            tasks.append(ClipTask(str(v), str(out), dict(options)))
+    return rows, tasks
+
+
+def _executor(args, tasks, outdir: Path):
+    """The rows of ``tasks`` as they finish, from the pool or the Dask cluster."""
+    if args.scheduler:
+        from vidcap.batch.cluster import run_dask
+
+        return run_dask(tasks, args.scheduler, outdir=outdir, default_workers=args.jobs,
+                        timeout=args.connect_timeout)
+    from vidcap.batch.local import run_local
+
+    return run_local(tasks, args.jobs)
+
+
+def _make_outdir(given: str) -> Path:
+    outdir = Path(given)
     try:
         outdir.mkdir(parents=True, exist_ok=True)
     except (FileExistsError, NotADirectoryError):
         what = ("is a file" if outdir.exists() else
                 "cannot be created: part of the path is a file")
         raise UsageError(f"{what}; OUTDIR must be a folder (created if missing)",
-                         args.outdir) from None
+                         given) from None
     except PermissionError:
         raise UsageError("cannot create the output folder: permission denied",
-                         args.outdir) from None
-    planned = [outdir / (v.stem + (f"_{k}" if k else "") + ".bvh")
-               for v, k in zip(videos, _stem_counts(videos), strict=True)]
-    check_outputs({"outdir": [*planned, outdir / "summary.csv"]},
-                  {"video": videos, "implicit_annotations": [default_path(v) for v in videos]})
-    todo, rows = [], []
-    for v, out in zip(videos, planned, strict=True):
-        if (not args.force and out.exists()
-                and out.stat().st_mtime >= v.stat().st_mtime):
-            rows.append({"file": str(v), "output": str(out), "frames": "", "seconds": 0.0,
-                         "fps": "", "status": "skipped", "message": "output is up to date"})
-        else:
-            todo.append((str(v), str(out)))
-    bar = progress(total=len(todo), desc="batch", unit="video")
-    with ProcessPoolExecutor(max_workers=min(args.jobs, max(1, len(todo)))) as pool:
-        futs = [pool.submit(_one, v, o, args.height, args.view) for v, o in todo]
-        for f in as_completed(futs):
-            rows.append(f.result())
-            bar.update(1)
-    bar.close()
-    order = {str(v): i for i, v in enumerate(videos)}
-    rows.sort(key=lambda r: order.get(r["file"], 0))
+                         given) from None
+    return outdir
+
+
+def write_summary(rows: list[dict], outdir: Path) -> None:
+    """Save ``rows`` as ``outdir/summary.csv`` and print them as a table."""
+    from vidcap.fileio import write_text_atomic
+
     cols = ["file", "frames", "seconds", "fps", "status", "message"]
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=cols, extrasaction="ignore", lineterminator="\n")
@@ -144,6 +157,39 @@ def run(args) -> int:
     print("  ".join(c.ljust(widths[c]) for c in cols[:-1]) + "  message")
     for r in rows:
         print("  ".join(str(r[c]).ljust(widths[c]) for c in cols[:-1]) + "  " + r["message"])
+
+
+def run(args) -> int:
+    """Run ``vidcap batch``."""
+    from vidcap.annotations import default_path
+    from vidcap.fileio import progress, remove_atomic_leftovers
+    from vidcap.outputguard import check_outputs
+
+    for name in ("jobs", "clip_jobs"):
+        if getattr(args, name) < 1:
+            raise UsageError(f"--{name.replace('_', '-')} must be at least 1, "
+                             f"got {getattr(args, name)}")
+    videos = expand_inputs(args.inputs)
+    if not videos:
+        raise UsageError("no input videos")
+    outdir = _make_outdir(args.outdir)
+    options = {"height": args.height, "view": args.view, "jobs": args.clip_jobs}
+    outputs = output_paths(videos, outdir)
+    check_outputs({"outdir": [*outputs, outdir / "summary.csv"]},
+                  {"video": videos, "implicit_annotations": [default_path(v) for v in videos]})
+    rows, tasks = plan(videos, outputs, args.force, options)
+    if tasks:
+        bar = progress(total=len(tasks), desc="batch", unit="video")
+        with contextlib.closing(_executor(args, tasks, outdir)) as finished:
+            for row in finished:
+                rows.append(row)
+                bar.update(1)
+        bar.close()
+        for task in tasks:  # a process killed mid-write leaves its temporary file
+            remove_atomic_leftovers(task.output)
+    order = {str(v): i for i, v in enumerate(videos)}
+    rows.sort(key=lambda r: order.get(r["file"], 0))
+    write_summary(rows, outdir)
     failed = sum(r["status"] == "failed" for r in rows)
     print(f"{len(rows) - failed} of {len(rows)} converted or up to date; {failed} failed; "
           f"summary: {outdir / 'summary.csv'}", file=sys.stderr)
