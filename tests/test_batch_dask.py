@@ -134,6 +134,11 @@ def test_the_startup_check_names_an_input_the_workers_cannot_see(cluster, tmp_pa
     _, client = cluster
     with pytest.raises(UsageError, match="a Dask worker .* cannot read this input"):
         check_workers(client, str(tmp_path / "elsewhere.mp4"), str(tmp_path), timeout=30)
+    seen = tmp_path / "seen.mp4"
+    seen.write_bytes(b"")
+    check_workers(client, str(seen), str(tmp_path), timeout=30)  # both shared: passes
+    with pytest.raises(UsageError, match="--clip-jobs 2: the Dask workers .* may not start"):
+        check_workers(client, str(seen), str(tmp_path), timeout=30, clip_jobs=2)
 
 
 def test_ctrl_c_cancels_the_batch_and_exits_130(clips, cluster, tmp_path):

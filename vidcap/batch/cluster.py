@@ -94,11 +94,17 @@ def check_scheduler(address: str, timeout: float) -> None:
                          address) from None
 
 
-def worker_access(video: str, outdir: str) -> str:
-    """On a worker: ``""`` if it can read ``video`` and write in ``outdir``, else why not."""
+def worker_access(video: str, outdir: str, clip_jobs: int = 1) -> str:
+    """On a worker: ``""`` if it can read ``video``, write in ``outdir`` and (for
+    ``clip_jobs`` > 1) start processes of its own; else why not."""
+    import multiprocessing
     import socket
 
     host = socket.gethostname()
+    if clip_jobs > 1 and multiprocessing.current_process().daemon:
+        return (f"--clip-jobs {clip_jobs}: the Dask workers (on {host}) may not start "
+                "processes; start them with DASK_DISTRIBUTED__WORKER__DAEMON=False, or "
+                "leave --clip-jobs at 1")
     if not os.access(video, os.R_OK):
         return (f"{video}: a Dask worker (on {host}) cannot read this input; inputs and "
                 "outputs must be on a filesystem every worker shares")
@@ -112,8 +118,10 @@ def worker_access(video: str, outdir: str) -> str:
     return ""
 
 
-def check_workers(client, video: str, outdir: str, timeout: float) -> None:
-    """Fail in one line unless a worker can read ``video`` and write in ``outdir``.
+def check_workers(client, video: str, outdir: str, timeout: float,
+                  clip_jobs: int = 1) -> None:
+    """Fail in one line unless a worker can read ``video``, write in ``outdir`` and
+    run ``clip_jobs`` processes per clip (see :func:`worker_access`).
 
     Raises
     ------
@@ -123,7 +131,7 @@ def check_workers(client, video: str, outdir: str, timeout: float) -> None:
     """
     from distributed import TimeoutError as DaskTimeout
 
-    future = client.submit(worker_access, video, outdir, pure=False)
+    future = client.submit(worker_access, video, outdir, clip_jobs, pure=False)
     try:
         problem = future.result(timeout=timeout)
     except (DaskTimeout, TimeoutError):
@@ -171,7 +179,8 @@ def run_dask(tasks: Sequence[ClipTask], scheduler: str, *, outdir: str | os.Path
 
         absolute = [replace(t, video=os.path.abspath(t.video), output=os.path.abspath(t.output))
                     for t in tasks]
-        check_workers(client, absolute[0].video, str(Path(outdir).absolute()), timeout)
+        check_workers(client, absolute[0].video, str(Path(outdir).absolute()), timeout,
+                      clip_jobs=int(tasks[0].options.get("jobs") or 1))
         futures = [client.submit(job, t, pure=False) for t in absolute]
         given = {f.key: t for f, t in zip(futures, tasks, strict=True)}
         try:
