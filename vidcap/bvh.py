@@ -219,76 +219,104 @@ def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -
     head, sep, motion_part = text.partition("MOTION")
     if not sep or "HIERARCHY" not in head:
         raise MotionFileError("not a BVH file (no HIERARCHY ... MOTION sections)", source)
-    tokens = _TOKEN.findall(head[head.index("HIERARCHY") + len("HIERARCHY"):])
-    names, parents, offsets, channels, ends = [], [], [], [], {}
-    pos = 0
+    h = _Hierarchy(_TOKEN.findall(head[head.index("HIERARCHY") + len("HIERARCHY"):]), source)
+    h.parse()
+    data, frame_time = _frame_values(motion_part, sum(len(c) for c in h.channels), source)
+    rotations, root_pos, offsets = _channels_to_pose(data, h.channels, h.parents, h.offsets)
+    # The root OFFSET and its position channels add (most readers, Blender included).
+    skeleton = Skeleton(tuple(h.names), tuple(h.parents), offsets, h.ends)
+    motion = Motion(skeleton, root_pos, rotations, 1.0 / frame_time)
+    scale = _resolve_units(units, skeleton, source)
+    if scale != 1.0:
+        motion = Motion(skeleton.scaled(scale), root_pos * scale, rotations, motion.fps)
+    return motion
 
-    def expect(tok):
-        nonlocal pos
+
+class _Hierarchy:
+    """The HIERARCHY section's tokens read into joints: ``names``, ``parents`` (index,
+    -1 for the root), ``offsets`` (J, 3 list), ``channels`` (per joint, in file order)
+    and ``ends`` (End Site offsets by joint name)."""
+
+    def __init__(self, tokens: list[str], source):
+        self.tokens, self.source, self.pos = tokens, source, 0
+        self.names, self.parents, self.offsets, self.channels, self.ends = [], [], [], [], {}
+
+    def parse(self) -> None:
+        if not self.tokens or self.tokens[0] != "ROOT":
+            raise MotionFileError("malformed hierarchy: it must start with ROOT", self.source)
+        self.joint(-1)
+
+    def expect(self, tok: str) -> None:
+        tokens, pos = self.tokens, self.pos
         if pos >= len(tokens) or tokens[pos] != tok:
             got = tokens[pos] if pos < len(tokens) else "end of hierarchy"
-            raise MotionFileError(f"malformed hierarchy: expected {tok!r}, got {got!r}", source)
-        pos += 1
+            raise MotionFileError(f"malformed hierarchy: expected {tok!r}, got {got!r}",
+                                  self.source)
+        self.pos += 1
 
-    def floats(n):
-        nonlocal pos
+    def floats(self, n: int) -> list[float]:
         try:
-            vals = [float(t) for t in tokens[pos : pos + n]]
+            vals = [float(t) for t in self.tokens[self.pos : self.pos + n]]
         except ValueError:
             raise MotionFileError(
-                f"malformed hierarchy: expected {n} numbers near {tokens[pos]!r}", source
+                f"malformed hierarchy: expected {n} numbers near {self.tokens[self.pos]!r}",
+                self.source,
             ) from None
         if len(vals) != n:
-            raise MotionFileError("malformed hierarchy: file ends inside an OFFSET", source)
+            raise MotionFileError("malformed hierarchy: file ends inside an OFFSET",
+                                  self.source)
         if not all(abs(v) <= MAX_VALUE for v in vals):  # also NaN
-            raise MotionFileError(f"OFFSET {vals} beyond {MAX_VALUE:g}", source)
-        pos += n
+            raise MotionFileError(f"OFFSET {vals} beyond {MAX_VALUE:g}", self.source)
+        self.pos += n
         return vals
 
-    def parse_joint(parent: int):
-        nonlocal pos
-        kind = tokens[pos]
-        pos += 1
+    def joint(self, parent: int) -> None:
+        """One ROOT/JOINT block with its children, or an End Site, from :attr:`pos`."""
+        kind = self.tokens[self.pos]
+        self.pos += 1
         if kind == "End":
-            expect("Site")
-            expect("{")
-            expect("OFFSET")
-            off = floats(3)
-            expect("}")
+            for tok in ("Site", "{", "OFFSET"):
+                self.expect(tok)
+            off = self.floats(3)
+            self.expect("}")
             if parent >= 0:
-                ends[names[parent]] = np.array(off)
+                self.ends[self.names[parent]] = np.array(off)
             return
-        name = tokens[pos]
-        pos += 1
-        if name in names:
-            raise MotionFileError(f"joint {name!r} appears twice", source)
-        idx = len(names)
-        names.append(name)
-        parents.append(parent)
-        expect("{")
-        expect("OFFSET")
-        offsets.append(floats(3))
-        expect("CHANNELS")
+        name = self.tokens[self.pos]
+        self.pos += 1
+        if name in self.names:
+            raise MotionFileError(f"joint {name!r} appears twice", self.source)
+        idx = len(self.names)
+        self.names.append(name)
+        self.parents.append(parent)
+        self.expect("{")
+        self.expect("OFFSET")
+        self.offsets.append(self.floats(3))
+        self.expect("CHANNELS")
+        self.channels.append(self.channel_list(name))
+        while self.pos < len(self.tokens) and self.tokens[self.pos] in ("JOINT", "End"):
+            self.joint(idx)
+        self.expect("}")
+
+    def channel_list(self, name: str) -> list[str]:
+        """The count and names after ``CHANNELS``, checked."""
         try:
-            n = int(tokens[pos])
+            n = int(self.tokens[self.pos])
         except (ValueError, IndexError):
-            raise MotionFileError(f"malformed CHANNELS line for joint {name!r}", source) from None
-        pos += 1
-        chans = tokens[pos : pos + n]
+            raise MotionFileError(f"malformed CHANNELS line for joint {name!r}",
+                                  self.source) from None
+        self.pos += 1
+        chans = self.tokens[self.pos : self.pos + n]
         bad = [c for c in chans if c not in _ROT_AXES and c not in _POS_AXES]
         if len(chans) != n or bad:
-            raise MotionFileError(f"bad channels for joint {name!r}: {bad or chans}", source)
-        channels.append(chans)
-        pos += n
-        while pos < len(tokens) and tokens[pos] in ("JOINT", "End"):
-            parse_joint(idx)
-        expect("}")
+            raise MotionFileError(f"bad channels for joint {name!r}: {bad or chans}",
+                                  self.source)
+        self.pos += n
+        return chans
 
-    if not tokens or tokens[0] != "ROOT":
-        raise MotionFileError("malformed hierarchy: it must start with ROOT", source)
-    parse_joint(-1)
 
-    n_channels = sum(len(c) for c in channels)
+def _frame_values(motion_part: str, n_channels: int, source) -> tuple[np.ndarray, float]:
+    """The MOTION section's values, (frames, n_channels), and its frame time in seconds."""
     m = re.search(r"Frames:\s*(\d+)\s*Frame Time:\s*([0-9.eE+-]+)", motion_part)
     if not m:
         raise MotionFileError("MOTION section lacks 'Frames:' and 'Frame Time:'", source)
@@ -310,11 +338,17 @@ def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -
             f"{have} complete frames (truncated?)",
             source,
         )
-    data = values[: n_frames * n_channels].reshape(n_frames, n_channels)
+    return values[: n_frames * n_channels].reshape(n_frames, n_channels), frame_time
 
+
+def _channels_to_pose(data: np.ndarray, channels, parents, offsets):
+    """Per-joint rotations (F, J, 4) quaternions (x, y, z, w), the root's position
+    (F, 3) and the offsets (J, 3), a non-root joint's given by its position channels
+    (their first frame) where it has them, from the frame values (F, n_channels) in
+    file units (angles in degrees)."""
+    n_frames = len(data)
     offsets_arr = np.array(offsets, dtype=float)
-    J = len(names)
-    rotations = np.empty((n_frames, J, 4))
+    rotations = np.empty((n_frames, len(channels), 4))
     root_pos = np.zeros((n_frames, 3))
     col = 0
     for j, chans in enumerate(channels):
@@ -340,13 +374,7 @@ def parse_bvh(text: str, *, source: str | os.PathLike = "<bvh>", units="auto") -
                 root_pos = p
             else:
                 offsets_arr[j] = p[0]
-    # The root OFFSET and its position channels add (most readers, Blender included).
-    skeleton = Skeleton(tuple(names), tuple(parents), offsets_arr, ends)
-    motion = Motion(skeleton, root_pos, rotations, 1.0 / frame_time)
-    scale = _resolve_units(units, skeleton, source)
-    if scale != 1.0:
-        motion = Motion(skeleton.scaled(scale), root_pos * scale, rotations, motion.fps)
-    return motion
+    return rotations, root_pos, offsets_arr
 
 
 def _skeleton_extent(skeleton: Skeleton) -> float:

@@ -304,6 +304,26 @@ def propose_signs(
         j2, yaw, scale=scale, body=body, hinge_weight=hinge_weight, range_weight=range_weight,
         midline_weight=midline_weight, lean_weight=lean_weight, torso_depth=torso_depth,
         twist_weight=twist_weight, leg_twist_weight=leg_twist_weight)
+    trans = _chain_transitions(unary, zeta, fixed, flip_cost=flip_cost,
+                               flip_penalty=flip_penalty)
+    gu, gt = _group_costs(unary, trans, lateral, symmetry_weight=symmetry_weight,
+                          arm_symmetry_weight=arm_symmetry_weight, symmetry_cap=symmetry_cap)
+    signs, margin = _read_signs(_min_marginals(gu, gt), F)
+    margin = np.where(fixed != 0, np.inf, np.minimum(margin, _BIG / 10))
+    return SignProposal(signs=signs, margin=margin, zeta=zeta)
+
+
+#: Chains solved jointly (indices into ``_CHAINS``): torso, head, both arms (16 states),
+#: both legs (16 states).
+_GROUPS = ((0, None), (1, None), (2, 3), (4, 5))
+
+
+def _chain_transitions(unary, zeta, fixed, *, flip_cost: float, flip_penalty: float):
+    """Per chain, the cost (F-1, 4, 4) of going from each sign state to each in the next
+    frame: a sign change costs ``flip_cost * min(zeta(t-1), zeta(t)) + flip_penalty``.
+    States against the user's ``fixed`` signs (F, 10) are made ``_BIG`` in ``unary``
+    (changed in place)."""
+    F = len(fixed)
     C, S = len(_CHAINS), 4
     trans = np.zeros((C, max(F - 1, 0), S, S))
     for c, (segs, _, _) in enumerate(_CHAINS):
@@ -318,15 +338,20 @@ def propose_signs(
                 flip = (sig[:, None, n] != sig[None, :, n]).astype(float)  # (S, S)
                 z = np.minimum(zeta[:-1, k], zeta[1:, k])
                 trans[c] += flip[None] * (flip_cost * z + flip_penalty)[:, None, None]
+    return trans
 
-    # Groups solved jointly: torso, head, both arms (16 states), both legs (16 states);
-    # a pair's left/right lateral asymmetry (mirror symmetry about the body's sagittal
-    # plane, of elbows/wrists and knees/ankles) costs ``symmetry_weight``.
-    G, S2 = 4, S * S
+
+def _group_costs(unary, trans, lateral, *, symmetry_weight: float,
+                 arm_symmetry_weight: float, symmetry_cap: float):
+    """Unary (G, F, 16) and transition (G, F-1, 16, 16) costs of the :data:`_GROUPS`:
+    a pair's joint state costs both chains' plus the weight times its left/right
+    lateral asymmetry (mirror symmetry about the body's sagittal plane, of
+    elbows/wrists and knees/ankles); a single chain uses the first 4 states."""
+    F, S = unary[0].shape[0], 4
+    G, S2 = len(_GROUPS), S * S
     gu = np.full((G, F, S2), _BIG)
     gt = np.zeros((G, max(F - 1, 0), S2, S2))
-    groups = ((0, None), (1, None), (2, 3), (4, 5))
-    for g, (ca, cb) in enumerate(groups):
+    for g, (ca, cb) in enumerate(_GROUPS):
         if cb is None:
             gu[g, :, :S] = unary[ca]
             gt[g, :, :S, :S] = trans[ca]
@@ -338,8 +363,13 @@ def propose_signs(
         if F > 1:
             gt[g] = (trans[ca][:, :, None, :, None]
                      + trans[cb][:, None, :, None, :]).reshape(F - 1, S2, S2)
+    return gu, gt
 
-    # min-sum forward / backward over frames, vectorised over groups and states
+
+def _min_marginals(gu, gt) -> np.ndarray:
+    """Min-sum forward / backward over frames, vectorised over groups and states: the
+    cheapest whole-clip cost through each (group, frame, state), (G, F, 16)."""
+    G, F, S2 = gu.shape
     alpha = np.empty((G, F, S2))
     beta = np.zeros((G, F, S2))
     alpha[:, 0] = gu[:, 0]
@@ -347,12 +377,18 @@ def propose_signs(
         alpha[:, t] = gu[:, t] + np.min(alpha[:, t - 1, :, None] + gt[:, t - 1], axis=1)
     for t in range(F - 2, -1, -1):
         beta[:, t] = np.min(gt[:, t] + (gu[:, t + 1] + beta[:, t + 1])[:, None, :], axis=2)
-    marg = np.minimum(alpha + beta, _BIG)  # (G, F, S2)
+    return np.minimum(alpha + beta, _BIG)
 
-    signs = np.ones((F, len(SEGMENT_NAMES)), dtype=np.int8)
-    margin = np.zeros((F, len(SEGMENT_NAMES)))
+
+def _read_signs(marg, n_frames: int):
+    """Each segment's sign (F, 10) int8, the cheaper of its + and - min-marginals, and
+    the margin between them (F, 10)."""
+    S = 4
+    S2 = S * S
+    signs = np.ones((n_frames, len(SEGMENT_NAMES)), dtype=np.int8)
+    margin = np.zeros((n_frames, len(SEGMENT_NAMES)))
     st_a, st_b = np.divmod(np.arange(S2), S)
-    for g, (ca, cb) in enumerate(groups):
+    for g, (ca, cb) in enumerate(_GROUPS):
         for c, st in ((ca, st_a if cb is not None else st_b), (cb, st_b)):
             if c is None:
                 continue
@@ -364,8 +400,7 @@ def propose_signs(
                 minus = np.min(np.where(valid & (_STATES[st, n] < 0), marg[g], np.inf), -1)
                 signs[:, k] = np.where(plus <= minus, 1, -1)
                 margin[:, k] = np.abs(plus - minus)
-    margin = np.where(fixed != 0, np.inf, np.minimum(margin, _BIG / 10))
-    return SignProposal(signs=signs, margin=margin, zeta=zeta)
+    return signs, margin
 
 
 def propose_orientation(
