@@ -115,7 +115,7 @@ class Annotations:
     >>> a.add_orientation(0, "right")
     >>> a.add_depth(5, "l_lower_arm", +1)
     >>> signs, orient, joints = a.resolve(8)
-    >>> signs[4:7, 3].tolist(), orient[0], a.n_user_inputs
+    >>> signs[4:7, 3].tolist(), str(orient[0]), a.n_user_inputs
     ([0, 1, 1], 'right', 2)
     """
 
