@@ -427,14 +427,20 @@ def convert(
     *,
     save: str | os.PathLike | None = None,
     cache_dir: str | os.PathLike | None | bool = True,
+    rig: str = "vidcap",
     **options,
 ) -> ConvertResult:
-    """:func:`run` and write the BVH (atomically) and optionally the ``--save`` npz.
+    """:func:`run` and write the motion (atomically) and optionally the ``--save`` npz.
 
-    ``cache_dir=True`` puts the cache in ``.vidcap-cache`` beside ``out_bvh``;
-    ``False``/``None`` disables it.
+    ``out_bvh`` ending in ``.glb``/``.gltf`` gives glTF 2.0, sampled at the video's own
+    frame times; any other name gives BVH (:func:`vidcap.motionfile.write_motion`), on
+    ``rig``'s joints. ``cache_dir=True`` puts the cache in ``.vidcap-cache`` beside
+    ``out_bvh``; ``False``/``None`` disables it.
     """
-    from vidcap.bvh import write_bvh
+    from vidcap.motionfile import write_motion
+    from vidcap.rigs import get_rig
+
+    get_rig(rig)  # an unknown rig fails before any work
 
     out_bvh = Path(out_bvh)
     if cache_dir is True:
@@ -442,7 +448,8 @@ def convert(
     elif cache_dir is False:
         cache_dir = None
     result = run(video, cache_dir=cache_dir, **options)
-    write_bvh(out_bvh, result.bvh_motion)
+    motion, times = result.motion_and_times(out_bvh)
+    write_motion(out_bvh, motion, rig=rig, times=times)
     if save is not None:
         result.save_npz(save)
     return result

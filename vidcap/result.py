@@ -79,6 +79,17 @@ class ConvertResult:
         rate = 1.0 / float(np.median(np.diff(self.frame_times)))
         return self.motion.resampled(rate, times=self.frame_times)
 
+    def motion_and_times(self, path: str | os.PathLike) -> tuple[object, np.ndarray | None]:
+        """The motion a file at ``path`` gets and its frame times: glTF keeps every
+        frame at the video's own times (:attr:`motion`, :attr:`frame_times` for a
+        variable-rate video), BVH's fixed frame time needs :attr:`bvh_motion`."""
+        from vidcap.motionfile import is_gltf
+
+        if not is_gltf(path):
+            return self.bvh_motion, None
+        return self.motion, (np.asarray(self.frame_times, float) if self.variable_rate
+                             else None)
+
     def notices(self) -> list[str]:
         """What the user should know about this result, one sentence each: frames
         without a person, frames left out as mostly outside the picture, and a body

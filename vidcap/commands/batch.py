@@ -17,11 +17,11 @@ import os
 import sys
 from pathlib import Path
 
-from vidcap.commands.convert import VIEW_CHOICES
+from vidcap.commands.convert import VIEW_CHOICES, add_rig_argument
 from vidcap.errors import UsageError
 
 NAME = "batch"
-HELP = "convert many videos to BVH in parallel, with a summary table"
+HELP = "convert many videos to BVH or glTF in parallel, with a summary table"
 ORDER = 11
 
 VIDEO_SUFFIXES = {".mp4", ".avi", ".mov", ".mkv", ".m4v", ".webm", ".mpg", ".mpeg", ".wmv"}
@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("inputs", nargs="+", metavar="INPUT",
                         help="video files, folders (their videos) or glob patterns")
     parser.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
-                        help="folder for the BVH files and summary.csv")
+                        help="folder for the motion files and summary.csv")
     parser.add_argument("--jobs", "-j", type=int, default=max(1, (os.cpu_count() or 2) // 2),
                         help="parallel processes (default: half the CPUs)")
     parser.add_argument("--height", type=float, default=1.75, metavar="M",
@@ -40,6 +40,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--view", default="auto", choices=VIEW_CHOICES, metavar="VIEW",
                         help="how the camera sees every subject (as in vidcap convert: side, "
                         "front, back or one orientation; default auto)")
+    parser.add_argument("--format", default="bvh", choices=("bvh", "glb", "gltf"),
+                        help="file written per video: BVH (default), binary glTF (.glb) or "
+                        "glTF JSON + .bin")
+    add_rig_argument(parser)
     parser.add_argument("--force", action="store_true",
                         help="redo outputs that are newer than their inputs")
     parser.add_argument("--clip-jobs", type=int, default=1, metavar="N",
@@ -163,6 +167,7 @@ def run(args) -> int:
     """Run ``vidcap batch``."""
     from vidcap.annotations import default_path
     from vidcap.fileio import progress, remove_atomic_leftovers
+    from vidcap.motionfile import FORMATS, output_files
     from vidcap.outputguard import check_outputs
 
     for name in ("jobs", "clip_jobs"):
@@ -173,9 +178,11 @@ def run(args) -> int:
     if not videos:
         raise UsageError("no input videos")
     outdir = _make_outdir(args.outdir)
-    options = {"height": args.height, "view": args.view, "jobs": args.clip_jobs}
-    outputs = output_paths(videos, outdir)
-    check_outputs({"outdir": [*outputs, outdir / "summary.csv"]},
+    options = {"height": args.height, "view": args.view, "jobs": args.clip_jobs,
+               "rig": args.rig}
+    outputs = output_paths(videos, outdir, FORMATS[args.format])
+    written = [f for out in outputs for f in output_files(out)]  # a .gltf brings its .bin
+    check_outputs({"outdir": [*written, outdir / "summary.csv"]},
                   {"video": videos, "implicit_annotations": [default_path(v) for v in videos]})
     rows, tasks = plan(videos, outputs, args.force, options)
     if tasks:

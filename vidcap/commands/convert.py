@@ -8,7 +8,7 @@ import sys
 from vidcap.errors import UsageError
 
 NAME = "convert"
-HELP = "convert a single-camera video of one person into BVH motion"
+HELP = "convert a single-camera video of one person into BVH or glTF motion"
 ORDER = 10
 OUTPUT_FILES = ("output", "save")
 INPUT_FILES = ("video", "annotations", "background")
@@ -23,14 +23,26 @@ def implicit_inputs(args) -> dict:
 #: does not import the pipeline).
 VIEW_CHOICES = ("auto", "side", "front", "back", "left", "right", "back_left", "back_right",
                 "front_left", "front_right")
+#: ``--rig`` values (:data:`vidcap.rigs.RIGS`, spelled here for a light ``--help``).
+RIG_CHOICES = ("vidcap", "mixamo", "humanik")
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
+
+
+def add_rig_argument(parser: argparse.ArgumentParser) -> None:
+    """``--rig``, shared by every command that writes the video path's motion."""
+    parser.add_argument("--rig", default="vidcap", choices=RIG_CHOICES,
+                        help="joint names and hierarchy of the BVH/glTF: ours (default), "
+                        "Mixamo's (mixamorig:Hips...) or MotionBuilder HumanIK's (Hips...), "
+                        "T-pose rest; mixamo and humanik face +Z as those characters do")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the ``vidcap convert`` parser."""
     parser.add_argument("video", help="input video (static camera, one person)")
-    parser.add_argument("-o", "--output", required=True, metavar="OUT.bvh", help="BVH to write")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT.bvh|OUT.glb",
+                        help="motion to write: glTF 2.0 for .glb or .gltf (+ .bin), else BVH")
+    add_rig_argument(parser)
     parser.add_argument("--annotations", metavar="A.json",
                         help="depth/orientation/joint annotations (default: "
                         "VIDEO_STEM.vidcap.json beside the video, if present)")
@@ -75,12 +87,17 @@ def run(args) -> int:
         raise UsageError(f"--keyframes is a fit similarity between 0 and 1, got {args.keyframes}")
     if args.jobs is not None and args.jobs < 1:
         raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
+    from vidcap.fileio import check_output_file
+    from vidcap.motionfile import output_files
+
+    for extra in output_files(args.output)[1:]:  # a .gltf's .bin
+        check_output_file(extra, [args.video, args.annotations, args.background])
     log = (lambda m: None) if args.quiet else (lambda m: print(f"vidcap: {m}", file=sys.stderr))
     res = convert(
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
         annotations=args.annotations, background=args.background, height=args.height,
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
-        view=args.view,
+        view=args.view, rig=args.rig,
     )
     if not args.quiet:
         lr = res.lifted

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 NAME = "joints"
-HELP = "joint centres (sphere fits) and a BVH skeleton from C3D marker trajectories"
+HELP = "joint centres (sphere fits) and a BVH or glTF skeleton from C3D marker trajectories"
 ORDER = 60
 OUTPUT_FILES = ("output", "centres", "report", "draft_markerset")
 INPUT_FILES = ("trial", "also", "markerset", "static")  # a marker-set name is no file: skipped
@@ -27,7 +27,9 @@ def add_arguments(parser) -> None:
                         help="a static trial of the subject: calibrates the joints placed "
                         "by definition (anatomical, pelvis regression) once, as constant "
                         "points of their parent segments")
-    parser.add_argument("-o", "--output", metavar="OUT.bvh", help="BVH file to write")
+    parser.add_argument("-o", "--output", metavar="OUT.bvh|OUT.glb",
+                        help="skeleton motion to write: glTF 2.0 for .glb or .gltf (+ .bin), "
+                        "else BVH")
     parser.add_argument("--centres", metavar="OUT.csv",
                         help="CSV of joint centres in the C3D lab frame (metres)")
     parser.add_argument("--report", metavar="OUT.json", help="JSON fit-quality report per joint")
@@ -99,9 +101,14 @@ def run(args) -> int:
     if args.noise_mm is not None and not args.noise_mm > 0:
         raise UsageError(f"--noise-mm must be positive, got {args.noise_mm}")
 
-    from vidcap.bvh import write_bvh
     from vidcap.mocap.skeleton import solution_to_motion, solve_joints
+    from vidcap.motionfile import output_files, write_motion
 
+    if args.output:
+        from vidcap.fileio import check_output_file
+
+        for extra in output_files(args.output)[1:]:  # a .gltf's .bin
+            check_output_file(extra, [args.trial, *args.also])
     steps = progress(total=3 + len(args.also), desc="joints", unit="step")
     trials = []
     for p in [args.trial, *args.also]:
@@ -118,7 +125,7 @@ def run(args) -> int:
         if r.warning():
             print(f"vidcap: warning: joint {r.joint}: {r.warning()}", file=sys.stderr)
     if args.output:
-        write_bvh(args.output, solution_to_motion(sol))
+        write_motion(args.output, solution_to_motion(sol))
     if args.centres:
         write_text_atomic(args.centres, centres_csv(sol))
     if args.report:
