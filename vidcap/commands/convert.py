@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from vidcap.errors import UsageError
-
 NAME = "convert"
 HELP = "convert a single-camera video of one person into BVH or glTF motion"
 ORDER = 10
@@ -77,16 +75,11 @@ def run(args) -> int:
     import numpy as np
 
     from vidcap.annotations import default_path
+    from vidcap.api import check_convert_options
     from vidcap.pipeline import convert
 
-    if not (args.height > 0):
-        raise UsageError(f"--height must be positive metres, got {args.height}")
-    if args.smooth < 0:
-        raise UsageError(f"--smooth must not be negative, got {args.smooth}")
-    if args.keyframes is not None and not 0.0 <= args.keyframes <= 1.0:
-        raise UsageError(f"--keyframes is a fit similarity between 0 and 1, got {args.keyframes}")
-    if args.jobs is not None and args.jobs < 1:
-        raise UsageError(f"--jobs must be at least 1, got {args.jobs}")
+    check_convert_options(height=args.height, jobs=args.jobs, view=args.view,
+                          smooth=args.smooth, keyframes=args.keyframes)
     from vidcap.fileio import check_output_file
     from vidcap.motionfile import output_files
 

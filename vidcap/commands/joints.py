@@ -118,12 +118,10 @@ def run(args) -> int:
     static = read_c3d(args.static) if args.static else None
     sol = solve_joints(trials, ms, noise_mm=args.noise_mm, static=static)
     steps.update()
-    for seg, gone in sol.missing_markers.items():
-        print(f"vidcap: warning: {trials[0].path}: marker set {sol.markerset.name}: segment "
-              f"{seg}: markers absent from the file: {', '.join(gone)}", file=sys.stderr)
-    for r in sol.reports:
-        if r.warning():
-            print(f"vidcap: warning: joint {r.joint}: {r.warning()}", file=sys.stderr)
+    from vidcap.api import solution_notices
+
+    for notice in solution_notices(sol, trials[0].path):
+        print(f"vidcap: warning: {notice}", file=sys.stderr)
     if args.output:
         write_motion(args.output, solution_to_motion(sol))
     if args.centres:
