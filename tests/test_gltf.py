@@ -142,7 +142,7 @@ def test_rig_errors():
     with pytest.raises(UsageError, match="unknown rig 'unreal'"):
         get_rig("unreal")
     other = Skeleton(("root", "tip"), (-1, 0), [[0, 0, 0], [0, 1, 0]])
-    with pytest.raises(UsageError, match="15-joint skeleton"):
+    with pytest.raises(UsageError, match="lacks pelvis, neck"):
         retarget(Motion.rest(other), "mixamo")
 
 
@@ -177,14 +177,37 @@ def test_converted_gltf_has_every_frame_and_the_bvh_rotations(walk_outputs):
     assert _same_rotations(g.rotations[:, :b.skeleton.n_joints], b.rotations) < 1e-5
 
 
-def test_joints_output_passes_the_khronos_validator(shared_data, tmp_path):
+def test_joints_output_passes_the_khronos_validator_on_every_rig(shared_data, tmp_path):
     c3d = shared_data("c3d/07_01.c3d")
     r = run_cli("joints", c3d, "-o", tmp_path / "j.glb", timeout=180)
     assert r.returncode == 0, r.stderr
-    issues = validate(tmp_path / "j.glb")
-    assert issues["numErrors"] == 0, issues["messages"][:5]
+    r = run_cli("joints", c3d, "-o", tmp_path / "m.glb", "--rig", "mixamo", timeout=180)
+    assert r.returncode == 0, r.stderr
+    for name in ("j.glb", "m.glb"):
+        issues = validate(tmp_path / name)
+        assert issues["numErrors"] == 0, issues["messages"][:5]
     g = read_gltf(tmp_path / "j.glb")
     assert "l_knee" in g.joint_names and g.rotations.shape[0] == 316
+    assert read_gltf(tmp_path / "m.glb").joint_names[0] == "mixamorig:Hips"
+
+
+def test_marker_skeleton_on_a_rig_keeps_its_joints(shared_data, tmp_path):
+    """The Mixamo BVH of a marker trial puts our 15 joints, its spine and toes where the
+    marker skeleton has them (turned to face +Z)."""
+    from vidcap.mocap.c3d import read_c3d
+    from vidcap.mocap.skeleton import solution_to_motion, solve_joints
+
+    m = solution_to_motion(solve_joints(read_c3d(shared_data("c3d/07_01.c3d"))))
+    write_motion(tmp_path / "m.bvh", m, rig="mixamo")
+    back = read_bvh(tmp_path / "m.bvh", units="m")
+    ours = m.positions() @ TURN_TO_PLUS_Z
+    got = source_joint_positions(back, JOINT_MAPS["humanik"])
+    np.testing.assert_allclose(got, ours[:, [m.skeleton.index(n) for n in JOINT_NAMES]],
+                               atol=1e-5)
+    pos = back.positions()
+    for rig_name, joint in (("Spine", "spine"), ("LeftToeBase", "l_toe")):
+        np.testing.assert_allclose(pos[:, back.skeleton.index("mixamorig:" + rig_name)],
+                                   ours[:, m.skeleton.index(joint)], atol=1e-5)
 
 
 def test_batch_writes_glb(walk_outputs):

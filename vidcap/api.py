@@ -175,16 +175,17 @@ class JointCentres:
     solution: object = field(repr=False)
     inputs: tuple[str, ...] = field(default=(), repr=False)
 
-    def save(self, path: str | os.PathLike) -> list[Path]:
-        """Write the skeleton's motion (Y up, -Z forward, T-pose rest): glTF 2.0 for
-        ``.glb``/``.gltf``, BVH otherwise. Returns the files written."""
+    def save(self, path: str | os.PathLike, *, rig: str = "vidcap") -> list[Path]:
+        """Write the skeleton's motion (Y up, T-pose rest): glTF 2.0 for ``.glb``/``.gltf``,
+        BVH otherwise; ``rig`` as :meth:`VideoMotion.save` (``mixamo``/``humanik`` need
+        a marker set with the body model's 15 joints). Returns the files written."""
         from vidcap.fileio import check_output_file
         from vidcap.mocap.skeleton import solution_to_motion
         from vidcap.motionfile import output_files, write_motion
 
         for out in output_files(path):
             check_output_file(out, self.inputs)
-        return write_motion(path, solution_to_motion(self.solution))
+        return write_motion(path, solution_to_motion(self.solution), rig=rig)
 
 
 def joints(c3d: str | os.PathLike, *, markerset: str | os.PathLike | None = None,

@@ -32,6 +32,11 @@ spine joints do not bend: the whole torso turns at Hips):
   0.12 m at 1.75 m, forward along the floor) ahead of the ankle; the foot's tip
   (``LeftToe_End``) is its End Site. ``LeftHand`` is our wrist.
 
+A marker skeleton (``vidcap joints``) is mapped the same way where it has our 15 joints
+(the built-in full-body marker sets do); its own ``spine`` joint becomes ``Spine`` (with
+``Spine1``/``Spine2`` at a third and two thirds of the way on to the neck), its ``l_toe``
+``LeftToeBase`` and its ``l_hand_end`` the hand's End Site.
+
 The mapped joints' names come from :data:`vidcap.synth.JOINT_MAPS` (``"humanik"``), the
 table by which :mod:`vidcap.synth` reads such files, so a file we write is read back
 by name.
@@ -77,20 +82,32 @@ class _RigJoint:
     anchor: str
 
 
-def _humanoid(side_names: dict[str, str]) -> tuple[_RigJoint, ...]:
+def _humanoid(side_names: dict[str, str], src: Skeleton) -> tuple[_RigJoint, ...]:
+    """The rig's joints placed on ``src``: the video path's 15 joints, or a marker
+    skeleton's, whose ``spine``, ``l_toe`` and ``l_hand_end`` joints are used where
+    they exist (the torso then turns at the spine joint too)."""
     n = side_names  # our joint name -> the rig's name (HumanIK spelling, no namespace)
+    have = set(src.joint_names)
+    chest = src.joint_names[src.parents[src.index("neck")]]  # what the neck hangs from
+    if "spine" in have:
+        spine = [_RigJoint("Spine", n["pelvis"], ("spine", "spine", 0.0), "spine")]
+        spine += [_RigJoint(name, parent, ("spine", "neck", f), chest) for name, parent, f in
+                  (("Spine1", "Spine", 1 / 3), ("Spine2", "Spine1", 2 / 3))]
+    else:
+        spine = [_RigJoint(name, parent, ("pelvis", "neck", f), chest)
+                 for name, parent, f in zip(("Spine", "Spine1", "Spine2"),
+                                            (n["pelvis"], "Spine", "Spine1"), SPINE_FRACTIONS,
+                                            strict=True)]
     joints = [
         _RigJoint(n["pelvis"], None, ("pelvis", "pelvis", 0.0), "pelvis"),
-        _RigJoint("Spine", n["pelvis"], ("pelvis", "neck", SPINE_FRACTIONS[0]), "pelvis"),
-        _RigJoint("Spine1", "Spine", ("pelvis", "neck", SPINE_FRACTIONS[1]), "pelvis"),
-        _RigJoint("Spine2", "Spine1", ("pelvis", "neck", SPINE_FRACTIONS[2]), "pelvis"),
+        *spine,
         _RigJoint(n["neck"], "Spine2", ("neck", "neck", 0.0), "neck"),
         _RigJoint("Head", n["neck"], ("neck", "head_top", HEAD_FRACTION), "neck"),
     ]
     for s, side in (("l", "Left"), ("r", "Right")):
         joints += [
             _RigJoint(f"{side}Shoulder", "Spine2",
-                      ("neck", f"{s}_shoulder", CLAVICLE_FRACTION), "pelvis"),
+                      ("neck", f"{s}_shoulder", CLAVICLE_FRACTION), chest),
             _RigJoint(n[f"{s}_shoulder"], f"{side}Shoulder",
                       (f"{s}_shoulder", f"{s}_shoulder", 0.0), f"{s}_shoulder"),
             _RigJoint(n[f"{s}_elbow"], n[f"{s}_shoulder"],
@@ -99,14 +116,15 @@ def _humanoid(side_names: dict[str, str]) -> tuple[_RigJoint, ...]:
                       (f"{s}_wrist", f"{s}_wrist", 0.0), f"{s}_wrist"),
         ]
     for s, side in (("l", "Left"), ("r", "Right")):
+        toe = ((f"{s}_toe", f"{s}_toe", 0.0) if f"{s}_toe" in have
+               else (f"{s}_ankle", f"{s}_ankle@end", TOE_FRACTION))
         joints += [
             _RigJoint(n[f"{s}_hip"], n["pelvis"], (f"{s}_hip", f"{s}_hip", 0.0), f"{s}_hip"),
             _RigJoint(n[f"{s}_knee"], n[f"{s}_hip"],
                       (f"{s}_knee", f"{s}_knee", 0.0), f"{s}_knee"),
             _RigJoint(n[f"{s}_ankle"], n[f"{s}_knee"],
                       (f"{s}_ankle", f"{s}_ankle", 0.0), f"{s}_ankle"),
-            _RigJoint(f"{side}ToeBase", n[f"{s}_ankle"],
-                      (f"{s}_ankle", f"{s}_ankle@end", TOE_FRACTION), f"{s}_ankle"),
+            _RigJoint(f"{side}ToeBase", n[f"{s}_ankle"], toe, f"{s}_ankle"),
         ]
     return tuple(joints)
 
@@ -176,7 +194,8 @@ def retarget(motion: Motion, rig: str | Rig = "vidcap") -> Motion:
     Parameters
     ----------
     motion : Motion
-        A motion of :meth:`vidcap.body.BodyModel.skeleton` (our 15 joints, -Z forward).
+        A motion of a skeleton with our 15 joints, rooted at ``pelvis``, -Z forward
+        (:meth:`vidcap.body.BodyModel.skeleton`, or a marker set's).
     rig : str or Rig
         One of :data:`RIGS`.
 
@@ -191,24 +210,38 @@ def retarget(motion: Motion, rig: str | Rig = "vidcap") -> Motion:
     Raises
     ------
     UsageError
-        If ``motion`` lacks one of our 15 joints (a marker skeleton, say) for a rig
-        other than ``"vidcap"``.
+        If ``motion`` lacks one of our 15 joints (a lower-body marker set, say) for a
+        rig other than ``"vidcap"``.
     """
     rig = get_rig(rig) if isinstance(rig, str) else rig
     if rig.name == "vidcap":
         return motion
     sk = motion.skeleton
-    if tuple(sk.joint_names) != JOINT_NAMES:
-        raise UsageError(f"--rig {rig.name} needs the video path's 15-joint skeleton; this "
-                         f"motion has joints {', '.join(sk.joint_names)}")
-    joints = _humanoid(_humanik_names())
+    missing = [n for n in JOINT_NAMES if n not in sk.joint_names]
+    if missing or sk.joint_names[0] != "pelvis":
+        missing = missing or ["pelvis as its root"]
+        raise UsageError(f"--rig {rig.name} needs the 15 joints of our body model; this "
+                         f"skeleton lacks {', '.join(missing)}")
+    joints = _humanoid(_humanik_names(), sk)
     ours = {n: i for i, n in enumerate(sk.joint_names)}
+    world_r, world_p = motion.world_transforms()
     rest = sk.rest_positions()
     ends = {n: rest[ours[n]] + off for n, off in sk.end_sites.items()}
 
     def point(spec: str) -> np.ndarray:
         name, _, end = spec.partition("@")
+        if end and name not in ends:  # a leaf without an End Site: the bone continued
+            return rest[ours[name]] + (rest[ours[name]] - rest[sk.parents[ours[name]]]) / 4
         return ends[name] if end else rest[ours[name]]
+
+    def tip(joint: str, *after: str) -> np.ndarray:
+        """Where the chain ends beyond ``joint``: the first of ``after`` that exists
+        (a joint or an End Site, ``@end``)."""
+        for spec in after:
+            if spec.partition("@")[0] in ours and (not spec.endswith("@end")
+                                                    or spec[:-4] in ends):
+                return point(spec)
+        return point(f"{joint}@end")
 
     pos = {j.name: point(j.place[0]) + j.place[2] * (point(j.place[1]) - point(j.place[0]))
            for j in joints}
@@ -218,12 +251,12 @@ def retarget(motion: Motion, rig: str | Rig = "vidcap") -> Motion:
     offsets = np.array([pos[j.name] - (pos[j.parent] if j.parent else 0.0) for j in joints])
     end_sites = {"Head": rest[ours["head_top"]] - pos["Head"]}
     for side, s in (("Left", "l"), ("Right", "r")):
-        end_sites[f"{side}Hand"] = sk.end_sites[f"{s}_wrist"]
-        end_sites[f"{side}ToeBase"] = ends[f"{s}_ankle"] - pos[f"{side}ToeBase"]
+        end_sites[f"{side}Hand"] = tip(f"{s}_wrist", f"{s}_hand_end") - pos[f"{side}Hand"]
+        end_sites[f"{side}ToeBase"] = (tip(f"{s}_ankle", f"{s}_toe@end", f"{s}_ankle@end")
+                                       - pos[f"{side}ToeBase"])
 
     # world rotation of each rig joint = that of its anchor; local = parent^-1 @ world
-    world = Rotation.from_quat(_world_quats(motion)).as_matrix()  # (F, 15, 3, 3)
-    w_rig = world[:, [ours[j.anchor] for j in joints]]
+    w_rig = world_r[:, [ours[j.anchor] for j in joints]]
     local = w_rig.copy()
     for k, p in enumerate(parents):
         if p >= 0:
@@ -234,12 +267,6 @@ def retarget(motion: Motion, rig: str | Rig = "vidcap") -> Motion:
                         {rig.joint_name(n): v for n, v in end_sites.items()})
     out = Motion(skeleton, motion.root_positions, quats, motion.fps)
     return face_plus_z(out) if rig.forward == "+Z" else out
-
-
-def _world_quats(motion: Motion) -> np.ndarray:
-    world_r, _ = motion.world_transforms()
-    F, J = world_r.shape[:2]
-    return Rotation.from_matrix(world_r.reshape(-1, 3, 3)).as_quat().reshape(F, J, 4)
 
 
 #: Half a turn about +Y: our -Z-forward frame to a +Z-forward one (x, z negated).

@@ -28,7 +28,7 @@ CLAMP_NOTICE = 0.02
 
 
 def add_rig_argument(parser: argparse.ArgumentParser) -> None:
-    """``--rig``, shared by every command that writes the video path's motion."""
+    """``--rig``, shared by every command that writes a skeleton's motion."""
     parser.add_argument("--rig", default="vidcap", choices=RIG_CHOICES,
                         help="joint names and hierarchy of the BVH/glTF: ours (default), "
                         "Mixamo's (mixamorig:Hips...) or MotionBuilder HumanIK's (Hips...), "

@@ -7,6 +7,8 @@ import sys
 
 import numpy as np
 
+from vidcap.commands.convert import add_rig_argument
+
 NAME = "joints"
 HELP = "joint centres (sphere fits) and a BVH or glTF skeleton from C3D marker trajectories"
 ORDER = 60
@@ -30,6 +32,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("-o", "--output", metavar="OUT.bvh|OUT.glb",
                         help="skeleton motion to write: glTF 2.0 for .glb or .gltf (+ .bin), "
                         "else BVH")
+    add_rig_argument(parser)
     parser.add_argument("--centres", metavar="OUT.csv",
                         help="CSV of joint centres in the C3D lab frame (metres)")
     parser.add_argument("--report", metavar="OUT.json", help="JSON fit-quality report per joint")
@@ -123,7 +126,7 @@ def run(args) -> int:
     for notice in solution_notices(sol, trials[0].path):
         print(f"vidcap: warning: {notice}", file=sys.stderr)
     if args.output:
-        write_motion(args.output, solution_to_motion(sol))
+        write_motion(args.output, solution_to_motion(sol), rig=args.rig)
     if args.centres:
         write_text_atomic(args.centres, centres_csv(sol))
     if args.report:
