@@ -88,11 +88,10 @@ class VideoMotion:
         list of Path
             The files written (a ``.gltf`` brings its ``.bin``).
         """
-        from vidcap.fileio import check_output_file
         from vidcap.motionfile import output_files, write_motion
+        from vidcap.outputguard import check_outputs
 
-        for out in output_files(path):
-            check_output_file(out, [self.result.video])
+        check_outputs({"output": output_files(path)}, {"video": [self.result.video]})
         if Path(path).suffix.lower() == ".npz":
             self.result.save_npz(path)
             return [Path(path)]
@@ -179,12 +178,11 @@ class JointCentres:
         """Write the skeleton's motion (Y up, T-pose rest): glTF 2.0 for ``.glb``/``.gltf``,
         BVH otherwise; ``rig`` as :meth:`VideoMotion.save` (``mixamo``/``humanik`` need
         a marker set with the body model's 15 joints). Returns the files written."""
-        from vidcap.fileio import check_output_file
         from vidcap.mocap.skeleton import solution_to_motion
         from vidcap.motionfile import output_files, write_motion
+        from vidcap.outputguard import check_outputs
 
-        for out in output_files(path):
-            check_output_file(out, self.inputs)
+        check_outputs({"output": output_files(path)}, {"trial": list(self.inputs)})
         return write_motion(path, solution_to_motion(self.solution), rig=rig)
 
 

@@ -10,7 +10,8 @@ results to one file.
 
 A command module declares its file arguments by name (``OUTPUT_FILES``,
 ``INPUT_FILES``, ``OUTPUT_DIRS``; list-valued arguments such as ``--also`` are
-flattened) and, for the implicit ones, an ``implicit_inputs(args)`` function.
+flattened) and, for the implicit ones, ``implicit_inputs(args)`` and
+``implicit_outputs(args)`` functions.
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ def _flat(value) -> list:
 
 
 def _flag(name: str) -> str:
+    if name == "gltf_bin":
+        return "the .bin beside the -o .gltf"
     return "-o" if name in ("output", "outdir") else "--" + name.replace("_", "-")
 
 
@@ -103,8 +106,11 @@ def command_files(module, args) -> tuple[dict, dict, dict]:
     implicit = getattr(module, "implicit_inputs", None)
     if implicit is not None:
         inputs.update(implicit(args))
-    return (get(getattr(module, "OUTPUT_FILES", ())), inputs,
-            get(getattr(module, "OUTPUT_DIRS", ())))
+    outputs = get(getattr(module, "OUTPUT_FILES", ()))
+    implicit_out = getattr(module, "implicit_outputs", None)
+    if implicit_out is not None:  # files an output brings along (a .gltf's .bin)
+        outputs.update(implicit_out(args))
+    return outputs, inputs, get(getattr(module, "OUTPUT_DIRS", ()))
 
 
 def guard_command(module, args) -> None:

@@ -12,6 +12,13 @@ OUTPUT_FILES = ("output", "save")
 INPUT_FILES = ("video", "annotations", "background")
 
 
+def implicit_outputs(args) -> dict:
+    """The ``.bin`` that a ``-o OUT.gltf`` writes beside it."""
+    from vidcap.motionfile import output_files
+
+    return {"gltf_bin": output_files(args.output)[1:] if args.output else None}
+
+
 def implicit_inputs(args) -> dict:
     """The annotations read by default (``VIDEO_STEM.vidcap.json`` beside the video)."""
     from vidcap.annotations import default_path
@@ -80,11 +87,6 @@ def run(args) -> int:
 
     check_convert_options(height=args.height, jobs=args.jobs, view=args.view,
                           smooth=args.smooth, keyframes=args.keyframes)
-    from vidcap.fileio import check_output_file
-    from vidcap.motionfile import output_files
-
-    for extra in output_files(args.output)[1:]:  # a .gltf's .bin
-        check_output_file(extra, [args.video, args.annotations, args.background])
     log = (lambda m: None) if args.quiet else (lambda m: print(f"vidcap: {m}", file=sys.stderr))
     res = convert(
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,

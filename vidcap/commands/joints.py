@@ -7,7 +7,8 @@ import sys
 
 import numpy as np
 
-from vidcap.commands.convert import add_rig_argument
+# implicit_outputs is read from here by the output guard (a .gltf's .bin)
+from vidcap.commands.convert import add_rig_argument, implicit_outputs  # noqa: F401
 
 NAME = "joints"
 HELP = "joint centres (sphere fits) and a BVH or glTF skeleton from C3D marker trajectories"
@@ -105,13 +106,8 @@ def run(args) -> int:
         raise UsageError(f"--noise-mm must be positive, got {args.noise_mm}")
 
     from vidcap.mocap.skeleton import solution_to_motion, solve_joints
-    from vidcap.motionfile import output_files, write_motion
+    from vidcap.motionfile import write_motion
 
-    if args.output:
-        from vidcap.fileio import check_output_file
-
-        for extra in output_files(args.output)[1:]:  # a .gltf's .bin
-            check_output_file(extra, [args.trial, *args.also])
     steps = progress(total=3 + len(args.also), desc="joints", unit="step")
     trials = []
     for p in [args.trial, *args.also]:
