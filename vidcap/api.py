@@ -187,7 +187,8 @@ class JointCentres:
 
 
 def joints(c3d: str | os.PathLike, *, markerset: str | os.PathLike | None = None,
-           also: Sequence[str | os.PathLike] = ()) -> JointCentres:
+           also: Sequence[str | os.PathLike] = (),
+           static: str | os.PathLike | None = None) -> JointCentres:
     """Joint centres by sphere fits from C3D marker trajectories (``vidcap joints``).
 
     Parameters
@@ -198,6 +199,9 @@ def joints(c3d: str | os.PathLike, *, markerset: str | os.PathLike | None = None
         A built-in marker set's name or a TOML file; default: detected.
     also : sequence of str or path-like
         More trials of the same subject and marker set, pooled for the fits.
+    static : str or path-like, optional
+        A static trial of the subject (``--static``): calibrates the joints placed by
+        definition once, as constant points of their parent segments.
 
     Returns
     -------
@@ -218,10 +222,10 @@ def joints(c3d: str | os.PathLike, *, markerset: str | os.PathLike | None = None
 
     trials = [read_c3d(p) for p in (c3d, *also)]
     ms = load_markerset(markerset) if markerset is not None else None
-    sol = solve_joints(trials, ms)
+    sol = solve_joints(trials, ms, static=read_c3d(static) if static is not None else None)
     return JointCentres(np.asarray(sol.positions), tuple(sol.joint_names), float(sol.fps),
                         solution_notices(sol, trials[0].path), sol,
-                        tuple(str(p) for p in (c3d, *also)))
+                        tuple(str(p) for p in (c3d, *also, *([static] if static else []))))
 
 
 def solution_notices(sol, trial_path) -> list[str]:
