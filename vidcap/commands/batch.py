@@ -187,11 +187,13 @@ def run(args) -> int:
     rows, tasks = plan(videos, outputs, args.force, options)
     if tasks:
         bar = progress(total=len(tasks), desc="batch", unit="video")
-        with contextlib.closing(_executor(args, tasks, outdir)) as finished:
-            for row in finished:
-                rows.append(row)
-                bar.update(1)
-        bar.close()
+        try:
+            with contextlib.closing(_executor(args, tasks, outdir)) as finished:
+                for row in finished:  # fed by completions, pool or cluster alike
+                    rows.append(row)
+                    bar.update(1)
+        finally:
+            bar.close()
         for task in tasks:  # a process killed mid-write leaves its temporary file
             remove_atomic_leftovers(task.output)
     order = {str(v): i for i, v in enumerate(videos)}
