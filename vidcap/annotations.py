@@ -51,6 +51,9 @@ from vidcap.body import JOINT_INDEX, JOINT_NAMES, ORIENTATIONS, SEGMENT_INDEX, S
 from vidcap.errors import AnnotationError
 from vidcap.fileio import write_text_atomic
 
+#: Farther than this from the picture's corner no joint of a video can be, pixels.
+MAX_PIXELS = 1e5
+
 FORMAT_VERSION = 1
 _DEPTH_VALUES = {"toward": 1, "away": -1, "auto": 0}
 _KEYS = {
@@ -151,8 +154,8 @@ class Annotations:
         if joint not in JOINT_INDEX:
             raise ValueError(f"unknown joint {joint!r}; expected one of {JOINT_NAMES}")
         u, v = float(u), float(v)
-        if not (np.isfinite(u) and np.isfinite(v)):
-            raise ValueError("joint position must be finite pixels")
+        if not (abs(u) <= MAX_PIXELS and abs(v) <= MAX_PIXELS):  # also NaN
+            raise ValueError(f"joint position must be pixels within +-{MAX_PIXELS:g}")
         self._put(Event(self._frame(frame), "joint", joint, (u, v)))
 
     def add_sides(self, frame: int, pair: str, swapped: bool) -> None:
@@ -354,8 +357,9 @@ class Annotations:
                          f" (expected one of {', '.join(JOINT_NAMES)})")
                 uv = (ev["u"], ev["v"])
                 if not all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                           and np.isfinite(x) for x in uv):
-                    fail(f"{where}: 'u' and 'v' must be finite numbers of pixels, got {uv!r}")
+                           and abs(x) <= MAX_PIXELS for x in uv):
+                    fail(f"{where}: 'u' and 'v' must be finite numbers of pixels within"
+                         f" +-{MAX_PIXELS:g}, got {uv!r}")
                 e = Event(frame, typ, ev["joint"], (float(uv[0]), float(uv[1])))
             key = (e.frame, e.type, e.key)
             if key in seen:

@@ -41,6 +41,16 @@ def _read(path) -> list[str]:
         raise MotionFileError(f"cannot read file: {exc.strerror or exc}", path) from None
 
 
+def _numbers(tokens, n: int, what: str) -> np.ndarray:
+    """``n`` finite numbers of sane size from ``tokens``, else ValueError naming ``what``."""
+    values = np.array([float(t) for t in tokens])
+    if len(values) != n:
+        raise ValueError(f"{what}: expected {n} numbers, got {len(values)}")
+    if not (np.isfinite(values).all() and (np.abs(values) < 1e6).all()):
+        raise ValueError(f"{what}: number out of range in {' '.join(tokens)!r}")
+    return values
+
+
 def _parse_asf(path):
     lines = _read(path)
     units = {"length": 1.0, "angle": "deg"}
@@ -70,7 +80,7 @@ def _parse_asf(path):
                 elif key == "axis":
                     root["axis"] = toks[1].upper()
                 elif key in ("position", "orientation"):
-                    root[key] = np.array([float(t) for t in toks[1:4]])
+                    root[key] = _numbers(toks[1:4], 3, key)
             elif section == "bonedata":
                 key = toks[0]
                 if key == "begin":
@@ -84,11 +94,11 @@ def _parse_asf(path):
                     if key == "name":
                         current["name"] = toks[1]
                     elif key == "direction":
-                        current["direction"] = np.array([float(t) for t in toks[1:4]])
+                        current["direction"] = _numbers(toks[1:4], 3, key)
                     elif key == "length":
-                        current["length"] = float(toks[1])
+                        current["length"] = float(_numbers(toks[1:2], 1, key)[0])
                     elif key == "axis":
-                        current["axis"] = np.array([float(t) for t in toks[1:4]])
+                        current["axis"] = _numbers(toks[1:4], 3, key)
                         current["axis_order"] = toks[4].upper() if len(toks) > 4 else "XYZ"
                     elif key == "dof":
                         current["dof"] = [t.lower() for t in toks[1:]]

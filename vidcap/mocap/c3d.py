@@ -194,6 +194,7 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
         message), or holds no 3D points.
     """
     from vidcap.mocap.c3dcheck import check_c3d
+    from vidcap.mocap.c3dchild import read_isolated
 
     path = Path(path)
     if not path.is_file():
@@ -202,16 +203,10 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
         check_c3d(path)  # ezc3d trusts the declared sizes: a bad one crashes the process
     except C3DError as exc:
         raise C3DError(f"not a readable C3D file ({exc.problem})", path) from None
-    try:
-        import ezc3d
-
-        c = ezc3d.c3d(str(path), extract_forceplat_data=False)
-    except Exception as exc:  # ezc3d raises plain RuntimeError/ValueError on bad files
-        reason = " ".join(str(exc).split()) or type(exc).__name__
-        raise C3DError(f"not a readable C3D file ({reason})", path) from None
+    c = read_isolated(path)  # a crash in the C++ parser must not end this process
     params = c["parameters"]
     raw = list(_param(params, "POINT", "LABELS", []) or [])
-    pts = np.asarray(c["data"]["points"], dtype=float)  # (4, M, F)
+    pts = c["points"]  # (4, M, F)
     if pts.ndim != 3 or pts.shape[1] == 0 or pts.shape[2] == 0:
         raise C3DError("the file holds no 3D marker points", path)
     M = pts.shape[1]
@@ -223,16 +218,15 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
     if rate is not None and len(rate):
         fps = float(rate[0])
     else:
-        fps = float(c["header"]["points"]["frame_rate"])
+        fps = float(c["header"]["frame_rate"])
     if not (np.isfinite(fps) and fps > 0):
         raise C3DError(f"invalid point frame rate {fps!r}", path)
     scale = _unit_scale(_param(params, "POINT", "UNITS", None), path)
 
     xyz = np.ascontiguousarray(pts[:3].transpose(2, 1, 0)) * scale  # (F, M, 3)
     missing = np.all(pts[:3] == 0.0, axis=0).T | ~np.isfinite(xyz).all(axis=2)
-    meta = c["data"].get("meta_points", {})
-    if "residuals" in meta:
-        res = np.asarray(meta["residuals"], dtype=float)
+    res = c["residuals"]
+    if res is not None:
         if res.shape == (1, M, xyz.shape[0]):
             missing |= (res[0] < 0).T
     xyz[missing] = np.nan
@@ -240,7 +234,7 @@ def read_c3d(path: str | os.PathLike) -> MarkerData:
     ysc = _param(params, "POINT", "Y_SCREEN", None)
     up = (0.0, 1.0, 0.0) if ysc is not None and len(ysc) and str(ysc[0]).strip().upper() == "+Y" \
         else (0.0, 0.0, 1.0)
-    first = int(c["header"]["points"]["first_frame"]) + 1  # ezc3d counts from 0
+    first = int(c["header"]["first_frame"]) + 1  # ezc3d counts from 0
     return MarkerData(
         labels=labels,
         positions=xyz,
