@@ -194,8 +194,9 @@ def run(args) -> int:
                     bar.update(1)
         finally:
             bar.close()
-        for task in tasks:  # a process killed mid-write leaves its temporary file
-            remove_atomic_leftovers(task.output)
+        for task in tasks:  # a process killed mid-write leaves its temporary files
+            for path in output_files(task.output):
+                remove_atomic_leftovers(path)
     order = {str(v): i for i, v in enumerate(videos)}
     rows.sort(key=lambda r: order.get(r["file"], 0))
     write_summary(rows, outdir)
