@@ -1,6 +1,7 @@
 """Silhouettes on real footage and on in-place renders over real backgrounds.
 
-    python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe] [--only NAME]
+    VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
+        [--only NAME] [--quick]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -153,13 +154,16 @@ def run_vidcap(video, method):
     return np.asarray(sil.masks), bg
 
 
-def score_clip(name, use, video, truth, mp):
+def score_clip(name, use, video, truth, mp, quick=False):
     row = {"clip": name, "use": use, "frames": len(truth)}
     t = time.perf_counter()
     masks, bg = run_vidcap(video, "felzenszwalb")
     row["secs"] = time.perf_counter() - t
     row["vidcap"] = stats(iou(masks, truth))
     row["never"] = (100 * bg.never_seen_fraction, 100 * float(np.all(truth, axis=0).mean()))
+    if quick:
+        row.update({"median": None, "MOG2": None, "GSOC": None, "MediaPipe": None})
+        return row
     row["median"] = stats(iou(run_vidcap(video, "median")[0], truth))
     frames = read_frames(video)
     row["MOG2"] = stats(iou(opencv_subtractor(
@@ -175,6 +179,7 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=90, help="frames per render")
     ap.add_argument("--no-mediapipe", action="store_true")
     ap.add_argument("--only", help="only clips whose name contains this")
+    ap.add_argument("--quick", action="store_true", help="vidcap only (no baselines)")
     args = ap.parse_args(argv)
     data = os.environ.get("VIDCAP_DATA")
     tmp = None
@@ -200,7 +205,8 @@ def main(argv=None) -> int:
     for name, use, video, truth in clips:
         if args.only and args.only not in name:
             continue
-        rows.append(score_clip(name, use, video, truth, mediapipe_masks(video, mp_cache)))
+        rows.append(score_clip(name, use, video, truth, mediapipe_masks(video, mp_cache),
+                                args.quick))
     cols = ["vidcap", "median", "MOG2", "GSOC", "MediaPipe"]
     print("| clip | use | " + " | ".join(f"{c} med / p10" for c in cols)
           + " | never seen (truth) | vidcap s |")

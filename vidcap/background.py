@@ -100,6 +100,16 @@ class BackgroundModel:
         a static scene with nobody in it.
     sample_indices : numpy.ndarray, shape (K,), int
         Frame indices sampled.
+    self_lit : numpy.ndarray, shape (H, W), bool, optional
+        Pixels that keep their level while the exposure drifts (a lamp, a screen:
+        :func:`vidcap.stillparts.self_lit`); their plate value is as recorded and
+        is compared without the frame's gain.
+    still_person : numpy.ndarray, shape (H, W), bool, optional
+        Parts of the person that never moved, found by appearance
+        (:mod:`vidcap.stillparts`): person in a frame where they still look as
+        they did (``person_plate``); also in ``never_seen``, their plate inpainted.
+    person_plate : numpy.ndarray, shape (H, W, 3), uint8, optional
+        The plate before the still parts were inpainted: their own colour.
     """
 
     plate: np.ndarray
@@ -112,6 +122,9 @@ class BackgroundModel:
     n_samples: int = 0
     moving_fraction: float = float("nan")
     sample_indices: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    self_lit: np.ndarray | None = None
+    still_person: np.ndarray | None = None
+    person_plate: np.ndarray | None = None
 
     @property
     def never_seen_fraction(self) -> float:
@@ -208,6 +221,12 @@ def sample_frames(
             got.append(frame)
             got_idx.append(wanted[j])
         start = got_idx[-1] + 1 if got_idx else 0
+    if got and any(f.shape != got[0].shape for f in got):
+        j = next(j for j, f in enumerate(got) if f.shape != got[0].shape)
+        raise BackgroundError(
+            f"the frame size changes mid-stream ({got[0].shape[1]}x{got[0].shape[0]}, then "
+            f"{got[j].shape[1]}x{got[j].shape[0]} at frame {got_idx[j]}); re-encode the "
+            "video at one size", source)
     if 0 < len(got) < len(idx):
         # The container over-stated its frame count: resample what exists.
         return sample_frames(source_frames_cache(source, start), n_samples=n_samples, rng=rng)
@@ -285,10 +304,9 @@ def estimate_background(
         if len(source) == 0:
             raise BackgroundError("the video has no frames")
     frames, idx = sample_frames(source, n_samples=n_samples, rng=rng)
-    if len(frames) < 2:
-        raise BackgroundError(
-            "only one frame: a background cannot be estimated from a single frame; "
-            "give a photo of the empty scene (--background plate.png)", name)
+    from vidcap.inputchecks import check_samples
+
+    check_samples(frames, name)
 
     gains = _frame_gains(frames)
     if method == "median":
@@ -300,7 +318,10 @@ def estimate_background(
     weights_small, holes = _region_vote(frames, gains, work_size=work_size,
                                  segment_scale=segment_scale, min_region=min_region,
                                  progress=progress)
-    return _finish_regions(frames, gains, weights_small, idx, name, holes)
+    model = _finish_regions(frames, gains, weights_small, idx, name, holes)
+    from vidcap.platepass import refine_plate
+
+    return refine_plate(model, frames, gains, weights_small.shape[1:])
 
 
 def _frame_gains(frames: np.ndarray) -> np.ndarray:
@@ -614,8 +635,9 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
     moving_fraction = float(moving.mean())
     if moving_fraction < 2e-4:
         raise BackgroundError(
-            f"nothing moves in the {k} sampled frames: no person to separate from the "
-            "background (a static scene?)", name)
+            f"nothing moves in the {k} sampled frames: nobody in view, or a person who "
+            "never moves (then give a photo of the empty scene: --background plate.png)",
+            name)
     if never_seen is None:
         never_seen = np.zeros(full_hw, bool)
     return BackgroundModel(

@@ -20,7 +20,7 @@ All image operations are OpenCV on uint8, so a 640x480 frame takes ~1-2 ms.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -85,9 +85,13 @@ class Silhouettes:
         A person-sized blob was found.
     n_other_blobs : numpy.ndarray, shape (F,), int
         Other blobs of at least ``other_fraction`` of the person's area and at least
-        ``min_area`` pixels (more people, a moving object): not in ``masks``.
+        ``min_area`` pixels that move (more people, a moving object): not in
+        ``masks``. Blobs that stay put are scene (:func:`vidcap.staticblobs.static_rows`)
+        and not counted.
     others : numpy.ndarray, shape (N, 6), int
-        One row per such blob: ``frame, x0, y0, x1, y1, area``.
+        One row per other blob, static ones included: ``frame, x0, y0, x1, y1, area``.
+    others_static : numpy.ndarray, shape (N,), bool
+        Rows of ``others`` that stay put (scene, not a person).
     foreground_fraction : numpy.ndarray, shape (F,), float
         Share of the frame above threshold before clean-up; near 1 means the
         camera moved or the light changed abruptly (the mask is unreliable).
@@ -107,6 +111,7 @@ class Silhouettes:
     foreground_fraction: np.ndarray
     threshold: float
     gains: np.ndarray
+    others_static: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     def __len__(self) -> int:
         return len(self.masks)
@@ -140,6 +145,24 @@ class _Params:
         self.tmap = np.clip(np.ceil(tmap), 0, 255).astype(np.uint8)
         self.plate = plate
         self.plate_full = bg.plate
+        still = getattr(bg, "still_person", None)
+        self.still = None
+        if still is not None and still.any():
+            if s > 1:
+                still = cv2.resize(still.view(np.uint8), (w, h),
+                                   interpolation=cv2.INTER_NEAREST)
+            self.still = np.nonzero(still)
+            colour = bg.person_plate if bg.person_plate is not None else bg.plate
+            if s > 1:
+                colour = cv2.resize(colour, (w, h), interpolation=cv2.INTER_AREA)
+            self.still_colour = colour[self.still].astype(np.float32)
+        # Self-lit pixels (see vidcap.stillparts.self_lit): compared unscaled.
+        lit = getattr(bg, "self_lit", None)
+        self.lit = None
+        if lit is not None and lit.any():
+            if s > 1:
+                lit = cv2.resize(lit.view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST)
+            self.lit = np.nonzero(lit)
         self.tmap_full = np.clip(np.ceil(np.maximum(
             self.threshold, local_factor * bg.noise_map)), 0, 255).astype(np.uint8)
         # Luma threshold for the edge band: the L1 threshold over three channels
@@ -220,12 +243,18 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
     scaled = np.abs(g - 1).max() > 0.01
     if scaled:
         ref = cv2.multiply(p.plate, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+        if p.lit is not None:  # lamps and screens keep their level
+            ref[p.lit] = p.plate[p.lit]
     else:
         ref = p.plate
     diff = cv2.absdiff(frame, ref)
     b, g_, r = cv2.split(diff)
     l1 = cv2.add(cv2.add(b, g_), r)  # saturating uint8 sum over channels
     fg = cv2.compare(l1, p.tmap, cv2.CMP_GT)
+    if p.still is not None:  # parts of the person that never move, still there
+        ys, xs = p.still
+        near = np.abs(frame[ys, xs] - p.still_colour * g).sum(axis=-1) <= p.tmap[ys, xs]
+        fg[ys[near], xs[near]] = 255
     n_fg = cv2.countNonZero(fg)
     frac = n_fg / fg.size
     fg = cv2.medianBlur(fg, 3)
@@ -263,6 +292,7 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
         if areas[best] >= p.min_area:
             c = _to_full(contours[best], p)
             cv2.drawContours(mask, [c], 0, 1, cv2.FILLED)
+            _open_large_holes(mask, contours[best], fg, p)
             if p.edge_band > 0:
                 _edge_by_contrast(mask, full_frame, g, p)
             elif p.work_size is not None:
@@ -279,6 +309,35 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
             if rows:
                 others = np.array(rows, np.int64)
     return FrameSilhouette(mask.view(bool), bbox, area, others, frac, p.threshold), g
+
+
+#: A hole of the person's blob larger than this share of the blob stays open: the
+#: gap between legs apart, closed below by a plate error along the floor, is not
+#: the person (small holes are: clothes the colour of the wall behind).
+MAX_HOLE_SHARE = 0.12
+
+
+def _open_large_holes(mask: np.ndarray, contour: np.ndarray, fg: np.ndarray,
+                      p: _Params) -> None:
+    """Clear, in ``mask`` (full resolution), the large holes of the blob ``contour``
+    (work resolution, in ``fg``)."""
+    x, y, w, h = cv2.boundingRect(contour)
+    blob = np.zeros((h, w), np.uint8)
+    cv2.drawContours(blob, [contour - np.array([x, y], np.int32)], 0, 1, cv2.FILLED)
+    holes = blob & (fg[y:y + h, x:x + w] == 0)
+    n, lab, st, _ = cv2.connectedComponentsWithStats(holes, connectivity=4)
+    big = np.flatnonzero(st[1:, cv2.CC_STAT_AREA] > MAX_HOLE_SHARE * blob.sum()) + 1
+    if not len(big):
+        return
+    hole = np.isin(lab, big).astype(np.uint8)
+    if p.work_size is None:
+        mask[y:y + h, x:x + w][hole > 0] = 0
+        return
+    X0, Y0 = int(round(x * p.fx)), int(round(y * p.fy))
+    X1 = min(mask.shape[1], int(round((x + w) * p.fx)))
+    Y1 = min(mask.shape[0], int(round((y + h) * p.fy)))
+    full = cv2.resize(hole, (X1 - X0, Y1 - Y0), interpolation=cv2.INTER_NEAREST)
+    mask[Y0:Y1, X0:X1][full > 0] = 0
 
 
 def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params) -> None:
@@ -464,6 +523,11 @@ def iter_silhouettes(
                                  edge_band, edge_fraction)
         results, gains = [], []
         for frame in chunk:
+            if frame.shape[:2] != background.plate.shape[:2]:
+                raise VidcapError(
+                    f"the frame size changes mid-stream (from {w}x{h} to "
+                    f"{frame.shape[1]}x{frame.shape[0]}); re-encode the video at one size",
+                    None if isinstance(source, np.ndarray) else source)
             r, g = silhouette_frame(frame, params, prev_box)
             if r.bbox[0] >= 0:
                 prev_box = r.bbox  # the person is followed, not the largest blob
@@ -552,64 +616,84 @@ def extract_silhouettes(
     VidcapError
         The plate's size differs from the video's; the video has no frames.
     """
-    from vidcap.fileio import progress as bar
-
-    total = len(source) if isinstance(source, np.ndarray) else None
-    if total is None:
-        try:
-            from vidcap.video import probe
-
-            total = probe(source).n_frames
-        except VidcapError:
-            total = None
-    masks = None  # MaskStack, made with the first frame
-    bbox, areas, others, fracs, gains_all = [], [], [], [], []
-    n_other = []
-    start = 0
-    pbar = bar(total=total, desc="silhouettes", unit="frame", enabled=progress)
-    try:
-        for chunk, res, gains in iter_silhouettes(
-                source, background, threshold=threshold, local_factor=local_factor,
-                shadows=shadows, min_area=min_area, other_fraction=other_fraction,
-                close_size=close_size, chunk_size=chunk_size, work_scale=work_scale,
-                edge_band=edge_band, edge_fraction=edge_fraction):
-            for j, r in enumerate(res):
-                thr = r.threshold
-                if masks is None:
-                    masks = MaskStack(r.mask.shape)
-                x0, y0, x1, y1 = (int(v) for v in r.bbox)
-                # only the person's box is kept, bit-packed (the frame is not)
-                masks.append(r.mask, None if x0 < 0 else (y0, y1, x0, x1))
-                bbox.append(r.bbox)
-                areas.append(r.area)
-                fracs.append(r.foreground_fraction)
-                n_other.append(len(r.others))
-                if len(r.others):
-                    others.append(np.column_stack(
-                        [np.full(len(r.others), start + j), r.others]))
-            gains_all.append(gains)
-            if on_masks is not None:
-                on_masks(start, masks[start:])
-            start += len(chunk)
-            pbar.update(len(chunk))
-    finally:
-        pbar.close()
-    bbox = np.array(bbox, np.int64).reshape(-1, 4)
-    found = bbox[:, 0] >= 0
+    options = dict(threshold=threshold, local_factor=local_factor, shadows=shadows,
+                   min_area=min_area, other_fraction=other_fraction, close_size=close_size,
+                   chunk_size=chunk_size, work_scale=work_scale, edge_band=edge_band,
+                   edge_fraction=edge_fraction)
+    acc = _Collected()
+    acc.run(source, background, options, progress, on_masks)
     name = None if isinstance(source, np.ndarray) else source
-    if require_person and not found.any():
-        raise NoPersonError(
-            "no frame differs from the background: nobody to extract (a static scene, "
-            "or a background plate that shows the person?)", name)
-    return Silhouettes(
-        masks=masks,
-        bbox=bbox,
-        heights=np.where(found, bbox[:, 3] - bbox[:, 1], 0),
-        areas=np.array(areas, np.int64),
-        found=found,
-        n_other_blobs=np.array(n_other, np.int64),
-        others=np.concatenate(others) if others else np.zeros((0, 6), np.int64),
-        foreground_fraction=np.array(fracs, np.float32),
-        threshold=float(thr),
-        gains=np.concatenate(gains_all),
-    )
+    return acc.result(name, require_person)
+
+
+class _Collected:
+    """The per-frame results of :func:`iter_silhouettes`, gathered into arrays."""
+
+    def __init__(self):
+        self.masks = None  # MaskStack, made with the first frame
+        self.bbox, self.areas, self.others, self.fracs, self.gains = [], [], [], [], []
+        self.threshold = float("nan")
+
+    def run(self, source, background, options, progress, on_masks) -> None:
+        from vidcap.fileio import progress as bar
+
+        total = len(source) if isinstance(source, np.ndarray) else None
+        if total is None:
+            try:
+                from vidcap.video import probe
+
+                total = probe(source).n_frames
+            except VidcapError:
+                total = None
+        start = 0
+        pbar = bar(total=total, desc="silhouettes", unit="frame", enabled=progress)
+        try:
+            for chunk, res, gains in iter_silhouettes(source, background, **options):
+                for j, r in enumerate(res):
+                    self.add(start + j, r)
+                self.gains.append(gains)
+                if on_masks is not None:
+                    on_masks(start, self.masks[start:])
+                start += len(chunk)
+                pbar.update(len(chunk))
+        finally:
+            pbar.close()
+
+    def add(self, frame: int, r: FrameSilhouette) -> None:
+        self.threshold = r.threshold
+        if self.masks is None:
+            self.masks = MaskStack(r.mask.shape)
+        x0, y0, x1, y1 = (int(v) for v in r.bbox)
+        # only the person's box is kept, bit-packed (the frame is not)
+        self.masks.append(r.mask, None if x0 < 0 else (y0, y1, x0, x1))
+        self.bbox.append(r.bbox)
+        self.areas.append(r.area)
+        self.fracs.append(r.foreground_fraction)
+        if len(r.others):
+            self.others.append(np.column_stack([np.full(len(r.others), frame), r.others]))
+
+    def result(self, name, require_person: bool) -> Silhouettes:
+        bbox = np.array(self.bbox, np.int64).reshape(-1, 4)
+        found = bbox[:, 0] >= 0
+        if require_person and not found.any():
+            raise NoPersonError(
+                "no frame differs from the background: nobody to extract (a static scene, "
+                "or a background plate that shows the person?)", name)
+        from vidcap.staticblobs import static_rows
+
+        others = np.concatenate(self.others) if self.others else np.zeros((0, 6), np.int64)
+        static = static_rows(others, len(bbox))
+        n_other = np.bincount(others[~static, 0], minlength=len(bbox)).astype(np.int64)
+        return Silhouettes(
+            masks=self.masks,
+            bbox=bbox,
+            heights=np.where(found, bbox[:, 3] - bbox[:, 1], 0),
+            areas=np.array(self.areas, np.int64),
+            found=found,
+            n_other_blobs=n_other,
+            others=others,
+            others_static=static,
+            foreground_fraction=np.array(self.fracs, np.float32),
+            threshold=float(self.threshold),
+            gains=np.concatenate(self.gains),
+        )

@@ -72,6 +72,11 @@ def run(args) -> int:
             if not cv2.imwrite(str(tmp), bg.plate):
                 raise UsageError("cannot write an image with this suffix", args.plate_out)
     n = len(sil)
+    from vidcap.inputchecks import plate_notice
+
+    notice = plate_notice(bg)
+    if notice:
+        print(notice, file=sys.stderr)
     multi = int((sil.n_other_blobs > 0).sum())
     print(f"{args.output}: {n} frames, person found in {int(sil.found.sum())}, "
           f"threshold {sil.threshold:.1f}, background {bg.method}"
