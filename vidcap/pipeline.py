@@ -61,7 +61,9 @@ _CHUNKS_PER_JOB = 2
 #: Bumped when the silhouette stage's results change for the same video and options
 #: (2: no shadow test on grey video; 3: the person followed, not the largest blob), so
 #: caches written by older versions are redone.
-_SILHOUETTE_VERSION = 3
+_SILHOUETTE_VERSION = 4
+#: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts).
+_PLATE_VERSION = 2
 
 
 def run(
@@ -140,6 +142,10 @@ def run(
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
+        from vidcap.inputchecks import plate_notice
+
+        if plate_notice(plate):
+            log(plate_notice(plate))
         with _timed(timings, "silhouettes"):
             # each chunk of frames is fitted as soon as its silhouettes are there
             streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
@@ -227,23 +233,47 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, *, jobs: in
 def _plate_key(video_id: dict, background) -> str:
     if background is not None:
         return stage_key("plate-file", video_identity(background))
-    return stage_key("plate", video_id)
+    return stage_key("plate", _PLATE_VERSION, video_id)
 
 
 def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, log):
     """The background plate (:class:`vidcap.background.BackgroundModel`): ``plate``
     when the user gave one, else the cached one, else estimated from the video."""
-    from vidcap.background import BackgroundModel, estimate_background
+    from vidcap.background import estimate_background
 
     if plate is not None:
         return plate
-    hit = cache.load("plate", key)
+    hit = cache.load("plate", key, required=_PLATE_FIELDS)
     if hit is not None:
-        return BackgroundModel.from_plate(hit["plate"])
+        return _plate_from_cache(hit)
     log("estimating the background plate")
     plate = estimate_background(video, rng=np.random.default_rng(0), progress=progress)
-    cache.save("plate", key, plate=plate.plate)
+    h, w = plate.plate.shape[:2]
+    cache.save("plate", key, plate=plate.plate, never_seen=plate.never_seen,
+               noise_map=plate.noise_map, noise_sigma=plate.noise_sigma,
+               threshold=np.float64(plate.threshold),
+               self_lit=np.zeros((h, w), bool) if plate.self_lit is None else plate.self_lit,
+               still_person=(np.zeros((h, w), bool) if plate.still_person is None
+                             else plate.still_person))
     return plate
+
+
+#: What a cached plate holds besides the image: the silhouette stage needs them all.
+_PLATE_FIELDS = ("plate", "never_seen", "noise_map", "noise_sigma", "threshold", "self_lit",
+                 "still_person")
+
+
+def _plate_from_cache(hit: dict):
+    from vidcap.background import BackgroundModel
+
+    never = hit["never_seen"].astype(bool)
+    return BackgroundModel(
+        plate=hit["plate"], confidence=(~never).astype(np.float32), never_seen=never,
+        noise_sigma=hit["noise_sigma"], noise_map=hit["noise_map"],
+        threshold=float(hit["threshold"]), method="felzenszwalb",
+        self_lit=hit["self_lit"].astype(bool) if hit["self_lit"].any() else None,
+        still_person=(hit["still_person"].astype(bool) if hit["still_person"].any()
+                      else None))
 
 
 # --------------------------------------------------------------------------- 2. silhouettes
