@@ -32,7 +32,13 @@ perspective) and lifted with the true signs and orientation, at the clip's singl
 scale (``estimate_scale``) and at per-frame scales (``estimate_scales``, what the
 pipeline uses).
 
+With --solve, instead, the tables of issue 33 (benchmarks/lift_solve_tables.py): the
+per-segment lift against the clip solve on noisy true 2D and end to end (the samples
+and held-out renders), MPJPE / PA-MPJPE in mm, foot sliding, jitter, the BVH's bone
+lengths and the solve's speed.
+
 Run:  python benchmarks/lift_accuracy.py [--frames 82] [--synth] [--end-to-end] [--approach]
+      python benchmarks/lift_accuracy.py --solve [--frames 82] [--no-renders]
 """
 
 from __future__ import annotations
@@ -358,8 +364,14 @@ def main(argv=None):
                     help="also run the whole pipeline on sample_videos/ against their truth")
     ap.add_argument("--approach", action="store_true",
                     help="also a subject walking toward / away from the camera (per-frame scale)")
+    ap.add_argument("--solve", action="store_true",
+                    help="the issue-33 tables: per-segment lift vs the clip solve")
+    ap.add_argument("--no-renders", action="store_true",
+                    help="with --solve: skip the held-out renders (each needs a 2D fit)")
     args = ap.parse_args(argv)
     body = BodyModel()
+    if args.solve:
+        return solve_tables(args.frames, body, renders=not args.no_renders)
     motions = {
         "131_01.bvh": dict(name_or_path=DATA / "131_01.bvh", frame_range=(200, None)),
         "07_07.amc": dict(name_or_path=DATA / "07.asf", amc=DATA / "07_07.amc"),
@@ -428,6 +440,91 @@ def main(argv=None):
         for r in rows:
             print(f"{r[0]} | {r[1]} | {r[2]:.1f} | {r[3]:.1f} | {r[4]:.1f} | {r[5]} | "
                   f"{r[6]:.1f} | {r[7]:.0f} | {r[8]:.1f}")
+
+
+#: Held-out renders for the end-to-end solve table: (name, motion, first frame, yaw);
+#: none of them chose a weight of the solve (those were chosen on the built-in walk).
+SOLVE_RENDERS = (("131_01 2-4s", "131_01", 60, 60.0), ("131_01 5-7s", "131_01", 150, 135.0),
+                 ("07_07 end", "07_07", -60, 90.0), ("07_07 0.7-2.7s", "07_07", 20, 30.0))
+
+
+def _render_clips(body, frames):
+    from vidcap.fit.pose2d import fit_sequence
+    from vidcap.synth import render_clip
+
+    full = {"131_01": make_motion(DATA / "131_01.bvh", body=body, fps=30.0),
+            "07_07": make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body, fps=30.0)}
+    out = []
+    for name, source, first, yaw in SOLVE_RENDERS:
+        n = full[source].n_frames
+        start = first if first >= 0 else n + first
+        motion = full[source].frames(start, min(start + frames, n))
+        _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                               rng=np.random.default_rng(0))
+        pose = fit_sequence(truth["masks"])
+        fit = {"joints2d": pose.joints2d, "spread": pose.spread,
+               "model_height": pose.model_height}
+        out.append((f"{name} yaw {yaw:.0f} (held out)", fit, truth,
+                    truth_in_camera_frame(truth), (640, 480)))
+    return out
+
+
+def _sample_clips(body):
+    from vidcap.pipeline import run
+
+    out = []
+    cache = ROOT / ".vidcap-cache"  # the 2D stage's cache (not in git)
+    for video in sorted((ROOT / "sample_videos").glob("*.mp4")):
+        truth_path = video.with_name(video.stem + "_truth.npz")
+        if not truth_path.exists():
+            continue
+        t = dict(np.load(truth_path))
+        res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
+                  cache_dir=cache, lift="segment")
+        fit = {"joints2d": res.image_joints2d, "spread": res.spread,
+               "model_height": res.model_height, "track": res.track}
+        out.append((f"{video.stem} (sample)", fit, t, truth_in_camera_frame(t),
+                    (res.masks.shape[2], res.masks.shape[1])))
+    return out
+
+
+def solve_tables(frames, body, *, renders=True):
+    """The ``--solve`` tables (see benchmarks/lift_solve_tables.py)."""
+    import lift_solve_tables as st
+
+    motions = {
+        "walk (tuning)": dict(name_or_path="walk", n_frames=frames),
+        "131_01 (validation)": dict(name_or_path=DATA / "131_01.bvh", frame_range=(200, None)),
+        "07_07 (validation)": dict(name_or_path=DATA / "07.asf", amc=DATA / "07_07.amc"),
+    }
+    rows, bones, speeds = [], [], []
+    for mname, kw in motions.items():
+        motion = make_motion(**kw, body=body, fps=30.0, rng=np.random.default_rng(0))
+        motion = motion.frames(0, min(frames, motion.n_frames))
+        for yaw in (90.0, 45.0):
+            clip = prepare_clip(motion, body=body, yaw_deg=yaw, rng=np.random.default_rng(1))
+            truth = truth_arrays(clip, np.zeros((motion.n_frames, 1, 1), bool))
+            r, b, sp = st.noisy_rows(f"{mname} yaw {yaw:.0f}", truth,
+                                     truth_in_camera_frame(truth), body)
+            rows += r
+            bones.append(b)
+            speeds += sp
+    print(f"True 2D plus noise ({frames} frames, 30 fps; orientation proposed; the solve's "
+          "weights were chosen on the walk):")
+    st.print_noisy(rows)
+    for noise in st.NOISE:
+        for lift_name in ("segment", "solve"):
+            sel = [r[5] for r in rows if r[1] == noise and r[2] == lift_name
+                   and r[3] == "proposed" and "validation" in r[0]]
+            print(f"  mean PA-MPJPE, validation, proposed signs, noise {noise * 100:.0f} %, "
+                  f"{lift_name}: {np.mean(sel):.0f} mm")
+    print(f"\nBVH from the solve, read back: largest bone-length deviation {max(bones):.1e} m; "
+          f"solve speed {np.median(speeds):.0f} frames/s (median over clips, this run)")
+    clips = _sample_clips(body) + (_render_clips(body, 60) if renders else [])
+    print("\nEnd to end (2D fit, no annotations, no smoothing):")
+    e2e = st.end_to_end_rows(clips, body)
+    st.print_end_to_end(e2e)
+    return 0
 
 
 if __name__ == "__main__":

@@ -162,7 +162,7 @@ class AnnotateSession:
     """
 
     def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
-                 low_doubt: float = 0.05, defer_refresh: bool = False):
+                 low_doubt: float = 0.05, defer_refresh: bool = False, lift: str = "solve"):
         from scipy.ndimage import median_filter
 
         from vidcap.annotations import Annotations
@@ -179,6 +179,7 @@ class AnnotateSession:
         self.saved = False
         self._visited: set[tuple[int, str]] = set()
         self.defer_refresh = bool(defer_refresh)
+        self.lift = lift
         self.stale = False
         self._version = 0
         self._lock = threading.RLock()
@@ -213,7 +214,7 @@ class AnnotateSession:
         c = self.clip
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
                          image_sides=c.image_sides, spread=c.spread, track=c.track,
-                         frame_size=c.size, model_height=c.model_height)
+                         frame_size=c.size, model_height=c.model_height, method=self.lift)
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.lifting.LiftResult`)."""
@@ -228,15 +229,21 @@ class AnnotateSession:
         self.user_signs, user_orient, self.user_joints = self.annotations.resolve(
             self.n_frames, near_plane=self._near_plane)
         self.user_orient = np.asarray(user_orient).astype(str)
+        self._user_sides = self.annotations.sides(self.n_frames)
         self.joints2d = np.asarray(res.joints2d, float)
         self.joints3d = np.asarray(res.joints3d, float)
         self.signs = np.asarray(res.signs).astype(int)
         self.orientation = np.asarray(res.orientation).astype(str)
         self.yaw = np.asarray(res.yaw, float)
+        # the clip solve's poses (None with the per-segment lift): an edit re-solves
+        # the frames it reaches from these (:mod:`vidcap.solve.local`)
+        self._params = None if res.solve_params is None else np.array(res.solve_params)
 
     def _quick(self) -> None:
         """The user's events with the last proposals: the 3D stage of
-        :func:`vidcap.lifting.lift_pose` without re-proposing (no dynamic programming)."""
+        :func:`vidcap.lifting.lift_pose` without re-proposing (no dynamic programming);
+        with the clip solve, only the frames whose events changed (and a few around)
+        are solved again (:func:`vidcap.solve.local.resolve_window`)."""
         from vidcap.lift import lift
         from vidcap.lifting import apply_user_view
 
@@ -244,16 +251,49 @@ class AnnotateSession:
         user_signs, user_orient, user_joints = self.annotations.resolve(
             self.n_frames, near_plane=self._near_plane)
         user_orient = np.asarray(user_orient).astype(str)
+        sides = self.annotations.sides(self.n_frames)
         orientation, yaw, j2 = apply_user_view(
             self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
-            image_sides=self.clip.image_sides, user_sides=self.annotations.sides(self.n_frames))
+            image_sides=self.clip.image_sides, user_sides=sides)
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
         centre = (0.5 * self.clip.size[0], 0.5 * self.clip.size[1])
-        joints3d = lift(j2, signs, yaw, body=body, scale=self.scale, principal_point=centre,
-                        segment_scale=self._segment_scale).joints3d
+        if self._params is not None:
+            joints3d, signs = self._quick_solve(j2, yaw, user_signs, user_orient, user_joints,
+                                                sides, signs, centre)
+        else:
+            joints3d = lift(j2, signs, yaw, body=body, scale=self.scale, principal_point=centre,
+                            segment_scale=self._segment_scale).joints3d
         (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,
          self.joints2d, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
                                                       orientation, yaw, j2, signs, joints3d)
+        self._user_sides = sides
+
+    def _quick_solve(self, j2, yaw, user_signs, user_orient, user_joints, sides, signs,
+                     centre):
+        """Re-solve the frames an edit reached; (joints3d, signs) of the clip."""
+        from vidcap.solve.local import edit_window, resolve_window
+        from vidcap.solve.stage import USER_JOINT_WEIGHT, YAW_SIGMA_PROPOSED, YAW_SIGMA_USER
+
+        def moved(a, b):
+            a, b = np.asarray(a, float), np.asarray(b, float)
+            same = (a == b) | (np.isnan(a) & np.isnan(b))
+            return ~same.reshape(len(a), -1).all(axis=1)
+
+        changed = (moved(user_signs, self.user_signs) | (user_orient != self.user_orient)
+                   | moved(user_joints, self.user_joints) | moved(sides, self._user_sides))
+        window = edit_window(changed)
+        if window is None:
+            return self.joints3d, self.signs
+        res = self._result
+        self._params, joints3d, wsigns = resolve_window(
+            self._params, self.joints3d, window, j2, scale=self.scale, fps=self.clip.fps,
+            body=self.clip.body, yaw=yaw, prior_signs=res.signs, hard_signs=user_signs,
+            segment_scale=self._segment_scale, principal_point=centre, contact=res.contact,
+            yaw_sigma=np.where(user_orient != "", YAW_SIGMA_USER, YAW_SIGMA_PROPOSED),
+            confidence=np.where(np.isfinite(user_joints).all(axis=-1), USER_JOINT_WEIGHT, 1.0))
+        signs = np.array(self.signs)
+        signs[window[0]:window[1]] = wsigns
+        return joints3d, signs
 
     def _recompute(self) -> None:
         with self._lock:

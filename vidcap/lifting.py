@@ -99,6 +99,10 @@ class LiftResult:
     zeta: np.ndarray
     segment_scale: np.ndarray | None = None
     excess: np.ndarray | None = None
+    #: The clip solve's poses (:mod:`vidcap.solve.skeleton`), (F, 24), and planted
+    #: ankles (F, 2) bool; None with the per-segment lift.
+    solve_params: np.ndarray | None = None
+    contact: np.ndarray | None = None
 
 
 def fill_gaps(joints2d) -> np.ndarray:
@@ -293,6 +297,7 @@ def lift_pose(
     frame_size: tuple[int, int] | None = None,
     model_height=None,
     view: str = "auto",
+    method: str = "solve",
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -330,6 +335,9 @@ def lift_pose(
         What the user said of the view for the whole clip (:data:`VIEWS`), applied to
         the proposed orientation (:func:`constrain_orientation`); the annotations'
         orientation events still override it from their frames.
+    method : {'solve', 'segment'}
+        The clip solve (:func:`vidcap.solve.stage.solve_lift`) or the seed's
+        per-segment lift (:func:`vidcap.lift.lift`).
 
     Returns
     -------
@@ -350,6 +358,10 @@ def lift_pose(
     >>> bool(np.allclose(res.joints3d[0] - res.joints3d[0, 0], rest - rest[0], atol=1e-6))
     True
     """
+    from vidcap.solve.stage import METHODS
+
+    if method not in METHODS:
+        raise ValueError(f"unknown lift method {method!r}; expected one of {list(METHODS)}")
     body = body or BodyModel()
     annotations = annotations or Annotations()
     j2 = fill_gaps(joints2d)
@@ -382,11 +394,20 @@ def lift_pose(
     centre = None if frame_size is None else (0.5 * frame_size[0], 0.5 * frame_size[1])
     out = lift(j2, final.signs, yaw, body=body, scale=scale, principal_point=centre,
                segment_scale=seg_scale)
+    joints3d, params, contact = out.joints3d, None, None
+    if method == "solve":
+        from vidcap.solve.stage import solve_lift
+
+        sol, final = solve_lift(j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale,
+                                yaw=yaw, proposal=final, user_signs=user_signs,
+                                user_orientation=user_orient, principal_point=centre,
+                                user_joints=user_joints)
+        joints3d, params, contact = sol.joints3d, sol.params, sol.contact
     return LiftResult(
-        joints2d=j2, joints3d=out.joints3d, proposed_signs=free.signs, signs=final.signs,
+        joints2d=j2, joints3d=joints3d, proposed_signs=free.signs, signs=final.signs,
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
         clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
-        segment_scale=seg_scale, excess=out.excess,
+        segment_scale=seg_scale, excess=out.excess, solve_params=params, contact=contact,
     )
 
 

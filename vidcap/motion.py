@@ -281,7 +281,25 @@ def build_motion(
     """
     body = body or BodyModel()
     j = place_on_floor(joints3d, ground=ground)
-    m = joints_to_motion(j, fps, body=body)
+    return finish_motion(joints_to_motion(j, fps, body=body), keys=keys,
+                         smooth_sigma=smooth_sigma)
+
+
+def finish_motion(motion: Motion, *, keys=None, smooth_sigma: float = 0.0) -> MotionResult:
+    """Key, smooth and keep on the floor a floor-placed motion (the end of
+    :func:`build_motion`, also used by the clip solve's motion).
+
+    Parameters
+    ----------
+    motion : Motion
+        Feet on the floor Y = 0 (:func:`place_on_floor`).
+    keys : array_like of int, optional
+        Keyframes (default: every frame).
+    smooth_sigma : float
+        Gaussian smoothing in frames (0 = none).
+    """
+    m = motion
+    fps = m.fps
     before = jitter(m.positions(), fps)
     if keys is not None:
         m = interpolate_keyframes(m, keys)

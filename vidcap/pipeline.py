@@ -79,6 +79,7 @@ def run(
     log=None,
     jobs: int | None = None,
     view: str = "auto",
+    lift: str = "solve",
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -112,6 +113,9 @@ def run(
     view : str
         How the camera sees the subject for the whole clip (:data:`vidcap.lifting.VIEWS`; default
         ``auto``: proposed per frame); see :func:`vidcap.lifting.constrain_orientation`.
+    lift : {'solve', 'segment'}
+        The 3D lift: one kinematic solve over the clip (:mod:`vidcap.solve`) or the
+        seed's per-segment lift (:func:`vidcap.lift.lift`).
 
     Returns
     -------
@@ -123,6 +127,8 @@ def run(
 
     log = log or (lambda msg: None)
     check_view(view)  # before any work
+    if lift not in ("solve", "segment"):
+        raise ValueError(f"unknown lift {lift!r}; expected 'solve' or 'segment'")
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -168,7 +174,7 @@ def run(
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
                                body=body, annotations=ann, ann_source=ann_source, view=view,
                                smooth_sigma=smooth_sigma, keyframe_score=keyframe_score,
-                               log=log)
+                               log=log, lift_method=lift)
     return ConvertResult(
         video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
         scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
@@ -432,7 +438,7 @@ def _image_joints(pose: dict, masks: MaskStack):
 
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
                      annotations: Annotations, ann_source, view: str, smooth_sigma: float,
-                     keyframe_score: float | None, log) -> _Lifted:
+                     keyframe_score: float | None, log, lift_method: str = "solve") -> _Lifted:
     """The 3D lift (:func:`vidcap.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given."""
@@ -441,12 +447,20 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     _check_events(annotations, len(sil.masks), ann_source)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
-                       frame_size=frame_size, model_height=model_height, view=view)
+                       frame_size=frame_size, model_height=model_height, view=view,
+                       method=lift_method)
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(pose["similarity"], min_score=keyframe_score)
         log(f"{len(keys)} keyframes of {len(sil.masks)}")
-    motion = build_motion(lifted.joints3d, fps, body=body, smooth_sigma=smooth_sigma, keys=keys)
+    if lifted.solve_params is not None:  # the solve's rotations go to the BVH as they are
+        from vidcap.solve.stage import solved_motion
+
+        motion = solved_motion(lifted.solve_params, fps, body=body, keys=keys,
+                               smooth_sigma=smooth_sigma)
+    else:
+        motion = build_motion(lifted.joints3d, fps, body=body, smooth_sigma=smooth_sigma,
+                              keys=keys)
     return _Lifted(lifted, motion, joints2d, model_height, outside, track)
 
 

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from vidcap.body import BodyModel, segment_vectors
 from vidcap.kinematics import Motion
-from vidcap.solve._banded import banded_cholesky_solve
+from vidcap.solve.blocksolve import solve_block_banded
 from vidcap.solve.clip import make_problem
-from vidcap.solve.gauss_newton import _HALF_BAND, _band, normal_equations
+from vidcap.solve.gauss_newton import normal_equations
 from vidcap.solve.residuals import linearise, residuals, sparse_jacobian
 from vidcap.solve.skeleton import (
     forward_kinematics,
@@ -82,25 +83,32 @@ def test_residual_jacobian_and_normal_equations():
     np.testing.assert_allclose(jac, num, atol=5e-3 * np.abs(num).max())
     blocks, grad = normal_equations(pb, lin)
     np.testing.assert_allclose(grad.ravel(), jac.T @ lin.r, rtol=1e-9, atol=1e-6)
-    ab = _band(blocks)
     h_full = jac.T @ jac
-    i, j = np.triu_indices(n * 24)
-    inside = j - i <= _HALF_BAND
-    np.testing.assert_allclose(ab[_HALF_BAND + i[inside] - j[inside], j[inside]],
-                               h_full[i[inside], j[inside]], rtol=1e-9, atol=1e-6)
-    assert np.abs(h_full[i[~inside], j[~inside]]).max() == 0.0
+    np.testing.assert_allclose(_dense(blocks), h_full, rtol=1e-9, atol=1e-6)
 
 
-def test_banded_cholesky_solves():
+def _dense(blocks):
+    """The symmetric matrix (F P, F P) of blocks (3, F, P, P)."""
+    _, F, P, _ = blocks.shape
+    h = np.zeros((F * P, F * P))
+    for d in range(3):
+        for f in range(F - d):
+            h[f * P:(f + 1) * P, (f + d) * P:(f + d + 1) * P] = blocks[d, f]
+            if d:
+                h[(f + d) * P:(f + d + 1) * P, f * P:(f + 1) * P] = blocks[d, f].T
+    return h
+
+
+@pytest.mark.parametrize("n_frames", [1, 6, 7])
+def test_block_banded_solve(n_frames):
     rng = np.random.default_rng(5)
-    n, u = 40, 5
-    a = np.zeros((n, n))
-    for d in range(u + 1):
-        v = rng.normal(size=n - d)
-        a[np.arange(d, n), np.arange(n - d)] = v
-        a[np.arange(n - d), np.arange(d, n)] = v
-    a += np.eye(n) * (np.abs(a).sum(1).max() + 1)
-    b = rng.normal(size=n)
-    lb = np.array([[a[i, i - d] if i - d >= 0 else 0.0 for d in range(u + 1)] for i in range(n)])
-    np.testing.assert_allclose(banded_cholesky_solve(lb, b), np.linalg.solve(a, b), atol=1e-10)
-    assert banded_cholesky_solve(-np.abs(lb), b).size == 0  # not positive definite
+    P = 4
+    blocks = rng.normal(size=(3, n_frames, P, P))
+    blocks[0] = blocks[0] @ np.swapaxes(blocks[0], 1, 2) + 20.0 * np.eye(P)
+    blocks[1, -1:] = 0.0
+    blocks[2, -2:] = 0.0
+    rhs = rng.normal(size=(n_frames, P))
+    x = solve_block_banded(blocks, rhs)
+    np.testing.assert_allclose(x.ravel(), np.linalg.solve(_dense(blocks), rhs.ravel()),
+                               atol=1e-10)
+    assert solve_block_banded(-blocks, rhs) is None  # not positive definite

@@ -28,7 +28,7 @@ def test_fresh_session_writes_nothing(walk_clip, tmp_path):
 
 def test_depth_edit_relifts_from_that_frame_on_and_saves(walk_clip, tmp_path):
     path = tmp_path / "a.json"
-    s = AnnotateSession(walk_clip, path)
+    s = AnnotateSession(walk_clip, path, lift="segment")  # Eq. 2.2 exactly
     k = SEGMENT_INDEX["l_lower_arm"]
     a, b = SEGMENT_JOINTS[k]
     before = s.joints3d.copy()
@@ -69,15 +69,17 @@ def test_flip_then_reopen_restores_state(walk_clip, tmp_path):
     assert s2.frame_info(7)["user_joints"] == ["l_wrist"]
 
 
-def test_joint_fix_moves_the_3d_joint(walk_clip, tmp_path):
-    s = AnnotateSession(walk_clip, tmp_path / "a.json")
+@pytest.mark.parametrize("lift, tol", [("segment", 0.05), ("solve", 0.35)])
+def test_joint_fix_moves_the_3d_joint(walk_clip, tmp_path, lift, tol):
+    # the solve weighs the fixed joint against its neighbours in time and the bones
+    s = AnnotateSession(walk_clip, tmp_path / "a.json", lift=lift)
     j = JOINT_INDEX["r_wrist"]
     before = s.joints3d[12, j].copy()
     u, v = walk_clip.joints2d[12, j] + [12.0, -8.0]
     s.set_joint(12, "r_wrist", u, v)
     moved = s.joints3d[12, j] - before
-    assert moved[0] == pytest.approx(12.0 / s.scale, rel=0.05)
-    assert moved[1] == pytest.approx(8.0 / s.scale, rel=0.05)  # image y down, Y up
+    assert moved[0] == pytest.approx(12.0 / s.scale, rel=tol)
+    assert moved[1] == pytest.approx(8.0 / s.scale, rel=tol)  # image y down, Y up
     s.clear_joint(12, "r_wrist")
     np.testing.assert_allclose(s.joints3d[12, j], before)
     assert s.n_user_inputs == 0
@@ -211,16 +213,37 @@ def test_frames_without_a_fit_are_filled_and_drawn(walk_clip, tmp_path):
     np.testing.assert_array_equal(img, clip.read_frame(20))  # nothing to draw, no crash
 
 
-def test_quick_relift_agrees_with_the_full_stage_for_user_signs(walk_clip, tmp_path):
+@pytest.mark.parametrize("lift, atol", [("segment", 1e-9), ("solve", 0.03)])
+def test_quick_relift_agrees_with_the_full_stage_for_user_signs(walk_clip, tmp_path, lift,
+                                                                 atol):
     """Before the worker's refresh, a user's sign already shows (and the rest agrees with
-    the last full result, so the page does not jump when the refresh lands)."""
-    lazy = AnnotateSession(walk_clip, tmp_path / "a.json", defer_refresh=True)
+    the last full result, so the page does not jump when the refresh lands; the solve's
+    local re-solve of the edited frames is within a few cm of the whole clip's)."""
+    lazy = AnnotateSession(walk_clip, tmp_path / "a.json", defer_refresh=True, lift=lift)
     lazy.set_depth(6, "l_upper_arm", -1)
     quick = lazy.joints3d.copy()
-    lazy.refresh()
     k = SEGMENT_INDEX["l_upper_arm"]
     assert lazy.signs[6, k] == -1
-    np.testing.assert_allclose(quick[6], lazy.joints3d[6], atol=1e-9)
+    lazy.refresh()
+    assert lazy.signs[6, k] == -1
+    np.testing.assert_allclose(quick[6], lazy.joints3d[6], atol=atol)
+
+
+def test_solve_depth_edit_is_hard_and_local(walk_clip, tmp_path):
+    """With the clip solve, a deferred depth edit re-solves only the frames it reaches:
+    the user's sign holds there (the distal joint on that side of the image plane) and
+    frames far from the edit keep their pose."""
+    s = AnnotateSession(walk_clip, tmp_path / "a.json", defer_refresh=True)
+    k = SEGMENT_INDEX["l_lower_leg"]
+    a, b = SEGMENT_JOINTS[k]
+    before = s.joints3d.copy()
+    want = -int(s.signs[20, k])
+    s.set_depth(20, "l_lower_leg", want)
+    held = np.flatnonzero(s.user_signs[:, k] != 0)
+    assert held[0] == 20
+    dz = s.joints3d[held, b, 2] - s.joints3d[held, a, 2]
+    assert (np.sign(dz) == want).all()
+    np.testing.assert_array_equal(s.joints3d[:5], before[:5])
 
 
 def test_sides_edit_swaps_the_legs_from_that_frame_on(walk_clip, tmp_path):

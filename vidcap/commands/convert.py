@@ -66,6 +66,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "one orientation (left, right, front_left, front_right, back_left, "
                         "back_right); default auto: read per frame. Orientation events in "
                         "the annotations override it from their frames")
+    parser.add_argument("--lift", default="solve", choices=("solve", "segment"),
+                        help="3D from the 2D joints: one kinematic solve over the clip "
+                        "(default; bone lengths constant, joint limits, smooth, feet planted "
+                        "on walks and stands) or the seed's per-segment lift (segment)")
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "
                         "signs, orientation and scores")
@@ -92,7 +96,7 @@ def run(args) -> int:
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
         annotations=args.annotations, background=args.background, height=args.height,
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
-        view=args.view, rig=args.rig,
+        view=args.view, rig=args.rig, lift=args.lift,
     )
     if not args.quiet:
         lr = res.lifted
@@ -100,6 +104,9 @@ def run(args) -> int:
         print(f"{args.output}: {bvh.n_frames} frames at {bvh.fps:.4g} fps; orientation "
               f"{', '.join(sorted(set(lr.orientation)))}; jitter {res.jitter_before:.1f} -> "
               f"{res.jitter_after:.1f} m/s^2")
+        if lr.contact is not None and lr.contact.any():
+            print(f"  foot contact on (the clip walks or stands): a foot stays put in "
+                  f"{int(lr.contact.any(axis=1).sum())} of {len(lr.contact)} frames")
         for notice in res.notices():
             print(f"  {notice}")
         # the normalised silhouette's width is whole pixels, which stretches a fitted

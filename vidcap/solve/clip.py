@@ -79,7 +79,7 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
 
     ``yaw`` (F,) radians and ``yaw_sigma`` (one or (F,), radians) the torso's yaw
     prior; ``prior_signs``/``hard_signs`` (F, 10) in {-1, 0, 1}; ``confidence`` (F,
-    15) in [0, 1] (default 1); ``contact`` 'auto' (:func:`foot_contacts`), 'off', or
+    15) each 2D joint's weight (default 1); ``contact`` 'auto' (:func:`foot_contacts`), 'off', or
     an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights.
     """
     body = body or BodyModel()
@@ -120,7 +120,7 @@ def warm_start(problem: Problem, joints2d, *, scale, body: BodyModel, segment_sc
 def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
                prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                segment_scale=None, principal_point=None, contact="auto", sweeps: int = 2,
-               max_iter: int = 30, **weights) -> ClipSolve:
+               max_iter: int = 30, robust: float | None = None, **weights) -> ClipSolve:
     """Fit the skeleton to a clip's 2D joints (see the module docstring).
 
     Parameters
@@ -137,7 +137,8 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
     prior_signs, hard_signs : array_like, shape (F, 10), optional
         Proposed depth signs (soft) and the user's (hard), 0 where none.
     confidence : array_like, shape (F, 15), optional
-        Weight of each 2D joint in [0, 1].
+        Weight of each 2D joint (1: a fitted joint; less where it is doubtful, more
+        where the user placed it).
     yaw_sigma : float or array_like, shape (F,)
         The yaw prior's spread, radians.
     segment_scale, principal_point :
@@ -147,6 +148,9 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
         Rounds of sign choice and re-solve after the first solve.
     max_iter : int
         Levenberg-Marquardt iterations per solve.
+    robust : float, optional
+        After the first solve, re-weight the 2D joints by their misfit
+        (:func:`robust_weights`, this many sigmas) and solve again.
     **weights
         Override :class:`vidcap.solve.residuals.Problem`'s weights.
 
@@ -162,17 +166,45 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                       contact=contact, **weights)
     p0 = warm_start(pb, j2, scale=scale, body=body, segment_scale=segment_scale,
                     principal_point=principal_point)
-    return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter)
+    return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust)
 
 
 def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 30,
-                  fixed=None) -> ClipSolve:
+                  fixed=None, robust: float | None = None) -> ClipSolve:
     """Solve ``problem`` from ``params`` (F, 24): LM, then ``sweeps`` rounds of sign
     choice (:func:`vidcap.solve.signs.sweep_signs`) and LM; ``fixed`` (F,) bool
-    frames are held (a local re-solve's boundary)."""
+    frames are held (a local re-solve's boundary).
+
+    BLAS runs on one thread here: the solve's dense blocks are 48 x 48, where more
+    threads only add waiting, ten-fold when other processes hold the cores."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        return _solve_problem(problem, params, sweeps=sweeps, max_iter=max_iter, fixed=fixed,
+                              robust=robust)
+
+
+def robust_weights(problem: Problem, joints, scale: float) -> Problem:
+    """``problem`` with each 2D joint's weight divided by sqrt(1 + (e / scale)^2), e its
+    misfit at ``joints`` in units of its own sigma (one re-weighting step of a Cauchy
+    loss): a joint the 2D fit put far from where the rest of the clip says it is
+    counts less, and the smoothness and the other joints carry its frame."""
+    from dataclasses import replace
+
+    e = np.linalg.norm(joints[..., :2] - problem.target, axis=-1) * problem.weight
+    return replace(problem, weight=problem.weight / np.sqrt(1.0 + (e / scale) ** 2))
+
+
+def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixed,
+                   robust: float | None = None) -> ClipSolve:
     sol = levenberg_marquardt(problem, params, max_iter=max_iter, fixed=fixed)
     p, iters = sol.params, sol.iterations
     joints, root, _ = forward_kinematics(p, problem.offsets)
+    if robust:
+        problem = robust_weights(problem, joints, robust)
+        sol = levenberg_marquardt(problem, p, max_iter=max_iter, fixed=fixed)
+        p, iters = sol.params, iters + sol.iterations
+        joints, root, _ = forward_kinematics(p, problem.offsets)
     for _ in range(sweeps):
         sw = sweep_signs(problem, joints, root, p)
         flip = sw.flipped.any(axis=1)

@@ -3,9 +3,9 @@
 The Jacobian (:func:`vidcap.solve.residuals.linearise`) couples a frame's
 parameters with those of the two frames either side (second differences), so
 ``J^T J`` is block-pentadiagonal in frame order: it is assembled here block by block
-from the per-frame Jacobians (never as a sparse product) into the band of half-width
-3 * 24 - 1, factored by a compiled banded Cholesky (:mod:`vidcap.solve._banded`),
-linear in the clip's length.
+from the per-frame Jacobians (never as a sparse product), a band of half-width
+3 * 24 - 1, solved by a block Cholesky over frame pairs
+(:mod:`vidcap.solve.blocksolve`), linear in the clip's length.
 """
 
 from __future__ import annotations
@@ -14,12 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vidcap.solve._banded import banded_cholesky_solve
+from vidcap.solve.blocksolve import solve_block_banded
 from vidcap.solve.residuals import Linearisation, Problem, contact_pairs, linearise, residuals
 from vidcap.solve.skeleton import N_PARAMS
 
 P = N_PARAMS
-_HALF_BAND = 3 * P - 1
 
 
 @dataclass(frozen=True)
@@ -43,29 +42,31 @@ def normal_equations(problem: Problem, lin: Linearisation):
     ju, jp = lin.unary, lin.joints
     F, U, _ = ju.shape
     blocks = np.zeros((3, F, P, P))
-    blocks[0] = np.einsum("fui,fuj->fij", ju, ju)
-    grad = np.einsum("fui,fu->fi", ju, lin.r[:F * U].reshape(F, U))
+    jut = np.swapaxes(ju, 1, 2)
+    blocks[0] = jut @ ju
+    grad = (jut @ lin.r[:F * U].reshape(F, U, 1))[..., 0]
     at = F * U
     if F > 2:
         w2 = pb.acc_weight ** 2
-        g0 = np.einsum("fci,fcj->fij", jp, jp)
+        jpt = np.swapaxes(jp, 1, 2)
+        g0 = jpt @ jp
         coef = np.zeros(F)  # sum of squared [1, -2, 1] weights each frame takes part with
         coef[:-2] += 1.0
         coef[1:-1] += 4.0
         coef[2:] += 1.0
         blocks[0] += w2 * coef[:, None, None] * g0
-        g1 = np.einsum("fci,fcj->fij", jp[:-1], jp[1:])  # (F-1)
+        g1 = jpt[:-1] @ jp[1:]  # (F-1)
         c1 = np.zeros(F - 1)
         c1[:-1] += -2.0  # residual centred at f + 1: (f, f+1) weights 1 * -2
         c1[1:] += -2.0  # centred at f: -2 * 1
         blocks[1, :-1] += w2 * c1[:, None, None] * g1
-        blocks[2, :-2] += w2 * np.einsum("fci,fcj->fij", jp[:-2], jp[2:])
+        blocks[2, :-2] += w2 * (jpt[:-2] @ jp[2:])
         s = lin.r[at:at + (F - 2) * 45].reshape(F - 2, 45)
         q = np.zeros((F, 45))
         q[:-2] += s
         q[1:-1] -= 2.0 * s
         q[2:] += s
-        grad += pb.acc_weight * np.einsum("fci,fc->fi", jp, q)
+        grad += pb.acc_weight * (jpt @ q[..., None])[..., 0]
         at += (F - 2) * 45
     f, ank = contact_pairs(pb.contact)
     if f.size:
@@ -82,26 +83,7 @@ def normal_equations(problem: Problem, lin: Linearisation):
     return blocks, grad
 
 
-def _band(blocks) -> np.ndarray:
-    """The upper band (72, F * 24) of the block matrix: ``ab[u + i - j, j] = H[i, j]``."""
-    F = blocks.shape[1]
-    n = F * P
-    ab = np.zeros((_HALF_BAND + 1, n))
-    a = np.arange(P)[:, None]
-    b = np.arange(P)[None, :]
-    for d in range(3):
-        rows = _HALF_BAND + a - b - P * d  # (24, 24)
-        keep = (rows >= 0) & (rows <= _HALF_BAND)
-        fr = np.arange(F - d)
-        cols = (fr[:, None, None] + d) * P + b  # (F-d, 1, 24) column j
-        vals = blocks[d, :F - d]
-        rr = np.broadcast_to(rows, vals.shape)[:, keep]
-        cc = np.broadcast_to(cols, vals.shape)[:, keep]
-        ab[rr, cc] = vals[:, keep]
-    return ab
-
-
-def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: float = 1e-4,
+def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: float = 1e-3,
                         damping: float = 1e-3, fixed=None) -> Solution:
     """Minimise the clip's residuals from ``params`` (F, 24).
 
@@ -124,25 +106,26 @@ def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: f
     """
     p = np.array(params, dtype=float)
     F = p.shape[0]
-    hold = np.repeat(np.zeros(F, bool) if fixed is None else np.asarray(fixed, bool), P)
+    hold = np.zeros(F, bool) if fixed is None else np.asarray(fixed, bool)
     lin = linearise(problem, p)
     c = 0.5 * float(lin.r @ lin.r)
     mu = damping
     it = 0
     for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
         blocks, grad = normal_equations(problem, lin)
-        g = grad.ravel()
+        g = grad.reshape(F, P)
         g[hold] = 0.0
-        ab = _band(blocks)
-        diag = ab[-1].copy()
+        diag = np.diagonal(blocks[0], axis1=1, axis2=2).copy()  # (F, P)
         improved = False
         for _ in range(8):
-            ab[-1] = diag + mu * (diag + 1e-6) + np.where(hold, 1e12, 0.0)
-            step = banded_cholesky_solve(np.ascontiguousarray(ab[::-1].T), -g)
-            if step.size == 0:  # not positive definite: damp more
+            damped = blocks.copy()
+            idx = np.arange(P)
+            damped[0][:, idx, idx] = diag + mu * (diag + 1e-6) + np.where(hold[:, None], 1e12, 0)
+            step = solve_block_banded(damped, -g)
+            if step is None:  # not positive definite: damp more
                 mu *= 10.0
                 continue
-            trial = p + step.reshape(F, P)
+            trial = p + step
             r_new = residuals(problem, trial)
             c_new = 0.5 * float(r_new @ r_new)
             if c_new < c:

@@ -47,15 +47,23 @@ _HIGH = np.array([hi for _, _, hi in LIMITS])
 
 
 def _unit(v):
-    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+    return v / np.maximum(np.sqrt(np.sum(v * v, axis=-1, keepdims=True)), 1e-12)
+
+
+def cross(a, b) -> np.ndarray:
+    """a x b over the last axis (3) with broadcasting; ``numpy.cross`` without its
+    axis shuffling, which dominates on many small vectors."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _into_swing_frame(rest, direction, x):
     """``x`` (..., 3) expressed in the frame of the minimal rotation rest -> direction."""
-    v = np.cross(rest, direction)
+    v = cross(rest, direction)
     c = np.sum(rest * direction, -1, keepdims=True)
-    vx = np.cross(v, x)
-    return x - vx + np.cross(v, vx) / np.maximum(1.0 + c, 1e-9)
+    vx = cross(v, x)
+    return x - vx + cross(v, vx) / np.maximum(1.0 + c, 1e-9)
 
 
 def limit_angles(joints, root, pitch_roll) -> np.ndarray:
@@ -88,7 +96,7 @@ def limit_angles(joints, root, pitch_roll) -> np.ndarray:
     for side in "lr":
         u, low = limb[side, "arm"]
         rest = np.array(_LIMB_JOINTS[side, "arm"][3])
-        out.append(np.arctan2(np.linalg.norm(np.cross(rest, low), axis=-1), low @ rest))
+        out.append(np.arctan2(np.sqrt(np.sum(cross(rest, low) ** 2, axis=-1)), low @ rest))
     for side in "lr":
         t = limb[side, "leg"][0]
         out.append(np.arctan2(-t[..., 2], -t[..., 1]))

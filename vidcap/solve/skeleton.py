@@ -205,6 +205,8 @@ def kinematics_jacobian(params, offsets):
     joints : (F, 15, 3); root : (F, 3, 3) the torso's world rotation;
     jac : (F, 15, 3, 24) metres per unit of each parameter.
     """
+    from vidcap.solve.limits import cross
+
     p = np.asarray(params, dtype=float)
     joints, world, rv, _ = _world(p, offsets)
     F = p.shape[0]
@@ -223,7 +225,7 @@ def kinematics_jacobian(params, offsets):
         axes[:, 6 + 2 * k: 8 + 2 * k] = np.einsum("fij,faj->fai", parent, local_axes)
         pivots[:, 6 + 2 * k: 8 + 2 * k] = joints[:, None, JOINT_INDEX[name]]
     rel = joints[:, None, :, :] - pivots[:, :, None, :]  # (F, 24, 15, 3)
-    jac = np.cross(axes[:, :, None, :], rel) * _MOVES[None, :, :, None]
+    jac = cross(axes[:, :, None, :], rel) * _MOVES[None, :, :, None]
     jac[:, :3] = 0.0
     for i in range(3):
         jac[:, i, :, i] = 1.0

@@ -1,0 +1,165 @@
+"""The tables of ``benchmarks/lift_accuracy.py --solve`` (issue 33): the seed's
+per-segment lift against the clip solve.
+
+* **Noisy true 2D**: each motion filmed by vidcap.synth's orthographic camera at yaw 90
+  and 45 degrees, its true 2D joints plus Gaussian noise of 0, 1, 2 and 4 % of the
+  body height (seeded), lifted with the proposed signs and with the true ones
+  (orientation proposed from the noisy joints, scale from the image height).
+* **End to end**: the sample clips and held-out renders through the 2D fit, then
+  both lifts on the fitted joints, no annotations.
+
+Columns: MPJPE (12 limb joints, pelvis-aligned) and PA-MPJPE (per frame similarity
+alignment without reflection) in mm; foot sliding in mm per frame while the *true*
+foot is planted (true ankle slower than 0.25 m/s and within 5 cm of the lower
+ankle), in the lift's own world; jitter (mean joint acceleration, m/s^2); the solve's
+largest bone-length deviation in the BVH it writes (read back), and its speed.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS
+from vidcap.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation
+from vidcap.motion import jitter
+from vidcap.proposals import propose_orientation, propose_signs
+
+LIMB_JOINTS = np.array([JOINT_INDEX[f"{s}_{j}"] for s in "lr" for j in
+                        ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")])
+ANKLES = np.array([JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]])
+NOISE = (0.0, 0.01, 0.02, 0.04)
+
+
+def mpjpe_mm(pred, true) -> float:
+    """Mean error of the 12 limb joints after aligning the pelvis, mm."""
+    a = pred - pred[:, :1]
+    b = true - true[:, :1]
+    return float(np.linalg.norm(a[:, LIMB_JOINTS] - b[:, LIMB_JOINTS], axis=-1).mean() * 1e3)
+
+
+def pa_mpjpe_mm(pred, true) -> float:
+    """Mean error of the 12 limb joints after a per-frame similarity alignment (rotation
+    without reflection, scale, translation; Umeyama), mm."""
+    a = pred[:, LIMB_JOINTS] - pred[:, LIMB_JOINTS].mean(1, keepdims=True)
+    b = true[:, LIMB_JOINTS] - true[:, LIMB_JOINTS].mean(1, keepdims=True)
+    u, s, vt = np.linalg.svd(np.swapaxes(a, 1, 2) @ b)
+    d = np.sign(np.linalg.det(u @ vt))
+    fix = np.ones((len(a), 3))
+    fix[:, 2] = d
+    rot = u @ (fix[:, :, None] * vt)
+    scale = (s * fix).sum(1) / (a ** 2).sum(axis=(1, 2))
+    aligned = scale[:, None, None] * a @ rot
+    return float(np.linalg.norm(aligned - b, axis=-1).mean() * 1e3)
+
+
+def true_planted(true3, fps) -> np.ndarray:
+    """(F, 2) bool: the true ankle is planted (slow and near the lower ankle)."""
+    ank = true3[:, ANKLES]
+    speed = np.linalg.norm(np.gradient(ank, axis=0), axis=-1) * fps
+    height = ank[:, :, 1] - ank[:, :, 1].min(axis=1, keepdims=True)
+    return (speed < 0.25) & (height < 0.05)
+
+
+def sliding_mm(pred, planted) -> float:
+    """Mean frame-to-frame motion of an ankle planted in both frames, mm (nan: none)."""
+    both = planted[1:] & planted[:-1]
+    if not both.any():
+        return float("nan")
+    step = np.linalg.norm(np.diff(pred[:, ANKLES], axis=0), axis=-1)
+    return float(step[both].mean() * 1e3)
+
+
+def bvh_bone_deviation(params, body, fps) -> float:
+    """Largest |bone length - its mean| (m) over the frames of the BVH written from the
+    solve's rotations and read back."""
+    from vidcap.bvh import read_bvh, write_bvh
+    from vidcap.solve.stage import solved_motion
+
+    m = solved_motion(params, fps, body=body).motion
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "solve.bvh"
+        write_bvh(path, m)
+        pos = read_bvh(path).positions()
+    seg = np.linalg.norm(pos[:, SEGMENT_JOINTS[:, 1]] - pos[:, SEGMENT_JOINTS[:, 0]], axis=-1)
+    return float(np.abs(seg - seg.mean(0)).max())
+
+
+def _row(label, pred, true3, fps, planted):
+    return (label, mpjpe_mm(pred, true3), pa_mpjpe_mm(pred, true3), sliding_mm(pred, planted),
+            jitter(pred, fps))
+
+
+def noisy_rows(name, truth, true3, body, *, seed=0):
+    """Rows (clip, noise, lift, signs, MPJPE, PA, sliding, jitter, s) for every noise level."""
+    from vidcap.solve import solve_clip
+
+    fps = float(truth["fps"])
+    planted = true_planted(true3, fps)
+    rows, bones, speed = [], [], []
+    for noise in NOISE:
+        rng = np.random.default_rng(seed)
+        s_true = estimate_scale(truth["joints2d"], body)
+        j2 = truth["joints2d"] + rng.normal(0.0, noise * body.height * s_true,
+                                            truth["joints2d"].shape)
+        s = estimate_scale(j2, body)
+        orient = propose_orientation(j2, scale=s, fps=fps, body=body, sides_known=True)
+        yaw = yaw_from_orientation(orient, torso_width_ratio(j2, s, body))
+        prop = propose_signs(j2, yaw, scale=s, body=body).signs
+        for sign_name, signs in (("proposed", prop), ("true", truth["depth_signs"])):
+            seg = lift(j2, signs, yaw, body=body, scale=s).joints3d
+            rows.append((name, noise, "segment", sign_name,
+                         *_row("", seg, true3, fps, planted)[1:], 0.0))
+            t0 = time.perf_counter()
+            sol = solve_clip(j2, scale=s, fps=fps, body=body, yaw=yaw, prior_signs=signs)
+            secs = time.perf_counter() - t0
+            speed.append(len(j2) / secs)
+            rows.append((name, noise, "solve", sign_name,
+                         *_row("", sol.joints3d, true3, fps, planted)[1:], secs))
+            if sign_name == "proposed":
+                bones.append(bvh_bone_deviation(sol.params, body, fps))
+    return rows, max(bones), speed
+
+
+def print_noisy(rows):
+    print("clip | 2D noise % of height | lift | signs | MPJPE mm | PA-MPJPE mm | "
+          "foot sliding mm/frame | jitter m/s^2 | s")
+    print("--- | --- | --- | --- | --- | --- | --- | --- | ---")
+    for r in rows:
+        print(f"{r[0]} | {r[1] * 100:.0f} | {r[2]} | {r[3]} | {r[4]:.0f} | {r[5]:.0f} | "
+              f"{r[6]:.1f} | {r[7]:.1f} | {r[8]:.2f}")
+
+
+def end_to_end_rows(clips, body):
+    """Rows (clip, frames, lift, MPJPE, PA, sliding, jitter, 2D error % of height) for
+    (name, pose2d-like dict, truth, true3) clips."""
+    from vidcap.lifting import lift_pose
+    from vidcap.solve import solve_clip  # noqa: F401 - imported before timing
+
+    rows = []
+    for name, fit, truth, true3, size in clips:
+        fps = float(truth["fps"])
+        planted = true_planted(true3, fps)
+        for method in ("segment", "solve"):
+            t0 = time.perf_counter()
+            lr = lift_pose(fit["joints2d"], fps=fps, body=body, image_sides=True,
+                           spread=fit["spread"], track=fit.get("track"), frame_size=size,
+                           model_height=fit["model_height"], method=method)
+            secs = time.perf_counter() - t0
+            e2 = np.linalg.norm(lr.joints2d - truth["joints2d"], axis=-1).mean()
+            h_px = np.mean(lr.scale) * body.height
+            rows.append((name, len(lr.joints3d), method,
+                         *_row("", lr.joints3d, true3, fps, planted)[1:], e2 / h_px * 100, secs))
+    return rows
+
+
+def print_end_to_end(rows):
+    print("clip | frames | lift | MPJPE mm | PA-MPJPE mm | foot sliding mm/frame | "
+          "jitter m/s^2 | 2D error % of height (body sides) | s")
+    print("--- | --- | --- | --- | --- | --- | --- | --- | ---")
+    for r in rows:
+        print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f} | {r[4]:.0f} | {r[5]:.1f} | {r[6]:.1f} | "
+              f"{r[7]:.1f} | {r[8]:.2f}")
