@@ -524,7 +524,26 @@ def solve_tables(frames, body, *, renders=True):
     print("\nEnd to end (2D fit, no annotations, no smoothing):")
     e2e = st.end_to_end_rows(clips, body)
     st.print_end_to_end(e2e)
+    _real_table(st, body)
     return 0
+
+
+def _real_table(st, body):
+    """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz under
+    $VIDCAP_DATA/lift/), skipped with the reason when absent."""
+    import os
+
+    video = DATA.parent / "video" / "ido_walk.avi"
+    ref = Path(os.environ.get("VIDCAP_DATA", "/nonexistent")) / "lift" / "ido_walk_mediapipe.npz"
+    print("\nReal footage, PA-MPJPE against MediaPipe Pose's world landmarks (validation):")
+    if not (video.exists() and ref.exists()):
+        print(f"  skipped: needs {video} and {ref} (run ../shared/tools/mediapipe-reference/"
+              "reference.py VIDEO OUT.npz with VIDCAP_DATA set)")
+        return
+    print("clip | frames | lift | PA-MPJPE mm")
+    print("--- | --- | --- | ---")
+    for r in st.real_rows(video, ref, body):
+        print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f}")
 
 
 if __name__ == "__main__":

@@ -163,3 +163,41 @@ def print_end_to_end(rows):
     for r in rows:
         print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f} | {r[4]:.0f} | {r[5]:.1f} | {r[6]:.1f} | "
               f"{r[7]:.1f} | {r[8]:.2f}")
+
+
+def mediapipe_world(path, joint_names) -> np.ndarray:
+    """MediaPipe's world landmarks of ``path`` (the mediapipe-reference tool's npz) as
+    (F, 15, 3) in the lift's frame (X right, Y up, Z toward the camera), NaN for the
+    joints it has no landmark for (pelvis = mid-hips; neck = mid-shoulders)."""
+    ref = np.load(path)
+    world = ref["world"].astype(float)
+    world = world * np.array([1.0, -1.0, -1.0])  # y down, z away -> Y up, Z toward
+    common = [str(n) for n in ref["names_vidcap_map"]]
+    out = np.full((len(world), len(joint_names), 3), np.nan)
+    for j, name in enumerate(joint_names):
+        if name in common:
+            out[:, j] = world[:, common.index(name)]
+    i = {n: k for k, n in enumerate(joint_names)}
+    out[:, i["pelvis"]] = 0.5 * (out[:, i["l_hip"]] + out[:, i["r_hip"]])
+    out[:, i["neck"]] = 0.5 * (out[:, i["l_shoulder"]] + out[:, i["r_shoulder"]])
+    return out
+
+
+def real_rows(video, reference, body):
+    """PA-MPJPE (mm) of both lifts on a real clip against MediaPipe's world landmarks."""
+    from vidcap.body import JOINT_NAMES
+    from vidcap.lifting import lift_pose
+    from vidcap.pipeline import run
+
+    res = run(video, height=body.height, smooth_sigma=0.0, progress=False, lift="segment")
+    ref = mediapipe_world(reference, JOINT_NAMES)
+    size = (res.masks.shape[2], res.masks.shape[1])
+    rows = []
+    for method in ("segment", "solve"):
+        lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
+                       spread=res.spread, track=res.track, frame_size=size,
+                       model_height=res.model_height, method=method)
+        ok = np.isfinite(ref[:, LIMB_JOINTS]).all(axis=(1, 2))
+        rows.append((Path(video).name, int(ok.sum()), method,
+                     pa_mpjpe_mm(lr.joints3d[ok], ref[ok])))
+    return rows

@@ -29,6 +29,7 @@ from vidcap.lift import (
     yaw_from_orientation,
 )
 from vidcap.proposals import propose_orientation, propose_signs
+from vidcap.solve.stage import check_method, solve_lift
 
 #: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
 #: (a depth annotation is carried forward until the segment next enters it).
@@ -282,6 +283,16 @@ def model_scales(model_height, n_frames: int, body: BodyModel | None = None):
     return np.interp(t, t[ok], h[ok]) / body.height
 
 
+def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
+    """The torso's horizontal foreshortening per frame: the 2D fit's ``spread`` where
+    given, else from the 2D shoulders and hips, then a running median over ``window``
+    frames (the body turns slowly: it removes single-frame misfits)."""
+    rho = torso_width_ratio(j2, geometry, body)
+    if spread is not None:
+        rho = np.where(np.isfinite(spread), np.asarray(spread, float), rho)
+    return median_filter(rho, size=window, mode="nearest")
+
+
 def lift_pose(
     joints2d,
     *,
@@ -358,10 +369,7 @@ def lift_pose(
     >>> bool(np.allclose(res.joints3d[0] - res.joints3d[0, 0], rest - rest[0], atol=1e-6))
     True
     """
-    from vidcap.solve.stage import METHODS
-
-    if method not in METHODS:
-        raise ValueError(f"unknown lift method {method!r}; expected one of {list(METHODS)}")
+    check_method(method)
     body = body or BodyModel()
     annotations = annotations or Annotations()
     j2 = fill_gaps(joints2d)
@@ -372,13 +380,7 @@ def lift_pose(
     geometry = scale if seg_scale is None else seg_scale  # what segments are read at
     if smooth_2d > 0 and F > 2:
         j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
-    if spread is None:
-        rho = torso_width_ratio(j2, geometry, body)
-    else:
-        rho = np.asarray(spread, float)
-        rho = np.where(np.isfinite(rho), rho, torso_width_ratio(j2, geometry, body))
-    # the body turns slowly: a running median over ~1 s removes single-frame misfits
-    rho = median_filter(rho, size=max(1, int(round(yaw_window_s * fps)) | 1), mode="nearest")
+    rho = _torso_spread(j2, spread, geometry, body, max(1, int(round(yaw_window_s * fps)) | 1))
     proposed_orient = propose_orientation(j2, scale=geometry, fps=fps, body=body,
                                           sides_known=not image_sides, track=track,
                                           window_s=yaw_window_s, turn_window_s=yaw_window_s)
@@ -396,8 +398,6 @@ def lift_pose(
                segment_scale=seg_scale)
     joints3d, params, contact = out.joints3d, None, None
     if method == "solve":
-        from vidcap.solve.stage import solve_lift
-
         sol, final = solve_lift(j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale,
                                 yaw=yaw, proposal=final, user_signs=user_signs,
                                 user_orientation=user_orient, principal_point=centre,

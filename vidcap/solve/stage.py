@@ -31,6 +31,12 @@ USER_JOINT_WEIGHT = 30.0
 METHODS = ("solve", "segment")
 
 
+def check_method(method: str) -> None:
+    """Raise ValueError unless ``method`` is one of :data:`METHODS`."""
+    if method not in METHODS:
+        raise ValueError(f"unknown lift method {method!r}; expected one of {list(METHODS)}")
+
+
 def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, yaw,
                proposal: SignProposal, user_signs, user_orientation, principal_point=None,
                user_joints=None) -> tuple[ClipSolve, SignProposal]:
