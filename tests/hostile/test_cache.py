@@ -6,18 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.hostile.clips import synth_walk
 from vidcap.stagecache import CHECKSUM, StageCache
 
 
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory):
-    from vidcap.synth import make_motion, synth_clip
-
-    folder = tmp_path_factory.mktemp("cacheclip")
-    video = folder / "walk.mp4"
-    synth_clip(video, folder / "truth.npz", make_motion("walk", n_frames=16), size=(160, 120),
-               rng=np.random.default_rng(0), show_progress=False)
-    return video
+    return synth_walk(tmp_path_factory.mktemp("cacheclip"), 16, (160, 120), seed=0)
 
 
 def test_entries_carry_a_checksum_and_a_mismatch_is_a_miss(tmp_path):

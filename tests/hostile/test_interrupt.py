@@ -9,9 +9,9 @@ import subprocess
 import sys
 import time
 
-import numpy as np
 import pytest
 
+from tests.hostile.clips import synth_walk
 from tests.hostile.mutate import REPO
 
 #: The promise: stopped this soon after the signal, seconds.
@@ -20,13 +20,7 @@ STOP_WITHIN_S = 2.0
 
 @pytest.fixture(scope="module")
 def long_clip(tmp_path_factory):
-    from vidcap.synth import make_motion, synth_clip
-
-    folder = tmp_path_factory.mktemp("longclip")
-    video = folder / "long.mp4"
-    synth_clip(video, folder / "truth.npz", make_motion("walk", n_frames=240), size=(320, 240),
-               rng=np.random.default_rng(1), show_progress=False)
-    return video
+    return synth_walk(tmp_path_factory.mktemp("longclip"), 240, (320, 240), seed=1)
 
 
 def _session_members(sid: int) -> list[int]:
