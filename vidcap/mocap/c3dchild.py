@@ -33,7 +33,7 @@ def _parse(path: str) -> dict:
     c = ezc3d.c3d(path, extract_forceplat_data=False)
     params = {g: {k: {"value": v["value"]} for k, v in grp.items()
                   if isinstance(v, dict) and "value" in v}
-              for g, grp in c["parameters"].items() if g in ("POINT",)}
+              for g, grp in c["parameters"].items() if isinstance(grp, dict)}
     meta = c["data"].get("meta_points", {})
     return {"parameters": params,
             "points": np.asarray(c["data"]["points"], dtype=float),
@@ -48,7 +48,8 @@ def _reason(exc: BaseException) -> str:
 
 
 def read_isolated(path) -> dict:
-    """ezc3d's parse of ``path`` (POINT parameters, points (4, M, F), residuals, header).
+    """ezc3d's parse of ``path`` (every parameter's value, points (4, M, F), residuals,
+    header).
 
     Raises
     ------
