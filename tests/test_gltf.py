@@ -92,6 +92,13 @@ def test_reading_a_non_gltf_fails_cleanly(tmp_path):
     bad.write_bytes(b"glTF\x02\x00\x00\x00garbage")
     with pytest.raises(InputFileError, match="x.glb"):
         read_gltf(bad)
+    good = tmp_path / "good.glb"
+    write_gltf(good, _motion(n_frames=3))
+    raw = bytearray(good.read_bytes())
+    for cut in (40, len(raw) // 2, len(raw) - 8):  # truncated files
+        bad.write_bytes(bytes(raw[:cut]))
+        with pytest.raises(InputFileError, match="x.glb"):
+            read_gltf(bad)
     with pytest.raises(UsageError, match=r"\.glb or \.gltf"):
         write_gltf(tmp_path / "x.obj", _motion(n_frames=2))
 

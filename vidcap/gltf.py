@@ -281,10 +281,16 @@ def write_gltf(path: str | os.PathLike, motion: Motion, *, times=None, end_names
         return [path]
     bin_path = path.with_suffix(".bin")
     doc["buffers"][0]["uri"] = bin_path.name
+    had_bin = bin_path.exists()
     with atomic_path(bin_path) as tmp:
         tmp.write_bytes(data)
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    try:
+        with atomic_path(path) as tmp:
+            tmp.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    except BaseException:
+        if not had_bin:  # no .bin left behind without the .gltf that names it
+            bin_path.unlink(missing_ok=True)
+        raise
     return [path, bin_path]
 
 
@@ -369,11 +375,16 @@ def read_gltf(path: str | os.PathLike) -> GltfMotion:
     path = Path(path)
     doc, data = _read_container(path)
     try:
-        joints = doc["skins"][0]["joints"]
-        nodes = doc["nodes"]
-        anim = doc["animations"][0]
-    except (KeyError, IndexError):
-        raise InputFileError("glTF file has no skin and animation", path) from None
+        return _parse_skin_animation(doc, data, path)
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
+        raise InputFileError(f"glTF file without a readable skin and animation ({exc!r})",
+                             path) from None
+
+
+def _parse_skin_animation(doc: dict, data: bytes, path: Path) -> GltfMotion:
+    joints = doc["skins"][0]["joints"]
+    nodes = doc["nodes"]
+    anim = doc["animations"][0]
     where = {node: k for k, node in enumerate(joints)}
     parents = [-1] * len(joints)
     for k, node in enumerate(joints):
