@@ -11,10 +11,10 @@ armatures' names, the scene's rate and the frame range.
 import json
 import sys
 
-import bpy
-
 
 def main(path: str, fps: float, out: str) -> None:
+    import bpy  # here, so that collecting this file elsewhere does not need Blender
+
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     if path.lower().endswith(".bvh"):
