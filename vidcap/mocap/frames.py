@@ -9,6 +9,7 @@ A segment frame is a rotation ``r`` (F, 3, 3; columns = axes, lab frame) and an 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -74,6 +75,40 @@ def frame_from_axis(c: np.ndarray, p0: np.ndarray, axis: np.ndarray) -> np.ndarr
     return np.stack([x, y, z], axis=-1)
 
 
+@functools.lru_cache(maxsize=1)
+def _kernels():
+    """The compiled rotation fit, or None without numba (imported on first use: ~0.3 s)."""
+    try:
+        from vidcap.mocap._frames_kernels import rotations_from_cross
+    except ImportError:  # pragma: no cover - numba is a declared dependency
+        return None
+    return rotations_from_cross
+
+
+def _rotations_numpy(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotations R (F, 3, 3) with x ≈ R t from cross-covariances h = Σ w t xᵀ (F, 3, 3),
+    and h's singular values (F, 3), descending: the SVD solution (Kabsch 1976)."""
+    u, s, vt = np.linalg.svd(h)
+    v = np.swapaxes(vt, 1, 2)
+    d = np.sign(_det3(u) * _det3(v))  # det(V Uᵀ): a reflection when negative
+    d = np.where(d == 0, 1.0, d)
+    v[:, :, 2] *= d[:, None]
+    return np.matmul(v, np.swapaxes(u, 1, 2)), s
+
+
+def _rotations(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_rotations_numpy`'s contract; the compiled quaternion fit when available."""
+    compiled = _kernels()
+    if compiled is None:
+        return _rotations_numpy(h)
+    return compiled(np.ascontiguousarray(h, dtype=float))
+
+
+def _det3(m: np.ndarray) -> np.ndarray:
+    """Determinants of a stack of 3x3 matrices (..., 3, 3), by the triple product."""
+    return np.sum(m[..., 0] * np.cross(m[..., 1], m[..., 2]), axis=-1)
+
+
 def kabsch(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None = None
            ) -> tuple[np.ndarray, np.ndarray]:
     """Rigid poses mapping a template onto points with gaps, batched over frames.
@@ -109,16 +144,12 @@ def kabsch(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None 
     den = np.maximum(wf.sum(axis=1), _EPS)[:, None]
     xc = (wt * x).sum(1) / den
     tc = (wt * t[None]).sum(1) / den
-    h = np.einsum("fk,fki,fkj->fij", wf, t[None] - tc[:, None], x - xc[:, None])
-    u, s, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(np.einsum("fji,fkj->fik", vt, u)))
-    d = np.where(d == 0, 1.0, d)
-    corr = np.ones((len(d), 3))
-    corr[:, 2] = d
-    r = np.einsum("fji,fj,fkj->fik", vt, corr, u)
+    # (matmul, not three-operand einsums: this runs once per segment and frame)
+    h = np.matmul(np.swapaxes(wt * (t[None] - tc[:, None]), 1, 2), x - xc[:, None])
+    r, s = _rotations(h)
     ok = (cnt >= 3) & (s[:, 1] > 1e-6 * np.maximum(s[:, 0], _EPS))
     r[~ok] = np.nan
-    origin = xc - np.einsum("fij,fj->fi", r, tc)
+    origin = xc - np.matmul(r, tc[..., None])[..., 0]
     origin[~ok] = np.nan
     return r, origin
 
@@ -190,12 +221,12 @@ def frame_noise(template: np.ndarray, weights: np.ndarray | None):
 
 def to_local(r: np.ndarray, o: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Lab points x (F, K, 3) in frames (r (F,3,3), o (F,3)): r^T (x - o)."""
-    return np.einsum("fij,fki->fkj", r, x - o[:, None])
+    return np.matmul(x - o[:, None], r)  # row k: (x_k - o)ᵀ r = (rᵀ (x_k - o))ᵀ
 
 
 def to_lab(r: np.ndarray, o: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Constant local point v (3,) per frame in the lab: o + r v, (F, 3)."""
-    return o + np.einsum("fij,j->fi", r, v)
+    return o + np.matmul(r, np.asarray(v, dtype=float))
 
 
 def nanmedian_rows(y: np.ndarray) -> np.ndarray:
@@ -258,7 +289,7 @@ def rigid_residual_var(frames: list[SegFrames], pts: list[np.ndarray]) -> float:
     """
     ss, dof = 0.0, 0
     for f, x in zip(frames, pts, strict=True):
-        pred = f.o[:, None] + np.einsum("fij,kj->fki", f.r, f.template[: x.shape[1]])
+        pred = f.o[:, None] + np.matmul(f.template[: x.shape[1]], np.swapaxes(f.r, 1, 2))
         res = np.sum((x - pred) ** 2, axis=2)  # (F, K)
         ok = np.isfinite(res)
         k = ok.sum(axis=1)
