@@ -151,3 +151,15 @@ def test_cli_static_report_provenance_and_warnings(cli, shared_data, tmp_path):
     before = cal.read_bytes()
     r = cli("joints", mot, "--static", cal, "--report", cal, timeout=60)
     assert r.returncode == 2 and cal.read_bytes() == before
+
+
+def test_rejected_fit_between_named_landmarks_takes_their_midpoint(shared_data):
+    """Qualisys's right wrist barely moves (its fit is rejected); its set names the
+    styloids straddling it, so the centre is their midpoint in every frame."""
+    trial = read_c3d(shared_data("c3d/Qualisys.c3d"))
+    sol = solve_joints(trial)
+    rep = sol.report("r_wrist")
+    assert rep.method == "anatomical" and "R_RSP/R_UHE" in rep.note and not rep.warning()
+    mid = (trial.marker("R_RSP") + trial.marker("R_UHE")) / 2
+    ok = np.isfinite(mid).all(axis=1)
+    np.testing.assert_allclose(sol.position("r_wrist")[ok], mid[ok], atol=1e-12)

@@ -373,8 +373,12 @@ def anatomical_centre(spec: SegmentSpec, trials: Sequence[MarkerData],
     frame where the set defines one (``spec.chord``) and the fit is poorly conditioned
     (:func:`poor_fit_reason`) or lies more than :data:`AGREE_MM` from it (soft tissue
     read as joint motion); the fit's report keeps its residual, condition and range of
-    motion, its method becomes ``'anatomical'``.
+    motion, its method becomes ``'anatomical'``. A joint whose set names the landmarks
+    straddling it (``axis_anchor``: epicondyles, malleoli, styloids) and whose fit was
+    rejected takes their midpoint per frame (:func:`landmark_midpoint_centre`).
     """
+    if spec.axis_anchor and fit.report.flagged:
+        return landmark_midpoint_centre(spec, trials, parent_frames, fit)
     if not spec.chord or parent_joint_lab is None:
         return fit
     wand, marker = spec.chord
@@ -400,6 +404,24 @@ def anatomical_centre(spec: SegmentSpec, trials: Sequence[MarkerData],
     rep = replace(fit.report, method="anatomical", note=note, flagged=False,
                   center_local_m=[float(a) for a in v])
     return JointCentre(v, None, fit.axis, rep, fit.own_frames, lab_centres=tuple(lab))
+
+
+def landmark_midpoint_centre(spec: SegmentSpec, trials: Sequence[MarkerData],
+                             parent_frames: Sequence[SegFrames], fit: JointCentre
+                             ) -> JointCentre:
+    """The midpoint of the landmarks straddling the joint (``spec.axis_anchor``, e.g. the
+    femoral epicondyles for the knee) per frame, for a joint whose fit was rejected."""
+    lab = [np.mean(markers_of(t, spec.axis_anchor), axis=1) for t in trials]
+    local = [to_local(pf.r, pf.o, c[:, None])[:, 0] for c, pf in zip(lab, parent_frames,
+                                                                     strict=True)]
+    v = nanmedian_rows(np.concatenate(local))
+    if not np.isfinite(v).all():
+        return fit
+    note = (f"midpoint of {'/'.join(spec.axis_anchor)} per frame; the fit: "
+            f"{fit.report.note.split(';')[0]}")
+    rep = replace(fit.report, method="anatomical", note=note, flagged=False,
+                  center_local_m=[float(a) for a in v])
+    return JointCentre(v, None, None, rep, fit.own_frames, lab_centres=tuple(lab))
 
 
 def static_offsets(static: MarkerData, ms: MarkerSet, opts: SolveOptions) -> dict:
