@@ -18,6 +18,7 @@ _EPS = 1e-9
 
 
 def unit(v: np.ndarray) -> np.ndarray:
+    """Unit vectors along the last axis (..., D); NaN where the length is ~0."""
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(n > _EPS, v / n, np.nan)
@@ -239,6 +240,10 @@ def nanmedian_rows(y: np.ndarray) -> np.ndarray:
 
 @dataclass
 class SegFrames:
+    """One segment's frames over a trial: rotations ``r`` (F, 3, 3; columns = axes, lab),
+    origins ``o`` (F, 3, metres), the template (K, 3) of its points in its own frame
+    and their weights (relative inverse variances; None: all 1)."""
+
     r: np.ndarray  # (F, 3, 3)
     o: np.ndarray  # (F, 3)
     template: np.ndarray  # (K, 3)
@@ -246,6 +251,7 @@ class SegFrames:
 
     @property
     def valid(self) -> np.ndarray:
+        """(F,) bool: frames whose rotation is known."""
         return np.isfinite(self.r).all(axis=(1, 2))
 
 
@@ -272,6 +278,8 @@ def frames_from_points(pts: np.ndarray) -> SegFrames:
 
 
 def frames_from_centre_axis(c: np.ndarray, p0: np.ndarray, axis_lab: np.ndarray) -> SegFrames:
+    """Frames of a one-marker segment (seed 000 §2.5 case 1): origin at the joint centre
+    ``c`` (F, 3), axes from the marker ``p0`` (F, 3) and the lab axis (F, 3)."""
     r = frame_from_axis(c, p0, axis_lab)
     o = c.copy()
     ok = np.isfinite(r).all(axis=(1, 2)) & np.isfinite(o).all(axis=1)
