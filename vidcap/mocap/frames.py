@@ -238,7 +238,7 @@ def nanmedian_rows(y: np.ndarray) -> np.ndarray:
     return np.median(y[ok], axis=0)
 
 
-@dataclass
+@dataclass(frozen=True)
 class SegFrames:
     """One segment's frames over a trial: rotations ``r`` (F, 3, 3; columns = axes, lab),
     origins ``o`` (F, 3, metres), the template (K, 3) of its points in its own frame
