@@ -116,7 +116,7 @@ def main(argv=None):
         results["Dask --scheduler local:2 (cluster start timed)"] = timed(
             run_dask(tasks("cold"), f"local:{WORKERS}", outdir=d / "cold")) + ("cold",)
         with LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True,
-                          host="127.0.0.1", dashboard_address=None,
+                          host="127.0.0.1", dashboard_address="127.0.0.1:0",
                           silence_logs=logging.ERROR) as cluster, \
                 Client(cluster, set_as_default=False) as client:
             (d / "warmup").mkdir()  # the steady state: each worker has converted a clip

@@ -42,7 +42,7 @@ def cluster():
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
             distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                     host="127.0.0.1", dashboard_address=None,
+                                     host="127.0.0.1", dashboard_address="127.0.0.1:0",
                                      silence_logs=50) as c, \
             distributed.Client(c, set_as_default=False) as client:
         yield c.scheduler_address, client

@@ -44,7 +44,8 @@ def connect(scheduler: str, *, default_workers: int = 1, timeout: float = 10.0):
     """Yield a ``distributed.Client`` on ``scheduler`` (``tcp://HOST:PORT`` or ``local[:N]``).
 
     ``local[:N]`` starts a ``LocalCluster`` of N single-thread worker processes on
-    the loopback interface (no dashboard) and stops it afterwards.
+    the loopback interface and stops it afterwards; the scheduler's HTTP server (which
+    Dask always starts) takes a free loopback port, never the user's 8787.
 
     Raises
     ------
@@ -60,7 +61,7 @@ def connect(scheduler: str, *, default_workers: int = 1, timeout: float = 10.0):
         if kind == "local":
             cluster = stack.enter_context(LocalCluster(
                 n_workers=value, threads_per_worker=1, processes=True, host="127.0.0.1",
-                dashboard_address=None, silence_logs=logging.ERROR))
+                dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR))
             address = cluster.scheduler_address
         else:
             address = value
