@@ -29,13 +29,9 @@ KERNEL_FILES = frozenset({"vidcap/fit/_kernels.py"})
 #: lands (none left). Their import circles still count.
 BEING_SPLIT: frozenset[str] = frozenset()
 
-#: Import circles left to break, as sets of module names. The plate's second pass
-#: (issue 26, landed today) needs the silhouettes, and ``estimate_background`` runs it:
-#: background -> platepass -> silhouette -> background (lazy imports).
-CIRCLES_BEING_BROKEN = frozenset({
-    frozenset({"vidcap.background", "vidcap.inputchecks", "vidcap.platepass",
-               "vidcap.silhouette"}),
-})
+#: Import circles left to break, as sets of module names (none left: the plate's
+#: second pass has its own person mask and the medians live in vidcap.platemedian).
+CIRCLES_BEING_BROKEN: frozenset[frozenset[str]] = frozenset()
 
 
 def _sources() -> dict[str, Path]:

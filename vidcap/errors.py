@@ -53,3 +53,7 @@ class FitError(VidcapError):
 
 class UsageError(VidcapError):
     """A command-line option or argument is invalid."""
+
+
+class BackgroundError(VidcapError):
+    """The background cannot be estimated from the video given."""

@@ -12,6 +12,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from vidcap.errors import BackgroundError
+
 __all__ = ["camera_shift", "check_samples", "plate_notice"]
 
 #: Fewest frames a plate is estimated from (fewer: give --background).
@@ -25,7 +27,7 @@ MIN_CHANGED = 0.25
 
 
 def check_samples(frames: np.ndarray, name=None) -> None:
-    """Raise :class:`vidcap.background.BackgroundError` for frames no plate can come from.
+    """Raise :class:`vidcap.errors.BackgroundError` for frames no plate can come from.
 
     Parameters
     ----------
@@ -34,8 +36,6 @@ def check_samples(frames: np.ndarray, name=None) -> None:
     name : str or path-like, optional
         The video, for the message.
     """
-    from vidcap.background import BackgroundError
-
     k = len(frames)
     if k < 2:
         raise BackgroundError(

@@ -95,7 +95,7 @@ def _with_still_parts(model, frames, gains, small_hw):
 
 
 def _with_self_lit(model, frames, gains, small_hw):
-    from vidcap.background import _masked_median
+    from vidcap.platemedian import masked_median as _masked_median
     from vidcap.stillparts import self_lit
 
     k, hh, ww = frames.shape[:3]
@@ -117,9 +117,30 @@ def _with_self_lit(model, frames, gains, small_hw):
     return replace(model, plate=plate, self_lit=lit, never_seen=never, noise_map=noise_map)
 
 
+def _person_masks(model, frames, gains) -> np.ndarray:
+    """The samples' person with the first plate, (K, H, W) uint8 0/1: pixels beyond
+    the per-pixel threshold (self-lit ones compared unscaled), de-specked, in blobs
+    of at least 0.2 % of the frame, holes filled. (A lean version of the silhouette
+    stage: the dilation that follows covers its rough outline.)"""
+    k, hh, ww = frames.shape[:3]
+    tmap = np.maximum(model.threshold, 3.0 * model.noise_map).astype(np.float32)
+    min_area = max(16, int(2e-3 * hh * ww))
+    out = np.zeros((k, hh, ww), np.uint8)
+    for t in range(k):
+        ref = model.plate.astype(np.float32) * gains[t]
+        if model.self_lit is not None:
+            ref[model.self_lit] = model.plate[model.self_lit]
+        l1 = np.abs(frames[t].astype(np.float32) - ref).sum(axis=-1)
+        fg = cv2.medianBlur((l1 > tmap).astype(np.uint8), 3)
+        contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        big = [c for c in contours if cv2.contourArea(c) >= min_area]
+        if big:
+            cv2.drawContours(out[t], big, -1, 1, cv2.FILLED)
+    return out
+
+
 def _second_pass(model, frames, gains):
-    from vidcap.background import _robust_plate
-    from vidcap.silhouette import extract_silhouettes
+    from vidcap.platemedian import robust_plate as _robust_plate
 
     k, hh, ww = frames.shape[:3]
     if k < 4 or not model.never_seen.any():
@@ -129,12 +150,12 @@ def _second_pass(model, frames, gains):
     r = max(3, int(round(0.03 * hh)))
     guessed = cv2.dilate(model.never_seen.view(np.uint8),
                          np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
-    sil = extract_silhouettes(frames, model, require_person=False, progress=False)
-    if not sil.found.any():
+    masks = _person_masks(model, frames, gains)
+    if not masks.any():
         return model
     r = max(1, int(round(PERSON_MARGIN * hh)))
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-    covered = np.stack([cv2.dilate(np.asarray(m, np.uint8), kernel) for m in sil.masks])
+    covered = np.stack([cv2.dilate(m, kernel) for m in masks])
     seen = (covered == 0).astype(np.uint8)
     count = seen.sum(axis=0, dtype=np.int32)
     enough = count >= max(3, int(np.ceil(MIN_SEEN_SHARE * k)))
