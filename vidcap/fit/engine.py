@@ -4,7 +4,7 @@ Built once per :class:`~vidcap.fit.normalise.NormalisedMask`, it holds what ever
 move of that frame's fit reads and nothing a move changes: the silhouette and its
 count tables, the model's segment lengths and radii at the body's height, and the
 joints and similarity of the states scored so far (caches keyed on the state's
-value). A pose is a :class:`~vidcap.fit.state.FitState`.
+value, memoised on the states). A pose is a :class:`~vidcap.fit.state.FitState`.
 
 Backends: each operation with a compiled and a numpy path is a thin dispatcher over
 a ``*_compiled``/``*_numpy`` pair with one contract; :func:`fit_kernels` makes the
@@ -33,7 +33,6 @@ from vidcap.fit.similarity import similarity_from_counts
 from vidcap.fit.state import FitState
 
 _TABLE_0 = np.zeros(1, np.int64)  # one candidate counted against table 0
-_CACHED = 16  # states whose joints / similarity an engine keeps
 
 
 def fit_kernels():
@@ -84,32 +83,25 @@ class _MaskEngine:
         self.sil_c = _carray(self.sil, np.bool_)  # what the kernels read
         self.L_c = _carray(self.L, np.float64)
         self.R_c = _carray(self.R, np.float64)
-        self._joints: dict = {}
-        self._similarity: dict = {}
 
     # -- a state's joints and similarity ------------------------------------------
-    @staticmethod
-    def _key(st: FitState):
-        return (st.root.tobytes(), st.angles.tobytes(), st.fore.tobytes(), st.spread)
-
+    # Memoised on the state itself (a FitState is never changed; FitState.replace
+    # passes a memo on only while the fields it depends on are the same).
     def _posed(self, st: FitState):
-        key = self._key(st)
-        hit = self._joints.get(key)
-        if hit is None:
-            if len(self._joints) >= _CACHED:
-                self._joints.clear()
+        memo = st.__dict__.get("_joints")
+        if memo is None or memo[0] is not self:
             j = pose_joints(self, st)
-            hit = self._joints[key] = (j, j[_PROX], j[_DIST])
-        return key, hit
+            memo = st.__dict__["_joints"] = (self, j, j[_PROX], j[_DIST])
+        return memo
 
     def joints(self, st: FitState) -> np.ndarray:
         """Joints of ``st``, (15, 2), normalised pixels (shared: not to be written to)."""
-        return self._posed(st)[1][0]
+        return self._posed(st)[1]
 
     def ends(self, st: FitState) -> tuple[np.ndarray, np.ndarray]:
         """Every segment's proximal and distal joint in ``st``, each (10, 2)."""
-        hit = self._posed(st)[1]
-        return hit[1], hit[2]
+        memo = self._posed(st)
+        return memo[2], memo[3]
 
     def model(self, st: FitState, segments=None) -> np.ndarray:
         """The drawn segments of ``st`` (or ``segments``) as a mask (h, w), bool."""
@@ -119,15 +111,12 @@ class _MaskEngine:
 
     def similarity(self, st: FitState) -> float:
         """S (Eq. 3.3) of the drawn model of ``st`` against the whole silhouette."""
-        key = (self._posed(st)[0], st.drawn.tobytes())  # the pose and what is drawn
-        s = self._similarity.get(key)
-        if s is None:
-            if len(self._similarity) >= _CACHED:
-                self._similarity.clear()
+        memo = st.__dict__.get("_similarity")
+        if memo is None or memo[0] is not self:
             d = drawn_counts(self, st)
-            s = self._similarity[key] = similarity_from_counts(int(self.sil_rows[-1]),
-                                                               int(d[0]), int(d[1]))
-        return s
+            s = similarity_from_counts(int(self.sil_rows[-1]), int(d[0]), int(d[1]))
+            memo = st.__dict__["_similarity"] = (self, s)
+        return memo[1]
 
     def rows(self, rows) -> tuple[int, int]:
         """A search's rows ``(r0, r1)``: all of them (None), or ``rows`` within the image."""

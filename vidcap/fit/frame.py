@@ -9,8 +9,6 @@ door: it checks the options once.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from vidcap.fit.engine import _MaskEngine
@@ -60,8 +58,8 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     st = place_torso(eng, FitState.rest(spread=fixed))
     warm = False
     if previous is not None:
-        st = dataclasses.replace(
-            st, angles=np.array(previous.angles, dtype=float),
+        st = st.replace(
+            angles=np.array(previous.angles, dtype=float),
             fore=np.array(previous.foreshortening, dtype=float),
             spread=float(previous.spread) if searched else fixed,
             drawn=np.ones(10, dtype=bool))
@@ -73,7 +71,7 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     if warm:
         return _fit_warm(eng, st, options, searched), False, True
     # a fresh fit from the rest pose (where a warm start was tried: at its root and spread)
-    st = dataclasses.replace(st, angles=np.deg2rad(REST_DEG), fore=np.ones(10),
+    st = st.replace(angles=np.deg2rad(REST_DEG), fore=np.ones(10),
                              drawn=np.zeros(10, dtype=bool))
     st, crossed = _fit_fresh(eng, st, options, searched)
     return st, crossed, False

@@ -9,7 +9,6 @@ other hips (:func:`untangle_thighs`).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 
 import numpy as np
@@ -64,7 +63,7 @@ def verify_crossing(eng: _MaskEngine, st: FitState, legs: Callable[[FitState], F
     """
     def other(kept: FitState) -> FitState:
         cur = swap_lower_legs(kept)
-        cur = dataclasses.replace(cur, spread=kept.spread if not spread else 0.5)
+        cur = cur.replace(spread=kept.spread if not spread else 0.5)
         return legs(cur)
 
     def straighter_kept(new: FitState, kept: FitState) -> bool:

@@ -9,7 +9,6 @@ reads it, the :class:`~vidcap.fit.search.SearchResult`). Algorithm 6
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from dataclasses import dataclass
 
@@ -253,7 +252,7 @@ def search_spread(eng: _MaskEngine, st: FitState, *, start=None, interval=None,
     ends.action = (SEARCH_POSE_SPREAD, [0], [0.0], NOWHERE, 0.0, fixed_ends)
     res = search(eng, st, ends, uppers, None, 0.0, 1.0, divisions=4, min_step=min_step,
                  start=start, interval=interval, prefer=0.5)
-    st = dataclasses.replace(st, spread=res.value)
+    st = st.replace(spread=res.value)
     vec = fixed_ends - eng.joints(st)[_PROX[uppers]]
     st = st.with_entries(angles=(uppers, image_angle(vec)),
                          fore=(uppers, np.clip(np.hypot(*vec.T) / eng.L[uppers], 1e-3, 1.0)))
@@ -286,7 +285,7 @@ def search_root(eng: _MaskEngine, st: FitState, axis: int, half_range: float, *,
     k = best[np.argmin(np.abs(shifts[best]))]
     root = st.root.copy()
     root[axis] += shifts[k]
-    return dataclasses.replace(st, root=root), scores[k]
+    return st.replace(root=root), scores[k]
 
 
 __all__ = ["search_angle", "search_group", "search_root", "search_spread"]

@@ -8,7 +8,6 @@ that turns out worse is undone by keeping the state it started from
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -56,6 +55,22 @@ class FitState:
         return cls(np.zeros(2), np.deg2rad(REST_DEG), np.ones(10), float(spread),
                    np.zeros(10), np.zeros(10), np.zeros(10, dtype=bool))
 
+    def replace(self, **changes) -> FitState:
+        """:func:`dataclasses.replace` without its per-call set-up (every move makes
+        a state): the fields in ``changes`` replaced, the rest shared. What an engine
+        memoised on this state (its joints, its S) goes along where the fields it
+        depends on are unchanged."""
+        new = object.__new__(FitState)
+        memo = new.__dict__
+        memo.update(self.__dict__)
+        if not _POSE.isdisjoint(changes):
+            memo.pop("_joints", None)
+            memo.pop("_similarity", None)
+        elif "drawn" in changes:
+            memo.pop("_similarity", None)
+        memo.update(changes)
+        return new
+
     def with_entries(self, **entries) -> FitState:
         """A copy with some entries of array fields set: ``field=(index, values)``
         (``index`` as numpy indexing takes it), e.g. ``st.with_entries(angles=(3, a),
@@ -65,13 +80,16 @@ class FitState:
             a = getattr(self, name).copy()
             a[index] = values
             changed[name] = a
-        return dataclasses.replace(self, **changed)
+        return self.replace(**changed)
 
     def drawing(self, segments) -> FitState:
         """This state with ``segments`` drawn (``slice(None)``: all of them)."""
-        if np.all(self.drawn[segments]):
+        if self.drawn[segments].all():
             return self
         return self.with_entries(drawn=(segments, True))
+
+
+_POSE = frozenset({"root", "angles", "fore", "spread"})  # what the joints depend on
 
 
 def hang(st: FitState) -> float:

@@ -8,8 +8,6 @@ about the neck (:func:`search_torso_about_neck`).
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from vidcap.fit.candidates import pose_ends, search
@@ -42,7 +40,7 @@ def place_torso(eng: _MaskEngine, st: FitState) -> FitState:
     x = _band_middle_numpy(band) if kernels is None else _band_middle_compiled(kernels, band)
     if x is None:
         x = float(np.median(np.nonzero(eng.sil)[1]))
-    return dataclasses.replace(st, root=np.array([x, pelvis_y]))
+    return st.replace(root=np.array([x, pelvis_y]))
 
 
 def _band_middle_compiled(kernels, band) -> float | None:
@@ -124,7 +122,7 @@ def search_torso_about_neck(eng: _MaskEngine, st: FitState, *, start, interval, 
                  start=start, interval=interval)
     st = st.with_entries(angles=(seg, res.value), scores=(seg, res.score),
                          margins=(seg, res.margin))
-    return dataclasses.replace(st, root=neck - direction(res.value) * length), res
+    return st.replace(root=neck - direction(res.value) * length), res
 
 
 __all__ = ["fit_torso_head", "place_torso", "search_torso_about_neck"]

@@ -20,6 +20,8 @@ from vidcap.fit.frame import fit_frame
 from vidcap.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.fit.options import FitOptions
 from vidcap.fit.result import FramePose, Pose2D
+from vidcap.fit.temporal import label_path
+from vidcap.fit.temporal import relabel as temporal_relabel
 from vidcap.masks import MaskStack
 
 #: Normalised silhouettes :func:`fit_sequence` keeps for backward re-tracking (frames)
@@ -30,7 +32,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  progress=None, reinit_every: int = 10, spread_window: int = 31,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
-                 body_tolerance: float = 0.05, **kw) -> Pose2D:
+                 body_tolerance: float = 0.05, relabel: bool = True, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -78,6 +80,11 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
         if its similarity is higher. 0 window: off.
+    relabel : bool
+        Tracked mode: after the priors, relabel the limb pairs over the clip by the
+        solve over time (:func:`vidcap.fit.temporal.label_path`), so a fresh fit
+        whose image-side names came out swapped against its neighbours (for one
+        frame or from then on) is outvoted by them.
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.fit.options.FitOptions`): a misspelled
@@ -109,6 +116,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                                   out.height.copy(), out)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out)
+    if tracked and relabel:
+        swaps = label_path(out.joints, out.height, out.linked)
+        temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
+                          "scores": out.scores, "margins": out.margins}, swaps)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
                   out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
 
@@ -166,6 +177,7 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
+        out.linked[k] = fp.warm
         if tracked and prev is not None and not fp.warm and back_tie is not None:
             _retrack_backward(normalised, out, fp, range(k - 1, start - 1, -1), back_tie,
                               options)
@@ -191,6 +203,7 @@ def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, fram
                 and fit_frame(nb, options=options).similarity > fb.similarity):
             break
         out.put(b, fb)
+        out.linked[b + 1], out.linked[b] = True, False  # b's labels came from b + 1's
         back = fb
 
 
@@ -207,6 +220,7 @@ class _Frames:
         self.sim = np.zeros(n)
         self.warm = np.zeros(n, dtype=bool)
         self.height = np.full(n, np.nan)  # the body height the model was drawn at, px
+        self.linked = np.zeros(n, dtype=bool)  # labels carried from the frame before
 
     def put(self, k: int, fp: FramePose, *, warm: bool = True) -> None:
         """Store frame k's fit (``warm``: its warm flag too)."""
@@ -307,6 +321,7 @@ def _refit_body_height(masks, window, tolerance, options: FitOptions, height, ou
             fp = fit_frame(norm, previous=prev, options=options)
             if fp.similarity > out.sim[k]:
                 out.put(k, fp)
+                out.linked[k] = fp.warm
                 used[k] = body[k]
                 prev = fp
                 continue
