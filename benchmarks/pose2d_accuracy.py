@@ -35,7 +35,8 @@ is more than 5 % from the body's.
 ``walk``, ``jacks`` and ``arms``, yaws 30-150), tracked, with the whole-leg grid and
 the 31-frame spread window each turned off in turn: single 60-frame clips move by a
 few points with any change to the search, so the mean over clips nobody tuned on is
-the steadier figure.
+the steadier figure. It also counts label flips of the default fit, and of the same fit
+relabelled by the solve over time (``fit_sequence(relabel=True)``).
 
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]``
@@ -217,9 +218,11 @@ def held_out(frames: int = 60) -> int:
     variants = (("default", {}), ("no leg grid", {"leg_grid": False}),
                 ("spread window 15", {"spread_window": 15}))
     print(f"Tracked 2D fit on held-out clips ({frames} frames, 640x480, 30 fps): "
-          "PCK@0.05 of all joints")
-    print(f"{'clip':16} {'yaw':>4} " + " ".join(f"{v:>16}" for v, _ in variants))
-    table = []
+          "PCK@0.05 of all joints; label flips without and with the solve over time "
+          "(relabel=True)")
+    print(f"{'clip':16} {'yaw':>4} " + " ".join(f"{v:>16}" for v, _ in variants)
+          + f" {'flips':>5} {'relabelled':>10}")
+    table, flips = [], []
     for name, source, first, yaws in HELD_OUT:
         if source in full:
             n = len(full[source].root_positions)
@@ -233,13 +236,23 @@ def held_out(frames: int = 60) -> int:
             tj = truth["joints2d"]
             hpx = body_height_px(tj)[:, None]
             row = []
-            for _, kw in variants:
-                err, _ = side_agnostic_errors(fit_sequence(truth["masks"], **kw).joints2d, tj)
+            for label, kw in variants:
+                joints = fit_sequence(truth["masks"], **kw).joints2d
+                err, _ = side_agnostic_errors(joints, tj)
                 row.append(summarise(err / hpx)["pck05"])
+                if label == "default":
+                    flip = [label_flips(joints, tj, hpx)]
+            # the same fit relabelled by the solve over time
+            flip.append(label_flips(fit_sequence(truth["masks"], relabel=True).joints2d, tj,
+                                    hpx))
             table.append(row)
-            print(f"{name:16} {yaw:>4g} " + " ".join(f"{v:16.1%}" for v in row), flush=True)
+            flips.append(flip)
+            print(f"{name:16} {yaw:>4g} " + " ".join(f"{v:16.1%}" for v in row)
+                  + f" {flip[0]:5d} {flip[1]:10d}", flush=True)
     mean = np.mean(table, axis=0)
-    print(f"{'mean':16} {'':>4} " + " ".join(f"{v:16.2%}" for v in mean))
+    total = np.sum(flips, axis=0)
+    print(f"{'mean / total':16} {'':>4} " + " ".join(f"{v:16.2%}" for v in mean)
+          + f" {total[0]:5d} {total[1]:10d}")
     return 0
 
 

@@ -516,3 +516,23 @@ def test_spread_prior_refits_a_misread_frame():
     assert out.spread[0] == pytest.approx(0.8)
     # where the fits of the frames after it put them (the model's own placement)
     assert np.linalg.norm(out.joints[0][hips] - out.joints[1][hips], axis=1).max() / H < 0.01
+
+
+def test_relabel_only_renames_limbs_of_a_tracked_fit():
+    # a front-view step: with the solve over time each frame holds the same joints as
+    # without it, each limb pair either as fitted or swapped, and the pose is tracked
+    from vidcap.body import LIMB_PAIR_JOINTS
+
+    masks = np.stack([_figure([90, 90, 250, 290, 265, 275, 262 + k, 275 - k, 280 - k, 266 + k],
+                              spread=0.9)[0] for k in range(0, 12, 2)])
+    plain = fit_sequence(masks)
+    named = fit_sequence(masks, relabel=True)
+    assert named.tracked and named.warm[1:].any()
+    for pair in ("arms", "legs"):
+        left, right = (list(x) for x in LIMB_PAIR_JOINTS[pair])
+        for k in range(len(masks)):
+            a, b = plain.joints2d[k], named.joints2d[k]
+            kept = np.array_equal(a[left + right], b[left + right])
+            swapped = np.array_equal(a[left + right], b[right + left])
+            assert kept or swapped
+    np.testing.assert_array_equal(plain.similarity, named.similarity)

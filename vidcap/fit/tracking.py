@@ -32,7 +32,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  progress=None, reinit_every: int = 10, spread_window: int = 31,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
-                 body_tolerance: float = 0.05, relabel: bool = True, **kw) -> Pose2D:
+                 body_tolerance: float = 0.05, relabel: bool = False, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -84,7 +84,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
         solve over time (:func:`vidcap.fit.temporal.label_path`), so a fresh fit
         whose image-side names came out swapped against its neighbours (for one
-        frame or from then on) is outvoted by them.
+        frame or from then on) is outvoted by them. Off by default: a clip fitted in
+        chunks (:mod:`vidcap.fit.parallel`) would be relabelled chunk by chunk, which
+        can differ from the whole clip's solve.
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.fit.options.FitOptions`): a misspelled

@@ -1,0 +1,103 @@
+"""2D pose on real clips against MediaPipe Pose's landmarks (issue 27).
+
+For every real single-person clip with silhouettes (today: Weizmann ``ido_walk.avi`` with
+the dataset's own silhouettes, ``../shared/data/video``), fits the model tracked
+(``fit_sequence``'s defaults) and scores the 12 limb joints (shoulders, elbows, wrists,
+hips, knees, ankles) against MediaPipe Pose's landmarks with the reference tool's
+``compare.py``: per joint the median distance and the share of frames where vidcap and
+MediaPipe disagree by more than 10 % of the height (the larger side of the box around
+MediaPipe's 33 landmarks, about 0.9 of stature). MediaPipe is a reference, not the truth
+(about 2.4 % of height off on lab footage). vidcap's ``l_*``/``r_*`` are image-side labels,
+so each frame's arms and legs are matched either way round ("swap" in compare.py).
+
+The reference's output is cached as ``$VIDCAP_DATA/fit2d/<clip>.mediapipe.npz`` (outside
+git); when absent it is made with the reference tool
+(``/work/shared/tools/mediapipe-reference``, set up in
+``~/.cache/vidcap-mediapipe-reference``), and the clip is skipped, saying why, when neither
+exists. No clip here chose a threshold of the fit (validation).
+
+Usage: ``PYTHONPATH=. python benchmarks/pose2d_real.py``
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from vidcap.fit.tracking import fit_sequence  # noqa: E402
+
+SHARED = REPO.parent / "shared"
+TOOL = SHARED / "tools" / "mediapipe-reference"
+TOOL_PY = Path.home() / ".cache" / "vidcap-mediapipe-reference" / "bin" / "python"
+#: (name, video, silhouettes .npz and its key)
+CLIPS = (("ido_walk", SHARED / "data" / "video" / "ido_walk.avi",
+          SHARED / "data" / "video" / "ido_walk_masks.npz", "masks"),)
+LIMB_JOINTS = tuple(f"{s}_{j}" for j in ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")
+                    for s in "lr")
+
+
+def reference(name: str, video: Path) -> Path | None:
+    """MediaPipe's landmarks of ``video`` (cached), or None with a note why not."""
+    data = os.environ.get("VIDCAP_DATA")
+    if not data:
+        print(f"{name}: skipped (VIDCAP_DATA is not set: where the reference is cached)")
+        return None
+    out = Path(data) / "fit2d" / f"{name}.mediapipe.npz"
+    if out.exists():
+        return out
+    if not TOOL_PY.exists():
+        print(f"{name}: skipped (no cached reference and no MediaPipe tool at {TOOL_PY})")
+        return None
+    out.parent.mkdir(parents=True, exist_ok=True)
+    subprocess.run([str(TOOL_PY), str(TOOL / "reference.py"), str(video), str(out)], check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return out
+
+
+def score(ref: Path, masks: np.ndarray) -> dict:
+    """compare.py's joint scores of the tracked fit to ``masks`` against ``ref``."""
+    pose = fit_sequence(masks)
+    with tempfile.TemporaryDirectory() as tmp:
+        pred = Path(tmp) / "pose2d.npz"
+        pose.save(pred)
+        run = subprocess.run([sys.executable, str(TOOL / "compare.py"), str(ref), str(pred),
+                              "--json"], check=True, capture_output=True, text=True)
+    return json.loads(run.stdout)["joints"]
+
+
+def main() -> int:
+    print("2D pose on real clips: 12 limb joints against MediaPipe Pose (image-side labels "
+          "matched either way per frame)")
+    print(f"{'clip':10} {'joint':11} {'median':>7} {'>10 %':>6}")
+    for name, video, masks_file, key in CLIPS:
+        if not (video.exists() and masks_file.exists()):
+            print(f"{name}: skipped ({video.name} or {masks_file.name} absent)")
+            continue
+        ref = reference(name, video)
+        if ref is None:
+            continue
+        with np.load(masks_file) as d:
+            masks = d[key].astype(bool)
+        res = score(ref, masks)
+        medians = []
+        for joint in LIMB_JOINTS:
+            s = res["joints"][joint]["swap"]
+            medians.append(s["median"])
+            print(f"{name:10} {joint:11} {s['median']:7.1%} {1 - s['pck10']:6.0%}")
+        print(f"{name:10} {'12 joints':11} {np.median(medians):7.1%}   (median of the joints' "
+              f"medians; {res['frames_with_reference']} frames, height "
+              f"{res['median_height_px']:.0f} px)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
