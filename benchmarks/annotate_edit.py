@@ -1,9 +1,9 @@
 """How long one edit on the annotate page takes (the issue's target: < 100 ms).
 
 "page edit": what the page waits for: the annotation event, resolving all events, re-solving
-the frames the edit reaches (the clip solve, ``vidcap.solve.local``; with ``--lift
+the frames the edit reaches (the clip solve, ``vidcap.video.solve.local``; with ``--lift
 segment`` re-lifting the clip with the current proposals), the atomic save. "full 3D
-stage": what the page then runs in a worker thread and redraws (``vidcap.lifting.lift_pose``:
+stage": what the page then runs in a worker thread and redraws (``vidcap.video.lifting.lift_pose``:
 the proposals with the user's signs as constraints and the whole clip's solve), measured
 once per clip length.
 
@@ -27,7 +27,7 @@ sys.path[:0] = [str(REPO), str(REPO / "tests" / "ui")]
 from clips import truth_clip  # noqa: E402
 from vidcap.ui.session import AnnotateSession, ClipData  # noqa: E402
 
-from vidcap.lift import lift  # noqa: E402
+from vidcap.video.lift import lift  # noqa: E402
 
 TARGET_MS = 100.0
 

@@ -23,11 +23,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from vidcap.background import estimate_background  # noqa: E402
-from vidcap.fit.parallel import default_jobs  # noqa: E402
-from vidcap.pipeline import convert  # noqa: E402
+from vidcap.io.video import iter_frames  # noqa: E402
 from vidcap.synth import synth_clip  # noqa: E402
-from vidcap.video import iter_frames  # noqa: E402
+from vidcap.video.background import estimate_background  # noqa: E402
+from vidcap.video.fit.parallel import default_jobs  # noqa: E402
+from vidcap.video.pipeline import convert  # noqa: E402
 
 
 def main(argv=None):

@@ -24,10 +24,10 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from vidcap.body import JOINT_NAMES, BodyModel  # noqa: E402
-from vidcap.gltf import gltf_document  # noqa: E402
+from vidcap.io.gltf import gltf_document  # noqa: E402
+from vidcap.io.motionfile import write_motion  # noqa: E402
+from vidcap.io.rigs import get_rig, retarget  # noqa: E402
 from vidcap.kinematics import Motion  # noqa: E402
-from vidcap.motionfile import write_motion  # noqa: E402
-from vidcap.rigs import get_rig, retarget  # noqa: E402
 
 
 def _motion(n_frames: int) -> Motion:

@@ -28,8 +28,8 @@ sys.path.insert(0, str(ROOT / "tests" / "mocap"))
 
 from synthetic import ASF_07, BVH_131, attach_markers  # noqa: E402
 
-from vidcap.asf import read_asf_amc  # noqa: E402
-from vidcap.bvh import read_bvh  # noqa: E402
+from vidcap.io.asf import read_asf_amc  # noqa: E402
+from vidcap.io.bvh import read_bvh  # noqa: E402
 from vidcap.mocap.c3d import read_c3d  # noqa: E402
 from vidcap.mocap.skeleton import solve_joints  # noqa: E402
 

@@ -56,9 +56,10 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from pose2d_accuracy import label_flips  # noqa: E402
 
-from vidcap.annotations import Annotations  # noqa: E402
 from vidcap.body import JOINT_NAMES, SEGMENT_NAMES, BodyModel  # noqa: E402
-from vidcap.lift import (  # noqa: E402
+from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
+from vidcap.video.annotations import Annotations  # noqa: E402
+from vidcap.video.lift import (  # noqa: E402
     body_axes,
     estimate_scale,
     estimate_scales,
@@ -66,9 +67,8 @@ from vidcap.lift import (  # noqa: E402
     torso_width_ratio,
     yaw_from_orientation,
 )
-from vidcap.lifting import plane_passages  # noqa: E402
-from vidcap.proposals import propose_orientation, propose_signs  # noqa: E402
-from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
+from vidcap.video.lifting import plane_passages  # noqa: E402
+from vidcap.video.proposals import propose_orientation, propose_signs  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data" / "motion"
 MATTERS = 0.25  # |dZ| / length above which a sign "matters"
@@ -279,7 +279,7 @@ def _pairs_swapped_error(res, arms: bool, legs: bool, true3, body) -> float:
     """Mean root-aligned 3D joint error (m) of ``res`` (a pipeline result) lifted again
     with a user's ``sides`` event at frame 0 for the arms and/or the legs: what a user
     who fixes each pair's sides once for the clip gets."""
-    from vidcap.lifting import lift_pose
+    from vidcap.video.lifting import lift_pose
 
     ann = Annotations()
     for pair, on in (("arms", arms), ("legs", legs)):
@@ -294,8 +294,8 @@ def _pairs_swapped_error(res, arms: bool, legs: bool, true3, body) -> float:
 
 def end_to_end(samples: Path, body):
     """vidcap's whole pipeline on the sample clips against their truth."""
-    from vidcap.lift import swap_sides
-    from vidcap.pipeline import run
+    from vidcap.video.lift import swap_sides
+    from vidcap.video.pipeline import run
 
     rows = []
     for video in sorted(samples.glob("*.mp4")):
@@ -449,8 +449,8 @@ SOLVE_RENDERS = (("131_01 2-4s", "131_01", 60, 60.0), ("131_01 5-7s", "131_01", 
 
 
 def _render_clips(body, frames):
-    from vidcap.fit.pose2d import fit_sequence
     from vidcap.synth import render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
 
     full = {"131_01": make_motion(DATA / "131_01.bvh", body=body, fps=30.0),
             "07_07": make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body, fps=30.0)}
@@ -470,7 +470,7 @@ def _render_clips(body, frames):
 
 
 def _sample_clips(body):
-    from vidcap.pipeline import run
+    from vidcap.video.pipeline import run
 
     out = []
     cache = ROOT / ".vidcap-cache"  # the 2D stage's cache (not in git)

@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS
-from vidcap.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation
-from vidcap.motion import jitter
-from vidcap.proposals import propose_orientation, propose_signs
+from vidcap.video.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation
+from vidcap.video.motion import jitter
+from vidcap.video.proposals import propose_orientation, propose_signs
 
 LIMB_JOINTS = np.array([JOINT_INDEX[f"{s}_{j}"] for s in "lr" for j in
                         ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")])
@@ -76,8 +76,8 @@ def sliding_mm(pred, planted) -> float:
 def bvh_bone_deviation(params, body, fps) -> float:
     """Largest |bone length - its mean| (m) over the frames of the BVH written from the
     solve's rotations and read back."""
-    from vidcap.bvh import read_bvh, write_bvh
-    from vidcap.solve.stage import solved_motion
+    from vidcap.io.bvh import read_bvh, write_bvh
+    from vidcap.video.solve.stage import solved_motion
 
     m = solved_motion(params, fps, body=body).motion
     with tempfile.TemporaryDirectory() as tmp:
@@ -95,7 +95,7 @@ def _row(label, pred, true3, fps, planted):
 
 def noisy_rows(name, truth, true3, body, *, seed=0):
     """Rows (clip, noise, lift, signs, MPJPE, PA, sliding, jitter, s) for every noise level."""
-    from vidcap.solve import solve_clip
+    from vidcap.video.solve import solve_clip
 
     fps = float(truth["fps"])
     planted = true_planted(true3, fps)
@@ -136,8 +136,8 @@ def print_noisy(rows):
 def end_to_end_rows(clips, body):
     """Rows (clip, frames, lift, MPJPE, PA, sliding, jitter, 2D error % of height) for
     (name, pose2d-like dict, truth, true3) clips."""
-    from vidcap.lifting import lift_pose
-    from vidcap.solve import solve_clip  # noqa: F401 - imported before timing
+    from vidcap.video.lifting import lift_pose
+    from vidcap.video.solve import solve_clip  # noqa: F401 - imported before timing
 
     rows = []
     for name, fit, truth, true3, size in clips:
@@ -186,8 +186,8 @@ def mediapipe_world(path, joint_names) -> np.ndarray:
 def real_rows(video, reference, body):
     """PA-MPJPE (mm) of both lifts on a real clip against MediaPipe's world landmarks."""
     from vidcap.body import JOINT_NAMES
-    from vidcap.lifting import lift_pose
-    from vidcap.pipeline import run
+    from vidcap.video.lifting import lift_pose
+    from vidcap.video.pipeline import run
 
     res = run(video, height=body.height, smooth_sigma=0.0, progress=False, lift="segment")
     ref = mediapipe_world(reference, JOINT_NAMES)

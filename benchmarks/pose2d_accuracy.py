@@ -20,7 +20,7 @@ in front of or behind the torso covers the same silhouette pixels at any angle
 there, so no silhouette-only method can place it; "hidden" is how many joints that
 leaves out.
 
-``--jobs N`` fits each clip in chunks on N processes (:mod:`vidcap.fit.parallel`;
+``--jobs N`` fits each clip in chunks on N processes (:mod:`vidcap.video.fit.parallel`;
 clips under 120 frames stay serial), to compare with the serial fit (``--jobs 1``,
 the default). ms/fr is then the parent's CPU time, not the workers'.
 
@@ -61,7 +61,7 @@ from vidcap.body import (  # noqa: E402
     SEGMENT_INDEX,
     SEGMENTS,
 )
-from vidcap.fit.parallel import fit_sequence_chunked  # noqa: E402
+from vidcap.video.fit.parallel import fit_sequence_chunked  # noqa: E402
 
 MOTION_DIR = REPO.parent / "shared" / "data" / "motion"
 
@@ -158,8 +158,8 @@ def load_motion(name: str, n_frames: int):
 
 def unusual_poses() -> int:
     """The ``--poses`` table: with and without the body-height pass, same run."""
-    from vidcap.fit.pose2d import fit_sequence
     from vidcap.synth import render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
 
     crouch = load_motion("131_01", 180).frames(60, 180)
     clips = [("131_01 2-6s", crouch, 90), ("131_01 2-6s", crouch, 45),
@@ -209,8 +209,8 @@ def held_out(frames: int = 60) -> int:
     """The ``--held-out`` table: tracked PCK@0.05 per clip and the mean, with each of
     this project's temporal options off in turn (same run), so a change to the search
     is judged on clips it was not tuned on rather than on the four above alone."""
-    from vidcap.fit.pose2d import fit_sequence
     from vidcap.synth import make_motion, render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
 
     full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
             "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
@@ -265,7 +265,8 @@ def main(argv=None) -> int:
     ap.add_argument("--caps", action="store_true", help="draw capsules, not rectangles")
     ap.add_argument("--no-refine", action="store_true", help="the seed's order only")
     ap.add_argument("--jobs", type=int, default=1,
-                    help="fit in chunks on N processes (vidcap.fit.parallel; default 1: serial)")
+                    help="fit in chunks on N processes (vidcap.video.fit.parallel; "
+                         "default 1: serial)")
     ap.add_argument("--poses", action="store_true",
                     help="crouches and raised arms, with and without the body-height pass")
     ap.add_argument("--held-out", action="store_true",

@@ -23,8 +23,8 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from vidcap.body import SEGMENT_JOINTS, SEGMENT_NAMES  # noqa: E402
-from vidcap.fit.pose2d import fit_pose, fit_sequence  # noqa: E402
-from vidcap.video import read_frames  # noqa: E402
+from vidcap.io.video import read_frames  # noqa: E402
+from vidcap.video.fit.pose2d import fit_pose, fit_sequence  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data" / "video"
 

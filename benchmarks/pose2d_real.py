@@ -33,7 +33,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vidcap.fit.tracking import fit_sequence  # noqa: E402
+from vidcap.video.fit.tracking import fit_sequence  # noqa: E402
 
 SHARED = REPO.parent / "shared"
 TOOL = SHARED / "tools" / "mediapipe-reference"

@@ -4,15 +4,15 @@ Renders a 640x480 clip of the built-in walk with :mod:`vidcap.synth` (H.264, wri
 to a temporary directory), then measures on one core (CPU time of this process,
 BLAS threads pinned to 1):
 
-* decoding the video with PyAV (:func:`vidcap.video.iter_frames`): the reference;
+* decoding the video with PyAV (:func:`vidcap.io.video.iter_frames`): the reference;
 * normalising the silhouette (crop + resize to the fitting height);
 * fitting every frame independently (the seed's method, ``--per-frame``);
 * fitting with tracking (warm start from the previous frame; the default).
 
 The first fit of a process also loads (or, on a cold cache, compiles) the numba
-kernels of :mod:`vidcap.fit.raster` and imports ``scipy.ndimage`` (the tracked
+kernels of :mod:`vidcap.video.fit.raster` and imports ``scipy.ndimage`` (the tracked
 mode's spread prior; ~0.4 s of CPU, which ``vidcap convert`` pays anyway on
-importing :mod:`vidcap.pipeline`); it is timed and printed apart. Sequence fits are
+importing :mod:`vidcap.video.pipeline`); it is timed and printed apart. Sequence fits are
 the best of ``--repeat`` runs.
 
 The seed reports about 1 s per frame (C#, 2.7 GHz Celeron). The issue's target is
@@ -36,8 +36,8 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vidcap.fit.pose2d import fit_pose, fit_sequence  # noqa: E402
-from vidcap.fit.raster import normalise_mask  # noqa: E402
+from vidcap.video.fit.pose2d import fit_pose, fit_sequence  # noqa: E402
+from vidcap.video.fit.raster import normalise_mask  # noqa: E402
 
 
 def cpu(fn, repeat=3):
@@ -61,8 +61,8 @@ def main(argv=None) -> int:
     except (AttributeError, OSError):
         pass
 
+    from vidcap.io.video import iter_frames
     from vidcap.synth import make_motion, synth_clip
-    from vidcap.video import iter_frames
 
     with tempfile.TemporaryDirectory() as tmp:
         video, truth = Path(tmp) / "walk.mp4", Path(tmp) / "truth.npz"

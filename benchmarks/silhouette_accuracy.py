@@ -21,8 +21,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tests._synthframes import clip  # noqa: E402
-from vidcap.background import estimate_background  # noqa: E402
-from vidcap.silhouette import extract_silhouettes  # noqa: E402
+from vidcap.video.background import estimate_background  # noqa: E402
+from vidcap.video.silhouette import extract_silhouettes  # noqa: E402
 
 DATA = ROOT.parent / "shared" / "data" / "video"
 

@@ -24,9 +24,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests._synthframes import clip  # noqa: E402
-from vidcap.background import estimate_background  # noqa: E402
-from vidcap.silhouette import extract_silhouettes  # noqa: E402
-from vidcap.video import iter_chunks, read_frames, write_video  # noqa: E402
+from vidcap.io.video import iter_chunks, read_frames, write_video  # noqa: E402
+from vidcap.video.background import estimate_background  # noqa: E402
+from vidcap.video.silhouette import extract_silhouettes  # noqa: E402
 
 
 def best_of(fn, repeat=3):

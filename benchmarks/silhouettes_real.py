@@ -46,9 +46,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vidcap import synth  # noqa: E402
-from vidcap.background import estimate_background  # noqa: E402
-from vidcap.silhouette import extract_silhouettes  # noqa: E402
-from vidcap.video import read_frames, write_video  # noqa: E402
+from vidcap.io.video import read_frames, write_video  # noqa: E402
+from vidcap.video.background import estimate_background  # noqa: E402
+from vidcap.video.silhouette import extract_silhouettes  # noqa: E402
 
 SHARED = ROOT.parent / "shared" / "data" / "video"
 MP_PY = Path.home() / ".cache" / "vidcap-mediapipe-reference" / "bin" / "python"

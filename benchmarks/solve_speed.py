@@ -1,4 +1,4 @@
-"""Speed of the clip solve (issue 33): frames per CPU-second of ``vidcap.solve``'s banded
+"""Speed of the clip solve (issue 33): frames per CPU-second of ``vidcap.video.solve``'s banded
 Levenberg-Marquardt, against ``scipy.optimize.least_squares`` ('trf', ``jac_sparsity``,
 ``x_scale='jac'``) on the same residuals from the same warm start, at equal accuracy
 (PA-MPJPE of the result), and a BLAS reference measured in the same run (on a shared
@@ -26,11 +26,11 @@ from lift_accuracy import truth_in_camera_frame  # noqa: E402
 from lift_solve_tables import pa_mpjpe_mm  # noqa: E402
 
 from vidcap.body import BodyModel  # noqa: E402
-from vidcap.lift import estimate_scale  # noqa: E402
-from vidcap.solve.clip import make_problem, solve_problem, warm_start  # noqa: E402
-from vidcap.solve.residuals import residuals, sparsity  # noqa: E402
-from vidcap.solve.skeleton import forward_kinematics  # noqa: E402
 from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
+from vidcap.video.lift import estimate_scale  # noqa: E402
+from vidcap.video.solve.clip import make_problem, solve_problem, warm_start  # noqa: E402
+from vidcap.video.solve.residuals import residuals, sparsity  # noqa: E402
+from vidcap.video.solve.skeleton import forward_kinematics  # noqa: E402
 
 
 def _clip(body, frames):
@@ -65,7 +65,7 @@ def main(argv=None) -> int:
     for frames in sorted({args.lsq_frames, args.frames}):
         pb, p0, true3 = _clip(body, frames)
         sol, wall, cpu = _timed(lambda pb=pb, p0=p0: solve_problem(pb, p0, sweeps=0))
-        print(f"banded LM (vidcap.solve) | {frames} | {cpu:.2f} | {wall:.2f} | "
+        print(f"banded LM (vidcap.video.solve) | {frames} | {cpu:.2f} | {wall:.2f} | "
               f"{frames / cpu:.0f} | {pa_mpjpe_mm(sol.joints3d, true3):.0f} | {sol.cost:.1f}")
         if frames != args.lsq_frames:
             continue

@@ -5,7 +5,7 @@ Run from the repository root:  python benchmarks/synth.py [--frames 60] [--size 
 Prints two tables:
 1. milliseconds per frame for drawing the body (z-buffered cylinders), the full frame
    (plus noise and lighting), and, as the reference measured in the same run, H.264
-   encoding of the same frames with vidcap.video.VideoWriter;
+   encoding of the same frames with vidcap.io.video.VideoWriter;
 2. for the real CMU motions in ../shared/data/motion/, the angle between each of our
    bones and the source's after retargeting (median and max over frames and segments,
    degrees) and the retargeting time per frame.
@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.body import SEGMENT_JOINTS
+from vidcap.io.video import VideoWriter
 from vidcap.synth import (
     JOINT_MAPS,
     detect_joint_map,
@@ -31,7 +32,6 @@ from vidcap.synth import (
     retarget,
     source_joint_positions,
 )
-from vidcap.video import VideoWriter
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "motion"
 
@@ -69,8 +69,8 @@ def speed(n_frames: int, size: tuple[int, int]) -> None:
 
 
 def fidelity() -> None:
-    from vidcap.asf import read_asf_amc
-    from vidcap.bvh import read_bvh
+    from vidcap.io.asf import read_asf_amc
+    from vidcap.io.bvh import read_bvh
 
     cases = []
     if (DATA / "131_01.bvh").exists():

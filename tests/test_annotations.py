@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from vidcap.annotations import Annotations, default_path
 from vidcap.body import SEGMENT_INDEX
 from vidcap.errors import AnnotationError
+from vidcap.video.annotations import Annotations, default_path
 
 
 def _sample():
@@ -109,7 +109,7 @@ def test_failed_save_keeps_the_users_file(tmp_path, monkeypatch):
     before = p.read_text()
     a = _sample()
     a.add_depth(1, "head", "away")
-    import vidcap.annotations as mod
+    import vidcap.video.annotations as mod
 
     def boom(*args, **kwargs):
         raise OSError("disk full")
@@ -145,7 +145,7 @@ def test_default_path():
 
 
 def test_plane_passages_end_a_depth_event_that_never_leaves_the_near_plane_zone():
-    from vidcap.pipeline import plane_passages
+    from vidcap.video.pipeline import plane_passages
 
     F, k = 20, SEGMENT_INDEX["l_lower_leg"]
     zeta = np.full((F, 10), 0.5)

@@ -8,9 +8,9 @@ import pytest
 import vidcap
 from tests.conftest import REPO, run_cli
 from vidcap.body import JOINT_NAMES
-from vidcap.bvh import read_bvh
 from vidcap.errors import C3DError, UsageError, VideoError
-from vidcap.gltf import read_gltf
+from vidcap.io.bvh import read_bvh
+from vidcap.io.gltf import read_gltf
 
 WALK = REPO / "sample_videos" / "walk_side.mp4"
 

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 from tests._synthframes import background, clip
-from vidcap.background import (
+from vidcap.errors import InputFileError
+from vidcap.video.background import (
     BackgroundError,
     BackgroundModel,
     estimate_background,
     load_plate,
     sample_frames,
 )
-from vidcap.errors import InputFileError
 
 
 def _plate_error(plate, truth):
@@ -157,7 +157,7 @@ def test_static_torso_is_flagged_never_seen_and_inpainted():
 def test_masked_median_equals_a_partition_for_every_sample_count():
     """The few-sample path (a sorting network of min / max) and the partition give
     the same per-pixel median of the included samples, for 1-12 samples."""
-    from vidcap.background import _masked_median
+    from vidcap.video.background import _masked_median
 
     rng = np.random.default_rng(3)
     for k in range(1, 13):

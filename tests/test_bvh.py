@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vidcap.asf import read_asf_amc
 from vidcap.body import BodyModel
-from vidcap.bvh import bvh_text, parse_bvh, read_bvh, write_bvh
 from vidcap.errors import MotionFileError
+from vidcap.io.asf import read_asf_amc
+from vidcap.io.bvh import bvh_text, parse_bvh, read_bvh, write_bvh
 from vidcap.kinematics import Motion
 
 

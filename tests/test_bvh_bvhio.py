@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from vidcap.body import BodyModel
-from vidcap.bvh import write_bvh
+from vidcap.io.bvh import write_bvh
 from vidcap.kinematics import Motion
 from vidcap.synth import make_motion
 

@@ -23,14 +23,14 @@ MAX_CLASS_METHODS = 30
 
 #: Compiled (numba) kernel files: long straight-line loops that must stay in one
 #: module for the compiler; exempt from the module-length limit only.
-KERNEL_FILES = frozenset({"vidcap/fit/_kernels.py"})
+KERNEL_FILES = frozenset({"vidcap/video/fit/_kernels.py"})
 
 #: Files another engineer is still splitting, exempt from every size limit until that
 #: lands (none left). Their import circles still count.
 BEING_SPLIT: frozenset[str] = frozenset()
 
 #: Import circles left to break, as sets of module names (none left: the plate's
-#: second pass has its own person mask and the medians live in vidcap.platemedian).
+#: second pass has its own person mask and the medians live in vidcap.video.platemedian).
 CIRCLES_BEING_BROKEN: frozenset[frozenset[str]] = frozenset()
 
 
@@ -104,7 +104,7 @@ def _imported(module: str, path: Path, known) -> set[str]:
         for name in names:
             if name.startswith("ui.") or name == "ui":
                 name = f"vidcap.{name}"
-            while name and name not in known:  # ``import vidcap.fit.raster`` etc.
+            while name and name not in known:  # ``import vidcap.video.fit.raster`` etc.
                 name = name.rpartition(".")[0]
             if name and name != module:
                 out.add(name)
@@ -173,9 +173,9 @@ def test_the_checks_catch_what_they_check(tmp_path):
 
 def test_the_graph_sees_the_package():
     graph = _graph()
-    assert "vidcap.pipeline" in graph["vidcap.commands.convert"]
+    assert "vidcap.video.pipeline" in graph["vidcap.commands.convert"]
     assert "vidcap.ui.session" in graph["vidcap.ui.annotate"]
-    assert "vidcap.lifting" in graph["vidcap.pipeline"]
+    assert "vidcap.video.lifting" in graph["vidcap.video.pipeline"]
 
 
 @pytest.mark.parametrize("name", sorted(SOURCES))
@@ -200,3 +200,40 @@ def test_being_split_list_is_current():
     cycles = {frozenset(c) for c in import_cycles(_graph())}
     for circle in CIRCLES_BEING_BROKEN:
         assert circle in cycles, f"{sorted(circle)} is broken now: drop it from the list"
+
+
+#: Which packages each layer may import (besides its own modules): the layout shows the
+#: two paths and what they share, so a file's place says what it may depend on.
+SHARED = ("vidcap.body", "vidcap.kinematics", "vidcap.errors", "vidcap.fileio",
+          "vidcap.interrupt", "vidcap.outputguard")
+LAYERS = {
+    "vidcap.io": SHARED,
+    "vidcap.mocap": (*SHARED, "vidcap.io"),
+    "vidcap.video": (*SHARED, "vidcap.io", "vidcap.synth"),
+}
+
+
+def layer_problems(graph: dict[str, set[str]]) -> list[str]:
+    """Imports that cross the layout: ``io`` reading a path, one path reading the other."""
+    out = []
+    for module, deps in graph.items():
+        for layer, allowed in LAYERS.items():
+            if module != layer and not module.startswith(layer + "."):
+                continue
+            for dep in sorted(deps):
+                inside = dep == layer or dep.startswith(layer + ".")
+                ok = inside or any(dep == a or dep.startswith(a + ".") for a in allowed)
+                if not ok and dep != "vidcap":
+                    out.append(f"{module} imports {dep}")
+    return out
+
+
+def test_layers_catch_a_crossing():
+    graph = {"vidcap.io.bvh": {"vidcap.video.motion"}, "vidcap.mocap.c3d": {"vidcap.io.bvh"},
+             "vidcap.video.lift": {"vidcap.mocap.frames", "vidcap.body"}}
+    assert layer_problems(graph) == ["vidcap.io.bvh imports vidcap.video.motion",
+                                     "vidcap.video.lift imports vidcap.mocap.frames"]
+
+
+def test_layout_layers_hold():
+    assert layer_problems(import_graph()) == []

@@ -8,8 +8,8 @@ import pytest
 
 from tests.conftest import REPO, run_cli, write_timed_video
 from vidcap.body import JOINT_INDEX
-from vidcap.bvh import read_bvh
-from vidcap.video import probe
+from vidcap.io.bvh import read_bvh
+from vidcap.io.video import probe
 
 WALK = REPO / "sample_videos" / "walk_side.mp4"
 TRUTH = REPO / "sample_videos" / "walk_side_truth.npz"
@@ -108,7 +108,7 @@ def test_frames_before_the_person_enters_and_after_leaving(tmp_path):
     convert says which frames it left out, fills them, and the BVH has every frame."""
     if not WALK.exists():
         pytest.skip("sample_videos/ not present")
-    from vidcap.video import read_frames, write_video
+    from vidcap.io.video import read_frames, write_video
 
     width = 380  # of 480: the walker's last frames are cut off on the right
     frames = read_frames(WALK)
@@ -136,7 +136,7 @@ def test_frames_before_the_person_enters_and_after_leaving(tmp_path):
 def test_a_moving_box_is_reported_as_a_poor_fit(tmp_path, converted):
     """Something that is not a person still converts, but the output says the body
     model does not fit it; a walking person's conversion says nothing of the kind."""
-    from vidcap.video import write_video
+    from vidcap.io.video import write_video
 
     rng = np.random.default_rng(0)
     plate = rng.integers(60, 200, (240, 320, 3)).astype(np.uint8)
@@ -217,7 +217,7 @@ def test_review_frames_are_three_panels_wide(tmp_path, converted):
 
 
 def test_review_refuses_results_of_another_video(tmp_path, converted):
-    from vidcap.video import write_video
+    from vidcap.io.video import write_video
 
     _, npz, _ = converted
     other = tmp_path / "other.mp4"
@@ -229,7 +229,7 @@ def test_review_refuses_results_of_another_video(tmp_path, converted):
 
 
 def test_second_run_uses_the_stage_cache(converted):
-    from vidcap.pipeline import convert
+    from vidcap.video.pipeline import convert
 
     out, _, _ = converted
     cache = out.parent / ".vidcap-cache"
@@ -246,8 +246,8 @@ def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
     """A clip of two chunks' length: jobs=2 (workers started early, labels reconciled)
     gives the serial fit on nearly every frame, the same BVH frame count; --jobs 0 is
     refused."""
-    from vidcap.pipeline import convert
     from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.pipeline import convert
 
     video = tmp_path / "long.mp4"
     synth_clip(video, tmp_path / "truth.npz", make_motion("walk", n_frames=130), size=(320, 240),
@@ -288,7 +288,7 @@ def test_variable_rate_video_gives_a_bvh_in_step_with_it(converted, tmp_path):
     rest shown at their own times: the BVH is resampled at the camera's 25 fps over
     the clip's 1.64 s (42 frames, not 32 frames at the 19 fps average), and the
     pelvis walks as in the whole clip's BVH."""
-    from vidcap.video import read_frames
+    from vidcap.io.video import read_frames
 
     keep = [i for i in range(42) if not (10 <= i < 30 and i % 2)]
     video = tmp_path / "dropped.mp4"

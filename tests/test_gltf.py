@@ -9,12 +9,12 @@ from scipy.spatial.transform import Rotation
 from tests.conftest import REPO, run_cli
 from tests.gltf_tools import blender_import, validate
 from vidcap.body import JOINT_NAMES, BodyModel
-from vidcap.bvh import read_bvh
 from vidcap.errors import UsageError
-from vidcap.gltf import read_gltf, write_gltf
+from vidcap.io.bvh import read_bvh
+from vidcap.io.gltf import read_gltf, write_gltf
+from vidcap.io.motionfile import write_motion
+from vidcap.io.rigs import TURN_TO_PLUS_Z, face_plus_z, get_rig, retarget
 from vidcap.kinematics import Motion, Skeleton
-from vidcap.motionfile import write_motion
-from vidcap.rigs import TURN_TO_PLUS_Z, face_plus_z, get_rig, retarget
 from vidcap.synth import JOINT_MAPS, detect_joint_map, source_joint_positions
 
 WALK = REPO / "sample_videos" / "walk_side.mp4"
@@ -123,7 +123,7 @@ def test_rig_puts_every_joint_where_ours_is_and_reads_back_by_name(tmp_path, rig
 
 
 def test_rig_rest_pose_is_a_t_pose_with_the_added_joints_where_documented():
-    from vidcap.rigs import CLAVICLE_FRACTION, SPINE_FRACTIONS, TOE_FRACTION
+    from vidcap.io.rigs import CLAVICLE_FRACTION, SPINE_FRACTIONS, TOE_FRACTION
 
     body = BodyModel()
     ours = Motion.rest(body.skeleton())

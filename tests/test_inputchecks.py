@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from tests._synthframes import background, clip
-from vidcap.background import BackgroundError, estimate_background
-from vidcap.inputchecks import camera_shift
+from vidcap.video.background import BackgroundError, estimate_background
+from vidcap.video.inputchecks import camera_shift
 
 
 def test_too_few_frames_black_and_white():
@@ -43,8 +43,8 @@ def test_nobody_and_a_person_who_never_moves():
 
 
 def test_plate_notice_only_when_much_is_never_seen():
-    from vidcap.background import BackgroundModel
-    from vidcap.inputchecks import plate_notice
+    from vidcap.video.background import BackgroundModel
+    from vidcap.video.inputchecks import plate_notice
 
     plate = background(60, 80, np.random.default_rng(4))
     model = BackgroundModel.from_plate(plate)

@@ -5,7 +5,7 @@ import pytest
 
 from tests.posed import posed_clip
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, BodyModel, segment_vectors
-from vidcap.lift import (
+from vidcap.video.lift import (
     assign_sides,
     depth_magnitudes,
     estimate_scale,
@@ -15,8 +15,8 @@ from vidcap.lift import (
     torso_width_ratio,
     yaw_from_orientation,
 )
-from vidcap.motion import build_motion, jitter, joints_to_motion, minimal_rotation
-from vidcap.proposals import propose_orientation, propose_signs
+from vidcap.video.motion import build_motion, jitter, joints_to_motion, minimal_rotation
+from vidcap.video.proposals import propose_orientation, propose_signs
 
 
 def _mpjpe(a, b):
@@ -151,7 +151,7 @@ def test_joints_to_motion_reproduces_the_pose_and_smoothing_reduces_jitter():
 
 
 def test_keyframes_and_slerp_interpolation():
-    from vidcap.motion import interpolate_keyframes, keyframes_by_confidence
+    from vidcap.video.motion import interpolate_keyframes, keyframes_by_confidence
 
     scores = np.array([0.9, 0.2, 0.2, 0.9] + [0.1] * 25 + [0.8])
     keys = keyframes_by_confidence(scores, min_score=0.5, max_gap=10)
@@ -238,7 +238,7 @@ def test_orientation_from_raised_forearms_turning_like_elbows():
 
 
 def test_elbow_fold_turns_with_the_upper_arm():
-    from vidcap.proposals import _elbow_fold
+    from vidcap.video.proposals import _elbow_fold
 
     down, up, fwd = np.array([0, -1.0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])
     side = np.array([1.0, 0, 0])
@@ -379,7 +379,7 @@ def test_bspline_design_matches_scipy():
     """estimate_scales' own B-spline basis equals scipy's (which it avoids importing)."""
     from scipy.interpolate import BSpline
 
-    from vidcap.lift import _bspline_design
+    from vidcap.video.lift import _bspline_design
 
     for n_frames, n_pieces in ((2, 1), (60, 1), (301, 3), (1000, 10)):
         t = np.arange(n_frames, dtype=float)
@@ -424,7 +424,7 @@ def test_arm_in_front_of_a_bent_torso_is_not_inside_it():
     other depth sign) would be inside it. Upright, both states are clear of the torso
     (a vertical column under the neck, as the check used to be, could not tell)."""
     from tests.posed import project
-    from vidcap.proposals import _CHAINS, _chain_costs
+    from vidcap.video.proposals import _CHAINS, _chain_costs
 
     chain = [c for c, (segs, _, _) in enumerate(_CHAINS) if segs[0] == "l_upper_arm"][0]
     weights = dict(hinge_weight=0.0, range_weight=0.0, midline_weight=1.0, lean_weight=0.0,

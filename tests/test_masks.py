@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from vidcap.fileio import savez_atomic
-from vidcap.masks import MaskStack, frames_with_pixels
+from vidcap.video.masks import MaskStack, frames_with_pixels
 
 
 def _masks(seed=0):
@@ -77,7 +77,7 @@ def test_stored_arrays_pickle_extend_and_npz_round_trip(tmp_path):
 
 
 def test_masks_read_from_an_npz_frame_by_frame(tmp_path):
-    from vidcap.masks import read_npz_masks
+    from vidcap.video.masks import read_npz_masks
 
     m = _masks(2)
     np.savez_compressed(tmp_path / "a.npz", masks=m, other=np.arange(3))

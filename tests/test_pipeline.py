@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 from tests.posed import posed_clip
-from vidcap.annotations import Annotations
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
 from vidcap.errors import VidcapError
-from vidcap.lift import swap_sides
-from vidcap.masks import MaskStack, pixel_counts, touches_border
-from vidcap.pipeline import (
+from vidcap.video.annotations import Annotations
+from vidcap.video.lift import swap_sides
+from vidcap.video.masks import MaskStack, pixel_counts, touches_border
+from vidcap.video.pipeline import (
     VIEWS,
     ConvertResult,
     StageCache,
@@ -161,8 +161,8 @@ def test_stage_cache_round_trip_and_damage(tmp_path):
 
 def test_run_says_when_more_than_one_person_is_in_view(tmp_path):
     from tests._synthframes import background, figure_mask
-    from vidcap.pipeline import run
-    from vidcap.video import write_video
+    from vidcap.io.video import write_video
+    from vidcap.video.pipeline import run
 
     rng = np.random.default_rng(3)
     h, w, n = 240, 320, 24
@@ -195,7 +195,7 @@ def test_lift_pose_reads_segments_at_the_model_height_of_each_frame():
     # shorter. Read at one scale for the clip that is depth in every segment; read at
     # the frame's model height (Pose2D.model_height) it is not.
     from vidcap.body import BodyModel
-    from vidcap.pipeline import model_scales
+    from vidcap.video.pipeline import model_scales
 
     body = BodyModel()
     j2, j3, signs, fps = posed_clip(90.0, 60, scale=200.0)
@@ -227,7 +227,7 @@ def test_lift_pose_reads_segments_at_the_model_height_of_each_frame():
 def test_a_sides_event_swaps_a_limb_pair_from_its_frame_on():
     # side view: nothing in the image tells the near leg from the far one; a 2D stage
     # that named them the other way round is put right by one sides event
-    from vidcap.pipeline import swap_pairs
+    from vidcap.video.pipeline import swap_pairs
 
     j2, j3, signs, fps = posed_clip(90.0, 40)
     ann = Annotations()
@@ -275,8 +275,8 @@ def test_a_failure_while_the_fit_workers_start_ends_them_at_once(tmp_path):
 
     import cv2
 
-    from vidcap.pipeline import convert
-    from vidcap.video import write_video
+    from vidcap.io.video import write_video
+    from vidcap.video.pipeline import convert
 
     rng = np.random.default_rng(0)
     frames = rng.integers(0, 255, size=(130, 48, 64, 3), dtype=np.uint8)

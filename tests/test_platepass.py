@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from tests._synthframes import clip
-from vidcap.background import BackgroundModel, estimate_background
-from vidcap.silhouette import extract_silhouettes
-from vidcap.stillparts import self_lit
+from vidcap.video.background import BackgroundModel, estimate_background
+from vidcap.video.silhouette import extract_silhouettes
+from vidcap.video.stillparts import self_lit
 
 
 def _iou(a, b):
@@ -86,7 +86,7 @@ def test_second_pass_takes_back_background_seen_beside_the_person():
 def test_the_appearance_cut_recovers_a_block_the_plate_absorbed():
     """A torso that never moves (in every frame, so in the plate) with an arm that
     swings from it: the cut finds the torso by colour, attached to the arm."""
-    from vidcap.stillparts import still_parts
+    from vidcap.video.stillparts import still_parts
 
     rng = np.random.default_rng(6)
     h, w = 80, 100

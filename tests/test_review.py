@@ -3,7 +3,7 @@
 import numpy as np
 
 from vidcap.body import BodyModel
-from vidcap.review import PoseRenderer
+from vidcap.video.review import PoseRenderer
 
 
 def test_pose_renderer_draws_each_new_pose():
@@ -22,7 +22,7 @@ def test_pose_renderer_draws_each_new_pose():
 
 
 def test_small_videos_are_reviewed_enlarged_by_a_whole_factor():
-    from vidcap.review import review_frames, review_scale
+    from vidcap.video.review import review_frames, review_scale
 
     assert review_scale(144, 360) == 3
     assert review_scale(360, 360) == 1
@@ -51,7 +51,7 @@ def test_small_videos_are_reviewed_enlarged_by_a_whole_factor():
 def test_filled_frames_are_framed_in_orange():
     """A frame whose pose was filled from its neighbours gets the orange border on the
     silhouette panel; a fitted one does not."""
-    from vidcap.review import review_frames
+    from vidcap.video.review import review_frames
 
     h, w = 120, 90
     frames = [np.zeros((h, w, 3), np.uint8)] * 2
@@ -69,7 +69,7 @@ def test_filled_frames_are_framed_in_orange():
 def test_tall_videos_are_reviewed_shrunk():
     """A frame taller than max_height is shown shrunk (area averaging), silhouette and
     2D model with it, so a 4K video does not give an 11520 px wide review."""
-    from vidcap.review import review_frames
+    from vidcap.video.review import review_frames
 
     h, w = 800, 600
     frame = np.zeros((h, w, 3), np.uint8)

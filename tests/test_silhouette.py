@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from tests._synthframes import background, clip
-from vidcap.background import BackgroundModel, estimate_background
-from vidcap.silhouette import NoPersonError, extract_silhouettes, is_monochrome
+from vidcap.video.background import BackgroundModel, estimate_background
+from vidcap.video.silhouette import NoPersonError, extract_silhouettes, is_monochrome
 
 
 def _iou(a, b):

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from tests._synthframes import background, clip
-from vidcap.background import BackgroundError, estimate_background
-from vidcap.silhouette import extract_silhouettes
-from vidcap.video import write_video
+from vidcap.io.video import write_video
+from vidcap.video.background import BackgroundError, estimate_background
+from vidcap.video.silhouette import extract_silhouettes
 
 
 def _iou(a, b):
@@ -88,8 +88,8 @@ def test_cli_errors(cli, tmp_path):
 
 
 def test_static_scene_with_a_given_plate_finds_nobody():
-    from vidcap.background import BackgroundModel
-    from vidcap.silhouette import NoPersonError
+    from vidcap.video.background import BackgroundModel
+    from vidcap.video.silhouette import NoPersonError
 
     still = background(64, 80, np.random.default_rng(23))
     frames = np.repeat(still[None], 4, axis=0)

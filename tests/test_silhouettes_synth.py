@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vidcap.background import estimate_background
-from vidcap.silhouette import extract_silhouettes
+from vidcap.video.background import estimate_background
+from vidcap.video.silhouette import extract_silhouettes
 
 synth = pytest.importorskip("vidcap.synth")
 

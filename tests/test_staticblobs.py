@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vidcap.staticblobs import static_rows
+from vidcap.video.staticblobs import static_rows
 
 
 def test_a_blob_that_stays_put_is_static_a_walker_is_not():

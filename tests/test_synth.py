@@ -7,10 +7,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX, SEGMENT_NAMES, BodyModel
-from vidcap.bvh import read_bvh
 from vidcap.errors import MotionFileError, VidcapError
+from vidcap.io.bvh import read_bvh
 from vidcap.kinematics import Motion, Skeleton
-from vidcap.motion import minimal_rotation
 from vidcap.synth import (
     JOINT_MAPS,
     body_yaw,
@@ -24,6 +23,7 @@ from vidcap.synth import (
     retarget,
     source_joint_positions,
 )
+from vidcap.video.motion import minimal_rotation
 
 TRUTH_KEYS = {
     "joint_names", "masks", "joints2d", "joints3d", "depth_signs", "segment_names",
@@ -57,7 +57,7 @@ def walk_clip(tmp_path_factory):
 
 
 def test_cli_writes_video_with_requested_frames_and_size(walk_clip):
-    from vidcap.video import probe, read_frames
+    from vidcap.io.video import probe, read_frames
 
     out, truth, _ = walk_clip
     info = probe(out, count=True)
@@ -282,7 +282,7 @@ def test_retarget_cmu_bvh(shared_data):
 
 
 def test_retarget_cmu_asf(shared_data):
-    from vidcap.asf import read_asf_amc
+    from vidcap.io.asf import read_asf_amc
 
     src = read_asf_amc(shared_data("motion/07.asf"), shared_data("motion/07_07.amc"))
     _check_retarget(src, "cmu_asf", retarget(src, solid_torso=False))
@@ -452,7 +452,7 @@ def test_render_infers_the_body_from_the_motion():
 def test_sample_videos_match_their_truth():
     from pathlib import Path
 
-    from vidcap.video import probe
+    from vidcap.io.video import probe
 
     root = Path(__file__).resolve().parents[1] / "sample_videos"
     clips = sorted(root.glob("*.mp4"))

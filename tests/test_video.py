@@ -11,7 +11,7 @@ import pytest
 
 from tests.conftest import write_timed_video
 from vidcap.errors import VideoError
-from vidcap.video import (
+from vidcap.io.video import (
     VideoWriter,
     frame_times,
     iter_chunks,
@@ -66,7 +66,7 @@ def test_frames_converted_on_one_thread_are_pyav_defaults_pixels(tmp_path):
 
 def test_frame_conversion_without_the_threads_argument(monkeypatch):
     """PyAV < 17 has no ``threads`` argument: the conversion falls back to its default."""
-    import vidcap.video as V
+    import vidcap.io.video as V
 
     class OldFrame:
         def to_ndarray(self, format):  # noqa: A002 - PyAV's name
@@ -168,7 +168,7 @@ def test_ido_walk_reads_in_a_subprocess_that_exits_normally(shared_data):
     # OpenCV >= 4.13 aborts the whole process on this file; PyAV must read it.
     path = shared_data("video/ido_walk.avi")
     code = (
-        "from vidcap.video import read_frames, probe;"
+        "from vidcap.io.video import read_frames, probe;"
         f"a = read_frames({str(path)!r}); i = probe({str(path)!r});"
         "print(a.shape, a.dtype, i.n_frames, i.fps)"
     )

@@ -64,7 +64,7 @@ class AnnotateApp:
         from trame.app import get_server
         from vidcap.ui.view import Points3D, Scene
 
-        from vidcap.review import quiet_vtk
+        from vidcap.video.review import quiet_vtk
 
         self.session = session
         session.defer_refresh = True  # edits answer at once; re-proposals run in a worker

@@ -3,8 +3,8 @@ user's annotations, and the lifted pose, re-lifted after every edit.
 
 The page (:mod:`vidcap.ui.annotate`) only talks to :class:`AnnotateSession`. The session
 holds a :class:`ClipData` (the pipeline's heavy, cached stages: frames, silhouettes,
-2D fit; built by :func:`load_clip` with :func:`vidcap.pipeline.run`) and reruns the
-3D stage, :func:`vidcap.lifting.lift_pose`, with the user's annotations after every
+2D fit; built by :func:`load_clip` with :func:`vidcap.video.pipeline.run`) and reruns the
+3D stage, :func:`vidcap.video.lifting.lift_pose`, with the user's annotations after every
 edit, exactly as ``vidcap convert`` does.
 """
 
@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-from vidcap.annotations import PAIRS
 from vidcap.body import (
     JOINT_INDEX,
     JOINT_NAMES,
@@ -31,6 +30,7 @@ from vidcap.body import (
     BodyModel,
 )
 from vidcap.errors import AnnotationError
+from vidcap.video.annotations import PAIRS
 
 
 @dataclass
@@ -49,7 +49,7 @@ class ClipData:
     joints2d : numpy.ndarray, shape (F, 15, 2)
         2D joints as the 2D stage gives them, pixels (x right, y down); NaN in frames
         without a person.
-    masks : numpy.ndarray of bool, shape (F, H, W), vidcap.masks.MaskStack, or None
+    masks : numpy.ndarray of bool, shape (F, H, W), vidcap.video.masks.MaskStack, or None
         Silhouettes (read one frame at a time, ``masks[f]``).
     fit_score : numpy.ndarray, shape (F,)
         Quality of the 2D fit per frame in [0, 1] (the model/silhouette similarity);
@@ -59,12 +59,13 @@ class ClipData:
         ``l_*`` in ``joints2d`` is the image's left limb (the 2D fitter's naming); False
         when the joints are named by the body's sides (ground truth).
     spread : numpy.ndarray, shape (F,), optional
-        Torso horizontal foreshortening from the 2D fit (see :func:`vidcap.lifting.lift_pose`).
+        Torso horizontal foreshortening from the 2D fit (see
+        :func:`vidcap.video.lifting.lift_pose`).
     track : numpy.ndarray, shape (F,), optional
         Horizontal image position of the subject (walking direction).
     model_height : numpy.ndarray, shape (F,), optional
         Body height in pixels the 2D model was drawn at per frame (see
-        :func:`vidcap.lifting.model_scales`).
+        :func:`vidcap.video.lifting.model_scales`).
     body : vidcap.body.BodyModel, optional
         The subject (default 1.75 m).
     size : tuple of int
@@ -111,7 +112,7 @@ def sign_doubt(margin: np.ndarray, zeta: np.ndarray, body: BodyModel, *,
                tau: float = 0.2) -> np.ndarray:
     """Expected displacement (metres) of each segment's distal joint if its proposed depth
     sign is wrong: ``2 zeta l p_wrong`` with ``p_wrong = 1 / (1 + exp(margin / tau))``, as
-    :meth:`vidcap.proposals.SignProposal.checks` ranks them. Shapes (F, 10) -> (F, 10)."""
+    :meth:`vidcap.video.proposals.SignProposal.checks` ranks them. Shapes (F, 10) -> (F, 10)."""
     with np.errstate(over="ignore", invalid="ignore"):
         p_wrong = 1.0 / (1.0 + np.exp(np.minimum(np.asarray(margin) / tau, 700.0)))
     return 2.0 * np.asarray(zeta) * body.segment_lengths() * np.nan_to_num(p_wrong)
@@ -153,21 +154,21 @@ class AnnotateSession:
         Why the annotations file could not be read. The file is then copied to
         :attr:`backup` and not written until the user makes an edit.
     joints2d, joints3d, signs, orientation, yaw : numpy.ndarray
-        The current result (as :class:`vidcap.lifting.LiftResult`): body-side 2D joints
+        The current result (as :class:`vidcap.video.lifting.LiftResult`): body-side 2D joints
         with the user's fixes (F, 15, 2), 3D joints (F, 15, 3), depth signs (F, 10),
         orientation labels (F,), yaw (F,).
     user_signs, user_orient, user_joints : numpy.ndarray
         The user's events resolved over the clip (see
-        :meth:`vidcap.annotations.Annotations.resolve`).
+        :meth:`vidcap.video.annotations.Annotations.resolve`).
     """
 
     def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
                  low_doubt: float = 0.05, defer_refresh: bool = False, lift: str = "solve"):
         from scipy.ndimage import median_filter
 
-        from vidcap.annotations import Annotations
-        from vidcap.lift import torso_width_ratio
-        from vidcap.lifting import fill_gaps, frame_scales, lift_pose, model_scales
+        from vidcap.video.annotations import Annotations
+        from vidcap.video.lift import torso_width_ratio
+        from vidcap.video.lifting import fill_gaps, frame_scales, lift_pose, model_scales
 
         self.clip = clip
         self.path = Path(annotations_path)
@@ -209,7 +210,7 @@ class AnnotateSession:
 
     # ------------------------------------------------------------------ derived state
     def _lift_pose(self, annotations):
-        from vidcap.lifting import lift_pose
+        from vidcap.video.lifting import lift_pose
 
         c = self.clip
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
@@ -217,8 +218,8 @@ class AnnotateSession:
                          frame_size=c.size, model_height=c.model_height, method=self.lift)
 
     def _take(self, res) -> None:
-        """Adopt a full 3D-stage result (:class:`vidcap.lifting.LiftResult`)."""
-        from vidcap.lifting import plane_passages
+        """Adopt a full 3D-stage result (:class:`vidcap.video.lifting.LiftResult`)."""
+        from vidcap.video.lifting import plane_passages
 
         self._result = res
         self.scale = res.scale  # one number, or one per frame
@@ -236,16 +237,16 @@ class AnnotateSession:
         self.orientation = np.asarray(res.orientation).astype(str)
         self.yaw = np.asarray(res.yaw, float)
         # the clip solve's poses (None with the per-segment lift): an edit re-solves
-        # the frames it reaches from these (:mod:`vidcap.solve.local`)
+        # the frames it reaches from these (:mod:`vidcap.video.solve.local`)
         self._params = None if res.solve_params is None else np.array(res.solve_params)
 
     def _quick(self) -> None:
         """The user's events with the last proposals: the 3D stage of
-        :func:`vidcap.lifting.lift_pose` without re-proposing (no dynamic programming);
+        :func:`vidcap.video.lifting.lift_pose` without re-proposing (no dynamic programming);
         with the clip solve, only the frames whose events changed (and a few around)
-        are solved again (:func:`vidcap.solve.local.resolve_window`)."""
-        from vidcap.lift import lift
-        from vidcap.lifting import apply_user_view
+        are solved again (:func:`vidcap.video.solve.local.resolve_window`)."""
+        from vidcap.video.lift import lift
+        from vidcap.video.lifting import apply_user_view
 
         res, body = self._result, self.clip.body
         user_signs, user_orient, user_joints = self.annotations.resolve(
@@ -271,8 +272,8 @@ class AnnotateSession:
     def _quick_solve(self, j2, yaw, user_signs, user_orient, user_joints, sides, signs,
                      centre):
         """Re-solve the frames an edit reached; (joints3d, signs) of the clip."""
-        from vidcap.solve.local import edit_window, resolve_window
-        from vidcap.solve.stage import USER_JOINT_WEIGHT, YAW_SIGMA_PROPOSED, YAW_SIGMA_USER
+        from vidcap.video.solve.local import edit_window, resolve_window
+        from vidcap.video.solve.stage import USER_JOINT_WEIGHT, YAW_SIGMA_PROPOSED, YAW_SIGMA_USER
 
         def moved(a, b):
             a, b = np.asarray(a, float), np.asarray(b, float)
@@ -310,7 +311,7 @@ class AnnotateSession:
         bool
             Whether the result was kept.
         """
-        from vidcap.annotations import Annotations
+        from vidcap.video.annotations import Annotations
 
         with self._lock:
             version = self._version
@@ -491,7 +492,7 @@ class AnnotateSession:
             if self.user_signs[c["frame"], k] == 0:
                 out.append({"frame": int(c["frame"]), "segment": c["segment"],
                             "reason": f"{c['segment'].replace('_', ' ')}: depth doubtful"})
-        from vidcap.result import true_runs
+        from vidcap.video.result import true_runs
 
         # frames not fitted at all (score 0): one item per run, at its first frame
         for a, b in true_runs(self.clip.fit_score <= 0):
@@ -523,8 +524,11 @@ class AnnotateSession:
 
 
 def default_annotations_path(video: str | os.PathLike) -> Path:
-    """``VIDEO_STEM.vidcap.json`` beside the video (:func:`vidcap.annotations.default_path`)."""
-    from vidcap.annotations import default_path
+    """``VIDEO_STEM.vidcap.json`` beside the video.
+
+    See :func:`vidcap.video.annotations.default_path`.
+    """
+    from vidcap.video.annotations import default_path
 
     return default_path(video)
 
@@ -559,9 +563,9 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     """
     import cv2
 
-    from vidcap import pipeline
-    from vidcap.annotations import Annotations
-    from vidcap.video import iter_frames
+    from vidcap.io.video import iter_frames
+    from vidcap.video import pipeline
+    from vidcap.video.annotations import Annotations
 
     video = Path(video)
     cache_dir = video.parent / ".vidcap-cache" if cache_dir is None else Path(cache_dir)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.errors import InputFileError, UsageError
-from vidcap.review import quiet_vtk
+from vidcap.video.review import quiet_vtk
 
 #: Colours of the scene (RGB 0-1).
 BONE_COLOUR = (0.16, 0.42, 0.80)
@@ -166,7 +166,7 @@ def load_points(path: str | os.PathLike) -> Points3D:
     path = Path(path)
     ext = path.suffix.lower()
     if ext == ".bvh":
-        from vidcap.bvh import read_bvh
+        from vidcap.io.bvh import read_bvh
 
         if not path.is_file():
             raise InputFileError("no such BVH file", path)

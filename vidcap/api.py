@@ -30,7 +30,7 @@ def check_convert_options(*, height: float, jobs: int | None, view: str = "auto"
 
     Shared by :func:`convert` and ``vidcap convert``, so both refuse the same values.
     """
-    from vidcap.lifting import VIEWS
+    from vidcap.video.lifting import VIEWS
 
     if not (height > 0):
         raise UsageError(f"--height must be positive metres, got {height}")
@@ -62,7 +62,7 @@ class VideoMotion:
     notices : list of str
         What the CLI prints after converting (frames without a person, a poor fit,
         a variable frame rate...), one sentence each.
-    result : vidcap.result.ConvertResult
+    result : vidcap.video.result.ConvertResult
         Everything the pipeline computed (masks, 2D joints, depth signs...).
     """
 
@@ -81,14 +81,14 @@ class VideoMotion:
         ----------
         path : str or path-like
         rig : {'vidcap', 'mixamo', 'humanik'}
-            Joint names and hierarchy (:mod:`vidcap.rigs`); not for ``.npz``.
+            Joint names and hierarchy (:mod:`vidcap.io.rigs`); not for ``.npz``.
 
         Returns
         -------
         list of Path
             The files written (a ``.gltf`` brings its ``.bin``).
         """
-        from vidcap.motionfile import output_files, write_motion
+        from vidcap.io.motionfile import output_files, write_motion
         from vidcap.outputguard import check_outputs
 
         check_outputs({"output": output_files(path)}, {"video": [self.result.video]})
@@ -136,7 +136,7 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
     vidcap.errors.UsageError
         If an option is invalid.
     """
-    from vidcap.pipeline import run
+    from vidcap.video.pipeline import run
 
     check_convert_options(height=height, jobs=jobs, view=view)
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
@@ -178,8 +178,8 @@ class JointCentres:
         """Write the skeleton's motion (Y up, T-pose rest): glTF 2.0 for ``.glb``/``.gltf``,
         BVH otherwise; ``rig`` as :meth:`VideoMotion.save` (``mixamo``/``humanik`` need
         a marker set with the body model's 15 joints). Returns the files written."""
+        from vidcap.io.motionfile import output_files, write_motion
         from vidcap.mocap.skeleton import solution_to_motion
-        from vidcap.motionfile import output_files, write_motion
         from vidcap.outputguard import check_outputs
 
         check_outputs({"output": output_files(path)}, {"trial": list(self.inputs)})

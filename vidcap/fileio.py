@@ -116,7 +116,7 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> None:
 def savez_atomic(path: str | os.PathLike, **arrays) -> None:
     """``numpy.savez_compressed`` to ``path`` atomically.
 
-    A value with a ``frame_shape`` (a :class:`vidcap.masks.MaskStack`) is written as
+    A value with a ``frame_shape`` (a :class:`vidcap.video.masks.MaskStack`) is written as
     its full (F, H, W) bool array one frame at a time, so it never sits in memory
     whole; ``numpy.load`` reads it back as an ordinary array.
     """

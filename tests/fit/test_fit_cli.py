@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from vidcap.fit.pose2d import Pose2D
+from vidcap.video.fit.pose2d import Pose2D
 
 
 def _clip(tmp_path):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vidcap.fit.contour import (
+from vidcap.video.fit.contour import (
     arm_angles,
     elbow_corner,
     fit_angle,
@@ -12,7 +12,7 @@ from vidcap.fit.contour import (
     limb_curve,
     row_runs,
 )
-from vidcap.fit.raster import draw_segments
+from vidcap.video.fit.raster import draw_segments
 
 
 def test_row_runs():

@@ -1,17 +1,17 @@
-"""Chunked fitting on worker processes (vidcap.fit.parallel)."""
+"""Chunked fitting on worker processes (vidcap.video.fit.parallel)."""
 
 import numpy as np
 import pytest
 
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
-from vidcap.fit.parallel import (
+from vidcap.video.fit.parallel import (
     chunk_bounds,
     default_jobs,
     fit_sequence_chunked,
     reconcile_labels,
     swap_labels,
 )
-from vidcap.fit.pose2d import fit_sequence
+from vidcap.video.fit.pose2d import fit_sequence
 
 
 @pytest.fixture(scope="module")
@@ -90,7 +90,7 @@ def test_per_frame_chunks_equal_one_serial_pass(walk_masks):
 
 
 def test_tracked_chunks_agree_with_serial_and_keep_labels(walk_masks, monkeypatch):
-    from vidcap.fit import parallel
+    from vidcap.video.fit import parallel
 
     serial = fit_sequence(walk_masks)
     got = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
@@ -107,14 +107,14 @@ def test_tracked_chunks_agree_with_serial_and_keep_labels(walk_masks, monkeypatc
 
 
 def _swapped_chunk(masks, skip, tracked, kw):
-    from vidcap.fit import parallel
+    from vidcap.video.fit import parallel
 
     out = _REAL_FIT_CHUNK(masks, skip, tracked, kw)
     return parallel.swap_labels(out, {"arms": True, "legs": True}) if skip else out
 
 
 def _real():
-    from vidcap.fit import parallel
+    from vidcap.video.fit import parallel
 
     return parallel._fit_chunk
 
@@ -130,7 +130,7 @@ def test_one_job_or_short_clip_is_the_serial_path(walk_masks):
 
 
 def test_a_pool_started_ahead_gives_the_same_fit(walk_masks):
-    from vidcap.fit.parallel import FitPool
+    from vidcap.video.fit.parallel import FitPool
 
     want = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
     with FitPool(2) as pool:
@@ -146,8 +146,8 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
     """Chunks sent as their frames arrive (StreamedFit.feed) give the fit of all frames
     at once, also when the clip turns out shorter than planned; the last chunk waits
     for finish()."""
-    from vidcap.fit import parallel
-    from vidcap.fit.parallel import FitPool, StreamedFit
+    from vidcap.video.fit import parallel
+    from vidcap.video.fit.parallel import FitPool, StreamedFit
 
     want = fit_sequence_chunked(walk_masks, jobs=2, min_chunk=20)
     sent = []
@@ -183,9 +183,9 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
 def test_masks_as_a_stack_of_crops_fit_exactly_as_full_frames(walk_masks):
     """fit_sequence (and the chunked fit) on a MaskStack normalise each frame from its
     crop: every result equals the fit of the full (F, H, W) array."""
-    from vidcap.fit.pose2d import fit_sequence
-    from vidcap.fit.raster import normalise_mask
-    from vidcap.masks import MaskStack
+    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.fit.raster import normalise_mask
+    from vidcap.video.masks import MaskStack
 
     m = walk_masks[:24].copy()
     m[5] = False  # an empty frame
@@ -218,7 +218,7 @@ def _dying_chunk(masks, skip, tracked, kw):
 def test_a_failing_or_dying_worker_is_an_error_not_a_hang(walk_masks, monkeypatch):
     import time
 
-    from vidcap.fit import parallel
+    from vidcap.video.fit import parallel
 
     monkeypatch.setattr(parallel, "_fit_chunk", _failing_chunk)
     with pytest.raises(ValueError, match="a bad chunk"):

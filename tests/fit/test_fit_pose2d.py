@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
-from vidcap.fit.pose2d import Pose2D, body_heights, fit_pose, fit_sequence
-from vidcap.fit.raster import draw_pose, draw_segments, model_dimensions, pose_joints
-from vidcap.fit.search import interval_search
-from vidcap.fit.similarity import similarity
+from vidcap.video.fit.pose2d import Pose2D, body_heights, fit_pose, fit_sequence
+from vidcap.video.fit.raster import draw_pose, draw_segments, model_dimensions, pose_joints
+from vidcap.video.fit.search import interval_search
+from vidcap.video.fit.similarity import similarity
 
 H = 240.0  # body height of the synthetic figures, pixels
 L, R, SH, HP = model_dimensions(H)
@@ -135,7 +135,7 @@ def test_sequence_refits_frames_taller_than_the_body():
 
 def test_fit_pose_of_a_normalised_silhouette_equals_fit_pose_of_the_mask():
     """fit_sequence refits frames from their normalised silhouettes: the same fit."""
-    from vidcap.fit.raster import normalise_mask
+    from vidcap.video.fit.raster import normalise_mask
 
     mask, _ = _figure([92, 88, 250, 275, 290, 265, 265, 275, 275, 265])
     a = fit_pose(mask, height=60)
@@ -240,7 +240,7 @@ def test_spread_value_fixes_the_spread():
 
 
 def test_into_range_scalar_path_equals_array_path():
-    from vidcap.fit.limits import into_range as _into_range
+    from vidcap.video.fit.limits import into_range as _into_range
 
     rng = np.random.default_rng(0)
     angles = rng.uniform(-20, 20, 500)
@@ -256,14 +256,14 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
     """Each kind of search run as one compiled call (limb angle and ratio, pose angles,
     torso about the neck, foreshortening) ends where interval_search with the Python
     scorer does, with the same score, margin and number of candidates."""
-    import vidcap.fit.engine as engine
-    from vidcap.fit.engine import _MaskEngine
-    from vidcap.fit.foreshortening import search_fore
-    from vidcap.fit.grids import search_arm_grid, search_leg_grid
-    from vidcap.fit.moves import search_angle, search_group, search_spread
-    from vidcap.fit.raster import normalise_mask
-    from vidcap.fit.state import FitState
-    from vidcap.fit.torso import place_torso, search_torso_about_neck
+    import vidcap.video.fit.engine as engine
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.foreshortening import search_fore
+    from vidcap.video.fit.grids import search_arm_grid, search_leg_grid
+    from vidcap.video.fit.moves import search_angle, search_group, search_spread
+    from vidcap.video.fit.raster import normalise_mask
+    from vidcap.video.fit.state import FitState
+    from vidcap.video.fit.torso import place_torso, search_torso_about_neck
 
     mask, _ = _figure([96, 84, 240, 300, 200, 330, 262, 280, 300, 250],
                       fore=[1, 1, 0.8, 1, 0.7, 1, 1, 0.9, 1, 1])
@@ -338,11 +338,11 @@ def test_compiled_searches_equal_the_scorer_path(monkeypatch):
 def test_place_torso_compiled_and_numpy_paths_agree(monkeypatch):
     """The torso's x from the widest run of each row between neck and pelvis (ties: the
     rightmost), compiled and numpy, on random silhouettes with many equal-width runs."""
-    import vidcap.fit.engine as engine
-    from vidcap.fit.engine import _MaskEngine
-    from vidcap.fit.raster import normalise_mask
-    from vidcap.fit.state import FitState
-    from vidcap.fit.torso import place_torso
+    import vidcap.video.fit.engine as engine
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.raster import normalise_mask
+    from vidcap.video.fit.state import FitState
+    from vidcap.video.fit.torso import place_torso
 
     rng = np.random.default_rng(3)
     masks = np.zeros((30, 120, 90), bool)
@@ -364,9 +364,9 @@ def _fitter_at(mask, joints, angles_deg, spread):
     figure's root)."""
     from dataclasses import replace
 
-    from vidcap.fit.engine import _MaskEngine
-    from vidcap.fit.raster import normalise_mask
-    from vidcap.fit.state import FitState
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.raster import normalise_mask
+    from vidcap.video.fit.state import FitState
 
     norm = normalise_mask(mask)
     eng = _MaskEngine(norm, caps=False)
@@ -377,7 +377,7 @@ def _fitter_at(mask, joints, angles_deg, spread):
 
 
 def test_fresh_fit_keeps_a_tracks_limb_names_in_a_side_view():
-    from vidcap.fit.labels import keep_labels
+    from vidcap.video.fit.labels import keep_labels
 
     # side view, legs apart: the track calls the forward leg "l"; a fresh fit named by
     # image side calls it "r". Swapping the names back draws the same pixels.
@@ -409,7 +409,7 @@ def test_fresh_fit_keeps_a_tracks_limb_names_in_a_side_view():
 
 
 def test_challenge_comes_reinit_every_frames_after_the_last_fresh_fit(monkeypatch):
-    import vidcap.fit.tracking as tracking
+    import vidcap.video.fit.tracking as tracking
 
     still, _ = _figure([92, 90, 265, 270, 275, 270, 270, 265, 270, 262], spread=0.2)
     moved, _ = _figure([92, 90, 200, 150, 340, 30, 250, 280, 290, 262], spread=0.2)
@@ -474,7 +474,7 @@ def test_tracked_thighs_may_cross():
 def test_window_median_keeps_ends_and_turns():
     from scipy.ndimage import median_filter
 
-    from vidcap.fit.tracking import _window_median
+    from vidcap.video.fit.tracking import _window_median
 
     # a clip whose first 4 frames were misread: judged by the frames after them
     x = np.r_[np.full(4, 0.1), np.full(26, 0.8)]
@@ -496,8 +496,8 @@ def test_spread_prior_refits_a_misread_frame():
     # limbs fitted for a side view): the median of the frames after it (the window is
     # not padded with copies of frame 0) refits it at 0.8, and the hips move out to where
     # the other frames have them
-    from vidcap.fit.options import FitOptions
-    from vidcap.fit.tracking import _Frames, _smooth_spread
+    from vidcap.video.fit.options import FitOptions
+    from vidcap.video.fit.tracking import _Frames, _smooth_spread
 
     angles = [92, 90, 250, 290, 265, 275, 262, 275, 280, 266]
     masks = []

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from vidcap.body import JOINT_INDEX, SEGMENT_NAMES
-from vidcap.fit.raster import (
+from vidcap.video.fit.raster import (
     draw_segments,
     image_angle,
     model_dimensions,
@@ -145,7 +145,7 @@ def test_normalise_to_a_given_body_height():
 def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatch):
     """span_counts (numba kernel and numpy fallback) = weights summed under draw_segments;
     draw_segments' compiled and numpy paths draw the same pixels."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     assert raster._kernels() is not None  # numba is a dependency: the fast path must be live
     rng = np.random.default_rng(7)
@@ -181,7 +181,7 @@ def test_span_counts_compiled_and_numpy_paths_equal_drawn_masks(caps, monkeypatc
 
 def test_pose_joints_batch_equals_pose_joints_bit_for_bit(monkeypatch):
     """The compiled joint kernel gives exactly pose_joints' floats (and so does its fallback)."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(3)
     b = 50
@@ -208,8 +208,8 @@ def test_pose_joints_batch_equals_pose_joints_bit_for_bit(monkeypatch):
 
 def test_span_similarity_equals_counts_then_similarity(monkeypatch):
     """span_similarity (compiled, and numpy fallback) = similarity_from_counts of span_counts."""
-    from vidcap.fit import raster
-    from vidcap.fit.similarity import similarity_from_counts
+    from vidcap.video.fit import raster
+    from vidcap.video.fit.similarity import similarity_from_counts
 
     rng = np.random.default_rng(11)
     h, w, t, k, b = 40, 36, 3, 2, 90
@@ -236,7 +236,7 @@ def test_span_similarity_equals_counts_then_similarity(monkeypatch):
 @pytest.mark.parametrize("caps", [True, False])
 def test_base_tables_compiled_and_numpy_paths_agree_with_drawn_model(caps, monkeypatch):
     """base_tables = row prefix sums of (not model) and (silhouette and not model)."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(5)
     h, w = 30, 27
@@ -264,7 +264,7 @@ def test_base_tables_compiled_and_numpy_paths_agree_with_drawn_model(caps, monke
 
 def test_group_tables_leave_out_each_searched_pair():
     """group_tables: each table is the model without the searched segment (and child)."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(9)
     h, w = 25, 22
@@ -284,7 +284,7 @@ def test_group_tables_leave_out_each_searched_pair():
 def test_group_span_tables_equal_group_tables_of_the_drawn_model(caps):
     """The span-counted group tables equal group_tables of the drawn segments, also
     with segments reaching past the image and limited table rows."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(11)
     h, w = 60, 45
@@ -310,7 +310,7 @@ def test_group_span_tables_equal_group_tables_of_the_drawn_model(caps):
 
 
 def test_shift_overlaps_compiled_and_numpy_paths_agree(monkeypatch):
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(1)
     sil = rng.random((20, 15)) < 0.5
@@ -326,7 +326,7 @@ def test_shift_overlaps_compiled_and_numpy_paths_agree(monkeypatch):
 
 def test_limb_and_pose_similarity_compiled_equal_numpy_paths(monkeypatch):
     """The fused end-point + similarity kernels give the numpy paths' floats exactly."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(8)
     h, w, b = 60, 50, 40
@@ -367,7 +367,7 @@ def test_limb_and_pose_similarity_compiled_equal_numpy_paths(monkeypatch):
 
 @pytest.mark.parametrize("form", ["angle", "ratio"])
 def test_group_similarity_compiled_equals_numpy_path(form, monkeypatch):
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(12)
     h, w, n, b = 50, 40, 3, 7
@@ -398,7 +398,7 @@ def test_group_similarity_compiled_equals_numpy_path(form, monkeypatch):
 
 def test_group_tables_reach_rows_give_the_same_counts():
     """Tables filled only in the rows a search reaches: same counts, zeros elsewhere."""
-    from vidcap.fit import raster
+    from vidcap.video.fit import raster
 
     rng = np.random.default_rng(10)
     h, w = 30, 20

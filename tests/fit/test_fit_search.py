@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vidcap.fit.search import interval_search
+from vidcap.video.fit.search import interval_search
 
 
 @pytest.mark.parametrize("optimum", [47.3, 45.0, 100.0, 134.2])
@@ -66,7 +66,7 @@ def test_bad_interval():
 def test_compiled_bookkeeping_equals_numpy_fallback(periodic, monkeypatch):
     """interval_search gives the same values, scores and runner-up with the compiled
     helpers as with the numpy code (bit for bit), including wrapped warm starts."""
-    from vidcap.fit import search
+    from vidcap.video.fit import search
 
     assert search._kernels() is not None
     rng = np.random.default_rng(2)
@@ -90,7 +90,7 @@ def test_compiled_bookkeeping_equals_numpy_fallback(periodic, monkeypatch):
 @pytest.mark.parametrize("periodic", [None, 2 * np.pi])
 def test_many_compiled_bookkeeping_equals_numpy_fallback(periodic, monkeypatch):
     """interval_search_many: compiled helpers and numpy code give the same arrays."""
-    from vidcap.fit import search
+    from vidcap.video.fit import search
 
     rng = np.random.default_rng(4)
     table = rng.normal(size=4096)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vidcap.fit.similarity import similarity, similarity_from_counts
+from vidcap.video.fit.similarity import similarity, similarity_from_counts
 
 
 def test_hand_computed_5x5():

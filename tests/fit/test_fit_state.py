@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from vidcap.fit.options import FitOptions
-from vidcap.fit.state import FitState, hang, keep_if_better
+from vidcap.video.fit.options import FitOptions
+from vidcap.video.fit.state import FitState, hang, keep_if_better
 
 
 def test_with_entries_returns_a_new_state_and_leaves_the_old_one():
@@ -51,7 +51,7 @@ def test_fit_options_refuse_values_out_of_range(bad):
 
 
 def test_fit_sequence_checks_its_options_and_masks_before_fitting(monkeypatch):
-    import vidcap.fit.tracking as tracking
+    import vidcap.video.fit.tracking as tracking
 
     calls = []
     monkeypatch.setattr(tracking, "fit_frame", lambda *a, **k: calls.append(1))

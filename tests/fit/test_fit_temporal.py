@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from vidcap.body import JOINT_INDEX, LIMB_PAIR_JOINTS
-from vidcap.fit.temporal import best_path, label_path, relabel
+from vidcap.video.fit.temporal import best_path, label_path, relabel
 
 LEFT_LEG, RIGHT_LEG = (list(x) for x in LIMB_PAIR_JOINTS["legs"])
 

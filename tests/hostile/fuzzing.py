@@ -204,14 +204,14 @@ def preload() -> None:
     for name in ("vidcap.cli", "vidcap.commands.joints", "vidcap.commands.synth",
                  "vidcap.commands.convert", "vidcap.commands.info", "vidcap.mocap.c3d",
                  "vidcap.mocap.markerset", "vidcap.mocap.skeleton", "vidcap.synth",
-                 "vidcap.pipeline", "vidcap.asf", "vidcap.bvh", "vidcap.video", "ezc3d",
-                 "av", "scipy.optimize", "scipy.spatial"):
+                 "vidcap.video.pipeline", "vidcap.io.asf", "vidcap.io.bvh", "vidcap.io.video",
+                 "ezc3d", "av", "scipy.optimize", "scipy.spatial"):
         try:
             importlib.import_module(name)
         except ImportError:
             pass
     try:
-        from vidcap.fit.parallel import warm_up
+        from vidcap.video.fit.parallel import warm_up
 
         warm_up()
     except Exception:  # noqa: BLE001 - only a speed-up

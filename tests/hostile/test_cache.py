@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tests.hostile.clips import synth_walk
-from vidcap.stagecache import CHECKSUM, StageCache
+from vidcap.video.stagecache import CHECKSUM, StageCache
 
 
 @pytest.fixture(scope="module")

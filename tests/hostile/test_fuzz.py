@@ -136,9 +136,9 @@ def test_c3d_fields(field, value, tmp_path_factory):
 @given(ops=OPS)
 def test_text_readers(ops, tmp_path_factory):
     _need_data()
-    from vidcap.annotations import Annotations
-    from vidcap.bvh import read_bvh
+    from vidcap.io.bvh import read_bvh
     from vidcap.mocap.markerset import load_markerset
+    from vidcap.video.annotations import Annotations
 
     cases = [(fuzzing._bvh_frames(4)((fuzzing.SHARED / "motion" / "131_01.bvh").read_bytes()),
               ".bvh", read_bvh),

@@ -59,7 +59,7 @@ def test_rate_from_the_packets_when_the_header_is_absurd(tmp_path, monkeypatch):
     import av
     import numpy as np
 
-    from vidcap import video
+    from vidcap.io import video
 
     path = tmp_path / "v.mkv"
     with av.open(str(path), "w") as out:

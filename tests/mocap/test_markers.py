@@ -148,8 +148,8 @@ def test_lab_to_yup_z_up():
 # ----------------------------------------------------------------------------- synthetic truth
 @pytest.fixture(scope="module")
 def motions():
-    from vidcap.asf import read_asf_amc
-    from vidcap.bvh import read_bvh
+    from vidcap.io.asf import read_asf_amc
+    from vidcap.io.bvh import read_bvh
 
     root = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "motion"
     if not root.exists():
@@ -343,7 +343,7 @@ def test_cli_07_01_outputs(cli, shared_data, tmp_path):
     r = cli("joints", c3d, "-o", out, "--centres", tmp_path / "c.csv",
             "--report", tmp_path / "r.json", timeout=120)
     assert r.returncode == 0, r.stderr
-    from vidcap.bvh import read_bvh
+    from vidcap.io.bvh import read_bvh
 
     m = read_bvh(out, units="m")
     assert "l_knee" in m.skeleton.joint_names and m.n_frames == 316
@@ -418,7 +418,7 @@ def test_cli_draft_markerset_for_an_unknown_set(cli, shared_data, tmp_path):
     assert text.count("[segments.") == 3 and "sphere fit: RMS" in text
     r = cli("joints", trial, "--markerset", draft, "-o", tmp_path / "d.bvh", timeout=60)
     assert r.returncode == 0, r.stderr
-    from vidcap.bvh import read_bvh
+    from vidcap.io.bvh import read_bvh
 
     assert read_bvh(tmp_path / "d.bvh", units="m").n_frames == read_c3d(trial).n_frames
     r = cli("joints", trial, "--draft-markerset", draft, "--rigid-mm", "0")

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from vidcap.body import BodyModel, segment_vectors
-from vidcap.bvh import write_bvh
-from vidcap.lift import estimate_scale
-from vidcap.solve import solve_clip
-from vidcap.solve.limits import limit_angles, limit_excess
-from vidcap.solve.skeleton import params_to_motion, root_rotation
+from vidcap.io.bvh import write_bvh
 from vidcap.synth import make_motion, prepare_clip, truth_arrays
+from vidcap.video.lift import estimate_scale
+from vidcap.video.solve import solve_clip
+from vidcap.video.solve.limits import limit_angles, limit_excess
+from vidcap.video.solve.skeleton import params_to_motion, root_rotation
 
 BODY = BodyModel()
 

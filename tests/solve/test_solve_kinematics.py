@@ -7,11 +7,11 @@ import pytest
 
 from vidcap.body import BodyModel, segment_vectors
 from vidcap.kinematics import Motion
-from vidcap.solve.blocksolve import solve_block_banded
-from vidcap.solve.clip import make_problem
-from vidcap.solve.gauss_newton import normal_equations
-from vidcap.solve.residuals import linearise, residuals, sparse_jacobian
-from vidcap.solve.skeleton import (
+from vidcap.video.solve.blocksolve import solve_block_banded
+from vidcap.video.solve.clip import make_problem
+from vidcap.video.solve.gauss_newton import normal_equations
+from vidcap.video.solve.residuals import linearise, residuals, sparse_jacobian
+from vidcap.video.solve.skeleton import (
     forward_kinematics,
     kinematics_jacobian,
     local_quaternions,

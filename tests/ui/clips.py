@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from vidcap.ui.session import ClipData
 
-from vidcap.video import read_frames
+from vidcap.io.video import read_frames
 
 REPO = Path(__file__).resolve().parents[2]
 SAMPLES = REPO / "sample_videos"

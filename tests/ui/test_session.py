@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from vidcap.ui.session import AnnotateSession, backup_path
 
-from vidcap.annotations import Annotations
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, SEGMENT_JOINTS
+from vidcap.video.annotations import Annotations
 
 
 def _events(path):
@@ -206,7 +206,7 @@ def test_frames_without_a_fit_are_filled_and_drawn(walk_clip, tmp_path):
     clip = replace(walk_clip, joints2d=j2)
     s = AnnotateSession(clip, tmp_path / "a.json")
     assert np.isfinite(s.joints3d).all() and np.isfinite(s.joints2d).all()
-    # frame 20 is interpolated between its neighbours (vidcap.pipeline.fill_gaps)
+    # frame 20 is interpolated between its neighbours (vidcap.video.pipeline.fill_gaps)
     np.testing.assert_allclose(s.joints2d[20], (j2[19] + j2[21]) / 2)
     nan_pose = np.full((15, 2), np.nan)
     img = render.draw_model(clip.read_frame(20), nan_pose, s.signs[20])

@@ -21,8 +21,8 @@ pv = pytest.importorskip("pyvista")
 from vidcap.ui import view as uiview  # noqa: E402
 
 from vidcap.body import JOINT_NAMES, BodyModel  # noqa: E402
-from vidcap.bvh import write_bvh  # noqa: E402
 from vidcap.errors import InputFileError, UsageError  # noqa: E402
+from vidcap.io.bvh import write_bvh  # noqa: E402
 from vidcap.kinematics import Motion  # noqa: E402
 
 CACHE = Path(__file__).parent / "image_cache"

@@ -15,9 +15,9 @@ class ClipTask:
     video : str
         The input video.
     output : str
-        The output file; whatever :func:`vidcap.pipeline.convert` writes for it.
+        The output file; whatever :func:`vidcap.video.pipeline.convert` writes for it.
     options : dict
-        Keyword options of :func:`vidcap.pipeline.convert` (``height``, ``view``,
+        Keyword options of :func:`vidcap.video.pipeline.convert` (``height``, ``view``,
         ``jobs``...), the same for every clip of the batch.
     """
 
@@ -47,7 +47,7 @@ def convert_clip(task: ClipTask) -> dict:
         time), ``fps``, ``status`` (``ok`` or ``failed``) and ``message`` (the
         conversion's notices, or the error).
     """
-    from vidcap.pipeline import convert
+    from vidcap.video.pipeline import convert
 
     t0 = time.perf_counter()
     try:

@@ -105,7 +105,7 @@ def plan(videos: list[Path], outputs: list[Path], force: bool, options: dict):
     rows : list of dict
         Summary rows of the clips whose output is newer than the input (unless ``force``).
     tasks : list of ClipTask
-        The clips to convert, with ``options`` for :func:`vidcap.pipeline.convert`.
+        The clips to convert, with ``options`` for :func:`vidcap.video.pipeline.convert`.
     """
     from vidcap.batch.job import ClipTask
 
@@ -165,10 +165,10 @@ def write_summary(rows: list[dict], outdir: Path) -> None:
 
 def run(args) -> int:
     """Run ``vidcap batch``."""
-    from vidcap.annotations import default_path
     from vidcap.fileio import progress, remove_atomic_leftovers
-    from vidcap.motionfile import FORMATS, output_files
+    from vidcap.io.motionfile import FORMATS, output_files
     from vidcap.outputguard import check_outputs
+    from vidcap.video.annotations import default_path
 
     for name in ("jobs", "clip_jobs"):
         if getattr(args, name) < 1:

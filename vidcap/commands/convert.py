@@ -14,21 +14,21 @@ INPUT_FILES = ("video", "annotations", "background")
 
 def implicit_outputs(args) -> dict:
     """The ``.bin`` that a ``-o OUT.gltf`` writes beside it."""
-    from vidcap.motionfile import output_files
+    from vidcap.io.motionfile import output_files
 
     return {"gltf_bin": output_files(args.output)[1:] if args.output else None}
 
 
 def implicit_inputs(args) -> dict:
     """The annotations read by default (``VIDEO_STEM.vidcap.json`` beside the video)."""
-    from vidcap.annotations import default_path
+    from vidcap.video.annotations import default_path
 
     return {"implicit_annotations": None if args.annotations else default_path(args.video)}
-#: ``--view`` values (:data:`vidcap.lifting.VIEWS`, spelled here so that ``--help``
+#: ``--view`` values (:data:`vidcap.video.lifting.VIEWS`, spelled here so that ``--help``
 #: does not import the pipeline).
 VIEW_CHOICES = ("auto", "side", "front", "back", "left", "right", "back_left", "back_right",
                 "front_left", "front_right")
-#: ``--rig`` values (:data:`vidcap.rigs.RIGS`, spelled here for a light ``--help``).
+#: ``--rig`` values (:data:`vidcap.io.rigs.RIGS`, spelled here for a light ``--help``).
 RIG_CHOICES = ("vidcap", "mixamo", "humanik")
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
@@ -85,9 +85,9 @@ def run(args) -> int:
     """Run ``vidcap convert``."""
     import numpy as np
 
-    from vidcap.annotations import default_path
     from vidcap.api import check_convert_options
-    from vidcap.pipeline import convert
+    from vidcap.video.annotations import default_path
+    from vidcap.video.pipeline import convert
 
     check_convert_options(height=args.height, jobs=args.jobs, view=args.view,
                           smooth=args.smooth, keyframes=args.keyframes)

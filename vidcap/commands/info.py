@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from vidcap.video import probe
+from vidcap.io.video import probe
 
 NAME = "info"
 HELP = "print frame count, frame rate, size and codec of videos (checks they decode)"

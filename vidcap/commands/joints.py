@@ -105,8 +105,8 @@ def run(args) -> int:
     if args.noise_mm is not None and not args.noise_mm > 0:
         raise UsageError(f"--noise-mm must be positive, got {args.noise_mm}")
 
+    from vidcap.io.motionfile import write_motion
     from vidcap.mocap.skeleton import solution_to_motion, solve_joints
-    from vidcap.motionfile import write_motion
 
     steps = progress(total=3 + len(args.also), desc="joints", unit="step")
     trials = []

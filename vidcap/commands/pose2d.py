@@ -36,10 +36,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def load_masks(path):
     """Read ``masks`` (F, H, W) from an .npz file, frame by frame, as a
-    :class:`vidcap.masks.MaskStack`; raise InputFileError naming the file."""
+    :class:`vidcap.video.masks.MaskStack`; raise InputFileError naming the file."""
     import zipfile
 
-    from vidcap.masks import read_npz_masks
+    from vidcap.video.masks import read_npz_masks
 
     path = Path(path)
     try:
@@ -58,8 +58,8 @@ def load_masks(path):
 def compute_masks(video) -> np.ndarray:
     """Silhouettes of ``video`` as ``vidcap silhouettes`` computes them."""
     try:
-        from vidcap.background import estimate_background
-        from vidcap.silhouette import extract_silhouettes
+        from vidcap.video.background import estimate_background
+        from vidcap.video.silhouette import extract_silhouettes
     except ImportError:
         raise UsageError("silhouette extraction is not available in this build; pass "
                          "--masks MASKS.npz") from None
@@ -70,9 +70,9 @@ def compute_masks(video) -> np.ndarray:
 def run(args) -> int:
     """Fit the model and write the .npz atomically."""
     from vidcap.fileio import progress
-    from vidcap.fit.pose2d import fit_sequence
-    from vidcap.masks import frames_with_pixels
-    from vidcap.video import probe
+    from vidcap.io.video import probe
+    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.masks import frames_with_pixels
 
     if args.height < 16:
         raise UsageError(f"--height must be at least 16 pixels, got {args.height}")

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from vidcap.errors import InputFileError, UsageError
-from vidcap.masks import frames_with_pixels, read_npz_masks
+from vidcap.video.masks import frames_with_pixels, read_npz_masks
 
 NAME = "review"
 HELP = "write a review video: frame | silhouette with the 2D model | 3D pose"
@@ -60,8 +60,8 @@ def run(args) -> int:
     """Run ``vidcap review``."""
     import cv2
 
-    from vidcap.review import review_frames
-    from vidcap.video import iter_frames, probe
+    from vidcap.io.video import iter_frames, probe
+    from vidcap.video.review import review_frames
 
     if args.max_height < 0 or args.min_height < 0:
         raise UsageError("--min-height and --max-height are pixels (0 or more)")
@@ -71,7 +71,7 @@ def run(args) -> int:
     if args.from_npz:
         d = _load(args.from_npz)
     else:
-        from vidcap.pipeline import run as run_pipeline
+        from vidcap.video.pipeline import run as run_pipeline
 
         res = run_pipeline(args.video, height=args.height)
         d = {"masks": res.masks, "joints2d": res.lifted.joints2d,
@@ -104,7 +104,7 @@ def run(args) -> int:
                 raise InputFileError("cannot write PNG frames here", out)
         print(f"{out}: {n} review frames")
     if args.output:
-        from vidcap.video import write_video
+        from vidcap.io.video import write_video
 
         if args.png:
             imgs = (cv2.imread(str(Path(args.png) / f"review_{i:05d}.png")) for i in range(n))

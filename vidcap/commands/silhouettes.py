@@ -37,11 +37,11 @@ def run(args) -> int:
     import cv2
     import numpy as np
 
-    from vidcap.background import estimate_background, load_plate
     from vidcap.errors import UsageError
     from vidcap.fileio import atomic_path, savez_atomic
-    from vidcap.silhouette import extract_silhouettes
-    from vidcap.video import probe
+    from vidcap.io.video import probe
+    from vidcap.video.background import estimate_background, load_plate
+    from vidcap.video.silhouette import extract_silhouettes
 
     if args.output.suffix.lower() != ".npz":
         raise UsageError("the output must be a .npz file", args.output)
@@ -72,7 +72,7 @@ def run(args) -> int:
             if not cv2.imwrite(str(tmp), bg.plate):
                 raise UsageError("cannot write an image with this suffix", args.plate_out)
     n = len(sil)
-    from vidcap.inputchecks import plate_notice
+    from vidcap.video.inputchecks import plate_notice
 
     notice = plate_notice(bg)
     if notice:

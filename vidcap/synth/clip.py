@@ -236,7 +236,7 @@ def synth_clip(
     Parameters
     ----------
     out_video : str or path-like
-        H.264 video to write (via :class:`vidcap.video.VideoWriter`).
+        H.264 video to write (via :class:`vidcap.io.video.VideoWriter`).
     truth_path : str or path-like
         ``.npz`` truth (:func:`truth_arrays` keys), via
         :func:`vidcap.fileio.savez_atomic`.
@@ -256,7 +256,7 @@ def synth_clip(
         The saved truth arrays.
     """
     from vidcap.fileio import savez_atomic
-    from vidcap.video import VideoWriter
+    from vidcap.io.video import VideoWriter
 
     rng = rng if rng is not None else np.random.default_rng(0)
     if not isinstance(motion, Motion):
@@ -273,7 +273,7 @@ def synth_clip(
     truth = truth_arrays(clip, masks)
     savez_atomic(truth_path, **truth)
     if bvh_path is not None:
-        from vidcap.bvh import write_bvh
+        from vidcap.io.bvh import write_bvh
 
         write_bvh(bvh_path, motion)
     return truth

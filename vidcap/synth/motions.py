@@ -88,13 +88,13 @@ def make_motion(
             f"no such motion file (built-in motions: {', '.join(BUILTIN_MOTIONS)})", path
         )
     if suffix == ".bvh":
-        from vidcap.bvh import read_bvh
+        from vidcap.io.bvh import read_bvh
 
         src = read_bvh(path)
     elif suffix == ".asf":
         if amc is None:
             raise UsageError("an ASF skeleton needs its motion: pass --amc M.amc", path)
-        from vidcap.asf import read_asf_amc
+        from vidcap.io.asf import read_asf_amc
 
         src = read_asf_amc(path, amc)
     elif suffix == ".amc":

@@ -19,7 +19,6 @@ the elbow), so the truth is a pose of the model itself.
 from __future__ import annotations
 
 import os
-from types import MappingProxyType
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -30,70 +29,10 @@ from vidcap.body import (
     BodyModel,
 )
 from vidcap.errors import MotionFileError
+from vidcap.io.jointmaps import JOINT_MAPS
 from vidcap.kinematics import Motion, Skeleton
-from vidcap.motion import joints_to_motion, minimal_rotation
 from vidcap.synth._geometry import unit
-
-#: How each of our 15 joints is found in a source skeleton, per naming scheme.
-#: Each entry maps our joint name to a source joint name, or to a tuple of names of
-#: which the first present is used; ``"<name>@end"`` means the End Site of that joint
-#: (or its first child when it has none). Source names are matched
-#: case-insensitively, ignoring a namespace prefix such as ``mixamorig:``. The first
-#: scheme whose joints are all present is used (:func:`detect_joint_map`).
-#:
-#: =========== ============== ============== ==========================
-#: ours        CMU BVH        CMU ASF/AMC    HumanIK
-#: =========== ============== ============== ==========================
-#: pelvis      Hips           root           Hips
-#: neck        Neck           upperneck      Neck
-#: head_top    Head@end       head@end       HeadTop_End or Head@end
-#: l_shoulder  LeftShoulder   lhumerus       LeftArm
-#: l_elbow     LeftElbow      lradius        LeftForeArm
-#: l_wrist     LeftWrist      lwrist         LeftHand
-#: l_hip       LeftHip        lfemur         LeftUpLeg
-#: l_knee      LeftKnee       ltibia         LeftLeg
-#: l_ankle     LeftAnkle      lfoot          LeftFoot
-#: (right side likewise: Right*, r*)
-#: =========== ============== ============== ==========================
-#:
-#: CMU BVH's ``Neck`` joint and ASF's ``upperneck`` (the near end of the bone) sit at
-#: shoulder height, where our neck joint is (the top of the torso cylinder). The
-#: HumanIK names (MotionBuilder's) are those of Mixamo, of the widely shared CMU
-#: conversion (``LHipJoint``, ``LeftUpLeg``, ``Spine1``, ``Neck1``...) and of many
-#: capture suits' BVH exports; their ``Neck`` is the base of the neck too.
-JOINT_MAPS = MappingProxyType(
-    {
-        "vidcap": MappingProxyType({n: n for n in JOINT_NAMES}),
-        "cmu_bvh": MappingProxyType(
-            {
-                "pelvis": "Hips", "neck": "Neck", "head_top": "Head@end",
-                "l_shoulder": "LeftShoulder", "l_elbow": "LeftElbow", "l_wrist": "LeftWrist",
-                "r_shoulder": "RightShoulder", "r_elbow": "RightElbow",
-                "r_wrist": "RightWrist",
-                "l_hip": "LeftHip", "l_knee": "LeftKnee", "l_ankle": "LeftAnkle",
-                "r_hip": "RightHip", "r_knee": "RightKnee", "r_ankle": "RightAnkle",
-            }
-        ),
-        "cmu_asf": MappingProxyType(
-            {
-                "pelvis": "root", "neck": "upperneck", "head_top": "head@end",
-                "l_shoulder": "lhumerus", "l_elbow": "lradius", "l_wrist": "lwrist",
-                "r_shoulder": "rhumerus", "r_elbow": "rradius", "r_wrist": "rwrist",
-                "l_hip": "lfemur", "l_knee": "ltibia", "l_ankle": "lfoot",
-                "r_hip": "rfemur", "r_knee": "rtibia", "r_ankle": "rfoot",
-            }
-        ),
-        "humanik": MappingProxyType(
-            {
-                "pelvis": "Hips", "neck": "Neck", "head_top": ("HeadTop_End", "Head@end"),
-                "l_shoulder": "LeftArm", "l_elbow": "LeftForeArm", "l_wrist": "LeftHand",
-                "r_shoulder": "RightArm", "r_elbow": "RightForeArm", "r_wrist": "RightHand",
-                "l_hip": "LeftUpLeg", "l_knee": "LeftLeg", "l_ankle": "LeftFoot",
-                "r_hip": "RightUpLeg", "r_knee": "RightLeg", "r_ankle": "RightFoot",
-            }
-        ),
-    }
-)
+from vidcap.video.motion import joints_to_motion, minimal_rotation
 
 
 def _norm_name(name: str) -> str:

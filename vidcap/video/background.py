@@ -1,0 +1,613 @@
+"""Background plate estimated from the video itself (seed 004 section 3.1.2).
+
+The seed finds "the regions on video frames that do not change" with
+Felzenszwalb-Huttenlocher graph segmentation, each region painted with its mean
+colour "to decrease the lighting effect". We do the same on a few sampled,
+downscaled frames, and combine the regions with per-pixel temporal statistics so
+that a pixel the person covers in *most* frames (jumping jacks, waving, turning on
+the spot) still takes its background from the frames where it is uncovered:
+
+1. Sample ``n_samples`` frames spread over the video; downscale them to
+   ``work_size`` pixels on the long side and normalise each frame's global
+   brightness per channel (slow lighting drift).
+2. Segment each sample (:func:`skimage.segmentation.felzenszwalb`) and replace
+   every pixel by its region's mean colour.
+3. Per pixel, count for each sample how many other samples show the same region
+   colour (within ``tau``, from the data's own noise). The most supported colour is
+   the pixel's first guess; pixels whose guess has a majority are *confident*.
+4. Region test, per frame: a region whose confident pixels agree with their guess
+   (a region that "does not change") is background in that frame, and so are all
+   its pixels - including pixels covered in most other frames.
+5. The per-pixel vote is repeated with every sample weighted by how background-like
+   its region was (step 4), which overturns a person's colour that happened to win
+   the plain vote.
+6. Motion footprint (:func:`_footprint_plate`): the union of the pixels that differ
+   from the temporal median in some sample. Inside it, the background around it,
+   inpainted across, is a spatial guess that overturns a voted colour far from it
+   when a supported sample colour is near it. Static areas enclosed by the
+   footprint whose ring the limbs cover often (a torso during jumping jacks) are
+   body parts that never moved: flagged ``never_seen``, confidence 0.
+7. At full resolution, the plate is the median of (at most 9 of) the samples
+   each pixel was found to be background in. Pixels never found uncovered are
+   flagged (``never_seen``) and inpainted from the surrounding background
+   (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
+
+``method='median'`` gives the plain per-pixel temporal median as a baseline.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from vidcap.errors import BackgroundError, InputFileError
+from vidcap.video.platemedian import _masked_median, _normalised_u8, _robust_plate
+
+__all__ = [
+    "BackgroundError",
+    "BackgroundModel",
+    "estimate_background",
+    "load_plate",
+    "sample_frames",
+]
+
+#: L1 (sum over B, G, R) threshold floor, grey levels: differences below this are
+#: never foreground, whatever the measured noise (guards clean synthetic video).
+MIN_THRESHOLD = 12.0
+#: Foreground threshold in standard deviations of the background's L1 noise above
+#: its mean. Isolated false alarms (~1e-4 of pixels at 4) are removed by the 3x3
+#: median of the clean-up, so the threshold can stay close to the noise.
+K_SIGMA = 4.0
+
+
+@dataclass(frozen=True)
+class BackgroundModel:
+    """A background plate and how much to trust it.
+
+    Attributes
+    ----------
+    plate : numpy.ndarray, shape (H, W, 3), uint8
+        Background colour per pixel, BGR, at the video's resolution and at the
+        sampled frames' median lighting.
+    confidence : numpy.ndarray, shape (H, W), float32
+        In [0, 1]: the share of sampled frames in which the pixel was seen as
+        background (1 = never covered; 0 = never seen uncovered).
+    never_seen : numpy.ndarray, shape (H, W), bool
+        Pixels no sampled frame showed uncovered; their plate value is a guess.
+    noise_sigma : numpy.ndarray, shape (3,), float32
+        Robust (1.4826 MAD) standard deviation of background pixels about the
+        plate, per channel B, G, R, grey levels.
+    noise_map : numpy.ndarray, shape (H, W), float32
+        Per-pixel mean absolute difference (L1 over the channels, grey levels)
+        of background samples from the plate; high where the background itself
+        flickers (leaves, screens, compression around edges).
+    threshold : float
+        Suggested foreground threshold on the L1 colour difference (sum over
+        B, G, R of ``|frame - plate|``, 0..765), from the noise of pixels known
+        to be background.
+    method : str
+        ``'felzenszwalb'``, ``'median'`` or ``'given'``.
+    n_samples : int
+        Frames the plate was estimated from.
+    moving_fraction : float
+        Share of pixels that were not background in at least one sample: ~0 for
+        a static scene with nobody in it.
+    sample_indices : numpy.ndarray, shape (K,), int
+        Frame indices sampled.
+    self_lit : numpy.ndarray, shape (H, W), bool, optional
+        Pixels that keep their level while the exposure drifts (a lamp, a screen:
+        :func:`vidcap.video.stillparts.self_lit`); their plate value is as recorded and
+        is compared without the frame's gain.
+    still_person : numpy.ndarray, shape (H, W), bool, optional
+        Parts of the person that never moved, found by appearance
+        (:mod:`vidcap.video.stillparts`): person in a frame where they still look as
+        they did (``person_plate``); also in ``never_seen``, their plate inpainted.
+    person_plate : numpy.ndarray, shape (H, W, 3), uint8, optional
+        The plate before the still parts were inpainted: their own colour.
+    """
+
+    plate: np.ndarray
+    confidence: np.ndarray
+    never_seen: np.ndarray
+    noise_sigma: np.ndarray
+    noise_map: np.ndarray
+    threshold: float
+    method: str
+    n_samples: int = 0
+    moving_fraction: float = float("nan")
+    sample_indices: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    self_lit: np.ndarray | None = None
+    still_person: np.ndarray | None = None
+    person_plate: np.ndarray | None = None
+
+    @property
+    def never_seen_fraction(self) -> float:
+        """Share of the frame never seen uncovered, in [0, 1]."""
+        return float(self.never_seen.mean())
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) of the plate."""
+        return self.plate.shape[:2]
+
+    @classmethod
+    def from_plate(cls, plate: np.ndarray, *, noise_sigma: float | None = None):
+        """Wrap a known plate (e.g. a photo of the empty scene).
+
+        Parameters
+        ----------
+        plate : numpy.ndarray, shape (H, W, 3), uint8
+            BGR background.
+        noise_sigma : float, optional
+            Per-channel noise in grey levels; when omitted ``threshold`` is NaN and
+            :func:`vidcap.video.silhouette.extract_silhouettes` measures it on the video.
+        """
+        plate = np.ascontiguousarray(plate)
+        if plate.ndim != 3 or plate.shape[2] != 3 or plate.dtype != np.uint8:
+            raise ValueError(f"plate must be (H, W, 3) uint8, got {plate.shape} {plate.dtype}")
+        h, w = plate.shape[:2]
+        sig = np.full(3, np.nan if noise_sigma is None else noise_sigma, np.float32)
+        thr = np.nan if noise_sigma is None else _threshold_from_sigma(sig)
+        return cls(plate=plate, confidence=np.ones((h, w), np.float32),
+                   never_seen=np.zeros((h, w), bool), noise_sigma=sig,
+                   noise_map=np.zeros((h, w), np.float32), threshold=float(thr),
+                   method="given")
+
+
+def load_plate(path: str | os.PathLike) -> BackgroundModel:
+    """Read a background image (PNG, JPEG, ...) as a :class:`BackgroundModel`.
+
+    Raises
+    ------
+    InputFileError
+        The file is missing or not an image.
+    """
+    if not os.path.isfile(path):
+        raise InputFileError("no such background image", path)
+    data = np.fromfile(path, np.uint8)
+    img = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    if img is None:
+        raise InputFileError("not a readable image (PNG, JPEG, BMP, TIFF)", path)
+    return BackgroundModel.from_plate(img)
+
+
+# --------------------------------------------------------------------------- sampling
+def sample_frames(
+    source, *, n_samples: int = 32, rng: np.random.Generator | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pick ``n_samples`` frames spread evenly over a video.
+
+    Parameters
+    ----------
+    source : str, path-like or numpy.ndarray
+        A video file, or frames (F, H, W, 3) uint8 BGR.
+    n_samples : int
+        How many frames at most.
+    rng : numpy.random.Generator, optional
+        Jitters the sample positions inside their stride; ``None`` = evenly spaced.
+
+    Returns
+    -------
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+    indices : numpy.ndarray, shape (K,), int
+    """
+    if isinstance(source, np.ndarray):
+        n = len(source)
+        idx = _sample_indices(n, n_samples, rng)
+        return np.ascontiguousarray(source[idx]), idx
+    from vidcap.io.video import iter_frames, probe
+
+    info = probe(source)
+    idx = _sample_indices(info.n_frames, n_samples, rng)
+    got, got_idx, start = [], [], 0
+    if len(idx) > 1 and np.all(np.diff(idx) == idx[1] - idx[0]):
+        # Evenly spaced: only the sampled frames are converted to arrays.
+        step = int(idx[1] - idx[0])
+        for j, frame in enumerate(iter_frames(source, start=int(idx[0]), step=step)):
+            if j >= len(idx):
+                break
+            got.append(frame)
+            got_idx.append(int(idx[j]))
+        start = got_idx[-1] + 1 if got_idx else 0
+    else:
+        wanted = idx.tolist()
+        for j, frame in enumerate(iter_frames(source, stop=wanted[-1] + 1, only=set(wanted))):
+            got.append(frame)
+            got_idx.append(wanted[j])
+        start = got_idx[-1] + 1 if got_idx else 0
+    if got and any(f.shape != got[0].shape for f in got):
+        j = next(j for j, f in enumerate(got) if f.shape != got[0].shape)
+        raise BackgroundError(
+            f"the frame size changes mid-stream ({got[0].shape[1]}x{got[0].shape[0]}, then "
+            f"{got[j].shape[1]}x{got[j].shape[0]} at frame {got_idx[j]}); re-encode the "
+            "video at one size", source)
+    if 0 < len(got) < len(idx):
+        # The container over-stated its frame count: resample what exists.
+        return sample_frames(source_frames_cache(source, start), n_samples=n_samples, rng=rng)
+    if not got:
+        raise BackgroundError("no frames decoded", source)
+    return np.stack(got), np.asarray(got_idx)
+
+
+def source_frames_cache(path, n):  # pragma: no cover - rare: wrong frame counts
+    from vidcap.io.video import read_frames
+
+    return read_frames(path, stop=n)
+
+
+def _sample_indices(n: int, k: int, rng) -> np.ndarray:
+    if n <= k:
+        return np.arange(n)
+    if rng is None:
+        # Evenly spaced with a constant stride, centred in the video.
+        step = n // k
+        return (n - step * (k - 1)) // 2 + step * np.arange(k)
+    edges = np.linspace(0, n, k + 1)
+    idx = (edges[:-1] + rng.random(k) * np.diff(edges)).astype(int)
+    return np.unique(np.clip(idx, 0, n - 1))
+
+
+# --------------------------------------------------------------------------- estimation
+def estimate_background(
+    source, *, method: str = "felzenszwalb", n_samples: int = 24,
+    work_size: int = 160, segment_scale: float = 60.0, min_region: int = 12,
+    rng: np.random.Generator | None = None, progress: bool | None = None,
+) -> BackgroundModel:
+    """Estimate the background plate of a static-camera video.
+
+    Parameters
+    ----------
+    source : str, path-like or numpy.ndarray
+        A video file (decoded in chunks) or frames (F, H, W, 3) uint8 BGR.
+    method : {'felzenszwalb', 'median'}
+        Region stability plus per-pixel votes (see the module docstring), or the
+        plain per-pixel temporal median of the samples (a baseline).
+    n_samples : int
+        Frames sampled (>= 2).
+    work_size : int
+        Long side, pixels, the samples are downscaled to for segmentation.
+    segment_scale : float
+        Felzenszwalb's ``scale`` (larger = larger regions), at ``work_size``.
+    min_region : int
+        Felzenszwalb's ``min_size``, pixels at ``work_size``.
+    rng : numpy.random.Generator, optional
+        Jitters which frames are sampled.
+    progress : bool, optional
+        Show a progress bar (default: when stderr is a terminal).
+
+    Returns
+    -------
+    BackgroundModel
+
+    Raises
+    ------
+    BackgroundError
+        Fewer than two frames, or nothing ever changes in the video (a static
+        scene with nobody in it).
+    VideoError
+        The file cannot be decoded.
+    """
+    if method not in ("felzenszwalb", "median"):
+        raise ValueError(f"method must be 'felzenszwalb' or 'median', not {method!r}")
+    if n_samples < 2:
+        raise ValueError("n_samples must be >= 2")
+    name = source if not isinstance(source, np.ndarray) else None
+    if isinstance(source, np.ndarray):
+        if source.ndim != 4 or source.shape[-1] != 3 or source.dtype != np.uint8:
+            raise ValueError(f"frames must be (F, H, W, 3) uint8, got {source.shape}")
+        if len(source) == 0:
+            raise BackgroundError("the video has no frames")
+    frames, idx = sample_frames(source, n_samples=n_samples, rng=rng)
+    from vidcap.video.inputchecks import check_samples
+
+    check_samples(frames, name)
+
+    gains = _frame_gains(frames)
+    if method == "median":
+        weights = np.ones(frames.shape[:3], np.float32)
+        plate = _gain_median(frames, gains)
+        conf = np.ones(frames.shape[1:3], np.float32)
+        model = _finish(frames, gains, plate, weights, conf, "median", idx, name)
+        return model
+    weights_small, holes = _region_vote(frames, gains, work_size=work_size,
+                                 segment_scale=segment_scale, min_region=min_region,
+                                 progress=progress)
+    model = _finish_regions(frames, gains, weights_small, idx, name, holes)
+    from vidcap.video.platepass import refine_plate
+
+    return refine_plate(model, frames, gains, weights_small.shape[1:])
+
+
+def _frame_gains(frames: np.ndarray) -> np.ndarray:
+    """Per-frame, per-channel brightness relative to the samples' median frame, (K, 3)."""
+    step = max(1, int(np.sqrt(frames.shape[1] * frames.shape[2] / 4096)))
+    sub = frames[:, ::step, ::step].astype(np.float32) + 1.0
+    med = np.median(sub, axis=0)
+    ratio = sub / med
+    g = np.median(ratio.reshape(len(frames), -1, 3), axis=1)
+    return np.clip(g, 0.25, 4.0).astype(np.float32)
+
+
+def _gain_median(frames, gains) -> np.ndarray:
+    return _masked_median(_normalised_u8(frames, gains), None)
+
+
+def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress,
+                 min_stability=0.5, min_support=0.15):
+    """Steps 2-5 at low resolution: per-sample background weights (K, h, w) in [0, 1]."""
+    from skimage.segmentation import felzenszwalb
+
+    from vidcap.fileio import progress as bar
+
+    k, hh, ww = frames.shape[:3]
+    s = min(1.0, work_size / max(hh, ww))
+    h, w = max(2, round(hh * s)), max(2, round(ww * s))
+    small = np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA) for f in frames])
+    small = small.astype(np.float32) / gains[:, None, None, :]
+    labels = np.empty((k, h, w), np.int32)
+    means = np.empty((k, h, w, 3), np.float32)
+    offset = 0
+    for t in bar(range(k), total=k, desc="background", unit="frame", enabled=progress):
+        lab = felzenszwalb(np.clip(small[t], 0, 255).astype(np.uint8), scale=segment_scale,
+                           sigma=0.5, min_size=min_region)
+        flat = lab.ravel()
+        cnt = np.bincount(flat).astype(np.float32)
+        for c in range(3):
+            means[t, ..., c] = (np.bincount(flat, small[t, ..., c].ravel()) / cnt)[lab]
+        labels[t] = lab + offset
+        offset += int(lab.max()) + 1
+    n_regions = offset
+
+    # Agreement threshold from the data: spread of region colours about their
+    # temporal median, most of which is background most of the time.
+    med = np.median(means, axis=0)
+    resid = np.abs(means - med).max(axis=-1)
+    sigma = 1.4826 * float(np.median(resid))
+    tau = max(8.0, 4.0 * sigma)
+
+    # agree[t, u, p]: samples t and u show the same region colour at p (max over
+    # channels; channel planes keep the arithmetic element-wise and fast).
+    planes = np.ascontiguousarray(np.moveaxis(means, -1, 0))  # (3, k, h, w)
+    agree = np.empty((k, k, h, w), bool)
+    for t in range(k):
+        d = np.abs(planes[0] - planes[0, t])
+        np.maximum(d, np.abs(planes[1] - planes[1, t]), out=d)
+        np.maximum(d, np.abs(planes[2] - planes[2, t]), out=d)
+        np.less(d, tau, out=agree[t])
+
+    lab_flat = labels.ravel()
+    reg_size = np.maximum(np.bincount(lab_flat, minlength=n_regions), 1).astype(np.float32)
+    # support[t, p]: share of samples showing at p the region colour sample t shows.
+    support = agree.sum(axis=1, dtype=np.float32) / k
+    # Region stability (the seed's "regions that do not change"): how often, on
+    # average over the region of sample t at p, its pixels show this colour. A
+    # background region reaching beyond the person scores near 1 even where the
+    # person covers it in most frames; a person's region scores the share of the
+    # time it stays put, lowered by its moving parts.
+    stability = (np.bincount(lab_flat, support.ravel(), minlength=n_regions)
+                 / reg_size)[labels]  # (k, h, w)
+    # A colour seen in too few samples is a mixture or a passer-by, however
+    # stable its region: candidates need some support of their own.
+    enough = support >= max(min_support, 2.5 / k)
+    scored = np.where(enough, stability, stability - 2.0)
+    best = scored.argmax(axis=0)
+    level = np.take_along_axis(scored, best[None], 0)[0]
+    same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
+    weights = same & (level >= min_stability)[None]
+    holes = _footprint_plate(small, means, med, tau, best, agree, weights)
+    return weights.astype(np.float32), holes
+
+
+def _footprint_plate(small, means, med, tau, best, agree, weights, *,
+                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15):
+    """Background inside the motion footprint, from the background around it.
+
+    Updates ``weights`` (k, h, w) in place and returns the static body parts
+    (h, w) bool, pixels never seen uncovered.
+
+    The motion footprint is the union over samples of the pixels that differ from
+    the temporal median. Inside it (and inside its holes) the per-pixel vote can
+    pick the person's colour when the person covers a pixel in most frames. The
+    background around the footprint, inpainted across it, is a spatial guess of
+    what lies behind; at a footprint pixel whose voted colour is far from that
+    guess while some sample is close to it, the samples showing that colour are
+    taken instead.
+
+    A person moving their limbs while the torso stays put (jumping jacks, waving)
+    leaves the torso as a *hole* of the footprint: static pixels the frame border
+    cannot reach through static pixels. A hole is a body part that never moved
+    (never seen uncovered) when its colour is far from the guess and
+
+    * it is not most of its footprint component (``max_hole_share`` of the filled
+      component's area): a static object walked around on all sides is usually
+      large next to the paths around it; and
+    * the footprint around it shows the hole's own colour in some samples where
+      its own background has another colour (``min_evidence`` of its ring
+      pixels): the body part's outline changes while its colour stays (a hop,
+      sleeves, a shifting hem), whereas around a patch of background or a static
+      object the ring's background continues the patch's colour and passers-by
+      rarely wear it.
+    """
+    k, h, w = small.shape[:3]
+    box = np.ones((3, 3), np.uint8)
+    blur = np.stack([cv2.GaussianBlur(x, (3, 3), 0) for x in small])
+    dev = np.abs(blur - np.median(blur, axis=0)[None]).max(axis=-1)  # (k, h, w)
+    # Pixel noise of the blurred samples (robust: most pixels are static in most
+    # samples); region colours can flicker more than pixels, so not ``tau``.
+    noise = 1.4826 * float(np.median(dev[:, ::2, ::2]))
+    tau_region, tau = tau, max(8.0, 5.0 * noise)
+    moving = (dev > tau).any(axis=0).astype(np.uint8)
+    moving = cv2.morphologyEx(moving, cv2.MORPH_OPEN, box)
+    out = np.zeros((h, w), bool)
+    if not moving.any():
+        return out
+    # Holes are looked for with narrow gaps sealed (a hop's thin band above the
+    # head, an arm's sweep, rarely close at low resolution).
+    sealed = cv2.morphologyEx(moving, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))
+    n, lab = cv2.connectedComponents(1 - sealed, connectivity=4)
+    border = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
+    hole_ids = np.setdiff1d(np.arange(1, n), border)
+    is_hole = np.isin(lab, hole_ids)
+    filled = (sealed > 0) | is_hole
+    # Spatial guess: the voted plate outside the footprint, inpainted across it.
+    voted = np.take_along_axis(means, best[None, ..., None], 0)[0]
+    region = cv2.dilate(filled.astype(np.uint8), box)
+    guess = cv2.inpaint(np.clip(voted, 0, 255).astype(np.uint8), region, 3,
+                        cv2.INPAINT_TELEA).astype(np.float32)
+    far = 3.0 * tau
+    dist = np.abs(means - guess[None]).max(axis=-1)  # (k, h, w)
+    near_t = dist.argmin(axis=0)
+    near_d = np.take_along_axis(dist, near_t[None], 0)[0]
+    voted_d = np.abs(voted - guess).max(axis=-1)
+    # Switch when some sample is clearly nearer the guess than the voted colour.
+    # and that colour has support of its own (not a passer-by's transient colour).
+    alt = np.take_along_axis(agree, near_t[None, None], 1)[:, 0]  # (k, h, w)
+    # (the region colours' own spread sets how far is clearly different)
+    switch = (filled & (voted_d > 3.0 * max(tau, tau_region)) & (near_d <= 0.5 * voted_d)
+              & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
+    if switch.any():
+        weights[:, switch] = alt[:, switch]
+    if not len(hole_ids):
+        return out
+    _, comp = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
+    comp_area = np.bincount(comp.ravel())
+    hole_area = np.bincount(lab.ravel(), minlength=n)
+    # How often each pixel differs from its temporal median: around a body part
+    # that never moved, the limbs and the hop cover the ring often; around a gap
+    # left between a passer-by's sampled positions they cover it once or twice.
+    cover = (dev > tau).mean(axis=0)
+    unseen = voted_d > far
+    for i in hole_ids:
+        hole = lab == i
+        c = np.bincount(comp[hole]).argmax()
+        if hole_area[i] > max_hole_share * comp_area[c]:
+            continue
+        ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
+            sealed > 0)
+        if ring.any() and cover[ring].mean() >= min_evidence:
+            out |= hole & unseen
+    if out.any():
+        # Footprint pixels next to a static body part, far from the guess in every
+        # sample, belong to it too (the head and shoulders above a hopping torso).
+        cand = (filled & unseen & ~switch) | out
+        nc, cl = cv2.connectedComponents(cand.astype(np.uint8), connectivity=8)
+        keep = np.zeros(nc, bool)
+        keep[np.unique(cl[out])] = True
+        keep[0] = False
+        out = keep[cl]
+    weights[:, out] = 0
+    return out
+
+
+def _finish_regions(frames, gains, weights_small, idx, name, holes=None):
+    k, hh, ww = frames.shape[:3]
+    h, w = weights_small.shape[1:]
+    # Keep only samples well inside background regions (low resolution edges are
+    # coarse), unless that leaves a pixel with none.
+    binary = (weights_small > 0).astype(np.uint8)
+    eroded = np.stack([cv2.erode(b, np.ones((3, 3), np.uint8)) for b in binary])
+    keep_small = np.where(eroded.any(axis=0), eroded, binary)
+    # 0/1 per sample and pixel: uint8, not float32 (4x less memory at full resolution)
+    wfull = np.stack([cv2.resize(x, (ww, hh), interpolation=cv2.INTER_NEAREST)
+                      for x in keep_small])
+    seen = wfull.sum(axis=0, dtype=np.int32)
+    never = seen <= 0
+    conf = (seen / k).astype(np.float32)
+    plate = _robust_plate(frames, gains, wfull)
+    if never.any():
+        # Never seen uncovered: guess from the surrounding background, so that
+        # whatever stands there (the person) still differs from the plate.
+        # Static body parts come from the low-resolution footprint: widen them by
+        # one low-res pixel so that the inpainting starts from background, not
+        # from the person's edge.
+        ring = never.astype(np.uint8)
+        if holes is not None and holes.any():
+            r = int(np.ceil(hh / h)) + 1
+            body = cv2.resize(holes.astype(np.uint8), (ww, hh),
+                              interpolation=cv2.INTER_NEAREST)
+            ring |= cv2.dilate(body, np.ones((2 * r + 1, 2 * r + 1), np.uint8))
+        plate = cv2.inpaint(plate, ring, 5, cv2.INPAINT_TELEA)
+    return _finish(frames, gains, plate, wfull, conf, "felzenszwalb", idx, name,
+                   never_seen=never)
+
+
+def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=None):
+    """Noise estimates from background samples; the static-scene check."""
+    k = len(frames)
+    full_hw = plate.shape[:2]
+    # Statistics on every other pixel of large frames: 4x less work, same noise;
+    # every 3rd from 4.5 Mpixel, every 4th at 4K (1080p and less: every other).
+    n_px = plate.shape[0] * plate.shape[1]
+    st = max(2, int(np.sqrt(n_px / 500_000))) if n_px > 100_000 else 1
+    frames = frames[:, ::st, ::st]
+    weights = weights[:, ::st, ::st]
+    ref = plate[::st, ::st].astype(np.float32)[None] * gains[:, None, None, :]
+    resid = frames.astype(np.float32) - ref  # (K, h, w, 3)
+    l1 = np.abs(resid).sum(axis=-1)
+    bgw = weights > 0
+    if method == "median":
+        # Background = close to the median; the bulk of pixels in most frames.
+        bgw = l1 < max(3.0 * 1.4826 * float(np.median(l1)) + 6.0, MIN_THRESHOLD)
+        conf = _upsample(bgw.mean(axis=0).astype(np.float32), full_hw)
+    sel = resid[bgw]
+    if len(sel) < 16:
+        sel = resid.reshape(-1, 3)
+    if len(sel) > 200_000:  # plenty for a robust spread; the median is the cost
+        sel = sel[:: len(sel) // 200_000]
+    sigma = (1.4826 * np.median(np.abs(sel - np.median(sel, axis=0)), axis=0)).astype(
+        np.float32)
+    thr = _threshold_from_sigma(sigma, l1[bgw] if bgw.any() else l1.ravel())
+    cnt = bgw.sum(axis=0)
+    # Mean over background samples of the difference, clipped at twice the
+    # threshold so a stray person pixel counted as background cannot inflate it.
+    clipped = np.minimum(l1, 2 * thr) * bgw
+    noise_map = np.where(cnt > 0, clipped.sum(axis=0) / np.maximum(cnt, 1), 0.0)
+    noise_map = cv2.dilate(_upsample(noise_map.astype(np.float32), full_hw),
+                           np.ones((3, 3), np.uint8))
+    # Static-scene check: pixels far from the plate in some sample (beyond the
+    # threshold), in connected areas large enough to be a person.
+    moving = (l1 > 2 * thr).any(axis=0)
+    moving = cv2.morphologyEx(moving.astype(np.uint8), cv2.MORPH_OPEN,
+                              np.ones((3, 3), np.uint8)).astype(bool)
+    moving_fraction = float(moving.mean())
+    if moving_fraction < 2e-4:
+        raise BackgroundError(
+            f"nothing moves in the {k} sampled frames: nobody in view, or a person who "
+            "never moves (then give a photo of the empty scene: --background plate.png)",
+            name)
+    if never_seen is None:
+        never_seen = np.zeros(full_hw, bool)
+    return BackgroundModel(
+        plate=plate, confidence=np.clip(conf, 0, 1).astype(np.float32),
+        never_seen=never_seen, noise_sigma=sigma, noise_map=noise_map.astype(np.float32),
+        threshold=float(thr), method=method, n_samples=k,
+        moving_fraction=moving_fraction, sample_indices=np.asarray(idx))
+
+
+def _upsample(img: np.ndarray, hw) -> np.ndarray:
+    if img.shape[:2] == tuple(hw):
+        return img
+    return cv2.resize(img, (hw[1], hw[0]), interpolation=cv2.INTER_NEAREST)
+
+
+def _threshold_from_sigma(sigma, l1=None) -> float:
+    """Foreground threshold on the L1 colour difference from background noise.
+
+    With Gaussian noise of standard deviation s per channel, the L1 difference
+    over three channels has mean ~2.39 s and standard deviation ~1.04 s; the
+    threshold sits K_SIGMA standard deviations above the mean (robustly measured when
+    the background differences ``l1`` are given), and never below MIN_THRESHOLD.
+    """
+    s = float(np.sqrt(np.mean(np.square(np.nan_to_num(sigma, nan=0.0)))))
+    t = 2.39 * s + K_SIGMA * 1.04 * s
+    if l1 is not None and np.size(l1):
+        sub = np.asarray(l1).ravel()
+        if sub.size > 200_000:
+            sub = sub[:: sub.size // 200_000]
+        m = float(np.median(sub))
+        mad = 1.4826 * float(np.median(np.abs(sub - m)))
+        t = max(t, m + K_SIGMA * mad)
+    return float(max(t, MIN_THRESHOLD))

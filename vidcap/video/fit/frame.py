@@ -1,0 +1,264 @@
+"""One frame's fit: the order of seed 004 section 3.1.4, fresh or warm from the last frame.
+
+:func:`fit_normalised` is two short recipes over the moves: :func:`_fit_fresh` (the
+seed's order, with the steps beyond it that :mod:`vidcap.video.fit.pose2d` lists) and
+:func:`_fit_warm` (tracking from the previous frame's pose). :func:`fit_frame` adds
+the fresh fit that challenges a slipping track, and :func:`fit_pose` is the public
+door: it checks the options once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video.fit.engine import _MaskEngine
+from vidcap.video.fit.foreshortening import fit_foreshortening
+from vidcap.video.fit.grids import search_arm_grid, search_leg_grid
+from vidcap.video.fit.labels import keep_labels
+from vidcap.video.fit.legs import (
+    fit_upper_legs,
+    swap_lower_legs,
+    untangle_thighs,
+    verify_crossing,
+)
+from vidcap.video.fit.limbs import contour_arms, contour_lower_legs, refine_limbs
+from vidcap.video.fit.limits import REST_DEG, TWO_PI, S
+from vidcap.video.fit.moves import search_group, search_root, search_spread
+from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
+from vidcap.video.fit.options import FALLBACK, FitOptions
+from vidcap.video.fit.result import FramePose
+from vidcap.video.fit.state import FitState
+from vidcap.video.fit.torso import fit_torso_head, place_torso, search_torso_about_neck
+
+#: Spread below which shoulders and hips nearly coincide in the image (a side view), so
+#: a fresh fit's image-side limb names mean nothing and a track's are kept
+#: (:func:`~vidcap.video.fit.labels.keep_labels`); above it a limb's name says which hip or
+#: shoulder it hangs from, which the image shows.
+SIDE_SPREAD = 0.3
+LABEL_TIE = 0.002  # S a fresh fit may lose to keep a track's limb names
+_UPPERS = [S[f"{s}_upper_{p}"] for p in ("arm", "leg") for s in "lr"]
+_LEAVES = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "lr"]
+
+
+def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
+                   options: FitOptions) -> tuple[FitState, bool, bool]:
+    """Fit the model to the engine's silhouette; see :func:`fit_pose`.
+
+    Returns
+    -------
+    state : FitState
+        The final pose (normalised pixels).
+    crossed : bool
+        Algorithm 5's verdict (fresh fits only).
+    warm : bool
+        The fit started from ``previous``.
+    """
+    searched = options.spread and options.spread_value is None  # search the spread?
+    fixed = 0.5 if options.spread_value is None else float(options.spread_value)
+    st = place_torso(eng, FitState.rest(spread=fixed))
+    warm = False
+    if previous is not None:
+        st = st.replace(
+            angles=np.array(previous.angles, dtype=float),
+            fore=np.array(previous.foreshortening, dtype=float),
+            spread=float(previous.spread) if searched else fixed,
+            drawn=np.ones(10, dtype=bool))
+        if eng.taller:
+            # the head need not be at the silhouette's top (a shorter silhouette, a
+            # crouch, still has the head on top)
+            st, _ = search_root(eng, st, 1, 0.25 * eng.H)
+        warm = eng.similarity(st) >= options.warm_threshold
+    if warm:
+        return _fit_warm(eng, st, options, searched), False, True
+    # a fresh fit from the rest pose (where a warm start was tried: at its root and spread)
+    st = st.replace(angles=np.deg2rad(REST_DEG), fore=np.ones(10),
+                             drawn=np.zeros(10, dtype=bool))
+    st, crossed = _fit_fresh(eng, st, options, searched)
+    return st, crossed, False
+
+
+def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -> FitState:
+    """Tracking: every search starts from the previous frame's pose with a narrow
+    interval (2 iterations of Algorithm 1: +-8 degrees in 2 degree steps, then 0.5;
+    2 of Algorithm 6); no contour step."""
+    st = st.drawing(slice(None))
+    st, _ = search_root(eng, st, 0, 0.1 * eng.H)
+    step = np.deg2rad(options.warm_step_deg)
+    st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]], interval=8 * step,
+                                    alone=True)
+    st = search_group(eng, st, _UPPERS, interval=8 * step)
+    st = search_group(eng, st, _LEAVES, interval=8 * step)
+    if spread:
+        st, _ = search_spread(eng, st, start=st.spread, interval=0.2, min_step=0.1)
+    st = search_group(eng, st, _UPPERS + _LEAVES, kind="fore", interval=0.2, divisions=5)
+    if options.leg_grid:
+        for s in ("l", "r"):
+            st = search_leg_grid(eng, st, s)
+    # no untangle_thighs here: a tracked leg stays on the hip it was found on. Thighs
+    # crossing in the image are no error in a three-quarter view (the forward knee
+    # passes the other across the narrow hips every step), and undoing them within
+    # the tie put the legs on the wrong hips for half of each gait cycle (07_07 at
+    # 45 deg: PCK@0.05 89.3 -> 90.8 %, RESULTS.md).
+    return st
+
+
+def _fit_fresh(eng: _MaskEngine, st: FitState, options: FitOptions,
+               spread: bool) -> tuple[FitState, bool]:
+    """The seed's order (torso and head, arms and lower legs by contour, upper legs,
+    foreshortening) and, with ``options.refine``, the refinement beyond it."""
+    st = fit_torso_head(eng, st)
+    st = contour_arms(eng, st)
+    st, crossed = contour_lower_legs(eng, st)
+    if crossed:
+        st = swap_lower_legs(st)  # Algorithm 2: swap the lower legs when crossed
+    st = st.drawing(slice(None))
+
+    def legs(cur: FitState) -> FitState:
+        cur = fit_upper_legs(eng, cur)
+        if spread:
+            cur, _ = search_spread(eng, cur)
+            cur = fit_upper_legs(eng, cur, warm=True, passes=1)
+        return cur
+
+    st = legs(st)
+    if crossed and options.verify_crossing:
+        st = verify_crossing(eng, st, legs, spread=spread, tie=options.tie)
+    if options.refine:
+        st = _refine(eng, st, options, spread)
+    return fit_foreshortening(eng, st, warm=options.refine), crossed
+
+
+def _refine(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -> FitState:
+    """Beyond the seed: the model centred, every limb again (whole arms first), the
+    arm grids, the torso once more with every limb drawn (the arms no longer pull
+    it), crossed thighs untangled, the spread again."""
+    st = st.drawing(slice(None))
+    st, _ = search_root(eng, st, 0, 0.05 * eng.H)
+    st = refine_limbs(eng, st, whole_arms=True)
+    if options.arm_grid:
+        for s in ("l", "r"):
+            st = search_arm_grid(eng, st, s)
+    st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]],
+                                    interval=np.deg2rad(16))
+    st = untangle_thighs(eng, st, tie=options.tie)
+    if spread:
+        st, _ = search_spread(eng, st, start=st.spread, interval=0.4)
+    return st
+
+
+def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
+              challenge: bool = False, options: FitOptions) -> FramePose:
+    """:func:`fit_pose` of a normalised silhouette with options already checked."""
+    eng = _MaskEngine(norm, caps=options.caps)
+    st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
+    if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity):
+        # the track is slipping: fit this frame from scratch, keep the better fit
+        fresh, fresh_crossed, _ = fit_normalised(eng, options=options)
+        if eng.similarity(fresh) > eng.similarity(st):
+            if max(previous.spread, fresh.spread) < SIDE_SPREAD:
+                # a side view: no image cue names the limbs, the track's names stand
+                fresh = keep_labels(eng, fresh, norm.to_normalised(previous.joints),
+                                    tie=LABEL_TIE)
+            st, crossed, warm = fresh, fresh_crossed, False
+    return FramePose(
+        joints=norm.to_original(eng.joints(st)),
+        angles=np.mod(st.angles, TWO_PI),
+        foreshortening=st.fore.copy(),
+        scores=st.scores.copy(),
+        margins=st.margins.copy(),
+        spread=float(st.spread),
+        crossed=bool(crossed),
+        similarity=eng.similarity(st),
+        warm=bool(warm),
+        height_px=norm.body_height / norm.scale,
+    )
+
+
+def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = None,
+             height: int = 80, refine: bool = True, spread: bool = True,
+             verify_crossing: bool = True, caps: bool = False, warm_threshold: float = 0.55,
+             fallback: float = FALLBACK, warm_step_deg: float = 2.0,
+             challenge: bool = False, arm_grid: bool = True, leg_grid: bool = True,
+             spread_value: float | None = None,
+             body_height: float | None = None) -> FramePose:
+    """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
+
+    Parameters
+    ----------
+    mask : numpy.ndarray, shape (H, W), bool, or NormalisedMask
+        The silhouette in the original frame, or already normalised by
+        :func:`vidcap.video.fit.raster.normalise_mask` (then ``height`` and ``body_height``
+        are not used: a sequence fit reuses a frame's for its refits).
+    previous : FramePose, optional
+        The previous frame's pose. If it still covers this silhouette with
+        similarity >= ``warm_threshold``, every search starts from it with narrow
+        intervals (tracking); otherwise the frame is fitted from scratch.
+    height : int
+        Height in pixels the silhouette is normalised to before fitting.
+    refine : bool
+        Run the extra Algorithm 1 pass over the limbs (beyond the seed).
+    spread : bool
+        Search the shoulders' and hips' lateral spread (beyond the seed); if false
+        the spread is fixed at 0.5.
+    spread_value : float, optional
+        Fix the spread at this value in [0, 1] instead (no search);
+        :func:`fit_sequence` uses it to refit frames whose spread jumps away from
+        their neighbours'.
+    verify_crossing : bool
+        When Algorithm 5 says the legs cross, keep the swap only if it fits better.
+    caps : bool
+        Draw segments as capsules (true) or rectangles.
+    warm_threshold : float
+        Similarity of the previous pose needed to warm-start.
+    fallback : float
+        A warm fit whose similarity is below ``fallback`` times the previous
+        frame's is redone from scratch and the better of the two kept.
+    warm_step_deg : float
+        First step of a warm angle search in degrees (8 divisions, so the search
+        spans +-4 steps around the previous angle, then refines by a quarter).
+    challenge : bool
+        Also fit a warm-started frame from scratch and keep the better fit (how a
+        track escapes a wrong but stable pose; :func:`fit_sequence` does this
+        ``reinit_every`` frames after the last fresh fit).
+    arm_grid : bool
+        With ``refine``, search each whole arm over every (upper, lower) angle pair
+        in fresh (not warm-started) fits; near-ties go to a hanging arm
+        (:func:`vidcap.video.fit.grids.search_arm_grid`).
+    leg_grid : bool
+        In warm-started (tracked) fits, search each whole leg over every (thigh,
+        shin) angle pair and keep the best if it fits clearly better than the
+        tracked leg (:func:`vidcap.video.fit.grids.search_leg_grid`).
+    body_height : float, optional
+        The body's standing height in original pixels, when known apart from the
+        silhouette's (a crouch, raised arms).
+
+    Returns
+    -------
+    FramePose
+
+    Raises
+    ------
+    ValueError
+        If ``mask`` is empty, or an option is out of range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vidcap.video.fit import fit_pose
+    >>> mask = np.zeros((120, 60), bool)
+    >>> mask[10:110, 25:35] = True  # a standing bar: a body seen from the side
+    >>> fp = fit_pose(mask)
+    >>> fp.joints.shape, bool(fp.similarity > 0.5)
+    ((15, 2), True)
+    """
+    options = FitOptions(height=height, refine=refine, spread=spread,
+                         verify_crossing=verify_crossing, caps=caps,
+                         warm_threshold=warm_threshold, fallback=fallback,
+                         warm_step_deg=warm_step_deg, arm_grid=arm_grid, leg_grid=leg_grid,
+                         spread_value=spread_value, body_height=body_height)
+    norm = (mask if isinstance(mask, NormalisedMask)
+            else normalise_mask(mask, height=height, body_height=body_height))
+    return fit_frame(norm, previous=previous, challenge=challenge, options=options)
+
+
+__all__ = ["LABEL_TIE", "SIDE_SPREAD", "fit_frame", "fit_normalised", "fit_pose"]

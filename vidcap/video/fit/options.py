@@ -1,0 +1,85 @@
+"""The options of a fit (:class:`FitOptions`), checked once at the door.
+
+:func:`~vidcap.video.fit.pose2d.fit_pose` builds one from its keywords and
+:func:`~vidcap.video.fit.pose2d.fit_sequence` from its ``**kw`` (a misspelled option fails
+there, before any frame is fitted); nothing inside the fit checks them again.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+#: fit_pose's default: a warm fit below this share of the last S slipped
+FALLBACK = 0.97
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """How each frame is fitted (the keywords of :func:`~vidcap.video.fit.pose2d.fit_pose`).
+
+    Attributes
+    ----------
+    height : int
+        Height in pixels the silhouette is normalised to before fitting.
+    refine, spread, verify_crossing, caps, arm_grid, leg_grid : bool
+        As :func:`~vidcap.video.fit.pose2d.fit_pose` describes them.
+    warm_threshold : float
+        Similarity of the previous pose needed to warm-start, in [0, 1].
+    fallback : float
+        A warm fit below ``fallback`` times the previous frame's S is redone fresh.
+    warm_step_deg : float
+        First step of a warm angle search, degrees (> 0).
+    spread_value : float or None
+        Fix the spread at this value in [0, 1] (no search).
+    body_height : float or None
+        The body's standing height in original pixels, when known apart from the
+        silhouette's (> 0).
+    tie : float
+        S within which a fresh fit's alternatives (crossed legs, untangled thighs)
+        count as tied (>= 0).
+    """
+
+    height: int = 80
+    refine: bool = True
+    spread: bool = True
+    verify_crossing: bool = True
+    caps: bool = False
+    warm_threshold: float = 0.55
+    fallback: float = FALLBACK
+    warm_step_deg: float = 2.0
+    arm_grid: bool = True
+    leg_grid: bool = True
+    spread_value: float | None = None
+    body_height: float | None = None
+    tie: float = 0.01
+
+    def __post_init__(self):
+        if not (isinstance(self.height, int) or float(self.height).is_integer()) \
+                or not self.height >= 1:
+            raise ValueError(f"height must be a positive whole number of pixels, got "
+                             f"{self.height!r}")
+        for name in ("warm_threshold", "fallback", "tie"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
+        if not self.warm_step_deg > 0:
+            raise ValueError(f"warm_step_deg must be > 0, got {self.warm_step_deg!r}")
+        if self.spread_value is not None and not 0.0 <= self.spread_value <= 1.0:
+            raise ValueError(f"spread_value must be in [0, 1], got {self.spread_value!r}")
+        if self.body_height is not None and not self.body_height > 0:
+            raise ValueError(f"body_height must be positive, got {self.body_height}")
+
+    @classmethod
+    def from_keywords(cls, kw: dict, *, caller: str = "fit_sequence") -> FitOptions:
+        """Options from keywords such as ``fit_sequence``'s ``**kw``; unknown names
+        raise TypeError (as a function's keywords do)."""
+        names = {f.name for f in dataclasses.fields(cls)} - {"tie"}
+        unknown = sorted(set(kw) - names)
+        if unknown:
+            raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
+        return cls(**kw)
+
+
+__all__ = ["FALLBACK", "FitOptions"]

@@ -1,0 +1,115 @@
+"""2D pose by fitting the 10-cylinder model to a silhouette (seed 004 section 3.1.4).
+
+This module is the fit's overview and its public names (re-exported from the
+modules that hold them). Where each part lives:
+
+* :mod:`vidcap.video.fit.frame` - one frame's fit: the order below (:func:`fit_pose`).
+* :mod:`vidcap.video.fit.tracking` - a clip: tracking and the temporal priors
+  (:func:`fit_sequence`, :func:`body_heights`).
+* :mod:`vidcap.video.fit.state` - the pose being fitted, a frozen :class:`FitState`, and
+  :func:`~vidcap.video.fit.state.keep_if_better`; :mod:`vidcap.video.fit.engine` - what every
+  move of one silhouette's fit reads (``_MaskEngine``).
+* The moves, each ``(engine, state) -> state``: :mod:`vidcap.video.fit.torso` (steps 2-3),
+  :mod:`vidcap.video.fit.limbs` (steps 4-5 and the refinement), :mod:`vidcap.video.fit.legs`
+  (step 6, crossings), :mod:`vidcap.video.fit.foreshortening` (step 7),
+  :mod:`vidcap.video.fit.moves` (Algorithm 1, group, spread and shift searches),
+  :mod:`vidcap.video.fit.grids` (whole-limb grids), :mod:`vidcap.video.fit.labels` (limb names).
+* :mod:`vidcap.video.fit.result` - :class:`FramePose` and :class:`Pose2D` and their I/O;
+  :mod:`vidcap.video.fit.options` - :class:`~vidcap.video.fit.options.FitOptions`.
+
+The order of section 3.1.4, per frame (:func:`fit_pose` with ``previous=None``):
+
+1. Normalise the silhouette to a fixed height (section 4.2), so the body height in
+   pixels is the silhouette's height and every length follows Table 3.1.
+2. Torso position: the pelvis' y from the Table 3.1 ratios (head + torso below the
+   top of the silhouette), its x the horizontal middle of the silhouette (the median
+   over the torso's scan lines of the middle of each line's widest run).
+3. Torso angle with the head attached (Algorithm 1, Table 3.3 "Waist" limits), then
+   the head angle (Algorithm 1, "Neck" limits).
+4. Arms by contour analysis (Algorithms 2-4): the silhouette left over beside the
+   fitted torso and head, on each side, ordered into a curve away from the shoulder
+   and split at the elbow corner.
+5. Lower legs by scan-line contour analysis (Algorithm 2), knee crossing
+   (Algorithm 5) and swap.
+6. Upper legs with their lower legs as one unit (Algorithm 1, "hip" limits).
+7. Foreshortening of every segment (Algorithm 6).
+
+Beyond the seed:
+
+* Segments are drawn as rectangles (``caps=False``, the default) or capsules; the
+  renderer's cylinders seen from the side are rectangles, and rectangles measured
+  better on rendered clips (RESULTS.md).
+* Torso: after the seed's torso+head and head searches, the model is shifted so
+  the head lines up with the silhouette and the torso is searched again turning
+  about the neck (the silhouette's middle is pulled by arms and legs; the head is
+  not), so a leaning torso under an upright head is found.
+* Arms: residual slivers along the torso's edges are removed (an opening about an
+  arm's width) before the contour curves are built; the curves are rings of
+  distance from the shoulder rather than horizontal scan lines, so a raised or
+  horizontal arm gives a curve too.
+* ``spread``: how far the shoulders and hips sit from the torso axis (0 side view,
+  1 front view) is searched like a foreshortening ratio (the seed draws one view).
+* When Algorithm 5 reports crossed legs, both leg assignments are fitted and the
+  better one kept; near-ties go to the straighter legs (the seed always swaps).
+* ``refine`` (default on): the whole model is centred (shift search), each arm is
+  searched whole (lower arm rigid, within 90 degrees of the contour estimate) and
+  its length (Algorithm 6 on the arm as a unit), then every limb segment again
+  with Algorithm 1 against the whole silhouette (+-30 degrees; lower limbs within
+  150 degrees of their parent, thighs over 180-360 degrees rather than Table 3.3's
+  240-300 so high steps fit), the torso once more with every limb drawn, and the
+  final Algorithm 6 pass starts from the current ratios.
+* ``arm_grid`` (default on, with ``refine``): after the limb refinement each whole
+  arm is scored at every (upper, lower) angle pair 15 degrees apart in one batch
+  (:func:`vidcap.video.fit.grids.search_arm_grid`), so a forearm poking out far from the contour
+  estimate (raised beside the head, bent forward) is found; near-ties (an arm
+  inside the torso's silhouette covers the same pixels at any angle) go to the
+  arm hanging along the torso. Run on fresh fits only: in tracked frames it
+  measured worse (it re-places carried arms on slivers along the torso's edges),
+  so warm frames carry their arms from the previous frame. ``refine=False``
+  (``--no-refine``) runs the seed's order only.
+* ``leg_grid`` (default on): in tracked frames each whole leg is scored at every
+  (thigh, shin) angle pair 15 degrees apart in one batch
+  (:func:`vidcap.video.fit.grids.search_leg_grid`) and the best kept when it fits better than the
+  tracked leg by more than 3 pixels' worth of S, so a leg that swung beyond the
+  track's +-8 degrees (a knee raised across the other leg) is found again.
+* Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
+  still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
+  search from that pose with narrow intervals, skips the contour analysis, and
+  searches the four upper limbs, then the head and four lower limbs, then all
+  ratios in lockstep (one batch per iteration for a whole group,
+  :func:`vidcap.video.fit.moves.search_group`). Limbs then keep their labels through crossings. A
+  warm fit losing more than 3 % of the previous frame's S is redone from scratch
+  and the better kept, and 10 frames after the last fresh fit another one challenges
+  the track (so a wrong but stable track is left). In a side view (spread < 0.3) a fresh fit that
+  takes over keeps the track's limb names (:func:`vidcap.video.fit.labels.keep_labels`): its
+  image-side names would swap the legs against the frames before after every crossing.
+  ``tracked=False`` (``--per-frame``) fits every frame independently, as the seed does.
+* Temporal priors in tracked mode (:func:`fit_sequence`): when a fresh fit replaces
+  the track, the frames before it are re-tracked backward from it while that fits
+  them better (a track that began in a wrong pose is corrected from where the right
+  one was found); and a frame whose ``spread`` jumps away from its neighbours'
+  running median is refitted with the spread fixed at that median.
+* Warm starts take part in their own search's first batch, so a search never ends
+  below where it started.
+
+Left and right
+--------------
+During 2D fitting ``l_*`` and ``r_*`` do NOT mean the performer's left and right.
+Per frame (seed 004 section 3.1.4) ``l_*`` is the limb on the image's left. In
+tracked mode a limb keeps its label from the frame where tracking (re)started, where
+it was the image-left one, so labels follow limbs through crossings. The 3D stage
+assigns true sides from the body orientation.
+
+Angles are image-plane angles in radians, counter-clockwise from the image's +x axis
+with y up (``pi/2`` straight up, ``3 pi/2`` straight down), in [0, 2 pi), of the
+vector from the segment's proximal to its distal joint; the same convention as
+:data:`vidcap.body.IMAGE_ANGLE_LIMITS_DEG` (which is in degrees).
+"""
+
+from vidcap.video.fit.frame import fit_normalised, fit_pose
+from vidcap.video.fit.labels import LIMB_PAIRS
+from vidcap.video.fit.result import FramePose, Pose2D
+from vidcap.video.fit.tracking import body_heights, fit_sequence
+
+__all__ = ["LIMB_PAIRS", "FramePose", "Pose2D", "body_heights", "fit_normalised", "fit_pose",
+           "fit_sequence"]

@@ -1,0 +1,140 @@
+"""A solve over the clip: the path through per-frame candidates that balances each
+frame's cost against the cost of moving between frames (Viterbi).
+
+:func:`best_path` is the dynamic programme over any candidates. :func:`label_path`
+uses it for the limb labels of a tracked fit: per frame and limb pair (arms, legs)
+two candidates, the labels as fitted and swapped, which draw the same pixels. A
+track keeps its labels through crossings, but where a fresh fit takes over (a
+slipping track, a challenge) its image-side names can come out swapped against the
+frames before, for that frame or from then on; the solve relabels such stretches
+so the joints move least across their ends, while labels carried by a warm start
+stay linked to the frame they came from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video.fit.labels import LIMB_PAIRS
+
+#: Cost, in body heights per joint, of changing labels across a warm start (a track
+#: carries its limbs' names from the frame it started from).
+LINK_COST = 0.05
+#: Cost of swapping a frame's labels for nothing: ties keep the labels as fitted.
+_SWAP_TIE = 1e-9
+
+
+def best_path(unary: np.ndarray, transition: np.ndarray) -> tuple[np.ndarray, float]:
+    """The candidate per frame that minimises the total cost (Viterbi).
+
+    Parameters
+    ----------
+    unary : numpy.ndarray, shape (F, K)
+        Cost of candidate k in frame f (finite).
+    transition : numpy.ndarray, shape (F - 1, K, K)
+        ``transition[f, a, b]``: cost of candidate a in frame f followed by candidate
+        b in frame f + 1 (finite).
+
+    Returns
+    -------
+    path : numpy.ndarray, shape (F,), int
+        The chosen candidate per frame (ties: the lower index).
+    cost : float
+        Its total cost.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> unary = np.array([[0.0, 1.0], [1.0, 0.0], [0.0, 1.0]])  # frame 1 prefers 1
+    >>> move = np.array([[0.0, 0.6], [0.6, 0.0]])          # changing costs 0.6 each way
+    >>> best_path(unary, np.stack([move, move]))[0].tolist()  # 1.2 to go there and back
+    [0, 0, 0]
+    >>> best_path(unary, np.stack([move, move]) / 2)[0].tolist()  # 0.6 < 1.0
+    [0, 1, 0]
+    """
+    unary = np.asarray(unary, dtype=float)
+    transition = np.asarray(transition, dtype=float)
+    n, k = unary.shape
+    if transition.shape != (max(n - 1, 0), k, k):
+        raise ValueError(f"transition must be ({n - 1}, {k}, {k}), got {transition.shape}")
+    if not (np.isfinite(unary).all() and np.isfinite(transition).all()):
+        raise ValueError("costs must be finite")
+    if n == 0:
+        return np.zeros(0, dtype=int), 0.0
+    back = np.empty((max(n - 1, 0), k), dtype=int)
+    cost = unary[0].copy()
+    cols = np.arange(k)
+    for f in range(n - 1):  # K is tiny: one small vector step per frame
+        total = cost[:, None] + transition[f]
+        back[f] = np.argmin(total, axis=0)
+        cost = total[back[f], cols] + unary[f + 1]
+    path = np.empty(n, dtype=int)
+    path[-1] = int(np.argmin(cost))
+    for f in range(n - 2, -1, -1):
+        path[f] = back[f, path[f + 1]]
+    return path, float(cost[path[-1]])
+
+
+def label_path(joints2d: np.ndarray, height_px: np.ndarray, linked: np.ndarray, *,
+               link_cost: float = LINK_COST) -> dict[str, np.ndarray]:
+    """Which frames' limb pairs to relabel so labels follow the limbs over the clip.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        The fitted joints, pixels (NaN in frames without a silhouette).
+    height_px : numpy.ndarray, shape (F,)
+        The body height per frame, pixels (NaN where unknown).
+    linked : numpy.ndarray, shape (F,), bool
+        Frame f's labels were carried from frame f - 1 (a warm start).
+    link_cost : float
+        Cost of changing labels across a link, body heights per joint.
+
+    Returns
+    -------
+    dict
+        ``{"arms": swap, "legs": swap}``, each (F,) bool: relabel that pair in that
+        frame. Moving between frames costs the mean distance of the pair's joints,
+        in body heights; frames without joints cost nothing either way.
+    """
+    j = np.asarray(joints2d, dtype=float)
+    h = np.asarray(height_px, dtype=float)
+    n = len(j)
+    out = {}
+    for name, ((jl, _), (jr, _)) in LIMB_PAIRS.items():
+        both, other = jl + jr, jr + jl
+        if n < 2:
+            out[name] = np.zeros(n, dtype=bool)
+            continue
+        scale = np.nanmean(np.stack([h[:-1], h[1:]]), axis=0)
+        same = np.linalg.norm(j[1:, both] - j[:-1, both], axis=-1).mean(-1) / scale
+        swapped = np.linalg.norm(j[1:, other] - j[:-1, both], axis=-1).mean(-1) / scale
+        known = np.isfinite(same) & np.isfinite(swapped)
+        same, swapped = np.where(known, same, 0.0), np.where(known, swapped, 0.0)
+        change = swapped + np.where(np.asarray(linked[1:], dtype=bool) & known, link_cost, 0.0)
+        transition = np.empty((n - 1, 2, 2))
+        transition[:, 0, 0] = transition[:, 1, 1] = same
+        transition[:, 0, 1] = transition[:, 1, 0] = change
+        unary = np.zeros((n, 2))
+        unary[:, 1] = _SWAP_TIE
+        path, _ = best_path(unary, transition)
+        out[name] = path.astype(bool)
+    return out
+
+
+def relabel(arrays: dict[str, np.ndarray], swaps: dict[str, np.ndarray]) -> None:
+    """Swap the limb pairs' labels in the frames ``swaps`` names, in place.
+
+    ``arrays``: ``joints`` (F, 15, 2) and per-segment ``(F, 10)`` arrays (any other
+    key); ``swaps``: :func:`label_path`'s result.
+    """
+    for name, ((jl, sl), (jr, sr)) in LIMB_PAIRS.items():
+        f = np.flatnonzero(swaps[name])
+        if not f.size:
+            continue
+        for key, a in arrays.items():
+            x, y = (jl, jr) if key == "joints" else (sl, sr)
+            a[f[:, None], x + y] = a[f[:, None], y + x]
+
+
+__all__ = ["LINK_COST", "best_path", "label_path", "relabel"]

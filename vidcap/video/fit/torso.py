@@ -1,0 +1,128 @@
+"""Torso and head: where the pelvis goes, and Algorithm 1 on the torso and the head.
+
+Seed 004 section 3.1.4 steps 2-3: the pelvis from the Table 3.1 ratios and the
+silhouette's horizontal middle (:func:`place_torso`), the torso's angle with the head
+attached, then the head's (:func:`fit_torso_head`); beyond the seed, the torso turned
+about the neck (:func:`search_torso_about_neck`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video.fit.candidates import pose_ends, search
+from vidcap.video.fit.contour import row_runs
+from vidcap.video.fit.engine import _MaskEngine, fit_kernels
+from vidcap.video.fit.limits import LIMITS, ONE_DEGREE, J, S, median
+from vidcap.video.fit.modes import SEARCH_POSE_TORSO_NECK
+from vidcap.video.fit.moves import search_angle, search_root
+from vidcap.video.fit.raster import _carray, direction
+from vidcap.video.fit.search import SearchResult
+from vidcap.video.fit.state import FitState
+
+
+def place_torso(eng: _MaskEngine, st: FitState) -> FitState:
+    """Pelvis from the Table 3.1 ratios and the silhouette's horizontal middle.
+
+    Writes ``root`` (normalised px): its y the head and torso lengths below the
+    silhouette's top (a silhouette taller than the body: the legs' length above its
+    bottom), its x the median over the torso's rows of the middle of each row's
+    widest run.
+    """
+    neck_y = eng.top + eng.L[S["head"]]
+    pelvis_y = neck_y + eng.L[S["torso"]]
+    if eng.taller:  # stand on the silhouette's bottom
+        legs = eng.L[S["l_upper_leg"]] + eng.L[S["l_lower_leg"]]
+        pelvis_y = eng.norm.bottom - legs
+        neck_y = pelvis_y - eng.L[S["torso"]]
+    band = eng.sil[int(round(neck_y)) : int(round(pelvis_y)) + 1]
+    kernels = fit_kernels()
+    x = _band_middle_numpy(band) if kernels is None else _band_middle_compiled(kernels, band)
+    if x is None:
+        x = float(np.median(np.nonzero(eng.sil)[1]))
+    return st.replace(root=np.array([x, pelvis_y]))
+
+
+def _band_middle_compiled(kernels, band) -> float | None:
+    mid = np.empty(band.shape[0])
+    count = kernels.widest_run_middles(_carray(band, np.bool_), mid)
+    return median(mid[:count]) if count else None
+
+
+def _band_middle_numpy(band) -> float | None:
+    """The median middle of each row's widest run (ties: the rightmost), None without
+    any run."""
+    rows, starts, ends = row_runs(band)
+    if not rows.size:
+        return None
+    widest = np.zeros(band.shape[0], dtype=int)
+    mid = np.zeros(band.shape[0])
+    width = ends - starts + 1
+    order = np.lexsort((width, rows))  # per row, widest run last
+    widest[rows[order]] = width[order]
+    mid[rows[order]] = 0.5 * (starts[order] + ends[order])
+    return float(np.median(mid[widest > 0]))
+
+
+def fit_torso_head(eng: _MaskEngine, st: FitState, *, warm: bool = False) -> FitState:
+    """Algorithm 1 on the torso (head attached) about the pelvis, then on the head.
+
+    ``warm``: only the torso about the neck (+-10 degrees) and the head (+-15) from
+    their current angles. Writes ``angles``, ``scores``, ``margins`` of torso and
+    head, and ``root``.
+    """
+    top_rows = (0, st.root[1] + 1)
+    if warm:
+        st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]],
+                                        interval=np.deg2rad(20), rows=top_rows)
+        neck_y = eng.joints(st)[J["neck"], 1]
+        st, _ = search_angle(eng, st, S["head"], rows=(0, neck_y + eng.R[S["torso"]]),
+                             start=st.angles[S["head"]], interval=np.deg2rad(30))
+        return st
+    # The seed: torso with the head attached (Alg. 1) about the pelvis, then the head.
+    st = st.with_entries(angles=(S["head"], st.angles[S["torso"]]))
+    st, _ = search_angle(eng, st, S["torso"], with_segments=(S["head"],), rows=top_rows)
+    neck_y = eng.joints(st)[J["neck"], 1]
+    head_rows = (0, neck_y + eng.R[S["torso"]])
+    st, _ = search_angle(eng, st, S["head"], rows=head_rows)
+    # Beyond the seed: the silhouette's middle is pulled by arms and legs, the head
+    # is not. Line the head up with the silhouette (shift the whole model), then
+    # turn the torso about the neck so a leaning torso under an upright head is
+    # found, and look at the head again.
+    st, _ = search_root(eng, st, 0, 0.1 * eng.H, rows=(0, neck_y))
+    st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]],
+                                    interval=np.deg2rad(40), rows=top_rows)
+    st, _ = search_angle(eng, st, S["head"], rows=head_rows, start=st.angles[S["head"]],
+                         interval=np.deg2rad(20))
+    return st
+
+
+def search_torso_about_neck(eng: _MaskEngine, st: FitState, *, start, interval, rows=None,
+                            alone=False) -> tuple[FitState, SearchResult]:
+    """Algorithm 1 on the torso angle with the neck held still (beyond the seed).
+
+    Writes the torso's ``angles``, ``scores``, ``margins`` and ``root`` (the pelvis
+    moves). ``alone``: score the torso's candidates with the limbs left where they
+    are (they re-attach afterwards); a cheaper approximation for small, warm steps.
+    """
+    seg = S["torso"]
+    st = st.drawing(seg)
+    lo, hi = LIMITS["torso"]
+    neck = eng.joints(st)[J["neck"]].copy()
+    length = eng.L[seg] * st.fore[seg]
+    moving = [seg] if alone else [d for d in range(10) if st.drawn[d]]
+
+    def make(v, root, ang, fore, spread):
+        ang[:, seg] = v
+        return neck - direction(v) * length, ang, fore, spread
+
+    ends = pose_ends(eng, st, make, moving, (SEARCH_POSE_TORSO_NECK, [seg], [0.0], neck,
+                                             length))
+    res = search(eng, st, ends, moving, rows, lo, hi, divisions=8, min_step=ONE_DEGREE,
+                 start=start, interval=interval)
+    st = st.with_entries(angles=(seg, res.value), scores=(seg, res.score),
+                         margins=(seg, res.margin))
+    return st.replace(root=neck - direction(res.value) * length), res
+
+
+__all__ = ["fit_torso_head", "place_torso", "search_torso_about_neck"]

@@ -1,0 +1,380 @@
+"""A clip's fit: tracking frame to frame, and the temporal priors over the clip.
+
+:func:`fit_sequence` fits every frame (:func:`~vidcap.video.fit.frame.fit_frame`), warm
+from the previous one while its pose still covers the silhouette; where a fresh fit
+replaces the track, the frames before it are re-tracked backward from it
+(:func:`_retrack_backward`). After the pass two priors refit frames that stand out
+from their neighbours: the body's height (:func:`_refit_body_height`, a crouch or
+raised arms) and the spread (:func:`_smooth_spread`, the body's yaw).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+
+from vidcap.body import JOINT_NAMES
+from vidcap.video.fit.frame import fit_frame
+from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
+from vidcap.video.fit.options import FitOptions
+from vidcap.video.fit.result import FramePose, Pose2D
+from vidcap.video.fit.temporal import label_path
+from vidcap.video.fit.temporal import relabel as temporal_relabel
+from vidcap.video.masks import MaskStack
+
+#: Normalised silhouettes :func:`fit_sequence` keeps for backward re-tracking (frames)
+_NORMS_KEPT = 64
+
+
+def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
+                 progress=None, reinit_every: int = 10, spread_window: int = 31,
+                 spread_jump: float = 0.25, spread_tie: float = 0.01,
+                 back_tie: float | None = 0.002, body_window: int = 91,
+                 body_tolerance: float = 0.05, relabel: bool = False, **kw) -> Pose2D:
+    """Fit every frame of a silhouette sequence.
+
+    Parameters
+    ----------
+    masks : numpy.ndarray, shape (F, H, W), bool (or a sequence of (H, W) masks)
+        Silhouettes in original-frame pixels.
+    tracked : bool
+        Warm-start each frame from the previous one when its pose still fits
+        (beyond the seed); ``False`` fits every frame independently (the seed).
+    progress : callable, optional
+        Wraps the frame iterator (e.g. :func:`vidcap.fileio.progress`); called as
+        ``progress(iterable, total=F)``.
+    reinit_every : int
+        In tracked mode a frame this many frames after the last one fitted from
+        scratch (a challenge, or a fresh fit that took over a slipping track) is also
+        fitted from scratch and the better fit kept (0: never).
+    back_tie : float or None
+        Tracked mode: when a fresh fit replaces the track at a frame, the frames
+        before it (back to where that track began) are refitted warm from the new
+        pose, backward, while that improves their similarity by more than
+        ``back_tie`` (None: off). A track that started in a wrong pose is thus
+        corrected from the frame where the right one was found.
+    spread_window, spread_jump, spread_tie
+        Temporal prior on the spread (tracked mode, beyond the seed): the spread
+        follows the body's yaw, which changes slowly, but a single silhouette
+        barely shows it (the torso cylinder looks the same from every side), so
+        per-frame estimates wander. After the pass, a frame whose spread is more
+        than ``spread_jump`` from the running median over ``spread_window``
+        frames (shifted inside the clip at its ends) is refitted with the spread
+        fixed at that median (warm from its own pose, from scratch, and within
+        a run of such frames warm from the one before), and the best refit
+        kept unless its similarity is more than ``spread_tie`` lower. 0 window:
+        off. A median passes a steady turn through unchanged (but within half a
+        window of the clip's ends, where a turn reads as the first or last
+        window's median and the similarity check decides), so the window (about
+        1 s at 30 fps) only has to be longer than twice the runs of misread
+        frames.
+    body_window, body_tolerance
+        The body's height in pixels (tracked mode, beyond the seed): the seed
+        scales the model to each silhouette's height, which assumes an upright
+        body; a crouch makes the silhouette shorter and raised arms make it
+        taller. After the pass, the body's height is estimated per frame as the
+        median silhouette height of the well-fitted frames (similarity at least
+        the window's median) within ``body_window`` frames; a frame whose
+        silhouette height is more than ``body_tolerance`` (a fraction) from it is
+        refitted at that height, warm from the frame before, and the refit kept
+        if its similarity is higher. 0 window: off.
+    relabel : bool
+        Tracked mode: after the priors, relabel the limb pairs over the clip by the
+        solve over time (:func:`vidcap.video.fit.temporal.label_path`), so a fresh fit
+        whose image-side names came out swapped against its neighbours (for one
+        frame or from then on) is outvoted by them. Off by default: a clip fitted in
+        chunks (:mod:`vidcap.video.fit.parallel`) would be relabelled chunk by chunk, which
+        can differ from the whole clip's solve.
+    **kw
+        The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
+        checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
+        one raises TypeError before any frame is fitted.
+
+    Returns
+    -------
+    Pose2D
+        Frames with an empty silhouette get NaN joints and angles and zero scores.
+
+    Raises
+    ------
+    ValueError
+        If ``masks`` is not a stack of 2-D silhouettes, or an option is out of range.
+    TypeError
+        If ``kw`` holds a name :func:`fit_pose` does not take.
+    """
+    options = FitOptions.from_keywords(kw)  # checked once, before any frame
+    _check_masks(masks)
+    n = len(masks)
+    out = _Frames(n)
+    it = range(n) if progress is None else progress(range(n), total=n)
+    _track(_Normalised(masks, options), it, out, tracked=tracked, reinit_every=reinit_every,
+           back_tie=back_tie, options=options)
+    body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
+    if tracked and body_window > 1 and n > 2:
+        # the heights the main pass scaled the model to (the silhouettes', unless given)
+        body = _refit_body_height(masks, body_window, body_tolerance, options,
+                                  out.height.copy(), out)
+    if tracked and spread_window > 1 and options.spread and n > 2:
+        _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out)
+    if tracked and relabel:
+        swaps = label_path(out.joints, out.height, out.linked)
+        temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
+                          "scores": out.scores, "margins": out.margins}, swaps)
+    return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
+                  out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
+
+
+def _check_masks(masks) -> None:
+    """A stack (F, H, W), a sequence of (H, W) masks or a MaskStack, else ValueError."""
+    if isinstance(masks, MaskStack):
+        return
+    if isinstance(masks, np.ndarray):
+        if masks.ndim != 3:
+            raise ValueError(f"masks must be (F, H, W), got shape {masks.shape}")
+        return
+    for k, m in enumerate(masks):
+        if np.ndim(m) != 2:
+            raise ValueError(f"mask {k} must be (H, W), got shape {np.shape(m)}")
+
+
+class _Normalised:
+    """Frames' normalised silhouettes, the last ``_NORMS_KEPT`` kept for backward
+    re-tracking (bounded memory)."""
+
+    def __init__(self, masks, options: FitOptions):
+        self.masks = masks
+        self.size = dict(height=options.height, body_height=options.body_height)
+        self.norms: dict[int, NormalisedMask] = {}
+
+    def __call__(self, k: int) -> NormalisedMask:
+        norm = self.norms.get(k)
+        if norm is None:
+            norm = _normalise_frame(self.masks, k, **self.size)
+            if len(self.norms) >= _NORMS_KEPT:
+                del self.norms[min(self.norms)]
+            self.norms[k] = norm
+        return norm
+
+    def has_pixels(self, k: int) -> bool:
+        return _frame_has_pixels(self.masks, k)
+
+
+def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, reinit_every: int,
+           back_tie: float | None, options: FitOptions) -> None:
+    """The main pass of :func:`fit_sequence` over ``frames`` (in place into ``out``)."""
+    prev = None
+    start = 0  # first frame of the current track
+    last_fresh = -reinit_every  # the last frame fitted from scratch (the first one is)
+    for k in frames:
+        if not normalised.has_pixels(k):
+            prev = None
+            start = k + 1
+            continue
+        # a fresh fit that took over (a slipping track) challenged the track as well
+        challenge = bool(reinit_every) and k - last_fresh >= reinit_every
+        fp = fit_frame(normalised(k), previous=prev if tracked else None, challenge=challenge,
+                       options=options)
+        if challenge or not fp.warm:
+            last_fresh = k
+        out.put(k, fp)
+        out.linked[k] = fp.warm
+        if tracked and prev is not None and not fp.warm and back_tie is not None:
+            _retrack_backward(normalised, out, fp, range(k - 1, start - 1, -1), back_tie,
+                              options)
+            start = k
+        prev = fp
+
+
+def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, frames,
+                      back_tie: float, options: FitOptions) -> None:
+    """A fresh fit ``fp`` replaced the track: the frames before it were probably tracked
+    in a wrong pose too. Carry the new pose backward over ``frames`` while it fits
+    them better by more than ``back_tie`` (beyond the seed; in place into ``out``)."""
+    back = fp
+    no_fallback = dataclasses.replace(options, fallback=0.0)
+    for b in frames:
+        nb = normalised(b)
+        fb = fit_frame(nb, previous=back, options=no_fallback)
+        if not fb.warm or fb.similarity <= out.sim[b] + back_tie:
+            break
+        # fit_frame's fallback, only where its outcome matters: a fresh fit that
+        # beats the slipping warm one ends the backward track
+        if (fb.similarity < options.fallback * back.similarity
+                and fit_frame(nb, options=options).similarity > fb.similarity):
+            break
+        out.put(b, fb)
+        out.linked[b + 1], out.linked[b] = True, False  # b's labels came from b + 1's
+        back = fb
+
+
+class _Frames:
+    """:func:`fit_sequence`'s per-frame results as arrays, filled frame by frame."""
+
+    def __init__(self, n: int):
+        self.joints = np.full((n, 15, 2), np.nan)
+        self.angles = np.full((n, 10), np.nan)
+        self.fore = np.full((n, 10), np.nan)
+        self.scores = np.zeros((n, 10))
+        self.margins = np.zeros((n, 10))
+        self.spread = np.full(n, np.nan)
+        self.sim = np.zeros(n)
+        self.warm = np.zeros(n, dtype=bool)
+        self.height = np.full(n, np.nan)  # the body height the model was drawn at, px
+        self.linked = np.zeros(n, dtype=bool)  # labels carried from the frame before
+
+    def put(self, k: int, fp: FramePose, *, warm: bool = True) -> None:
+        """Store frame k's fit (``warm``: its warm flag too)."""
+        self.joints[k], self.angles[k], self.fore[k] = fp.joints, fp.angles, fp.foreshortening
+        self.scores[k], self.margins[k], self.spread[k] = fp.scores, fp.margins, fp.spread
+        self.sim[k] = fp.similarity
+        self.height[k] = fp.height_px
+        if warm:
+            self.warm[k] = fp.warm
+
+    def get(self, k: int, *, spread: float | None = None, height_px: float = 0.0) -> FramePose:
+        """Frame k's stored fit as a :class:`FramePose` to warm-start from."""
+        return FramePose(joints=self.joints[k], angles=self.angles[k],
+                         foreshortening=self.fore[k], scores=self.scores[k],
+                         margins=self.margins[k],
+                         spread=float(self.spread[k] if spread is None else spread),
+                         crossed=False, similarity=float(self.sim[k]),
+                         warm=bool(self.warm[k]), height_px=float(height_px))
+
+
+def body_heights(heights: np.ndarray, similarity: np.ndarray, window: int) -> np.ndarray:
+    """The body's standing height per frame, from the silhouettes' heights.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray, shape (F,)
+        Silhouette height per frame, pixels (NaN: no silhouette).
+    similarity : numpy.ndarray, shape (F,)
+        S of each frame's fit at that height.
+    window : int
+        Frames (centred; truncated at the clip's ends).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,)
+        The median height over the window's well-fitted frames (S at least the
+        window's median S): a body whose silhouette is not as tall as it (a
+        crouch, raised arms) fits worse at that height, so those frames drop out
+        while they are fewer than half the window. NaN where the window has no
+        frame.
+    """
+    h = np.asarray(heights, dtype=float)
+    s = np.where(np.isfinite(h), np.asarray(similarity, dtype=float), np.nan)
+    half = max(1, int(window) // 2)
+    pad = np.full(half, np.nan)
+
+    def windows(x):  # (F, 2 half + 1), NaN beyond the clip
+        return np.lib.stride_tricks.sliding_window_view(np.concatenate([pad, x, pad]),
+                                                        2 * half + 1)
+
+    out = np.full(h.shape, np.nan)
+    have = np.isfinite(windows(s)).any(axis=1)
+    if not have.any():
+        return out
+    sw, hw = windows(s)[have], windows(h)[have]
+    good = sw >= np.nanmedian(sw, axis=1, keepdims=True)
+    out[have] = np.nanmedian(np.where(good, hw, np.nan), axis=1)
+    return out
+
+
+def _normalise_frame(masks, k: int, *, height: int = 80,
+                     body_height: float | None = None) -> NormalisedMask:
+    """Frame ``k`` of ``masks`` normalised: a :class:`MaskStack` frame from its crop
+    (the same result as from the full frame, without building it)."""
+    if isinstance(masks, MaskStack):
+        crop, origin = masks.crop(k)
+        return normalise_mask(crop, height=height, body_height=body_height, origin=origin)
+    return normalise_mask(np.asarray(masks[k], dtype=bool), height=height,
+                          body_height=body_height)
+
+
+def _frame_has_pixels(masks, k: int) -> bool:
+    if isinstance(masks, MaskStack):
+        return bool(masks.bits[k].any())
+    return bool(np.asarray(masks[k]).any())
+
+
+def _frame_has_pixels(masks, k: int) -> bool:
+    if isinstance(masks, MaskStack):
+        return bool(masks.bits[k].any())
+    return bool(np.asarray(masks[k]).any())
+
+
+def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames):
+    """Refit frames whose silhouette is not as tall as the body (in place); returns
+    the body height (px) each refitted frame was fitted at, NaN elsewhere."""
+    body = body_heights(height, out.sim, window)
+    off = np.isfinite(height) & np.isfinite(body) & (np.abs(height / body - 1) > tolerance)
+    used = np.full(len(height), np.nan)
+    prev = None
+    for k in range(len(height)):
+        if not np.isfinite(height[k]):
+            prev = None
+            continue
+        if off[k]:
+            norm = _normalise_frame(masks, k, height=options.height,
+                                    body_height=float(body[k]))
+            fp = fit_frame(norm, previous=prev, options=options)
+            if fp.similarity > out.sim[k]:
+                out.put(k, fp)
+                out.linked[k] = fp.warm
+                used[k] = body[k]
+                prev = fp
+                continue
+        prev = out.get(k, height_px=height[k])
+    return used
+
+
+def _window_median(values: np.ndarray, window: int) -> np.ndarray:
+    """Running median of ``values`` (N,) over ``window`` samples, the window shifted to
+    stay inside the array near its ends rather than padded there: a clip whose first
+    frames were misread is judged by the frames after them, not by copies of its own
+    first value (as ``median_filter(mode="nearest")`` would). (N,)."""
+    n = values.shape[0]
+    w = max(1, min(int(window), n))
+    first = np.clip(np.arange(n) - w // 2, 0, n - w)
+    return np.median(values[first[:, None] + np.arange(w)], axis=1)
+
+
+def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Frames):
+    """Refit frames whose spread jumps away from the running median (in place), each at
+    the height it was fitted at (``body``: px, NaN for the silhouette's).
+
+    Each such frame is fitted at the median's spread warm from its own pose, from
+    scratch (its limbs were found for the other spread), and, inside a run of such
+    frames, warm from the frame before once that was refitted (a run is tracked at
+    the new spread, as the main pass would have); the best is kept unless it fits
+    more than ``tie`` worse than the frame's fit.
+    """
+    spread = out.spread
+    ok = np.isfinite(spread)
+    if ok.sum() < 3:
+        return
+    idx = np.flatnonzero(ok)
+    med = np.full_like(spread, np.nan)
+    med[idx] = _window_median(spread[idx], window)
+    refitted = -2
+    for k in np.flatnonzero(ok & (np.abs(spread - med) > jump)):
+        at = float(body[k]) if np.isfinite(body[k]) else None
+        norm = _normalise_frame(masks, k, height=options.height, body_height=at)
+        at_median = dataclasses.replace(options, spread_value=float(med[k]))
+        # warm from its own pose, challenged by a fresh fit (which, in a side view,
+        # takes the track's limb names, as in the main pass)
+        fp = fit_frame(norm, previous=out.get(k, spread=med[k]), challenge=True,
+                       options=at_median)
+        if refitted == k - 1:
+            chained = fit_frame(norm, previous=out.get(k - 1, spread=med[k]), options=at_median)
+            if chained.similarity > fp.similarity:
+                fp = chained
+        if fp.similarity >= out.sim[k] - tie:
+            out.put(k, fp, warm=False)
+            refitted = k
+
+
+__all__ = ["body_heights", "fit_sequence"]

@@ -1,0 +1,416 @@
+"""The 3D stage of the video path: from 2D joints to 3D joints, with the user's events.
+
+:func:`lift_pose` runs the stage's steps in order: gaps filled (:func:`fill_gaps`), the
+scale per frame (:func:`frame_scales`, :func:`model_scales`), the body's orientation
+proposed and constrained to what the user said of the view
+(:func:`constrain_orientation`), the user's orientation, sides and joints applied
+(:func:`apply_user_view`, :func:`swap_pairs`), the depth signs proposed and fixed where
+the user set them (held until the segment next passes through the image plane,
+:func:`plane_passages`), then the scaled orthographic lift itself
+(:func:`vidcap.video.lift.lift`). The stage is cheap (milliseconds per clip) and is rerun
+after every annotation edit (``ui/session.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d, median_filter
+
+from vidcap.body import LIMB_PAIR_JOINTS, ORIENTATIONS, BodyModel
+from vidcap.errors import VidcapError
+from vidcap.video.annotations import PAIRS, Annotations
+from vidcap.video.lift import (
+    assign_sides,
+    estimate_scales,
+    lift,
+    torso_width_ratio,
+    yaw_from_orientation,
+)
+from vidcap.video.proposals import propose_orientation, propose_signs
+from vidcap.video.solve.stage import check_method, solve_lift
+
+#: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
+#: (a depth annotation is carried forward until the segment next enters it).
+NEAR_PLANE = 0.15
+
+def plane_passages(zeta, *, near: float = NEAR_PLANE, window: int = 5) -> np.ndarray:
+    """Frames where each segment passes through the image plane.
+
+    A passage is a frame where ``zeta = |dZ| / length`` is below ``near`` and is the
+    smallest within ``window`` frames (a run of equal minima, e.g. clamped zeros,
+    counts as a whole). Given to :meth:`vidcap.video.annotations.Annotations.resolve` as
+    ``near_plane``, a depth event then holds until its segment next passes through
+    the plane, also when the segment never leaves the near-plane zone (a side-view
+    walk), where "until it next enters the zone" would hold across a sign change.
+
+    Parameters
+    ----------
+    zeta : array_like, shape (F, 10)
+        Out-of-plane fraction of every segment (:attr:`SignProposal.zeta`).
+    near : float
+        Only minima below this count.
+    window : int
+        Frames over which a minimum must be the smallest (odd).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F, 10)
+    """
+    from scipy.ndimage import minimum_filter1d
+
+    z = np.asarray(zeta, dtype=float)
+    if z.shape[0] == 0:
+        return np.zeros(z.shape, bool)
+    low = minimum_filter1d(z, size=max(1, int(window)), axis=0, mode="nearest")
+    return (z <= low + 1e-12) & (z < near)
+
+
+@dataclass(frozen=True)
+class LiftResult:
+    """The 3D stage's output (:func:`lift_pose`).
+
+    Attributes
+    ----------
+    joints2d : (F, 15, 2) px, body-side named, user joint fixes applied, gaps filled.
+    joints3d : (F, 15, 3) m, camera-aligned world (X right, Y up, Z toward camera).
+    proposed_signs, signs : (F, 10) int8, proposed and final (user events applied).
+    proposed_orientation, orientation : (F,) str.
+    yaw : (F,) rad. scale : px per metre, one number or (F,) (the subject's distance
+    changes): where the root is. segment_scale : (F,) px per metre the segments were
+    read at (:func:`model_scales`), or None (``scale``). clamped : (F, 10) bool;
+    excess : (F, 10) how much longer than the model a clamped segment was (0 elsewhere).
+    checks : ranked list of (frame, segment) pairs to check (see
+        :meth:`vidcap.video.proposals.SignProposal.checks`).
+    margin, zeta : (F, 10) sign confidence and out-of-plane amount.
+    """
+
+    joints2d: np.ndarray
+    joints3d: np.ndarray
+    proposed_signs: np.ndarray
+    signs: np.ndarray
+    proposed_orientation: np.ndarray
+    orientation: np.ndarray
+    yaw: np.ndarray
+    scale: float | np.ndarray
+    clamped: np.ndarray
+    checks: list
+    margin: np.ndarray
+    zeta: np.ndarray
+    segment_scale: np.ndarray | None = None
+    excess: np.ndarray | None = None
+    #: The clip solve's poses (:mod:`vidcap.video.solve.skeleton`), (F, 24), and planted
+    #: ankles (F, 2) bool; None with the per-segment lift.
+    solve_params: np.ndarray | None = None
+    contact: np.ndarray | None = None
+
+
+def fill_gaps(joints2d) -> np.ndarray:
+    """Linearly interpolate frames with NaN joints (no silhouette), (F, 15, 2).
+
+    Raises
+    ------
+    VidcapError
+        No frame has joints.
+    """
+    j = np.array(joints2d, float)
+    ok = np.isfinite(j).all(axis=(1, 2))
+    if not ok.any():
+        raise VidcapError("no person was found in any frame")
+    if ok.all():
+        return j
+    t = np.arange(len(j))
+    flat = j.reshape(len(j), -1)
+    for c in range(flat.shape[1]):  # 30 coordinate series, vectorised over frames
+        flat[:, c] = np.interp(t, t[ok], flat[ok, c])
+    return flat.reshape(j.shape)
+
+
+#: What ``view`` (``vidcap convert --view``) accepts: how the camera sees the subject
+#: for the whole clip. ``auto`` proposes the orientation per frame; ``side``,
+#: ``front`` and ``back`` fix the sector and leave which way the subject faces (image
+#: left or right) to the proposal; one of the six labels fixes the orientation.
+VIEWS: tuple[str, ...] = ("auto", "side", "front", "back", *ORIENTATIONS)
+
+def check_view(view: str) -> None:
+    """Raise ValueError unless ``view`` is one of :data:`VIEWS`."""
+    if view not in VIEWS:
+        raise ValueError(f"unknown view {view!r}; expected one of {list(VIEWS)}")
+
+
+def constrain_orientation(labels, view: str = "auto") -> np.ndarray:
+    """The orientation labels within what the user said of the view.
+
+    Parameters
+    ----------
+    labels : array_like of str, shape (F,)
+        Proposed labels (:data:`vidcap.body.ORIENTATIONS`).
+    view : str
+        One of :data:`VIEWS`. ``side`` keeps each label's facing (``front_right``
+        becomes ``right``), ``front``/``back`` put it in that half (``right`` becomes
+        ``front_right``), a label replaces every frame's.
+
+    Returns
+    -------
+    numpy.ndarray of str, shape (F,)
+
+    Raises
+    ------
+    ValueError
+        ``view`` is not one of :data:`VIEWS`.
+    """
+    labels = np.asarray(labels).astype(str)
+    check_view(view)
+    if view == "auto":
+        return labels
+    if view in ORIENTATIONS:
+        return np.full(labels.shape, view)
+    facing = np.where(np.char.endswith(labels, "left"), "left", "right")
+    return facing if view == "side" else np.char.add(f"{view}_", facing)
+
+
+def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,
+                    *, image_sides: bool = True, user_sides=None):
+    """Orientation, yaw and side-named 2D joints once the user's events are applied.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        Gap-filled 2D joints, pixels.
+    proposed_orientation : array_like of str, shape (F,)
+        The automatic orientation proposal.
+    spread : array_like, shape (F,)
+        Torso horizontal foreshortening (0 side view, 1 front view).
+    user_orientation : array_like of str, shape (F,)
+        The user's orientation per frame, ``""`` where none.
+    user_joints : numpy.ndarray, shape (F, 15, 2)
+        The user's joint positions, NaN where none.
+    image_sides : bool
+        ``joints2d`` names limbs by image side (the 2D fitter's naming).
+    user_sides : array_like of bool, shape (F, 2), optional
+        :meth:`vidcap.video.annotations.Annotations.sides`: frames where the user swapped
+        the arms' (column 0) or legs' (column 1) left and right.
+
+    Returns
+    -------
+    orientation : numpy.ndarray of str, shape (F,)
+    yaw : numpy.ndarray, shape (F,), radians
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        Named by the body's true sides, with the user's joints in place.
+    """
+    orientation = np.where(user_orientation != "", user_orientation,
+                           proposed_orientation).astype(str)
+    yaw = yaw_from_orientation(orientation, spread)
+    j2 = assign_sides(joints2d, yaw) if image_sides else joints2d
+    if user_sides is not None:
+        j2 = swap_pairs(j2, user_sides)
+    j2 = np.where(np.isfinite(user_joints), user_joints, j2)
+    return orientation, yaw, j2
+
+
+def swap_pairs(joints2d, swapped) -> np.ndarray:
+    """Exchange the left and right arms and/or legs where ``swapped`` says so.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, D)
+    swapped : array_like of bool, shape (F, 2)
+        Per frame: swap the arms (column 0), the legs (column 1)
+        (:data:`vidcap.video.annotations.PAIRS`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, 15, D)
+        A copy.
+    """
+    j = np.array(joints2d, dtype=float)
+    sw = np.asarray(swapped, dtype=bool)
+    if sw.shape != (len(j), len(PAIRS)):
+        raise ValueError(f"swapped must be ({len(j)}, {len(PAIRS)}), got {sw.shape}")
+    for col, pair in enumerate(PAIRS):
+        left, right = LIMB_PAIR_JOINTS[pair]
+        rows = np.flatnonzero(sw[:, col])
+        j[np.ix_(rows, left + right)] = j[np.ix_(rows, right + left)]
+    return j
+
+
+#: Knot spacing (seconds) of the per-frame scale (:func:`vidcap.video.lift.estimate_scales`).
+SCALE_WINDOW_S = 3.0
+
+
+def frame_scales(joints2d, fps: float, body: BodyModel | None = None, *,
+                 window_s: float = SCALE_WINDOW_S):
+    """:func:`vidcap.video.lift.estimate_scales` with its window in seconds: pixels per metre,
+    one number or (F,) for gap-filled (F, 15, 2) joints."""
+    return estimate_scales(joints2d, body, window=max(3, int(round(window_s * fps)) | 1))
+
+
+def model_scales(model_height, n_frames: int, body: BodyModel | None = None):
+    """Pixels per metre at which the 2D fit drew its model in each frame.
+
+    The fitter scales its model to each frame's silhouette (seed 004 section 4.2),
+    and a walker's silhouette is a few per cent shorter with the feet apart than in
+    mid-stance, so every drawn segment is that much shorter there. Read against one
+    scale for the clip, Eq. 2.2 turns that into depth in every segment (sqrt(1 -
+    0.96^2) = 0.28 of its length); read against the frame's own model scale, a
+    segment's ratio is the foreshortening the fit found.
+
+    Parameters
+    ----------
+    model_height : array_like, shape (F,), or None
+        :attr:`vidcap.video.fit.pose2d.Pose2D.model_height`: body height in pixels per
+        frame, NaN where there was no fit (interpolated here).
+    n_frames : int
+    body : BodyModel, optional
+        The subject (its height in metres).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,), or None
+        None when ``model_height`` is None or has no usable value.
+    """
+    if model_height is None:
+        return None
+    body = body or BodyModel()
+    h = np.asarray(model_height, dtype=float).reshape(-1)
+    if h.shape != (n_frames,):
+        raise ValueError(f"model_height must be ({n_frames},), got shape {h.shape}")
+    ok = np.isfinite(h) & (h > 0)
+    if not ok.any():
+        return None
+    t = np.arange(n_frames)
+    return np.interp(t, t[ok], h[ok]) / body.height
+
+
+def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
+    """The torso's horizontal foreshortening per frame: the 2D fit's ``spread`` where
+    given, else from the 2D shoulders and hips, then a running median over ``window``
+    frames (the body turns slowly: it removes single-frame misfits)."""
+    rho = torso_width_ratio(j2, geometry, body)
+    if spread is not None:
+        rho = np.where(np.isfinite(spread), np.asarray(spread, float), rho)
+    return median_filter(rho, size=window, mode="nearest")
+
+
+def lift_pose(
+    joints2d,
+    *,
+    fps: float,
+    body: BodyModel | None = None,
+    annotations: Annotations | None = None,
+    image_sides: bool = True,
+    spread=None,
+    track=None,
+    smooth_2d: float = 0.0,
+    yaw_window_s: float = 1.0,
+    scale_window_s: float = SCALE_WINDOW_S,
+    frame_size: tuple[int, int] | None = None,
+    model_height=None,
+    view: str = "auto",
+    method: str = "solve",
+) -> LiftResult:
+    """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        2D joints in pixels; NaN frames are interpolated.
+    fps : float
+    body : BodyModel, optional
+    annotations : Annotations, optional
+        User events (orientation, depth, joint positions), true-side names.
+    image_sides : bool
+        ``l_*`` means the image's left limb (the 2D fitter's naming) rather than the
+        body's left (ground truth).
+    spread : array_like, shape (F,), optional
+        Torso horizontal foreshortening (0 side view, 1 front view), e.g.
+        :attr:`vidcap.video.fit.pose2d.Pose2D.spread`; default from the 2D shoulders/hips.
+    track : array_like, shape (F,), optional
+        Horizontal image position of the subject (walking direction).
+    smooth_2d : float
+        Gaussian smoothing of the 2D joints over time before lifting, in frames
+        (0 = none): Eq. 2.2 amplifies image noise where a segment is nearly in plane.
+    yaw_window_s : float
+        Running-median window (seconds) of the torso's horizontal foreshortening.
+    scale_window_s : float
+        Window (seconds) of the per-frame scale (:func:`vidcap.video.lift.estimate_scales`).
+    frame_size : (int, int), optional
+        (width, height) of the frames in pixels: their centre is the camera's axis
+        when the scale changes per frame.
+    model_height : array_like, shape (F,), optional
+        The height in pixels the 2D model was drawn at per frame
+        (:attr:`vidcap.video.fit.pose2d.Pose2D.model_height`): segments are then read at
+        that frame's scale (:func:`model_scales`), the root at the clip's.
+    view : str
+        What the user said of the view for the whole clip (:data:`VIEWS`), applied to
+        the proposed orientation (:func:`constrain_orientation`); the annotations'
+        orientation events still override it from their frames.
+    method : {'solve', 'segment'}
+        The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
+        per-segment lift (:func:`vidcap.video.lift.lift`).
+
+    Returns
+    -------
+    LiftResult
+
+    Examples
+    --------
+    The model's rest pose, seen from the front at 200 px per metre for 30 frames,
+    comes back at its own size:
+
+    >>> import numpy as np
+    >>> from vidcap.body import BodyModel
+    >>> rest = BodyModel().rest_positions()  # (15, 3) m, Y up
+    >>> uv = np.c_[320 + 200 * rest[:, 0], 400 - 200 * rest[:, 1]]  # px, y down
+    >>> res = lift_pose(np.repeat(uv[None], 30, axis=0), fps=30.0, image_sides=False)
+    >>> res.joints3d.shape, float(res.scale)
+    ((30, 15, 3), 200.0)
+    >>> bool(np.allclose(res.joints3d[0] - res.joints3d[0, 0], rest - rest[0], atol=1e-6))
+    True
+    """
+    check_method(method)
+    body = body or BodyModel()
+    annotations = annotations or Annotations()
+    j2 = fill_gaps(joints2d)
+    F = len(j2)
+    # one scale, or one per frame when the subject's distance changes (weak perspective)
+    scale = frame_scales(j2, fps, body, window_s=scale_window_s)
+    seg_scale = model_scales(model_height, F, body)
+    geometry = scale if seg_scale is None else seg_scale  # what segments are read at
+    if smooth_2d > 0 and F > 2:
+        j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
+    rho = _torso_spread(j2, spread, geometry, body, max(1, int(round(yaw_window_s * fps)) | 1))
+    proposed_orient = propose_orientation(j2, scale=geometry, fps=fps, body=body,
+                                          sides_known=not image_sides, track=track,
+                                          window_s=yaw_window_s, turn_window_s=yaw_window_s)
+    proposed_orient = constrain_orientation(proposed_orient, view)
+    _, user_orient, user_joints = annotations.resolve(F)
+    orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
+                                      image_sides=image_sides,
+                                      user_sides=annotations.sides(F))
+    free = propose_signs(j2, yaw, scale=geometry, body=body)
+    user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
+    final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \
+        if (user_signs != 0).any() else free
+    centre = None if frame_size is None else (0.5 * frame_size[0], 0.5 * frame_size[1])
+    out = lift(j2, final.signs, yaw, body=body, scale=scale, principal_point=centre,
+               segment_scale=seg_scale)
+    joints3d, params, contact = out.joints3d, None, None
+    if method == "solve":
+        sol, final = solve_lift(j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale,
+                                yaw=yaw, proposal=final, user_signs=user_signs,
+                                user_orientation=user_orient, principal_point=centre,
+                                user_joints=user_joints)
+        joints3d, params, contact = sol.joints3d, sol.params, sol.contact
+    return LiftResult(
+        joints2d=j2, joints3d=joints3d, proposed_signs=free.signs, signs=final.signs,
+        proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
+        clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
+        segment_scale=seg_scale, excess=out.excess, solve_params=params, contact=contact,
+    )
+
+
+__all__ = ["NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult", "apply_user_view", "check_view",
+           "constrain_orientation", "fill_gaps", "frame_scales", "lift_pose", "model_scales",
+           "plane_passages", "swap_pairs"]

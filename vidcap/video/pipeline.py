@@ -1,0 +1,510 @@
+"""Video -> BVH: the stages in sequence, with caching and progress.
+
+Stages (``docs/architecture.md``)::
+
+    frames -> background plate -> silhouettes -> 2D pose -> 3D lift -> motion -> BVH
+
+:func:`run` calls one function per stage (:func:`_plate_stage`,
+:func:`_silhouette_stage`, :func:`_pose_stage`, :func:`_lift_and_motion`), each owning
+its cache key and its test for stale entries. The expensive image stages (plate,
+silhouettes, 2D pose) are cached as ``.npz`` files (:class:`vidcap.video.stagecache.StageCache`,
+default folder ``.vidcap-cache`` beside the output), each keyed by the video's identity,
+the stage's parameters and the key of the stage before it, so changing an option or the
+video redoes exactly the stages that depend on it. The 3D stage
+(:func:`vidcap.video.lifting.lift_pose`) is cheap and always rerun, since it depends on the
+user's annotations.
+
+The stages themselves live in their own modules; the names this module used to define
+are imported here too, so ``from vidcap.video.pipeline import lift_pose`` keeps working.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.body import BodyModel
+from vidcap.errors import AnnotationError
+from vidcap.video.annotations import Annotations, default_path
+from vidcap.video.lifting import (
+    NEAR_PLANE,
+    SCALE_WINDOW_S,
+    VIEWS,
+    LiftResult,
+    apply_user_view,
+    check_view,
+    constrain_orientation,
+    fill_gaps,
+    frame_scales,
+    lift_pose,
+    model_scales,
+    plane_passages,
+    swap_pairs,
+)
+from vidcap.video.masks import MaskStack
+from vidcap.video.motion import MotionResult, build_motion, keyframes_by_confidence
+from vidcap.video.person import partly_outside, person_track
+from vidcap.video.result import MIXED_VIEW, POOR_FIT, ConvertResult, frame_runs, true_runs
+from vidcap.video.stagecache import StageCache, stage_key, video_identity
+
+#: Chunks per fitting process in ``run``: the fit of each chunk starts as soon as its
+#: silhouettes are out, so shorter chunks leave less of the fit to wait for after the
+#: last frame is extracted (each chunk after the first costs ``overlap`` extra frames).
+_CHUNKS_PER_JOB = 2
+
+#: Bumped when the silhouette stage's results change for the same video and options
+#: (2: no shadow test on grey video; 3: the person followed, not the largest blob), so
+#: caches written by older versions are redone.
+_SILHOUETTE_VERSION = 4
+#: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts).
+_PLATE_VERSION = 2
+
+
+def run(
+    video: str | os.PathLike,
+    *,
+    annotations: str | os.PathLike | Annotations | None = None,
+    background: str | os.PathLike | None = None,
+    height: float = 1.75,
+    smooth_sigma: float = 1.0,
+    keyframe_score: float | None = None,
+    cache_dir: str | os.PathLike | None = None,
+    progress: bool | None = None,
+    log=None,
+    jobs: int | None = None,
+    view: str = "auto",
+    lift: str = "solve",
+) -> ConvertResult:
+    """Run the whole video path on ``video``.
+
+    Parameters
+    ----------
+    video : str or path-like
+    annotations : path or Annotations, optional
+        Default: ``VIDEO_STEM.vidcap.json`` beside the video when it exists.
+    background : path, optional
+        A background plate image; default: estimated from the video.
+    height : float
+        Subject's height in metres.
+    smooth_sigma : float
+        Gaussian smoothing of the motion in frames (0 = none).
+    keyframe_score : float, optional
+        Key only the frames whose 2D fit similarity is at least this (plus enough
+        frames to leave no gap over 10 frames) and Slerp between them (seed 004
+        section 3.1.5 keys the poses); default: every frame is a key.
+    cache_dir : path, optional
+        Stage cache folder (None = no caching).
+    progress : bool, optional
+        Progress bars (default: when stderr is a terminal).
+    log : callable, optional
+        Called with one-line status messages.
+    jobs : int, optional
+        Worker processes for the 2D fit (default: the usable CPUs, at most
+        :data:`vidcap.video.fit.parallel.MAX_JOBS`); 1 fits in this process. Clips of
+        fewer than 120 frames are fitted in this process anyway
+        (:func:`vidcap.video.fit.parallel.fit_sequence_chunked`). The workers start, and
+        load the fit's compiled kernels, while the silhouettes are extracted.
+    view : str
+        How the camera sees the subject for the whole clip
+        (:data:`vidcap.video.lifting.VIEWS`; default ``auto``: proposed per frame);
+        see :func:`vidcap.video.lifting.constrain_orientation`.
+    lift : {'solve', 'segment'}
+        The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
+        seed's per-segment lift (:func:`vidcap.video.lift.lift`).
+
+    Returns
+    -------
+    ConvertResult
+    """
+    from vidcap.io.video import frame_times, probe
+    from vidcap.video.background import load_plate
+    from vidcap.video.fit.parallel import StreamedFit, default_jobs
+
+    log = log or (lambda msg: None)
+    check_view(view)  # before any work
+    if lift not in ("solve", "segment"):
+        raise ValueError(f"unknown lift {lift!r}; expected 'solve' or 'segment'")
+    video = Path(video)
+    info = probe(video)
+    body = BodyModel(height=height)
+    cache = StageCache(cache_dir, log=log)
+    timings = {}
+    ann, ann_source = _load_annotations(annotations, video, log)
+
+    # a given plate is read first: a bad file is reported before any worker starts
+    with _timed(timings, "plate"):
+        plate = load_plate(background) if background is not None else None
+    ident = video_identity(video)
+    k_plate = _plate_key(ident, background)
+    k_sil = _silhouette_key(ident, k_plate)
+    jobs = default_jobs() if jobs is None else max(1, int(jobs))
+    per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
+    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs=jobs, per_job=per_job)
+    try:
+        with _timed(timings, "plate"):
+            plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
+        from vidcap.video.inputchecks import plate_notice
+
+        if plate_notice(plate):
+            log(plate_notice(plate))
+        with _timed(timings, "silhouettes"):
+            # each chunk of frames is fitted as soon as its silhouettes are there
+            streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
+                        if pool is not None else None)
+            sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed,
+                                    progress=progress)
+        _report_silhouettes(sil, info.n_frames, log)
+        with _timed(timings, "pose2d"):
+            pose = _pose_stage(cache, k_sil, sil.masks, jobs=jobs, per_job=per_job,
+                               streamed=streamed, progress=progress)
+    except BaseException:
+        if pool is not None:
+            pool.kill()  # an error or Ctrl-C: the running chunks are nobody's now
+        raise
+    finally:
+        if pool is not None:
+            pool.close()
+
+    with _timed(timings, "lift+motion"):
+        out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
+                               body=body, annotations=ann, ann_source=ann_source, view=view,
+                               smooth_sigma=smooth_sigma, keyframe_score=keyframe_score,
+                               log=log, lift_method=lift)
+    return ConvertResult(
+        video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
+        scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
+        motion=out.motion.motion, jitter_before=out.motion.jitter_before,
+        jitter_after=out.motion.jitter_after, timings=timings,
+        image_joints2d=out.joints2d, spread=pose["spread"], track=out.track,
+        model_height=out.model_height, outside=out.outside, view=view,
+        frame_times=frame_times(video),
+    )
+
+
+# --------------------------------------------------------------------------- helpers
+@contextmanager
+def _timed(timings: dict, name: str):
+    """Add the seconds the ``with`` block takes to ``timings[name]``."""
+    t0 = time.perf_counter()
+    try:
+        yield
+    finally:
+        timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+
+
+def _load_annotations(annotations, video: Path, log) -> tuple[Annotations, object]:
+    """The user's events (given, a file, or ``VIDEO_STEM.vidcap.json`` beside the
+    video when it exists) and the file named in errors about them."""
+    if annotations is None and default_path(video).exists():
+        annotations = default_path(video)
+    source = video
+    if isinstance(annotations, (str, os.PathLike)):
+        log(f"annotations: {annotations}")
+        source = annotations
+        annotations = Annotations.load(annotations)  # frames are checked once decoded
+    return annotations or Annotations(), source
+
+
+def _check_events(ann: Annotations, n_frames: int, source) -> None:
+    late = [e for e in ann.events if e.frame >= n_frames]
+    if late:
+        e = late[0]
+        raise AnnotationError(
+            f"{e.type} event at frame {e.frame} is beyond the video's {n_frames} frames "
+            f"(frames count from 0)", source)
+
+
+def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, *, jobs: int,
+                       per_job: int):
+    """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
+    first so that they load their compiled kernels while this process estimates the
+    plate and extracts the silhouettes; None when the fit is serial or cached."""
+    from vidcap.video.fit.parallel import FitPool, chunk_bounds
+
+    expected = chunk_bounds(n_frames, jobs, per_job=per_job)
+    if len(expected) < 2:
+        return None
+    pose_path = cache.path("pose2d", _pose_key(k_sil, expected))
+    if pose_path and pose_path.exists():
+        return None
+    return FitPool(min(jobs, len(expected)))
+
+
+# --------------------------------------------------------------------------- 1. plate
+def _plate_key(video_id: dict, background) -> str:
+    if background is not None:
+        return stage_key("plate-file", video_identity(background))
+    return stage_key("plate", _PLATE_VERSION, video_id)
+
+
+def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, log):
+    """The background plate (:class:`vidcap.video.background.BackgroundModel`): ``plate``
+    when the user gave one, else the cached one, else estimated from the video."""
+    from vidcap.video.background import estimate_background
+
+    if plate is not None:
+        return plate
+    hit = cache.load("plate", key, required=_PLATE_FIELDS)
+    if hit is not None:
+        return _plate_from_cache(hit)
+    log("estimating the background plate")
+    plate = estimate_background(video, rng=np.random.default_rng(0), progress=progress)
+    h, w = plate.plate.shape[:2]
+    cache.save("plate", key, plate=plate.plate, never_seen=plate.never_seen,
+               noise_map=plate.noise_map, noise_sigma=plate.noise_sigma,
+               threshold=np.float64(plate.threshold),
+               self_lit=np.zeros((h, w), bool) if plate.self_lit is None else plate.self_lit,
+               still_person=(np.zeros((h, w), bool) if plate.still_person is None
+                             else plate.still_person))
+    return plate
+
+
+#: What a cached plate holds besides the image: the silhouette stage needs them all.
+_PLATE_FIELDS = ("plate", "never_seen", "noise_map", "noise_sigma", "threshold", "self_lit",
+                 "still_person")
+
+
+def _plate_from_cache(hit: dict):
+    from vidcap.video.background import BackgroundModel
+
+    never = hit["never_seen"].astype(bool)
+    return BackgroundModel(
+        plate=hit["plate"], confidence=(~never).astype(np.float32), never_seen=never,
+        noise_sigma=hit["noise_sigma"], noise_map=hit["noise_map"],
+        threshold=float(hit["threshold"]), method="felzenszwalb",
+        self_lit=hit["self_lit"].astype(bool) if hit["self_lit"].any() else None,
+        still_person=(hit["still_person"].astype(bool) if hit["still_person"].any()
+                      else None))
+
+
+# --------------------------------------------------------------------------- 2. silhouettes
+@dataclass(frozen=True)
+class _Silhouettes:
+    """The silhouette stage's output: ``masks`` (F frames, original pixels), ``bbox``
+    (F, 4) ``x0, y0, x1, y1`` px of the followed person, ``n_other`` (F,) other
+    person-sized blobs per frame."""
+
+    masks: MaskStack
+    bbox: np.ndarray
+    n_other: np.ndarray
+
+
+def _silhouette_key(video_id: dict, k_plate: str) -> str:
+    return stage_key("silhouettes", _SILHOUETTE_VERSION, video_id, k_plate)
+
+
+class _MaskFeed:
+    """``on_masks`` of :func:`vidcap.video.silhouette.extract_silhouettes`: gathers the chunks
+    of silhouettes so far and hands them to the streamed 2D fit."""
+
+    def __init__(self, streamed):
+        self.streamed = streamed
+        self.so_far = None  # MaskStack of the frames so far
+
+    def __call__(self, _start, chunk_masks) -> None:
+        if self.so_far is None:
+            self.so_far = MaskStack(chunk_masks.frame_shape)
+        self.so_far.extend(chunk_masks)
+        self.streamed.feed(self.so_far)
+
+
+def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, streamed,
+                      progress) -> _Silhouettes:
+    """The person's silhouettes, cached or extracted; while they are extracted, each
+    chunk of frames goes to ``streamed`` (a :class:`vidcap.video.fit.parallel.StreamedFit`,
+    or None) as soon as it is complete."""
+    from vidcap.video.silhouette import extract_silhouettes
+
+    # entries written before the masks were stored cropped lack mask_boxes: extract again
+    hit = cache.load("silhouettes", key, required=("mask_boxes",))
+    if hit is not None:
+        masks = MaskStack.from_arrays(hit["mask_shape"], hit["mask_boxes"],
+                                      hit["mask_bits"], hit["mask_sizes"])
+        n_other = hit["n_other"] if "n_other" in hit else np.zeros(len(masks), np.int64)
+        return _Silhouettes(masks, hit["bbox"], n_other)
+    sil = extract_silhouettes(video, plate, progress=progress,
+                              on_masks=None if streamed is None else _MaskFeed(streamed))
+    out = _Silhouettes(sil.masks, sil.bbox, sil.n_other_blobs)
+    cache.save("silhouettes", key, bbox=out.bbox, n_other=out.n_other, **out.masks.to_arrays())
+    return out
+
+
+def _report_silhouettes(sil: _Silhouettes, n_expected: int | None, log) -> None:
+    """Tell the user of other people in view and of a frame count the container got wrong."""
+    masks, n_other = sil.masks, sil.n_other
+    crowded = int(np.count_nonzero(n_other))
+    if crowded >= max(3, 0.05 * len(masks)):
+        # vidcap follows one person: say so rather than silently mixing people (an
+        # extra blob in a frame or two is a plate artefact, not a person, and is not
+        # told)
+        log(f"more than one person-sized blob in {crowded} of {len(masks)} frames "
+            f"(up to {int(n_other.max()) + 1} at once); one is followed from frame to frame "
+            "(the largest at first)")
+    if len(masks) != n_expected and n_expected:
+        log(f"decoded {len(masks)} frames (container says {n_expected})")
+
+
+# --------------------------------------------------------------------------- 3. 2D pose
+def _pose_key(k_sil: str, chunks) -> str:
+    # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
+    return stage_key("pose2d", k_sil) if len(chunks) < 2 else stage_key("pose2d", k_sil, chunks)
+
+
+def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, per_job: int,
+                streamed, progress) -> dict:
+    """The 2D pose, cached or fitted (by ``streamed`` when it was fed the silhouettes,
+    else by :func:`vidcap.video.fit.parallel.fit_sequence_chunked`).
+
+    Returns
+    -------
+    dict
+        ``joints2d`` (F, 15, 2) px, image-side limb names, NaN where no fit;
+        ``scores`` and ``similarity`` (F,); ``spread`` (F,) torso foreshortening
+        (0 side view, 1 front view); ``model_height`` (F,) px.
+    """
+    from vidcap.fileio import progress as bar
+    from vidcap.video.fit.parallel import chunk_bounds, fit_sequence_chunked
+
+    key = _pose_key(k_sil, chunk_bounds(len(masks), jobs, per_job=per_job))
+    # entries written before the model's height was kept lack it: fit again
+    hit = cache.load("pose2d", key, required=("model_height",))
+    if hit is not None:
+        return hit
+
+    def wrap(it, total):
+        return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
+
+    if streamed is not None:
+        # this process only waits for the workers now: meanwhile, load what the lift
+        # needs (a core is free while the last chunk is fitted)
+        _preload_lift()
+        pose = streamed.finish(masks, progress=wrap)
+    else:
+        pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job)
+    hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
+           "similarity": pose.similarity, "model_height": pose.model_height}
+    cache.save("pose2d", key, **hit)
+    return hit
+
+
+def _preload_lift() -> None:
+    """Import ``scipy.optimize`` (for :func:`vidcap.video.lift.estimate_scales`, ~0.2 s once
+    per process) on a daemon thread; an import error is left to the lift to report.
+
+    Only once this process forks no more workers: a fork must not copy a thread
+    midway through an import.
+    """
+    def load():
+        try:
+            import scipy.optimize  # noqa: F401
+        except Exception:  # noqa: BLE001 - the lift itself reports it
+            pass
+
+    threading.Thread(target=load, name="vidcap-preload", daemon=True).start()
+
+
+
+
+# --------------------------------------------------------------------------- 4. lift, 5. motion
+@dataclass(frozen=True)
+class _Lifted:
+    """The 3D stage's and the motion's output, with the 2D joints they were read from."""
+
+    lifted: LiftResult
+    motion: MotionResult
+    joints2d: np.ndarray  # (F, 15, 2) px, image-side names, NaN where left out
+    model_height: np.ndarray  # (F,) px, NaN where left out
+    outside: np.ndarray  # (F,) bool, the person mostly outside the picture
+    track: np.ndarray | None  # (F,) px, horizontal centre of the person
+
+
+def _image_joints(pose: dict, masks: MaskStack):
+    """The 2D fit's joints and model heights with the frames where the person is mostly
+    outside the picture left out (NaN: filled from the neighbouring frames, like frames
+    without a fit), and those frames (F,) bool."""
+    outside = partly_outside(masks)
+    joints2d, model_height = pose["joints2d"], pose["model_height"]
+    if outside.any():
+        joints2d, model_height = joints2d.copy(), np.array(model_height, float)
+        joints2d[outside] = np.nan
+        model_height[outside] = np.nan
+    return joints2d, model_height, outside
+
+
+def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
+                     annotations: Annotations, ann_source, view: str, smooth_sigma: float,
+                     keyframe_score: float | None, log, lift_method: str = "solve") -> _Lifted:
+    """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
+    motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
+    ``keyframe_score`` is given."""
+    joints2d, model_height, outside = _image_joints(pose, sil.masks)
+    track = person_track(sil.bbox, sil.masks, exclude=outside)
+    _check_events(annotations, len(sil.masks), ann_source)
+    lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
+                       image_sides=True, spread=pose["spread"], track=track,
+                       frame_size=frame_size, model_height=model_height, view=view,
+                       method=lift_method)
+    keys = None
+    if keyframe_score is not None:
+        keys = keyframes_by_confidence(pose["similarity"], min_score=keyframe_score)
+        log(f"{len(keys)} keyframes of {len(sil.masks)}")
+    if lifted.solve_params is not None:  # the solve's rotations go to the BVH as they are
+        from vidcap.video.solve.stage import solved_motion
+
+        motion = solved_motion(lifted.solve_params, fps, body=body, keys=keys,
+                               smooth_sigma=smooth_sigma)
+    else:
+        motion = build_motion(lifted.joints3d, fps, body=body, smooth_sigma=smooth_sigma,
+                              keys=keys)
+    return _Lifted(lifted, motion, joints2d, model_height, outside, track)
+
+
+# --------------------------------------------------------------------------- convert
+def convert(
+    video: str | os.PathLike,
+    out_bvh: str | os.PathLike,
+    *,
+    save: str | os.PathLike | None = None,
+    cache_dir: str | os.PathLike | None | bool = True,
+    rig: str = "vidcap",
+    **options,
+) -> ConvertResult:
+    """:func:`run` and write the motion (atomically) and optionally the ``--save`` npz.
+
+    ``out_bvh`` ending in ``.glb``/``.gltf`` gives glTF 2.0, sampled at the video's own
+    frame times; any other name gives BVH (:func:`vidcap.io.motionfile.write_motion`), on
+    ``rig``'s joints. ``cache_dir=True`` puts the cache in ``.vidcap-cache`` beside
+    ``out_bvh``; ``False``/``None`` disables it.
+    """
+    from vidcap.io.motionfile import write_motion
+    from vidcap.io.rigs import get_rig
+
+    get_rig(rig)  # an unknown rig fails before any work
+
+    out_bvh = Path(out_bvh)
+    if cache_dir is True:
+        cache_dir = out_bvh.parent / ".vidcap-cache"
+    elif cache_dir is False:
+        cache_dir = None
+    result = run(video, cache_dir=cache_dir, **options)
+    motion, times = result.motion_and_times(out_bvh)
+    write_motion(out_bvh, motion, rig=rig, times=times)
+    if save is not None:
+        result.save_npz(save)
+    return result
+
+
+
+# the stages' names, defined in their own modules since issue 31 and imported from
+# here by existing callers
+__all__ = ["MIXED_VIEW", "NEAR_PLANE", "POOR_FIT", "SCALE_WINDOW_S", "VIEWS", "ConvertResult",
+           "LiftResult", "StageCache", "apply_user_view", "constrain_orientation", "convert",
+           "fill_gaps", "frame_runs", "frame_scales", "lift_pose", "model_scales",
+           "partly_outside", "person_track", "plane_passages", "run", "swap_pairs",
+           "true_runs"]

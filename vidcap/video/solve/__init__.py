@@ -1,0 +1,13 @@
+"""The kinematic solve over a clip (issue 33): 2D joints -> BVH joint rotations.
+
+Modules: :mod:`~vidcap.video.solve.skeleton` (parametrisation and forward kinematics),
+:mod:`~vidcap.video.solve.limits` (joint limits), :mod:`~vidcap.video.solve.contact` (foot
+contact), :mod:`~vidcap.video.solve.residuals` (residuals, sparse Jacobian),
+:mod:`~vidcap.video.solve.gauss_newton` (the banded Levenberg-Marquardt),
+:mod:`~vidcap.video.solve.signs` (depth signs and their confidence), :mod:`~vidcap.video.solve.clip`
+(the whole solve).
+"""
+
+from vidcap.video.solve.clip import ClipSolve, solve_clip, solve_problem
+
+__all__ = ["ClipSolve", "solve_clip", "solve_problem"]

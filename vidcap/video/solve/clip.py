@@ -1,0 +1,224 @@
+"""One kinematic solve over the clip: 2D joints -> joint rotations (issue 33).
+
+The skeleton of the body model with fixed bone lengths (:mod:`vidcap.video.solve.skeleton`)
+is fitted to the 2D joints of every frame at once (:mod:`vidcap.video.solve.residuals`:
+projection, joint limits, temporal smoothness, foot contact, depth signs), starting
+from the seed's per-segment lift (:func:`vidcap.video.lift.lift`) with the proposed signs;
+then every limb's reflection through the image plane is chosen over the clip
+(:mod:`vidcap.video.solve.signs`) and the clip solved again from there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vidcap.body import BodyModel
+from vidcap.video.lift import lift
+from vidcap.video.solve.contact import foot_contacts
+from vidcap.video.solve.gauss_newton import levenberg_marquardt
+from vidcap.video.solve.residuals import Problem, segment_zeta
+from vidcap.video.solve.signs import sweep_signs
+from vidcap.video.solve.skeleton import forward_kinematics, params_from_joints
+
+#: Default 2D uncertainty of a joint, as a fraction of body height.
+SIGMA_2D = 0.01
+
+
+@dataclass(frozen=True)
+class ClipSolve:
+    """Result of :func:`solve_clip`.
+
+    Attributes
+    ----------
+    params : (F, 24) the poses (:mod:`vidcap.video.solve.skeleton`).
+    joints3d : (F, 15, 3) their joints, metres, camera-aligned world.
+    signs : (F, 10) int8, the solved depth signs (+1 distal joint nearer the camera).
+    confidence : (F, 10) clip cost of the other sign (:mod:`vidcap.video.solve.signs`).
+    contact : (F, 2) bool, planted ankles used (all False when contact was off).
+    cost : float, iterations : int.
+    """
+
+    params: np.ndarray
+    joints3d: np.ndarray
+    signs: np.ndarray
+    confidence: np.ndarray
+    contact: np.ndarray
+    cost: float
+    iterations: int
+
+
+def image_targets(joints2d, scale, segment_scale=None, principal_point=None) -> np.ndarray:
+    """The joints' world (X, Y) that the image shows, (F, 15, 2) metres.
+
+    The pelvis is placed at ``scale`` (pixels per metre, one or (F,)) about
+    ``principal_point`` (default the pelvis' median image position); the other joints
+    about the pelvis at ``segment_scale`` (default ``scale``), as
+    :func:`vidcap.video.lift.lift` reads them. Y is up.
+    """
+    j = np.asarray(joints2d, dtype=float)
+    F = j.shape[0]
+    s_root = np.broadcast_to(np.asarray(scale, dtype=float), (F,))[:, None]
+    s_seg = s_root if segment_scale is None else np.broadcast_to(
+        np.asarray(segment_scale, dtype=float), (F,))[:, None]
+    c = (np.median(j[:, 0], axis=0) if principal_point is None
+         else np.asarray(principal_point, dtype=float))
+    pel = (j[:, 0] - c) / s_root
+    rel = (j - j[:, :1]) / s_seg[..., None]
+    out = pel[:, None] + rel
+    out[..., 1] *= -1.0
+    return out
+
+
+def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
+                 prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
+                 segment_scale=None, principal_point=None, contact="auto",
+                 **weights) -> Problem:
+    """The :class:`Problem` of a clip of 2D joints (F, 15, 2), body-side named.
+
+    ``yaw`` (F,) radians and ``yaw_sigma`` (one or (F,), radians) the torso's yaw
+    prior; ``prior_signs``/``hard_signs`` (F, 10) in {-1, 0, 1}; ``confidence`` (F,
+    15) each 2D joint's weight (default 1); ``contact`` 'auto' (:func:`foot_contacts`), 'off', or
+    an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights.
+    """
+    body = body or BodyModel()
+    j = np.asarray(joints2d, dtype=float)
+    F = j.shape[0]
+    conf = np.ones((F, 15)) if confidence is None else np.asarray(confidence, float)
+    zeros = np.zeros((F, 10), np.int8)
+    geometry = scale if segment_scale is None else segment_scale
+    if isinstance(contact, str):
+        if contact not in ("auto", "off"):
+            raise ValueError(f"contact must be 'auto', 'off' or an (F, 2) array, got {contact!r}")
+        contact = (foot_contacts(j, geometry, fps) if contact == "auto"
+                   else np.zeros((F, 2), bool))
+    return Problem(
+        offsets=body.rest_offsets(), lengths=body.segment_lengths(),
+        target=image_targets(j, scale, segment_scale, principal_point),
+        weight=conf / (SIGMA_2D * body.height),
+        prior_signs=zeros if prior_signs is None else np.sign(prior_signs).astype(np.int8),
+        hard_signs=zeros if hard_signs is None else np.sign(hard_signs).astype(np.int8),
+        yaw=np.broadcast_to(np.asarray(yaw, float), (F,)).copy(),
+        yaw_weight=1.0 / np.broadcast_to(np.asarray(yaw_sigma, float), (F,)),
+        contact=np.asarray(contact, bool), **weights)
+
+
+def warm_start(problem: Problem, joints2d, *, scale, body: BodyModel, segment_scale=None,
+               principal_point=None) -> np.ndarray:
+    """Parameters (F, 24) of the seed's per-segment lift with the prior signs (the hard
+    ones where given), the root on the image's pelvis."""
+    signs = np.where(problem.hard_signs != 0, problem.hard_signs, problem.prior_signs)
+    out = lift(joints2d, np.where(signs == 0, 1, signs), problem.yaw, body=body, scale=scale,
+               principal_point=principal_point, segment_scale=segment_scale)
+    p = params_from_joints(out.joints3d, problem.yaw)
+    p[:, :2] = problem.target[:, 0]
+    p[:, 2] = 0.0
+    return p
+
+
+def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
+               prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
+               segment_scale=None, principal_point=None, contact="auto", sweeps: int = 2,
+               max_iter: int = 30, robust: float | None = None, **weights) -> ClipSolve:
+    """Fit the skeleton to a clip's 2D joints (see the module docstring).
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Pixels, body-side named (:func:`vidcap.video.lift.assign_sides`), no gaps.
+    scale : float or array_like, shape (F,)
+        Pixels per metre of the root (:func:`vidcap.video.lift.estimate_scales`).
+    fps : float
+    body : BodyModel, optional
+        The subject's bone lengths (default 1.75 m, Table 3.1).
+    yaw : array_like, shape (F,)
+        The torso's yaw prior, radians (:func:`vidcap.video.lift.yaw_from_orientation`).
+    prior_signs, hard_signs : array_like, shape (F, 10), optional
+        Proposed depth signs (soft) and the user's (hard), 0 where none.
+    confidence : array_like, shape (F, 15), optional
+        Weight of each 2D joint (1: a fitted joint; less where it is doubtful, more
+        where the user placed it).
+    yaw_sigma : float or array_like, shape (F,)
+        The yaw prior's spread, radians.
+    segment_scale, principal_point :
+        As :func:`vidcap.video.lift.lift`.
+    contact : 'auto', 'off' or array_like of bool, shape (F, 2)
+    sweeps : int
+        Rounds of sign choice and re-solve after the first solve.
+    max_iter : int
+        Levenberg-Marquardt iterations per solve.
+    robust : float, optional
+        After the first solve, re-weight the 2D joints by their misfit
+        (:func:`robust_weights`, this many sigmas) and solve again.
+    **weights
+        Override :class:`vidcap.video.solve.residuals.Problem`'s weights.
+
+    Returns
+    -------
+    ClipSolve
+    """
+    body = body or BodyModel()
+    j2 = np.asarray(joints2d, dtype=float)
+    pb = make_problem(j2, scale=scale, fps=fps, body=body, yaw=yaw, prior_signs=prior_signs,
+                      hard_signs=hard_signs, confidence=confidence, yaw_sigma=yaw_sigma,
+                      segment_scale=segment_scale, principal_point=principal_point,
+                      contact=contact, **weights)
+    p0 = warm_start(pb, j2, scale=scale, body=body, segment_scale=segment_scale,
+                    principal_point=principal_point)
+    return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust)
+
+
+def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 30,
+                  fixed=None, robust: float | None = None) -> ClipSolve:
+    """Solve ``problem`` from ``params`` (F, 24): LM, then ``sweeps`` rounds of sign
+    choice (:func:`vidcap.video.solve.signs.sweep_signs`) and LM; ``fixed`` (F,) bool
+    frames are held (a local re-solve's boundary).
+
+    BLAS runs on one thread here: the solve's dense blocks are 48 x 48, where more
+    threads only add waiting, ten-fold when other processes hold the cores."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):
+        return _solve_problem(problem, params, sweeps=sweeps, max_iter=max_iter, fixed=fixed,
+                              robust=robust)
+
+
+def robust_weights(problem: Problem, joints, scale: float) -> Problem:
+    """``problem`` with each 2D joint's weight divided by sqrt(1 + (e / scale)^2), e its
+    misfit at ``joints`` in units of its own sigma (one re-weighting step of a Cauchy
+    loss): a joint the 2D fit put far from where the rest of the clip says it is
+    counts less, and the smoothness and the other joints carry its frame."""
+    from dataclasses import replace
+
+    e = np.linalg.norm(joints[..., :2] - problem.target, axis=-1) * problem.weight
+    return replace(problem, weight=problem.weight / np.sqrt(1.0 + (e / scale) ** 2))
+
+
+def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixed,
+                   robust: float | None = None) -> ClipSolve:
+    sol = levenberg_marquardt(problem, params, max_iter=max_iter, fixed=fixed)
+    p, iters = sol.params, sol.iterations
+    joints, root, _ = forward_kinematics(p, problem.offsets)
+    if robust:
+        problem = robust_weights(problem, joints, robust)
+        sol = levenberg_marquardt(problem, p, max_iter=max_iter, fixed=fixed)
+        p, iters = sol.params, iters + sol.iterations
+        joints, root, _ = forward_kinematics(p, problem.offsets)
+    for _ in range(sweeps):
+        sw = sweep_signs(problem, joints, root, p)
+        flip = sw.flipped.any(axis=1)
+        if fixed is not None:
+            flip &= ~np.asarray(fixed, bool)
+        if not flip.any():
+            break
+        q = p.copy()
+        q[flip] = params_from_joints(sw.joints[flip], p[flip, 3])
+        q[flip, :3] = p[flip, :3]
+        sol = levenberg_marquardt(problem, q, max_iter=max_iter, fixed=fixed)
+        p, iters = sol.params, iters + sol.iterations
+        joints, root, _ = forward_kinematics(p, problem.offsets)
+    sw = sweep_signs(problem, joints, root, p)
+    zeta = segment_zeta(joints, problem.lengths)
+    signs = np.where(zeta < 0, -1, 1).astype(np.int8)
+    return ClipSolve(p, joints, signs, sw.confidence, problem.contact.copy(), sol.cost, iters)

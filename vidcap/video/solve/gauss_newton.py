@@ -1,0 +1,143 @@
+"""Levenberg-Marquardt on the clip's banded normal equations.
+
+The Jacobian (:func:`vidcap.video.solve.residuals.linearise`) couples a frame's
+parameters with those of the two frames either side (second differences), so
+``J^T J`` is block-pentadiagonal in frame order: it is assembled here block by block
+from the per-frame Jacobians (never as a sparse product), a band of half-width
+3 * 24 - 1, solved by a block Cholesky over frame pairs
+(:mod:`vidcap.video.solve.blocksolve`), linear in the clip's length.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vidcap.video.solve.blocksolve import solve_block_banded
+from vidcap.video.solve.residuals import Linearisation, Problem, contact_pairs, linearise, residuals
+from vidcap.video.solve.skeleton import N_PARAMS
+
+P = N_PARAMS
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Result of :func:`levenberg_marquardt`: params (F, 24), cost, iterations."""
+
+    params: np.ndarray
+    cost: float
+    iterations: int
+
+
+def normal_equations(problem: Problem, lin: Linearisation):
+    """Blocks of J^T J and J^T r.
+
+    Returns
+    -------
+    blocks : (3, F, 24, 24) the blocks (f, f), (f, f + 1), (f, f + 2) (zero past the end).
+    grad : (F, 24).
+    """
+    pb = problem
+    ju, jp = lin.unary, lin.joints
+    F, U, _ = ju.shape
+    blocks = np.zeros((3, F, P, P))
+    jut = np.swapaxes(ju, 1, 2)
+    blocks[0] = jut @ ju
+    grad = (jut @ lin.r[:F * U].reshape(F, U, 1))[..., 0]
+    at = F * U
+    if F > 2:
+        w2 = pb.acc_weight ** 2
+        jpt = np.swapaxes(jp, 1, 2)
+        g0 = jpt @ jp
+        coef = np.zeros(F)  # sum of squared [1, -2, 1] weights each frame takes part with
+        coef[:-2] += 1.0
+        coef[1:-1] += 4.0
+        coef[2:] += 1.0
+        blocks[0] += w2 * coef[:, None, None] * g0
+        g1 = jpt[:-1] @ jp[1:]  # (F-1)
+        c1 = np.zeros(F - 1)
+        c1[:-1] += -2.0  # residual centred at f + 1: (f, f+1) weights 1 * -2
+        c1[1:] += -2.0  # centred at f: -2 * 1
+        blocks[1, :-1] += w2 * c1[:, None, None] * g1
+        blocks[2, :-2] += w2 * (jpt[:-2] @ jp[2:])
+        s = lin.r[at:at + (F - 2) * 45].reshape(F - 2, 45)
+        q = np.zeros((F, 45))
+        q[:-2] += s
+        q[1:-1] -= 2.0 * s
+        q[2:] += s
+        grad += pb.acc_weight * (jpt @ q[..., None])[..., 0]
+        at += (F - 2) * 45
+    f, ank = contact_pairs(pb.contact)
+    if f.size:
+        w2 = pb.contact_weight ** 2
+        coord = 3 * ank[:, None] + np.arange(3)
+        a = jp[f[:, None], coord]  # (n, 3, 24) at f
+        b = jp[(f - 1)[:, None], coord]  # at f - 1
+        np.add.at(blocks[0], f, w2 * np.einsum("nci,ncj->nij", a, a))
+        np.add.at(blocks[0], f - 1, w2 * np.einsum("nci,ncj->nij", b, b))
+        np.add.at(blocks[1], f - 1, -w2 * np.einsum("nci,ncj->nij", b, a))
+        s = lin.r[at:at + 3 * f.size].reshape(-1, 3)
+        np.add.at(grad, f, pb.contact_weight * np.einsum("nci,nc->ni", a, s))
+        np.add.at(grad, f - 1, -pb.contact_weight * np.einsum("nci,nc->ni", b, s))
+    return blocks, grad
+
+
+def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: float = 1e-3,
+                        damping: float = 1e-3, fixed=None) -> Solution:
+    """Minimise the clip's residuals from ``params`` (F, 24).
+
+    Parameters
+    ----------
+    problem : Problem
+    params : array_like, shape (F, 24)
+        The start (a warm one: the per-segment lift's pose).
+    max_iter : int
+    rtol : float
+        Stop when a step lowers the cost by less than this fraction.
+    damping : float
+        Initial Marquardt damping, relative to the normal matrix's diagonal.
+    fixed : array_like of bool, shape (F,), optional
+        Frames whose parameters are held (the boundary of a local re-solve).
+
+    Returns
+    -------
+    Solution
+    """
+    p = np.array(params, dtype=float)
+    F = p.shape[0]
+    hold = np.zeros(F, bool) if fixed is None else np.asarray(fixed, bool)
+    lin = linearise(problem, p)
+    c = 0.5 * float(lin.r @ lin.r)
+    mu = damping
+    it = 0
+    for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
+        blocks, grad = normal_equations(problem, lin)
+        g = grad.reshape(F, P)
+        g[hold] = 0.0
+        diag = np.diagonal(blocks[0], axis1=1, axis2=2).copy()  # (F, P)
+        improved = False
+        for _ in range(8):
+            damped = blocks.copy()
+            idx = np.arange(P)
+            damped[0][:, idx, idx] = diag + mu * (diag + 1e-6) + np.where(hold[:, None], 1e12, 0)
+            step = solve_block_banded(damped, -g)
+            if step is None:  # not positive definite: damp more
+                mu *= 10.0
+                continue
+            trial = p + step
+            r_new = residuals(problem, trial)
+            c_new = 0.5 * float(r_new @ r_new)
+            if c_new < c:
+                improved = True
+                break
+            mu *= 5.0
+        if not improved:
+            break
+        done = c - c_new < rtol * c
+        p, c = trial, c_new
+        mu = max(mu / 3.0, 1e-9)
+        if done:
+            break
+        lin = linearise(problem, p)
+    return Solution(p, c, it)

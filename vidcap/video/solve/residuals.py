@@ -1,0 +1,271 @@
+"""The residuals of the clip solve and their sparse Jacobian.
+
+Per frame (the *unary* residuals, which depend on that frame's 24 parameters):
+
+* projection: each joint's world (X, Y) against the fitted 2D joint read in metres
+  (scaled orthography, seed 004 Eq. 2.1, at the frame's scale: weak perspective),
+  times the joint's confidence over ``sigma_2d``;
+* joint limits (:mod:`vidcap.video.solve.limits`): the excess over ``sigma_limit``;
+* depth signs: a segment on the wrong side of the image plane, ``relu(-sign * dZ /
+  length)``, over ``sigma_sign`` for a proposal (soft: the image may overrule it) and
+  over ``sigma_hard`` beyond a margin for a user's annotation (hard);
+* the torso's yaw against the orientation's, over ``sigma_yaw`` (per frame);
+* the root's depth against 0, weakly (orthography cannot tell it; contact can).
+
+Across frames, linear in the joints: the second difference of every joint over
+``sigma_acc`` (temporal smoothness), and the planted ankle's frame-to-frame motion
+over ``sigma_contact`` (:mod:`vidcap.video.solve.contact`).
+
+The Jacobian is built from 24 perturbed evaluations of the whole clip (one per
+parameter column: the unary residuals and the joints of a frame depend on its own
+parameters only), so it costs about 25 forward kinematics of the clip.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+
+from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS
+from vidcap.video.solve.limits import LIMITS, limit_angles, limit_excess
+from vidcap.video.solve.skeleton import (
+    N_PARAMS,
+    PITCH,
+    ROOT_POS,
+    YAW,
+    forward_kinematics,
+    kinematics_jacobian,
+)
+
+_ANKLES = (JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"])
+#: Margin (fraction of the length) a hard depth sign keeps from the image plane.
+HARD_MARGIN = 0.03
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A clip to solve: targets, weights and priors (all per frame).
+
+    Attributes
+    ----------
+    offsets : (15, 3) rest offsets, metres. lengths : (10,) segment lengths, metres.
+    target : (F, 15, 2) joints' world (X, Y) from the image, metres.
+    weight : (F, 15) confidence / sigma_2d, 1/m.
+    prior_signs, hard_signs : (F, 10) in {-1, 0, +1} (0: none).
+    yaw : (F,) radians; yaw_weight : (F,) 1/rad.
+    contact : (F, 2) bool, planted left/right ankle.
+    sign_weight, hard_weight, limit_weight, acc_weight, contact_weight, depth_weight :
+        the inverse sigmas of the module docstring.
+    """
+
+    offsets: np.ndarray
+    lengths: np.ndarray
+    target: np.ndarray
+    weight: np.ndarray
+    prior_signs: np.ndarray
+    hard_signs: np.ndarray
+    yaw: np.ndarray
+    yaw_weight: np.ndarray
+    contact: np.ndarray
+    sign_weight: float = 5.0
+    hard_weight: float = 300.0
+    limit_weight: float = 60.0
+    acc_weight: float = 60.0
+    contact_weight: float = 100.0
+    depth_weight: float = 0.01
+
+    @property
+    def n_frames(self) -> int:
+        """Frames F."""
+        return self.target.shape[0]
+
+    def frames(self, start: int, stop: int) -> Problem:
+        """The same problem on frames ``start:stop``."""
+        sl = slice(start, stop)
+        return Problem(self.offsets, self.lengths, self.target[sl], self.weight[sl],
+                       self.prior_signs[sl], self.hard_signs[sl], self.yaw[sl],
+                       self.yaw_weight[sl], self.contact[sl], self.sign_weight,
+                       self.hard_weight, self.limit_weight, self.acc_weight,
+                       self.contact_weight, self.depth_weight)
+
+
+def segment_zeta(joints, lengths) -> np.ndarray:
+    """dZ / length of every segment, (..., 10): > 0 distal joint nearer the camera."""
+    dz = joints[..., SEGMENT_JOINTS[:, 1], 2] - joints[..., SEGMENT_JOINTS[:, 0], 2]
+    return dz / lengths
+
+
+def sign_penalty(zeta, signs, *, margin: float = 0.0) -> np.ndarray:
+    """relu(margin - sign * zeta) where a sign is given, 0 elsewhere, (..., 10)."""
+    return np.where(signs != 0, np.maximum(margin - signs * zeta, 0.0), 0.0)
+
+
+def unary(problem: Problem, params, frames=None):
+    """Per-frame residuals (..., U) and joints (..., 15, 3) of poses ``params`` (..., 24).
+
+    ``frames`` (...) indexes the problem's frames the poses belong to (default all,
+    params (F, 24)).
+    """
+    joints, root, _ = forward_kinematics(params, problem.offsets)
+    return unary_from_joints(problem, joints, root, params, frames), joints
+
+
+def unary_from_joints(problem: Problem, joints, root, params, frames=None) -> np.ndarray:
+    """:func:`unary`'s residuals (..., U) of world ``joints`` (..., 15, 3) with the
+    torso's rotation ``root`` (..., 3, 3); ``params`` (..., 24) give the yaw, pitch,
+    roll and root depth."""
+    pb = problem
+    idx = np.arange(pb.n_frames) if frames is None else frames
+    proj = (joints[..., :2] - pb.target[idx]) * pb.weight[idx][..., None]
+    lim = limit_excess(limit_angles(joints, root, params[..., PITCH:PITCH + 2]))
+    zeta = segment_zeta(joints, pb.lengths)
+    soft = sign_penalty(zeta, pb.prior_signs[idx]) * pb.sign_weight
+    hard = sign_penalty(zeta, pb.hard_signs[idx], margin=HARD_MARGIN) * pb.hard_weight
+    yaw = (params[..., YAW] - pb.yaw[idx]) * pb.yaw_weight[idx]
+    depth = params[..., ROOT_POS.start + 2] * pb.depth_weight
+    return np.concatenate([proj.reshape(proj.shape[:-2] + (-1,)), lim * pb.limit_weight,
+                           soft, hard, yaw[..., None], depth[..., None]], axis=-1)
+
+
+N_UNARY = 15 * 2 + len(LIMITS) + 10 + 10 + 2
+
+
+def contact_pairs(contact) -> tuple[np.ndarray, np.ndarray]:
+    """Frames f (>= 1) and ankles (index into 15) planted at both f - 1 and f."""
+    c = np.asarray(contact, bool)
+    both = c[1:] & c[:-1]
+    f, foot = np.nonzero(both)
+    return f + 1, np.array(_ANKLES)[foot]
+
+
+def temporal(problem: Problem, joints) -> np.ndarray:
+    """Smoothness and contact residuals of the clip's joints (F, 15, 3), flat."""
+    acc = (joints[2:] - 2 * joints[1:-1] + joints[:-2]) * problem.acc_weight
+    f, ank = contact_pairs(problem.contact)
+    slide = (joints[f, ank] - joints[f - 1, ank]) * problem.contact_weight
+    return np.concatenate([acc.ravel(), slide.ravel()])
+
+
+def residuals(problem: Problem, params) -> np.ndarray:
+    """All residuals of the clip, flat: unary then temporal."""
+    res, joints = unary(problem, params)
+    return np.concatenate([res.ravel(), temporal(problem, joints)])
+
+
+def cost(problem: Problem, params) -> float:
+    """Half the sum of squared residuals."""
+    r = residuals(problem, params)
+    return 0.5 * float(r @ r)
+
+
+@dataclass(frozen=True)
+class Linearisation:
+    """The clip's residuals and their Jacobian at a point, in blocks.
+
+    Attributes
+    ----------
+    r : (R,) all residuals (:func:`residuals`' order).
+    unary : (F, U, 24) d(unary residuals)/d(params) of each frame.
+    joints : (F, 45, 24) d(joints)/d(params) of each frame (the temporal residuals'
+        Jacobian is made of these).
+    """
+
+    r: np.ndarray
+    unary: np.ndarray
+    joints: np.ndarray
+
+
+def _limit_jacobian(pb: Problem, params, frames, step: float = 1e-6) -> np.ndarray:
+    """d(limit residuals)/d(params), (n, 15, 24), by forward differences on ``frames``."""
+    p = params[frames]
+    batch = np.repeat(p[None], N_PARAMS + 1, axis=0)
+    batch[1:] += step * np.eye(N_PARAMS)[:, None, :]
+    joints, root, _ = forward_kinematics(batch, pb.offsets)
+    lim = limit_excess(limit_angles(joints, root, batch[..., PITCH:PITCH + 2])) * pb.limit_weight
+    return np.moveaxis((lim[1:] - lim[0]) / step, 0, -1)
+
+
+def linearise(problem: Problem, params) -> Linearisation:
+    """Residuals and Jacobian blocks at ``params`` (F, 24): the projection, sign, yaw
+    and depth rows in closed form (:func:`vidcap.video.solve.skeleton.kinematics_jacobian`),
+    the limit rows by finite differences on the frames near a limit."""
+    pb = problem
+    p = np.asarray(params, dtype=float)
+    F = p.shape[0]
+    joints, root, jk = kinematics_jacobian(p, pb.offsets)  # jk (F, 15, 3, 24)
+    res = unary_from_joints(pb, joints, root, p)
+    r = np.concatenate([res.ravel(), temporal(pb, joints)])
+    ju = np.zeros((F, res.shape[1], N_PARAMS))
+    ju[:, :30] = (jk[:, :, :2] * pb.weight[:, :, None, None]).reshape(F, 30, N_PARAMS)
+    n_lim = len(LIMITS)
+    angles = limit_angles(joints, root, p[:, PITCH:PITCH + 2])
+    near = np.flatnonzero((_near(angles) > 0).any(axis=1))
+    if near.size:
+        ju[near, 30:30 + n_lim] = _limit_jacobian(pb, p, near)
+    dzeta = (jk[:, SEGMENT_JOINTS[:, 1], 2] - jk[:, SEGMENT_JOINTS[:, 0], 2]) \
+        / pb.lengths[None, :, None]  # (F, 10, 24)
+    zeta = segment_zeta(joints, pb.lengths)
+    at = 30 + n_lim
+    for signs, margin, w in ((pb.prior_signs, 0.0, pb.sign_weight),
+                             (pb.hard_signs, HARD_MARGIN, pb.hard_weight)):
+        active = (signs != 0) & (margin - signs * zeta > 0)
+        ju[:, at:at + 10] = np.where(active[..., None], -w * signs[..., None] * dzeta, 0.0)
+        at += 10
+    ju[:, at, YAW] = pb.yaw_weight
+    ju[:, at + 1, ROOT_POS.start + 2] = pb.depth_weight
+    return Linearisation(r, ju, jk.reshape(F, 45, N_PARAMS))
+
+
+#: Angles within this much (radians) of a bound get their limit rows differentiated.
+_NEAR_LIMIT = np.deg2rad(3.0)
+
+
+def _near(angles) -> np.ndarray:
+    """How far inside its bounds, minus the margin, each angle is (> 0: near)."""
+    from vidcap.video.solve.limits import _HIGH, _LOW
+
+    inside = np.minimum(angles - _LOW, _HIGH - angles)
+    return _NEAR_LIMIT - inside
+
+
+def sparse_jacobian(problem: Problem, lin: Linearisation):
+    """The Jacobian of :func:`residuals` as a CSR matrix (R, F * 24)."""
+    pb = problem
+    ju, jp = lin.unary, lin.joints
+    F, U, _ = ju.shape
+    col = (np.arange(F)[:, None] * N_PARAMS + np.arange(N_PARAMS)[None, :])  # (F, 24)
+    rows = [np.broadcast_to((np.arange(F)[:, None] * U + np.arange(U))[..., None],
+                            (F, U, N_PARAMS)).ravel()]
+    cols = [np.broadcast_to(col[:, None, :], (F, U, N_PARAMS)).ravel()]
+    data = [ju.ravel()]
+    base = F * U
+    if F > 2:
+        n = F - 2
+        row = base + (np.arange(n)[:, None] * 45 + np.arange(45))[..., None]
+        for shift, coef in ((0, 1.0), (1, -2.0), (2, 1.0)):
+            rows.append(np.broadcast_to(row, (n, 45, N_PARAMS)).ravel())
+            cols.append(np.broadcast_to(col[shift:shift + n, None, :], (n, 45, N_PARAMS)).ravel())
+            data.append((coef * pb.acc_weight * jp[shift:shift + n]).ravel())
+        base += n * 45
+    f, ank = contact_pairs(pb.contact)
+    if f.size:
+        n = f.size
+        row = base + (np.arange(n)[:, None] * 3 + np.arange(3))[..., None]
+        coord = 3 * ank[:, None] + np.arange(3)  # (n, 3) rows of jp
+        for frames, coef in ((f, 1.0), (f - 1, -1.0)):
+            block = jp[frames[:, None], coord]  # (n, 3, 24)
+            rows.append(np.broadcast_to(row, (n, 3, N_PARAMS)).ravel())
+            cols.append(np.broadcast_to(col[frames][:, None, :], (n, 3, N_PARAMS)).ravel())
+            data.append((coef * pb.contact_weight * block).ravel())
+    return coo_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(lin.r.size, F * N_PARAMS)).tocsr()
+
+
+def sparsity(problem: Problem):
+    """The Jacobian's structure (``least_squares(jac_sparsity=...)``), CSR of ones."""
+    F = problem.n_frames
+    lin = Linearisation(np.zeros(residuals(problem, np.zeros((F, N_PARAMS))).size),
+                        np.ones((F, N_UNARY, N_PARAMS)), np.ones((F, 45, N_PARAMS)))
+    return sparse_jacobian(problem, lin)
