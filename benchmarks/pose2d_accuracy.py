@@ -205,24 +205,31 @@ HELD_OUT = (
 )
 
 
-def held_out(frames: int = 60) -> int:
-    """The ``--held-out`` table: tracked PCK@0.05 per clip and the mean, with each of
-    this project's temporal options off in turn (same run), so a change to the search
-    is judged on clips it was not tuned on rather than on the four above alone."""
+def view_of(yaw: float) -> str:
+    """'side', 'three-quarter' or 'front' for a camera yaw in degrees (0: facing it)."""
+    f = abs(((float(yaw) + 180.0) % 360.0) - 180.0)
+    f = min(f, 180.0 - f)
+    return "side" if f >= 67.5 else "three-quarter" if f >= 22.5 else "front"
+
+
+def held_out(frames: int = 60, cues: str = "all") -> int:
+    """The ``--held-out`` table: tracked PCK@0.05 per clip and the mean, with the
+    frame's cues (``cues``) and with the outline only (same run), and the means per
+    view, so a change to the search is judged on clips it was not tuned on rather than
+    on the four above alone."""
     from vidcap.synth import make_motion, render_clip
     from vidcap.video.fit.pose2d import fit_sequence
 
     full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
             "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
                                  fps=30.0)}
-    variants = (("default", {}), ("no leg grid", {"leg_grid": False}),
-                ("spread window 15", {"spread_window": 15}))
+    variants = ((f"cues {cues}", {"cues": cues}), ("cues outline", {"cues": "outline"}))
     print(f"Tracked 2D fit on held-out clips ({frames} frames, 640x480, 30 fps): "
           "PCK@0.05 of all joints; label flips without and with the solve over time "
           "(relabel=True)")
     print(f"{'clip':16} {'yaw':>4} " + " ".join(f"{v:>16}" for v, _ in variants)
           + f" {'flips':>5} {'relabelled':>10}")
-    table, flips = [], []
+    table, flips, views, medians = [], [], [], []
     for name, source, first, yaws in HELD_OUT:
         if source in full:
             n = len(full[source].root_positions)
@@ -231,20 +238,23 @@ def held_out(frames: int = 60) -> int:
         else:
             motion = make_motion(source, n_frames=frames)
         for yaw in yaws:
-            _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
-                                   rng=np.random.default_rng(0))
+            video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                       rng=np.random.default_rng(0))
             tj = truth["joints2d"]
             hpx = body_height_px(tj)[:, None]
             row = []
-            for label, kw in variants:
-                joints = fit_sequence(truth["masks"], **kw).joints2d
+            for k, (_, kw) in enumerate(variants):
+                joints = fit_sequence(truth["masks"], frames=video, **kw).joints2d
                 err, _ = side_agnostic_errors(joints, tj)
-                row.append(summarise(err / hpx)["pck05"])
-                if label == "default":
+                summary = summarise(err / hpx)
+                row.append(summary["pck05"])
+                if k == 0:
                     flip = [label_flips(joints, tj, hpx)]
+                    medians.append(summary["median"])
             # the same fit relabelled by the solve over time
-            flip.append(label_flips(fit_sequence(truth["masks"], relabel=True).joints2d, tj,
-                                    hpx))
+            flip.append(label_flips(fit_sequence(truth["masks"], frames=video, relabel=True,
+                                                 **variants[0][1]).joints2d, tj, hpx))
+            views.append(view_of(yaw))
             table.append(row)
             flips.append(flip)
             print(f"{name:16} {yaw:>4g} " + " ".join(f"{v:16.1%}" for v in row)
@@ -253,6 +263,13 @@ def held_out(frames: int = 60) -> int:
     total = np.sum(flips, axis=0)
     print(f"{'mean / total':16} {'':>4} " + " ".join(f"{v:16.2%}" for v in mean)
           + f" {total[0]:5d} {total[1]:10d}")
+    table, views = np.asarray(table), np.asarray(views)
+    for view in ("side", "three-quarter", "front"):
+        here = views == view
+        if here.any():
+            print(f"{'mean ' + view:21} " + " ".join(f"{v:16.2%}" for v in table[here].mean(0))
+                  + f"   ({here.sum()} clips)")
+    print(f"median error / height over clips (cues {cues}): {np.median(medians):.4f}")
     return 0
 
 
@@ -269,6 +286,9 @@ def main(argv=None) -> int:
                          "default 1: serial)")
     ap.add_argument("--poses", action="store_true",
                     help="crouches and raised arms, with and without the body-height pass")
+    ap.add_argument("--cues", choices=("all", "outline"), default="all",
+                    help="the frame's cues inside the outline (all, the default) or the "
+                         "silhouette only (outline)")
     ap.add_argument("--held-out", action="store_true",
                     help="tracked PCK on clips the search was not tuned on, with the "
                          "temporal options off in turn")
@@ -276,7 +296,7 @@ def main(argv=None) -> int:
     if args.poses:
         return unusual_poses()
     if args.held_out:
-        return held_out(args.frames)
+        return held_out(args.frames, args.cues)
 
     from vidcap.synth import render_clip
 
@@ -286,8 +306,8 @@ def main(argv=None) -> int:
         motion = load_motion(name, args.frames)
         motion = motion.frames(0, min(args.frames, len(motion.root_positions)))
         for yaw in map(float, args.yaws.split(",")):
-            _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
-                                   rng=np.random.default_rng(0))
+            video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                       rng=np.random.default_rng(0))
             masks, tj = truth["masks"], truth["joints2d"]
             hpx = body_height_px(tj)[:, None]
             hidden = hidden_by_torso(tj, hpx)
@@ -295,7 +315,8 @@ def main(argv=None) -> int:
                 t0 = time.process_time()
                 pose = fit_sequence_chunked(masks, jobs=args.jobs, tracked=tracked,
                                             height=args.height, caps=args.caps,
-                                            refine=not args.no_refine)
+                                            refine=not args.no_refine, frames=video,
+                                            cues=args.cues)
                 dt = (time.process_time() - t0) / len(masks)
                 err, sw = side_agnostic_errors(pose.joints2d, tj)
                 frac = err / hpx

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.foreshortening import fit_foreshortening
 from vidcap.video.fit.grids import search_arm_grid, search_leg_grid
@@ -147,8 +148,14 @@ def _refine(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -
 
 
 def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
-              challenge: bool = False, options: FitOptions) -> FramePose:
-    """:func:`fit_pose` of a normalised silhouette with options already checked."""
+              challenge: bool = False, options: FitOptions, cues=None) -> FramePose:
+    """:func:`fit_pose` of a normalised silhouette with options already checked.
+
+    ``cues``: ``(image, colour_model)``, the colour frame on ``norm``'s grid
+    (:func:`vidcap.video.fit.cues.cue_image`) and the clip's
+    :class:`~vidcap.video.fit.cues.ColourModel`: the arms are then placed by the
+    frame's cues as well (:func:`vidcap.video.fit.cues.apply_cues`); None: outline only.
+    """
     eng = _MaskEngine(norm, caps=options.caps)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
     if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity):
@@ -160,6 +167,8 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
                 fresh = keep_labels(eng, fresh, norm.to_normalised(previous.joints),
                                     tie=LABEL_TIE)
             st, crossed, warm = fresh, fresh_crossed, False
+    if cues is not None:
+        st = apply_cues(eng, st, *cues)
     return FramePose(
         joints=norm.to_original(eng.joints(st)),
         angles=np.mod(st.angles, TWO_PI),

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from vidcap.body import JOINT_NAMES
+from vidcap.video.fit.cues import CUE_MODES, ColourModel, cue_image
 from vidcap.video.fit.frame import fit_frame
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
@@ -32,7 +33,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  progress=None, reinit_every: int = 10, spread_window: int = 31,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
-                 body_tolerance: float = 0.05, relabel: bool = False, **kw) -> Pose2D:
+                 body_tolerance: float = 0.05, relabel: bool = False, frames=None,
+                 cues: str = "all", **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -87,6 +89,13 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         frame or from then on) is outvoted by them. Off by default: a clip fitted in
         chunks (:mod:`vidcap.video.fit.parallel`) would be relabelled chunk by chunk, which
         can differ from the whole clip's solve.
+    frames : numpy.ndarray, shape (F, H, W, 3), uint8, or a sequence of frames, optional
+        The colour frames the silhouettes were cut from (BGR). With them (and
+        ``cues="all"``) each frame's arms are also placed by the frame's cues inside
+        the outline (:mod:`vidcap.video.fit.cues`: skin colour learned from this
+        clip's head, image edges along the limbs' borders).
+    cues : {'all', 'outline'}
+        ``'outline'``: the seed's silhouette-only score even when ``frames`` are given.
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -106,18 +115,24 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     """
     options = FitOptions.from_keywords(kw)  # checked once, before any frame
     _check_masks(masks)
+    if cues not in CUE_MODES:
+        raise ValueError(f"cues must be one of {CUE_MODES}, got {cues!r}")
     n = len(masks)
+    if frames is not None and len(frames) != n:
+        raise ValueError(f"{len(frames)} frames for {n} silhouettes")
     out = _Frames(n)
     it = range(n) if progress is None else progress(range(n), total=n)
-    _track(_Normalised(masks, options), it, out, tracked=tracked, reinit_every=reinit_every,
+    normalised = _Normalised(masks, options, frames if cues == "all" else None)
+    _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
            back_tie=back_tie, options=options)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
         body = _refit_body_height(masks, body_window, body_tolerance, options,
-                                  out.height.copy(), out)
+                                  out.height.copy(), out, normalised.cues)
     if tracked and spread_window > 1 and options.spread and n > 2:
-        _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out)
+        _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
+                       normalised.cues)
     if tracked and relabel:
         swaps = label_path(out.joints, out.height, out.linked)
         temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
@@ -143,10 +158,19 @@ class _Normalised:
     """Frames' normalised silhouettes, the last ``_NORMS_KEPT`` kept for backward
     re-tracking (bounded memory)."""
 
-    def __init__(self, masks, options: FitOptions):
+    def __init__(self, masks, options: FitOptions, frames=None):
         self.masks = masks
         self.size = dict(height=options.height, body_height=options.body_height)
         self.norms: dict[int, NormalisedMask] = {}
+        self.frames = frames
+        self.colours = ColourModel()  # learned over the clip as frames are fitted
+
+    def cues(self, k: int, norm: NormalisedMask):
+        """``fit_frame``'s ``cues`` for frame ``k`` normalised as ``norm`` (None: no
+        frames, the outline only)."""
+        if self.frames is None:
+            return None
+        return cue_image(np.asarray(self.frames[k]), norm), self.colours
 
     def __call__(self, k: int) -> NormalisedMask:
         norm = self.norms.get(k)
@@ -174,8 +198,9 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
             continue
         # a fresh fit that took over (a slipping track) challenged the track as well
         challenge = bool(reinit_every) and k - last_fresh >= reinit_every
-        fp = fit_frame(normalised(k), previous=prev if tracked else None, challenge=challenge,
-                       options=options)
+        norm = normalised(k)
+        fp = fit_frame(norm, previous=prev if tracked else None, challenge=challenge,
+                       options=options, cues=normalised.cues(k, norm))
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
@@ -196,13 +221,14 @@ def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, fram
     no_fallback = dataclasses.replace(options, fallback=0.0)
     for b in frames:
         nb = normalised(b)
-        fb = fit_frame(nb, previous=back, options=no_fallback)
+        cb = normalised.cues(b, nb)
+        fb = fit_frame(nb, previous=back, options=no_fallback, cues=cb)
         if not fb.warm or fb.similarity <= out.sim[b] + back_tie:
             break
         # fit_frame's fallback, only where its outcome matters: a fresh fit that
         # beats the slipping warm one ends the backward track
         if (fb.similarity < options.fallback * back.similarity
-                and fit_frame(nb, options=options).similarity > fb.similarity):
+                and fit_frame(nb, options=options, cues=cb).similarity > fb.similarity):
             break
         out.put(b, fb)
         out.linked[b + 1], out.linked[b] = True, False  # b's labels came from b + 1's
@@ -306,7 +332,8 @@ def _frame_has_pixels(masks, k: int) -> bool:
     return bool(np.asarray(masks[k]).any())
 
 
-def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames):
+def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames,
+                       cues_of=None):
     """Refit frames whose silhouette is not as tall as the body (in place); returns
     the body height (px) each refitted frame was fitted at, NaN elsewhere."""
     body = body_heights(height, out.sim, window)
@@ -320,7 +347,8 @@ def _refit_body_height(masks, window, tolerance, options: FitOptions, height, ou
         if off[k]:
             norm = _normalise_frame(masks, k, height=options.height,
                                     body_height=float(body[k]))
-            fp = fit_frame(norm, previous=prev, options=options)
+            fp = fit_frame(norm, previous=prev, options=options,
+                           cues=None if cues_of is None else cues_of(k, norm))
             if fp.similarity > out.sim[k]:
                 out.put(k, fp)
                 out.linked[k] = fp.warm
@@ -342,7 +370,8 @@ def _window_median(values: np.ndarray, window: int) -> np.ndarray:
     return np.median(values[first[:, None] + np.arange(w)], axis=1)
 
 
-def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Frames):
+def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Frames,
+                   cues_of=None):
     """Refit frames whose spread jumps away from the running median (in place), each at
     the height it was fitted at (``body``: px, NaN for the silhouette's).
 
@@ -364,12 +393,14 @@ def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Fr
         at = float(body[k]) if np.isfinite(body[k]) else None
         norm = _normalise_frame(masks, k, height=options.height, body_height=at)
         at_median = dataclasses.replace(options, spread_value=float(med[k]))
+        cues = None if cues_of is None else cues_of(k, norm)
         # warm from its own pose, challenged by a fresh fit (which, in a side view,
         # takes the track's limb names, as in the main pass)
         fp = fit_frame(norm, previous=out.get(k, spread=med[k]), challenge=True,
-                       options=at_median)
+                       options=at_median, cues=cues)
         if refitted == k - 1:
-            chained = fit_frame(norm, previous=out.get(k - 1, spread=med[k]), options=at_median)
+            chained = fit_frame(norm, previous=out.get(k - 1, spread=med[k]), options=at_median,
+                                cues=cues)
             if chained.similarity > fp.similarity:
                 fp = chained
         if fp.similarity >= out.sim[k] - tie:

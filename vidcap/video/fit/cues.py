@@ -1,0 +1,389 @@
+"""Cues inside the outline: what the colour frame says where the silhouette says nothing.
+
+Beyond the seed (issue 27). The seed's S = e^(-p-n)(1-p) scores a model against the
+silhouette only, so an arm in front of the torso covers the same silhouette pixels at
+any angle. The frame shows it: a forearm or hand in skin colour on a shirt, and the
+limb's borders as image edges. This module gives the fit
+
+- :func:`cue_image`: the colour frame resampled onto the normalised silhouette's grid
+  (:class:`~vidcap.video.fit.normalise.NormalisedMask`), so cues and mask share pixels;
+- :class:`ColourModel`: a skin-versus-clothing colour model learned from *this clip*
+  (chromaticity histograms of the fitted head and of the torso's core, accumulated
+  over the frames fitted so far; no fixed colour threshold);
+- :class:`CueMaps`: per frame, a skin likelihood image and an edge structure tensor
+  (Sobel over the three colour channels), both zero outside the silhouette;
+- :func:`search_arms_cues`: each arm scored over (upper, lower) angle pairs by
+  J = S + w_skin * skin(forearm) + w_edge * edges(limb borders) - w_prior * |angles -
+  prior|, S computed by the same batched kernel as the outline-only arm grid.
+
+The weights are :data:`WEIGHTS` (chosen on the four tuning clips of
+``benchmarks/pose2d_accuracy.py``; the held-out clips measure them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vidcap.video.fit.grids import _pair_scores, pair_grid
+from vidcap.video.fit.limits import MAX_BEND, J, S
+from vidcap.video.fit.normalise import NormalisedMask
+from vidcap.video.fit.raster import _carray, _kernels, direction, draw_pose
+from vidcap.video.fit.state import FitState, hang
+
+#: Which cues the fit uses: the seed's outline only, or the frame's cues as well.
+CUE_MODES = ("outline", "all")
+
+#: Weights of the cue terms against S (S of one silhouette pixel is about
+#: 2 S / silhouette pixels, ~0.001 at the normalised height 80): ``skin``, the mean
+#: skin likelihood along the forearm (0-1); ``edge``, the mean edge strength across the
+#: arm's borders (0-1); ``prior``, per radian away from the arm's prior (the previous
+#: frame's arm, else hanging), so an arm with no evidence either way stays put.
+WEIGHTS = {"skin": 0.03, "edge": 0.02, "prior": 0.01}
+
+_BINS = 32  # chromaticity histogram bins per axis
+_EPS = 1e-6
+
+
+def cue_image(frame: np.ndarray, norm: NormalisedMask) -> np.ndarray:
+    """The colour frame on the normalised silhouette's pixel grid.
+
+    Parameters
+    ----------
+    frame : numpy.ndarray, shape (H, W, 3), uint8
+        The original frame (BGR), the one ``norm`` was cut from.
+    norm : NormalisedMask
+
+    Returns
+    -------
+    numpy.ndarray, shape (h, w, 3), float32
+        ``norm.mask.shape``; pixel (i, j) is the frame at ``norm.to_original((j, i))``,
+        low-pass filtered to the normalised pixel size first (no aliasing).
+    """
+    h, w = norm.mask.shape
+    sx, sy = (float(v) for v in norm.scale_xy)
+    ox, oy = (float(v) for v in norm.offset)
+    H, W = frame.shape[:2]
+    # the part of the frame the normalised image covers, area-averaged to about the
+    # normalised pixel size (no aliasing), then moved onto the grid exactly
+    x0, y0 = min(max(int(np.floor(ox)), 0), W - 1), min(max(int(np.floor(oy)), 0), H - 1)
+    x1 = min(max(int(np.ceil(ox + w / sx)) + 1, x0 + 1), W)
+    y1 = min(max(int(np.ceil(oy + h / sy)) + 1, y0 + 1), H)
+    k = max(1, int(1.0 / max(sx, sy)))  # whole original pixels per averaged pixel
+    x1, y1 = x0 + max(k, (x1 - x0) // k * k), y0 + max(k, (y1 - y0) // k * k)
+    crop = frame[y0:y1, x0:x1]
+    if k > 1 and crop.shape[0] >= k and crop.shape[1] >= k:
+        # INTER_AREA by a whole factor: its fast path (a plain k x k box average)
+        small = cv2.resize(crop, (crop.shape[1] // k, crop.shape[0] // k),
+                           interpolation=cv2.INTER_AREA).astype(np.float32)
+    else:
+        k, small = 1, crop.astype(np.float32)
+    m = np.array([[1.0 / (sx * k), 0.0, (ox - x0 + 0.5) / k - 0.5],
+                  [0.0, 1.0 / (sy * k), (oy - y0 + 0.5) / k - 0.5]])
+    return cv2.warpAffine(small, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                          borderMode=cv2.BORDER_REPLICATE)
+
+
+def chroma_bins(img: np.ndarray) -> np.ndarray:
+    """Each pixel's chromaticity bin, (h, w) int: normalised (r, g) = (R, G) / (R + G + B),
+    each in ``_BINS`` steps; chromaticity does not change with shading (a limb's lit
+    and shadowed sides fall in one bin)."""
+    total = img.sum(axis=-1) + 3.0
+    r = (img[..., 2] + 1.0) / total
+    g = (img[..., 1] + 1.0) / total
+    ri = np.minimum((r * _BINS).astype(np.int64), _BINS - 1)
+    gi = np.minimum((g * _BINS).astype(np.int64), _BINS - 1)
+    return ri * _BINS + gi
+
+
+class ColourModel:
+    """Skin and clothing chromaticity, learned from the frames of one clip.
+
+    Two histograms over :func:`chroma_bins`: ``skin`` from the fitted head's core, and
+    ``cloth`` from the torso's core (where no arm is drawn). :meth:`skin_map` turns them
+    into a likelihood ratio: near 1 where a colour was seen on the head and not on the
+    torso, near 0 where it was seen on the torso or on neither (background, trousers).
+    """
+
+    def __init__(self):
+        self.counts = np.zeros((2, _BINS * _BINS))
+        self._table = None
+
+    @property
+    def learned(self) -> bool:
+        """Both regions have been seen (at least a few pixels each)."""
+        return bool((self.counts.sum(axis=1) >= 8).all())
+
+    def learn(self, bins: np.ndarray, skin: np.ndarray, cloth: np.ndarray) -> None:
+        """Add the pixels of the ``skin`` and ``cloth`` masks (h, w bool) of one frame,
+        ``bins`` as :func:`chroma_bins` gives them."""
+        n = _BINS * _BINS
+        self.counts[0] += np.bincount(bins[skin], minlength=n)
+        self.counts[1] += np.bincount(bins[cloth], minlength=n)
+        self._table = None
+
+    def table(self) -> np.ndarray:
+        """P(skin | chromaticity bin), (``_BINS`` ** 2,) float32."""
+        if self._table is None:
+            dens = []
+            for c in self.counts:
+                hist = cv2.GaussianBlur(c.reshape(_BINS, _BINS).astype(np.float32), (0, 0), 1.0)
+                dens.append(hist / max(float(hist.sum()), _EPS) * hist.size)  # uniform = 1
+            skin, cloth = dens
+            # a colour seen on neither (density below the uniform's) is not skin
+            self._table = (skin / (skin + cloth + 1.0)).ravel().astype(np.float32)
+        return self._table
+
+    def skin_map(self, bins: np.ndarray) -> np.ndarray:
+        """P(skin) of every pixel, (h, w) float32."""
+        return self.table()[bins]
+
+
+@dataclass(frozen=True)
+class CueMaps:
+    """The cues of one frame on the normalised grid, zero outside the silhouette.
+
+    Attributes
+    ----------
+    stack : numpy.ndarray, shape (h, w, 4), float32
+        Skin likelihood (0-1) and the edge structure tensor ``Jxx, Jxy, Jyy`` of the
+        colour image (Sobel per channel, summed over channels, divided by a robust
+        scale of the frame's edges inside the silhouette), sampled together.
+    bins : numpy.ndarray, shape (h, w), int
+        Chromaticity bins (:func:`chroma_bins`), for :meth:`ColourModel.learn`.
+    """
+
+    stack: np.ndarray
+    bins: np.ndarray
+
+
+def cue_maps(img: np.ndarray, sil: np.ndarray, model: ColourModel) -> CueMaps:
+    """:class:`CueMaps` of one normalised colour image ``img`` (h, w, 3) and its
+    silhouette ``sil`` (h, w) bool."""
+    bins = chroma_bins(img)
+    inside = cv2.dilate(sil.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    stack = np.zeros((*sil.shape, 4), np.float32)
+    if model.learned:
+        stack[..., 0] = np.where(sil, model.skin_map(bins), 0.0)
+    gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
+    jxx, jxy, jyy = (gx * gx).sum(-1), (gx * gy).sum(-1), (gy * gy).sum(-1)
+    energy = (jxx + jyy)[inside]
+    scale = float(np.percentile(energy, 90)) if energy.size else 0.0
+    if scale > 0:
+        for k, t in enumerate((jxx, jxy, jyy), start=1):
+            stack[..., k] = np.where(inside, t / scale, 0.0)
+    return CueMaps(stack, bins)
+
+
+def learn_colours(model: ColourModel, maps: CueMaps, eng, st: FitState) -> None:
+    """Add one fitted frame's head core (skin) and torso core (clothing) to ``model``:
+    the head and torso drawn at 0.7 and 0.6 of their radii, within the silhouette,
+    the torso's less every arm segment (a forearm across it is not clothing)."""
+    joints = eng.joints(st)
+    shape = eng.sil.shape
+    head_j = joints.copy()
+    # the head's lower two thirds: its top may be hair
+    top, neck = joints[J["head_top"]], joints[J["neck"]]
+    head_j[J["head_top"]] = neck + (top - neck) * 0.67
+    r = eng.R.copy()
+    r[S["head"]] *= 0.7
+    r[S["torso"]] *= 0.6
+    head = draw_pose(head_j, r, shape, segments=[S["head"]], caps=False) & eng.sil
+    torso = draw_pose(joints, r, shape, segments=[S["torso"]], caps=False) & eng.sil
+    arms = [S[f"{s}_{p}_arm"] for s in "lr" for p in ("upper", "lower")]
+    torso &= ~draw_pose(joints, eng.R * 1.5, shape, segments=arms, caps=True)
+    model.learn(maps.bins, head, torso)
+
+
+def _sample(stack: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Bilinear samples of ``stack`` (h, w, 4) at points (..., 2) ``(x, y)``, (..., 4);
+    zero beyond the image (the compiled kernel's arithmetic)."""
+    h, w = stack.shape[:2]
+    x, y = pts[..., 0], pts[..., 1]
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    out = np.zeros((*pts.shape[:-1], stack.shape[2]))
+    for dy, wy in ((0, 1.0 - fy), (1, fy)):
+        yy = y0.astype(np.int64) + dy
+        for dx, wx in ((0, 1.0 - fx), (1, fx)):
+            xx = x0.astype(np.int64) + dx
+            ok = (yy >= 0) & (yy < h) & (xx >= 0) & (xx < w)
+            v = stack[np.clip(yy, 0, h - 1), np.clip(xx, 0, w - 1)] * ok[..., None]
+            out += wy * wx * v
+    return out
+
+
+_T_AXIS = np.linspace(0.1, 0.9, 6)  # along a segment, for the edge samples
+_T_SKIN = np.linspace(0.25, 1.0, 6)  # along the forearm toward the hand
+
+
+def arm_cue_terms(maps: CueMaps, shoulder: np.ndarray, du: np.ndarray, dl: np.ndarray,
+                  len_u: float, len_l: float, r_u: float, r_l: float):
+    """The cue terms of whole-arm candidates.
+
+    Parameters
+    ----------
+    maps : CueMaps
+    shoulder : numpy.ndarray, shape (2,)
+        The shoulder, normalised pixels.
+    du, dl : numpy.ndarray, shape (N, 2)
+        Unit directions of the upper and lower arm of each candidate.
+    len_u, len_l, r_u, r_l : float
+        Drawn lengths and radii of the upper and lower arm, normalised pixels.
+
+    Returns
+    -------
+    skin : numpy.ndarray, shape (N,)
+        Mean skin likelihood on the forearm's axis and half way to its borders,
+        toward the hand.
+    edge : numpy.ndarray, shape (N,)
+        Mean edge strength across both segments' borders (the structure tensor
+        along each border's normal, square-rooted, capped at 1 per sample).
+    """
+    kernels = cue_kernels()
+    if kernels is None:
+        return _arm_cue_terms_numpy(maps, shoulder, du, dl, len_u, len_l, r_u, r_l)
+    n = len(du)
+    skin, edge = np.empty(n), np.empty(n)
+    kernels.arm_cue_terms(maps.stack, _carray(shoulder, np.float64), _carray(du, np.float64),
+                          _carray(dl, np.float64), float(len_u), float(len_l), float(r_u),
+                          float(r_l), _T_SKIN, _T_AXIS, skin, edge)
+    return skin, edge
+
+
+def cue_kernels():
+    """The compiled cue kernel module, or None (numpy path; the same terms)."""
+    if _kernels() is None:  # the fit's switch (tests turn the compiled paths off)
+        return None
+    from vidcap.video.fit import _cue_kernels
+    return _cue_kernels
+
+
+def _arm_cue_terms_numpy(maps, shoulder, du, dl, len_u, len_l, r_u, r_l):
+    elbow = shoulder + du * len_u
+    wrist = elbow + dl * len_l
+    nu = np.stack([-du[:, 1], du[:, 0]], axis=-1)
+    nl = np.stack([-dl[:, 1], dl[:, 0]], axis=-1)
+    # skin: forearm samples (N, 6, 3)
+    axis_l = elbow[:, None] + (wrist - elbow)[:, None] * _T_SKIN[None, :, None]
+    across = 0.5 * r_l * np.array([-1.0, 0.0, 1.0])
+    skin_pts = axis_l[:, :, None] + nl[:, None, None] * across[None, None, :, None]
+    # edges: both borders of both segments (N, 6, 2 sides)
+    axis_u = shoulder + du[:, None] * len_u * _T_AXIS[None, :, None]
+    axis_lo = elbow[:, None] + dl[:, None] * len_l * _T_AXIS[None, :, None]
+    side = np.array([-1.0, 1.0])
+    bu = axis_u[:, :, None] + nu[:, None, None] * (r_u * side)[None, None, :, None]
+    bl = axis_lo[:, :, None] + nl[:, None, None] * (r_l * side)[None, None, :, None]
+    n = len(du)
+    skin = _sample(maps.stack, skin_pts.reshape(n, -1, 2))[..., 0].mean(axis=1)
+    edge = np.zeros(n)
+    for pts, nrm in ((bu, nu), (bl, nl)):
+        v = _sample(maps.stack, pts.reshape(n, -1, 2))
+        nx, ny = nrm[:, 0:1], nrm[:, 1:2]
+        e = nx * nx * v[..., 1] + 2 * nx * ny * v[..., 2] + ny * ny * v[..., 3]
+        edge += np.minimum(np.sqrt(np.maximum(e, 0.0)), 1.0).sum(axis=1)
+    return skin, edge / (4 * len(_T_AXIS))
+
+
+def _angle_gap(a, b):
+    return np.abs(np.angle(np.exp(1j * (np.asarray(a) - b))))
+
+
+def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float):
+    """(upper, lower) pairs within ``half_deg`` of ``(u0, l0)``, ``step_deg`` apart, the
+    bend within the limit, as :func:`pair_grid` returns them."""
+    off = np.deg2rad(np.arange(-half_deg, half_deg + 1e-9, step_deg))
+    ua, la = (g.ravel() for g in np.meshgrid(u0 + off, l0 + off, indexing="ij"))
+    keep = _angle_gap(la, ua) <= MAX_BEND + 1e-9
+    ua, la = np.mod(ua[keep], 2 * np.pi), np.mod(la[keep], 2 * np.pi)
+    return ua, la, direction(ua), direction(la)
+
+
+def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
+                    weights=None, coarse_deg: float = 15.0) -> FitState:
+    """One whole arm placed by S and the frame's cues together (beyond the seed).
+
+    Every (upper, lower) pair ``coarse_deg`` apart is scored by J (the module's
+    docstring), then pairs 2.5 degrees apart within one coarse step of the best, and
+    the arm is moved there if that J beats the arm in place. The other arm's drawn
+    pixels carry no cue for this one (its skin and edges are masked out), so both
+    arms do not settle on the one the frame shows.
+
+    Parameters
+    ----------
+    s : {'l', 'r'}
+        Which arm (its label).
+    prior : tuple of float, optional
+        ``(upper, lower)`` radians the arm keeps without evidence (default: as it is).
+    weights : dict, optional
+        :data:`WEIGHTS`' keys.
+    """
+    w = WEIGHTS if weights is None else weights
+    up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+    other = "r" if s == "l" else "l"
+    st = st.drawing([up, lo])
+    joints = eng.joints(st)
+    shoulder = joints[J[f"{s}_shoulder"]]
+    if prior is None:
+        prior = (st.angles[up], st.angles[lo])
+    len_u, len_l = eng.L[up] * st.fore[up], eng.L[lo] * st.fore[lo]
+    r_u, r_l = float(eng.R[up]), float(eng.R[lo])
+    # the other arm's pixels and the head's (skin, but the head's) are no cue for this arm
+    oth = draw_pose(joints, eng.R, eng.sil.shape,
+                    segments=[S[f"{other}_upper_arm"], S[f"{other}_lower_arm"]], caps=True)
+    oth |= draw_pose(joints, eng.R * 1.25, eng.sil.shape, segments=[S["head"]], caps=True)
+    stack = maps.stack.copy()
+    stack[oth] = 0.0
+    own = CueMaps(stack, maps.bins)
+
+    def score(grid):
+        ua, la, du, dl = grid
+        sim = _pair_scores(eng, st, up, lo, shoulder, grid)
+        skin, edge = arm_cue_terms(own, shoulder, du, dl, len_u, len_l, r_u, r_l)
+        gap = _angle_gap(ua, prior[0]) + _angle_gap(la, prior[1])
+        return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
+
+    coarse = pair_grid(float(coarse_deg))
+    k = int(np.argmax(score(coarse)))
+    fine = _fine_grid(coarse[0][k], coarse[1][k], coarse_deg, 2.5)
+    here = _fine_grid(st.angles[up], st.angles[lo], 0.0, 1.0)  # the arm in place
+    both = tuple(np.concatenate([a, b]) for a, b in zip(here, fine, strict=True))
+    j = score(both)
+    best = int(np.argmax(j))
+    if best == 0 or j[best] <= j[0]:
+        return st
+    return st.with_entries(angles=([up, lo], [both[0][best], both[1][best]]))
+
+
+def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
+                          weights=None) -> FitState:
+    """Both arms by :func:`search_arm_cues`, each with the other's pixels masked out,
+    the image-left arm first. ``priors``: ``{'l': (upper, lower), 'r': ...}`` radians
+    (default: each arm as it is, hanging where not yet drawn)."""
+    for s in ("l", "r"):
+        prior = None if priors is None else priors.get(s)
+        if prior is None and not st.drawn[S[f"{s}_upper_arm"]]:
+            prior = (hang(st), hang(st))
+        st = search_arm_cues(eng, st, s, maps, prior=prior, weights=weights)
+    return st
+
+
+__all__ = ["CUE_MODES", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues", "arm_cue_terms",
+           "chroma_bins",
+           "cue_image", "cue_maps", "learn_colours", "refine_arms_with_cues",
+           "search_arm_cues"]
+
+
+def apply_cues(eng, st: FitState, image: np.ndarray, model: ColourModel, *,
+               weights=None) -> FitState:
+    """The cue step of one frame's fit: learn this frame's colours into the clip's
+    ``model`` from ``st`` (its head and torso), build the frame's :class:`CueMaps` from
+    ``image`` (:func:`cue_image`) and place both arms by them
+    (:func:`refine_arms_with_cues`)."""
+    bins = chroma_bins(image)
+    learn_colours(model, CueMaps(np.zeros((1, 1, 4), np.float32), bins), eng, st)
+    maps = cue_maps(image, eng.sil, model)
+    return refine_arms_with_cues(eng, st, maps, weights=weights)
