@@ -71,6 +71,7 @@ def main(argv=None) -> int:
         masks = np.load(truth)["masks"]
         n = len(masks)
         t_decode = cpu(lambda: sum(1 for _ in iter_frames(video))) / n
+        frames = np.array(list(iter_frames(video)))  # what the cues read (BGR)
     # the compiled kernels are loaded (or compiled) once per process: timed apart
     # (and scipy.ndimage imported by the tracked mode's spread prior)
     t_first = cpu(lambda: fit_sequence(masks[:3], tracked=True, height=args.height), 1)
@@ -78,6 +79,9 @@ def main(argv=None) -> int:
     r = args.repeat
     t_cold = cpu(lambda: fit_sequence(masks, tracked=False, height=args.height), r) / n
     t_track = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height), r) / n
+    fit_sequence(masks[:3], frames=frames[:3], height=args.height)  # the cue kernels loaded
+    t_cues = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height, frames=frames),
+                 r) / n
     t_no_legs = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height,
                                          leg_grid=False), r) / n
     warm = fit_sequence(masks, tracked=True, height=args.height).warm
@@ -92,6 +96,7 @@ def main(argv=None) -> int:
         ("normalise silhouette", t_norm),
         ("fit, per frame (seed order)", t_cold),
         (f"fit, tracked ({warm.mean():.0%} frames warm)", t_track),
+        ("fit, tracked, cues inside the outline", t_cues),
         ("fit, tracked, no whole-leg grid", t_no_legs),
         ("fit, one warm frame", t_warm),
         ("seed 004 (C#, 2.7 GHz Celeron)", 1.0),

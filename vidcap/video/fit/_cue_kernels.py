@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -81,3 +80,45 @@ def arm_cue_terms(stack, shoulder, du, dl, len_u, len_l, r_u, r_l, t_skin, t_axi
 
 
 __all__ = ["arm_cue_terms"]
+
+
+@numba.njit(cache=True, nogil=True)
+def cue_stack(img, gx, gy, sil, inside, table, n_bins, bins, stack, energy):
+    """Per pixel: the chromaticity bin (into ``bins``), the skin likelihood from
+    ``table`` (empty: none yet) within ``sil``, and the structure tensor ``Jxx, Jxy, Jyy``
+    of the Sobel images ``gx``, ``gy`` (h, w, 3) within ``inside`` (into ``stack``,
+    unscaled); returns how many of ``energy`` (``Jxx + Jyy`` inside) it filled. See
+    :func:`vidcap.video.fit.cues.cue_maps`."""
+    h, w = sil.shape
+    n = 0
+    have = table.shape[0] > 0
+    for i in range(h):
+        for j in range(w):
+            tot = img[i, j, 0] + img[i, j, 1] + img[i, j, 2] + 3.0
+            r = (img[i, j, 2] + 1.0) / tot
+            g = (img[i, j, 1] + 1.0) / tot
+            ri = min(int(r * n_bins), n_bins - 1)
+            gi = min(int(g * n_bins), n_bins - 1)
+            k = ri * n_bins + gi
+            bins[i, j] = k
+            stack[i, j, 0] = table[k] if have and sil[i, j] else 0.0
+            if inside[i, j]:
+                a = 0.0
+                b = 0.0
+                c = 0.0
+                for ch in range(3):
+                    x = gx[i, j, ch]
+                    y = gy[i, j, ch]
+                    a += x * x
+                    b += x * y
+                    c += y * y
+                stack[i, j, 1] = a
+                stack[i, j, 2] = b
+                stack[i, j, 3] = c
+                energy[n] = a + c
+                n += 1
+            else:
+                stack[i, j, 1] = 0.0
+                stack[i, j, 2] = 0.0
+                stack[i, j, 3] = 0.0
+    return n

@@ -161,20 +161,45 @@ class CueMaps:
 
 def cue_maps(img: np.ndarray, sil: np.ndarray, model: ColourModel) -> CueMaps:
     """:class:`CueMaps` of one normalised colour image ``img`` (h, w, 3) and its
-    silhouette ``sil`` (h, w) bool."""
-    bins = chroma_bins(img)
+    silhouette ``sil`` (h, w) bool, the skin likelihood from ``model`` (zero while it
+    has not learned both colours)."""
     inside = cv2.dilate(sil.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
+    kernels = cue_kernels()
+    if kernels is None:
+        return _cue_maps_numpy(img, gx, gy, sil, inside, model)
+    table = model.table() if model.learned else np.zeros(0, np.float32)
+    bins = np.empty(sil.shape, np.int64)
+    stack = np.empty((*sil.shape, 4), np.float32)
+    energy = np.empty(sil.size, np.float32)
+    n = kernels.cue_stack(np.ascontiguousarray(img, np.float32), gx, gy, sil, inside, table,
+                          _BINS, bins, stack, energy)
+    _scale_edges(stack, energy[:n])
+    return CueMaps(stack, bins)
+
+
+def _scale_edges(stack: np.ndarray, energy: np.ndarray) -> None:
+    """Divide the structure tensor (``stack[..., 1:]``) by the 90th percentile of the
+    edge energy inside the silhouette, in place: edges measured against this frame's."""
+    if not energy.size:
+        return
+    k = int(0.9 * (energy.size - 1))
+    scale = float(np.partition(energy, k)[k])
+    if scale > 0:
+        stack[..., 1:] *= np.float32(1.0 / scale)
+    else:
+        stack[..., 1:] = 0.0
+
+
+def _cue_maps_numpy(img, gx, gy, sil, inside, model):
+    bins = chroma_bins(img)
     stack = np.zeros((*sil.shape, 4), np.float32)
     if model.learned:
         stack[..., 0] = np.where(sil, model.skin_map(bins), 0.0)
-    gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
-    jxx, jxy, jyy = (gx * gx).sum(-1), (gx * gy).sum(-1), (gy * gy).sum(-1)
-    energy = (jxx + jyy)[inside]
-    scale = float(np.percentile(energy, 90)) if energy.size else 0.0
-    if scale > 0:
-        for k, t in enumerate((jxx, jxy, jyy), start=1):
-            stack[..., k] = np.where(inside, t / scale, 0.0)
+    for k, t in enumerate(((gx * gx).sum(-1), (gx * gy).sum(-1), (gy * gy).sum(-1)), start=1):
+        stack[..., k] = np.where(inside, t, 0.0)
+    _scale_edges(stack, (stack[..., 1] + stack[..., 3])[inside])
     return CueMaps(stack, bins)
 
 
@@ -303,7 +328,8 @@ def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float):
 
 
 def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
-                    weights=None, coarse_deg: float = 15.0) -> FitState:
+                    weights=None, coarse_deg: float = 15.0, local: bool = False,
+                    out: dict | None = None) -> FitState:
     """One whole arm placed by S and the frame's cues together (beyond the seed).
 
     Every (upper, lower) pair ``coarse_deg`` apart is scored by J (the module's
@@ -320,6 +346,12 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
         ``(upper, lower)`` radians the arm keeps without evidence (default: as it is).
     weights : dict, optional
         :data:`WEIGHTS`' keys.
+    local : bool
+        Only pairs within one coarse step of the arm in place (a tracked frame: the
+        arm moved little since the last frame), 5 then 2.5 degrees apart.
+    out : dict, optional
+        Filled with ``out[s]``: the arm's candidates for the solve over time
+        (:func:`_candidates`).
     """
     w = WEIGHTS if weights is None else weights
     up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
@@ -346,20 +378,64 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
         gap = _angle_gap(ua, prior[0]) + _angle_gap(la, prior[1])
         return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
 
-    coarse = pair_grid(float(coarse_deg))
-    k = int(np.argmax(score(coarse)))
-    fine = _fine_grid(coarse[0][k], coarse[1][k], coarse_deg, 2.5)
+    if local:
+        coarse = _fine_grid(st.angles[up], st.angles[lo], 2 * coarse_deg, 10.0)
+        half = 5.0
+    else:
+        coarse, half = pair_grid(float(coarse_deg)), coarse_deg
+    j_coarse = score(coarse)
+    k = int(np.argmax(j_coarse))
+    fine = _fine_grid(coarse[0][k], coarse[1][k], half, 2.5)
     here = _fine_grid(st.angles[up], st.angles[lo], 0.0, 1.0)  # the arm in place
     both = tuple(np.concatenate([a, b]) for a, b in zip(here, fine, strict=True))
     j = score(both)
     best = int(np.argmax(j))
     if best == 0 or j[best] <= j[0]:
+        best = 0
+    if out is not None:
+        out[s] = _candidates(eng, shoulder, len_u, len_l, (coarse, both),
+                             (j_coarse, j), both[2][best], both[3][best], j[best])
+    if best == 0:
         return st
     return st.with_entries(angles=([up, lo], [both[0][best], both[1][best]]))
 
 
+#: Candidates kept per arm and frame for the solve over time, and how far apart (the
+#: sum of the upper and lower arm's angle differences) two must be to count as two.
+N_CANDIDATES = 4
+_APART = np.deg2rad(30.0)
+
+
+def _candidates(eng, shoulder, len_u, len_l, grids, scores, du_best, dl_best, j_best):
+    """The chosen arm and up to ``N_CANDIDATES - 1`` others from the searched grids,
+    best J first and each ``_APART`` from those kept: ``(elbows (K, 2), wrists (K, 2)``
+    in original pixels, ``costs (K,)``: J below the chosen arm's, in units of S)."""
+    ua = np.concatenate([g[0] for g in grids])
+    la = np.concatenate([g[1] for g in grids])
+    du = np.concatenate([g[2] for g in grids])
+    dl = np.concatenate([g[3] for g in grids])
+    jj = np.concatenate(scores)
+    order = np.argsort(-jj, kind="stable")
+    keep_u, keep_l = [np.arctan2(-du_best[1], du_best[0])], [np.arctan2(-dl_best[1], dl_best[0])]
+    kept_du, kept_dl, cost = [du_best], [dl_best], [0.0]
+    for k in order:
+        if len(cost) >= N_CANDIDATES:
+            break
+        gap = _angle_gap(keep_u, ua[k]) + _angle_gap(keep_l, la[k])
+        if (gap < _APART).any():
+            continue
+        keep_u.append(ua[k])
+        keep_l.append(la[k])
+        kept_du.append(du[k])
+        kept_dl.append(dl[k])
+        cost.append(max(float(j_best - jj[k]), 0.0))
+    elbow = shoulder + np.array(kept_du) * len_u
+    wrist = elbow + np.array(kept_dl) * len_l
+    return (eng.norm.to_original(elbow), eng.norm.to_original(wrist), np.array(cost))
+
+
 def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
-                          weights=None) -> FitState:
+                          weights=None, local: bool = False, out: dict | None = None) -> FitState:
     """Both arms by :func:`search_arm_cues`, each with the other's pixels masked out,
     the image-left arm first. ``priors``: ``{'l': (upper, lower), 'r': ...}`` radians
     (default: each arm as it is, hanging where not yet drawn)."""
@@ -367,7 +443,8 @@ def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
         prior = None if priors is None else priors.get(s)
         if prior is None and not st.drawn[S[f"{s}_upper_arm"]]:
             prior = (hang(st), hang(st))
-        st = search_arm_cues(eng, st, s, maps, prior=prior, weights=weights)
+        st = search_arm_cues(eng, st, s, maps, prior=prior, weights=weights, local=local,
+                             out=out)
     return st
 
 
@@ -378,12 +455,15 @@ __all__ = ["CUE_MODES", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues", "arm_
 
 
 def apply_cues(eng, st: FitState, image: np.ndarray, model: ColourModel, *,
-               weights=None) -> FitState:
+               weights=None, local: bool = False, out: dict | None = None) -> FitState:
     """The cue step of one frame's fit: learn this frame's colours into the clip's
     ``model`` from ``st`` (its head and torso), build the frame's :class:`CueMaps` from
     ``image`` (:func:`cue_image`) and place both arms by them
-    (:func:`refine_arms_with_cues`)."""
-    bins = chroma_bins(image)
-    learn_colours(model, CueMaps(np.zeros((1, 1, 4), np.float32), bins), eng, st)
+    (:func:`refine_arms_with_cues`; ``local``: near the arms in place, a tracked
+    frame)."""
     maps = cue_maps(image, eng.sil, model)
-    return refine_arms_with_cues(eng, st, maps, weights=weights)
+    learned = model.learned
+    learn_colours(model, maps, eng, st)
+    if not learned:  # the clip's first frame: its own colours are all there is
+        maps = cue_maps(image, eng.sil, model)
+    return refine_arms_with_cues(eng, st, maps, weights=weights, local=local, out=out)

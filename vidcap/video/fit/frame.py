@@ -168,7 +168,12 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
                                     tie=LABEL_TIE)
             st, crossed, warm = fresh, fresh_crossed, False
     if cues is not None:
-        st = apply_cues(eng, st, *cues)
+        # a tracked frame's arms moved little: searched near where they are, unless
+        # challenged (then over every angle pair, as a fresh fit's)
+        candidates = {}
+        st = apply_cues(eng, st, *cues, local=warm and not challenge, out=candidates)
+    else:
+        candidates = None
     return FramePose(
         joints=norm.to_original(eng.joints(st)),
         angles=np.mod(st.angles, TWO_PI),
@@ -180,6 +185,7 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
         similarity=eng.similarity(st),
         warm=bool(warm),
         height_px=norm.body_height / norm.scale,
+        arm_candidates=candidates,
     )
 
 

@@ -45,6 +45,11 @@ class FramePose:
     height_px : float
         Body height in original-frame pixels the model was scaled to (the
         silhouette's height, unless ``body_height`` was given).
+    arm_candidates : dict or None
+        With the frame's cues (:mod:`vidcap.video.fit.cues`): per arm label ``'l'``,
+        ``'r'``, a few good placements of that arm, ``(elbows (K, 2), wrists (K, 2)
+        in original pixels, costs (K,))``, the fitted one first (cost 0), for the
+        solve over time (:func:`vidcap.video.fit.temporal.arm_path`); None otherwise.
     """
 
     joints: np.ndarray
@@ -57,6 +62,7 @@ class FramePose:
     similarity: float
     warm: bool
     height_px: float
+    arm_candidates: dict | None = None
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vidcap.body import JOINT_INDEX
 from vidcap.video.fit.labels import LIMB_PAIRS
 
 #: Cost, in body heights per joint, of changing labels across a warm start (a track
@@ -137,4 +138,59 @@ def relabel(arrays: dict[str, np.ndarray], swaps: dict[str, np.ndarray]) -> None
             a[f[:, None], x + y] = a[f[:, None], y + x]
 
 
-__all__ = ["LINK_COST", "best_path", "label_path", "relabel"]
+#: Weight of an arm candidate's cost (J below the frame's best, units of S) against
+#: the movement of its elbow and wrist between frames (body heights, mean of the two).
+ARM_FIT_WEIGHT = 10.0
+
+
+def arm_path(joints2d: np.ndarray, height_px: np.ndarray, candidates, *,
+             fit_weight: float = ARM_FIT_WEIGHT) -> dict[str, np.ndarray]:
+    """Each arm's placement per frame chosen over the clip among its candidates.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        The fitted joints, pixels (their elbows and wrists are each frame's first
+        candidate).
+    height_px : numpy.ndarray, shape (F,)
+        Body height per frame, pixels.
+    candidates : sequence of dict or None, length F
+        Per frame :attr:`vidcap.video.fit.result.FramePose.arm_candidates` (None: the
+        frame has only its fitted arms).
+    fit_weight : float
+        Cost per unit of S a candidate fits worse than the frame's best, against one
+        body height of elbow and wrist movement between frames.
+
+    Returns
+    -------
+    dict
+        ``{"l": (elbows (F, 2), wrists (F, 2)), "r": ...}``: the chosen elbows and
+        wrists (the fitted ones where nothing better was chosen).
+    """
+    j = np.asarray(joints2d, dtype=float)
+    h = np.asarray(height_px, dtype=float)
+    n = len(j)
+    out = {}
+    for s in ("l", "r"):
+        ie, iw = JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]
+        k_max = max([len(c[s][2]) for c in candidates if c and s in c] or [1])
+        ends = np.repeat(j[:, None, [ie, iw]], k_max, axis=1)  # (F, K, 2 joints, 2)
+        unary = np.zeros((n, k_max))
+        unary[:, 1:] = np.inf
+        for f, c in enumerate(candidates):
+            if c and s in c and np.isfinite(j[f, [ie, iw]]).all():
+                e, w, cost = c[s]
+                ends[f, :len(cost), 0], ends[f, :len(cost), 1] = e, w
+                unary[f, :len(cost)] = fit_weight * cost
+        big = 1e6  # a slot a frame does not have: never chosen
+        unary = np.where(np.isfinite(unary), unary, big)
+        scale = np.nan_to_num(np.nanmean(np.stack([h[:-1], h[1:]]), axis=0), nan=1.0)
+        move = np.linalg.norm(ends[1:, None] - ends[:-1, :, None], axis=-1).mean(-1)
+        move = np.nan_to_num(move / scale[:, None, None], nan=0.0)
+        path, _ = best_path(unary, move) if n else (np.zeros(0, int), 0.0)
+        pick = ends[np.arange(n), path]
+        out[s] = (pick[:, 0], pick[:, 1])
+    return out
+
+
+__all__ = ["ARM_FIT_WEIGHT", "LINK_COST", "arm_path", "best_path", "label_path", "relabel"]

@@ -15,13 +15,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from vidcap.body import JOINT_NAMES
+from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
 from vidcap.video.fit.cues import CUE_MODES, ColourModel, cue_image
 from vidcap.video.fit.frame import fit_frame
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
 from vidcap.video.fit.result import FramePose, Pose2D
-from vidcap.video.fit.temporal import label_path
+from vidcap.video.fit.raster import image_angle
+from vidcap.video.fit.temporal import arm_path, label_path
 from vidcap.video.fit.temporal import relabel as temporal_relabel
 from vidcap.video.masks import MaskStack
 
@@ -34,7 +35,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, relabel: bool = False, frames=None,
-                 cues: str = "all", **kw) -> Pose2D:
+                 cues: str = "all", arm_solve: bool = True, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -96,6 +97,11 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         clip's head, image edges along the limbs' borders).
     cues : {'all', 'outline'}
         ``'outline'``: the seed's silhouette-only score even when ``frames`` are given.
+    arm_solve : bool
+        Tracked mode with cues: after the priors, choose each arm's placement per
+        frame among the cue search's candidates by the solve over time
+        (:func:`vidcap.video.fit.temporal.arm_path`), so a one-frame misplacement is
+        outvoted by its neighbours.
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -133,12 +139,31 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
                        normalised.cues)
+    if tracked and arm_solve and any(c is not None for c in out.candidates):
+        _choose_arms(out)
     if tracked and relabel:
         swaps = label_path(out.joints, out.height, out.linked)
         temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
                           "scores": out.scores, "margins": out.margins}, swaps)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
                   out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
+
+
+def _choose_arms(out: _Frames) -> None:
+    """Each arm's elbows and wrists as :func:`arm_path` chooses them (in place; the
+    arms' angles follow; the foreshortening stays the frame's)."""
+    chosen = arm_path(out.joints, out.height, out.candidates)
+    for s, (elbow, wrist) in chosen.items():
+        ie, iw = JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]
+        moved = np.flatnonzero((np.abs(out.joints[:, ie] - elbow) > 1e-9).any(-1)
+                               | (np.abs(out.joints[:, iw] - wrist) > 1e-9).any(-1))
+        if not moved.size:
+            continue
+        out.joints[moved, ie], out.joints[moved, iw] = elbow[moved], wrist[moved]
+        shoulder = out.joints[moved, JOINT_INDEX[f"{s}_shoulder"]]
+        up, lo = SEGMENT_INDEX[f"{s}_upper_arm"], SEGMENT_INDEX[f"{s}_lower_arm"]
+        out.angles[moved, up] = image_angle(elbow[moved] - shoulder)
+        out.angles[moved, lo] = image_angle(wrist[moved] - elbow[moved])
 
 
 def _check_masks(masks) -> None:
@@ -249,6 +274,7 @@ class _Frames:
         self.warm = np.zeros(n, dtype=bool)
         self.height = np.full(n, np.nan)  # the body height the model was drawn at, px
         self.linked = np.zeros(n, dtype=bool)  # labels carried from the frame before
+        self.candidates: list = [None] * n  # the cue search's arm candidates
 
     def put(self, k: int, fp: FramePose, *, warm: bool = True) -> None:
         """Store frame k's fit (``warm``: its warm flag too)."""
@@ -256,6 +282,7 @@ class _Frames:
         self.scores[k], self.margins[k], self.spread[k] = fp.scores, fp.margins, fp.spread
         self.sim[k] = fp.similarity
         self.height[k] = fp.height_px
+        self.candidates[k] = fp.arm_candidates
         if warm:
             self.warm[k] = fp.warm
 
