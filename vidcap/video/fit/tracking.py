@@ -20,8 +20,8 @@ from vidcap.video.fit.cues import CUE_MODES, ColourModel, cue_image
 from vidcap.video.fit.frame import fit_frame
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
-from vidcap.video.fit.result import FramePose, Pose2D
 from vidcap.video.fit.raster import image_angle
+from vidcap.video.fit.result import FramePose, Pose2D
 from vidcap.video.fit.temporal import arm_path, label_path
 from vidcap.video.fit.temporal import relabel as temporal_relabel
 from vidcap.video.masks import MaskStack

@@ -1,0 +1,139 @@
+"""Cues inside the outline (issue 27): known answers on tiny synthetic frames."""
+
+import numpy as np
+import pytest
+
+from vidcap.body import JOINT_INDEX, SEGMENT_NAMES
+from vidcap.synth import SHIRT, SKIN, TROUSERS, make_motion
+from vidcap.synth.clip import prepare_clip
+from vidcap.synth.render import finish_frame, render_body
+from vidcap.video.fit.cues import ColourModel, chroma_bins, cue_image
+from vidcap.video.fit.normalise import normalise_mask
+from vidcap.video.fit.temporal import arm_path
+from vidcap.video.fit.tracking import fit_sequence
+
+SLEEVE = (40, 150, 40)  # green: a colour neither the shirt's nor the skin's
+
+
+def _arm_across_torso(n=6):
+    """Frames (n, H, W, 3) and masks of a body facing the camera whose image-right arm
+    lies across its torso in front of it (upper arm down, forearm level toward the
+    other side), a green sleeve and skin forearm on a red shirt; and the true 2D
+    joints (15, 2)."""
+    rng = np.random.default_rng(0)
+    clip = prepare_clip(make_motion("walk", n_frames=2), yaw_deg=0.0, size=(320, 240),
+                        noise=0.0, rng=rng)
+    j3 = clip.joints3d[0].copy()
+    cam = clip.camera
+    right = cam.matrix[0, :3] / np.linalg.norm(cam.matrix[0, :3])
+    down = cam.matrix[1, :3] / np.linalg.norm(cam.matrix[1, :3])
+    toward = -cam.view_dir
+    uv = cam.project(j3)
+    side = "l" if uv[JOINT_INDEX["l_shoulder"], 0] > uv[JOINT_INDEX["pelvis"], 0] else "r"
+    sh = j3[JOINT_INDEX[f"{side}_shoulder"]]
+    centre = np.sign((uv[JOINT_INDEX["pelvis"]] - uv[JOINT_INDEX[f"{side}_shoulder"]])[0])
+    up_len = np.linalg.norm(j3[JOINT_INDEX[f"{side}_elbow"]] - sh)
+    lo_len = np.linalg.norm(j3[JOINT_INDEX[f"{side}_wrist"]] - j3[JOINT_INDEX[f"{side}_elbow"]])
+    elbow = sh + up_len * (0.85 * down + 0.5 * toward) / np.linalg.norm([0.85, 0.5])
+    wrist = elbow + lo_len * (0.95 * centre * right + 0.3 * toward) / np.linalg.norm([0.95, 0.3])
+    j3[JOINT_INDEX[f"{side}_elbow"]], j3[JOINT_INDEX[f"{side}_wrist"]] = elbow, wrist
+    colours = {name: SHIRT for name in SEGMENT_NAMES}
+    colours.update({"head": SKIN, "l_lower_arm": SKIN, "r_lower_arm": SKIN,
+                    f"{side}_upper_arm": SLEEVE})
+    for leg in ("l_upper_leg", "r_upper_leg", "l_lower_leg", "r_lower_leg"):
+        colours[leg] = TROUSERS
+    img, mask = render_body(j3, cam, clip.body, clip.background, colours=colours)
+    frame = finish_frame(img, rng, noise=1.0)
+    return (np.repeat(frame[None], n, 0), np.repeat(mask[None], n, 0), cam.project(j3), side)
+
+
+def _nearest_wrist_error(joints, truth, side):
+    """Distance from the true wrist of ``side`` to the nearer fitted wrist, px (labels
+    are image sides in the fit)."""
+    t = truth[JOINT_INDEX[f"{side}_wrist"]]
+    return min(np.linalg.norm(joints[JOINT_INDEX[f"{s}_wrist"]] - t) for s in "lr")
+
+
+@pytest.mark.xfail(strict=True, reason="issue 27, not met yet: the outline fit draws this "
+                   "arm at 0.46 of its length (the sleeve alone sticks out of the torso) and "
+                   "the cue search keeps each segment's foreshortening, so the short "
+                   "forearm cannot reach along the skin across the torso (wrist 31-34 px off)")
+def test_an_arm_across_a_torso_of_another_colour_is_found_within_3_px():
+    frames, masks, truth, side = _arm_across_torso()
+    cued = fit_sequence(masks, frames=frames)
+    outline = fit_sequence(masks, frames=frames, cues="outline")
+    err_cues = _nearest_wrist_error(cued.joints2d[-1], truth, side)
+    err_outline = _nearest_wrist_error(outline.joints2d[-1], truth, side)
+    assert err_cues <= 3.0
+    assert err_outline > 3.0  # the silhouette alone does not show the arm
+    elbow = truth[JOINT_INDEX[f"{side}_elbow"]]
+    assert min(np.linalg.norm(cued.joints2d[-1, JOINT_INDEX[f"{s}_elbow"]] - elbow)
+               for s in "lr") <= 3.0
+
+
+def test_a_skin_model_learned_from_a_head_finds_the_hands():
+    rng = np.random.default_rng(1)
+    h, w = 60, 40
+    img = np.empty((h, w, 3), np.float32)
+    img[:] = (128, 128, 128)  # grey background
+    shade = rng.uniform(0.5, 1.05, (h, w, 1)).astype(np.float32)  # shading, lit to dark
+    regions = {"head": (slice(2, 12), slice(15, 25), SKIN),
+               "torso": (slice(12, 35), slice(10, 30), SHIRT),
+               "legs": (slice(35, 58), slice(12, 28), TROUSERS),
+               "hand": (slice(30, 36), slice(4, 10), SKIN)}
+    for rows, cols, colour in regions.values():
+        img[rows, cols] = np.asarray(colour, np.float32) * shade[rows, cols]
+    img += rng.normal(0, 2.0, img.shape).astype(np.float32)
+    bins = chroma_bins(np.clip(img, 0, 255))
+    masks = {}
+    for name, (rows, cols, _) in regions.items():
+        masks[name] = np.zeros((h, w), bool)
+        masks[name][rows, cols] = True
+    model = ColourModel()
+    model.learn(bins, masks["head"], masks["torso"])
+    p = model.skin_map(bins)
+    assert p[masks["hand"]].mean() > 0.8
+    for other in ("torso", "legs"):
+        assert p[masks[other]].mean() < 0.2
+    # (the grey background is not asserted: grey's chromaticity is 3 bins from this
+    # skin's, and reads 0.6; the fit reads the skin map inside the silhouette only)
+
+
+def test_cue_image_is_the_frame_on_the_normalised_grid():
+    H, W = 240, 320
+    yy, xx = np.mgrid[0:H, 0:W]
+    frame = np.zeros((H, W, 3), np.uint8)
+    frame[..., 0], frame[..., 1] = xx // 2, yy  # colour encodes the position
+    mask = np.zeros((H, W), bool)
+    mask[40:200, 150:190] = True
+    norm = normalise_mask(mask)
+    img = cue_image(frame, norm)
+    assert img.shape[:2] == norm.mask.shape
+    i, j = 50, 20
+    x, y = norm.to_original(np.array([j, i], float))
+    assert img[i, j, 0] == pytest.approx((x - 0.5) / 2, abs=1.0)
+    assert img[i, j, 1] == pytest.approx(y, abs=2.0)
+
+
+def test_the_arm_solve_outvotes_a_one_frame_misplacement():
+    n = 9
+    joints = np.zeros((n, 15, 2))
+    ie, iw = JOINT_INDEX["l_elbow"], JOINT_INDEX["l_wrist"]
+    t = np.arange(n)
+    joints[:, ie] = np.c_[100 + t, np.full(n, 120.0)]  # the arm drifts slowly
+    joints[:, iw] = np.c_[100 + t, np.full(n, 150.0)]
+    cands = []
+    for f in range(n):
+        e, w = joints[f, ie].copy(), joints[f, iw].copy()
+        far_e, far_w = e + [0.0, -40.0], w + [30.0, -60.0]  # raised: far away
+        cands.append({"l": (np.array([e, far_e]), np.array([w, far_w]), np.array([0.0, 0.002]))})
+    # frame 4: the fit chose the raised arm, its track only 0.002 behind
+    joints[4, ie], joints[4, iw] = cands[4]["l"][0][1], cands[4]["l"][1][1]
+    cands[4] = {"l": (cands[4]["l"][0][::-1], cands[4]["l"][1][::-1], np.array([0.0, 0.002]))}
+    chosen = arm_path(joints, np.full(n, 200.0), cands)
+    elbow, wrist = chosen["l"]
+    assert np.allclose(wrist[:, 1], 150.0) and np.allclose(elbow[:, 0], 100 + t)
+    # a placement the image clearly prefers (cost 0.2 for the track) is kept
+    cands[4] = {"l": (cands[4]["l"][0], cands[4]["l"][1], np.array([0.0, 0.2]))}
+    elbow, wrist = arm_path(joints, np.full(n, 200.0), cands)["l"]
+    assert wrist[4, 1] == pytest.approx(90.0)
