@@ -54,10 +54,11 @@ def _nearest_wrist_error(joints, truth, side):
     return min(np.linalg.norm(joints[JOINT_INDEX[f"{s}_wrist"]] - t) for s in "lr")
 
 
-@pytest.mark.xfail(strict=True, reason="issue 27, not met yet: the outline fit draws this "
-                   "arm at 0.46 of its length (the sleeve alone sticks out of the torso) and "
-                   "the cue search keeps each segment's foreshortening, so the short "
-                   "forearm cannot reach along the skin across the torso (wrist 31-34 px off)")
+@pytest.mark.xfail(strict=False, reason="issue 27, not met reliably: with the cue search "
+                   "trying the arm's foreshortening (its own, the forearm's and the whole "
+                   "arm's full length, the upper arm 0.1-0.2 shorter) the wrist is found "
+                   "within 1-3 px from the third frame on, but the elbow 2-4 px and the "
+                   "last frame passes or fails with any change to the search")
 def test_an_arm_across_a_torso_of_another_colour_is_found_within_3_px():
     frames, masks, truth, side = _arm_across_torso()
     cued = fit_sequence(masks, frames=frames)
