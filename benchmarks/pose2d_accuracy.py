@@ -38,8 +38,18 @@ few points with any change to the search, so the mean over clips nobody tuned on
 the steadier figure. It also counts label flips of the default fit, and of the same fit
 relabelled by the solve over time (``fit_sequence(relabel=True)``).
 
+``--proportions`` (issue 27) renders bodies scaled away from the seed's ratios (legs
++15 %, arms -10 %, shoulders +20 %; and a second body, legs -8 %, arms +8 %, shoulders
+-10 %, limbs 20 % wider) and the seed's own body, on clips and yaws, estimates the
+subject's proportions from the true silhouettes
+(:func:`vidcap.video.fit.proportions.estimate_proportions`), and prints each recovered
+length (pooled left/right, as a share of the standing height) against the truth, and
+the tracked fit's PCK@0.05 and median error with the estimated, the seed's and the true
+proportions (same run). Errors are fractions of the true standing height in pixels.
+
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
-[--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]``
+[--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
+[--proportions]``
 """
 
 from __future__ import annotations
@@ -273,6 +283,86 @@ def held_out(frames: int = 60, cues: str = "all") -> int:
     return 0
 
 
+#: ``--proportions``: the bodies (factors of :func:`vidcap.body.body_with_proportions`).
+BODIES = (
+    ("A", {"legs": 1.15, "arms": 0.9, "shoulders": 1.2}),
+    ("B", {"legs": 0.92, "arms": 1.08, "shoulders": 0.9, "arm_width": 1.2, "leg_width": 1.2}),
+    ("seed", {}),
+)
+#: ``--proportions``: (name, motion source, first frame, yaw). walk 90, jacks 0, 131_01 45,
+#: arms 30 and 07_07 120 (first 60 frames) were looked at while the estimator was built;
+#: the rest are other stretches and yaws.
+PROPORTION_CLIPS = (
+    ("walk", "walk", 0, 90),
+    ("131_01 0-2s", "131_01", 0, 45),
+    ("07_07 0-2s", "07_07", 0, 120),
+    ("jacks", "jacks", 0, 0),
+    ("walk", "walk", 0, 60),
+    ("131_01 5-7s", "131_01", 150, 60),
+    ("07_07 end", "07_07", -60, 135),
+    ("jacks", "jacks", 0, 45),
+)
+
+
+def proportions(frames: int = 60) -> int:
+    """The ``--proportions`` table (issue 27)."""
+    from vidcap.body import PROPORTION_GROUPS
+    from vidcap.synth import make_motion, render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.fit.proportions import ProportionEstimate, estimate_proportions
+
+    groups = [*PROPORTION_GROUPS, "shoulders"]
+    print(f"Per-subject proportions ({frames} frames, 640x480, true silhouettes): recovered "
+          "length (share of the standing height) vs truth, %; tracked fit PCK@0.05 "
+          "(median error) with the estimated / seed / true proportions")
+    print(f"{'body':4} {'clip':12} {'yaw':>4} " + " ".join(f"{g[:9]:>9}" for g in groups)
+          + f" {'estimated':>15} {'seed':>15} {'true':>15} {'est s':>6}")
+    worst, table = {}, []
+    for label, factors in BODIES:
+        truth_p = ProportionEstimate(factors=factors)
+        body = truth_p.body(1.75)
+        for name, source, first, yaw in PROPORTION_CLIPS:
+            if source == "131_01":
+                m = make_motion(MOTION_DIR / "131_01.bvh", body=body, fps=30.0)
+            elif source == "07_07":
+                m = make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
+                                body=body, fps=30.0)
+            else:
+                m = make_motion(source, body=body, n_frames=frames)
+            n = len(m.root_positions)
+            start = first if first >= 0 else n + first
+            m = m.frames(start, min(start + frames, n))
+            _, truth = render_clip(m, body=body, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                   rng=np.random.default_rng(0))
+            masks, tj = truth["masks"], truth["joints2d"]
+            hpx = 1.75 * np.linalg.norm(truth["camera"][0, :3])  # standing height, px
+            t0 = time.process_time()
+            est = estimate_proportions(masks)
+            dt = time.process_time() - t0
+            got, want = est.ratios(), truth_p.ratios()
+            errs = [100 * (got[g] / want[g] - 1) for g in groups]
+            cells = []
+            for fit_body in (est.body(), None, body):
+                err, _ = side_agnostic_errors(fit_sequence(masks, body=fit_body).joints2d, tj)
+                summ = summarise(err / hpx)
+                cells.append((summ["pck05"], summ["median"]))
+            table.append((label, cells))
+            for g, e in zip(groups, errs, strict=True):
+                worst[(label, g)] = max(worst.get((label, g), 0.0), abs(e))
+            print(f"{label:4} {name:12} {yaw:>4g} " + " ".join(f"{e:+9.1f}" for e in errs)
+                  + " " + " ".join(f"{p:7.1%} ({m:.3f})" for p, m in cells)
+                  + f" {dt:6.1f}", flush=True)
+    for label, _ in BODIES:
+        rows = np.array([[c[0] for c in cells] for lab, cells in table if lab == label])
+        meds = np.array([[c[1] for c in cells] for lab, cells in table if lab == label])
+        print(f"{label:4} {'mean':12} {'':>4} "
+              + " ".join(f"{worst[(label, g)]:9.1f}" for g in groups)
+              + " " + " ".join(f"{p:7.1%} ({m:.3f})" for p, m in zip(rows.mean(0), meds.mean(0),
+                                                                   strict=True))
+              + "   (lengths: worst |error| over the clips)")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--frames", type=int, default=60, help="frames per clip (30 fps)")
@@ -292,7 +382,12 @@ def main(argv=None) -> int:
     ap.add_argument("--held-out", action="store_true",
                     help="tracked PCK on clips the search was not tuned on, with the "
                          "temporal options off in turn")
+    ap.add_argument("--proportions", action="store_true",
+                    help="bodies scaled away from the seed's ratios: recovered lengths and "
+                         "the fit with estimated / seed / true proportions")
     args = ap.parse_args(argv)
+    if args.proportions:
+        return proportions(args.frames)
     if args.poses:
         return unusual_poses()
     if args.held_out:

@@ -243,6 +243,14 @@ class BodyModel:
     lengths : mapping of str to float, optional
         Segment lengths in metres overriding the Table 3.1 ratios for this subject,
         keyed by segment name (e.g. ``{"l_upper_arm": 0.31}``).
+    widths : mapping of str to float, optional
+        Segment widths (diameters) in metres overriding the Table 3.2 ratios, keyed
+        by segment name. The torso's width is the shoulders' breadth (the shoulder
+        joints sit at its corners, the hips a quarter of it from the pelvis).
+
+    A subject's own proportions (:mod:`vidcap.video.fit.proportions` estimates them
+    from a clip) are built with :func:`body_with_proportions`, which keeps ``height``
+    the standing height.
 
     Examples
     --------
@@ -255,18 +263,29 @@ class BodyModel:
 
     height: float = DEFAULT_HEIGHT_M
     lengths: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    widths: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
     def __post_init__(self):
         if not np.isfinite(self.height) or self.height <= 0:
             raise ValueError(f"height must be a positive number of metres, got {self.height!r}")
-        lengths = dict(self.lengths)
-        unknown = set(lengths) - set(SEGMENT_NAMES)
-        if unknown:
-            raise ValueError(f"unknown segment(s) in lengths: {sorted(unknown)}")
-        bad = {k: v for k, v in lengths.items() if not (np.isfinite(v) and v > 0)}
-        if bad:
-            raise ValueError(f"segment lengths must be positive metres, got {bad}")
-        object.__setattr__(self, "lengths", MappingProxyType(lengths))
+        for name in ("lengths", "widths"):
+            values = {k: float(v) for k, v in dict(getattr(self, name)).items()}
+            unknown = set(values) - set(SEGMENT_NAMES)
+            if unknown:
+                raise ValueError(f"unknown segment(s) in {name}: {sorted(unknown)}")
+            bad = {k: v for k, v in values.items() if not (np.isfinite(v) and v > 0)}
+            if bad:
+                raise ValueError(f"segment {name} must be positive metres, got {bad}")
+            object.__setattr__(self, name, MappingProxyType(values))
+
+    def __reduce__(self):
+        # a MappingProxyType does not pickle: rebuild from plain dicts (fit workers)
+        return (type(self), (self.height, dict(self.lengths), dict(self.widths)))
+
+    @property
+    def custom(self) -> bool:
+        """True when any length or width is this subject's own (not the seed's ratios)."""
+        return bool(self.lengths) or bool(self.widths)
 
     def length(self, segment: str) -> float:
         """Length of ``segment`` in metres."""
@@ -279,7 +298,10 @@ class BodyModel:
         return np.array([self.length(s) for s in SEGMENT_NAMES])
 
     def radius(self, segment: str) -> float:
-        """Cylinder radius of ``segment`` in metres (half the Table 3.2 value)."""
+        """Cylinder radius of ``segment`` in metres (half its width: Table 3.2's value
+        unless ``widths`` gives this subject's)."""
+        if segment in self.widths:
+            return 0.5 * float(self.widths[segment])
         return 0.5 * SEGMENTS[SEGMENT_INDEX[segment]].width_ratio * self.height
 
     def segment_radii(self) -> np.ndarray:
@@ -340,6 +362,13 @@ class BodyModel:
         }
 
     @property
+    def standing_height(self) -> float:
+        """Head top to floor when standing straight (head + torso + the longer leg),
+        metres; ``height`` unless the lengths are a subject's own that do not add up to
+        it."""
+        return self.pelvis_height + self.length("torso") + self.length("head")
+
+    @property
     def pelvis_height(self) -> float:
         """Height of the pelvis above the floor when standing straight, metres."""
         return max(
@@ -366,6 +395,93 @@ class BodyModel:
             offsets=self.rest_offsets(),
             end_sites=self.end_site_offsets(),
         )
+
+
+#: The groups of segments :func:`body_with_proportions` scales together (left and right
+#: pooled: one subject has one arm length).
+PROPORTION_GROUPS = MappingProxyType({
+    "head": ("head",),
+    "torso": ("torso",),
+    "upper_arms": ("l_upper_arm", "r_upper_arm"),
+    "lower_arms": ("l_lower_arm", "r_lower_arm"),
+    "upper_legs": ("l_upper_leg", "r_upper_leg"),
+    "lower_legs": ("l_lower_leg", "r_lower_leg"),
+})
+#: Shorthands of :func:`body_with_proportions`: several groups at once.
+PROPORTION_ALIASES = MappingProxyType({
+    "arms": ("upper_arms", "lower_arms"),
+    "legs": ("upper_legs", "lower_legs"),
+})
+#: Width factors :func:`body_with_proportions` takes (``shoulders``: the torso's width).
+WIDTH_GROUPS = MappingProxyType({
+    "shoulders": ("torso",),
+    "head_width": ("head",),
+    "arm_width": ("l_upper_arm", "r_upper_arm", "l_lower_arm", "r_lower_arm"),
+    "leg_width": ("l_upper_leg", "r_upper_leg", "l_lower_leg", "r_lower_leg"),
+})
+
+
+def body_with_proportions(height: float = DEFAULT_HEIGHT_M, factors=None, *,
+                          keep_height: bool = True) -> BodyModel:
+    """A body whose segments are the seed's ratios times per-group factors.
+
+    Parameters
+    ----------
+    height : float
+        Standing height in metres.
+    factors : mapping of str to float, optional
+        Length factors by :data:`PROPORTION_GROUPS` name (or an alias of
+        :data:`PROPORTION_ALIASES`: ``legs``, ``arms``) and width factors by
+        :data:`WIDTH_GROUPS` name, e.g. ``{"legs": 1.15, "arms": 0.9, "shoulders": 1.2}``.
+    keep_height : bool
+        Rescale every length and width together so head + torso + leg stays
+        ``height`` (the subject's standing height is the metric scale); False keeps
+        the factors as given (a body taller than ``height`` when the legs are longer).
+
+    Returns
+    -------
+    BodyModel
+
+    Raises
+    ------
+    ValueError
+        On an unknown name or a factor that is not positive.
+
+    Examples
+    --------
+    >>> b = body_with_proportions(1.75, {"legs": 1.15})
+    >>> round(b.standing_height, 6), b.length("l_upper_leg") > BodyModel().length("l_upper_leg")
+    (1.75, True)
+    """
+    f_len = dict.fromkeys(SEGMENT_NAMES, 1.0)
+    f_wid = dict.fromkeys(SEGMENT_NAMES, 1.0)
+    # aliases first, so a group's own factor (``upper_legs``) wins over ``legs``
+    items = sorted(dict(factors or {}).items(), key=lambda kv: kv[0] not in PROPORTION_ALIASES)
+    for name, value in items:
+        value = float(value)
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"proportion {name!r} must be a positive factor, got {value!r}")
+        if name in WIDTH_GROUPS:
+            for seg in WIDTH_GROUPS[name]:
+                f_wid[seg] = value
+            continue
+        groups = PROPORTION_ALIASES.get(name, (name,))
+        if any(g not in PROPORTION_GROUPS for g in groups):
+            known = sorted([*PROPORTION_GROUPS, *PROPORTION_ALIASES, *WIDTH_GROUPS])
+            raise ValueError(f"unknown proportion {name!r} (known: {', '.join(known)})")
+        for g in groups:
+            for seg in PROPORTION_GROUPS[g]:
+                f_len[seg] = value
+    seed = BodyModel(height=height)
+    lengths = {s: seed.length(s) * f_len[s] for s in SEGMENT_NAMES}
+    widths = {s: 2.0 * seed.radius(s) * f_wid[s] for s in SEGMENT_NAMES}
+    k = 1.0
+    if keep_height:
+        legs = max(lengths["l_upper_leg"] + lengths["l_lower_leg"],
+                   lengths["r_upper_leg"] + lengths["r_lower_leg"])
+        k = height / (legs + lengths["torso"] + lengths["head"])
+    return BodyModel(height=height, lengths={s: v * k for s, v in lengths.items()},
+                     widths={s: v * k for s, v in widths.items()})
 
 
 def segment_vectors(joints: np.ndarray) -> np.ndarray:

@@ -70,6 +70,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="3D from the 2D joints: one kinematic solve over the clip "
                         "(default; bone lengths constant, joint limits, smooth, feet planted "
                         "on walks and stands) or the seed's per-segment lift (segment)")
+    parser.add_argument("--proportions", default="seed", choices=("seed", "auto"),
+                        help="the body's proportions: the seed's ratios (default) or auto: "
+                        "this subject's segment lengths and widths estimated from the clip, "
+                        "the 2D fit done again with them and the lift and skeleton built "
+                        "on them (--height stays the standing height)")
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "
                         "signs, orientation and scores")
@@ -96,7 +101,7 @@ def run(args) -> int:
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
         annotations=args.annotations, background=args.background, height=args.height,
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
-        view=args.view, rig=args.rig, lift=args.lift,
+        view=args.view, rig=args.rig, lift=args.lift, proportions=args.proportions,
     )
     if not args.quiet:
         lr = res.lifted
@@ -107,6 +112,8 @@ def run(args) -> int:
         if lr.contact is not None and lr.contact.any():
             print(f"  foot contact on (the clip walks or stands): a foot stays put in "
                   f"{int(lr.contact.any(axis=1).sum())} of {len(lr.contact)} frames")
+        if res.proportions is not None:
+            print(f"  {res.proportions.summary()}")
         for notice in res.notices():
             print(f"  {notice}")
         # the normalised silhouette's width is whole pixels, which stretches a fitted

@@ -32,6 +32,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="silhouette height after normalisation (default 80)")
     parser.add_argument("--no-refine", action="store_true",
                         help="skip the extra Algorithm 1 pass over the limbs")
+    parser.add_argument("--proportions", default="seed", choices=("seed", "auto"),
+                        help="the model's proportions: the seed's ratios (default) or auto: "
+                        "this subject's, estimated from the clip, and the clip fitted again "
+                        "with them (written as body_lengths/body_widths, fractions of the "
+                        "standing height)")
 
 
 def load_masks(path):
@@ -84,12 +89,25 @@ def run(args) -> int:
             f"{info.width}x{info.height}", args.masks)
     if not frames_with_pixels(masks).any():
         raise InputFileError("no silhouette in any frame", args.masks or args.video)
+    body, extra, estimate = None, {}, None
+    if args.proportions == "auto":
+        from vidcap.video.fit.proportions import estimate_proportions
+
+        estimate = estimate_proportions(masks, height=args.height, refine=not args.no_refine)
+        body = estimate.body(1.0)
+        extra = {"body_lengths": body.segment_lengths(),
+                 "body_widths": 2.0 * body.segment_radii()}
     pose = fit_sequence(
         masks, tracked=not args.per_frame, height=args.height, refine=not args.no_refine,
         progress=lambda it, total: progress(it, total=total, desc="pose2d", unit="frame"),
+        body=body,
     )
-    pose.save(args.output)
+    from vidcap.fileio import savez_atomic
+
+    savez_atomic(args.output, **pose.arrays(), **extra)
     n = int(np.isfinite(pose.joints2d[:, 0, 0]).sum())
     print(f"{args.output}: 2D pose of {n}/{pose.n_frames} frames "
           f"(median similarity {np.median(pose.similarity[pose.similarity > 0]):.3f})")
+    if estimate is not None:
+        print(f"  {estimate.summary()}")
     return 0

@@ -28,6 +28,27 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def parse_proportions(text: str) -> dict[str, float]:
+    """Parse ``NAME=FACTOR,...`` (``--proportions``) into a dict; UsageError if malformed
+    or a name is unknown."""
+    from vidcap.body import body_with_proportions
+
+    out = {}
+    for part in str(text).split(","):
+        name, sep, value = part.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise UsageError(f"--proportions must be NAME=FACTOR,..., got {text!r}") from None
+    try:
+        body_with_proportions(1.75, out)
+    except ValueError as exc:
+        raise UsageError(f"--proportions: {exc}") from None
+    return out
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the ``vidcap synth`` parser."""
     parser.add_argument(
@@ -76,13 +97,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="relative amplitude of a slow brightness/colour drift (e.g. 0.1)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--height", type=float, default=1.75, help="body height in metres")
+    parser.add_argument("--proportions", metavar="NAME=FACTOR,...",
+                        help="a body scaled away from the seed's ratios, e.g. "
+                        "legs=1.15,arms=0.9,shoulders=1.2 (groups: head, torso, upper_arms, "
+                        "lower_arms, upper_legs, lower_legs, arms, legs; widths: shoulders, "
+                        "head_width, arm_width, leg_width); --height stays the standing height")
 
 
 def run(args: argparse.Namespace) -> int:
     """Render the clip and write the video, the truth and optionally the BVH."""
     from pathlib import Path
 
-    from vidcap.body import BodyModel
+    from vidcap.body import BodyModel, body_with_proportions
     from vidcap.synth import make_motion, parse_range, synth_clip
 
     if not (np.isfinite(args.height) and 0.5 <= args.height <= 3.0):
@@ -94,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     out = Path(args.output)
     truth = Path(args.truth) if args.truth else out.with_name(out.stem + "_truth.npz")
-    body = BodyModel(height=args.height)
+    body = (BodyModel(height=args.height) if not args.proportions
+            else body_with_proportions(args.height, parse_proportions(args.proportions)))
     rng = np.random.default_rng(args.seed)
     motion = make_motion(
         args.motion, body=body, amc=args.amc, frame_range=parse_range(args.range),

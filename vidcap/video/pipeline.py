@@ -80,6 +80,7 @@ def run(
     jobs: int | None = None,
     view: str = "auto",
     lift: str = "solve",
+    proportions: str = "seed",
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -117,6 +118,11 @@ def run(
     lift : {'solve', 'segment'}
         The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
+    proportions : {'seed', 'auto'}
+        The body's proportions: the seed's Table 3.1/3.2 ratios, or this subject's,
+        estimated from the clip (:mod:`vidcap.video.fit.proportions`); then the 2D fit
+        is done again with them, and the 3D lift and the motion's skeleton use them
+        (``height`` stays the standing height).
 
     Returns
     -------
@@ -130,6 +136,8 @@ def run(
     check_view(view)  # before any work
     if lift not in ("solve", "segment"):
         raise ValueError(f"unknown lift {lift!r}; expected 'solve' or 'segment'")
+    if proportions not in ("seed", "auto"):
+        raise ValueError(f"unknown proportions {proportions!r}; expected 'seed' or 'auto'")
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -163,6 +171,15 @@ def run(
         with _timed(timings, "pose2d"):
             pose = _pose_stage(cache, k_sil, sil.masks, jobs=jobs, per_job=per_job,
                                streamed=streamed, progress=progress)
+        estimate = None
+        if proportions == "auto":
+            from vidcap.video.bodystage import proportions_stage
+
+            with _timed(timings, "proportions"):
+                pose, estimate = proportions_stage(cache, k_sil, sil.masks, jobs=jobs,
+                                                   per_job=per_job, progress=progress)
+            body = estimate.body(height)
+            log(estimate.summary())
     except BaseException:
         if pool is not None:
             pool.kill()  # an error or Ctrl-C: the running chunks are nobody's now
@@ -183,7 +200,7 @@ def run(
         jitter_after=out.motion.jitter_after, timings=timings,
         image_joints2d=out.joints2d, spread=pose["spread"], track=out.track,
         model_height=out.model_height, outside=out.outside, view=view,
-        frame_times=frame_times(video),
+        frame_times=frame_times(video), body=body, proportions=estimate,
     )
 
 

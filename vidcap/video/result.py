@@ -56,6 +56,12 @@ class ConvertResult:
     #: When each frame was shown, seconds from the first (the container's timestamps),
     #: (F,); None where the container keeps none.
     frame_times: np.ndarray | None = None
+    #: The body the 2D fit, the lift and the motion used (``--height`` tall); None: the
+    #: seed's proportions at 1.75 m.
+    body: object = None
+    #: The subject's proportions as estimated from the clip
+    #: (:class:`vidcap.video.fit.proportions.ProportionEstimate`; None: the seed's used).
+    proportions: object = None
 
     @property
     def n_frames(self) -> int:
@@ -162,7 +168,19 @@ class ConvertResult:
                      else np.asarray(self.outside, bool)),
             frame_times=(np.arange(self.n_frames) / self.fps if self.frame_times is None
                          else np.asarray(self.frame_times, dtype=np.float64)),
+            **self._body_arrays(),
         )
+
+    def _body_arrays(self) -> dict:
+        """``body_lengths`` and ``body_widths`` (10,) m, ``body_height`` () m, and
+        ``body_estimated`` () bool (the subject's own proportions, not the seed's)."""
+        from vidcap.body import BodyModel
+
+        body = self.body if self.body is not None else BodyModel()
+        return {"body_lengths": body.segment_lengths(),
+                "body_widths": 2.0 * body.segment_radii(),
+                "body_height": np.float64(body.height),
+                "body_estimated": np.bool_(self.proportions is not None)}
 
 def true_runs(flags) -> list[tuple[int, int]]:
     """The runs of True in ``flags`` (F,) as (first, last) frame pairs."""

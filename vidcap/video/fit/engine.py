@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vidcap.body import SEGMENTS
+from vidcap.body import SEGMENTS, BodyModel
 from vidcap.video.fit.limits import S
 from vidcap.video.fit.normalise import NormalisedMask
 from vidcap.video.fit.raster import (
@@ -63,19 +63,22 @@ class _MaskEngine:
         Segments drawn as capsules (else rectangles).
     """
 
-    def __init__(self, norm: NormalisedMask, *, caps: bool):
+    def __init__(self, norm: NormalisedMask, *, caps: bool, body: BodyModel | None = None):
         self.norm = norm
         self.sil = norm.mask
         self.h, self.w = self.sil.shape
         # Body height = silhouette height (or the body's, when given apart from it),
         # less the round ends of the head and the lower legs when segments are drawn
         # as capsules (they reach beyond the joints).
-        ends = (SEGMENTS[S["head"]].width_ratio + SEGMENTS[S["l_lower_leg"]].width_ratio) / 2
-        body = norm.body_height
-        self.H = body / (1.0 + ends) if caps else body
+        if body is None:
+            ends = (SEGMENTS[S["head"]].width_ratio + SEGMENTS[S["l_lower_leg"]].width_ratio) / 2
+        else:  # the subject's own proportions (vidcap.video.fit.proportions)
+            ends = (body.radius("head") + body.radius("l_lower_leg")) / body.height
+        height = norm.body_height
+        self.H = height / (1.0 + ends) if caps else height
         # a silhouette taller than the body (raised arms): its top need not be the head
         self.taller = norm.height > 1.02 * self.H
-        self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H)
+        self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H, body)
         self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
         self.caps = caps
         self.sil_rows, self.sil_cum = norm.count_tables  # shared by every fit of this mask

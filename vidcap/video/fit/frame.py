@@ -156,7 +156,7 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     :class:`~vidcap.video.fit.cues.ColourModel`: the arms are then placed by the
     frame's cues as well (:func:`vidcap.video.fit.cues.apply_cues`); None: outline only.
     """
-    eng = _MaskEngine(norm, caps=options.caps)
+    eng = _MaskEngine(norm, caps=options.caps, body=options.body)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
     if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity):
         # the track is slipping: fit this frame from scratch, keep the better fit

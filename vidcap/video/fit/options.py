@@ -11,6 +11,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from vidcap.body import BodyModel
+
 #: fit_pose's default: a warm fit below this share of the last S slipped
 FALLBACK = 0.97
 
@@ -39,6 +41,9 @@ class FitOptions:
     tie : float
         S within which a fresh fit's alternatives (crossed legs, untangled thighs)
         count as tied (>= 0).
+    body : BodyModel or None
+        The subject's proportions the model is drawn with (its lengths and widths
+        relative to its standing height; None: the seed's Table 3.1/3.2 ratios).
     """
 
     height: int = 80
@@ -54,6 +59,7 @@ class FitOptions:
     spread_value: float | None = None
     body_height: float | None = None
     tie: float = 0.01
+    body: BodyModel | None = None
 
     def __post_init__(self):
         if not (isinstance(self.height, int) or float(self.height).is_integer()) \
@@ -70,6 +76,8 @@ class FitOptions:
             raise ValueError(f"spread_value must be in [0, 1], got {self.spread_value!r}")
         if self.body_height is not None and not self.body_height > 0:
             raise ValueError(f"body_height must be positive, got {self.body_height}")
+        if self.body is not None and not isinstance(self.body, BodyModel):
+            raise ValueError(f"body must be a BodyModel, got {type(self.body).__name__}")
 
     @classmethod
     def from_keywords(cls, kw: dict, *, caller: str = "fit_sequence") -> FitOptions:

@@ -1,0 +1,62 @@
+"""The pipeline's proportions stage (``vidcap convert --proportions auto``, issue 27).
+
+After the 2D fit with the seed's proportions, the subject's own are estimated from
+the silhouettes (:func:`vidcap.video.fit.proportions.estimate_proportions`) and the
+clip fitted again with them; both are cached as one stage, keyed on the silhouettes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video.fit.proportions import ProportionEstimate, estimate_proportions
+from vidcap.video.stagecache import StageCache, stage_key
+
+#: Bumped when the estimator's results change for the same silhouettes.
+_VERSION = 1
+
+
+def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_job: int,
+                      progress) -> tuple[dict, ProportionEstimate]:
+    """The subject's proportions and the 2D pose fitted with them, cached or computed.
+
+    Returns
+    -------
+    pose : dict
+        As :func:`vidcap.video.pipeline._pose_stage` returns it.
+    estimate : ProportionEstimate
+    """
+    from vidcap.fileio import progress as bar
+    from vidcap.video.fit.parallel import chunk_bounds, fit_sequence_chunked
+
+    key = stage_key("proportions", _VERSION, k_sil,
+                    chunk_bounds(len(masks), jobs, per_job=per_job))
+    names = ("factor_names", "factor_values", "evidence", "seed_similarity")
+    hit = cache.load("proportions", key, required=names + ("model_height",))
+    if hit is not None:
+        factors = dict(zip(hit["factor_names"].astype(str).tolist(),
+                           hit["factor_values"].tolist(), strict=True))
+        evidence = dict(zip(hit["factor_names"].astype(str).tolist(),
+                            hit["evidence"].astype(int).tolist(), strict=True))
+        est = ProportionEstimate(factors, evidence, (float(hit["seed_similarity"][0]),
+                                                     float(hit["seed_similarity"][1])))
+        return {k: v for k, v in hit.items() if k not in names}, est
+    est = estimate_proportions(masks)
+
+    def wrap(it, total):
+        return bar(it, total=total, desc="2D pose (own proportions)", unit="frame",
+                   enabled=progress)
+
+    pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
+                                body=est.body())
+    out = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
+           "similarity": pose.similarity, "model_height": pose.model_height}
+    names_in = sorted(est.factors)
+    cache.save("proportions", key, **out, factor_names=np.array(names_in, dtype=str),
+               factor_values=np.array([est.factors[n] for n in names_in], float),
+               evidence=np.array([est.evidence.get(n, 0) for n in names_in], int),
+               seed_similarity=np.array(est.similarity, float))
+    return out, est
+
+
+__all__ = ["proportions_stage"]

@@ -1,0 +1,236 @@
+"""The subject's own proportions, estimated from a clip's silhouettes (issue 27).
+
+The seed's model has the Table 3.1/3.2 ratios; a real subject does not. Two kinds of
+evidence measure this subject's, each where it is reliable (measured on renders of
+bodies scaled away from the seed's ratios, ``benchmarks/pose2d_accuracy.py
+--proportions``):
+
+* **The fit's own score over a sample of frames** (:func:`_search`): a few windows of
+  consecutive frames are fitted (tracked, as the clip is) with a body whose factor
+  for one group is varied, and the factor with the best mean S (Eq. 3.3) kept,
+  coordinate by coordinate. S peaks clearly for the legs' share of the height (the
+  pelvis sits where the legs part), the shoulders' breadth, the limbs' widths and,
+  where the arms stand clear in some frames, the arms' length. Left and right are
+  one factor (one subject, one arm length).
+* **Length profiles** (:mod:`vidcap.video.fit.lengthprofile`) split each leg between
+  thigh and shin: with the sample's fitted poses held, the median over the frames
+  whose knee and ankle the outline pins.
+
+Everything is relative to the standing height (head top to ankles), which stays the
+metric scale (``--height``): :meth:`ProportionEstimate.body` builds the
+:class:`~vidcap.body.BodyModel` the second pass of the fit, the 3D lift and the BVH
+skeleton use. The head's share of head + torso stays the seed's (nothing in a
+silhouette marks the neck reliably).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vidcap.body import (
+    DEFAULT_HEIGHT_M,
+    PROPORTION_GROUPS,
+    SEGMENT_INDEX,
+    BodyModel,
+    body_with_proportions,
+)
+from vidcap.video.fit.lengthprofile import length_profiles
+from vidcap.video.masks import frames_with_pixels, touches_border
+
+#: The factors searched by the fit's S, in this order (a group's, or a width's).
+SEARCHED = ("legs", "shoulders", "leg_width", "arms", "arm_width")
+#: Lengths a longer model fits as well as the right one (its segments foreshortened,
+#: Algorithm 6): the shortest factor whose S is within ``PLATEAU_TIE`` of the best.
+PLATEAU = ("arms",)
+PLATEAU_TIE = 0.0015
+#: Factors a search may reach (beyond: the seed's ratios are kept for that group).
+LIMITS = (0.7, 1.45)
+#: Relative step and steps either side of each round of the search.
+STEPS = ((0.05, 4), (0.025, 3))
+#: Frames per window and windows per clip fitted for each candidate body.
+WINDOW, WINDOWS = 30, 3
+#: Fewest frames that must pin a knee for the thigh/shin split to be measured.
+MIN_FRAMES = 10
+
+
+@dataclass(frozen=True)
+class ProportionEstimate:
+    """A subject's proportions as factors on the seed's ratios.
+
+    Attributes
+    ----------
+    factors : dict
+        Factor per name :func:`vidcap.body.body_with_proportions` takes (``legs``,
+        ``upper_legs``, ``lower_legs``, ``arms``, ``shoulders``, ``leg_width``,
+        ``arm_width``), applied before the lengths are rescaled to the standing height.
+    evidence : dict
+        Per factor, what measured it: frames fitted for a searched factor, frames
+        with a determined length for a profiled one (0: kept at 1, the seed's).
+    similarity : tuple of float
+        Mean S of the sample with the seed's proportions and with these.
+    """
+
+    factors: dict = field(default_factory=dict)
+    evidence: dict = field(default_factory=dict)
+    similarity: tuple = (float("nan"), float("nan"))
+
+    def body(self, height: float = DEFAULT_HEIGHT_M) -> BodyModel:
+        """The body with these proportions, ``height`` metres tall standing."""
+        return body_with_proportions(height, self.factors)
+
+    def ratios(self) -> dict[str, float]:
+        """Length per group (pooled left/right) as a fraction of the standing height,
+        and ``shoulders`` (the torso's width) likewise."""
+        b = self.body(1.0)
+        out = {g: b.length(segs[0]) for g, segs in PROPORTION_GROUPS.items()}
+        out["shoulders"] = 2.0 * b.radius("torso")
+        return out
+
+    def summary(self) -> str:
+        """One line: each length and the shoulders as % of height, and the change
+        from the seed's ratio."""
+        seed = ProportionEstimate().ratios()
+        cells = [f"{k.replace('_', ' ')} {100 * v:.1f}% ({100 * (v / seed[k] - 1):+.0f}%)"
+                 for k, v in self.ratios().items()]
+        return "body proportions (of height, vs the seed's): " + ", ".join(cells)
+
+
+def sample_windows(masks, *, window: int = WINDOW, windows: int = WINDOWS) -> list[slice]:
+    """Up to ``windows`` runs of ``window`` consecutive frames spread over the clip,
+    each with the person wholly in the picture in every frame (the whole clip when it
+    is shorter than the windows together)."""
+    ok = frames_with_pixels(masks) & ~touches_border(masks)
+    n = len(ok)
+    if n <= window * windows:
+        return [slice(0, n)] if ok.any() else []
+    # runs of usable frames at least a window long; windows spread over their frames
+    good = np.flatnonzero(np.convolve(ok.astype(int), np.ones(window, int), "valid")
+                          == window)
+    if not good.size:
+        return [slice(0, n)] if ok.any() else []
+    picks = good[np.unique(np.round(np.linspace(0, good.size - 1, windows)).astype(int))]
+    out, last = [], -window
+    for p in picks:
+        if p >= last + window:  # no overlap
+            out.append(slice(int(p), int(p) + window))
+            last = p
+    return out
+
+
+def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
+                         windows: int = WINDOWS, searched=SEARCHED, steps=STEPS,
+                         **fit_kw) -> ProportionEstimate:
+    """Estimate the subject's proportions from a clip's silhouettes.
+
+    Parameters
+    ----------
+    masks : numpy.ndarray, shape (F, H, W), bool, or MaskStack
+        The clip's silhouettes.
+    height : int
+        The fit's normalised silhouette height (px).
+    window, windows : int
+        Frames per sample window and windows (:func:`sample_windows`).
+    searched : sequence of str
+        The factors searched by S (:data:`SEARCHED`), in order.
+    steps : sequence of (float, int)
+        Relative step and steps either side of the current factor, per round.
+    **fit_kw
+        Other options of :func:`vidcap.video.fit.tracking.fit_sequence`.
+
+    Returns
+    -------
+    ProportionEstimate
+        The seed's (all factors 1) when the clip has no usable frame.
+    """
+    from vidcap.video.fit.tracking import fit_sequence
+
+    wins = sample_windows(masks, window=window, windows=windows)
+    if not wins:
+        return ProportionEstimate()
+    n_frames = sum(len(range(len(masks))[w]) for w in wins)
+
+    def score(factors):
+        body = body_with_proportions(DEFAULT_HEIGHT_M, factors)
+        sims = [fit_sequence(masks[w], body=body, height=height, **fit_kw).similarity
+                for w in wins]
+        s = np.concatenate(sims)
+        return float(np.mean(s[s > 0])) if (s > 0).any() else 0.0
+
+    factors: dict[str, float] = {}
+    seed_s = best = score(factors)
+    for step, reach in steps:
+        for name in searched:
+            factors, best = _search(score, factors, name, step, reach)
+    evidence = dict.fromkeys(searched, n_frames)
+    split, n_split = _leg_split(masks, wins, factors, height, fit_kw)
+    if split is not None:
+        factors.update(split)
+    evidence["upper_legs"] = evidence["lower_legs"] = n_split
+    return ProportionEstimate(factors=dict(factors), evidence=evidence,
+                              similarity=(seed_s, best))
+
+
+def _search(score, factors: dict, name: str, step: float, reach: int):
+    """One coordinate: S at ``factors[name]`` times ``1 + k step`` for ``|k| <= reach``
+    (within :data:`LIMITS`), then the vertex of a parabola fitted (least squares) to
+    the best and the points within two steps of it, which steadies the choice against
+    the fit's own noise (a small change of the model moves a search by a pixel here
+    and there). Returns (factors, S at the chosen factor)."""
+    cur = factors.get(name, 1.0)
+    values = np.unique(np.clip(cur * (1 + step * np.arange(-reach, reach + 1)), *LIMITS))
+    s = np.array([score({**factors, name: float(v)}) for v in values])
+    i = int(np.argmax(s))
+    if name in PLATEAU:  # longer than the subject's fits as well, foreshortened
+        i = int(np.flatnonzero(s >= s[i] - PLATEAU_TIE)[0])
+        return {**factors, name: float(values[i])}, float(s[i])
+    near = np.abs(values - values[i]) <= 2.01 * step * cur
+    v_best = float(values[i])
+    if near.sum() >= 3:
+        c = np.polyfit(values[near] - values[i], s[near], 2)
+        if c[0] < 0:
+            v_best = float(np.clip(values[i] - c[1] / (2 * c[0]), values[near].min(),
+                                   values[near].max()))
+    if v_best != values[i]:
+        s_v = score({**factors, name: v_best})
+        if s_v >= s[i]:  # the vertex, unless it fits worse than the best point tried
+            return {**factors, name: v_best}, s_v
+    return {**factors, name: float(values[i])}, float(s[i])
+
+
+def _leg_split(masks, wins, factors, height, fit_kw):
+    """Thigh and shin factors from length profiles of the sample's fitted frames (the
+    legs' whole length kept), and how many frames measured them; (None, n) below
+    :data:`MIN_FRAMES`."""
+    from vidcap.video.fit.tracking import fit_sequence
+
+    body = body_with_proportions(DEFAULT_HEIGHT_M, factors)
+    ul = [SEGMENT_INDEX["l_upper_leg"], SEGMENT_INDEX["r_upper_leg"]]
+    ll = [SEGMENT_INDEX["l_lower_leg"], SEGMENT_INDEX["r_lower_leg"]]
+    ratios = []
+    for w in wins:
+        sub = masks[w]
+        pose = fit_sequence(sub, body=body, height=height, **fit_kw)
+        for k in range(len(sub)):
+            if not pose.similarity[k] > 0:
+                continue
+            lengths, _ = length_profiles(np.asarray(sub[k]), pose.joints2d[k],
+                                         pose.angles[k], pose.foreshortening[k],
+                                         float(pose.spread[k]), float(pose.model_height[k]),
+                                         body=body)
+            r = lengths[ul] / (lengths[ul] + lengths[ll])  # NaN where either is unknown
+            ratios.extend(r[np.isfinite(r)].tolist())
+    if len(ratios) < MIN_FRAMES:
+        return None, len(ratios)
+    upper = float(np.median(ratios))
+    seed = BodyModel(height=1.0)
+    u0, l0 = seed.length("l_upper_leg"), seed.length("l_lower_leg")
+    legs = factors.get("legs", 1.0)
+    total = legs * (u0 + l0)  # the legs' length as searched, split as measured
+    return {"upper_legs": upper * total / u0, "lower_legs": (1 - upper) * total / l0}, \
+        len(ratios)
+
+
+__all__ = ["LIMITS", "SEARCHED", "ProportionEstimate", "estimate_proportions",
+           "sample_windows"]
