@@ -79,8 +79,7 @@ def run(
     log=None,
     jobs: int | None = None,
     view: str = "auto",
-    lift: str = "solve",
-    proportions: str = "seed",
+    lift: str = "solve", proportions: str = "seed",
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -119,10 +118,7 @@ def run(
         The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
     proportions : {'seed', 'auto'}
-        The body's proportions: the seed's Table 3.1/3.2 ratios, or this subject's,
-        estimated from the clip (:mod:`vidcap.video.fit.proportions`); then the 2D fit
-        is done again with them, and the 3D lift and the motion's skeleton use them
-        (``height`` stays the standing height).
+        The seed's ratios or the subject's, from the clip (:func:`_fit_stage`).
 
     Returns
     -------
@@ -134,10 +130,8 @@ def run(
 
     log = log or (lambda msg: None)
     check_view(view)  # before any work
-    if lift not in ("solve", "segment"):
-        raise ValueError(f"unknown lift {lift!r}; expected 'solve' or 'segment'")
-    if proportions not in ("seed", "auto"):
-        raise ValueError(f"unknown proportions {proportions!r}; expected 'seed' or 'auto'")
+    _check_choice("lift", lift, ("solve", "segment"))
+    _check_choice("proportions", proportions, ("seed", "auto"))
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -168,18 +162,9 @@ def run(
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed,
                                     progress=progress)
         _report_silhouettes(sil, info.n_frames, log)
-        with _timed(timings, "pose2d"):
-            pose = _pose_stage(cache, k_sil, sil.masks, jobs=jobs, per_job=per_job,
-                               streamed=streamed, progress=progress)
-        estimate = None
-        if proportions == "auto":
-            from vidcap.video.bodystage import proportions_stage
-
-            with _timed(timings, "proportions"):
-                pose, estimate = proportions_stage(cache, k_sil, sil.masks, jobs=jobs,
-                                                   per_job=per_job, progress=progress)
-            body = estimate.body(height)
-            log(estimate.summary())
+        pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
+                                          per_job=per_job, streamed=streamed,
+                                          progress=progress, timings=timings, log=log)
     except BaseException:
         if pool is not None:
             pool.kill()  # an error or Ctrl-C: the running chunks are nobody's now
@@ -200,11 +185,37 @@ def run(
         jitter_after=out.motion.jitter_after, timings=timings,
         image_joints2d=out.joints2d, spread=pose["spread"], track=out.track,
         model_height=out.model_height, outside=out.outside, view=view,
-        frame_times=frame_times(video), body=body, proportions=estimate,
-    )
+        frame_times=frame_times(video), body=body, proportions=estimate)
 
 
 # --------------------------------------------------------------------------- helpers
+def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise ValueError(f"unknown {name} {value!r}; expected "
+                         + " or ".join(repr(c) for c in choices))
+
+
+def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
+               progress, timings, log):
+    """The 2D pose (:func:`_pose_stage`) and, with ``proportions='auto'``, the subject's
+    own proportions estimated from it and the clip fitted again with them
+    (:func:`vidcap.video.bodystage.proportions_stage`): the 3D lift and the motion's
+    skeleton then use them, ``body``'s height still the standing height. Returns
+    (pose, body, estimate or None)."""
+    with _timed(timings, "pose2d"):
+        pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
+                           streamed=streamed, progress=progress)
+    if proportions != "auto":
+        return pose, body, None
+    from vidcap.video.bodystage import proportions_stage
+
+    with _timed(timings, "proportions"):
+        pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
+                                           progress=progress)
+    log(estimate.summary())
+    return pose, estimate.body(body.height), estimate
+
+
 @contextmanager
 def _timed(timings: dict, name: str):
     """Add the seconds the ``with`` block takes to ``timings[name]``."""

@@ -69,7 +69,9 @@ class ProportionEstimate:
         Per factor, what measured it: frames fitted for a searched factor, frames
         with a determined length for a profiled one (0: kept at 1, the seed's).
     similarity : tuple of float
-        Mean S of the sample with the seed's proportions and with these.
+        Mean S of the sample windows fitted with the seed's proportions and with these
+        (the parabola's vertex is kept even where a single fit there scores a little
+        lower than a grid point: the fit's noise is of that size).
     """
 
     factors: dict = field(default_factory=dict)
@@ -159,17 +161,17 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
         return float(np.mean(s[s > 0])) if (s > 0).any() else 0.0
 
     factors: dict[str, float] = {}
-    seed_s = best = score(factors)
+    seed_s = score(factors)
     for step, reach in steps:
         for name in searched:
-            factors, best = _search(score, factors, name, step, reach)
+            factors = _search(score, factors, name, step, reach)
     evidence = dict.fromkeys(searched, n_frames)
     split, n_split = _leg_split(masks, wins, factors, height, fit_kw)
     if split is not None:
         factors.update(split)
     evidence["upper_legs"] = evidence["lower_legs"] = n_split
     return ProportionEstimate(factors=dict(factors), evidence=evidence,
-                              similarity=(seed_s, best))
+                              similarity=(seed_s, score(factors)))
 
 
 def _search(score, factors: dict, name: str, step: float, reach: int):
@@ -177,14 +179,14 @@ def _search(score, factors: dict, name: str, step: float, reach: int):
     (within :data:`LIMITS`), then the vertex of a parabola fitted (least squares) to
     the best and the points within two steps of it, which steadies the choice against
     the fit's own noise (a small change of the model moves a search by a pixel here
-    and there). Returns (factors, S at the chosen factor)."""
+    and there). Returns the factors with ``name``'s chosen."""
     cur = factors.get(name, 1.0)
     values = np.unique(np.clip(cur * (1 + step * np.arange(-reach, reach + 1)), *LIMITS))
     s = np.array([score({**factors, name: float(v)}) for v in values])
     i = int(np.argmax(s))
     if name in PLATEAU:  # longer than the subject's fits as well, foreshortened
         i = int(np.flatnonzero(s >= s[i] - PLATEAU_TIE)[0])
-        return {**factors, name: float(values[i])}, float(s[i])
+        return {**factors, name: float(values[i])}
     near = np.abs(values - values[i]) <= 2.01 * step * cur
     v_best = float(values[i])
     if near.sum() >= 3:
@@ -192,11 +194,7 @@ def _search(score, factors: dict, name: str, step: float, reach: int):
         if c[0] < 0:
             v_best = float(np.clip(values[i] - c[1] / (2 * c[0]), values[near].min(),
                                    values[near].max()))
-    if v_best != values[i]:
-        s_v = score({**factors, name: v_best})
-        if s_v >= s[i]:  # the vertex, unless it fits worse than the best point tried
-            return {**factors, name: v_best}, s_v
-    return {**factors, name: float(values[i])}, float(s[i])
+    return {**factors, name: v_best}
 
 
 def _leg_split(masks, wins, factors, height, fit_kw):
