@@ -14,7 +14,10 @@ File format (JSON, UTF-8)::
         {"frame": 12, "type": "depth", "segment": "l_lower_arm", "value": "toward"},
         {"frame": 40, "type": "depth", "segment": "l_lower_arm", "value": "auto"},
         {"frame": 30, "type": "joint", "joint": "l_wrist", "u": 123.5, "v": 240.0},
-        {"frame": 0,  "type": "sides", "pair": "legs", "value": "swapped"}
+        {"frame": 0,  "type": "sides", "pair": "legs", "value": "swapped"},
+        {"frame": 0,  "type": "scene_region", "box": [400, 0, 480, 120]},
+        {"frame": 9,  "type": "scene_region", "polygon": [[10, 300], [60, 290], [40, 350]]},
+        {"frame": 25, "type": "person_box", "box": [120, 40, 260, 355]}
       ]
     }
 
@@ -34,7 +37,18 @@ File format (JSON, UTF-8)::
   leg from the far one, so the 2D stage's choice of which leg is the left one is a
   guess, kept for the whole track: one event fixes it.
 
-Frames count from 0. Segment and joint names are those of :mod:`vidcap.body`, with
+* ``scene_region`` (beyond the seed, issue 26): pixels that are never the person, for
+  the whole clip whatever its ``frame`` (the frame it was drawn on): a ``box``
+  ``[x0, y0, x1, y1]`` or a ``polygon`` of ``[x, y]`` points (an area drawn around a
+  lamp, a lit wall, a mirror). The silhouette stage removes them from every mask and
+  from the choice of the person's blob (:mod:`vidcap.video.userregions`).
+* ``person_box`` (beyond the seed): at ``frame`` only, the person is inside ``box``:
+  the silhouette there is the blob inside it (nothing outside it is kept), and the
+  frames after follow that blob as they follow the person anyway. One per frame.
+
+Boxes are integer pixel edges, x right, y down, ``x1`` and ``y1`` exclusive
+(``[0, 0, W, H]`` is the whole frame); polygon points are pixels in ``0..W``,
+``0..H``. Frames count from 0. Segment and joint names are those of :mod:`vidcap.body`, with
 true (body) sides.
 """
 
@@ -61,7 +75,14 @@ _KEYS = {
     "depth": {"frame", "type", "segment", "value"},
     "joint": {"frame", "type", "joint", "u", "v"},
     "sides": {"frame", "type", "pair", "value"},
+    "scene_region": {"frame", "type"},  # and one of "box", "polygon"
+    "person_box": {"frame", "type", "box"},
 }
+#: The events that change the silhouettes (and only those: see
+#: :meth:`Annotations.region_events`).
+REGION_TYPES = ("scene_region", "person_box")
+#: Most points a scene_region polygon may have.
+MAX_POLYGON_POINTS = 2000
 #: The limb pairs a sides event names, in the column order of :meth:`Annotations.sides`.
 PAIRS = ("arms", "legs")
 _SIDES_VALUES = ("as_fitted", "swapped")
@@ -71,9 +92,11 @@ _SIDES_VALUES = ("as_fitted", "swapped")
 class Event:
     """One annotation event (see the module docstring).
 
-    ``key`` is the segment (depth), joint (joint), pair (sides) or ``""``
-    (orientation); ``value`` is ``+1/-1/0`` (depth), a label (orientation), ``(u, v)``
-    pixels (joint) or a bool, swapped (sides).
+    ``key`` is the segment (depth), joint (joint), pair (sides), the shape
+    (scene_region: :func:`region_key`) or ``""`` (orientation, person_box); ``value`` is
+    ``+1/-1/0`` (depth), a label (orientation), ``(u, v)`` pixels (joint), a bool,
+    swapped (sides), a box ``(x0, y0, x1, y1)`` (person_box, scene_region box) or a
+    tuple of ``(x, y)`` points (scene_region polygon).
     """
 
     frame: int
@@ -91,6 +114,12 @@ class Event:
         if self.type == "sides":
             return {"frame": self.frame, "type": "sides", "pair": self.key,
                     "value": _SIDES_VALUES[bool(self.value)]}
+        if self.type == "person_box":
+            return {"frame": self.frame, "type": "person_box", "box": list(self.value)}
+        if self.type == "scene_region":
+            shape = "box" if self.key.startswith("box") else "polygon"
+            value = list(self.value) if shape == "box" else [list(p) for p in self.value]
+            return {"frame": self.frame, "type": "scene_region", shape: value}
         u, v = self.value
         return {"frame": self.frame, "type": "joint", "joint": self.key, "u": u, "v": v}
 
@@ -103,6 +132,52 @@ def _sign_value(sign) -> int:
     if sign in (1, -1, 0) and not isinstance(sign, bool):
         return int(sign)
     raise ValueError(f"depth sign must be +1, -1, 0 or toward/away/auto, got {sign!r}")
+
+
+def _is_int(x) -> bool:
+    return isinstance(x, (int, np.integer)) and not isinstance(x, bool)
+
+
+def check_box(box) -> tuple[int, int, int, int]:
+    """A box ``[x0, y0, x1, y1]`` as a tuple of ints, or ValueError saying what is wrong
+    (the frame's size is checked by :meth:`Annotations.check_frame_size`)."""
+    if not isinstance(box, (list, tuple)) or len(box) != 4 or not all(map(_is_int, box)):
+        raise ValueError(f"'box' must be four integers [x0, y0, x1, y1] (pixels), got {box!r}")
+    x0, y0, x1, y1 = (int(v) for v in box)
+    if min(x0, y0) < 0 or max(x1, y1) > MAX_PIXELS:
+        raise ValueError(f"box {[x0, y0, x1, y1]} must lie within 0..{MAX_PIXELS:g} pixels")
+    if not (x0 < x1 and y0 < y1):
+        raise ValueError(f"box {[x0, y0, x1, y1]} is empty: it needs x0 < x1 and y0 < y1")
+    return x0, y0, x1, y1
+
+
+def check_polygon(points) -> tuple[tuple[float, float], ...]:
+    """A polygon ``[[x, y], ...]`` (3 or more points) as a tuple of float pairs, or
+    ValueError saying what is wrong."""
+    if (not isinstance(points, (list, tuple)) or not 3 <= len(points) <= MAX_POLYGON_POINTS
+            or not all(isinstance(q, (list, tuple)) and len(q) == 2 for q in points)):
+        raise ValueError(f"'polygon' must be 3 to {MAX_POLYGON_POINTS} points [x, y]")
+    flat = [v for q in points for v in q]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+               and 0 <= v <= MAX_PIXELS for v in flat):  # (NaN fails too)
+        raise ValueError(f"'polygon' points must be pixels within 0..{MAX_PIXELS:g}")
+    return tuple((float(x), float(y)) for x, y in points)
+
+
+def region_key(value) -> str:
+    """The key of a scene_region event: its shape in words (two regions with the same
+    shape are one)."""
+    if len(value) == 4 and all(map(_is_int, value)):
+        return "box " + " ".join(str(int(v)) for v in value)
+    return "polygon " + " ".join(f"{x:g},{y:g}" for x, y in value)
+
+
+def _region_extent(e: Event) -> tuple[float, float]:
+    """The largest x and y a region event reaches."""
+    if e.type == "person_box" or e.key.startswith("box"):
+        return float(e.value[2]), float(e.value[3])
+    pts = np.asarray(e.value, float)
+    return float(pts[:, 0].max()), float(pts[:, 1].max())
 
 
 class Annotations:
@@ -167,6 +242,39 @@ class Annotations:
             raise ValueError(f"swapped must be True or False, got {swapped!r}")
         self._put(Event(self._frame(frame), "sides", pair, bool(swapped)))
 
+    def add_scene_region(self, frame: int, *, box=None, polygon=None) -> str:
+        """Pixels that are never the person, for the whole clip: a ``box`` ``(x0, y0, x1,
+        y1)`` (integer pixel edges, x1 and y1 exclusive) or a ``polygon`` of ``(x, y)``
+        points; ``frame`` is where it was drawn. Returns the event's key (for
+        :meth:`remove`)."""
+        if (box is None) == (polygon is None):
+            raise ValueError("a scene region is a box or a polygon (give one)")
+        value = check_box(box) if box is not None else check_polygon(polygon)
+        key = region_key(value)
+        self._put(Event(self._frame(frame), "scene_region", key, value))
+        return key
+
+    def add_person_box(self, frame: int, box) -> None:
+        """At ``frame``, the person is inside ``box`` ``(x0, y0, x1, y1)`` (replaces an
+        earlier person box at that frame)."""
+        self._put(Event(self._frame(frame), "person_box", "", check_box(box)))
+
+    def region_events(self) -> list[Event]:
+        """The events that change the silhouettes (:data:`REGION_TYPES`), sorted."""
+        return [e for e in self.events if e.type in REGION_TYPES]
+
+    def check_frame_size(self, width: int, height: int, source="<annotations>") -> None:
+        """Raise :class:`AnnotationError` (naming ``source``) for a region reaching
+        beyond a ``width`` x ``height`` frame."""
+        for e in self.region_events():
+            x, y = _region_extent(e)
+            if x > width or y > height:
+                shape = e.to_json()
+                what = shape.get("box", "polygon")
+                raise AnnotationError(
+                    f"the {e.type} at frame {e.frame} ({what}) reaches beyond the "
+                    f"{width}x{height} frame (x up to {width}, y up to {height})", source)
+
     def remove(self, frame: int, type: str, key: str = "") -> bool:
         """Remove the event at ``frame`` of ``type`` for ``key``; return whether one was."""
         return self._events.pop((int(frame), type, key), None) is not None
@@ -225,8 +333,8 @@ class Annotations:
         for e in evs:
             if e.type == "orientation":
                 orient[e.frame:] = e.value
-            elif e.type == "sides":
-                continue  # see sides()
+            elif e.type == "sides" or e.type in REGION_TYPES:
+                continue  # see sides(); regions are the silhouette stage's
             elif e.type == "joint":
                 joints[e.frame, JOINT_INDEX[e.key]] = e.value
             else:
@@ -269,7 +377,8 @@ class Annotations:
         write_text_atomic(path, text)
 
     @classmethod
-    def load(cls, path: str | os.PathLike, n_frames: int | None = None) -> Annotations:
+    def load(cls, path: str | os.PathLike, n_frames: int | None = None, *,
+             frame_size: tuple[int, int] | None = None) -> Annotations:
         """Read and validate an annotations file.
 
         Parameters
@@ -277,6 +386,8 @@ class Annotations:
         path : str or path-like
         n_frames : int, optional
             Frames in the clip; events at or beyond it are errors.
+        frame_size : (int, int), optional
+            The frames' width and height in pixels; regions beyond them are errors.
 
         Raises
         ------
@@ -296,10 +407,11 @@ class Annotations:
             raise AnnotationError(
                 f"not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})", p
             ) from None
-        return cls.from_json(data, n_frames=n_frames, source=p)
+        return cls.from_json(data, n_frames=n_frames, source=p, frame_size=frame_size)
 
     @classmethod
-    def from_json(cls, data, *, n_frames: int | None = None, source="<annotations>"):
+    def from_json(cls, data, *, n_frames: int | None = None, source="<annotations>",
+                  frame_size: tuple[int, int] | None = None):
         """Validate a decoded JSON document (see :meth:`load`)."""
         def fail(msg):
             raise AnnotationError(msg, source)
@@ -326,7 +438,8 @@ class Annotations:
             missing = _KEYS[typ] - set(ev)
             if missing:
                 fail(f"{where}: {typ} event lacks {sorted(missing)}")
-            unknown = set(ev) - _KEYS[typ]
+            unknown = set(ev) - _KEYS[typ] - ({"box", "polygon"} if typ == "scene_region"
+                                              else set())
             if unknown:
                 fail(f"{where}: unknown key(s) {sorted(unknown)} in a {typ} event")
             frame = ev["frame"]
@@ -345,6 +458,11 @@ class Annotations:
                 if ev["value"] not in _DEPTH_VALUES:
                     fail(f"{where}: depth value {ev['value']!r} is not toward, away or auto")
                 e = Event(frame, typ, ev["segment"], _DEPTH_VALUES[ev["value"]])
+            elif typ in REGION_TYPES:
+                try:
+                    e = _region_event(frame, typ, ev)
+                except ValueError as exc:
+                    fail(f"{where}: {typ}: {exc}")
             elif typ == "sides":
                 if ev["pair"] not in PAIRS:
                     fail(f"{where}: unknown limb pair {ev['pair']!r} (expected arms or legs)")
@@ -366,7 +484,19 @@ class Annotations:
                 fail(f"{where}: a second {typ} event for {e.key or 'the body'} at frame {frame}")
             seen.add(key)
             out._put(e)
+        if frame_size is not None:
+            out.check_frame_size(*frame_size, source=source)
         return out
+
+
+def _region_event(frame: int, typ: str, ev: dict) -> Event:
+    """A scene_region or person_box event from its JSON object (ValueError if bad)."""
+    if typ == "person_box":
+        return Event(frame, typ, "", check_box(ev["box"]))
+    if ("box" in ev) == ("polygon" in ev):
+        raise ValueError("needs one of 'box' [x0, y0, x1, y1] or 'polygon' [[x, y], ...]")
+    value = check_box(ev["box"]) if "box" in ev else check_polygon(ev["polygon"])
+    return Event(frame, typ, region_key(value), value)
 
 
 def default_path(video: str | os.PathLike) -> Path:

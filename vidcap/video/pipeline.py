@@ -52,6 +52,7 @@ from vidcap.video.motion import MotionResult, build_motion, keyframes_by_confide
 from vidcap.video.person import partly_outside, person_track
 from vidcap.video.result import MIXED_VIEW, POOR_FIT, ConvertResult, frame_runs, true_runs
 from vidcap.video.stagecache import StageCache, stage_key, video_identity
+from vidcap.video.userregions import region_cache_part
 
 #: Chunks per fitting process in ``run``: the fit of each chunk starts as soon as its
 #: silhouettes are out, so shorter chunks leave less of the fit to wait for after the
@@ -138,13 +139,14 @@ def run(
     cache = StageCache(cache_dir, log=log)
     timings = {}
     ann, ann_source = _load_annotations(annotations, video, log)
+    ann.check_frame_size(info.width, info.height, ann_source)  # before any work
 
     # a given plate is read first: a bad file is reported before any worker starts
     with _timed(timings, "plate"):
         plate = load_plate(background) if background is not None else None
     ident = video_identity(video)
     k_plate = _plate_key(ident, background)
-    k_sil = _silhouette_key(ident, k_plate)
+    k_sil = _silhouette_key(ident, k_plate, region_cache_part(ann))
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
     pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs=jobs, per_job=per_job)
@@ -160,7 +162,7 @@ def run(
             streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
                         if pool is not None else None)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed,
-                                    progress=progress)
+                                    progress=progress, regions=_regions(ann, plate))
         _report_silhouettes(sil, info.n_frames, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
                                           per_job=per_job, streamed=streamed,
@@ -323,8 +325,19 @@ class _Silhouettes:
     n_other: np.ndarray
 
 
-def _silhouette_key(video_id: dict, k_plate: str) -> str:
-    return stage_key("silhouettes", _SILHOUETTE_VERSION, video_id, k_plate)
+def _silhouette_key(video_id: dict, k_plate: str, regions: list | None = None) -> str:
+    # the user's regions join the key only when there are some: the entries of clips
+    # without any stay valid, and no other event ever touches it
+    extra = (regions,) if regions else ()
+    return stage_key("silhouettes", _SILHOUETTE_VERSION, video_id, k_plate, *extra)
+
+
+def _regions(ann: Annotations, plate):
+    """The user's regions (:class:`vidcap.video.userregions.UserRegions`), None if none."""
+    from vidcap.video.userregions import UserRegions
+
+    regions = UserRegions(ann, plate.plate.shape[:2])
+    return regions if regions else None
 
 
 class _MaskFeed:
@@ -343,10 +356,12 @@ class _MaskFeed:
 
 
 def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, streamed,
-                      progress) -> _Silhouettes:
+                      progress, regions=None, on_masks=None) -> _Silhouettes:
     """The person's silhouettes, cached or extracted; while they are extracted, each
     chunk of frames goes to ``streamed`` (a :class:`vidcap.video.fit.parallel.StreamedFit`,
-    or None) as soon as it is complete."""
+    or None) as soon as it is complete, or to ``on_masks`` (as ``on_masks(start, masks)``
+    of :func:`vidcap.video.silhouette.extract_silhouettes`). ``regions``: the user's
+    (:class:`vidcap.video.userregions.UserRegions`), which ``key`` must include."""
     from vidcap.video.silhouette import extract_silhouettes
 
     # entries written before the masks were stored cropped lack mask_boxes: extract again
@@ -356,11 +371,52 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
                                       hit["mask_bits"], hit["mask_sizes"])
         n_other = hit["n_other"] if "n_other" in hit else np.zeros(len(masks), np.int64)
         return _Silhouettes(masks, hit["bbox"], n_other)
-    sil = extract_silhouettes(video, plate, progress=progress,
-                              on_masks=None if streamed is None else _MaskFeed(streamed))
+    if streamed is not None:
+        on_masks = _MaskFeed(streamed)
+    sil = extract_silhouettes(video, plate, progress=progress, on_masks=on_masks,
+                              regions=regions)
     out = _Silhouettes(sil.masks, sil.bbox, sil.n_other_blobs)
     cache.save("silhouettes", key, bbox=out.bbox, n_other=out.n_other, **out.masks.to_arrays())
     return out
+
+
+def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
+                     cache_dir: str | os.PathLike | None = None, on_masks=None,
+                     log=None) -> _Silhouettes:
+    """The first two stages of :func:`run` only (plate, silhouettes with the user's
+    regions), cached as :func:`run` caches them: what the annotate page redoes when
+    the user draws a region.
+
+    Parameters
+    ----------
+    video : str or path-like
+    annotations : Annotations
+        Only the region events count (:mod:`vidcap.video.userregions`).
+    cache_dir : path, optional
+        The stage cache (None = no caching).
+    on_masks : callable, optional
+        ``on_masks(start, masks)`` after each chunk of frames (progress).
+    log : callable, optional
+
+    Returns
+    -------
+    object
+        ``masks`` (:class:`vidcap.video.masks.MaskStack`), ``bbox`` (F, 4) and
+        ``n_other`` (F,), as the silhouette stage gives them.
+    """
+    from vidcap.io.video import probe
+
+    log = log or (lambda msg: None)
+    video = Path(video)
+    info = probe(video)
+    annotations.check_frame_size(info.width, info.height, video)
+    cache = StageCache(cache_dir, log=log)
+    ident = video_identity(video)
+    k_plate = _plate_key(ident, None)
+    plate = _plate_stage(cache, k_plate, video, None, progress=False, log=log)
+    key = _silhouette_key(ident, k_plate, region_cache_part(annotations))
+    return _silhouette_stage(cache, key, video, plate, streamed=None, progress=False,
+                             regions=_regions(annotations, plate), on_masks=on_masks)
 
 
 def _report_silhouettes(sil: _Silhouettes, n_expected: int | None, log) -> None:

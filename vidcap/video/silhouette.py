@@ -232,10 +232,12 @@ def _follow(contours, areas, order, prev_box, p: _Params) -> int:
     return best
 
 
-def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
+def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
                      ) -> tuple[FrameSilhouette, np.ndarray]:
     """One frame (internal; use :func:`extract_silhouettes`). ``prev_box``: the
-    person's box in the previous frame where one was found (:func:`_follow`)."""
+    person's box in the previous frame where one was found (:func:`_follow`);
+    ``keep``: where the user allows the person in this frame
+    (:meth:`vidcap.video.userregions.UserRegions.keep_masks`), or None."""
     full_frame = frame
     if p.work_size is not None:
         frame = cv2.resize(frame, p.work_size, interpolation=cv2.INTER_AREA)
@@ -255,6 +257,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
         ys, xs = p.still
         near = np.abs(frame[ys, xs] - p.still_colour * g).sum(axis=-1) <= p.tmap[ys, xs]
         fg[ys[near], xs[near]] = 255
+    if keep is not None:  # the user's regions: never the person, nor chosen as them
+        fg = cv2.bitwise_and(fg, keep[0])
     n_fg = cv2.countNonZero(fg)
     frac = n_fg / fg.size
     fg = cv2.medianBlur(fg, 3)
@@ -297,6 +301,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None
                 _edge_by_contrast(mask, full_frame, g, p)
             elif p.work_size is not None:
                 _refine_edges(mask, full_frame, g, p)
+            if keep is not None:  # (the edge refinement may reach into a region)
+                mask &= keep[1]
             x, y, w, h = cv2.boundingRect(mask)
             bbox = np.array([x, y, x + w, y + h], np.int64)
             area = int(cv2.countNonZero(mask))
@@ -487,7 +493,7 @@ def iter_silhouettes(
     local_factor: float = 3.0, shadows: bool = True, min_area: int | None = None,
     other_fraction: float = 0.2, close_size: int | None = None, chunk_size: int = 64,
     work_scale: int | None = None, edge_band: int | None = None,
-    edge_fraction: float = 0.3,
+    edge_fraction: float = 0.3, regions=None,
 ) -> Iterator[tuple[np.ndarray, list[FrameSilhouette], np.ndarray]]:
     """Silhouettes chunk by chunk (for long videos); see :func:`extract_silhouettes`.
 
@@ -509,6 +515,7 @@ def iter_silhouettes(
         chunks = iter_frame_lists(source, chunk_size=chunk_size)
     params = None
     prev_box = None
+    index = 0  # of the frame in the clip (for the user's regions)
     for chunk in chunks:
         h, w = chunk[0].shape[:2]
         if (h, w) != background.plate.shape[:2]:
@@ -528,7 +535,9 @@ def iter_silhouettes(
                     f"the frame size changes mid-stream (from {w}x{h} to "
                     f"{frame.shape[1]}x{frame.shape[0]}); re-encode the video at one size",
                     None if isinstance(source, np.ndarray) else source)
-            r, g = silhouette_frame(frame, params, prev_box)
+            keep = None if not regions else regions.keep_masks(index, params.work_size)
+            index += 1
+            r, g = silhouette_frame(frame, params, prev_box, keep)
             if r.bbox[0] >= 0:
                 prev_box = r.bbox  # the person is followed, not the largest blob
             results.append(r)
@@ -545,7 +554,7 @@ def extract_silhouettes(
     other_fraction: float = 0.2, close_size: int | None = None, chunk_size: int = 64,
     progress: bool | None = None, require_person: bool = True,
     work_scale: int | None = None, edge_band: int | None = None,
-    edge_fraction: float = 0.3, on_masks=None,
+    edge_fraction: float = 0.3, on_masks=None, regions=None,
 ) -> Silhouettes:
     """Separate the person from the background in every frame.
 
@@ -604,6 +613,8 @@ def extract_silhouettes(
         (a :class:`MaskStack` of frames ``start`` on; final: nothing later
         changes them), so a caller can start on them (the pipeline fits the first
         chunk of frames while the rest are still being extracted).
+    regions : vidcap.video.userregions.UserRegions, optional
+        The user's scene regions and person boxes: pixels the person may not be in.
 
     Returns
     -------
@@ -619,7 +630,7 @@ def extract_silhouettes(
     options = dict(threshold=threshold, local_factor=local_factor, shadows=shadows,
                    min_area=min_area, other_fraction=other_fraction, close_size=close_size,
                    chunk_size=chunk_size, work_scale=work_scale, edge_band=edge_band,
-                   edge_fraction=edge_fraction)
+                   edge_fraction=edge_fraction, regions=regions)
     acc = _Collected()
     acc.run(source, background, options, progress, on_masks)
     name = None if isinstance(source, np.ndarray) else source
