@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import sys
 
+import cv2
 import numpy as np
 from vidcap.ui import render
 from vidcap.ui.session import MAX_DISPLAY_WIDTH, AnnotateSession
@@ -24,6 +25,11 @@ from vidcap.body import JOINT_NAMES, ORIENTATIONS, SEGMENT_JOINTS
 DISPLAY_WIDTH = 640
 #: Radius in display pixels within which a mouse press picks a joint up.
 PICK_RADIUS = 14
+#: What dragging the mouse over the frame does (state ``draw_mode``): move a joint,
+#: or draw a region (:mod:`vidcap.ui.regionedit`).
+DRAW_MODES = (("joints", "move joints"), ("scene_region", "not the person: box"),
+              ("scene_area", "not the person: outline"),
+              ("person_box", "person is here (this frame)"))
 
 _KEYS_JS = """
 if (!window.__vidcapKeys) {
@@ -74,6 +80,9 @@ class AnnotateApp:
         self.display_scale = (DISPLAY_WIDTH / w if w < DISPLAY_WIDTH
                               else min(1.0, MAX_DISPLAY_WIDTH / w))
         self._drag: str | None = None
+        self._rect_start: tuple[float, float] | None = None  # a region being drawn
+        self._reseg_task = None
+        self._reseg_progress = ("", 0, 0)
         self._play_task = None
 
         # live 3D pose: the whole clip frames the camera and the floor
@@ -88,6 +97,7 @@ class AnnotateApp:
         self._init_state()
         self._build_ui()
         self.state.change("frame")(self._on_frame)
+        self.state.change("show_sil")(self._on_frame)
         self._register_triggers()
         self._update_frame()
 
@@ -132,6 +142,15 @@ class AnnotateApp:
         st.joint_names = list(JOINT_NAMES)
         st.joints_display = []
         st.annotations_path = str(s.path)
+        # regions (issue 26): what the mouse draws, the silhouette over the frame
+        st.draw_mode = "joints"
+        st.show_sil = True
+        st.band = []
+        st.regions = s.region_items()
+        st.resegmenting = False
+        st.reseg_status = ""
+        st.sil_area = 0
+        st.can_resegment = s.clip.resegment is not None
 
     def _update_flagged(self) -> None:
         items = self.session.flagged()
@@ -151,10 +170,13 @@ class AnnotateApp:
         scale = self.display_scale
         big = render.fit_width(frame, round(s.clip.size[0] * scale))  # frames may come shrunk
         j2 = s.joints2d[f] * scale
-        overlay = render.draw_model(big, j2, signs, low_confidence=low, user_signs=user_signs,
+        mask = None if s.clip.masks is None else s.clip.masks[f]
+        shown = render.draw_regions(
+            render.overlay_silhouette(big, mask) if st.show_sil else big,
+            s.regions_at(f), scale)
+        overlay = render.draw_model(shown, j2, signs, low_confidence=low, user_signs=user_signs,
                                     user_joints=user_joints)
-        sil = render.silhouette_image(None if s.clip.masks is None else s.clip.masks[f],
-                                      frame.shape[:2])
+        sil = render.silhouette_image(mask, frame.shape[:2])
         sil_big = render.fit_width(sil, big.shape[1])
         sil_model = render.draw_model(sil_big, j2, signs, low_confidence=low,
                                       user_signs=user_signs, user_joints=user_joints)
@@ -174,6 +196,7 @@ class AnnotateApp:
             st.user_joints = info["user_joints"]
             st.joints_display = np.round(j2, 1).tolist()  # page pixels, for tests and tools
             st.n_inputs = s.n_user_inputs
+            st.sil_area = 0 if mask is None else int(np.count_nonzero(mask))
         self.scene.set_frame(f)
         self._update_3d_view()
 
@@ -189,6 +212,7 @@ class AnnotateApp:
         s, st = self.session, self.state
         from vidcap.ui.view import Points3D
 
+        st.regions = s.region_items()
         self._points3d = Points3D(JOINT_NAMES, self._floor(s.joints3d), self._points3d.bones,
                                   s.clip.fps, 1)
         self.scene.data = self._points3d
@@ -227,6 +251,9 @@ class AnnotateApp:
 
         @server.trigger("drag_start")
         def drag_start(x, y):
+            if self.state.draw_mode != "joints":  # a region: its first corner
+                self._rect_start = (x / self.display_scale, y / self.display_scale)
+                return
             f = int(self.state.frame)
             u, v = x / self.display_scale, y / self.display_scale
             self._drag = self.session.nearest_joint(f, u, v,
@@ -235,6 +262,15 @@ class AnnotateApp:
 
         @server.trigger("drag_end")
         def drag_end(x, y):
+            mode, start, self._rect_start = self.state.draw_mode, self._rect_start, None
+            if mode in ("scene_region", "person_box") and start is not None:
+                box = (*start, x / self.display_scale, y / self.display_scale)
+                f = int(self.state.frame)
+                if mode == "scene_region":
+                    self._region_edit(lambda: self.session.add_scene_region(f, box=box))
+                else:
+                    self._region_edit(lambda: self.session.add_person_box(f, box))
+                return
             joint, self._drag = self._drag, None
             self.state.drag_joint = ""
             if joint is None:
@@ -245,6 +281,23 @@ class AnnotateApp:
             if np.hypot(u - old[0], v - old[1]) * self.display_scale < 2:  # a click, not a drag
                 return
             self._edit(self.session.set_joint, f, joint, u, v)
+
+        @server.trigger("lasso_end")
+        def lasso_end(points):
+            self._rect_start = None
+            if self.state.draw_mode != "scene_area" or not points:
+                return
+            pts = np.asarray(points, np.float32).reshape(-1, 1, 2) / self.display_scale
+            if len(pts) > 3:  # the mouse's path to within a pixel: fewer points to keep
+                pts = cv2.approxPolyDP(pts, 1.0, True)
+            poly = pts.reshape(-1, 2).tolist()
+            f = int(self.state.frame)
+            self._region_edit(lambda: self.session.add_scene_region(f, polygon=poly))
+
+        @server.trigger("delete_region")
+        def delete_region(ident):
+            type_, frame, key = str(ident).split("|", 2)
+            self._region_edit(lambda: self.session.remove_region(int(frame), type_, key))
 
         @server.trigger("clear_joint")
         def clear_joint(joint):
@@ -293,6 +346,67 @@ class AnnotateApp:
             else:
                 self.state.refreshing = True
                 loop.create_task(self._refresh())
+
+    def _region_edit(self, fn) -> None:
+        """A region edit: saved at once, then the silhouettes and fit are redone (in the
+        background when the server runs)."""
+        try:
+            ms = fn()
+        except (ValueError, OSError) as exc:
+            self.state.message = f"region refused: {exc}"
+            return
+        self._after_edit(ms)
+        if not self.session.regions_stale:
+            if self.session.clip.resegment is None:
+                self.state.reseg_status = "saved; vidcap convert applies it"
+            return
+        try:
+            loop = asyncio.get_running_loop()
+        except RuntimeError:  # no server loop (a script or a test): do it now
+            self._resegmented(self.session.resegment())
+            return
+        if self._reseg_task is None or self._reseg_task.done():
+            self._reseg_task = loop.create_task(self._resegment_loop())
+
+    def _on_reseg_progress(self, stage: str, done: int, total: int) -> None:
+        self._reseg_progress = (stage, done, total)  # (a worker thread: read by the loop)
+
+    async def _resegment_loop(self) -> None:
+        """Redo the silhouettes (and refit what changed) in a worker thread while the
+        page stays live, showing progress; again if a region was edited meanwhile."""
+        loop = asyncio.get_running_loop()
+        st = self.state
+        while self.session.regions_stale:
+            self._reseg_progress = ("silhouettes", 0, self.session.n_frames)
+            with st:
+                st.resegmenting = True
+            job = loop.run_in_executor(None, self.session.resegment, self._on_reseg_progress)
+            while not job.done():
+                stage, done, total = self._reseg_progress
+                with st:
+                    st.reseg_status = f"recomputing {stage}: {done}/{total} frames"
+                await asyncio.wait({job}, timeout=0.25)
+            try:
+                result = job.result()
+            except Exception as exc:  # noqa: BLE001 - shown, the page stays up
+                with st:
+                    st.resegmenting = False
+                    st.reseg_status = f"recompute failed: {exc}"
+                print(f"vidcap annotate: recompute failed: {exc}", file=sys.stderr, flush=True)
+                return
+            with st:
+                self._resegmented(result)
+
+    def _resegmented(self, result) -> None:
+        """Show the clip's new silhouettes and pose."""
+        st = self.state
+        st.resegmenting = False
+        if result is None:
+            return
+        st.reseg_status = (f"silhouettes recomputed: {result['changed']} frame(s) changed"
+                           f" ({result['seconds']:.1f} s)")
+        self._update_flagged()
+        self._after_edit(self.session.last_edit_ms)
 
     async def _refresh(self) -> None:
         """Re-propose the other depth signs in a worker thread, then redraw."""
@@ -385,11 +499,27 @@ class AnnotateApp:
                         raw_attrs=[
                             'draggable="false"',
                             f'@mousedown.prevent="trigger(\'drag_start\', [{drag_x}, {drag_y}]);'
-                            ' drag_pos = [$event.offsetX, $event.offsetY]"',
+                            ' drag_pos = [$event.offsetX, $event.offsetY];'
+                            " draw_mode != 'joints' && (band = [$event.offsetX, $event.offsetY,"
+                            f' $event.offsetX, $event.offsetY], $event.target.__pts = [[{drag_x},'
+                            f' {drag_y}]])"',
                             '@mousemove="drag_joint && (drag_pos = [$event.offsetX,'
-                            ' $event.offsetY])"',
-                            f'@mouseup="trigger(\'drag_end\', [{drag_x}, {drag_y}])"',
+                            ' $event.offsetY]); band.length && (band = [band[0], band[1],'
+                            " $event.offsetX, $event.offsetY]); band.length && draw_mode =="
+                            " 'scene_area' && $event.target.__pts &&"
+                            f' $event.target.__pts.push([{drag_x}, {drag_y}])"',
+                            f'@mouseup="trigger(\'drag_end\', [{drag_x}, {drag_y}]);'
+                            " band.length && draw_mode == 'scene_area' &&"
+                            " trigger('lasso_end', [$event.target.__pts || []]); band = []\"",
                         ])
+                    html.Div(
+                        v_if="band.length", id="draw-band",
+                        style=("'position: absolute; pointer-events: none; border: 2px dashed '"
+                               " + (draw_mode == 'person_box' ? 'rgb(60,220,60)' :"
+                               " 'rgb(230,60,60)') + '; left: ' + Math.min(band[0], band[2])"
+                               " + 'px; top: ' + Math.min(band[1], band[3]) + 'px; width: '"
+                               " + Math.abs(band[2] - band[0]) + 'px; height: '"
+                               " + Math.abs(band[3] - band[1]) + 'px'",))
                     v3.VChip(
                         "FILLED: not fitted (no person, or mostly outside the picture); "
                         "pose from the frames around", v_if="filled", id="filled-badge",
@@ -402,6 +532,7 @@ class AnnotateApp:
                                " background: rgb(60,220,60); left: ' + drag_pos[0] + 'px; top: '"
                                " + drag_pos[1] + 'px'",))
                 self._frame_controls(v3, html, "")
+                self._region_controls(v3, html)
                 with v3.VRow(classes="align-center ma-0", dense=True):
                     v3.VBtn("next needing attention (N)", id="btn-attention", size="small",
                             prepend_icon="mdi-alert-circle-outline", click="trigger('attention')",
@@ -467,6 +598,32 @@ class AnnotateApp:
                                         variant="text",
                                         click="trigger('flip_depth', [s.name])")
                             html.Td("{{ s.user ? 'you' : 'auto' }}", classes="text-caption")
+
+    def _region_controls(self, v3, html) -> None:
+        """What the mouse draws on the frame, the silhouette over it, the regions drawn."""
+        with v3.VRow(classes="align-center ma-0", dense=True):
+            html.Span("mouse:", classes="text-caption mr-1")
+            with v3.VBtnToggle(v_model=("draw_mode",), mandatory=True, density="compact",
+                               divided=True, variant="outlined", id="draw-mode"):
+                for value, title in DRAW_MODES:
+                    v3.VBtn(title, value=value, size="small", id=f"mode-{value}",
+                            classes="text-none")
+        with v3.VRow(classes="align-center ma-0", dense=True):
+            v3.VSwitch(v_model=("show_sil",), label="silhouette over the frame",
+                       density="compact", hide_details=True, color="info", id="show-sil",
+                       classes="mr-3", style="flex: 0 0 auto")
+            v3.VChip("{{ reseg_status }}", v_if="reseg_status", id="reseg-status", size="small",
+                     color=("resegmenting ? 'warning' : 'success'",), variant="tonal",
+                     prepend_icon=("resegmenting ? 'mdi-progress-clock' : 'mdi-check'",))
+        with html.Div(id="region-list", classes="text-caption"):
+            with html.Div(v_for="r in regions", key="r.id", classes="d-flex align-center"):
+                v3.VIcon("mdi-square-outline", size="x-small", classes="mr-1",
+                         color=(f"r.type == 'scene_region' ? '{render.SCENE_REGION_CSS}'"
+                                f" : '{render.PERSON_BOX_CSS}'",))
+                html.Span("{{ r.label }}")
+                v3.VBtn(icon="mdi-delete", size="x-small", variant="text",
+                        id=("'delete-' + r.id",), title="delete this region",
+                        click="trigger('delete_region', [r.id])")
 
     def _review_tab(self, v3, html) -> None:
         with v3.VRow(dense=True):

@@ -148,3 +148,54 @@ def fit_width(image: np.ndarray, width: int) -> np.ndarray:
         return image
     interp = cv2.INTER_AREA if width < w else cv2.INTER_LINEAR
     return cv2.resize(image, (width, max(1, round(h * width / w))), interpolation=interp)
+
+
+#: Colours (BGR) of the user's regions over the frame: scene (never the person), the
+#: person's box; and of the silhouette laid over the frame.
+SCENE_REGION_BGR = (60, 60, 230)  # red
+PERSON_BOX_BGR = (60, 220, 60)  # green
+SILHOUETTE_BGR = (255, 200, 0)  # cyan
+SCENE_REGION_CSS = "rgb(230,60,60)"
+PERSON_BOX_CSS = "rgb(60,220,60)"
+SILHOUETTE_CSS = "rgb(0,200,255)"
+
+
+def overlay_silhouette(image: np.ndarray, mask: np.ndarray | None, *,
+                       alpha: float = 0.4) -> np.ndarray:
+    """``image`` (H, W, 3) BGR with the silhouette ``mask`` (any size, bool; scaled to
+    the image) tinted over it and outlined, so what was taken for the person shows."""
+    out = np.ascontiguousarray(image).copy()
+    if mask is None:
+        return out
+    h, w = out.shape[:2]
+    m = np.asarray(mask, np.uint8)
+    if m.shape != (h, w):
+        m = cv2.resize(m, (w, h), interpolation=cv2.INTER_NEAREST)
+    sel = m > 0
+    tint = np.array(SILHOUETTE_BGR, np.float32)
+    out[sel] = (out[sel] * (1 - alpha) + tint * alpha).astype(np.uint8)
+    contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(out, contours, -1, SILHOUETTE_BGR, 1, cv2.LINE_AA)
+    return out
+
+
+def draw_regions(image: np.ndarray, regions, scale: float) -> np.ndarray:
+    """The user's regions over ``image``: scene regions hatched red, the person box
+    green. ``regions``: dicts with ``type`` and ``box`` or ``polygon`` (video pixels,
+    as :func:`vidcap.ui.regionedit.region_items` lists them); ``scale``: image pixels
+    per video pixel."""
+    out = np.ascontiguousarray(image).copy()
+    for r in regions:
+        colour = SCENE_REGION_BGR if r["type"] == "scene_region" else PERSON_BOX_BGR
+        if "box" in r:
+            x0, y0, x1, y1 = r["box"]
+            pts = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float)
+        else:
+            pts = np.asarray(r["polygon"], float)
+        poly = np.round(pts * scale * 4).astype(np.int32).reshape(-1, 1, 2)
+        if r["type"] == "scene_region":  # shaded: these pixels are never the person
+            shade = out.copy()
+            cv2.fillPoly(shade, [poly], colour, cv2.LINE_AA, shift=2)
+            out = cv2.addWeighted(shade, 0.3, out, 0.7, 0)
+        cv2.polylines(out, [poly], True, colour, 2, cv2.LINE_AA, shift=2)
+    return out

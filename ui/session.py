@@ -70,6 +70,14 @@ class ClipData:
         The subject (default 1.75 m).
     size : tuple of int
         (width, height) of the frames in pixels (read from frame 0 if not given).
+    resegment : callable, optional
+        ``resegment(regions, on_masks) -> MaskStack``: the clip's silhouettes again with
+        the user's regions (an :class:`vidcap.video.annotations.Annotations` of region
+        events; ``on_masks(start, masks)`` after each chunk, for progress). None: the
+        page cannot recompute them (the events are still saved for ``vidcap convert``).
+    pose : dict, optional
+        The 2D fit's arrays (:data:`vidcap.video.refit.POSE_KEYS`) the frames of changed
+        silhouettes are refitted from; needed with ``resegment``.
     """
 
     video: Path
@@ -84,6 +92,8 @@ class ClipData:
     model_height: np.ndarray | None = None
     body: BodyModel | None = None
     size: tuple[int, int] = field(default=(0, 0))
+    resegment: Callable | None = None
+    pose: dict | None = None
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -164,11 +174,7 @@ class AnnotateSession:
 
     def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
                  low_doubt: float = 0.05, defer_refresh: bool = False, lift: str = "solve"):
-        from scipy.ndimage import median_filter
-
         from vidcap.video.annotations import Annotations
-        from vidcap.video.lift import torso_width_ratio
-        from vidcap.video.lifting import fill_gaps, frame_scales, lift_pose, model_scales
 
         self.clip = clip
         self.path = Path(annotations_path)
@@ -184,7 +190,30 @@ class AnnotateSession:
         self.stale = False
         self._version = 0
         self._lock = threading.RLock()
-        # what lift_pose derives from the 2D joints alone (for the quick re-lift)
+        self._region_version = 0
+        self.regions_stale = False  # regions edited since the silhouettes were made
+        self._prepare_clip()
+        self.annotations = Annotations()
+        if self.path.exists():
+            try:
+                self.annotations = Annotations.load(self.path, clip.n_frames,
+                                                    frame_size=clip.size)
+            except AnnotationError as exc:
+                self.load_error = str(exc)
+                self.backup = backup_path(self.path)
+                shutil.copy2(self.path, self.backup)
+        self._recompute()
+
+    # ------------------------------------------------------------------ derived state
+    def _prepare_clip(self) -> None:
+        """What :func:`vidcap.video.lifting.lift_pose` derives from the clip's 2D joints
+        alone (for the quick re-lift); again after the silhouettes were recomputed."""
+        from scipy.ndimage import median_filter
+
+        from vidcap.video.lift import torso_width_ratio
+        from vidcap.video.lifting import fill_gaps, frame_scales, lift_pose, model_scales
+
+        clip = self.clip
         self._filled = fill_gaps(clip.joints2d)
         scale = frame_scales(self._filled, clip.fps, clip.body)  # as lift_pose does
         self._segment_scale = model_scales(clip.model_height, len(self._filled), clip.body)
@@ -198,17 +227,7 @@ class AnnotateSession:
             size = max(1, int(round(window.default * clip.fps)) | 1)
             rho = median_filter(rho, size=size, mode="nearest")
         self._rho = rho
-        self.annotations = Annotations()
-        if self.path.exists():
-            try:
-                self.annotations = Annotations.load(self.path, clip.n_frames)
-            except AnnotationError as exc:
-                self.load_error = str(exc)
-                self.backup = backup_path(self.path)
-                shutil.copy2(self.path, self.backup)
-        self._recompute()
 
-    # ------------------------------------------------------------------ derived state
     def _lift_pose(self, annotations):
         from vidcap.video.lifting import lift_pose
 
@@ -464,6 +483,104 @@ class AnnotateSession:
             self.annotations.remove(self._check_frame(frame), "joint", joint)
         return self._edited(t0)
 
+    # ------------------------------------------------------------------ regions
+    def _region_edited(self, t0: float) -> float:
+        with self._lock:
+            self._region_version += 1
+            self.regions_stale = self.clip.resegment is not None
+        self.save()
+        self.last_edit_ms = (time.perf_counter() - t0) * 1000.0
+        return self.last_edit_ms
+
+    def add_scene_region(self, frame: int, *, box=None, polygon=None) -> float:
+        """Mark pixels that are never the person, for the whole clip (a ``box`` ``(x0,
+        y0, x1, y1)`` or a ``polygon`` of ``(x, y)``, video pixels, clipped to the frame;
+        ``frame``: where it was drawn). Saved at once; the silhouettes follow with
+        :meth:`resegment`. Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        w, h = self.clip.size
+        if box is not None:
+            box = self._clip_box(box)
+        if polygon is not None:
+            polygon = [(round(float(np.clip(x, 0, w)), 1), round(float(np.clip(y, 0, h)), 1))
+                       for x, y in polygon]
+        with self._lock:
+            self.annotations.add_scene_region(self._check_frame(frame), box=box,
+                                              polygon=polygon)
+        return self._region_edited(t0)
+
+    def add_person_box(self, frame: int, box) -> float:
+        """In ``frame``, the person is inside ``box`` (video pixels, clipped to the frame).
+        Saved at once; the silhouettes follow with :meth:`resegment`."""
+        t0 = time.perf_counter()
+        with self._lock:
+            self.annotations.add_person_box(self._check_frame(frame), self._clip_box(box))
+        return self._region_edited(t0)
+
+    def remove_region(self, frame: int, type_: str, key: str = "") -> float:
+        """Delete a region event (as :meth:`region_items` lists it)."""
+        from vidcap.video.annotations import REGION_TYPES
+
+        t0 = time.perf_counter()
+        if type_ not in REGION_TYPES:
+            raise ValueError(f"not a region event: {type_!r}")
+        with self._lock:
+            if not self.annotations.remove(int(frame), type_, key):
+                raise ValueError(f"no {type_} at frame {frame}")
+        return self._region_edited(t0)
+
+    def _clip_box(self, box) -> tuple[int, int, int, int]:
+        """A dragged box as integer pixel edges within the frame, corners in any order."""
+        w, h = self.clip.size
+        x0, y0, x1, y1 = (float(v) for v in box)
+        x0, x1 = sorted((x0, x1))
+        y0, y1 = sorted((y0, y1))
+        out = (int(np.clip(np.floor(x0), 0, w - 1)), int(np.clip(np.floor(y0), 0, h - 1)),
+               int(np.clip(np.ceil(x1), 1, w)), int(np.clip(np.ceil(y1), 1, h)))
+        if out[2] - out[0] < 2 or out[3] - out[1] < 2:
+            raise ValueError("the box is too small (drag a rectangle)")
+        return out
+
+    def region_items(self) -> list[dict]:
+        """The region events for the page's list (:func:`vidcap.ui.regionedit.region_items`)."""
+        from vidcap.ui.regionedit import region_items
+
+        return region_items(self.annotations)
+
+    def regions_at(self, frame: int) -> list[dict]:
+        """The regions drawn over ``frame``: every scene region, the frame's person box."""
+        return [r for r in self.region_items()
+                if r["type"] == "scene_region" or r["frame"] == int(frame)]
+
+    def resegment(self, progress=None) -> dict | None:
+        """Recompute the silhouettes with the current regions and refit the frames they
+        change, then re-lift (safe in a worker thread; dropped, returning None, when a
+        region was edited meanwhile or the clip cannot recompute).
+
+        Returns
+        -------
+        dict or None
+            ``changed`` (frames whose silhouette changed) and ``seconds``.
+        """
+        from vidcap.ui.regionedit import adopt, resegment
+        from vidcap.video.annotations import Annotations
+
+        if self.clip.resegment is None:
+            return None
+        with self._lock:
+            version = self._region_version
+            snapshot = Annotations(self.annotations.region_events())
+        new = resegment(self.clip, snapshot, progress=progress)
+        with self._lock:
+            if version != self._region_version:
+                return None
+            adopt(self.clip, new)
+            self._prepare_clip()
+            self._version += 1  # a deferred refresh running now is of the old clip
+            self._recompute()
+            self.regions_stale = False
+        return {"changed": int(new.changed.sum()), "seconds": round(new.seconds, 2)}
+
     def nearest_joint(self, frame: int, u: float, v: float, *, radius: float) -> str | None:
         """Name of the joint nearest pixel (u, v) within ``radius`` pixels, else None."""
         d = np.linalg.norm(self.joints2d[self._check_frame(frame)] - [u, v], axis=1)
@@ -534,7 +651,8 @@ def default_annotations_path(video: str | os.PathLike) -> Path:
 
 
 def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None = None,
-              height: float = 1.75, progress: bool | None = None, log=None) -> ClipData:
+              height: float = 1.75, progress: bool | None = None, log=None,
+              annotations: str | os.PathLike | None = None) -> ClipData:
     """Run the pipeline's heavy stages for ``video`` (or load them from its stage cache).
 
     Parameters
@@ -549,6 +667,10 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
         Progress bars (default: when stderr is a terminal).
     log : callable, optional
         Called with one-line status messages.
+    annotations : str or path-like, optional
+        The annotations file: its regions (scene_region, person_box) shape the
+        silhouettes, as in ``vidcap convert``. A file that cannot be read counts as
+        none (the session reports it).
 
     Returns
     -------
@@ -565,12 +687,13 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
 
     from vidcap.io.video import iter_frames
     from vidcap.video import pipeline
-    from vidcap.video.annotations import Annotations
 
     video = Path(video)
     cache_dir = video.parent / ".vidcap-cache" if cache_dir is None else Path(cache_dir)
-    # the user's annotations are the session's business: run the stages without them
-    res = pipeline.run(video, annotations=Annotations(), height=height, cache_dir=cache_dir,
+    # the user's annotations are the session's business: run the stages with their
+    # regions only (the silhouettes depend on them)
+    regions = _file_regions(annotations, video)
+    res = pipeline.run(video, annotations=regions, height=height, cache_dir=cache_dir,
                        progress=progress, log=log)
     joints2d, spread = res.image_joints2d, res.spread
     jpegs = []
@@ -597,6 +720,38 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     image_sides=True, spread=None if spread is None else spread[:n],
                     track=None if track is None else track[:n],
                     model_height=None if res.model_height is None else res.model_height[:n],
-                    body=BodyModel(height=height), size=size)
+                    body=BodyModel(height=height), size=size,
+                    resegment=_resegmenter(video, cache_dir, log),
+                    pose={"joints2d": joints2d[:n], "scores": res.scores[:n],
+                          "similarity": res.similarity[:n], "spread": spread[:n],
+                          "model_height": res.model_height[:n]})
+
+
+def _file_regions(path, video: Path):
+    """The region events of the annotations file ``path`` (an empty set when there is
+    none, or it cannot be read, or a region lies outside the video's frames)."""
+    from vidcap.io.video import probe
+    from vidcap.video.annotations import Annotations
+
+    if path is None or not Path(path).exists():
+        return Annotations()
+    try:
+        info = probe(video)
+        ann = Annotations.load(path, frame_size=(info.width, info.height))
+    except AnnotationError:
+        return Annotations()
+    return Annotations(ann.region_events())
+
+
+def _resegmenter(video: Path, cache_dir: Path, log):
+    """:attr:`ClipData.resegment` for a video: the pipeline's plate and silhouette stages
+    with the user's regions, cached as ``vidcap convert`` caches them."""
+    from vidcap.video import pipeline
+
+    def resegment(regions, on_masks):
+        return pipeline.silhouettes_only(video, regions, cache_dir=cache_dir,
+                                         on_masks=on_masks, log=log).masks
+
+    return resegment
 
 

@@ -8,7 +8,8 @@ from pathlib import Path
 from vidcap.errors import UsageError
 
 NAME = "annotate"
-HELP = "annotate depth directions, orientation and occluded joints of a video in a web page"
+HELP = ("annotate depth directions, orientation, occluded joints and the regions that are"
+        " not the person of a video in a web page")
 ORDER = 50
 
 #: Packages of the ``ui`` extra the page needs.
@@ -47,7 +48,10 @@ def run(args) -> int:
     def log(msg: str) -> None:
         print(f"vidcap annotate: {msg}", file=sys.stderr, flush=True)
 
-    clip = load_clip(video, cache_dir=args.cache_dir, height=args.height, log=log)
-    session = AnnotateSession(clip, args.annotations or default_annotations_path(video))
+    path = args.annotations or default_annotations_path(video)
+    # the file's regions shape the silhouettes; its other events are the session's
+    clip = load_clip(video, cache_dir=args.cache_dir, height=args.height, log=log,
+                     annotations=path)
+    session = AnnotateSession(clip, path)
     annotate.serve(session, port=args.port, open_browser=not args.no_browser)
     return 0
