@@ -87,6 +87,27 @@ def test_depth_event_ends_where_the_segment_next_enters_the_image_plane():
         ('{"version": 1, "events": [{"frame": 1, "type": "orientation", "value": "left"},'
          ' {"frame": 1, "type": "orientation", "value": "right"}]}', "events[1]: a second"),
         ('{"version": 1, "events": [', "not valid JSON (line 1"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "scene_region"}]}',
+         "events[0]: scene_region: needs one of 'box'"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "scene_region", "box": [0, 0, 5, 5],'
+         ' "polygon": [[0, 0], [1, 0], [0, 1]]}]}', "needs one of 'box'"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "scene_region", "box": [0, 0, 5]}]}',
+         "'box' must be four integers [x0, y0, x1, y1]"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "person_box", "box": [0, 0, 5.5,'
+         ' 9]}]}', "events[0]: person_box: 'box' must be four integers"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "person_box", "box": [9, 0, 5, 9]}]}',
+         "box [9, 0, 5, 9] is empty: it needs x0 < x1 and y0 < y1"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "person_box", "box": [-1, 0, 5, 9]}]}',
+         "must lie within 0.."),
+        ('{"version": 1, "events": [{"frame": 0, "type": "person_box"}]}', "lacks ['box']"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "scene_region", "polygon":'
+         ' [[0, 0], [1, 0]]}]}', "'polygon' must be 3 to"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "scene_region", "polygon":'
+         ' [[0, 0], [1, 0], [1, "a"]]}]}', "'polygon' points must be pixels"),
+        ('{"version": 1, "events": [{"frame": 0, "type": "person_box", "box": [0, 0, 5, 9],'
+         ' "polygon": 1}]}', "unknown key(s) ['polygon']"),
+        ('{"version": 1, "events": [{"frame": 3, "type": "person_box", "box": [0, 0, 5, 9]},'
+         ' {"frame": 3, "type": "person_box", "box": [1, 0, 5, 9]}]}', "events[1]: a second"),
     ],
 )
 def test_malformed_files_give_one_line_errors(tmp_path, doc, message):
@@ -96,6 +117,29 @@ def test_malformed_files_give_one_line_errors(tmp_path, doc, message):
         Annotations.load(p, n_frames=50)
     text = str(info.value)
     assert message in text and str(p) in text and "\n" not in text
+
+
+def test_regions_round_trip_apart_from_the_other_events_and_fit_the_frame(tmp_path):
+    a = _sample()
+    key = a.add_scene_region(4, box=(400, 0, 480, 120))
+    a.add_scene_region(9, polygon=[(10, 300), (60.5, 290), (40, 350)])
+    a.add_person_box(25, (120, 40, 260, 355))
+    p = tmp_path / "r.json"
+    a.save(p)
+    b = Annotations.load(p, n_frames=50, frame_size=(480, 360))
+    assert a == b and b.n_user_inputs == 12
+    assert [e.type for e in b.region_events()] == ["scene_region", "scene_region",
+                                                   "person_box"]
+    signs, orient, joints = b.resolve(40)  # regions change none of the 3D stage's inputs
+    ref = _sample().resolve(40)
+    assert (signs == ref[0]).all() and (orient == ref[1]).all()
+    assert np.array_equal(joints, ref[2], equal_nan=True)
+    with pytest.raises(AnnotationError) as info:
+        Annotations.load(p, frame_size=(479, 360))
+    text = str(info.value)
+    assert str(p) in text and "scene_region at frame 4" in text and "479x360" in text
+    assert "\n" not in text
+    assert b.remove(4, "scene_region", key) and len(b.region_events()) == 2
 
 
 def test_missing_file(tmp_path):
@@ -135,6 +179,10 @@ def test_api_rejects_bad_values():
         a.add_sides(0, "feet", True)
     with pytest.raises(ValueError, match="True or False"):
         a.add_sides(0, "legs", "yes")
+    with pytest.raises(ValueError, match="a box or a polygon"):
+        a.add_scene_region(0)
+    with pytest.raises(ValueError, match="empty"):
+        a.add_person_box(0, (5, 5, 5, 9))
     a.add_depth(4, "head", 1)
     a.add_depth(4, "head", -1)  # replaces
     assert a.n_user_inputs == 1 and a.remove(4, "depth", "head") and len(a) == 0

@@ -113,6 +113,11 @@ def test_cache_part_only_regions():
     assert region_cache_part(a) == [] and region_cache_part(None) == []
     a.add_person_box(2, (1, 2, 3, 4))
     assert region_cache_part(a) == [{"frame": 2, "type": "person_box", "box": [1, 2, 3, 4]}]
+    b = Annotations()
+    b.add_scene_region(7, box=(1, 2, 3, 4))
+    c = Annotations()
+    c.add_scene_region(0, box=(1, 2, 3, 4))  # drawn on another frame: the same pixels
+    assert region_cache_part(b) == region_cache_part(c) != region_cache_part(a)
 
 
 @pytest.fixture(scope="module")
@@ -124,10 +129,15 @@ def walk_copy(tmp_path_factory):
     return d / "clip.mp4"
 
 
-def test_silhouette_cache_is_keyed_by_regions_only(walk_copy, tmp_path):
+def _head_half(bbox):
+    x0, y0, x1, y1 = (int(v) for v in bbox)
+    return x0, y0, x1, (y0 + y1) // 2
+
+
+def test_silhouette_cache_is_keyed_by_regions_only(walk_copy):
     from vidcap.video.pipeline import silhouettes_only
 
-    cache = tmp_path / "cache"
+    cache = walk_copy.parent / "cache"
     entries = lambda: sorted(p.name for p in cache.glob("silhouettes-*.npz"))  # noqa: E731
     a = Annotations()
     plain = silhouettes_only(walk_copy, a, cache_dir=cache)
@@ -139,19 +149,38 @@ def test_silhouette_cache_is_keyed_by_regions_only(walk_copy, tmp_path):
     silhouettes_only(walk_copy, a, cache_dir=cache)
     assert entries() == first  # other events: the same entry
     # a box over the person's upper body in frames 0-2 (where the walk starts)
-    x0, y0, x1, y1 = (int(v) for v in plain.bbox[1])
-    a.add_scene_region(1, box=(x0, y0, x1, (y0 + y1) // 2))
+    x0, y0, x1, _ = (int(v) for v in plain.bbox[1])
+    a.add_scene_region(1, box=_head_half(plain.bbox[1]))
     calls = []
     cut = silhouettes_only(walk_copy, a, cache_dir=cache,
                            on_masks=lambda start, m: calls.append((start, len(m))))
     assert len(entries()) == 2 and calls and calls[0][0] == 0
     old, new = np.asarray(plain.masks), np.asarray(cut.masks)
-    assert not new[:, y0:(y0 + y1) // 2, x0:x1].any()
-    assert old[1, y0:(y0 + y1) // 2, x0:x1].any()
+    x0, y0, x1, y1 = _head_half(plain.bbox[1])
+    assert not new[:, y0:y1, x0:x1].any()
+    assert old[1, y0:y1, x0:x1].any()
     assert changed_frames(plain.masks, cut.masks)[1]
     again = silhouettes_only(walk_copy, a, cache_dir=cache, on_masks=lambda *_: calls.append(0))
     assert len(entries()) == 2 and calls[-1] != 0  # a cache hit: no chunk extracted
     assert not changed_frames(cut.masks, again.masks).any()
+
+
+def test_convert_honours_the_region_and_reuses_its_silhouettes(walk_copy):
+    """The whole pipeline (as ``vidcap convert``) with the same region as above: the
+    silhouettes come from the cache entry made for it, and hold none of its pixels."""
+    from vidcap.video import pipeline
+
+    cache = walk_copy.parent / "cache"
+    before = sorted(cache.glob("silhouettes-*.npz"))
+    plain = pipeline.silhouettes_only(walk_copy, Annotations(), cache_dir=cache)
+    a = Annotations()
+    a.add_scene_region(0, box=_head_half(plain.bbox[1]))
+    a.add_orientation(0, "right")
+    res = pipeline.run(walk_copy, annotations=a, cache_dir=cache, jobs=1)
+    assert sorted(cache.glob("silhouettes-*.npz")) == before and len(before) == 2
+    x0, y0, x1, y1 = _head_half(plain.bbox[1])
+    assert not np.asarray(res.masks)[:, y0:y1, x0:x1].any()
+    assert np.isfinite(res.image_joints2d[1]).all()
 
 
 def test_region_beyond_the_frame_is_one_line_naming_the_file(walk_copy, tmp_path):

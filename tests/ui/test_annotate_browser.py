@@ -202,3 +202,43 @@ def test_malformed_annotations_shown_and_kept(browser, stage_cache, tmp_path):
     assert (tmp_path / "walk.json.bak").read_text() == text
     out = log.read_text()
     assert "walk.json" in out and "error" in out
+
+
+def test_draw_a_scene_region_and_see_the_new_silhouette(browser, stage_cache, tmp_path):
+    """Mark the person's head at frame 0 as "not the person" (a deliberate mistake that
+    shows plainly): the event is saved in video pixels, the silhouettes are recomputed
+    in the background and the frame's silhouette loses the head."""
+    ann = tmp_path / "walk.json"
+    with annotate_server(ann, stage_cache) as (url, _proc, log):
+        page = browser.new_page(viewport={"width": 1280, "height": 900})
+        page.goto(url)
+        page.wait_for_selector("#frame-img[src^='data:image']", timeout=30000)
+        _wait_state(page, "window.trame.state.get('sil_area') > 0")
+        area0 = _state(page, "sil_area")
+        names = _state(page, "joint_names")
+        joints = _state(page, "joints_display")
+        (hx, hy), (_nx, ny) = joints[names.index("head_top")], joints[names.index("neck")]
+        x0, y0, x1, y1 = hx - 20, hy - 12, hx + 20, ny  # page pixels: the head
+        page.click("#mode-scene_region")
+        _wait_state(page, "window.trame.state.get('draw_mode') == 'scene_region'")
+        box = page.locator("#frame-img").bounding_box()
+        natural = page.evaluate("document.querySelector('#frame-img').naturalWidth")
+        k = box["width"] / natural
+        page.mouse.move(box["x"] + x0 * k, box["y"] + y0 * k)
+        page.mouse.down()
+        page.mouse.move(box["x"] + (x0 + x1) / 2 * k, box["y"] + (y0 + y1) / 2 * k, steps=3)
+        page.wait_for_selector("#draw-band")  # the rubber band follows the mouse
+        page.mouse.move(box["x"] + x1 * k, box["y"] + y1 * k, steps=3)
+        page.mouse.up()
+        page.wait_for_selector("#region-list :text('not the person')")
+        _wait_state(page, "window.trame.state.get('reseg_status').includes('changed')",
+                    timeout=60000)
+        _wait_state(page, f"window.trame.state.get('sil_area') < {area0}")
+        _screenshot(page, "annotate_regions.png")
+        page.close()
+    events = json.loads(ann.read_text())["events"]
+    assert len(events) == 1 and events[0]["type"] == "scene_region" and events[0]["frame"] == 0
+    disp = 640 / 480  # the page shows the 480 px clip 640 px wide
+    expected = [x0 / disp, y0 / disp, x1 / disp, y1 / disp]
+    assert events[0]["box"] == pytest.approx(expected, abs=2.0)
+    assert "Traceback" not in log.read_text()

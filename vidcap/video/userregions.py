@@ -24,6 +24,8 @@ while the other events (depth, orientation, joints, sides) never do.
 
 from __future__ import annotations
 
+import json
+
 import cv2
 import numpy as np
 
@@ -32,10 +34,17 @@ from vidcap.video.annotations import Annotations, Event
 
 def region_cache_part(annotations: Annotations | None) -> list[dict]:
     """The region events as JSON objects, sorted (empty when there are none): the
-    part of the silhouette stage's cache key that depends on the user."""
+    part of the silhouette stage's cache key that depends on the user. A scene region's
+    frame (where it was drawn) is left out: it holds for every frame alike."""
     if annotations is None:
         return []
-    return [e.to_json() for e in annotations.region_events()]
+    out = []
+    for e in annotations.region_events():
+        d = e.to_json()
+        if e.type == "scene_region":
+            del d["frame"]
+        out.append(d)
+    return sorted(out, key=lambda d: json.dumps(d, sort_keys=True))
 
 
 def _fill(mask: np.ndarray, e: Event, value: int) -> None:
