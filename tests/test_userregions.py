@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from tests._synthframes import background
-from tests.conftest import REPO, run_cli
+from tests.conftest import REPO
 from vidcap.video.annotations import Annotations
 from vidcap.video.background import BackgroundModel
 from vidcap.video.masks import MaskStack
@@ -183,20 +183,23 @@ def test_convert_honours_the_region_and_reuses_its_silhouettes(walk_copy):
     assert np.isfinite(res.image_joints2d[1]).all()
 
 
-def test_region_beyond_the_frame_is_one_line_naming_the_file(walk_copy, tmp_path):
+def test_region_beyond_the_frame_is_one_line_naming_the_file(walk_copy, tmp_path, capsys):
+    from vidcap.cli import main
+
     ann = walk_copy.with_name("clip.vidcap.json")
     ann.write_text(json.dumps({"version": 1, "events": [
         {"frame": 0, "type": "scene_region", "box": [400, 0, 481, 50]}]}))
     out = tmp_path / "o.bvh"
     try:
-        r = run_cli("convert", walk_copy, "-o", out, "--no-cache")
+        code = main(["convert", str(walk_copy), "-o", str(out), "--no-cache"])
     finally:
         ann.unlink()
-    assert r.returncode == 2, r.stderr
-    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("vidcap: error:")]
+    err = capsys.readouterr().err
+    assert code == 2, err
+    lines = [ln for ln in err.splitlines() if ln.startswith("vidcap: error:")]
     assert len(lines) == 1
     assert "clip.vidcap.json" in lines[0] and "480x360" in lines[0]
-    assert "Traceback" not in r.stderr and not out.exists()
+    assert "Traceback" not in err and not out.exists()
 
 
 def test_changed_frames_and_windows():

@@ -19,6 +19,7 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytestmark = pytest.mark.browser
@@ -204,6 +205,11 @@ def test_malformed_annotations_shown_and_kept(browser, stage_cache, tmp_path):
     assert "walk.json" in out and "error" in out
 
 
+def disp_scale() -> float:
+    """Page pixels per video pixel: the page shows the 480 px sample 640 px wide."""
+    return 640 / 480
+
+
 def test_draw_a_scene_region_and_see_the_new_silhouette(browser, stage_cache, tmp_path):
     """Mark the person's head at frame 0 as "not the person" (a deliberate mistake that
     shows plainly): the event is saved in video pixels, the silhouettes are recomputed
@@ -235,9 +241,24 @@ def test_draw_a_scene_region_and_see_the_new_silhouette(browser, stage_cache, tm
                     timeout=60000)
         _wait_state(page, f"window.trame.state.get('sil_area') < {area0}")
         _screenshot(page, "annotate_regions.png")
+        # an outline drawn around an empty corner: saved as a polygon, changes nothing
+        page.click("#mode-scene_area")
+        _wait_state(page, "window.trame.state.get('draw_mode') == 'scene_area'")
+        corner = [(560, 20), (630, 20), (630, 90), (600, 60), (560, 80)]
+        page.mouse.move(box["x"] + corner[0][0] * k, box["y"] + corner[0][1] * k)
+        page.mouse.down()
+        for cx, cy in corner[1:] + corner[:1]:
+            page.mouse.move(box["x"] + cx * k, box["y"] + cy * k, steps=4)
+        page.mouse.up()
+        _wait_state(page, "window.trame.state.get('regions').length == 2")
+        _wait_state(page, "window.trame.state.get('reseg_status').includes(': 0 frame')",
+                    timeout=60000)
         page.close()
     events = json.loads(ann.read_text())["events"]
-    assert len(events) == 1 and events[0]["type"] == "scene_region" and events[0]["frame"] == 0
+    assert len(events) == 2 and events[0]["type"] == "scene_region" and events[0]["frame"] == 0
+    poly = np.array(events[1]["polygon"]) * disp_scale()
+    assert 4 <= len(poly) <= 40 and poly.min(axis=0) == pytest.approx([560, 20], abs=3)
+    assert poly.max(axis=0) == pytest.approx([630, 90], abs=3)
     disp = 640 / 480  # the page shows the 480 px clip 640 px wide
     expected = [x0 / disp, y0 / disp, x1 / disp, y1 / disp]
     assert events[0]["box"] == pytest.approx(expected, abs=2.0)
