@@ -1,5 +1,7 @@
 """The annotate web app (trame + vuetify 3 + pyvista): depth directions, orientation and
-occluded joints for one clip, with a live 3D pose, and a Review tab.
+occluded joints for one clip, with a live 3D pose, and a Review tab; regions that are not
+the person and boxes around the person, with the silhouette over the frame
+(:mod:`vidcap.ui.regionedit`).
 
 Start it with ``vidcap annotate VIDEO`` (or :func:`serve`). Everything the page
 shows comes from an :class:`vidcap.ui.session.AnnotateSession`; every edit goes through it,
