@@ -563,6 +563,7 @@ class AnnotateSession:
             ``changed`` (frames whose silhouette changed) and ``seconds``.
         """
         from vidcap.ui.regionedit import adopt, resegment
+
         from vidcap.video.annotations import Annotations
 
         if self.clip.resegment is None:
