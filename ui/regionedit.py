@@ -6,8 +6,9 @@ asks the clip for new ones (:attr:`vidcap.ui.session.ClipData.resegment`: the pi
 silhouette stage with the regions, :func:`vidcap.video.pipeline.silhouettes_only`), finds
 the frames that came out different (:func:`vidcap.video.refit.changed_frames`) and refits
 the 2D pose around them only (:func:`vidcap.video.refit.refit_changed`); the 3D stage is
-then rerun on the whole clip, as after any edit. All of it is safe to run in a worker
-thread: nothing here touches the session.
+then rerun on the whole clip, as after any edit. :func:`resegment` is safe to run in a
+worker thread (it touches no session); :class:`RegionEditing` gives the session its region
+edits and adopts the new silhouettes under the session's lock.
 """
 
 from __future__ import annotations
@@ -122,4 +123,102 @@ def region_items(annotations: Annotations) -> list[dict]:
     return out
 
 
-__all__ = ["Resegmented", "adopt", "region_items", "resegment"]
+class RegionEditing:
+    """The region edits of :class:`vidcap.ui.session.AnnotateSession` (a mixin: it uses the
+    session's ``clip``, ``annotations``, ``_lock``, ``_check_frame``, ``save`` and the
+    lift state it rebuilds after new silhouettes)."""
+
+    def _region_edited(self, t0: float) -> float:
+        with self._lock:
+            self._region_version += 1
+            self.regions_stale = self.clip.resegment is not None
+        self.save()
+        self.last_edit_ms = (time.perf_counter() - t0) * 1000.0
+        return self.last_edit_ms
+
+    def add_scene_region(self, frame: int, *, box=None, polygon=None) -> float:
+        """Mark pixels that are never the person, for the whole clip (a ``box`` ``(x0,
+        y0, x1, y1)`` or a ``polygon`` of ``(x, y)``, video pixels, clipped to the frame;
+        ``frame``: where it was drawn). Saved at once; the silhouettes follow with
+        :meth:`resegment`. Returns milliseconds taken."""
+        t0 = time.perf_counter()
+        w, h = self.clip.size
+        if box is not None:
+            box = self._clip_box(box)
+        if polygon is not None:
+            polygon = [(round(float(np.clip(x, 0, w)), 1), round(float(np.clip(y, 0, h)), 1))
+                       for x, y in polygon]
+        with self._lock:
+            self.annotations.add_scene_region(self._check_frame(frame), box=box,
+                                              polygon=polygon)
+        return self._region_edited(t0)
+
+    def add_person_box(self, frame: int, box) -> float:
+        """In ``frame``, the person is inside ``box`` (video pixels, clipped to the frame).
+        Saved at once; the silhouettes follow with :meth:`resegment`."""
+        t0 = time.perf_counter()
+        with self._lock:
+            self.annotations.add_person_box(self._check_frame(frame), self._clip_box(box))
+        return self._region_edited(t0)
+
+    def remove_region(self, frame: int, type_: str, key: str = "") -> float:
+        """Delete a region event (as :meth:`region_items` lists it)."""
+        from vidcap.video.annotations import REGION_TYPES
+
+        t0 = time.perf_counter()
+        if type_ not in REGION_TYPES:
+            raise ValueError(f"not a region event: {type_!r}")
+        with self._lock:
+            if not self.annotations.remove(int(frame), type_, key):
+                raise ValueError(f"no {type_} at frame {frame}")
+        return self._region_edited(t0)
+
+    def _clip_box(self, box) -> tuple[int, int, int, int]:
+        """A dragged box as integer pixel edges within the frame, corners in any order."""
+        w, h = self.clip.size
+        x0, y0, x1, y1 = (float(v) for v in box)
+        x0, x1 = sorted((x0, x1))
+        y0, y1 = sorted((y0, y1))
+        out = (int(np.clip(np.floor(x0), 0, w - 1)), int(np.clip(np.floor(y0), 0, h - 1)),
+               int(np.clip(np.ceil(x1), 1, w)), int(np.clip(np.ceil(y1), 1, h)))
+        if out[2] - out[0] < 2 or out[3] - out[1] < 2:
+            raise ValueError("the box is too small (drag a rectangle)")
+        return out
+
+    def region_items(self) -> list[dict]:
+        """The region events for the page's list (:func:`vidcap.ui.regionedit.region_items`)."""
+        return region_items(self.annotations)
+
+    def regions_at(self, frame: int) -> list[dict]:
+        """The regions drawn over ``frame``: every scene region, the frame's person box."""
+        return [r for r in self.region_items()
+                if r["type"] == "scene_region" or r["frame"] == int(frame)]
+
+    def resegment(self, progress=None) -> dict | None:
+        """Recompute the silhouettes with the current regions and refit the frames they
+        change, then re-lift (safe in a worker thread; dropped, returning None, when a
+        region was edited meanwhile or the clip cannot recompute).
+
+        Returns
+        -------
+        dict or None
+            ``changed`` (frames whose silhouette changed) and ``seconds``.
+        """
+        if self.clip.resegment is None:
+            return None
+        with self._lock:
+            version = self._region_version
+            snapshot = Annotations(self.annotations.region_events())
+        new = resegment(self.clip, snapshot, progress=progress)
+        with self._lock:
+            if version != self._region_version:
+                return None
+            adopt(self.clip, new)
+            self._prepare_clip()
+            self._version += 1  # a deferred refresh running now is of the old clip
+            self._recompute()
+            self.regions_stale = False
+        return {"changed": int(new.changed.sum()), "seconds": round(new.seconds, 2)}
+
+
+__all__ = ["RegionEditing", "Resegmented", "adopt", "region_items", "resegment"]
