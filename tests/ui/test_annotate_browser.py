@@ -2,7 +2,8 @@
 
 Starts ``vidcap annotate sample_videos/walk_side.mp4 --no-browser`` in a subprocess on a
 free port, opens the address it prints (with its token), flips a depth, steps frames with the
-keyboard, drags a joint, and checks the annotations file holds exactly those events.
+keyboard, drags a joint, draws a region that is not the person (and sees the silhouette
+recomputed without it), and checks the annotations file holds exactly those events.
 Screenshots go to ``test-artifacts/`` (and to ``docs/`` with ``VIDCAP_UPDATE_DOCS=1``).
 """
 
@@ -150,6 +151,9 @@ def test_annotate_flip_step_drag(browser, stage_cache, tmp_path):
         _wait_state(page, "window.trame.state.get('sides_swapped').length == 0")
         page.wait_for_selector("#inputs-count:has-text('inputs: 2')")
 
+        # 5. regions that are not the person: a box over the head, an outline in a corner
+        drawn, corner = _draw_regions(page)
+
         # the Review tab lists flagged frames; clicking one opens it
         page.click("#tab-review")
         chip = page.locator("#flagged-list .v-chip").first
@@ -169,13 +173,19 @@ def test_annotate_flip_step_drag(browser, stage_cache, tmp_path):
 
     events = json.loads(ann.read_text())["events"]
     disp = 640 / 480  # the page shows the 480 px clip 640 px wide
-    assert len(events) == 2, events
-    depth, joint = events
+    assert len(events) == 4, events
+    depth, joint, region, outline = events
     assert depth == {"frame": 0, "type": "depth", "segment": seg,
                      "value": "away" if sign0 > 0 else "toward"}
     assert joint["frame"] == 3 and joint["type"] == "joint" and joint["joint"] == "r_wrist"
     assert joint["u"] == pytest.approx((x + 24) / disp, abs=1.5)
     assert joint["v"] == pytest.approx((y + 12) / disp, abs=1.5)
+    assert region["type"] == "scene_region" and region["frame"] == 3
+    assert region["box"] == pytest.approx([v / disp for v in drawn], abs=2.0)
+    poly = np.array(outline["polygon"]) * disp
+    assert outline["type"] == "scene_region" and 4 <= len(poly) <= 40
+    assert poly.min(axis=0) == pytest.approx(corner[0], abs=3)
+    assert poly.max(axis=0) == pytest.approx(corner[2], abs=3)
     assert "Traceback" not in log.read_text()
 
 
@@ -205,61 +215,44 @@ def test_malformed_annotations_shown_and_kept(browser, stage_cache, tmp_path):
     assert "walk.json" in out and "error" in out
 
 
-def disp_scale() -> float:
-    """Page pixels per video pixel: the page shows the 480 px sample 640 px wide."""
-    return 640 / 480
-
-
-def test_draw_a_scene_region_and_see_the_new_silhouette(browser, stage_cache, tmp_path):
-    """Mark the person's head at frame 0 as "not the person" (a deliberate mistake that
-    shows plainly): the event is saved in video pixels, the silhouettes are recomputed
-    in the background and the frame's silhouette loses the head."""
-    ann = tmp_path / "walk.json"
-    with annotate_server(ann, stage_cache) as (url, _proc, log):
-        page = browser.new_page(viewport={"width": 1280, "height": 900})
-        page.goto(url)
-        page.wait_for_selector("#frame-img[src^='data:image']", timeout=30000)
-        _wait_state(page, "window.trame.state.get('sil_area') > 0")
-        area0 = _state(page, "sil_area")
-        names = _state(page, "joint_names")
-        joints = _state(page, "joints_display")
-        (hx, hy), (_nx, ny) = joints[names.index("head_top")], joints[names.index("neck")]
-        x0, y0, x1, y1 = hx - 20, hy - 12, hx + 20, ny  # page pixels: the head
-        page.click("#mode-scene_region")
-        _wait_state(page, "window.trame.state.get('draw_mode') == 'scene_region'")
-        box = page.locator("#frame-img").bounding_box()
-        natural = page.evaluate("document.querySelector('#frame-img').naturalWidth")
-        k = box["width"] / natural
-        page.mouse.move(box["x"] + x0 * k, box["y"] + y0 * k)
-        page.mouse.down()
-        page.mouse.move(box["x"] + (x0 + x1) / 2 * k, box["y"] + (y0 + y1) / 2 * k, steps=3)
-        page.wait_for_selector("#draw-band")  # the rubber band follows the mouse
-        page.mouse.move(box["x"] + x1 * k, box["y"] + y1 * k, steps=3)
-        page.mouse.up()
-        page.wait_for_selector("#region-list :text('not the person')")
-        _wait_state(page, "window.trame.state.get('reseg_status').includes('changed')",
-                    timeout=60000)
-        _wait_state(page, f"window.trame.state.get('sil_area') < {area0}")
-        _screenshot(page, "annotate_regions.png")
-        # an outline drawn around an empty corner: saved as a polygon, changes nothing
-        page.click("#mode-scene_area")
-        _wait_state(page, "window.trame.state.get('draw_mode') == 'scene_area'")
-        corner = [(560, 20), (630, 20), (630, 90), (600, 60), (560, 80)]
-        page.mouse.move(box["x"] + corner[0][0] * k, box["y"] + corner[0][1] * k)
-        page.mouse.down()
-        for cx, cy in corner[1:] + corner[:1]:
-            page.mouse.move(box["x"] + cx * k, box["y"] + cy * k, steps=4)
-        page.mouse.up()
-        _wait_state(page, "window.trame.state.get('regions').length == 2")
-        _wait_state(page, "window.trame.state.get('reseg_status').includes(': 0 frame')",
-                    timeout=60000)
-        page.close()
-    events = json.loads(ann.read_text())["events"]
-    assert len(events) == 2 and events[0]["type"] == "scene_region" and events[0]["frame"] == 0
-    poly = np.array(events[1]["polygon"]) * disp_scale()
-    assert 4 <= len(poly) <= 40 and poly.min(axis=0) == pytest.approx([560, 20], abs=3)
-    assert poly.max(axis=0) == pytest.approx([630, 90], abs=3)
-    disp = 640 / 480  # the page shows the 480 px clip 640 px wide
-    expected = [x0 / disp, y0 / disp, x1 / disp, y1 / disp]
-    assert events[0]["box"] == pytest.approx(expected, abs=2.0)
-    assert "Traceback" not in log.read_text()
+def _draw_regions(page) -> tuple[list, list]:
+    """Mark the person's head in the current frame as "not the person" (a deliberate
+    mistake that shows plainly) and outline an empty corner; wait until the silhouettes
+    are recomputed each time. Returns the box and the outline drawn, in page pixels."""
+    area0 = _state(page, "sil_area")
+    assert area0 > 0
+    names = _state(page, "joint_names")
+    joints = _state(page, "joints_display")
+    (hx, hy), (_nx, ny) = joints[names.index("head_top")], joints[names.index("neck")]
+    drawn = [hx - 20, hy - 12, hx + 20, ny]  # page pixels: the head
+    x0, y0, x1, y1 = drawn
+    page.click("#mode-scene_region")
+    _wait_state(page, "window.trame.state.get('draw_mode') == 'scene_region'")
+    box = page.locator("#frame-img").bounding_box()
+    natural = page.evaluate("document.querySelector('#frame-img').naturalWidth")
+    k = box["width"] / natural
+    page.mouse.move(box["x"] + x0 * k, box["y"] + y0 * k)
+    page.mouse.down()
+    page.mouse.move(box["x"] + (x0 + x1) / 2 * k, box["y"] + (y0 + y1) / 2 * k, steps=3)
+    page.wait_for_selector("#draw-band")  # the rubber band follows the mouse
+    page.mouse.move(box["x"] + x1 * k, box["y"] + y1 * k, steps=3)
+    page.mouse.up()
+    page.wait_for_selector("#region-list :text('not the person')")
+    _wait_state(page, "window.trame.state.get('reseg_status').includes('changed')",
+                timeout=60000)
+    _wait_state(page, f"window.trame.state.get('sil_area') < {area0}")  # the head is gone
+    _screenshot(page, "annotate_regions.png")
+    # an outline drawn around an empty corner: saved as a polygon, changes nothing
+    page.click("#mode-scene_area")
+    _wait_state(page, "window.trame.state.get('draw_mode') == 'scene_area'")
+    corner = [(560, 20), (630, 20), (630, 90), (600, 60), (560, 80)]
+    page.mouse.move(box["x"] + corner[0][0] * k, box["y"] + corner[0][1] * k)
+    page.mouse.down()
+    for cx, cy in corner[1:] + corner[:1]:
+        page.mouse.move(box["x"] + cx * k, box["y"] + cy * k, steps=4)
+    page.mouse.up()
+    _wait_state(page, "window.trame.state.get('regions').length == 2")
+    _wait_state(page, "window.trame.state.get('reseg_status').includes(': 0 frame')",
+                timeout=60000)
+    page.click("#mode-joints")
+    return drawn, corner
