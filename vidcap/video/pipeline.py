@@ -138,8 +138,7 @@ def run(
     body = BodyModel(height=height)
     cache = StageCache(cache_dir, log=log)
     timings = {}
-    ann, ann_source = _load_annotations(annotations, video, log)
-    ann.check_frame_size(info.width, info.height, ann_source)  # before any work
+    ann, ann_source = _load_annotations(annotations, video, log, (info.width, info.height))
 
     # a given plate is read first: a bad file is reported before any worker starts
     with _timed(timings, "plate"):
@@ -228,9 +227,11 @@ def _timed(timings: dict, name: str):
         timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
 
 
-def _load_annotations(annotations, video: Path, log) -> tuple[Annotations, object]:
+def _load_annotations(annotations, video: Path, log,
+                      frame_size) -> tuple[Annotations, object]:
     """The user's events (given, a file, or ``VIDEO_STEM.vidcap.json`` beside the
-    video when it exists) and the file named in errors about them."""
+    video when it exists) and the file named in errors about them; a region beyond the
+    ``frame_size`` (width, height) is refused here, before any work."""
     if annotations is None and default_path(video).exists():
         annotations = default_path(video)
     source = video
@@ -238,7 +239,9 @@ def _load_annotations(annotations, video: Path, log) -> tuple[Annotations, objec
         log(f"annotations: {annotations}")
         source = annotations
         annotations = Annotations.load(annotations)  # frames are checked once decoded
-    return annotations or Annotations(), source
+    annotations = annotations or Annotations()
+    annotations.check_frame_size(*frame_size, source)
+    return annotations, source
 
 
 def _check_events(ann: Annotations, n_frames: int, source) -> None:
