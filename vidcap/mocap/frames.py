@@ -78,12 +78,13 @@ def frame_from_axis(c: np.ndarray, p0: np.ndarray, axis: np.ndarray) -> np.ndarr
 
 @functools.lru_cache(maxsize=1)
 def _kernels():
-    """The compiled rotation fit, or None without numba (imported on first use: ~0.3 s)."""
+    """The compiled kernels module (:mod:`vidcap.mocap._frames_kernels`), or None without
+    numba (imported on first use: ~0.3 s)."""
     try:
-        from vidcap.mocap._frames_kernels import rotations_from_cross
+        from vidcap.mocap import _frames_kernels
     except ImportError:  # pragma: no cover - numba is a declared dependency
         return None
-    return rotations_from_cross
+    return _frames_kernels
 
 
 def _rotations_numpy(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -102,7 +103,7 @@ def _rotations(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     compiled = _kernels()
     if compiled is None:
         return _rotations_numpy(h)
-    return compiled(np.ascontiguousarray(h, dtype=float))
+    return compiled.rotations_from_cross(np.ascontiguousarray(h, dtype=float))
 
 
 def _det3(m: np.ndarray) -> np.ndarray:
@@ -131,6 +132,21 @@ def kabsch(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None 
         points are present.
     origin : numpy.ndarray, shape (F, 3)
     """
+    compiled = _kernels()
+    if compiled is None:
+        return _kabsch_numpy(template, points, weights)
+    points = np.ascontiguousarray(points, dtype=float)
+    shape = points.shape[:2]
+    wf = (np.ones(shape) if weights is None else
+          np.ascontiguousarray(np.broadcast_to(np.asarray(weights, dtype=float), shape)))
+    return compiled.kabsch_frames(np.ascontiguousarray(template, dtype=float), points, wf,
+                                  _EPS)
+
+
+def _kabsch_numpy(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`kabsch` in numpy (batched over frames; the rotation fit by
+    :func:`_rotations`): the path without numba, and the reference for the kernel."""
     w = np.isfinite(points).all(axis=2) & np.isfinite(template).all(axis=1)  # (F, K)
     cnt = w.sum(axis=1)
     wf = w.astype(float)
@@ -256,7 +272,25 @@ class SegFrames:
 
 
 def frames_from_points(pts: np.ndarray) -> SegFrames:
-    """Frames from K >= 3 points (F, K, 3): seed case 3 on the first three, Kabsch fill."""
+    """Frames from K >= 3 points (F, K, 3): seed case 3 on the first three, Kabsch fill.
+
+    The template is each point's median position in the frame of the first three
+    points (seed 000 §2.5 case 3); every frame with >= 3 points then gets the
+    least-squares rigid pose of the template (the seed's construction puts all the
+    noise of three points into the axes; this spreads it over all points, and fills
+    frames whose primary three points are incomplete).
+    """
+    compiled = _kernels()
+    if compiled is None:
+        return _frames_from_points_numpy(pts)
+    pts = np.ascontiguousarray(pts, dtype=float)
+    template = compiled.three_point_template(pts, _EPS)
+    r, o = kabsch(template, pts)
+    return SegFrames(r, o, template)
+
+
+def _frames_from_points_numpy(pts: np.ndarray) -> SegFrames:
+    """:func:`frames_from_points` in numpy: the path without numba, and the reference."""
     r = frame_from_three(pts[:, 0], pts[:, 1], pts[:, 2])
     o = pts[:, 0].copy()
     ok = np.isfinite(r).all(axis=(1, 2)) & np.isfinite(o).all(axis=1)
@@ -267,9 +301,6 @@ def frames_from_points(pts: np.ndarray) -> SegFrames:
     template = np.stack([nanmedian_rows(local[:, k]) for k in range(pts.shape[1])])
     if not ok.any():
         return SegFrames(r, o, template)
-    # Every frame with >= 3 points: the least-squares rigid pose of the template (the
-    # seed's construction puts all the noise of three points into the axes; this spreads
-    # it over all points, and fills frames whose primary three points are incomplete).
     has3 = np.isfinite(pts).all(axis=2).sum(axis=1) >= 3
     rf, of = kabsch(template, pts[has3])
     r[has3] = rf

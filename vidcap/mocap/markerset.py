@@ -47,6 +47,7 @@ Joint names follow ``design.md`` (``l_hip``, ``l_knee``...); extra joints
 
 from __future__ import annotations
 
+import functools
 import os
 import tomllib
 from dataclasses import dataclass, replace
@@ -340,14 +341,21 @@ def parse_markerset(text: str, *, source: str = "<toml>") -> MarkerSet:
 
 
 def builtin_markersets() -> dict[str, MarkerSet]:
-    """The marker sets shipped with vidcap, by name."""
+    """The marker sets shipped with vidcap, by name (a new dict of the frozen sets)."""
+    return dict(_builtin_markersets())
+
+
+@functools.lru_cache(maxsize=1)
+def _builtin_markersets() -> tuple[tuple[str, MarkerSet], ...]:
+    """The shipped TOML files parsed once per process (~10 ms, every solve asked for
+    them to detect its set)."""
     out = {}
     for f in sorted(resources.files("vidcap.mocap").joinpath("markersets").iterdir(),
                     key=lambda p: p.name):
         if f.name.endswith(".toml"):
             ms = parse_markerset(f.read_text(encoding="utf-8"), source=f.name)
             out[ms.name] = ms
-    return out
+    return tuple(out.items())
 
 
 def load_markerset(name_or_path: str | os.PathLike) -> MarkerSet:
