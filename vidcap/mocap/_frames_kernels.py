@@ -400,3 +400,32 @@ def three_point_template(pts, eps):
             for j in range(3):
                 out[k, j] = np.median(local[k, j, :cnt[k]])
     return out
+
+
+@njit(cache=True)
+def median_finite_rows(y):
+    """Per column, the median of ``y`` (N, D) over the rows without NaN or inf; (D,),
+    NaN when there are none. The median of an even count is the mean of the middle two,
+    as numpy's."""
+    n, d = y.shape
+    ok = np.empty(n, dtype=np.bool_)
+    cnt = 0
+    for i in range(n):
+        good = True
+        for j in range(d):
+            good = good and np.isfinite(y[i, j])
+        ok[i] = good
+        if good:
+            cnt += 1
+    out = np.full(d, np.nan)
+    if cnt == 0:
+        return out
+    col = np.empty(cnt)
+    for j in range(d):
+        c = 0
+        for i in range(n):
+            if ok[i]:
+                col[c] = y[i, j]
+                c += 1
+        out[j] = np.median(col)
+    return out

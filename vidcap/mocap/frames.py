@@ -236,6 +236,14 @@ def frame_noise(template: np.ndarray, weights: np.ndarray | None):
 
 
 
+def nanmean_points(y: np.ndarray) -> np.ndarray:
+    """``np.nanmean(y, axis=1)`` for points (F, K, 3) -> (F, 3), bit for bit, without
+    its warnings and overhead (NaN where a frame has none)."""
+    nan = np.isnan(y)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(nan, 0.0, y).sum(axis=1) / (~nan).sum(axis=1)
+
+
 def to_local(r: np.ndarray, o: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Lab points x (F, K, 3) in frames (r (F,3,3), o (F,3)): r^T (x - o)."""
     return np.matmul(x - o[:, None], r)  # row k: (x_k - o)ᵀ r = (rᵀ (x_k - o))ᵀ
@@ -247,7 +255,11 @@ def to_lab(r: np.ndarray, o: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def nanmedian_rows(y: np.ndarray) -> np.ndarray:
-    """Median over axis 0 ignoring NaN, without warnings (all-NaN -> NaN)."""
+    """Median over axis 0 of the rows without NaN (or inf), without warnings (none ->
+    NaN); y (N, D) or (N, ...)."""
+    compiled = _kernels() if y.ndim == 2 else None
+    if compiled is not None:
+        return compiled.median_finite_rows(np.ascontiguousarray(y, dtype=float))
     ok = np.isfinite(y).all(axis=-1)
     if not ok.any():
         return np.full(y.shape[1:], np.nan)

@@ -30,7 +30,6 @@ markers and trials.
 """
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -47,6 +46,7 @@ from vidcap.mocap.frames import (
     frames_from_centre_axis,
     frames_from_points,
     kabsch,
+    nanmean_points,
     nanmedian_rows,
     point_covariance,
     point_variance,
@@ -161,8 +161,8 @@ def _lab_up(trial: MarkerData) -> np.ndarray:
 
 
 def markers_of(trial: MarkerData, names) -> np.ndarray:
-    """Positions of the named markers, (F, len(names), 3) metres."""
-    return trial.positions[:, [trial.index(m) for m in names]]
+    """Positions of the named markers, (F, len(names), 3) metres (a copy)."""
+    return np.take(trial.positions, [trial.index(m) for m in names], axis=1)
 
 
 # --------------------------------------------------------------------------- steps
@@ -184,10 +184,9 @@ def child_samples(spec: SegmentSpec, trials: Sequence[MarkerData],
         used += int(ok.any(axis=1).sum())
         for k in range(len(spec.markers)):
             sets[k].append(y[ok[:, k], k])
-        fy = to_local(pf.r, pf.o, markers_of(t, spec.fallback or spec.markers))
-        with warnings.catch_warnings():  # frames without any of them stay NaN
-            warnings.simplefilter("ignore", RuntimeWarning)
-            fb.append(np.nanmean(fy, axis=1) if np.isfinite(fy).any() else fy[:, 0])
+        fy = to_local(pf.r, pf.o, markers_of(t, spec.fallback)) if spec.fallback else y
+        # (frames without any of them stay NaN)
+        fb.append(nanmean_points(fy) if np.isfinite(fy).any() else fy[:, 0])
     return ChildSamples(tuple(np.concatenate(a) for a in sets),
                         nanmedian_rows(np.concatenate(fb)), used)
 
@@ -206,8 +205,8 @@ def hinge_anchor(spec: SegmentSpec, ms: MarkerSet, trial: MarkerData, parent_fra
     pf = parent_frame
     if spec.axis_anchor:
         # their midpoint is the joint's anatomical centre along its axis
-        point = nanmedian_rows(np.nanmean(
-            to_local(pf.r, pf.o, markers_of(trial, spec.axis_anchor)), axis=1))
+        point = nanmedian_rows(nanmean_points(
+            to_local(pf.r, pf.o, markers_of(trial, spec.axis_anchor))))
         return HingeAnchor(point, f"the {'/'.join(spec.axis_anchor)} midpoint")
     pspec = ms.segment(spec.parent)
     n_siblings = sum(1 for q in ms.segments if q.parent == spec.parent)
@@ -485,7 +484,7 @@ def end_joint(spec: SegmentSpec, sf: SegFrames, trial: MarkerData
     loc = to_local(np.where(valid[:, None, None], sf.r, 0.0), np.where(valid[:, None], sf.o, 0.0),
                    markers_of(trial, spec.end_markers))
     loc[~valid] = np.nan
-    v_end = nanmedian_rows(np.nanmean(loc, axis=1) if np.isfinite(loc).any() else loc[:, 0])
+    v_end = nanmedian_rows(nanmean_points(loc) if np.isfinite(loc).any() else loc[:, 0])
     rep = JointReport(
         joint=spec.end_joint, segment=spec.name, parent_segment=spec.name, kind="end",
         method="markers", frames_used=int(valid.sum()), rms_residual_m=np.nan,
