@@ -429,3 +429,29 @@ def median_finite_rows(y):
                 c += 1
         out[j] = np.median(col)
     return out
+
+
+@njit(cache=True)
+def points_to_local(r, o, x):
+    """rᵀ (x - o) per frame: lab points x (F, K, 3) in frames r (F, 3, 3), o (F, 3)."""
+    f_n, k_n = x.shape[0], x.shape[1]
+    out = np.empty((f_n, k_n, 3))
+    for f in range(f_n):
+        for k in range(k_n):
+            d0 = x[f, k, 0] - o[f, 0]
+            d1 = x[f, k, 1] - o[f, 1]
+            d2 = x[f, k, 2] - o[f, 2]
+            for j in range(3):
+                out[f, k, j] = d0 * r[f, 0, j] + d1 * r[f, 1, j] + d2 * r[f, 2, j]
+    return out
+
+
+@njit(cache=True)
+def point_to_lab(r, o, v):
+    """o + r v per frame: a constant local point v (3,) in frames r (F, 3, 3), o (F, 3)."""
+    f_n = r.shape[0]
+    out = np.empty((f_n, 3))
+    for f in range(f_n):
+        for i in range(3):
+            out[f, i] = o[f, i] + (r[f, i, 0] * v[0] + r[f, i, 1] * v[1] + r[f, i, 2] * v[2])
+    return out

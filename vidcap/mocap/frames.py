@@ -246,12 +246,22 @@ def nanmean_points(y: np.ndarray) -> np.ndarray:
 
 def to_local(r: np.ndarray, o: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Lab points x (F, K, 3) in frames (r (F,3,3), o (F,3)): r^T (x - o)."""
+    compiled = _kernels()
+    if compiled is not None and x.ndim == 3 and r.shape[0] == o.shape[0] == x.shape[0]:
+        return compiled.points_to_local(np.ascontiguousarray(r, dtype=float),
+                                        np.ascontiguousarray(o, dtype=float),
+                                        np.ascontiguousarray(x, dtype=float))
     return np.matmul(x - o[:, None], r)  # row k: (x_k - o)ᵀ r = (rᵀ (x_k - o))ᵀ
 
 
 def to_lab(r: np.ndarray, o: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Constant local point v (3,) per frame in the lab: o + r v, (F, 3)."""
-    return o + np.matmul(r, np.asarray(v, dtype=float))
+    v = np.asarray(v, dtype=float)
+    compiled = _kernels()
+    if compiled is not None and v.shape == (3,) and r.shape[0] == o.shape[0]:
+        return compiled.point_to_lab(np.ascontiguousarray(r, dtype=float),
+                                     np.ascontiguousarray(o, dtype=float), v)
+    return o + np.matmul(r, v)
 
 
 def nanmedian_rows(y: np.ndarray) -> np.ndarray:

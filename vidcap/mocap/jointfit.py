@@ -5,6 +5,8 @@ the fit cannot be trusted."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from vidcap.errors import FitError
@@ -14,12 +16,33 @@ from vidcap.mocap.solution import JointReport
 from vidcap.mocap.spherefit import mgdk
 
 
+@functools.lru_cache(maxsize=1)
+def _kernels():
+    """The compiled per-marker statistics (:mod:`vidcap.mocap._jointfit_kernels`), or
+    None without numba: the numpy expressions below are then used."""
+    try:
+        from vidcap.mocap import _jointfit_kernels
+    except ImportError:  # pragma: no cover - numba is a declared dependency
+        return None
+    return _jointfit_kernels
+
+
 def cap_and_residual(sets: list[np.ndarray], center, radius, normal):
     """RMS radial residual (m) and 98th-percentile cap angle (deg) over marker sets."""
     radius = np.broadcast_to(np.asarray(radius, dtype=float), (len(sets),))
     hinge = normal is not None and np.isfinite(normal).all()
+    compiled = _kernels()
     res2, n, caps = 0.0, 0, []
     for y, rp in zip(sets, radius, strict=True):
+        if compiled is not None:
+            r2, ang = compiled.radial_residual_angles(
+                np.ascontiguousarray(y, dtype=float), np.asarray(center, dtype=float),
+                float(rp), np.asarray(normal if hinge else np.zeros(3), dtype=float),
+                hinge, _EPS)
+            res2 += r2
+            n += len(ang)
+            caps.append(float(np.percentile(ang, 98)) if len(ang) else 0.0)
+            continue
         d = y - center
         if hinge:
             d = d - (d @ normal)[:, None] * normal
@@ -44,6 +67,15 @@ def weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
     sets = [y for y in sets if len(y) > 1]
     if not sets:
         return np.full(3, np.nan), float("inf")
+    compiled = _kernels()
+    if compiled is not None:
+        info = np.zeros((3, 3))
+        for y in sets:
+            s, q = compiled.direction_sums(np.ascontiguousarray(y, dtype=float),
+                                           np.asarray(center, dtype=float), _EPS)
+            info += q - np.outer(s, s) / len(y)
+        w, v = np.linalg.eigh(info / max(sigma, 1e-12) ** 2)
+        return v[:, 0], float(np.inf if w[0] <= 0 else 1.0 / np.sqrt(w[0]))
     lens = np.array([len(y) for y in sets])
     u = unit(np.concatenate(sets) - center)
     u = np.where(np.isfinite(u), u, 0.0)
@@ -52,6 +84,16 @@ def weak_axis(sets: list[np.ndarray], center: np.ndarray, sigma: float):
     w, v = np.linalg.eigh(info / max(sigma, 1e-12) ** 2)
     std = np.inf if w[0] <= 0 else 1.0 / np.sqrt(w[0])
     return v[:, 0], float(std)
+
+
+def pooled_covariance(sets: list[np.ndarray]) -> np.ndarray:
+    """The markers' pooled within-marker covariance (3, 3), m²: Σ_p Σ_i (y - ȳ_p)(y - ȳ_p)ᵀ
+    over all samples, / their count; ``sets`` non-empty (N_p, 3) arrays."""
+    compiled = _kernels()
+    if compiled is None:
+        return sum(np.cov(y.T, bias=True) * len(y) for y in sets) / sum(map(len, sets))
+    return (sum(compiled.scatter(np.ascontiguousarray(y, dtype=float)) for y in sets)
+            / sum(map(len, sets)))
 
 
 def axis_along_bone(axis, anchor, child_sets, *, max_deg: float = 45.0) -> float | None:
@@ -127,8 +169,7 @@ def fit_joint(spec: SegmentSpec, parent: str, sets: list[np.ndarray], fallback_l
         if kind == "hinge":
             axis_w = normal
         # out-of-plane spread of the markers (pooled within-marker covariance)
-        pooled = sum(np.cov(y.T, bias=True) * len(y) for y in usable) / sum(map(len, usable))
-        lam, vec = np.linalg.eigh(pooled)
+        lam, vec = np.linalg.eigh(pooled_covariance(usable))
         thin = np.sqrt(max(lam[0], 0.0)) < hinge_ratio * sigma
         if thin and kind != "hinge":
             axis_w = vec[:, 0]
