@@ -1,6 +1,7 @@
-"""The compiled segment-frame kernels (vidcap.mocap._frames_kernels) against the numpy
-paths they replace: Kabsch poses with gaps, weights and degenerate point sets, the
-three-point templates, and the whole solve on a small synthetic chain."""
+"""The compiled kernels of the marker path (vidcap.mocap._frames_kernels,
+_jointfit_kernels) against the numpy paths they replace: Kabsch poses with gaps, weights
+and degenerate point sets, the three-point templates, frame changes, medians, the
+per-marker fit statistics, and the whole solve on a small synthetic chain."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vidcap.mocap import _sphere_moments
+from vidcap.mocap import _sphere_moments, jointfit
 from vidcap.mocap import frames as fr
 from vidcap.mocap.skeleton import solve_joints
 
@@ -23,6 +24,7 @@ def _numpy_only(monkeypatch):
     """Every compiled kernel of the marker path off: the numpy reference paths."""
     monkeypatch.setattr(fr, "_kernels", lambda: None)
     monkeypatch.setattr(_sphere_moments, "_kernels", lambda: None)
+    monkeypatch.setattr(jointfit, "_kernels", lambda: None)
 
 
 def _poses(rng, tmpl, frames=300, noise=1e-3):
@@ -157,3 +159,47 @@ def test_whole_solve_equals_the_numpy_reference(n_shank, monkeypatch):
         np.testing.assert_allclose(a.center_local_m, b.center_local_m, rtol=0, atol=1e-9)
         np.testing.assert_allclose([a.rms_residual_m, a.cap_angle_deg],
                                    [b.rms_residual_m, b.cap_angle_deg], rtol=1e-9)
+
+
+def test_frame_changes_and_medians_equal_the_numpy_path(monkeypatch):
+    rng = np.random.default_rng(5)
+    r = Rotation.random(50, random_state=rng).as_matrix()
+    o = rng.normal(size=(50, 3))
+    x = rng.normal(size=(50, 4, 3))
+    x[3, 1] = np.nan
+    y = rng.normal(size=(41, 3))
+    y[::4, 2] = np.nan
+    v = np.array([0.1, -0.2, 0.3])
+    fast = fr.to_local(r, o, x), fr.to_lab(r, o, v), fr.nanmedian_rows(y)
+    monkeypatch.setattr(fr, "_kernels", lambda: None)
+    slow = fr.to_local(r, o, x), fr.to_lab(r, o, v), fr.nanmedian_rows(y)
+    for a, b in zip(fast, slow, strict=True):
+        _same(a, b, 1e-15)
+    np.testing.assert_array_equal(fast[2], slow[2])  # order statistics: exact
+    assert np.isnan(fr.nanmedian_rows(np.full((3, 3), np.nan))).all()
+
+
+@pytest.mark.parametrize("hinge", [False, True])
+def test_marker_statistics_equal_the_numpy_path(hinge, monkeypatch):
+    """Residual, cap angle, weakest direction and pooled spread of markers on spheres
+    (circles for a hinge) about a centre: compiled and numpy agree to rounding."""
+    rng = np.random.default_rng(9)
+    centre = np.array([0.01, -0.02, 0.03])
+    normal = np.array([0.0, 0.6, 0.8]) if hinge else None
+    sets = []
+    for radius, n in [(0.2, 500), (0.3, 321), (0.25, 2)]:
+        d = rng.normal(size=(n, 3))
+        if hinge:
+            d -= np.outer(d @ normal, normal)
+        d = d / np.linalg.norm(d, axis=1, keepdims=True) * np.linspace(0.2, 1, n)[:, None]
+        sets.append(centre + radius * d + rng.normal(scale=1e-3, size=(n, 3)))
+    radii = np.array([0.2, 0.3, 0.25])
+    fast = (jointfit.cap_and_residual(sets, centre, radii, normal),
+            jointfit.weak_axis(sets, centre, 1e-3), jointfit.pooled_covariance(sets))
+    monkeypatch.setattr(jointfit, "_kernels", lambda: None)
+    slow = (jointfit.cap_and_residual(sets, centre, radii, normal),
+            jointfit.weak_axis(sets, centre, 1e-3), jointfit.pooled_covariance(sets))
+    np.testing.assert_allclose(fast[0], slow[0], rtol=1e-12)
+    np.testing.assert_allclose(abs(fast[1][0] @ slow[1][0]), 1.0, atol=1e-12)
+    np.testing.assert_allclose(fast[1][1], slow[1][1], rtol=1e-10)
+    np.testing.assert_allclose(fast[2], slow[2], rtol=1e-12, atol=1e-18)
