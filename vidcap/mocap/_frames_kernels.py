@@ -455,3 +455,46 @@ def point_to_lab(r, o, v):
         for i in range(3):
             out[f, i] = o[f, i] + (r[f, i, 0] * v[0] + r[f, i, 1] * v[1] + r[f, i, 2] * v[2])
     return out
+
+
+@njit(cache=True)
+def rigid_residuals(r, o, template, x):
+    """Σ |x - o - r m|² over the frames with >= 3 of the K points x (F, K, 3) present, and
+    those frames' Σ (3 k - 6) degrees of freedom; m = template[:K]."""
+    ss = 0.0
+    dof = 0
+    for f in range(x.shape[0]):
+        part = 0.0
+        k_ok = 0
+        for k in range(x.shape[1]):
+            e = 0.0
+            for i in range(3):
+                pred = o[f, i] + (r[f, i, 0] * template[k, 0] + r[f, i, 1] * template[k, 1]
+                                  + r[f, i, 2] * template[k, 2])
+                e += (x[f, k, i] - pred) ** 2
+            if np.isfinite(e):
+                part += e
+                k_ok += 1
+        if k_ok >= 3:
+            ss += part
+            dof += 3 * k_ok - 6
+    return ss, dof
+
+
+@njit(cache=True)
+def mean_over_points(y):
+    """``np.nanmean(y, axis=1)`` of y (F, K, 3): per frame and coordinate, the sum in
+    point order of the values that are not NaN over their count (NaN when none)."""
+    f_n, k_n = y.shape[0], y.shape[1]
+    out = np.empty((f_n, 3))
+    for f in range(f_n):
+        for i in range(3):
+            tot = 0.0
+            cnt = 0
+            for k in range(k_n):
+                v = y[f, k, i]
+                if not np.isnan(v):
+                    tot += v
+                    cnt += 1
+            out[f, i] = tot / cnt if cnt > 0 else np.nan
+    return out

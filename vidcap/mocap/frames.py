@@ -239,6 +239,9 @@ def frame_noise(template: np.ndarray, weights: np.ndarray | None):
 def nanmean_points(y: np.ndarray) -> np.ndarray:
     """``np.nanmean(y, axis=1)`` for points (F, K, 3) -> (F, 3), bit for bit, without
     its warnings and overhead (NaN where a frame has none)."""
+    compiled = _kernels()
+    if compiled is not None and y.ndim == 3 and y.shape[2] == 3:
+        return compiled.mean_over_points(np.ascontiguousarray(y, dtype=float))
     nan = np.isnan(y)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(nan, 0.0, y).sum(axis=1) / (~nan).sum(axis=1)
@@ -349,7 +352,15 @@ def rigid_residual_var(frames: list[SegFrames], pts: list[np.ndarray]) -> float:
     σ̂² = Σ |x - o - R m|² / Σ_frames (3K - 6) (the template's own error neglected).
     """
     ss, dof = 0.0, 0
+    compiled = _kernels()
     for f, x in zip(frames, pts, strict=True):
+        if compiled is not None:
+            s1, d1 = compiled.rigid_residuals(
+                np.ascontiguousarray(f.r, dtype=float), np.ascontiguousarray(f.o, dtype=float),
+                np.ascontiguousarray(f.template[: x.shape[1]], dtype=float),
+                np.ascontiguousarray(x, dtype=float))
+            ss, dof = ss + s1, dof + d1
+            continue
         pred = f.o[:, None] + np.matmul(f.template[: x.shape[1]], np.swapaxes(f.r, 1, 2))
         res = np.sum((x - pred) ** 2, axis=2)  # (F, K)
         ok = np.isfinite(res)

@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from vidcap.mocap.frames import to_lab
 from vidcap.mocap.jointfit import axis_along_bone
 from vidcap.mocap.solution import JointReport
 
@@ -59,27 +60,28 @@ def score(rp: np.ndarray, tp: np.ndarray, rc: np.ndarray, tc: np.ndarray, *,
     shift = np.zeros(6)
     dp = dc = np.eye(3)
     if rot_cov_p is not None and rot_cov_c is not None:
-        tp = tp + np.einsum("fij,j->fi", rp, centroid_p)
-        tc = tc + np.einsum("fij,j->fi", rc, centroid_c)
+        tp = to_lab(rp, tp, centroid_p)
+        tc = to_lab(rc, tc, centroid_c)
         shift = np.concatenate([centroid_p, centroid_c])
         dp = np.linalg.inv(np.eye(3) - 0.5 * (np.trace(rot_cov_p) * np.eye(3) - rot_cov_p))
         dc = np.linalg.inv(np.eye(3) - 0.5 * (np.trace(rot_cov_c) * np.eye(3) - rot_cov_c))
-    cross = dp @ np.einsum("fji,fjk->ik", rp, rc) @ dc  # Σ R_pᵀ R_c
+    # (the sums over frames as one (3F, 3) product each: Σ_f R_pᵀ R_c = P̃ᵀ C̃)
+    rp_rows, rc_rows = rp.reshape(-1, 3), rc.reshape(-1, 3)
+    cross = dp @ (rp_rows.T @ rc_rows) @ dc  # Σ R_pᵀ R_c
     m = np.zeros((6, 6))
     m[:3, :3] = n * np.eye(3)
     m[3:, 3:] = n * np.eye(3)
     m[:3, 3:] = -cross
     m[3:, :3] = -cross.T
     b = tc - tp
-    rhs = np.concatenate([dp @ np.einsum("fji,fj->i", rp, b),
-                          -dc @ np.einsum("fji,fj->i", rc, b)])
+    rhs = np.concatenate([dp @ (rp_rows.T @ b.reshape(-1)),
+                          -dc @ (rc_rows.T @ b.reshape(-1))])
     lam, vec = np.linalg.eigh(m)
     coef = vec.T @ rhs
     inv = np.where(lam > 1e-9 * lam[-1], 1.0 / np.maximum(lam, 1e-300), 0.0)
     x_full = vec @ (coef * inv)
     x_min = vec[:, 1:] @ (coef[1:] * inv[1:])  # without the weakest direction
-    res = (np.einsum("fij,j->fi", rp, x_full[:3]) + tp
-           - np.einsum("fij,j->fi", rc, x_full[3:]) - tc)
+    res = to_lab(rp, tp, x_full[:3]) - to_lab(rc, tc, x_full[3:])
     s2 = float(np.sum(res ** 2) / max(3 * n - 6, 1))
     x_full, x_min = x_full + shift, x_min + shift
     return {"x": x_full, "x_min": x_min, "null": vec[:, 0], "eig": lam, "s2": s2, "n": n}
