@@ -118,81 +118,74 @@ def rotations_from_cross(h):
     return rot, sv
 
 
-@njit(cache=True, inline="always")
-def _horn(s, a):
-    """Horn's symmetric, traceless 4x4 matrix of the cross-covariance ``s`` into ``a``."""
-    sxx, sxy, sxz = s[0, 0], s[0, 1], s[0, 2]
-    syx, syy, syz = s[1, 0], s[1, 1], s[1, 2]
-    szx, szy, szz = s[2, 0], s[2, 1], s[2, 2]
-    a[0, 0] = sxx + syy + szz
-    a[0, 1] = a[1, 0] = syz - szy
-    a[0, 2] = a[2, 0] = szx - sxz
-    a[0, 3] = a[3, 0] = sxy - syx
-    a[1, 1] = sxx - syy - szz
-    a[1, 2] = a[2, 1] = sxy + syx
-    a[1, 3] = a[3, 1] = szx + sxz
-    a[2, 2] = -sxx + syy - szz
-    a[2, 3] = a[3, 2] = syz + szy
-    a[3, 3] = -sxx - syy + szz
-
-
-@njit(cache=True, inline="always")
-def _det3(a, r0, r1, r2, c0, c1, c2):
-    """Determinant of the 3x3 submatrix of ``a`` on rows r0..r2 and columns c0..c2."""
-    return (a[r0, c0] * (a[r1, c1] * a[r2, c2] - a[r1, c2] * a[r2, c1])
-            - a[r0, c1] * (a[r1, c0] * a[r2, c2] - a[r1, c2] * a[r2, c0])
-            + a[r0, c2] * (a[r1, c0] * a[r2, c1] - a[r1, c1] * a[r2, c0]))
-
-
-@njit(cache=True, inline="always")
-def _cofactor(a, i, j):
-    """Cofactor (i, j) of the 4x4 ``a``: the signed determinant without row i, column j."""
-    r0 = 1 if i == 0 else 0
-    r1 = 2 if i <= 1 else 1
-    r2 = 3 if i <= 2 else 2
-    c0 = 1 if j == 0 else 0
-    c1 = 2 if j <= 1 else 1
-    c2 = 3 if j <= 2 else 2
-    d = _det3(a, r0, r1, r2, c0, c1, c2)
-    return d if (i + j) % 2 == 0 else -d
-
-
-@njit(cache=True, inline="always")
-def _quat_rotation(w, x, y, z, rot, f):
-    """The rotation of the unit quaternion (w, x, y, z) into ``rot[f]``."""
-    rot[f, 0, 0] = w * w + x * x - y * y - z * z
-    rot[f, 0, 1] = 2.0 * (x * y - w * z)
-    rot[f, 0, 2] = 2.0 * (x * z + w * y)
-    rot[f, 1, 0] = 2.0 * (x * y + w * z)
-    rot[f, 1, 1] = w * w - x * x + y * y - z * z
-    rot[f, 1, 2] = 2.0 * (y * z - w * x)
-    rot[f, 2, 0] = 2.0 * (x * z - w * y)
-    rot[f, 2, 1] = 2.0 * (y * z + w * x)
-    rot[f, 2, 2] = w * w - x * x - y * y + z * z
+@njit(cache=True)
+def _adjugate4(a00, a01, a02, a03, a11, a12, a13, a22, a23, a33, adj):
+    """The adjugate of the symmetric 4x4 matrix with upper triangle a00..a33 into
+    ``adj`` (4, 4), from its twelve 2x2 minors (Laplace expansion); returns the
+    determinant."""
+    a10, a20, a30, a21, a31, a32 = a01, a02, a03, a12, a13, a23
+    s0 = a00 * a11 - a10 * a01
+    s1 = a00 * a12 - a10 * a02
+    s2 = a00 * a13 - a10 * a03
+    s3 = a01 * a12 - a11 * a02
+    s4 = a01 * a13 - a11 * a03
+    s5 = a02 * a13 - a12 * a03
+    c5 = a22 * a33 - a32 * a23
+    c4 = a21 * a33 - a31 * a23
+    c3 = a21 * a32 - a31 * a22
+    c2 = a20 * a33 - a30 * a23
+    c1 = a20 * a32 - a30 * a22
+    c0 = a20 * a31 - a30 * a21
+    adj[0, 0] = a11 * c5 - a12 * c4 + a13 * c3
+    adj[0, 1] = -a01 * c5 + a02 * c4 - a03 * c3
+    adj[0, 2] = a31 * s5 - a32 * s4 + a33 * s3
+    adj[0, 3] = -a21 * s5 + a22 * s4 - a23 * s3
+    adj[1, 0] = -a10 * c5 + a12 * c2 - a13 * c1
+    adj[1, 1] = a00 * c5 - a02 * c2 + a03 * c1
+    adj[1, 2] = -a30 * s5 + a32 * s2 - a33 * s1
+    adj[1, 3] = a20 * s5 - a22 * s2 + a23 * s1
+    adj[2, 0] = a10 * c4 - a11 * c2 + a13 * c0
+    adj[2, 1] = -a00 * c4 + a01 * c2 - a03 * c0
+    adj[2, 2] = a30 * s4 - a31 * s2 + a33 * s0
+    adj[2, 3] = -a20 * s4 + a21 * s2 - a23 * s0
+    adj[3, 0] = -a10 * c3 + a11 * c1 - a12 * c0
+    adj[3, 1] = a00 * c3 - a01 * c1 + a02 * c0
+    adj[3, 2] = -a30 * s3 + a31 * s1 - a32 * s0
+    adj[3, 3] = a20 * s3 - a21 * s1 + a22 * s0
+    return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
 
 
 @njit(cache=True)
-def _rotation_newton(s, e0, a, rot, f):
+def _rotation_newton(s, e0, adj, rot, f):
     """Horn's rotation of cross-covariance ``s`` (3, 3) into ``rot[f]`` the fast way;
-    False (nothing written) where it is ill-determined and the Jacobi sweeps must do.
+    False (nothing written) where it is ill-determined and the Jacobi sweeps of
+    :func:`rotations_from_cross` must do. ``adj`` (4, 4) is scratch.
 
-    The largest eigenvalue of Horn's matrix N by Newton's method on its characteristic
-    polynomial λ⁴ - 2|S|² λ² - 8 det(S) λ + det(N) from ``e0`` >= it (Theobald's QCP,
-    Acta Cryst A 61:478, 2005), then its eigenvector as the largest column of the
-    adjugate of N - λI. Newton's steps from above the largest root decrease
-    monotonically; they stop where rounding turns them back.
+    The largest eigenvalue λ of Horn's symmetric, traceless 4x4 matrix N by Newton's
+    method on its characteristic polynomial λ⁴ - 2|S|² λ² - 8 det(S) λ + det(N) from
+    ``e0`` >= λ (Theobald's QCP, Acta Cryst A 61:478, 2005): the steps from above the
+    largest root decrease monotonically and stop where rounding turns them back. Its
+    eigenvector q (the unit quaternion) is the largest column of adj(N - λI) =
+    Π(λ_k - λ) q qᵀ.
     """
-    _horn(s, a)
-    c2 = 0.0
-    for i in range(3):
-        for j in range(3):
-            c2 += s[i, j] * s[i, j]
-    c2 = -2.0 * c2
-    c1 = -8.0 * (s[0, 0] * (s[1, 1] * s[2, 2] - s[1, 2] * s[2, 1])
-                 - s[0, 1] * (s[1, 0] * s[2, 2] - s[1, 2] * s[2, 0])
-                 + s[0, 2] * (s[1, 0] * s[2, 1] - s[1, 1] * s[2, 0]))
-    c0 = (a[0, 0] * _det3(a, 1, 2, 3, 1, 2, 3) - a[0, 1] * _det3(a, 1, 2, 3, 0, 2, 3)
-          + a[0, 2] * _det3(a, 1, 2, 3, 0, 1, 3) - a[0, 3] * _det3(a, 1, 2, 3, 0, 1, 2))
+    sxx, sxy, sxz = s[0, 0], s[0, 1], s[0, 2]
+    syx, syy, syz = s[1, 0], s[1, 1], s[1, 2]
+    szx, szy, szz = s[2, 0], s[2, 1], s[2, 2]
+    n00 = sxx + syy + szz
+    n01 = syz - szy
+    n02 = szx - sxz
+    n03 = sxy - syx
+    n11 = sxx - syy - szz
+    n12 = sxy + syx
+    n13 = szx + sxz
+    n22 = -sxx + syy - szz
+    n23 = syz + szy
+    n33 = -sxx - syy + szz
+    c2 = -2.0 * (sxx * sxx + sxy * sxy + sxz * sxz + syx * syx + syy * syy + syz * syz
+                 + szx * szx + szy * szy + szz * szz)
+    c1 = -8.0 * (sxx * (syy * szz - syz * szy) - sxy * (syx * szz - syz * szx)
+                 + sxz * (syx * szy - syy * szx))
+    c0 = _adjugate4(n00, n01, n02, n03, n11, n12, n13, n22, n23, n33, adj)
     lam = e0
     if not (lam > 0.0) or not np.isfinite(lam):
         return False
@@ -212,24 +205,36 @@ def _rotation_newton(s, e0, a, rot, f):
         lam -= step
     if not converged or not (lam > 0.0):
         return False
-    for i in range(4):
-        a[i, i] -= lam
-    best, cbest = 0, 0.0
-    for j in range(4):
-        cjj = abs(_cofactor(a, j, j))
-        if cjj > cbest:
-            best, cbest = j, cjj
-    # adj(N - λI) = Π(λ_k - λ) q qᵀ, so cbest >= Π|λ_k - λ| / 4. The eigenvector's error
-    # is ~ ε (λ/gap)² (det N's rounding moves λ by ~ ε λ²/gap): with the nearest other
-    # eigenvalue closer than a few % of λ the sweeps do it, to ~ ε λ/gap.
-    if not (cbest > 1e-2 * lam * lam * lam):
-        return False
-    w = _cofactor(a, 0, best)
-    x = _cofactor(a, 1, best)
-    y = _cofactor(a, 2, best)
-    z = _cofactor(a, 3, best)
-    nrm = np.sqrt(w * w + x * x + y * y + z * z)
-    _quat_rotation(w / nrm, x / nrm, y / nrm, z / nrm, rot, f)
+    # det N's rounding moves λ by ~ ε λ²/gap, the adjugate's column by that over the gap
+    # (ε (λ/gap)²); the Rayleigh quotient of that column is λ to ~ ε λ, and the column
+    # at it is q to ~ ε λ/gap, what the Jacobi sweeps reach.
+    for _ in range(2):
+        _adjugate4(n00 - lam, n01, n02, n03, n11 - lam, n12, n13, n22 - lam, n23, n33 - lam,
+                   adj)
+        best = 0
+        for j in range(1, 4):
+            if abs(adj[j, j]) > abs(adj[best, best]):
+                best = j
+        # |adj_jj| max >= Π|λ_k - λ| / 4: with the nearest other eigenvalue within a few %
+        # of λ the sweeps do it
+        if not (abs(adj[best, best]) > 1e-2 * lam * lam * lam):
+            return False
+        w, x, y, z = adj[0, best], adj[1, best], adj[2, best], adj[3, best]
+        nrm = np.sqrt(w * w + x * x + y * y + z * z)
+        w, x, y, z = w / nrm, x / nrm, y / nrm, z / nrm
+        lam = (w * (n00 * w + n01 * x + n02 * y + n03 * z)
+               + x * (n01 * w + n11 * x + n12 * y + n13 * z)
+               + y * (n02 * w + n12 * x + n22 * y + n23 * z)
+               + z * (n03 * w + n13 * x + n23 * y + n33 * z))
+    rot[f, 0, 0] = w * w + x * x - y * y - z * z
+    rot[f, 0, 1] = 2.0 * (x * y - w * z)
+    rot[f, 0, 2] = 2.0 * (x * z + w * y)
+    rot[f, 1, 0] = 2.0 * (x * y + w * z)
+    rot[f, 1, 1] = w * w - x * x + y * y - z * z
+    rot[f, 1, 2] = 2.0 * (y * z - w * x)
+    rot[f, 2, 0] = 2.0 * (x * z - w * y)
+    rot[f, 2, 1] = 2.0 * (y * z + w * x)
+    rot[f, 2, 2] = w * w - x * x - y * y + z * z
     return True
 
 
@@ -261,22 +266,30 @@ def _rank2_clear(s):
     return 0
 
 
+#: :func:`kabsch_frames` states per frame: no pose, a pose, and (bits) the rotation or
+#: the rank test left to :func:`rotations_from_cross` (see :func:`kabsch_finish`).
+NO_POSE, POSE, SWEEP_ROTATION, SWEEP_RANK = 0, 1, 2, 4
+
+
 @njit(cache=True)
 def kabsch_frames(template, points, weights, eps):
-    """:func:`vidcap.mocap.frames.kabsch` fused per frame: rotations (F, 3, 3) and
-    origins (F, 3), NaN where fewer than 3 points or a rank-deficient fit.
+    """:func:`vidcap.mocap.frames.kabsch` fused per frame: rotations (F, 3, 3), origins
+    (F, 3), states (F,) and, for the frames whose state has a SWEEP bit, the
+    cross-covariance, x̄ and t̄ (F, 15) to finish them with (:func:`kabsch_finish`).
 
     template (K, 3), points (F, K, 3), weights (F, K): a point counts where it, its
-    template row and its weight are finite and the weight is > 0. The rotation from
+    template row and its weight are finite and the weight is > 0. NaN poses where
+    fewer than 3 points count or the rank test (s₂ > 1e-6 s₁) fails. The rotation from
     :func:`_rotation_newton` with the bound e0 = (Σw|t - t̄|² + Σw|x - x̄|²)/2 >= λ
-    (Σ w xᵀRt <= Σ w |x||t|), else from :func:`rotations_from_cross`'s sweeps; the
-    rank test (s₂ > 1e-6 s₁) from :func:`_rank2_clear`, else the sweeps' singular values.
+    (Σ w xᵀRt <= Σ w |x||t|); the rank test from :func:`_rank2_clear`.
     """
     f_n, k_n = points.shape[0], points.shape[1]
     rot = np.empty((f_n, 3, 3))
     org = np.empty((f_n, 3))
-    a = np.empty((4, 4))
-    h = np.zeros((1, 3, 3))
+    state = np.zeros(f_n, dtype=np.int8)
+    aux = np.empty((f_n, 15))
+    adj = np.empty((4, 4))
+    h = np.empty((3, 3))
     use = np.empty(k_n, dtype=np.bool_)
     xc = np.empty(3)
     tc = np.empty(3)
@@ -292,23 +305,21 @@ def kabsch_frames(template, points, weights, eps):
             if ok:
                 cnt += 1
                 den += wk
-        good = cnt >= 3
-        if good:
+        st = NO_POSE
+        if cnt >= 3:
             den = max(den, eps)
             for i in range(3):
                 sx = 0.0
-                st = 0.0
+                sw = 0.0
                 for k in range(k_n):
                     if use[k]:
                         sx += weights[f, k] * points[f, k, i]
-                        st += weights[f, k] * template[k, i]
+                        sw += weights[f, k] * template[k, i]
                 xc[i] = sx / den
-                tc[i] = st / den
+                tc[i] = sw / den
             ga = 0.0
             gb = 0.0
-            for i in range(3):
-                for j in range(3):
-                    h[0, i, j] = 0.0
+            h[:, :] = 0.0
             for k in range(k_n):
                 if use[k]:
                     wk = weights[f, k]
@@ -318,25 +329,49 @@ def kabsch_frames(template, points, weights, eps):
                         xi = points[f, k, i] - xc[i]
                         gb += wk * xi * xi
                         for j in range(3):
-                            h[0, i, j] += wk * ti * (points[f, k, j] - xc[j])
-            s = h[0]
-            rank = _rank2_clear(s)
-            fast = _rotation_newton(s, 0.5 * (ga + gb), a, rot, f)
-            if not fast or rank == 0:
-                r1, sv = rotations_from_cross(h)
-                if not fast:
-                    rot[f] = r1[0]
-                if rank == 0:
-                    rank = 1 if sv[0, 1] > 1e-6 * max(sv[0, 0], eps) else -1
-            good = rank > 0
-        if good:
+                            h[i, j] += wk * ti * (points[f, k, j] - xc[j])
+            rank = _rank2_clear(h)
+            if rank >= 0:
+                st = POSE if rank > 0 else SWEEP_RANK
+                if not _rotation_newton(h, 0.5 * (ga + gb), adj, rot, f):
+                    st |= SWEEP_ROTATION
+                if st != POSE:
+                    for i in range(3):
+                        for j in range(3):
+                            aux[f, 3 * i + j] = h[i, j]
+                        aux[f, 9 + i] = xc[i]
+                        aux[f, 12 + i] = tc[i]
+        state[f] = st
+        if st == POSE:
             for i in range(3):
                 org[f, i] = xc[i] - (rot[f, i, 0] * tc[0] + rot[f, i, 1] * tc[1]
                                      + rot[f, i, 2] * tc[2])
-        else:
+        elif st == NO_POSE:
             rot[f] = np.nan
             org[f] = np.nan
-    return rot, org
+    return rot, org, state, aux
+
+
+def kabsch_finish(rot, org, state, aux, eps):
+    """The frames :func:`kabsch_frames` left to the Jacobi sweeps (their SWEEP bits), in
+    place: the rotation and/or the rank test from :func:`rotations_from_cross`, then
+    the origin. Plain Python around one compiled call: such frames are rare, and
+    calling the sweeps from inside the fused kernel would cost seconds of compiling."""
+    idx = np.flatnonzero(state > POSE)
+    if idx.size == 0:
+        return
+    st = state[idx]
+    r1, sv = rotations_from_cross(np.ascontiguousarray(aux[idx, :9]).reshape(-1, 3, 3))
+    prev = rot[idx]
+    r = np.where((st & SWEEP_ROTATION)[:, None, None] > 0, r1, prev)
+    ok = ((st & SWEEP_RANK) == 0) | (sv[:, 1] > 1e-6 * np.maximum(sv[:, 0], eps))
+    r[~ok] = np.nan
+    xc, tc = aux[idx, 9:12], aux[idx, 12:15]
+    o = xc - np.matmul(r, tc[..., None])[..., 0]
+    o[~ok] = np.nan
+    rot[idx] = r
+    org[idx] = o
+    state[idx] = np.where(ok, POSE, NO_POSE)
 
 
 @njit(cache=True)

@@ -139,8 +139,10 @@ def kabsch(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None 
     shape = points.shape[:2]
     wf = (np.ones(shape) if weights is None else
           np.ascontiguousarray(np.broadcast_to(np.asarray(weights, dtype=float), shape)))
-    return compiled.kabsch_frames(np.ascontiguousarray(template, dtype=float), points, wf,
-                                  _EPS)
+    r, o, state, aux = compiled.kabsch_frames(np.ascontiguousarray(template, dtype=float),
+                                              points, wf, _EPS)
+    compiled.kabsch_finish(r, o, state, aux, _EPS)
+    return r, o
 
 
 def _kabsch_numpy(template: np.ndarray, points: np.ndarray, weights: np.ndarray | None = None
