@@ -187,31 +187,26 @@ def point_covariance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | 
     ----------
     template : numpy.ndarray, shape (K, 3)
         The frame's points in its own coordinates (NaN rows ignored).
-    v : numpy.ndarray, shape (3,)
-        The point, same coordinates.
+    v : numpy.ndarray, shape (3,) or (P, 3)
+        The point, or several (the template's inertia inverted once), same coordinates.
     weights : numpy.ndarray, shape (K,), optional
 
     Returns
     -------
-    numpy.ndarray, shape (3, 3)
+    numpy.ndarray, shape (3, 3) or (P, 3, 3)
         In units of σ² (all inf if undetermined).
     """
-    t = np.asarray(template, dtype=float)
-    w = np.ones(len(t)) if weights is None else np.asarray(weights, dtype=float)
-    ok = np.isfinite(t).all(axis=1) & np.isfinite(w) & (w > 0)
-    if ok.sum() < 3 or not np.isfinite(v).all():
-        return np.full((3, 3), np.inf)
-    t, w = t[ok], w[ok]
-    c = (w[:, None] * t).sum(0) / w.sum()
-    m = t - c
-    inertia = (w * (m * m).sum(1)).sum() * np.eye(3) - np.einsum("k,ki,kj->ij", w, m, m)
-    try:
-        inv = np.linalg.inv(inertia)
-    except np.linalg.LinAlgError:
-        return np.full((3, 3), np.inf)
-    p = np.asarray(v, dtype=float) - c
-    px = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
-    return np.eye(3) / w.sum() + px @ inv @ px.T
+    v = np.asarray(v, dtype=float)
+    pts = v.reshape(-1, 3)
+    out = np.full((len(pts), 3, 3), np.inf)
+    c, inv, wsum = _template_inertia(template, weights)
+    if c is not None:
+        for k, q in enumerate(pts):
+            if np.isfinite(q).all():
+                p = q - c
+                px = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
+                out[k] = np.eye(3) / wsum + px @ inv @ px.T
+    return out[0] if v.ndim == 1 else out
 
 
 def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | None = None
@@ -221,21 +216,29 @@ def point_variance(template: np.ndarray, v: np.ndarray, weights: np.ndarray | No
 
 
 def frame_noise(template: np.ndarray, weights: np.ndarray | None):
-    """Weighted centroid (3,) and inverse inertia (3, 3) of a frame's template."""
+    """Weighted centroid (3,) and inverse inertia (3, 3) of a frame's template; (None,
+    None) with fewer than 3 points or a singular inertia."""
+    c, inv, _ = _template_inertia(template, weights)
+    return c, inv
+
+
+def _template_inertia(template: np.ndarray, weights: np.ndarray | None):
+    """The template's weighted centroid (3,), inverse inertia (3, 3) about it and weight
+    sum, over its finite rows of positive weight (:func:`point_covariance`); Nones with
+    fewer than 3 of them or a singular inertia."""
     t = np.asarray(template, dtype=float)
     w = np.ones(len(t)) if weights is None else np.asarray(weights, dtype=float)
     ok = np.isfinite(t).all(axis=1) & np.isfinite(w) & (w > 0)
     if ok.sum() < 3:
-        return None, None
+        return None, None, None
     t, w = t[ok], w[ok]
     c = (w[:, None] * t).sum(0) / w.sum()
     m = t - c
     inertia = (w * (m * m).sum(1)).sum() * np.eye(3) - np.einsum("k,ki,kj->ij", w, m, m)
     try:
-        return c, np.linalg.inv(inertia)
+        return c, np.linalg.inv(inertia), w.sum()
     except np.linalg.LinAlgError:
-        return None, None
-
+        return None, None, None
 
 
 def nanmean_points(y: np.ndarray) -> np.ndarray:

@@ -160,6 +160,11 @@ def _lab_up(trial: MarkerData) -> np.ndarray:
     return np.array([0.0, 0.0, 1.0]) if up is None else np.asarray(up, dtype=float)
 
 
+def _pooled(arrays: Sequence[np.ndarray]) -> np.ndarray:
+    """The trials' arrays one after the other (the one array itself for one trial)."""
+    return arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
+
+
 def markers_of(trial: MarkerData, names) -> np.ndarray:
     """Positions of the named markers, (F, len(names), 3) metres (a copy)."""
     return np.take(trial.positions, [trial.index(m) for m in names], axis=1)
@@ -220,9 +225,10 @@ def parent_frame_cov(parent_frame: SegFrames, sets: Sequence[np.ndarray]) -> np.
     """The noise the parent's frame adds to the child's markers in its coordinates: the
     mean over the markers of :func:`point_covariance` (3, 3), units of σ²; None when
     undetermined."""
-    covs = [point_covariance(parent_frame.template, y.mean(axis=0), parent_frame.weights)
-            for y in sets if len(y)]
-    cov = np.mean(covs, axis=0) if covs else None
+    means = [y.mean(axis=0) for y in sets if len(y)]
+    covs = (point_covariance(parent_frame.template, np.array(means), parent_frame.weights)
+            if means else None)
+    cov = np.mean(covs, axis=0) if means else None
     return None if cov is None or not np.isfinite(cov).all() else cov
 
 
@@ -264,9 +270,8 @@ def refine_symmetric(spec: SegmentSpec, trials: Sequence[MarkerData],
     if opts.noise_correct and cen_p is not None and cen_c is not None:
         kw = dict(rot_cov_p=sig2_m * inv_p, rot_cov_c=sig2_m * inv_c,
                   centroid_p=cen_p, centroid_c=cen_c)
-    sc = score(np.concatenate([f.r for f in parent_frames]),
-               np.concatenate([f.o for f in parent_frames]),
-               np.concatenate([f.r for f in own]), np.concatenate([f.o for f in own]), **kw)
+    sc = score(_pooled([f.r for f in parent_frames]), _pooled([f.o for f in parent_frames]),
+               _pooled([f.r for f in own]), _pooled([f.o for f in own]), **kw)
     if sc["x"] is None:
         return fit
     v, v_child, axis, rep = refine_score(sc, fit.report, anchor.point, opts.max_axial_std_mm,
