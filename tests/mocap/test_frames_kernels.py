@@ -91,20 +91,23 @@ def test_fused_kabsch_equals_the_numpy_path(case, monkeypatch):
         weights[::11, 1] = np.nan
         pts[::13, 2] = np.nan
     if case == "mirror":  # mirrored points: Horn's top eigenvalues 2 (s₂ - s₃) apart, with
-        # s₂/s₁ = 0.5 and s₃ 0.6 % below s₂: the Jacobi sweeps take over in many frames
-        tmpl = np.diag([0.1, 0.1 * np.sqrt(0.5), 0.1 * np.sqrt(0.497)])
+        # s₂/s₁ = 0.5 and s₃ 2e-5 below s₂: the Jacobi sweeps take over
+        tmpl = np.diag([0.1, 0.1 * np.sqrt(0.5), 0.1 * np.sqrt(0.49999)])
         tmpl = np.concatenate([tmpl, -tmpl])
-        pts = _poses(rng, tmpl, 400, noise=1e-5) * np.array([1.0, 1.0, -1.0])
+        pts = _poses(rng, tmpl, 400, noise=1e-7) * np.array([1.0, 1.0, -1.0])
         kern = fr._kernels()
         state = kern.kabsch_frames(tmpl, pts, np.ones(pts.shape[:2]), fr._EPS)[2]
-        assert (state & kern.POSE).all() and (state & kern.SWEEP_ROTATION).mean() > 0.2
+        assert (state == kern.POSE | kern.SWEEP_ROTATION).all()
     fast = fr.kabsch(tmpl, pts, weights)
+    sweeps = fr._kabsch_numpy(tmpl, pts, weights)  # batched numpy, Jacobi rotations
     monkeypatch.setattr(fr, "_kernels", lambda: None)
-    slow = fr.kabsch(tmpl, pts, weights)
-    # (at s2/s1 ~ 1e-6 the rotation about the line is ill-determined: there the SVD and
-    # the old sweeps differ by 3e-10 too)
-    for a, b in zip(fast, slow, strict=True):
-        _same(a, b, 1e-9 if case == "nearly_collinear" else 1e-11)
+    slow = fr.kabsch(tmpl, pts, weights)  # batched numpy, SVD rotations
+    # Ill-determined rotations (about a near-line; mirrored with s₂ ≈ s₃) differ between
+    # any two methods: the SVD and the sweeps by 3e-10 and 1.4e-9 here.
+    tol = {"nearly_collinear": 1e-9, "mirror": 1e-8}.get(case, 1e-11)
+    for a, b, c in zip(fast, slow, sweeps, strict=True):
+        _same(a, b, tol)
+        _same(a, c, 1e-9 if case == "mirror" else tol)
     if case == "collinear":
         assert np.isnan(fast[0]).all()
     elif case == "nearly_collinear":

@@ -215,9 +215,9 @@ def _rotation_newton(s, e0, adj, rot, f):
         for j in range(1, 4):
             if abs(adj[j, j]) > abs(adj[best, best]):
                 best = j
-        # |adj_jj| max >= Π|λ_k - λ| / 4: with the nearest other eigenvalue within a few %
-        # of λ the sweeps do it
-        if not (abs(adj[best, best]) > 1e-2 * lam * lam * lam):
+        # |adj_jj| max >= Π|λ_k - λ| / 4: where the nearest other eigenvalue is within
+        # ~1e-4 λ (degenerate, or nearly: collinear points, mirrored sets) the sweeps do it
+        if not (abs(adj[best, best]) > 1e-4 * lam * lam * lam):
             return False
         w, x, y, z = adj[0, best], adj[1, best], adj[2, best], adj[3, best]
         nrm = np.sqrt(w * w + x * x + y * y + z * z)
