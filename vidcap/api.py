@@ -26,7 +26,7 @@ from vidcap.errors import UsageError
 
 def check_convert_options(*, height: float, jobs: int | None, view: str = "auto",
                           smooth: float = 1.0, keyframes: float | None = None,
-                          cues: str = "all") -> None:
+                          cues: str = "outline") -> None:
     """Raise :class:`UsageError` for an option of ``convert`` that cannot work.
 
     Shared by :func:`convert` and ``vidcap convert``, so both refuse the same values.

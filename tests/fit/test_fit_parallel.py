@@ -153,9 +153,9 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
     sent = []
     submit = StreamedFit._submit
 
-    def spy(self, chunk, frames):
+    def spy(self, chunk, frames, colour):
         sent.append((chunk, len(frames)))
-        submit(self, chunk, frames)
+        submit(self, chunk, frames, colour)
 
     monkeypatch.setattr(StreamedFit, "_submit", spy)
     with FitPool(2) as pool:

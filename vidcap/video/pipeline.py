@@ -60,7 +60,7 @@ from vidcap.video.userregions import region_cache_part
 _CHUNKS_PER_JOB = 2
 
 #: The fit's cues by default (``run``'s ``cues``; ``vidcap convert --cues``).
-DEFAULT_CUES = "all"
+DEFAULT_CUES = "outline"
 
 
 def check_cues(cues: str) -> None:
@@ -143,14 +143,10 @@ def run(
     """
     from vidcap.io.video import frame_times, probe
     from vidcap.video.background import load_plate
-    from vidcap.video.fit.cueframes import FrameCrops
-    from vidcap.video.fit.parallel import StreamedFit, default_jobs
+    from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    check_view(view)  # before any work
-    _check_choice("lift", lift, ("solve", "segment"))
-    _check_choice("proportions", proportions, ("seed", "auto"))
-    check_cues(cues)
+    _check_options(view, lift, proportions, cues)  # before any work
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -166,8 +162,7 @@ def run(
     k_sil = _silhouette_key(ident, k_plate, region_cache_part(ann))
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
-    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs=jobs, per_job=per_job,
-                              cues=cues)
+    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues)
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
@@ -176,12 +171,7 @@ def run(
         if plate_notice(plate):
             log(plate_notice(plate))
         with _timed(timings, "silhouettes"):
-            # each chunk of frames is fitted as soon as its silhouettes are there
-            streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job,
-                                    cues=cues)
-                        if pool is not None else None)
-            # the colour crops the cues read, cut as the silhouettes are extracted
-            crops = FrameCrops() if cues == "all" else None
+            streamed, crops = _streamed_fit(pool, info.n_frames or 0, jobs, per_job, cues)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed,
                                     progress=progress, regions=_regions(ann, plate),
                                     crops=crops)
@@ -244,6 +234,26 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
     return pose, estimate.body(body.height), estimate
 
 
+def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
+    check_view(view)
+    _check_choice("lift", lift, ("solve", "segment"))
+    _check_choice("proportions", proportions, ("seed", "auto"))
+    check_cues(cues)
+
+
+def _streamed_fit(pool, n_frames: int, jobs: int, per_job: int, cues: str):
+    """The :class:`vidcap.video.fit.parallel.StreamedFit` that fits each chunk of frames as
+    soon as its silhouettes are there (None without ``pool``), and the
+    :class:`vidcap.video.fit.cueframes.FrameCrops` to fill with the colour crops the cues
+    read as the silhouettes are extracted (None for ``cues='outline'``)."""
+    from vidcap.video.fit.cueframes import FrameCrops
+    from vidcap.video.fit.parallel import StreamedFit
+
+    streamed = (None if pool is None
+                else StreamedFit(pool, n_frames, jobs=jobs, per_job=per_job, cues=cues))
+    return streamed, (FrameCrops() if cues == "all" else None)
+
+
 @contextmanager
 def _timed(timings: dict, name: str):
     """Add the seconds the ``with`` block takes to ``timings[name]``."""
@@ -280,7 +290,7 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
             f"(frames count from 0)", source)
 
 
-def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, *, jobs: int,
+def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
                        per_job: int, cues: str = DEFAULT_CUES):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
