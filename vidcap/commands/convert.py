@@ -52,7 +52,7 @@ def add_cues_argument(parser: argparse.ArgumentParser) -> None:
                         help="what places the 2D body model: 'all' = the silhouette's outline "
                         "and the colour frame inside it (skin colour and edges place arms "
                         "in front of the body), 'outline' = the silhouette only (the "
-                        "seed's method; 2.5x faster). Default: " + DEFAULT_CUES)
+                        "seed's method; 2.7x faster). Default: " + DEFAULT_CUES)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
