@@ -134,8 +134,7 @@ def run(
     proportions : {'seed', 'auto'}
         The seed's ratios or the subject's, from the clip (:func:`_fit_stage`).
     cues : {'outline', 'all'}
-        The 2D fit reads the silhouette only (the seed), or the colour frame's cues
-        inside it too (:mod:`vidcap.video.fit.cues`); default :data:`DEFAULT_CUES`.
+        The 2D fit reads the silhouette only, or the frame's cues inside it too.
 
     Returns
     -------
@@ -172,13 +171,12 @@ def run(
             log(plate_notice(plate))
         with _timed(timings, "silhouettes"):
             streamed, crops = _streamed_fit(pool, info.n_frames or 0, jobs, per_job, cues)
-            sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed,
-                                    progress=progress, regions=_regions(ann, plate),
-                                    crops=crops)
+            sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
+                                    progress=progress, regions=_regions(ann, plate))
         _report_silhouettes(sil, info.n_frames, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
-                                          per_job=per_job, streamed=streamed,
-                                          progress=progress, timings=timings, log=log,
+                                          per_job=per_job, streamed=streamed, log=log,
+                                          progress=progress, timings=timings,
                                           cues=(cues, crops, video))
     except BaseException:
         if pool is not None:
