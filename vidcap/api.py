@@ -25,7 +25,8 @@ from vidcap.errors import UsageError
 
 
 def check_convert_options(*, height: float, jobs: int | None, view: str = "auto",
-                          smooth: float = 1.0, keyframes: float | None = None) -> None:
+                          smooth: float = 1.0, keyframes: float | None = None,
+                          cues: str = "outline") -> None:
     """Raise :class:`UsageError` for an option of ``convert`` that cannot work.
 
     Shared by :func:`convert` and ``vidcap convert``, so both refuse the same values.
@@ -42,6 +43,16 @@ def check_convert_options(*, height: float, jobs: int | None, view: str = "auto"
         raise UsageError(f"--jobs must be at least 1, got {jobs}")
     if view not in VIEWS:
         raise UsageError(f"unknown view {view!r}; use one of {', '.join(VIEWS)}")
+    check_cues_option(cues)
+
+
+def check_cues_option(cues: str) -> None:
+    """:class:`UsageError` unless ``cues`` is a ``--cues`` value
+    (:data:`vidcap.video.fit.cues.CUE_MODES`)."""
+    from vidcap.video.fit.cues import CUE_MODES
+
+    if cues not in CUE_MODES:
+        raise UsageError(f"unknown --cues {cues!r}; use one of {', '.join(CUE_MODES)}")
 
 
 @dataclass(frozen=True)
@@ -101,7 +112,7 @@ class VideoMotion:
 
 def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None = None,
             height: float = 1.75, view: str = "auto", jobs: int | None = None,
-            progress: bool = False) -> VideoMotion:
+            progress: bool = False, cues: str | None = None) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -120,6 +131,10 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         Processes fitting the 2D pose (default: the CPUs, at most 8).
     progress : bool
         Show progress bars on stderr.
+    cues : {'all', 'outline'}, optional
+        What places the 2D model: the silhouette's outline and the colour frame's cues
+        inside it (``'all'``: skin colour and edges place the arms), or the outline
+        only (the seed); default :data:`vidcap.video.pipeline.DEFAULT_CUES`.
 
     Returns
     -------
@@ -136,11 +151,12 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
     vidcap.errors.UsageError
         If an option is invalid.
     """
-    from vidcap.video.pipeline import run
+    from vidcap.video.pipeline import DEFAULT_CUES, run
 
-    check_convert_options(height=height, jobs=jobs, view=view)
+    cues = DEFAULT_CUES if cues is None else cues
+    check_convert_options(height=height, jobs=jobs, view=view, cues=cues)
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
-              progress=progress)
+              progress=progress, cues=cues)
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))

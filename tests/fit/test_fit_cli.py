@@ -1,6 +1,7 @@
 """``vidcap pose2d`` end to end on a tiny rendered clip."""
 
 import numpy as np
+import pytest
 
 from vidcap.video.fit.pose2d import Pose2D
 
@@ -64,3 +65,36 @@ def test_pose2d_cli_without_masks_extracts_silhouettes(tmp_path, cli):
     hpx = np.ptp(d["joints2d"][0, :, 1])
     err = np.linalg.norm(pose.joints2d[found] - d["joints2d"][found], axis=-1)
     assert np.median(err[:, :3]) < 0.08 * hpx  # pelvis, neck, head top
+
+
+def test_pose2d_cli_cues_option(tmp_path, cli):
+    video, masks, _ = _clip(tmp_path)
+    out = tmp_path / "pose2d.npz"
+    for cues in ("outline", "all"):
+        r = cli("pose2d", video, "--masks", masks, "-o", out, "--cues", cues)
+        assert r.returncode == 0, r.stderr
+        assert Pose2D.load(out).joints2d.shape == (4, 15, 2)
+    out.unlink()
+    r = cli("pose2d", video, "--masks", masks, "-o", out, "--cues", "colour")
+    assert r.returncode == 2 and not out.exists()
+    assert r.stderr.strip().count("\n") == 0  # one line, no usage text, no traceback
+    assert r.stderr.startswith("vidcap: error:") and "--cues 'colour'" in r.stderr
+    assert "all" in r.stderr and "outline" in r.stderr
+
+
+def test_convert_cli_bad_cues_is_a_one_line_error(tmp_path, cli):
+    video, _, _ = _clip(tmp_path)
+    r = cli("convert", video, "-o", tmp_path / "o.bvh", "--cues", "skin")
+    assert r.returncode == 2 and not (tmp_path / "o.bvh").exists()
+    assert r.stderr.strip().count("\n") == 0 and "--cues 'skin'" in r.stderr
+
+
+def test_cues_default_and_pose_cache_key():
+    from vidcap.commands import convert as convert_cmd
+    from vidcap.video import pipeline
+
+    assert convert_cmd.DEFAULT_CUES == pipeline.DEFAULT_CUES
+    keys = {cues: pipeline._pose_key("sil", [(0, 0, 100)], cues) for cues in ("all", "outline")}
+    assert keys["all"] != keys["outline"]  # a fit with cues is not read back as one without
+    with pytest.raises(ValueError, match="cues"):
+        pipeline.run("nothing.mp4", cues="skin")

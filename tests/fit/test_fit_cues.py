@@ -138,3 +138,40 @@ def test_the_arm_solve_outvotes_a_one_frame_misplacement():
     cands[4] = {"l": (cands[4]["l"][0], cands[4]["l"][1], np.array([0.0, 0.2]))}
     elbow, wrist = arm_path(joints, np.full(n, 200.0), cands)["l"]
     assert wrist[4, 1] == pytest.approx(90.0)
+
+
+def test_frame_crops_give_the_cue_image_of_the_whole_frame():
+    from vidcap.video.fit.cueframes import FrameCrops
+
+    frames, masks, _, _ = _arm_across_torso(n=1)
+    for height, factor in ((80, 1), (30, 4)):  # crops kept whole, and averaged 4x4
+        norm = normalise_mask(masks[0], height=height)
+        whole = cue_image(frames[0], norm)
+        crops = FrameCrops.from_frames(frames, masks, height=height)
+        assert crops.factors == [factor] and crops.nbytes < frames[0].nbytes / 4
+        got = crops.cue_image(0, norm)
+        assert got.shape == whole.shape
+        # the same colours inside the silhouette, but for resampling (the colours
+        # there spread 45 grey levels)
+        assert np.abs(got - whole)[norm.mask].mean() < 3.0 * factor ** 0.5
+    assert crops[0:1].factors == crops.factors and len(crops[1:]) == 0
+
+
+def test_a_chunked_fit_with_cues_agrees_with_the_serial_fit_with_cues():
+    from vidcap.video.fit.parallel import fit_sequence_chunked
+
+    frames, masks, truth, side = _arm_across_torso(n=44)
+    serial = fit_sequence(masks, frames=frames)
+    chunked = fit_sequence_chunked(masks, frames=frames, jobs=2, min_chunk=20)
+    outline = fit_sequence_chunked(masks, frames=frames, jobs=2, min_chunk=20, cues="outline")
+    # the second chunk (frames 20 on, fitted by a worker) read the colour crops: its
+    # arms are the serial fit's with cues, not the outline's
+    late = slice(24, None)
+    err = np.linalg.norm(chunked.joints2d[late] - serial.joints2d[late], axis=-1)
+    assert np.median(err) < 1.0
+    err_wrist = [_nearest_wrist_error(chunked.joints2d[f], truth, side) for f in range(24, 44)]
+    err_outline = [_nearest_wrist_error(outline.joints2d[f], truth, side) for f in range(24, 44)]
+    assert np.median(err_wrist) < 5.0 < np.median(err_outline)
+    # one job: the serial path, the same fit exactly
+    one = fit_sequence_chunked(masks, frames=frames, jobs=1)
+    np.testing.assert_array_equal(one.joints2d, serial.joints2d)

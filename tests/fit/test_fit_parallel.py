@@ -106,10 +106,10 @@ def test_tracked_chunks_agree_with_serial_and_keep_labels(walk_masks, monkeypatc
         np.testing.assert_array_equal(again.arrays()[key], value, err_msg=key)
 
 
-def _swapped_chunk(masks, skip, tracked, kw):
+def _swapped_chunk(masks, frames, skip, tracked, kw):
     from vidcap.video.fit import parallel
 
-    out = _REAL_FIT_CHUNK(masks, skip, tracked, kw)
+    out = _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw)
     return parallel.swap_labels(out, {"arms": True, "legs": True}) if skip else out
 
 
@@ -153,9 +153,9 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
     sent = []
     submit = StreamedFit._submit
 
-    def spy(self, chunk, frames):
+    def spy(self, chunk, frames, colour):
         sent.append((chunk, len(frames)))
-        submit(self, chunk, frames)
+        submit(self, chunk, frames, colour)
 
     monkeypatch.setattr(StreamedFit, "_submit", spy)
     with FitPool(2) as pool:
@@ -201,18 +201,18 @@ def test_masks_as_a_stack_of_crops_fit_exactly_as_full_frames(walk_masks):
             np.testing.assert_array_equal(cropped[key], v, err_msg=key)
 
 
-def _failing_chunk(masks, skip, tracked, kw):
+def _failing_chunk(masks, frames, skip, tracked, kw):
     if skip:  # the second chunk
         raise ValueError("a bad chunk")
-    return _REAL_FIT_CHUNK(masks, skip, tracked, kw)
+    return _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw)
 
 
-def _dying_chunk(masks, skip, tracked, kw):
+def _dying_chunk(masks, frames, skip, tracked, kw):
     import os
 
     if skip:
         os._exit(3)  # a worker killed mid-chunk (out of memory, a signal)
-    return _REAL_FIT_CHUNK(masks, skip, tracked, kw)
+    return _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw)
 
 
 def test_a_failing_or_dying_worker_is_an_error_not_a_hang(walk_masks, monkeypatch):

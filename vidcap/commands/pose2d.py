@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vidcap.commands.convert import DEFAULT_CUES, add_cues_argument
 from vidcap.errors import InputFileError, UsageError
 
 NAME = "pose2d"
@@ -37,6 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "this subject's, estimated from the clip, and the clip fitted again "
                         "with them (written as body_lengths/body_widths, fractions of the "
                         "standing height)")
+    add_cues_argument(parser)
 
 
 def load_masks(path):
@@ -60,8 +62,10 @@ def load_masks(path):
         raise InputFileError(f"cannot read masks ({exc})", path) from None
 
 
-def compute_masks(video) -> np.ndarray:
-    """Silhouettes of ``video`` as ``vidcap silhouettes`` computes them."""
+def compute_masks(video, crops=None) -> np.ndarray:
+    """Silhouettes of ``video`` as ``vidcap silhouettes`` computes them (``crops``: a
+    :class:`vidcap.video.fit.cueframes.FrameCrops` filled with the colour frames'
+    crops meanwhile)."""
     try:
         from vidcap.video.background import estimate_background
         from vidcap.video.silhouette import extract_silhouettes
@@ -69,26 +73,39 @@ def compute_masks(video) -> np.ndarray:
         raise UsageError("silhouette extraction is not available in this build; pass "
                          "--masks MASKS.npz") from None
     background = estimate_background(video)
-    return extract_silhouettes(video, background).masks
+    return extract_silhouettes(video, background, crops=crops).masks
 
 
 def run(args) -> int:
     """Fit the model and write the .npz atomically."""
+    from vidcap.api import check_cues_option
     from vidcap.fileio import progress
     from vidcap.io.video import probe
+    from vidcap.video.fit.cueframes import FrameCrops, crops_from_video
     from vidcap.video.fit.pose2d import fit_sequence
     from vidcap.video.masks import frames_with_pixels
 
     if args.height < 16:
         raise UsageError(f"--height must be at least 16 pixels, got {args.height}")
+    cues = DEFAULT_CUES if args.cues is None else args.cues
+    check_cues_option(cues)
     info = probe(args.video)
-    masks = load_masks(args.masks) if args.masks else compute_masks(args.video)
+    frames = None
+    if cues == "all" and not args.masks:
+        frames = FrameCrops(height=args.height)  # cut as the silhouettes are extracted
+    masks = load_masks(args.masks) if args.masks else compute_masks(args.video, frames)
     if masks.shape[1:] != (info.height, info.width):
         raise InputFileError(
             f"masks are {masks.shape[2]}x{masks.shape[1]} but the video is "
             f"{info.width}x{info.height}", args.masks)
     if not frames_with_pixels(masks).any():
         raise InputFileError("no silhouette in any frame", args.masks or args.video)
+    if cues == "all" and frames is None:  # the colour frames' crops (video decoded again)
+        frames = crops_from_video(args.video, masks, height=args.height, progress=lambda it,
+                                  total: progress(it, total=total, desc="colour", unit="frame"))
+        if len(frames) != len(masks):
+            raise InputFileError(f"{len(masks)} masks but {len(frames)} video frames",
+                                 args.masks or args.video)
     body, extra, estimate = None, {}, None
     if args.proportions == "auto":
         from vidcap.video.fit.proportions import estimate_proportions
@@ -100,7 +117,7 @@ def run(args) -> int:
     pose = fit_sequence(
         masks, tracked=not args.per_frame, height=args.height, refine=not args.no_refine,
         progress=lambda it, total: progress(it, total=total, desc="pose2d", unit="frame"),
-        body=body,
+        body=body, frames=frames, cues=cues,
     )
     from vidcap.fileio import savez_atomic
 

@@ -59,6 +59,18 @@ from vidcap.video.userregions import region_cache_part
 #: last frame is extracted (each chunk after the first costs ``overlap`` extra frames).
 _CHUNKS_PER_JOB = 2
 
+#: The fit's cues by default (``run``'s ``cues``; ``vidcap convert --cues``).
+DEFAULT_CUES = "outline"
+
+
+def check_cues(cues: str) -> None:
+    """ValueError unless ``cues`` is one of :data:`vidcap.video.fit.cues.CUE_MODES`."""
+    from vidcap.video.fit.cues import CUE_MODES
+
+    if cues not in CUE_MODES:
+        raise ValueError(f"unknown cues {cues!r}; expected one of {', '.join(CUE_MODES)}")
+
+
 #: Bumped when the silhouette stage's results change for the same video and options
 #: (2: no shadow test on grey video; 3: the person followed, not the largest blob), so
 #: caches written by older versions are redone.
@@ -81,6 +93,7 @@ def run(
     jobs: int | None = None,
     view: str = "auto",
     lift: str = "solve", proportions: str = "seed",
+    cues: str = DEFAULT_CUES,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -120,6 +133,8 @@ def run(
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
     proportions : {'seed', 'auto'}
         The seed's ratios or the subject's, from the clip (:func:`_fit_stage`).
+    cues : {'outline', 'all'}
+        The 2D fit reads the silhouette only, or the frame's cues inside it too.
 
     Returns
     -------
@@ -127,12 +142,10 @@ def run(
     """
     from vidcap.io.video import frame_times, probe
     from vidcap.video.background import load_plate
-    from vidcap.video.fit.parallel import StreamedFit, default_jobs
+    from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    check_view(view)  # before any work
-    _check_choice("lift", lift, ("solve", "segment"))
-    _check_choice("proportions", proportions, ("seed", "auto"))
+    _check_options(view, lift, proportions, cues)  # before any work
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -148,7 +161,7 @@ def run(
     k_sil = _silhouette_key(ident, k_plate, region_cache_part(ann))
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
-    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs=jobs, per_job=per_job)
+    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues)
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
@@ -157,15 +170,14 @@ def run(
         if plate_notice(plate):
             log(plate_notice(plate))
         with _timed(timings, "silhouettes"):
-            # each chunk of frames is fitted as soon as its silhouettes are there
-            streamed = (StreamedFit(pool, info.n_frames or 0, jobs=jobs, per_job=per_job)
-                        if pool is not None else None)
-            sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed,
+            streamed, crops = _streamed_fit(pool, info.n_frames or 0, jobs, per_job, cues)
+            sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
                                     progress=progress, regions=_regions(ann, plate))
         _report_silhouettes(sil, info.n_frames, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
-                                          per_job=per_job, streamed=streamed,
-                                          progress=progress, timings=timings, log=log)
+                                          per_job=per_job, streamed=streamed, log=log,
+                                          progress=progress, timings=timings,
+                                          cues=(cues, crops, video))
     except BaseException:
         if pool is not None:
             pool.kill()  # an error or Ctrl-C: the running chunks are nobody's now
@@ -197,15 +209,18 @@ def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
 
 
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
-               progress, timings, log):
+               progress, timings, log, cues=(DEFAULT_CUES, None, None)):
     """The 2D pose (:func:`_pose_stage`) and, with ``proportions='auto'``, the subject's
     own proportions estimated from it and the clip fitted again with them
     (:func:`vidcap.video.bodystage.proportions_stage`): the 3D lift and the motion's
     skeleton then use them, ``body``'s height still the standing height. Returns
-    (pose, body, estimate or None)."""
+    (pose, body, estimate or None). ``cues``: ``(cues, crops, video)`` of
+    :func:`_pose_stage` (the refit with the subject's proportions reads the outline only).
+    """
     with _timed(timings, "pose2d"):
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
-                           streamed=streamed, progress=progress)
+                           streamed=streamed, progress=progress, cues=cues[0],
+                           crops=cues[1], video=cues[2])
     if proportions != "auto":
         return pose, body, None
     from vidcap.video.bodystage import proportions_stage
@@ -215,6 +230,26 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
                                            progress=progress)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
+
+
+def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
+    check_view(view)
+    _check_choice("lift", lift, ("solve", "segment"))
+    _check_choice("proportions", proportions, ("seed", "auto"))
+    check_cues(cues)
+
+
+def _streamed_fit(pool, n_frames: int, jobs: int, per_job: int, cues: str):
+    """The :class:`vidcap.video.fit.parallel.StreamedFit` that fits each chunk of frames as
+    soon as its silhouettes are there (None without ``pool``), and the
+    :class:`vidcap.video.fit.cueframes.FrameCrops` to fill with the colour crops the cues
+    read as the silhouettes are extracted (None for ``cues='outline'``)."""
+    from vidcap.video.fit.cueframes import FrameCrops
+    from vidcap.video.fit.parallel import StreamedFit
+
+    streamed = (None if pool is None
+                else StreamedFit(pool, n_frames, jobs=jobs, per_job=per_job, cues=cues))
+    return streamed, (FrameCrops() if cues == "all" else None)
 
 
 @contextmanager
@@ -253,8 +288,8 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
             f"(frames count from 0)", source)
 
 
-def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, *, jobs: int,
-                       per_job: int):
+def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
+                       per_job: int, cues: str = DEFAULT_CUES):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
     plate and extracts the silhouettes; None when the fit is serial or cached."""
@@ -263,7 +298,7 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, *, jobs: in
     expected = chunk_bounds(n_frames, jobs, per_job=per_job)
     if len(expected) < 2:
         return None
-    pose_path = cache.path("pose2d", _pose_key(k_sil, expected))
+    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues))
     if pose_path and pose_path.exists():
         return None
     return FitPool(min(jobs, len(expected)))
@@ -347,24 +382,27 @@ class _MaskFeed:
     """``on_masks`` of :func:`vidcap.video.silhouette.extract_silhouettes`: gathers the chunks
     of silhouettes so far and hands them to the streamed 2D fit."""
 
-    def __init__(self, streamed):
+    def __init__(self, streamed, crops=None):
         self.streamed = streamed
         self.so_far = None  # MaskStack of the frames so far
+        self.crops = crops  # FrameCrops of the frames so far (filled by the extraction)
 
     def __call__(self, _start, chunk_masks) -> None:
         if self.so_far is None:
             self.so_far = MaskStack(chunk_masks.frame_shape)
         self.so_far.extend(chunk_masks)
-        self.streamed.feed(self.so_far)
+        self.streamed.feed(self.so_far, self.crops)
 
 
 def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, streamed,
-                      progress, regions=None, on_masks=None) -> _Silhouettes:
+                      progress, regions=None, on_masks=None, crops=None) -> _Silhouettes:
     """The person's silhouettes, cached or extracted; while they are extracted, each
     chunk of frames goes to ``streamed`` (a :class:`vidcap.video.fit.parallel.StreamedFit`,
     or None) as soon as it is complete, or to ``on_masks`` (as ``on_masks(start, masks)``
     of :func:`vidcap.video.silhouette.extract_silhouettes`). ``regions``: the user's
-    (:class:`vidcap.video.userregions.UserRegions`), which ``key`` must include."""
+    (:class:`vidcap.video.userregions.UserRegions`), which ``key`` must include.
+    ``crops``: a :class:`vidcap.video.fit.cueframes.FrameCrops` filled with each frame's
+    colour crop (None: none; left empty when the silhouettes come from the cache)."""
     from vidcap.video.silhouette import extract_silhouettes
 
     # entries written before the masks were stored cropped lack mask_boxes: extract again
@@ -375,9 +413,9 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
         n_other = hit["n_other"] if "n_other" in hit else np.zeros(len(masks), np.int64)
         return _Silhouettes(masks, hit["bbox"], n_other)
     if streamed is not None:
-        on_masks = _MaskFeed(streamed)
+        on_masks = _MaskFeed(streamed, crops)
     sil = extract_silhouettes(video, plate, progress=progress, on_masks=on_masks,
-                              regions=regions)
+                              regions=regions, crops=crops)
     out = _Silhouettes(sil.masks, sil.bbox, sil.n_other_blobs)
     cache.save("silhouettes", key, bbox=out.bbox, n_other=out.n_other, **out.masks.to_arrays())
     return out
@@ -438,15 +476,20 @@ def _report_silhouettes(sil: _Silhouettes, n_expected: int | None, log) -> None:
 
 
 # --------------------------------------------------------------------------- 3. 2D pose
-def _pose_key(k_sil: str, chunks) -> str:
+def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES) -> str:
     # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
-    return stage_key("pose2d", k_sil) if len(chunks) < 2 else stage_key("pose2d", k_sil, chunks)
+    parts = ("pose2d", k_sil) if len(chunks) < 2 else ("pose2d", k_sil, chunks)
+    # the outline-only fit keeps the key it had before the cues existed
+    return stage_key(*parts) if cues == "outline" else stage_key(*parts, f"cues={cues}")
 
 
 def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, per_job: int,
-                streamed, progress) -> dict:
+                streamed, progress, cues: str = DEFAULT_CUES, crops=None,
+                video=None) -> dict:
     """The 2D pose, cached or fitted (by ``streamed`` when it was fed the silhouettes,
-    else by :func:`vidcap.video.fit.parallel.fit_sequence_chunked`).
+    else by :func:`vidcap.video.fit.parallel.fit_sequence_chunked`), with the colour
+    frames' cues (``cues='all'``: ``crops``, filled while the silhouettes were
+    extracted, else cut now from ``video``, decoded again) or the outline only.
 
     Returns
     -------
@@ -458,7 +501,7 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
     from vidcap.fileio import progress as bar
     from vidcap.video.fit.parallel import chunk_bounds, fit_sequence_chunked
 
-    key = _pose_key(k_sil, chunk_bounds(len(masks), jobs, per_job=per_job))
+    key = _pose_key(k_sil, chunk_bounds(len(masks), jobs, per_job=per_job), cues)
     # entries written before the model's height was kept lack it: fit again
     hit = cache.load("pose2d", key, required=("model_height",))
     if hit is not None:
@@ -467,17 +510,33 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
     def wrap(it, total):
         return bar(it, total=total, desc="2D pose", unit="frame", enabled=progress)
 
+    frames = None
+    if cues == "all":
+        frames = crops if crops is not None and len(crops) == len(masks) else None
+        if frames is None:  # the silhouettes came from the cache: cut the crops now
+            frames = _colour_crops(video, masks, progress=progress)
     if streamed is not None:
         # this process only waits for the workers now: meanwhile, load what the lift
         # needs (a core is free while the last chunk is fitted)
         _preload_lift()
-        pose = streamed.finish(masks, progress=wrap)
+        pose = streamed.finish(masks, frames=frames, progress=wrap)
     else:
-        pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job)
+        pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
+                                    frames=frames, cues=cues)
     hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity, "model_height": pose.model_height}
     cache.save("pose2d", key, **hit)
     return hit
+
+
+def _colour_crops(video, masks: MaskStack, *, progress):
+    """The colour crops (:class:`vidcap.video.fit.cueframes.FrameCrops`) of ``video``'s
+    frames around ``masks`` (decoded again)."""
+    from vidcap.fileio import progress as bar
+    from vidcap.video.fit.cueframes import crops_from_video
+
+    return crops_from_video(video, masks, progress=lambda it, total: bar(
+        it, total=total, desc="colour", unit="frame", enabled=progress))
 
 
 def _preload_lift() -> None:

@@ -554,7 +554,7 @@ def extract_silhouettes(
     other_fraction: float = 0.2, close_size: int | None = None, chunk_size: int = 64,
     progress: bool | None = None, require_person: bool = True,
     work_scale: int | None = None, edge_band: int | None = None,
-    edge_fraction: float = 0.3, on_masks=None, regions=None,
+    edge_fraction: float = 0.3, on_masks=None, regions=None, crops=None,
 ) -> Silhouettes:
     """Separate the person from the background in every frame.
 
@@ -615,6 +615,10 @@ def extract_silhouettes(
         chunk of frames while the rest are still being extracted).
     regions : vidcap.video.userregions.UserRegions, optional
         The user's scene regions and person boxes: pixels the person may not be in.
+    crops : FrameCrops, optional
+        Each frame's colour crop around its silhouette is appended to it
+        (:class:`vidcap.video.fit.cueframes.FrameCrops`, the 2D fit's cues), before
+        ``on_masks`` is called for the chunk.
 
     Returns
     -------
@@ -632,7 +636,7 @@ def extract_silhouettes(
                    chunk_size=chunk_size, work_scale=work_scale, edge_band=edge_band,
                    edge_fraction=edge_fraction, regions=regions)
     acc = _Collected()
-    acc.run(source, background, options, progress, on_masks)
+    acc.run(source, background, options, progress, on_masks, crops)
     name = None if isinstance(source, np.ndarray) else source
     return acc.result(name, require_person)
 
@@ -645,7 +649,7 @@ class _Collected:
         self.bbox, self.areas, self.others, self.fracs, self.gains = [], [], [], [], []
         self.threshold = float("nan")
 
-    def run(self, source, background, options, progress, on_masks) -> None:
+    def run(self, source, background, options, progress, on_masks, crops=None) -> None:
         from vidcap.fileio import progress as bar
 
         total = len(source) if isinstance(source, np.ndarray) else None
@@ -662,6 +666,9 @@ class _Collected:
             for chunk, res, gains in iter_silhouettes(source, background, **options):
                 for j, r in enumerate(res):
                     self.add(start + j, r)
+                    if crops is not None:
+                        x0, y0, x1, y1 = (int(v) for v in r.bbox)
+                        crops.append(chunk[j], (0, 0, 0, 0) if x0 < 0 else (y0, y1, x0, x1))
                 self.gains.append(gains)
                 if on_masks is not None:
                     on_masks(start, self.masks[start:])

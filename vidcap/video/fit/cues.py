@@ -327,16 +327,45 @@ def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float):
     return ua, la, direction(ua), direction(la)
 
 
+def fore_options(fu: float, fl: float) -> list[tuple[float, float]]:
+    """The (upper, lower) foreshortenings :func:`search_arm_cues` tries: the arm's own
+    (the outline's), its forearm at full length, and the whole arm at full length.
+
+    An arm in front of the torso leaves the outline nothing to measure its length by,
+    so the outline fit draws it short; the frame's skin and edges can show it whole.
+    """
+    out = [(float(fu), float(fl))]
+    for opt in ((u, low) for u in (fu, 0.7, 1.0) for low in (fl, 1.0)):
+        opt = (float(opt[0]), float(opt[1]))
+        if min(max(abs(a - b) for a, b in zip(opt, o, strict=True)) for o in out) > 0.05:
+            out.append(opt)
+    return out
+
+
+def _fore_steps(fore):
+    """Foreshortenings near ``fore`` (the upper arm 0.1 and 0.2, the forearm 0.1 either
+    way, within [0.3, 1]), ``fore`` left out."""
+    opts = []
+    for a in (-0.2, -0.1, 0.0, 0.1, 0.2):
+        for b in (0.0,):
+            f = (min(max(fore[0] + a, 0.3), 1.0), min(max(fore[1] + b, 0.3), 1.0))
+            if f != fore and f not in opts:
+                opts.append(f)
+    return opts
+
+
 def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
                     weights=None, coarse_deg: float = 15.0, local: bool = False,
                     out: dict | None = None) -> FitState:
     """One whole arm placed by S and the frame's cues together (beyond the seed).
 
-    Every (upper, lower) pair ``coarse_deg`` apart is scored by J (the module's
-    docstring), then pairs 2.5 degrees apart within one coarse step of the best, and
-    the arm is moved there if that J beats the arm in place. The other arm's drawn
-    pixels carry no cue for this one (its skin and edges are masked out), so both
-    arms do not settle on the one the frame shows.
+    Every (upper, lower) pair ``coarse_deg`` apart, at each foreshortening of
+    :func:`fore_options`, is scored by J (the module's docstring; the prior's pull
+    on each segment's angle weighed by the segment's own foreshortening), then pairs 2.5
+    degrees apart within one coarse step of the best, at the best's foreshortening,
+    and the arm is moved there if that J beats the arm in place. The other arm's
+    drawn pixels carry no cue for this one (its skin and edges are masked out), so
+    both arms do not settle on the one the frame shows.
 
     Parameters
     ----------
@@ -361,7 +390,7 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     shoulder = joints[J[f"{s}_shoulder"]]
     if prior is None:
         prior = (st.angles[up], st.angles[lo])
-    len_u, len_l = eng.L[up] * st.fore[up], eng.L[lo] * st.fore[lo]
+    fore0 = (float(st.fore[up]), float(st.fore[lo]))
     r_u, r_l = float(eng.R[up]), float(eng.R[lo])
     # the other arm's pixels and the head's (skin, but the head's) are no cue for this arm
     oth = draw_pose(joints, eng.R, eng.sil.shape,
@@ -371,11 +400,15 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     stack[oth] = 0.0
     own = CueMaps(stack, maps.bins)
 
-    def score(grid):
+    def score(grid, fore):
         ua, la, du, dl = grid
-        sim = _pair_scores(eng, st, up, lo, shoulder, grid)
-        skin, edge = arm_cue_terms(own, shoulder, du, dl, len_u, len_l, r_u, r_l)
-        gap = _angle_gap(ua, prior[0]) + _angle_gap(la, prior[1])
+        at = st if fore == fore0 else st.with_entries(fore=([up, lo], list(fore)))
+        sim = _pair_scores(eng, at, up, lo, shoulder, grid)
+        skin, edge = arm_cue_terms(own, shoulder, du, dl, eng.L[up] * fore[0],
+                                   eng.L[lo] * fore[1], r_u, r_l)
+        # a segment the outline drew short is one it hardly sees: its angle is held
+        # by the prior that much less
+        gap = fore0[0] * _angle_gap(ua, prior[0]) + fore0[1] * _angle_gap(la, prior[1])
         return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
 
     if local:
@@ -383,21 +416,43 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
         half = 5.0
     else:
         coarse, half = pair_grid(float(coarse_deg)), coarse_deg
-    j_coarse = score(coarse)
-    k = int(np.argmax(j_coarse))
+    fores = fore_options(*fore0)
+    j_coarse = [score(coarse, f) for f in fores]
+    v = int(np.argmax([jc.max() for jc in j_coarse]))
+    fore = fores[v]
+    k = int(np.argmax(j_coarse[v]))
     fine = _fine_grid(coarse[0][k], coarse[1][k], half, 2.5)
-    here = _fine_grid(st.angles[up], st.angles[lo], 0.0, 1.0)  # the arm in place
-    both = tuple(np.concatenate([a, b]) for a, b in zip(here, fine, strict=True))
-    j = score(both)
-    best = int(np.argmax(j))
-    if best == 0 or j[best] <= j[0]:
-        best = 0
+    # the arm in place (even beyond the bend limit, where the outline fit left it)
+    a_here = np.mod([st.angles[up]], 2 * np.pi), np.mod([st.angles[lo]], 2 * np.pi)
+    here = (*a_here, direction(a_here[0]), direction(a_here[1]))
+    j_here = score(here, fore0)
+    j_fine = score(fine, fore)
+    if fore != fore0 or fore0[0] > 0.95 or fore0[1] > 0.95:
+        # an arm the cues lengthened (or drawn whole): its lengths between the coarse
+        # options, too
+        for f in _fore_steps(fore):
+            j_f = score(fine, f)
+            if j_f.max() > j_fine.max():
+                j_fine, fore = j_f, f
+    if j_fine.max() > j_here[0]:
+        best = int(np.argmax(j_fine))
+        d_best, j_best = (fine[2][best], fine[3][best]), float(j_fine[best])
+    else:
+        best, fore = -1, fore0
+        d_best, j_best = (here[2][0], here[3][0]), float(j_here[0])
     if out is not None:
-        out[s] = _candidates(eng, shoulder, len_u, len_l, (coarse, both),
-                             (j_coarse, j), both[2][best], both[3][best], j[best])
-    if best == 0:
+        # the candidates at the chosen foreshortening (the solve over time compares
+        # places, not lengths)
+        both = tuple(np.concatenate([a, b]) for a, b in zip(here, fine, strict=True))
+        j_both = np.concatenate([j_here, j_fine])
+        cg, cj = (coarse, j_coarse[fores.index(fore)]) if fore in fores else (coarse,
+                                                                             j_coarse[0])
+        out[s] = _candidates(eng, shoulder, eng.L[up] * fore[0], eng.L[lo] * fore[1],
+                             (cg, both), (cj, j_both), d_best[0], d_best[1], j_best)
+    if best < 0:
         return st
-    return st.with_entries(angles=([up, lo], [both[0][best], both[1][best]]))
+    return st.with_entries(angles=([up, lo], [fine[0][best], fine[1][best]]),
+                           fore=([up, lo], list(fore)))
 
 
 #: Candidates kept per arm and frame for the solve over time, and how far apart (the
@@ -450,7 +505,7 @@ def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
 
 __all__ = ["CUE_MODES", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues", "arm_cue_terms",
            "chroma_bins",
-           "cue_image", "cue_maps", "learn_colours", "refine_arms_with_cues",
+           "cue_image", "cue_maps", "fore_options", "learn_colours", "refine_arms_with_cues",
            "search_arm_cues"]
 
 

@@ -24,10 +24,11 @@ Workers are processes. Where ``os.fork`` is (Linux, macOS), one process loads th
 compiled kernels (numba's start-up, ~1 s of CPU) and forks the workers, which inherit
 them, so the start-up is paid once instead of once per worker; elsewhere they are a
 ``concurrent.futures.ProcessPoolExecutor``'s, each loading its own. Masks are sent as
-:class:`vidcap.video.masks.MaskStack` crops. A :class:`FitPool` starts the
-workers ahead of the fit, so they get ready while the caller does other work. Each
-worker reports every frame it finishes, so one progress bar advances smoothly over the
-whole clip.
+:class:`vidcap.video.masks.MaskStack` crops, and the colour frames for the cues as
+:class:`vidcap.video.fit.cueframes.FrameCrops` (each frame's silhouette box, ~20-60 KB).
+A :class:`FitPool` starts the workers ahead of the fit, so they get ready while the
+caller does other work. Each worker reports every frame it finishes, so one progress bar
+advances smoothly over the whole clip.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
+from vidcap.video.fit.cueframes import FrameCrops, as_frame_crops
 from vidcap.video.fit.labels import LIMB_PAIRS
 from vidcap.video.fit.result import Pose2D
 from vidcap.video.fit.tracking import fit_sequence
@@ -428,8 +430,9 @@ class FitPool:
         self.executor.shutdown(wait=False, cancel_futures=True)
 
 
-def _fit_chunk(masks: MaskStack, skip: int, tracked: bool, kw: dict) -> dict:
-    """Fit one chunk in a worker; reports each frame from ``skip`` on to the queue."""
+def _fit_chunk(masks: MaskStack, frames, skip: int, tracked: bool, kw: dict) -> dict:
+    """Fit one chunk in a worker (``frames``: its :class:`FrameCrops`, or None);
+    reports each frame from ``skip`` on to the queue."""
 
     def report(it, total):
         for k in it:
@@ -437,7 +440,7 @@ def _fit_chunk(masks: MaskStack, skip: int, tracked: bool, kw: dict) -> dict:
             if k >= skip and _QUEUE is not None:
                 _QUEUE.put(1)
 
-    pose = fit_sequence(masks, tracked=tracked, progress=report, **kw)
+    pose = fit_sequence(masks, tracked=tracked, progress=report, frames=frames, **kw)
     return pose.arrays()
 
 
@@ -450,7 +453,8 @@ def _context():
 
 def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True,
                          progress=None, overlap: int = 10, min_chunk: int = 60,
-                         per_job: int = 1, pool: FitPool | None = None, **kw) -> Pose2D:
+                         per_job: int = 1, pool: FitPool | None = None, frames=None,
+                         **kw) -> Pose2D:
     """:func:`vidcap.video.fit.pose2d.fit_sequence` in chunks on ``jobs`` worker processes.
 
     Parameters
@@ -475,8 +479,12 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     pool : FitPool, optional
         Workers started beforehand (``jobs`` defaults to its size); default: a pool
         made for this call.
+    frames : numpy.ndarray, shape (F, H, W, 3), uint8, or FrameCrops, optional
+        The colour frames for the cues (``fit_sequence``'s ``frames``): cut to the
+        silhouettes' boxes (:class:`~vidcap.video.fit.cueframes.FrameCrops`) once
+        here, and each chunk's crops sent to its worker.
     **kw
-        Passed to ``fit_sequence`` (``reinit_every``, ``height``, ...).
+        Passed to ``fit_sequence`` (``reinit_every``, ``height``, ``cues``, ...).
 
     Returns
     -------
@@ -484,6 +492,8 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         As from ``fit_sequence``; tracked labels reconciled across chunks.
     """
     masks = mask_frames(masks)
+    if frames is not None:
+        frames = as_frame_crops(frames, masks, height=kw.get("height", 80))
     if jobs is None:
         jobs = pool.jobs if pool is not None else default_jobs()
     jobs = max(1, int(jobs))
@@ -491,12 +501,13 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     if own:
         n_chunks = len(_bounds(len(masks), jobs, tracked, overlap, min_chunk, per_job, kw))
         if jobs == 1 or n_chunks < 2:
-            return fit_sequence(masks, tracked=tracked, progress=progress, **kw)
+            return fit_sequence(masks, tracked=tracked, progress=progress, frames=frames,
+                                **kw)
         pool = FitPool(min(jobs, n_chunks), warm=False)
     try:
         fit = StreamedFit(pool, len(masks), jobs=jobs, tracked=tracked, overlap=overlap,
                           min_chunk=min_chunk, per_job=per_job, **kw)
-        return fit.finish(masks, progress=progress)
+        return fit.finish(masks, frames=frames, progress=progress)
     finally:
         if own:
             pool.close()
@@ -539,31 +550,39 @@ class StreamedFit:
                               per_job, kw)
         self.futures = {}  # (start, begin, end) -> Future
 
-    def _submit(self, chunk, masks) -> None:
+    def _submit(self, chunk, masks, frames) -> None:
         s, b, e = chunk
         # sent as bit-packed crops, whatever the frames came as
-        frames = masks[s:e] if isinstance(masks, MaskStack) else MaskStack.from_masks(masks[s:e])
+        sil = masks[s:e] if isinstance(masks, MaskStack) else MaskStack.from_masks(masks[s:e])
         self.futures[chunk] = self.pool.executor.submit(
-            _fit_chunk, frames, b - s, self.tracked, self.kw)
+            _fit_chunk, sil, None if frames is None else frames[s:e], b - s, self.tracked,
+            self.kw)
 
-    def feed(self, masks) -> None:
+    def feed(self, masks, frames: FrameCrops | None = None) -> None:
         """Send every planned chunk but the last whose frames are all in ``masks`` (the
-        frames so far, from frame 0: a MaskStack, a list or an array of (H, W) bool)."""
+        frames so far, from frame 0: a MaskStack, a list or an array of (H, W) bool)
+        and in ``frames`` (their colour crops for the cues, or None: the outline
+        only)."""
+        n = len(masks) if frames is None else min(len(masks), len(frames))
         for chunk in self.bounds[:-1]:
-            if chunk not in self.futures and chunk[2] <= len(masks):
-                self._submit(chunk, masks)
+            if chunk not in self.futures and chunk[2] <= n:
+                self._submit(chunk, masks, frames)
 
-    def finish(self, masks, *, progress=None) -> Pose2D:
-        """Fit what is left of all ``masks`` (F, H, W) and join the chunks."""
+    def finish(self, masks, *, frames=None, progress=None) -> Pose2D:
+        """Fit what is left of all ``masks`` (F, H, W) (``frames``: their colour frames
+        or :class:`FrameCrops`, as fed) and join the chunks."""
         masks = mask_frames(masks)
+        if frames is not None:
+            frames = as_frame_crops(frames, masks, height=self.kw.get("height", 80))
         n = len(masks)
         bounds = _bounds(n, self.jobs, self.tracked, self.overlap, self.min_chunk,
                          self.per_job, self.kw)
         if len(bounds) < 2:
-            return fit_sequence(masks, tracked=self.tracked, progress=progress, **self.kw)
+            return fit_sequence(masks, tracked=self.tracked, progress=progress,
+                                frames=frames, **self.kw)
         for chunk in bounds:
             if chunk not in self.futures:
-                self._submit(chunk, masks)
+                self._submit(chunk, masks, frames)
         futures = [self.futures[c] for c in bounds]
         q = self.pool.queue
 

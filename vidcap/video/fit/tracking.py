@@ -16,7 +16,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
-from vidcap.video.fit.cues import CUE_MODES, ColourModel, cue_image
+from vidcap.video.fit.cueframes import as_frame_crops
+from vidcap.video.fit.cues import CUE_MODES, ColourModel
 from vidcap.video.fit.frame import fit_frame
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
@@ -90,8 +91,11 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         frame or from then on) is outvoted by them. Off by default: a clip fitted in
         chunks (:mod:`vidcap.video.fit.parallel`) would be relabelled chunk by chunk, which
         can differ from the whole clip's solve.
-    frames : numpy.ndarray, shape (F, H, W, 3), uint8, or a sequence of frames, optional
-        The colour frames the silhouettes were cut from (BGR). With them (and
+    frames : numpy.ndarray, shape (F, H, W, 3), uint8, or FrameCrops, optional
+        The colour frames the silhouettes were cut from (BGR, or a sequence of
+        frames), or their crops around the silhouettes
+        (:class:`~vidcap.video.fit.cueframes.FrameCrops`, what the pipeline and chunked
+        fits pass; whole frames are cut the same way). With them (and
         ``cues="all"``) each frame's arms are also placed by the frame's cues inside
         the outline (:mod:`vidcap.video.fit.cues`: skin colour learned from this
         clip's head, image edges along the limbs' borders).
@@ -187,7 +191,9 @@ class _Normalised:
         self.masks = masks
         self.size = dict(height=options.height, body_height=options.body_height)
         self.norms: dict[int, NormalisedMask] = {}
-        self.frames = frames
+        # cut to the silhouettes' boxes, as the pipeline sends them to chunked fits
+        self.frames = (None if frames is None
+                       else as_frame_crops(frames, masks, height=options.height))
         self.colours = ColourModel()  # learned over the clip as frames are fitted
 
     def cues(self, k: int, norm: NormalisedMask):
@@ -195,7 +201,7 @@ class _Normalised:
         frames, the outline only)."""
         if self.frames is None:
             return None
-        return cue_image(np.asarray(self.frames[k]), norm), self.colours
+        return self.frames.cue_image(k, norm), self.colours
 
     def __call__(self, k: int) -> NormalisedMask:
         norm = self.norms.get(k)
