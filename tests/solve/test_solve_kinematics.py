@@ -10,6 +10,12 @@ from vidcap.kinematics import Motion
 from vidcap.video.solve.blocksolve import solve_block_banded
 from vidcap.video.solve.clip import make_problem
 from vidcap.video.solve.gauss_newton import normal_equations
+from vidcap.video.solve.limits import (
+    limit_angles,
+    limit_excess,
+    limit_jacobian,
+    params_limit_angles,
+)
 from vidcap.video.solve.residuals import linearise, residuals, sparse_jacobian
 from vidcap.video.solve.skeleton import (
     forward_kinematics,
@@ -85,6 +91,22 @@ def test_residual_jacobian_and_normal_equations():
     np.testing.assert_allclose(grad.ravel(), jac.T @ lin.r, rtol=1e-9, atol=1e-6)
     h_full = jac.T @ jac
     np.testing.assert_allclose(_dense(blocks), h_full, rtol=1e-9, atol=1e-6)
+
+
+def test_limit_angles_from_parameters_are_those_of_the_joints():
+    p = _poses(40, seed=6, spread=1.2)  # many poses beyond the limits
+    joints, root, _ = forward_kinematics(p, BODY.rest_offsets())
+    from_joints = limit_angles(joints, root, p[:, 4:6])
+    np.testing.assert_allclose(params_limit_angles(p), from_joints, atol=1e-12)
+    excess, jac = limit_jacobian(p)
+    np.testing.assert_allclose(excess, limit_excess(from_joints), atol=1e-12)
+    assert (excess > 0).any(axis=0).all()  # every limit is exceeded somewhere
+    h = 1e-7
+    for i in range(24):
+        q = p.copy()
+        q[:, i] += h
+        num = (limit_excess(params_limit_angles(q)) - excess) / h
+        np.testing.assert_allclose(jac[:, :, i], num, atol=1e-4)
 
 
 def _dense(blocks):

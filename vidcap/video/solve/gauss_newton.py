@@ -4,8 +4,8 @@ The Jacobian (:func:`vidcap.video.solve.residuals.linearise`) couples a frame's
 parameters with those of the two frames either side (second differences), so
 ``J^T J`` is block-pentadiagonal in frame order: it is assembled here block by block
 from the per-frame Jacobians (never as a sparse product), a band of half-width
-3 * 24 - 1, solved by a block Cholesky over frame pairs
-(:mod:`vidcap.video.solve.blocksolve`), linear in the clip's length.
+3 * 24 - 1, solved by LAPACK's banded Cholesky (:mod:`vidcap.video.solve.blocksolve`),
+linear in the clip's length.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vidcap.video.solve.blocksolve import solve_block_banded
+from vidcap.video.solve.blocksolve import solve_band, upper_band
 from vidcap.video.solve.residuals import Linearisation, Problem, contact_pairs, linearise, residuals
 from vidcap.video.solve.skeleton import N_PARAMS
 
@@ -107,25 +107,25 @@ def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: f
     p = np.array(params, dtype=float)
     F = p.shape[0]
     hold = np.zeros(F, bool) if fixed is None else np.asarray(fixed, bool)
+    pin = np.repeat(np.where(hold, 1e12, 0.0), P)
     lin = linearise(problem, p)
     c = 0.5 * float(lin.r @ lin.r)
     mu = damping
     it = 0
     for it in range(1, max_iter + 1):  # noqa: B007 - the count is reported
         blocks, grad = normal_equations(problem, lin)
-        g = grad.reshape(F, P)
-        g[hold] = 0.0
-        diag = np.diagonal(blocks[0], axis1=1, axis2=2).copy()  # (F, P)
+        g = grad.reshape(-1)
+        g[pin > 0] = 0.0
+        ab = upper_band(blocks)
+        diag = ab[-1].copy()  # (F P,) the normal matrix's diagonal
         improved = False
         for _ in range(8):
-            damped = blocks.copy()
-            idx = np.arange(P)
-            damped[0][:, idx, idx] = diag + mu * (diag + 1e-6) + np.where(hold[:, None], 1e12, 0)
-            step = solve_block_banded(damped, -g)
+            ab[-1] = diag + mu * (diag + 1e-6) + pin
+            step = solve_band(ab, -g)
             if step is None:  # not positive definite: damp more
                 mu *= 10.0
                 continue
-            trial = p + step
+            trial = p + step.reshape(F, P)
             r_new = residuals(problem, trial)
             c_new = 0.5 * float(r_new @ r_new)
             if c_new < c:

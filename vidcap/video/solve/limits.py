@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from vidcap.body import FLEXION_LIMITS_DEG, JOINT_INDEX
+from vidcap.video.solve.skeleton import N_PARAMS, PITCH, REST_DIRS, SWING_AXES, cross, rodrigues
 
 _J = JOINT_INDEX
 _LIMB_JOINTS = {  # (proximal, middle, distal) joints and rest direction of each limb
@@ -48,14 +49,6 @@ _HIGH = np.array([hi for _, _, hi in LIMITS])
 
 def _unit(v):
     return v / np.maximum(np.sqrt(np.sum(v * v, axis=-1, keepdims=True)), 1e-12)
-
-
-def cross(a, b) -> np.ndarray:
-    """a x b over the last axis (3) with broadcasting; ``numpy.cross`` without its
-    axis shuffling, which dominates on many small vectors."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _into_swing_frame(rest, direction, x):
@@ -116,3 +109,71 @@ def limit_excess(angles) -> np.ndarray:
     """How far (radians, >= 0) each angle (..., 15) is outside its bounds."""
     a = np.asarray(angles, dtype=float)
     return np.maximum(a - _HIGH, 0.0) + np.maximum(_LOW - a, 0.0)
+
+
+
+#: For each limited angle after the torso's pitch and roll: the swing joint
+#: (:data:`vidcap.video.solve.skeleton.SWING_JOINTS` index) whose bone it reads.
+#: Every limb angle depends on that one swing only: the shoulders and hips hang from
+#: the torso, and a lower limb's angle is read in the frame of its upper limb's
+#: swing, which is the lower joint's own swing (the body model's T-pose has every
+#: bone along its rest direction).
+_ANGLE_SWING = np.array([0, 1, 3, 2, 4, 5, 7, 5, 7, 6, 8, 6, 8])
+_ARMS = np.array([(-1.0, 0.0, 0.0), (1.0, 0.0, 0.0)])
+_SIDES = np.array([-1.0, 1.0])
+
+
+def _angles_from_bones(v) -> np.ndarray:
+    """The limited angles after the torso's, (..., 13), of the swung bone directions
+    v (..., 9, 3) (each swing's rotation times its rest direction), as
+    :func:`limit_angles` reads them from the joints."""
+    a = v[..., _ANGLE_SWING, :]
+    out = np.empty(v.shape[:-2] + (13,))
+    out[..., 0] = np.arccos(np.clip(a[..., 0, 1], -1.0, 1.0))
+    out[..., 1:3] = np.arcsin(np.clip(a[..., 1:3, 2], -1.0, 1.0))
+    low = a[..., 3:5, :]
+    out[..., 3:5] = np.arctan2(np.sqrt(np.sum(cross(_ARMS, low) ** 2, axis=-1)),
+                               np.sum(low * _ARMS, -1))
+    out[..., 5:7] = np.arctan2(-a[..., 5:7, 2], -a[..., 5:7, 1])
+    out[..., 7:9] = np.arcsin(np.clip(_SIDES * a[..., 7:9, 0], -1.0, 1.0))
+    out[..., 9:11] = np.arctan2(a[..., 9:11, 2], -a[..., 9:11, 1])
+    out[..., 11:13] = np.arcsin(np.clip(_SIDES * a[..., 11:13, 0], -1.0, 1.0))
+    return out
+
+
+def _bones(swings) -> np.ndarray:
+    """Swung bone directions (..., 9, 3) of the swing parameters (..., 9, 2)."""
+    rot = rodrigues(np.einsum("...ka,kac->...kc", swings, SWING_AXES))
+    return np.einsum("...ij,...j->...i", rot, REST_DIRS)
+
+
+def params_limit_angles(params) -> np.ndarray:
+    """:func:`limit_angles` of poses ``params`` (..., 24) read from the parameters
+    directly (no forward kinematics), (..., 15) radians."""
+    p = np.asarray(params, dtype=float)
+    sw = p[..., PITCH + 2:].reshape(p.shape[:-1] + (9, 2))
+    return np.concatenate([p[..., PITCH:PITCH + 2], _angles_from_bones(_bones(sw))], axis=-1)
+
+
+def limit_jacobian(params, step: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """Limit excesses (F, 15) of poses ``params`` (F, 24) and their Jacobian (F, 15, 24).
+
+    Each angle depends on the torso's pitch or roll or on one swing's two columns,
+    so the Jacobian takes three evaluations of the swung bones (forward differences
+    of ``step`` radians on every swing's first, then second column at once).
+    """
+    p = np.asarray(params, dtype=float)
+    F = p.shape[0]
+    sw = p[:, PITCH + 2:].reshape(F, 9, 2)
+    batch = np.stack([sw, sw + (step, 0.0), sw + (0.0, step)])
+    ang = _angles_from_bones(_bones(batch))  # (3, F, 13)
+    exc = limit_excess(np.concatenate([np.broadcast_to(p[:, PITCH:PITCH + 2], (3, F, 2)), ang],
+                                      axis=-1))
+    jac = np.zeros((F, len(LIMITS), N_PARAMS))
+    torso = np.arange(2)
+    jac[:, torso, PITCH + torso] = np.sign(np.maximum(p[:, PITCH:PITCH + 2] - _HIGH[:2], 0.0)) \
+        - np.sign(np.maximum(_LOW[:2] - p[:, PITCH:PITCH + 2], 0.0))
+    rows = np.arange(2, len(LIMITS))
+    for c in range(2):
+        jac[:, rows, PITCH + 2 + 2 * _ANGLE_SWING + c] = (exc[1 + c, :, 2:] - exc[0, :, 2:]) / step
+    return exc[0], jac

@@ -29,7 +29,13 @@ import numpy as np
 from scipy.sparse import coo_matrix
 
 from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS
-from vidcap.video.solve.limits import LIMITS, limit_angles, limit_excess
+from vidcap.video.solve.limits import (
+    LIMITS,
+    limit_angles,
+    limit_excess,
+    limit_jacobian,
+    params_limit_angles,
+)
 from vidcap.video.solve.skeleton import (
     N_PARAMS,
     PITCH,
@@ -108,18 +114,22 @@ def unary(problem: Problem, params, frames=None):
     ``frames`` (...) indexes the problem's frames the poses belong to (default all,
     params (F, 24)).
     """
-    joints, root, _ = forward_kinematics(params, problem.offsets)
-    return unary_from_joints(problem, joints, root, params, frames), joints
+    joints, _, _ = forward_kinematics(params, problem.offsets)
+    lim = limit_excess(params_limit_angles(params))
+    return unary_from_joints(problem, joints, None, params, frames, excess=lim), joints
 
 
-def unary_from_joints(problem: Problem, joints, root, params, frames=None) -> np.ndarray:
+def unary_from_joints(problem: Problem, joints, root, params, frames=None, *,
+                      excess=None) -> np.ndarray:
     """:func:`unary`'s residuals (..., U) of world ``joints`` (..., 15, 3) with the
     torso's rotation ``root`` (..., 3, 3); ``params`` (..., 24) give the yaw, pitch,
-    roll and root depth."""
+    roll and root depth; ``excess`` (..., 15) the joint limits' excess when known
+    (then ``root`` is not read)."""
     pb = problem
     idx = np.arange(pb.n_frames) if frames is None else frames
     proj = (joints[..., :2] - pb.target[idx]) * pb.weight[idx][..., None]
-    lim = limit_excess(limit_angles(joints, root, params[..., PITCH:PITCH + 2]))
+    lim = (limit_excess(limit_angles(joints, root, params[..., PITCH:PITCH + 2]))
+           if excess is None else excess)
     zeta = segment_zeta(joints, pb.lengths)
     soft = sign_penalty(zeta, pb.prior_signs[idx]) * pb.sign_weight
     hard = sign_penalty(zeta, pb.hard_signs[idx], margin=HARD_MARGIN) * pb.hard_weight
@@ -177,33 +187,22 @@ class Linearisation:
     joints: np.ndarray
 
 
-def _limit_jacobian(pb: Problem, params, frames, step: float = 1e-6) -> np.ndarray:
-    """d(limit residuals)/d(params), (n, 15, 24), by forward differences on ``frames``."""
-    p = params[frames]
-    batch = np.repeat(p[None], N_PARAMS + 1, axis=0)
-    batch[1:] += step * np.eye(N_PARAMS)[:, None, :]
-    joints, root, _ = forward_kinematics(batch, pb.offsets)
-    lim = limit_excess(limit_angles(joints, root, batch[..., PITCH:PITCH + 2])) * pb.limit_weight
-    return np.moveaxis((lim[1:] - lim[0]) / step, 0, -1)
-
-
 def linearise(problem: Problem, params) -> Linearisation:
     """Residuals and Jacobian blocks at ``params`` (F, 24): the projection, sign, yaw
     and depth rows in closed form (:func:`vidcap.video.solve.skeleton.kinematics_jacobian`),
-    the limit rows by finite differences on the frames near a limit."""
+    the limit rows by finite differences of the swings
+    (:func:`vidcap.video.solve.limits.limit_jacobian`)."""
     pb = problem
     p = np.asarray(params, dtype=float)
     F = p.shape[0]
     joints, root, jk = kinematics_jacobian(p, pb.offsets)  # jk (F, 15, 3, 24)
-    res = unary_from_joints(pb, joints, root, p)
+    excess, jlim = limit_jacobian(p)
+    res = unary_from_joints(pb, joints, root, p, excess=excess)
     r = np.concatenate([res.ravel(), temporal(pb, joints)])
     ju = np.zeros((F, res.shape[1], N_PARAMS))
     ju[:, :30] = (jk[:, :, :2] * pb.weight[:, :, None, None]).reshape(F, 30, N_PARAMS)
     n_lim = len(LIMITS)
-    angles = limit_angles(joints, root, p[:, PITCH:PITCH + 2])
-    near = np.flatnonzero((_near(angles) > 0).any(axis=1))
-    if near.size:
-        ju[near, 30:30 + n_lim] = _limit_jacobian(pb, p, near)
+    ju[:, 30:30 + n_lim] = jlim * pb.limit_weight
     dzeta = (jk[:, SEGMENT_JOINTS[:, 1], 2] - jk[:, SEGMENT_JOINTS[:, 0], 2]) \
         / pb.lengths[None, :, None]  # (F, 10, 24)
     zeta = segment_zeta(joints, pb.lengths)
@@ -216,18 +215,6 @@ def linearise(problem: Problem, params) -> Linearisation:
     ju[:, at, YAW] = pb.yaw_weight
     ju[:, at + 1, ROOT_POS.start + 2] = pb.depth_weight
     return Linearisation(r, ju, jk.reshape(F, 45, N_PARAMS))
-
-
-#: Angles within this much (radians) of a bound get their limit rows differentiated.
-_NEAR_LIMIT = np.deg2rad(3.0)
-
-
-def _near(angles) -> np.ndarray:
-    """How far inside its bounds, minus the margin, each angle is (> 0: near)."""
-    from vidcap.video.solve.limits import _HIGH, _LOW
-
-    inside = np.minimum(angles - _LOW, _HIGH - angles)
-    return _NEAR_LIMIT - inside
 
 
 def sparse_jacobian(problem: Problem, lin: Linearisation):

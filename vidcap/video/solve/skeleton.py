@@ -54,6 +54,15 @@ def swing_slice(joint: str) -> slice:
     return slice(6 + 2 * k, 8 + 2 * k)
 
 
+def cross(a, b) -> np.ndarray:
+    """a x b over the last axis (3) with broadcasting; ``numpy.cross`` without its
+    axis shuffling, which dominates on many small vectors."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+
 def _sin_terms(theta):
     """sin t / t, (1 - cos t) / t^2 and (t - sin t) / t^3, with their limits at 0."""
     small = theta < 1e-4
@@ -205,8 +214,6 @@ def kinematics_jacobian(params, offsets):
     joints : (F, 15, 3); root : (F, 3, 3) the torso's world rotation;
     jac : (F, 15, 3, 24) metres per unit of each parameter.
     """
-    from vidcap.video.solve.limits import cross
-
     p = np.asarray(params, dtype=float)
     joints, world, rv, _ = _world(p, offsets)
     F = p.shape[0]
