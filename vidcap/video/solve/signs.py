@@ -62,23 +62,31 @@ def _reflect(joints, chain, state) -> np.ndarray:
     return out
 
 
+#: Cost standing for "no such state" (the head's chain has 2 states of the 4).
+_NONE = 1e30
+
+
 def _min_sum(unary, pair):
-    """Min-sum over frames: unary (F, S), pair (F-1, S, S). Returns (best (F,), marg (F, S))."""
-    F, S = unary.shape
-    fwd = np.empty((F, S))
-    bwd = np.zeros((F, S))
-    fwd[0] = unary[0]
-    back = np.zeros((F, S), int)
-    for f in range(1, F):  # over frames; S <= 4 states
-        tot = fwd[f - 1][:, None] + pair[f - 1]
-        back[f] = np.argmin(tot, axis=0)
-        fwd[f] = unary[f] + tot[back[f], np.arange(S)]
+    """Min-sum over frames of C chains at once: unary (C, F, S), pair (C, F-1, S, S).
+
+    Returns (best (C, F) states, min-marginals (C, F, S))."""
+    C, F, S = unary.shape
+    fwd = np.empty((C, F, S))
+    bwd = np.zeros((C, F, S))
+    back = np.zeros((C, F, S), int)
+    fwd[:, 0] = unary[:, 0]
+    cols = np.arange(S)
+    chains = np.arange(C)[:, None]
+    for f in range(1, F):  # over frames, all chains at once (S <= 4 states)
+        tot = fwd[:, f - 1, :, None] + pair[:, f - 1]
+        back[:, f] = np.argmin(tot, axis=1)
+        fwd[:, f] = unary[:, f] + tot[chains, back[:, f], cols]
     for f in range(F - 2, -1, -1):
-        bwd[f] = np.min(pair[f] + (unary[f + 1] + bwd[f + 1])[None, :], axis=1)
-    best = np.empty(F, int)
-    best[-1] = int(np.argmin(fwd[-1]))
+        bwd[:, f] = np.min(pair[:, f] + (unary[:, f + 1] + bwd[:, f + 1])[:, None, :], axis=2)
+    best = np.empty((C, F), int)
+    best[:, -1] = np.argmin(fwd[:, -1], axis=1)
     for f in range(F - 1, 0, -1):
-        best[f - 1] = back[f, best[f]]
+        best[:, f - 1] = back[chains[:, 0], f, best[:, f]]
     return best, fwd + bwd
 
 
@@ -106,29 +114,36 @@ def sweep_signs(problem: Problem, joints, root, params, *, step_weight: float = 
     out = joints.copy()
     flipped = np.zeros((F, len(SEGMENT_NAMES)), bool)
     conf = np.full((F, len(SEGMENT_NAMES)), np.inf)
-    for chain in CHAINS:
-        states = _states(len(chain))
-        moved = sorted({int(SEGMENT_JOINTS[SEGMENT_INDEX[n], 1]) for n in chain})
-        variants = [_reflect(joints, chain, s) for s in states]
-        un = np.stack([0.5 * np.sum(unary_from_joints(problem, v, root, params) ** 2, -1)
-                       for v in variants], -1)  # (F, S)
-        pos = np.stack([v[:, moved] for v in variants], 1)  # (F, S, m, 3)
-        if F > 1:
-            d = pos[1:, None] - pos[:-1, :, None]  # (F-1, S, S, m, 3)
-            pair = 0.5 * step_weight ** 2 * np.sum(d ** 2, axis=(-1, -2))
-        else:
-            pair = np.zeros((0, len(states), len(states)))
-        best, marg = _min_sum(un, pair)
-        sel = states[best]
+    states = [_states(len(chain)) for chain in CHAINS]
+    S = max(len(st) for st in states)
+    variants = np.stack([_reflect(joints, chain, s)  # (V, F, 15, 3): every chain's states
+                         for chain, st in zip(CHAINS, states, strict=True) for s in st])
+    V = len(variants)
+    res = unary_from_joints(problem, variants, np.broadcast_to(root, (V,) + root.shape),
+                            np.broadcast_to(params, (V,) + params.shape))
+    un_all = 0.5 * np.sum(res * res, -1)  # (V, F)
+    un = np.full((len(CHAINS), F, S), _NONE)
+    pair = np.full((len(CHAINS), max(F - 1, 0), S, S), _NONE)
+    at = 0
+    for c, (chain, st) in enumerate(zip(CHAINS, states, strict=True)):
+        n = len(st)
+        moved = sorted({int(SEGMENT_JOINTS[SEGMENT_INDEX[name], 1]) for name in chain})
+        un[c, :, :n] = un_all[at:at + n].T
+        pos = np.moveaxis(variants[at:at + n][:, :, moved], 0, 1)  # (F, n, m, 3)
+        d = pos[1:, None] - pos[:-1, :, None]  # (F-1, n, n, m, 3)
+        pair[c, :, :n, :n] = 0.5 * step_weight ** 2 * np.sum(d ** 2, axis=(-1, -2))
+        at += n
+    best, marg = _min_sum(un, pair)
+    for c, (chain, st) in enumerate(zip(CHAINS, states, strict=True)):
+        n = len(st)
+        sel = st[best[c]]
+        lowest = marg[c, :, :n].min(axis=1)
         for k, name in enumerate(chain):
             seg = SEGMENT_INDEX[name]
             flipped[:, seg] = sel[:, k]
-            same = states[:, k][None, :] == sel[:, k][:, None]  # (F, S)
-            lowest = marg.min(axis=1)
-            conf[:, seg] = np.where(~same, marg, np.inf).min(axis=1) - lowest
-        for f_state in np.unique(best):
-            rows = best == f_state
-            out[rows] = _reflect(out[rows], chain, states[f_state])
+            other = st[:, k][None, :] != sel[:, k][:, None]  # (F, n)
+            conf[:, seg] = np.where(other, marg[c, :, :n], np.inf).min(axis=1) - lowest
+        for f_state in np.unique(best[c]):
+            rows = best[c] == f_state
+            out[rows] = _reflect(out[rows], chain, st[f_state])
     return SignSweep(out, flipped, conf)
-
-

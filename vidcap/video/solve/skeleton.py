@@ -195,6 +195,11 @@ _MOVES = np.zeros((N_PARAMS, len(JOINT_NAMES)), bool)
 _MOVES[:6] = True
 for _k, (_name, _) in enumerate(SWING_JOINTS):
     _MOVES[6 + 2 * _k: 8 + 2 * _k, _descendants(JOINT_INDEX[_name])] = True
+#: The turning columns' (yaw on) pivot joints, and the (column, joint) pairs a turn
+#: moves: the Jacobian's nonzero rotational entries (68 of 315).
+_PIVOTS = np.array([0, 0, 0] + [JOINT_INDEX[n] for n, _ in SWING_JOINTS for _ in range(2)])
+_TURN_COL, _TURN_JOINT = np.nonzero(_MOVES[3:] & (np.arange(len(JOINT_NAMES)) != 0))
+_TURN_COL = _TURN_COL + 3
 
 
 def kinematics_jacobian(params, offsets):
@@ -218,25 +223,22 @@ def kinematics_jacobian(params, offsets):
     joints, world, rv, _ = _world(p, offsets)
     F = p.shape[0]
     axes = np.zeros((F, N_PARAMS, 3))
-    pivots = np.zeros((F, N_PARAMS, 3))
     turn = root_rotation(p[:, YAW], np.zeros(F), np.zeros(F))
     axes[:, YAW] = (0.0, 1.0, 0.0)
     axes[:, PITCH] = turn[:, :, 0]
     c, s = np.cos(p[:, PITCH]), np.sin(p[:, PITCH])
     axes[:, ROLL] = np.einsum("fij,fj->fi", turn, np.stack([0 * c, -s, c], -1))
-    pivots[:, 3:6] = joints[:, None, 0]
     lj = left_jacobian(rv)  # (F, 9, 3, 3)
     for k, (name, _) in enumerate(SWING_JOINTS):
         parent = world[JOINT_NAMES[PARENT_INDEX[JOINT_INDEX[name]]]]
         local_axes = np.einsum("fij,aj->fai", lj[:, k], SWING_AXES[k])  # (F, 2, 3)
         axes[:, 6 + 2 * k: 8 + 2 * k] = np.einsum("fij,faj->fai", parent, local_axes)
-        pivots[:, 6 + 2 * k: 8 + 2 * k] = joints[:, None, JOINT_INDEX[name]]
-    rel = joints[:, None, :, :] - pivots[:, :, None, :]  # (F, 24, 15, 3)
-    jac = cross(axes[:, :, None, :], rel) * _MOVES[None, :, :, None]
-    jac[:, :3] = 0.0
+    rel = joints[:, _TURN_JOINT] - joints[:, _PIVOTS[_TURN_COL - 3]]  # (F, n, 3)
+    jac = np.zeros((F, len(JOINT_NAMES), 3, N_PARAMS))
+    jac[:, _TURN_JOINT, :, _TURN_COL] = np.swapaxes(cross(axes[:, _TURN_COL], rel), 0, 1)
     for i in range(3):
-        jac[:, i, :, i] = 1.0
-    return joints, world["pelvis"], np.moveaxis(jac, 1, -1)
+        jac[:, :, i, i] = 1.0
+    return joints, world["pelvis"], jac
 
 
 def _swing_vector(rest, direction) -> np.ndarray:
