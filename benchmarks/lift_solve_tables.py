@@ -4,7 +4,8 @@ per-segment lift against the clip solve.
 * **Noisy true 2D**: each motion filmed by vidcap.synth's orthographic camera at yaw 90
   and 45 degrees, its true 2D joints plus Gaussian noise of 0, 1, 2 and 4 % of the
   body height (seeded), lifted with the proposed signs and with the true ones
-  (orientation proposed from the noisy joints, scale from the image height).
+  (orientation proposed from the noisy joints, scale from the image height as the 3D
+  stage reads it: :func:`vidcap.video.lifting.frame_scales`, noise bias removed).
 * **End to end**: the sample clips and held-out renders through the 2D fit, then
   both lifts on the fitted joints, no annotations.
 
@@ -25,6 +26,7 @@ import numpy as np
 
 from vidcap.body import JOINT_INDEX, SEGMENT_JOINTS
 from vidcap.video.lift import estimate_scale, lift, torso_width_ratio, yaw_from_orientation
+from vidcap.video.lifting import frame_scales
 from vidcap.video.motion import jitter
 from vidcap.video.proposals import propose_orientation, propose_signs
 
@@ -105,7 +107,7 @@ def noisy_rows(name, truth, true3, body, *, seed=0):
         s_true = estimate_scale(truth["joints2d"], body)
         j2 = truth["joints2d"] + rng.normal(0.0, noise * body.height * s_true,
                                             truth["joints2d"].shape)
-        s = estimate_scale(j2, body)
+        s = frame_scales(j2, fps, body)  # the 3D stage's scale (noise bias removed)
         orient = propose_orientation(j2, scale=s, fps=fps, body=body, sides_known=True)
         yaw = yaw_from_orientation(orient, torso_width_ratio(j2, s, body))
         prop = propose_signs(j2, yaw, scale=s, body=body).signs

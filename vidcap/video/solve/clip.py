@@ -24,6 +24,8 @@ from vidcap.video.solve.skeleton import forward_kinematics, params_from_joints
 
 #: Default 2D uncertainty of a joint, as a fraction of body height.
 SIGMA_2D = 0.01
+#: Levenberg-Marquardt iterations of the first solve, before the first sign sweep.
+FIRST_ITER = 8
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,28 @@ def image_targets(joints2d, scale, segment_scale=None, principal_point=None) -> 
     return out
 
 
+#: Weight of the in-plane prior (:func:`plane_weight`) at 1 % of the height of 2D noise.
+PLANE_WEIGHT = 3.0
+
+
+def plane_weight(joints2d, scale, body: BodyModel) -> float:
+    """Weight of the prior pulling every segment toward the image plane, from the 2D
+    joints' measured noise (:func:`vidcap.video.solve.noise.noise_fraction`).
+
+    A segment's 2D length changes as sqrt(1 - zeta^2): near the image plane a depth of
+    zeta = 0.3 shortens it by 5 %, less than 2D noise of 1-2 % of the height does, so
+    the image cannot tell zeta in [-0.3, 0.3] apart and the sign prior (a guess there)
+    and the noise decide where the segment goes. The prior (``zeta * weight`` per
+    segment) takes the middle of what the image allows; out of the plane the 2D
+    length pins zeta and the prior moves it by < 0.01. Its weight grows as the square
+    root of the noise and is 0 on noise-free joints (chosen on the synth walk, arms
+    and jacks at 1-4 % noise; the mocap clips validated it).
+    """
+    from vidcap.video.solve.noise import noise_fraction
+
+    return PLANE_WEIGHT * float(np.sqrt(noise_fraction(joints2d, scale, body) / 0.01))
+
+
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
                  prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                  segment_scale=None, principal_point=None, contact="auto",
@@ -80,7 +104,8 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
     ``yaw`` (F,) radians and ``yaw_sigma`` (one or (F,), radians) the torso's yaw
     prior; ``prior_signs``/``hard_signs`` (F, 10) in {-1, 0, 1}; ``confidence`` (F,
     15) each 2D joint's weight (default 1); ``contact`` 'auto' (:func:`foot_contacts`), 'off', or
-    an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights.
+    an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights (the in-plane
+    prior's default is :func:`plane_weight`).
     """
     body = body or BodyModel()
     j = np.asarray(joints2d, dtype=float)
@@ -93,6 +118,8 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
             raise ValueError(f"contact must be 'auto', 'off' or an (F, 2) array, got {contact!r}")
         contact = (foot_contacts(j, geometry, fps) if contact == "auto"
                    else np.zeros((F, 2), bool))
+    if "plane_weight" not in weights:
+        weights["plane_weight"] = plane_weight(j, geometry, body)
     return Problem(
         offsets=body.rest_offsets(), lengths=body.segment_lengths(),
         target=image_targets(j, scale, segment_scale, principal_point),
@@ -197,7 +224,10 @@ def robust_weights(problem: Problem, joints, scale: float) -> Problem:
 
 def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixed,
                    robust: float | None = None) -> ClipSolve:
-    sol = levenberg_marquardt(problem, params, max_iter=max_iter, fixed=fixed)
+    # the first solve only brings the clip near enough for the sign sweep to read it;
+    # the re-solve after the sweep finishes (a full first solve: 2x the time, equal
+    # accuracy on the tuning clips)
+    sol = levenberg_marquardt(problem, params, max_iter=min(max_iter, FIRST_ITER), fixed=fixed)
     p, iters = sol.params, sol.iterations
     joints, root, _ = forward_kinematics(p, problem.offsets)
     if robust:

@@ -10,7 +10,9 @@ Per frame (the *unary* residuals, which depend on that frame's 24 parameters):
   length)``, over ``sigma_sign`` for a proposal (soft: the image may overrule it) and
   over ``sigma_hard`` beyond a margin for a user's annotation (hard);
 * the torso's yaw against the orientation's, over ``sigma_yaw`` (per frame);
-* the root's depth against 0, weakly (orthography cannot tell it; contact can).
+* the root's depth against 0, weakly (orthography cannot tell it; contact can);
+* every segment's ``dZ / length`` against 0 over ``sigma_plane`` (the in-plane prior:
+  where 2D noise leaves a segment's depth open, :func:`vidcap.video.solve.clip.plane_weight`).
 
 Across frames, linear in the joints: the second difference of every joint over
 ``sigma_acc`` (temporal smoothness), and the planted ankle's frame-to-frame motion
@@ -62,8 +64,8 @@ class Problem:
     prior_signs, hard_signs : (F, 10) in {-1, 0, +1} (0: none).
     yaw : (F,) radians; yaw_weight : (F,) 1/rad.
     contact : (F, 2) bool, planted left/right ankle.
-    sign_weight, hard_weight, limit_weight, acc_weight, contact_weight, depth_weight :
-        the inverse sigmas of the module docstring.
+    sign_weight, hard_weight, limit_weight, acc_weight, contact_weight, depth_weight,
+    plane_weight : the inverse sigmas of the module docstring.
     """
 
     offsets: np.ndarray
@@ -81,6 +83,7 @@ class Problem:
     acc_weight: float = 60.0
     contact_weight: float = 100.0
     depth_weight: float = 0.01
+    plane_weight: float = 0.0
 
     @property
     def n_frames(self) -> int:
@@ -94,7 +97,7 @@ class Problem:
                        self.prior_signs[sl], self.hard_signs[sl], self.yaw[sl],
                        self.yaw_weight[sl], self.contact[sl], self.sign_weight,
                        self.hard_weight, self.limit_weight, self.acc_weight,
-                       self.contact_weight, self.depth_weight)
+                       self.contact_weight, self.depth_weight, self.plane_weight)
 
 
 def segment_zeta(joints, lengths) -> np.ndarray:
@@ -136,10 +139,11 @@ def unary_from_joints(problem: Problem, joints, root, params, frames=None, *,
     yaw = (params[..., YAW] - pb.yaw[idx]) * pb.yaw_weight[idx]
     depth = params[..., ROOT_POS.start + 2] * pb.depth_weight
     return np.concatenate([proj.reshape(proj.shape[:-2] + (-1,)), lim * pb.limit_weight,
-                           soft, hard, yaw[..., None], depth[..., None]], axis=-1)
+                           soft, hard, yaw[..., None], depth[..., None],
+                           zeta * pb.plane_weight], axis=-1)
 
 
-N_UNARY = 15 * 2 + len(LIMITS) + 10 + 10 + 2
+N_UNARY = 15 * 2 + len(LIMITS) + 10 + 10 + 2 + 10
 
 
 def contact_pairs(contact) -> tuple[np.ndarray, np.ndarray]:
@@ -214,6 +218,7 @@ def linearise(problem: Problem, params) -> Linearisation:
         at += 10
     ju[:, at, YAW] = pb.yaw_weight
     ju[:, at + 1, ROOT_POS.start + 2] = pb.depth_weight
+    ju[:, at + 2:at + 12] = pb.plane_weight * dzeta
     return Linearisation(r, ju, jk.reshape(F, 45, N_PARAMS))
 
 
