@@ -8,7 +8,7 @@ from vidcap.body import BodyModel
 from vidcap.synth import make_motion, prepare_clip, truth_arrays
 from vidcap.video.lift import estimate_scale
 from vidcap.video.lifting import frame_scales
-from vidcap.video.solve.clip import plane_weight
+from vidcap.video.solve.clip import make_problem
 from vidcap.video.solve.noise import noise_fraction, noise_sigma, robust_scale
 
 BODY = BodyModel()
@@ -42,10 +42,14 @@ def test_robust_scale_removes_the_noise_bias():
         < 0.4 * (biased / s - 1.0)
 
 
-def test_the_in_plane_prior_is_off_without_noise_and_grows_with_it():
+def test_the_in_plane_prior_and_contact_grow_with_the_noise():
     j2, s = _walk()
     rng = np.random.default_rng(3)
-    w = [plane_weight(j2 + rng.normal(0.0, f * BODY.height * s, j2.shape), s, BODY)
-         for f in (0.0, 0.01, 0.04)]
-    assert w[0] == 0.0
+    pbs = [make_problem(j2 + rng.normal(0.0, f * BODY.height * s, j2.shape), scale=s,
+                        fps=30.0, body=BODY, yaw=np.zeros(len(j2)), contact="off")
+           for f in (0.0, 0.01, 0.04)]
+    w = [pb.plane_weight for pb in pbs]
+    assert w[0] == 0.0  # off on noise-free joints
     assert 0.0 < w[1] < w[2] < 3 * w[1]  # as the square root of the noise
+    c = [pb.contact_weight for pb in pbs]
+    assert c[0] == 100.0 and c[0] < c[1] < c[2]

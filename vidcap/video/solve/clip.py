@@ -73,26 +73,22 @@ def image_targets(joints2d, scale, segment_scale=None, principal_point=None) -> 
     return out
 
 
-#: Weight of the in-plane prior (:func:`plane_weight`) at 1 % of the height of 2D noise.
+#: Weight of the in-plane prior (``Problem.plane_weight``) at 1 % of the height of 2D
+#: noise; it grows as the square root of the measured noise
+#: (:func:`vidcap.video.solve.noise.noise_fraction`) and is 0 on noise-free joints.
+#: A segment's 2D length changes as sqrt(1 - zeta^2): near the image plane a depth of
+#: zeta = 0.3 shortens it by 5 %, less than 2D noise of 1-2 % of the height does, so the
+#: image cannot tell zeta in [-0.3, 0.3] apart and the sign prior (a guess there) and
+#: the noise decide where the segment goes. The prior takes the middle of what the
+#: image allows; out of the plane the 2D length pins zeta and the prior moves it by
+#: < 0.01. Chosen on the synth walk, arms and jacks at 1-4 % noise (3 of 2, 3, 4; linear
+#: in the noise instead of its root was too strong at 4 %); the mocap clips validated it.
 PLANE_WEIGHT = 3.0
-
-
-def plane_weight(joints2d, scale, body: BodyModel) -> float:
-    """Weight of the prior pulling every segment toward the image plane, from the 2D
-    joints' measured noise (:func:`vidcap.video.solve.noise.noise_fraction`).
-
-    A segment's 2D length changes as sqrt(1 - zeta^2): near the image plane a depth of
-    zeta = 0.3 shortens it by 5 %, less than 2D noise of 1-2 % of the height does, so
-    the image cannot tell zeta in [-0.3, 0.3] apart and the sign prior (a guess there)
-    and the noise decide where the segment goes. The prior (``zeta * weight`` per
-    segment) takes the middle of what the image allows; out of the plane the 2D
-    length pins zeta and the prior moves it by < 0.01. Its weight grows as the square
-    root of the noise and is 0 on noise-free joints (chosen on the synth walk, arms
-    and jacks at 1-4 % noise; the mocap clips validated it).
-    """
-    from vidcap.video.solve.noise import noise_fraction
-
-    return PLANE_WEIGHT * float(np.sqrt(noise_fraction(joints2d, scale, body) / 0.01))
+#: Weight (1 / m) of a planted ankle's frame-to-frame motion on noise-free 2D; it grows
+#: with the measured noise, (1 + noise / 1 % of the height) times (chosen on the synth
+#: walk, arms and jacks: 100 -> 300 at 2 % noise takes sliding 7.6 -> 3.1 mm/frame at equal
+#: PA-MPJPE; 1000 costs 4 mm of it).
+CONTACT_WEIGHT = 100.0
 
 
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
@@ -105,7 +101,8 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
     prior; ``prior_signs``/``hard_signs`` (F, 10) in {-1, 0, 1}; ``confidence`` (F,
     15) each 2D joint's weight (default 1); ``contact`` 'auto' (:func:`foot_contacts`), 'off', or
     an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights (the in-plane
-    prior's default is :func:`plane_weight`).
+    prior's and the contact's defaults grow with the 2D joints' measured noise:
+    :data:`PLANE_WEIGHT`, :data:`CONTACT_WEIGHT`).
     """
     body = body or BodyModel()
     j = np.asarray(joints2d, dtype=float)
@@ -118,8 +115,13 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
             raise ValueError(f"contact must be 'auto', 'off' or an (F, 2) array, got {contact!r}")
         contact = (foot_contacts(j, geometry, fps) if contact == "auto"
                    else np.zeros((F, 2), bool))
-    if "plane_weight" not in weights:
-        weights["plane_weight"] = plane_weight(j, geometry, body)
+    if "plane_weight" not in weights or "contact_weight" not in weights:
+        from vidcap.video.solve.noise import noise_fraction
+
+        noise = noise_fraction(j, geometry, body)
+        weights.setdefault("plane_weight", PLANE_WEIGHT * float(np.sqrt(noise / 0.01)))
+        # a planted foot holds against the noisy 2D's pull, which grows with the noise
+        weights.setdefault("contact_weight", CONTACT_WEIGHT * (1.0 + noise / 0.01))
     return Problem(
         offsets=body.rest_offsets(), lengths=body.segment_lengths(),
         target=image_targets(j, scale, segment_scale, principal_point),
