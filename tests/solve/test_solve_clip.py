@@ -115,3 +115,25 @@ def test_contact_marks_feet_that_stand_still(motion, yaw):
     speed = np.linalg.norm(np.gradient(ankles, axis=0), axis=-1) * 30.0  # m/s, true
     if contact.any():
         assert np.mean(speed[contact] < 0.3) > 0.8  # the ends of a stance move a little
+
+
+def test_a_run_of_frames_left_in_a_wrong_pose_is_repaired():
+    from vidcap.video.solve.clip import make_problem
+    from vidcap.video.solve.repair import frame_costs, repair_outliers
+    from vidcap.video.solve.skeleton import params_from_joints
+
+    t = _clip()
+    s = np.linalg.norm(t["camera"][0, :3])
+    yaw = np.deg2rad(t["yaw_deg"])
+    pb = make_problem(t["joints2d"], scale=s, fps=30.0, body=BODY, yaw=yaw,
+                      prior_signs=t["depth_signs"], contact="off")
+    good = params_from_joints(t["camera_joints"], yaw)
+    good[:, :2] = pb.target[:, 0]
+    good[:, 2] = 0.0
+    bad = good.copy()
+    bad[30:34, 6:] = -good[30:34, 6:] + 1.0  # every limb swung far off for 4 frames
+    assert frame_costs(pb, bad)[30:34].min() > 20 * np.median(frame_costs(pb, good))
+    fixed, n = repair_outliers(pb, bad)
+    assert n >= 1
+    assert np.abs(fixed[30:34] - good[30:34]).max() < 0.1
+    np.testing.assert_array_equal(fixed[:20], bad[:20])  # away from the run: untouched

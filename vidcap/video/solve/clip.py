@@ -5,7 +5,9 @@ is fitted to the 2D joints of every frame at once (:mod:`vidcap.video.solve.resi
 projection, joint limits, temporal smoothness, foot contact, depth signs), starting
 from the seed's per-segment lift (:func:`vidcap.video.lift.lift`) with the proposed signs;
 then every limb's reflection through the image plane is chosen over the clip
-(:mod:`vidcap.video.solve.signs`) and the clip solved again from there.
+(:mod:`vidcap.video.solve.signs`) and the clip solved again from there; runs of frames
+left in a wrong basin are re-started from their neighbours
+(:mod:`vidcap.video.solve.repair`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from vidcap.body import BodyModel
 from vidcap.video.lift import lift
 from vidcap.video.solve.contact import foot_contacts
 from vidcap.video.solve.gauss_newton import levenberg_marquardt
+from vidcap.video.solve.repair import repair_outliers
 from vidcap.video.solve.residuals import Problem, segment_zeta
 from vidcap.video.solve.signs import sweep_signs
 from vidcap.video.solve.skeleton import forward_kinematics, params_from_joints
@@ -237,6 +240,7 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
         sol = levenberg_marquardt(problem, p, max_iter=max_iter, fixed=fixed)
         p, iters = sol.params, iters + sol.iterations
         joints, root, _ = forward_kinematics(p, problem.offsets)
+    sw = None
     for _ in range(sweeps):
         sw = sweep_signs(problem, joints, root, p)
         flip = sw.flipped.any(axis=1)
@@ -250,7 +254,15 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
         sol = levenberg_marquardt(problem, q, max_iter=max_iter, fixed=fixed)
         p, iters = sol.params, iters + sol.iterations
         joints, root, _ = forward_kinematics(p, problem.offsets)
-    sw = sweep_signs(problem, joints, root, p)
+        sw = None
+    p2, repaired = repair_outliers(problem, p, fixed=fixed)
+    if repaired:  # the windows were solved with their edges held: now the whole clip
+        sol = levenberg_marquardt(problem, p2, max_iter=max_iter, fixed=fixed)
+        p, iters = sol.params, iters + sol.iterations
+        joints, root, _ = forward_kinematics(p, problem.offsets)
+        sw = None
+    if sw is None:  # the loop's last sweep, when nothing moved since, is this one
+        sw = sweep_signs(problem, joints, root, p)
     zeta = segment_zeta(joints, problem.lengths)
     signs = np.where(zeta < 0, -1, 1).astype(np.int8)
     return ClipSolve(p, joints, signs, sw.confidence, problem.contact.copy(), sol.cost, iters)
