@@ -38,7 +38,7 @@ and held-out renders), MPJPE / PA-MPJPE in mm, foot sliding, jitter, the BVH's b
 lengths and the solve's speed.
 
 Run:  python benchmarks/lift_accuracy.py [--frames 82] [--synth] [--end-to-end] [--approach]
-      python benchmarks/lift_accuracy.py --solve [--frames 82] [--no-renders]
+      python benchmarks/lift_accuracy.py --solve [--frames 82] [--no-renders] [--real-only]
 """
 
 from __future__ import annotations
@@ -368,8 +368,14 @@ def main(argv=None):
                     help="the issue-33 tables: per-segment lift vs the clip solve")
     ap.add_argument("--no-renders", action="store_true",
                     help="with --solve: skip the held-out renders (each needs a 2D fit)")
+    ap.add_argument("--real-only", action="store_true",
+                    help="with --solve: only the real-footage table (MediaPipe references)")
     args = ap.parse_args(argv)
     body = BodyModel()
+    if args.solve and args.real_only:
+        import lift_solve_tables as st
+
+        return _real_table(st, body)
     if args.solve:
         return solve_tables(args.frames, body, renders=not args.no_renders)
     motions = {
@@ -528,22 +534,42 @@ def solve_tables(frames, body, *, renders=True):
     return 0
 
 
-def _real_table(st, body):
-    """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz under
-    $VIDCAP_DATA/lift/), skipped with the reason when absent."""
+#: Person-present stretches of onebyone_room.mp4 ($VIDCAP_DATA/video/CLIPS.md: MediaPipe
+#: also "finds" a person on the table in empty frames).
+ONEBYONE_VISITS = ((66, 195), (233, 446), (510, 695), (749, 866), (936, 1196), (1242, 1358))
+
+
+def _real_clips():
+    """(video, MediaPipe reference npz, frames mask or None) of the real clips present:
+    ido_walk (reference under $VIDCAP_DATA/lift/) and those of $VIDCAP_DATA/video/CLIPS.md."""
     import os
 
-    video = DATA.parent / "video" / "ido_walk.avi"
-    ref = Path(os.environ.get("VIDCAP_DATA", "/nonexistent")) / "lift" / "ido_walk_mediapipe.npz"
+    data = Path(os.environ.get("VIDCAP_DATA", "/nonexistent"))
+    out = [(DATA.parent / "video" / "ido_walk.avi", data / "lift" / "ido_walk_mediapipe.npz",
+            None)]
+    for video in sorted((data / "video").glob("*.mp4")):
+        frames = None
+        if video.stem == "onebyone_room":
+            frames = np.zeros(1394, bool)
+            for a, b in ONEBYONE_VISITS:
+                frames[a:b] = True
+        out.append((video, video.with_suffix(".mediapipe.npz"), frames))
+    return out
+
+
+def _real_table(st, body):
+    """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz),
+    skipped with the reason when absent."""
     print("\nReal footage, PA-MPJPE against MediaPipe Pose's world landmarks (validation):")
-    if not (video.exists() and ref.exists()):
-        print(f"  skipped: needs {video} and {ref} (run ../shared/tools/mediapipe-reference/"
-              "reference.py VIDEO OUT.npz with VIDCAP_DATA set)")
-        return
     print("clip | frames | lift | PA-MPJPE mm")
     print("--- | --- | --- | ---")
-    for r in st.real_rows(video, ref, body):
-        print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f}")
+    for video, ref, frames in _real_clips():
+        if not (video.exists() and ref.exists()):
+            print(f"  skipped: needs {video} and {ref} (run ../shared/tools/mediapipe-reference/"
+                  "reference.py VIDEO OUT.npz with VIDCAP_DATA set)")
+            continue
+        for r in st.real_rows(video, ref, body, frames):
+            print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f}")
 
 
 if __name__ == "__main__":

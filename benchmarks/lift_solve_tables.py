@@ -185,8 +185,10 @@ def mediapipe_world(path, joint_names) -> np.ndarray:
     return out
 
 
-def real_rows(video, reference, body):
-    """PA-MPJPE (mm) of both lifts on a real clip against MediaPipe's world landmarks."""
+def real_rows(video, reference, body, frames=None):
+    """PA-MPJPE (mm) of both lifts on a real clip against MediaPipe's world landmarks, on
+    the frames where MediaPipe has every limb joint (and within ``frames``, (F,) bool,
+    when given: the stretches a person is in the picture)."""
     from vidcap.body import JOINT_NAMES
     from vidcap.video.lifting import lift_pose
     from vidcap.video.pipeline import run
@@ -194,12 +196,16 @@ def real_rows(video, reference, body):
     res = run(video, height=body.height, smooth_sigma=0.0, progress=False, lift="segment")
     ref = mediapipe_world(reference, JOINT_NAMES)
     size = (res.masks.shape[2], res.masks.shape[1])
+    n = min(len(ref), len(res.image_joints2d))
+    ok = np.isfinite(ref[:n, LIMB_JOINTS]).all(axis=(1, 2))
+    ok &= np.isfinite(res.image_joints2d[:n]).all(axis=(1, 2))
+    if frames is not None:
+        ok &= np.asarray(frames, bool)[:n]
     rows = []
     for method in ("segment", "solve"):
         lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
                        spread=res.spread, track=res.track, frame_size=size,
                        model_height=res.model_height, method=method)
-        ok = np.isfinite(ref[:, LIMB_JOINTS]).all(axis=(1, 2))
         rows.append((Path(video).name, int(ok.sum()), method,
-                     pa_mpjpe_mm(lr.joints3d[ok], ref[ok])))
+                     pa_mpjpe_mm(lr.joints3d[:n][ok], ref[:n][ok])))
     return rows
