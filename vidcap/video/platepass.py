@@ -20,6 +20,7 @@ sampled frames:
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 
 import cv2
@@ -59,8 +60,13 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
     -------
     vidcap.video.background.BackgroundModel
     """
+    from vidcap.video.appearance import appearance_plate
+
     model = _with_self_lit(model, frames, gains, small_hw)
-    model = _second_pass(model, frames, gains)
+    if os.environ.get("VIDCAP_NO_APPEARANCE") != "1":
+        model = appearance_plate(model, frames, gains)
+    if os.environ.get("NO2") != "1":
+        model = _second_pass(model, frames, gains)
     if still_parts:
         model = _with_still_parts(model, frames, gains, small_hw)
     return model
