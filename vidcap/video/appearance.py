@@ -28,9 +28,9 @@ sampled frames, at a reduced resolution:
    uncovered are the honest never-seen map, inpainted from the background around
    them (a ring outside the person, so that the guess is not the person's colour).
 
-Only clips in which the person stays in place are treated (the footprint is at most
-:data:`MAX_FOOTPRINT` times the person's median area in a sample, or a never-seen
-area exists): a walker's plate saw everything.
+Only clips in which the person stays in place are treated (the box of what differs
+from the plate moves by at most :data:`MAX_TRAVEL` of its size, or a never-seen area
+exists): a walker's plate saw everything.
 """
 
 from __future__ import annotations
@@ -46,14 +46,19 @@ __all__ = ["appearance_plate", "colour_model", "log_ratio"]
 BINS = 16
 #: Long side, pixels, of the working resolution.
 WORK_SIZE = 320
-#: The person stays in place when the footprint is at most this many times the
-#: person's median area in one sample.
-MAX_FOOTPRINT = 4.0
+#: The person stays in place when the centre of their box moves by at most this
+#: share of the box's size over the clip.
+MAX_TRAVEL = 1.0
+#: ... or when the first plate left at least this share of the frame never seen.
+MIN_NEVER = 0.005
 #: Share of the person's colour model spread over every colour.
 PRIOR_UNSEEN = 0.3
-#: Rounds of growing the absorbed area; it may reach this many times the person's
-#: median area in a sample before the growth is refused.
-GROW_STEPS, MAX_GROWTH = int(__import__("os").environ.get("GS", 3)), 1.5
+#: Rounds of growing the absorbed area; it may cover at most this share of the
+#: frame (more has leaked into the scene).
+GROW_STEPS, MAX_SHARE = 6, 0.15
+#: The pass is refused when it leaves less than this share of the first never-seen
+#: area never seen.
+MIN_KEPT_NEVER = 0.5
 #: A pixel needs this many samples (and this share) outside the person to be seen.
 MIN_SEEN, MIN_SEEN_SHARE = 2, 0.1
 
@@ -124,6 +129,17 @@ def _person_blobs(fg: np.ndarray) -> np.ndarray:
     return keep[lab]
 
 
+def _in_place(fg: np.ndarray) -> bool:
+    """Whether the person's box stays put: its centre moves over the samples by at
+    most :data:`MAX_TRAVEL` times the box's median size (a walker crosses the frame)."""
+    boxes = np.array([cv2.boundingRect(f.view(np.uint8)) for f in fg if f.any()], float)
+    if len(boxes) < 2:
+        return False
+    cx, cy = boxes[:, 0] + boxes[:, 2] / 2, boxes[:, 1] + boxes[:, 3] / 2
+    size = np.median(np.maximum(boxes[:, 2], boxes[:, 3]))
+    return bool(max(np.ptp(cx), np.ptp(cy)) <= MAX_TRAVEL * size)
+
+
 def _smooth(llr: np.ndarray, size: int) -> np.ndarray:
     """Box filter over space per sample, then [1, 2, 1] / 4 over neighbouring samples."""
     sp = np.stack([cv2.blur(x, (size, size)) for x in llr])
@@ -181,7 +197,7 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     areas = fg.reshape(k, -1).sum(axis=1)
     foot = fg.sum(axis=0) >= 2
     med_area = float(np.median(areas))
-    if med_area < 16 or (foot.sum() > MAX_FOOTPRINT * med_area and not never.any()):
+    if med_area < 16 or (never.mean() < MIN_NEVER and not _in_place(fg)):
         return model
     r = max(1, round(0.01 * max(h, w)))
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
@@ -232,7 +248,7 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
         keep[np.unique(lab[seeds])] = True
         keep[0] = False
         grown = cand & keep[lab] & ~foot
-        if grown.sum() > MAX_GROWTH * max(med_area, 1) or (grown == absorbed).all():
+        if grown.sum() > MAX_SHARE * h * w or (grown == absorbed).all():
             break
         absorbed = grown
         bg_model = ring_model(seeds | absorbed)
@@ -264,6 +280,11 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     take = unc_full & ok_full
     plate_new[take] = again[take]
     never_full = (model.never_seen & ~unc_full) | new_never
+    if never_full.sum() < MIN_KEPT_NEVER * model.never_seen.sum():
+        # Appearance alone un-flagged most of what no sample showed uncovered: the
+        # person's colour model missed a static part (seen only on the limbs that
+        # move, it does not know the shirt): not trusted.
+        return model
     if never_full.any():
         # The pixels around were re-taken outside the person: the guess starts
         # right at the never-seen area's edge.

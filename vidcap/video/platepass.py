@@ -20,7 +20,6 @@ sampled frames:
 
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 
 import cv2
@@ -63,10 +62,8 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
     from vidcap.video.appearance import appearance_plate
 
     model = _with_self_lit(model, frames, gains, small_hw)
-    if os.environ.get("VIDCAP_NO_APPEARANCE") != "1":
-        model = appearance_plate(model, frames, gains)
-    if os.environ.get("NO2") != "1":
-        model = _second_pass(model, frames, gains)
+    model = appearance_plate(model, frames, gains)
+    model = _second_pass(model, frames, gains)
     if still_parts:
         model = _with_still_parts(model, frames, gains, small_hw)
     return model

@@ -1,0 +1,81 @@
+"""The person by appearance where the plate is a guess (issue 26, vidcap/video/appearance.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tests._synthframes import clip
+from vidcap.video.appearance import appearance_plate, colour_model, log_ratio
+from vidcap.video.background import estimate_background
+from vidcap.video.silhouette import extract_silhouettes
+
+RED, SKIN = (40, 45, 190), (120, 160, 215)
+
+
+def _iou(a, b):
+    a, b = np.asarray(a, bool), np.asarray(b, bool)
+    return (a & b).sum((1, 2)) / np.maximum((a | b).sum((1, 2)), 1)
+
+
+def test_colour_models_tell_person_from_scene_and_allow_unseen_colours():
+    rng = np.random.default_rng(0)
+    person = np.clip(rng.normal(RED, 4, (500, 3)), 0, 255)
+    scene = np.clip(rng.normal((120, 130, 125), 4, (500, 3)), 0, 255)
+    p, b = colour_model(person, uniform=0.3), colour_model(scene)
+    llr = log_ratio(np.array([RED, (120, 130, 125), (200, 30, 30)], np.float32), p, b)
+    assert llr[0] > 3 and llr[1] < -3
+    assert llr[2] > 0  # a colour neither model saw: unlike the scene, so person
+
+
+def _in_place(n=30, h=120, w=160, seed=1):
+    """A static red torso with skin arms sweeping round it, over a striped scene."""
+    rng = np.random.default_rng(seed)
+    xs = np.arange(w)
+    scene = np.zeros((h, w, 3), np.float32)
+    scene[:] = np.where((xs // 8 % 2 == 0)[None, :, None], (110, 120, 115), (150, 160, 150))
+    frames, masks = [], []
+    for t in range(n):
+        f, m = scene.copy(), np.zeros((h, w), bool)
+        m[40:90, 70:90] = True                      # the torso never moves
+        f[m] = RED
+        a = np.deg2rad(-60 + 120 * (0.5 + 0.5 * np.sin(2 * np.pi * t / 10)))
+        for side in (-1, 1):                        # arms from the shoulders
+            for s in np.linspace(0, 35, 60):
+                x = int(80 + side * (10 + s * np.cos(a)))
+                y = int(45 - s * np.sin(a))
+                arm = np.zeros((h, w), bool)
+                arm[max(0, y - 2):y + 3, max(0, x - 2):x + 3] = True
+                f[arm & ~m] = RED if s < 15 else SKIN
+                m |= arm
+        frames.append(np.clip(f + rng.normal(0, 2, f.shape), 0, 255))
+        masks.append(m)
+    return np.array(frames, np.uint8), np.array(masks)
+
+
+def test_a_torso_that_never_moves_is_never_seen_and_found_by_appearance():
+    frames, masks = _in_place()
+    bg = estimate_background(frames, n_samples=20)
+    always = masks.all(axis=0)
+    # the honest never-seen map: the torso, not the arms' sweep
+    assert bg.never_seen[45:85, 73:87].all()
+    assert abs(bg.never_seen.mean() - always.mean()) < 0.03  # (a one-pixel margin at 160x120)
+    # the plate where the arms sweep is the scene again
+    swept = masks.any(axis=0) & ~always
+    err = np.abs(bg.plate.astype(int) - frames[0].astype(int)).sum(-1)
+    clear = swept & ~masks[0]
+    assert np.median(err[clear]) < 20
+    sil = extract_silhouettes(frames, bg)
+    assert np.median(_iou(sil.masks, masks)) > 0.85
+
+
+def test_a_walker_keeps_a_plate_that_saw_everything():
+    rng = np.random.default_rng(2)
+    frames, masks = clip(30, 120, 160, rng=rng, walk=True)
+    bg = estimate_background(frames, n_samples=16)
+    from vidcap.video.background import _frame_gains, sample_frames
+
+    smp, _ = sample_frames(frames, n_samples=16)
+    again = appearance_plate(bg, smp, _frame_gains(smp))
+    assert again.never_seen.mean() <= bg.never_seen.mean() + 0.005
+    sil = extract_silhouettes(frames, again)
+    assert np.median(_iou(sil.masks, masks)) > 0.9
