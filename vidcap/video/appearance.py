@@ -55,7 +55,7 @@ MIN_NEVER = 0.005
 PRIOR_UNSEEN = 0.3
 #: Rounds of growing the absorbed area; it may cover at most this share of the
 #: frame (more has leaked into the scene).
-GROW_STEPS, MAX_SHARE = 6, 0.15
+GROW_STEPS, MAX_SHARE = 3, 0.15
 #: The pass is refused when it leaves less than this share of the first never-seen
 #: area never seen.
 MIN_KEPT_NEVER = 0.5
@@ -209,8 +209,15 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
         return model
     # Colours never seen on the person are not impossible for it (a static part
     # may be another colour): a uniform share.
-    person_seen = colour_model(small[sure])
-    person_model = colour_model(small[sure], uniform=PRIOR_UNSEEN)
+    px = small[sure]
+    if never.any():
+        # the never-seen area of the first plate is a static body part: what the
+        # samples show there is the person too
+        core_never = cv2.erode(never.view(np.uint8), disk) > 0
+        if core_never.any():
+            px = np.concatenate([px, small[:, core_never].reshape(-1, 3)])
+    person_seen = colour_model(px)
+    person_model = colour_model(px, uniform=PRIOR_UNSEEN)
     # 2. uncertain area: never seen, the footprint, and plate pixels unlike the
     # background around them that touch the footprint (a static part the plate
     # absorbed); grown while the ring around it finds more.
