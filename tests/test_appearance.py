@@ -52,20 +52,27 @@ def _in_place(n=30, h=120, w=160, seed=1):
     return np.array(frames, np.uint8), np.array(masks)
 
 
-def test_a_torso_that_never_moves_is_never_seen_and_found_by_appearance():
+def test_a_torso_the_plate_absorbed_is_found_by_appearance(monkeypatch):
     frames, masks = _in_place()
-    bg = estimate_background(frames, n_samples=20)
     always = masks.all(axis=0)
-    # the honest never-seen map: the torso, not the arms' sweep
-    assert bg.never_seen[45:85, 73:87].all()
-    assert abs(bg.never_seen.mean() - always.mean()) < 0.03  # (a one-pixel margin at 160x120)
-    # the plate where the arms sweep is the scene again
-    swept = masks.any(axis=0) & ~always
+    # Without the pass the plate keeps the torso (the arms alone differ from it).
+    import vidcap.video.appearance as appearance
+
+    with monkeypatch.context() as m:
+        m.setattr(appearance, "appearance_plate", lambda model, *a, **k: model)
+        plain = estimate_background(frames, n_samples=20)
+    assert plain.never_seen[always].mean() < 0.1
+    before = np.median(_iou(extract_silhouettes(frames, plain).masks, masks))
+    bg = estimate_background(frames, n_samples=20)
+    # Most of the torso is flagged never seen; little else is.
+    assert bg.never_seen[always].mean() > 0.7
+    assert (bg.never_seen & ~always).mean() < 0.01
+    # The plate where the arms sweep is the scene.
+    swept = masks.any(axis=0) & ~always & ~masks[0]
     err = np.abs(bg.plate.astype(int) - frames[0].astype(int)).sum(-1)
-    clear = swept & ~masks[0]
-    assert np.median(err[clear]) < 20
-    sil = extract_silhouettes(frames, bg)
-    assert np.median(_iou(sil.masks, masks)) > 0.85
+    assert np.median(err[swept]) < 20
+    after = np.median(_iou(extract_silhouettes(frames, bg).masks, masks))
+    assert before < 0.3 and after > 0.7
 
 
 def test_a_walker_keeps_a_plate_that_saw_everything():
