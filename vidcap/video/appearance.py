@@ -12,13 +12,16 @@ the same pixels in every frame still differs from the wall in colour. On the
 sampled frames, at a reduced resolution:
 
 1. **Sure person**: pixels that differ from the first plate where that plate was
-   seen (not a guess), over the whole clip. **Sure background**: the seen plate
-   in a window around the person (the motion footprint and the never-seen area,
-   widened), outside them. A colour histogram of each (BGR quantised to
-   :data:`BINS` levels per channel, smoothed) is the colour model.
-2. **Uncertain area**: the never-seen area, the footprint, and plate pixels that
-   look like the person (their colour is more likely under the person's model)
-   and touch the footprint: a static body part the plate absorbed.
+   seen (not a guess), over the whole clip, and what the samples show inside the
+   first plate's never-seen area (a static body part). **Background**: a ring
+   round the person's area (round the convex hull of its largest part at first)
+   in the samples where it is not foreground, mixed with the whole plate outside.
+   A colour histogram of each (BGR quantised to :data:`BINS` levels per channel,
+   smoothed) is the colour model.
+2. **Uncertain area**: the never-seen area and plate pixels that look like the
+   person (a colour seen on it, more likely under its model than under the
+   background's) and touch what moved: a static body part the plate absorbed,
+   grown a ring's width a round while the ring around it finds more.
 3. Per sample, in the uncertain area, the log-likelihood ratio person/background
    is smoothed over space (a box filter, the pairwise term of a graph cut done
    cheaply) and over time (neighbouring samples: a limb that is person in sample
@@ -143,6 +146,18 @@ def _in_place(fg: np.ndarray) -> bool:
     return bool(q75 - q25 <= MAX_TRAVEL * w)
 
 
+def _hull(mask: np.ndarray) -> np.ndarray:
+    """The mask with the convex hull of its largest 8-connected blob filled in."""
+    n, lab, st, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=8)
+    if n <= 1:
+        return mask
+    big = lab == 1 + int(np.argmax(st[1:, cv2.CC_STAT_AREA]))
+    pts = cv2.findNonZero(big.view(np.uint8))
+    out = mask.view(np.uint8).copy()
+    cv2.fillConvexPoly(out, cv2.convexHull(pts), 1)
+    return out > 0
+
+
 def _smooth(llr: np.ndarray, size: int) -> np.ndarray:
     """Box filter over space per sample, then [1, 2, 1] / 4 over neighbouring samples."""
     sp = np.stack([cv2.blur(x, (size, size)) for x in llr])
@@ -154,6 +169,117 @@ def _smooth(llr: np.ndarray, size: int) -> np.ndarray:
     out[0] += 0.25 * sp[0]
     out[-1] += 0.25 * sp[-1]
     return out
+
+
+class _Work:
+    """The samples at the working resolution and what the first plate says there."""
+
+    def __init__(self, model, frames, gains, work_size):
+        k, hh, ww = frames.shape[:3]
+        s = min(1.0, work_size / max(hh, ww))
+        h, w = max(2, round(hh * s)), max(2, round(ww * s))
+        self.k, self.h, self.w, self.full = k, h, w, (hh, ww)
+        small = np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA)
+                          for f in frames])
+        self.small = np.clip(small.astype(np.float32) / gains[:, None, None, :], 0, 255)
+        self.plate = cv2.resize(model.plate, (w, h),
+                                interpolation=cv2.INTER_AREA).astype(np.float32)
+        self.never = self.down(model.never_seen)
+        self.lit = np.zeros((h, w), bool) if model.self_lit is None else self.down(
+            model.self_lit)
+        self.thr = float(model.threshold)
+        self.d = np.abs(self.small - self.plate).sum(axis=-1)
+        fg = np.stack([_person_blobs(x > self.thr) for x in self.d])
+        # (and the lamps' outline: the glow's edge flickers with the exposure)
+        fg[:, cv2.dilate(self.lit.view(np.uint8), np.ones((7, 7), np.uint8)) > 0] = False
+        self.fg = fg
+        self.foot = fg.sum(axis=0) >= 2
+        self.med_area = float(np.median(fg.reshape(k, -1).sum(axis=1)))
+        self.r = max(1, round(0.01 * max(h, w)))
+        self.disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE,
+                                              (2 * self.r + 1, 2 * self.r + 1))
+        self.ring_r = max(3, round(0.04 * max(h, w)))
+
+    def down(self, mask):
+        return cv2.resize(mask.view(np.uint8), (self.w, self.h),
+                          interpolation=cv2.INTER_NEAREST) > 0
+
+    def up(self, mask):
+        return cv2.resize(mask.view(np.uint8), (self.full[1], self.full[0]),
+                          interpolation=cv2.INTER_NEAREST)
+
+
+def _person_colours(wk: _Work) -> np.ndarray | None:
+    """Colours sure to be the person, (N, 3): what differs by a margin from a plate
+    that was seen, eroded, over all samples; and what the samples show inside the
+    first plate's never-seen area (a static body part)."""
+    never_wide = cv2.dilate(wk.never.view(np.uint8), wk.disk, iterations=2) > 0
+    sure = (wk.d > 2 * wk.thr) & wk.fg & ~never_wide[None]
+    box3 = np.ones((3, 3), np.uint8)
+    sure &= np.stack([cv2.erode(x.view(np.uint8), box3) for x in sure]) > 0
+    if sure.sum() < 50:
+        return None
+    px = wk.small[sure]
+    core = cv2.erode(wk.never.view(np.uint8), wk.disk) > 0
+    if core.any():
+        px = np.concatenate([px, wk.small[:, core].reshape(-1, 3)])
+    return px
+
+
+def _scene_model(wk: _Work, core: np.ndarray, hull: bool = False) -> np.ndarray | None:
+    """The background's colour model: a ring around ``core`` in the samples where
+    it is not foreground, mixed half and half with the whole plate outside it."""
+    if hull:
+        # The first model goes round the convex hull of the person's largest part:
+        # a part the plate absorbed lies between what is known (a torso between the
+        # back and the arms' sweep) and must not be taken for scene. (Later rounds
+        # follow what was grown: on limbs spread wide the hull is mostly scene, and
+        # a scene colour missing from the model lets the growth leak.)
+        core = _hull(core)
+    c8 = core.view(np.uint8)
+    inner = cv2.dilate(c8, wk.disk, iterations=2) > 0
+    outer = cv2.dilate(c8, np.ones((2 * wk.ring_r + 1,) * 2, np.uint8)) > 0
+    ring = outer & ~inner & ~wk.lit
+    if ring.sum() < 50:
+        return None
+    px = wk.small[:, ring][~wk.fg[:, ring]]
+    local = colour_model(px if len(px) >= 50 else wk.plate[ring])
+    # The whole scene outside the person's area: colours the ring misses (the
+    # background behind a raised arm may be another object).
+    scene = ~(cv2.dilate(c8, wk.disk, iterations=3) > 0) & ~wk.lit
+    if scene.sum() < 50:
+        return local
+    return np.logaddexp(local, colour_model(wk.plate[scene])) - np.log(2.0)
+
+
+def _grow_absorbed(wk: _Work, person_seen: np.ndarray):
+    """Plate pixels that look like the person (a colour seen on it, unlike the
+    background around) and touch what moved or was never seen: static parts the
+    plate absorbed. Grown by at most the ring's width a round, :data:`GROW_STEPS`
+    rounds, the background's model re-learnt round what was found. Returns
+    ``(absorbed, background model)``, or None without a background model."""
+    seeds = wk.foot | wk.never
+    absorbed = np.zeros((wk.h, wk.w), bool)
+    bg_model = _scene_model(wk, seeds, hull=True)
+    if bg_model is None:
+        return None
+    grow = np.ones((2 * wk.ring_r + 1,) * 2, np.uint8)
+    for _ in range(GROW_STEPS):
+        llr_plate = cv2.blur(log_ratio(wk.plate, person_seen, bg_model), (3, 3))
+        reach = cv2.dilate((seeds | absorbed).view(np.uint8), grow) > 0
+        cand = (llr_plate > 0) & ~wk.lit & reach
+        n, lab = cv2.connectedComponents((cand | seeds).view(np.uint8), connectivity=8)
+        keep = np.zeros(n, bool)
+        keep[np.unique(lab[seeds])] = True
+        keep[0] = False
+        grown = cand & keep[lab] & ~wk.foot
+        if grown.sum() > MAX_SHARE * wk.h * wk.w or (grown == absorbed).all():
+            break
+        absorbed = grown
+        bg_model = _scene_model(wk, seeds | absorbed)
+        if bg_model is None:
+            return None
+    return absorbed, bg_model
 
 
 def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
@@ -174,133 +300,61 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     Returns
     -------
     vidcap.video.background.BackgroundModel
-        Unchanged when the person does not stay in place; else with the plate
-        re-taken and ``never_seen`` / ``confidence`` updated in the uncertain area.
+        Unchanged when the person does not stay in place (or the pass is not
+        trusted); else with the plate re-taken and ``never_seen`` / ``confidence``
+        updated in the uncertain area.
     """
-    from vidcap.video.platemedian import robust_plate
-
-    k, hh, ww = frames.shape[:3]
-    if k < 4:
+    if len(frames) < 4:
         return model
-    s = min(1.0, work_size / max(hh, ww))
-    h, w = max(2, round(hh * s)), max(2, round(ww * s))
-    small = np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA) for f in frames])
-    small = np.clip(small.astype(np.float32) / gains[:, None, None, :], 0, 255)
-    plate = cv2.resize(model.plate, (w, h), interpolation=cv2.INTER_AREA).astype(np.float32)
-    never = cv2.resize(model.never_seen.view(np.uint8), (w, h),
-                       interpolation=cv2.INTER_NEAREST) > 0
-    lit = np.zeros((h, w), bool)
-    if model.self_lit is not None:
-        lit = cv2.resize(model.self_lit.view(np.uint8), (w, h),
-                         interpolation=cv2.INTER_NEAREST) > 0
-    thr = float(model.threshold)
-    d = np.abs(small - plate).sum(axis=-1)
-    fg = np.stack([_person_blobs(x > thr) for x in d])
-    # (and their outline: the glow's edge flickers with the exposure)
-    fg[:, cv2.dilate(lit.view(np.uint8), np.ones((7, 7), np.uint8)) > 0] = False
-    areas = fg.reshape(k, -1).sum(axis=1)
-    foot = fg.sum(axis=0) >= 2
-    med_area = float(np.median(areas))
-    if med_area < 16 or not _in_place(fg):
+    wk = _Work(model, frames, gains, work_size)
+    if wk.med_area < 16 or not _in_place(wk.fg):
         return model
-    r = max(1, round(0.01 * max(h, w)))
-    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-    never_wide = cv2.dilate(never.view(np.uint8), disk, iterations=2) > 0
-    # 1. colour models. Sure person: differs from a plate that was seen, by a margin.
-    sure = (d > 2 * thr) & fg & ~never_wide[None]
-    sure &= np.stack([cv2.erode(x.view(np.uint8), np.ones((3, 3), np.uint8)) for x in sure]) > 0
-    if sure.sum() < 50:
+    px = _person_colours(wk)
+    if px is None:
         return model
-    # Colours never seen on the person are not impossible for it (a static part
-    # may be another colour): a uniform share.
-    px = small[sure]
-    if never.any():
-        # the never-seen area of the first plate is a static body part: what the
-        # samples show there is the person too
-        core_never = cv2.erode(never.view(np.uint8), disk) > 0
-        if core_never.any():
-            px = np.concatenate([px, small[:, core_never].reshape(-1, 3)])
-    person_seen = colour_model(px)
-    person_model = colour_model(px, uniform=PRIOR_UNSEEN)
-    # 2. uncertain area: never seen, the footprint, and plate pixels unlike the
-    # background around them that touch the footprint (a static part the plate
-    # absorbed); grown while the ring around it finds more.
-    seeds = foot | never
-    absorbed = np.zeros((h, w), bool)
-    ring_r = max(3, round(0.04 * max(h, w)))
-
-    def ring_model(core):
-        inner = cv2.dilate(core.view(np.uint8), disk, iterations=2) > 0
-        outer = cv2.dilate(core.view(np.uint8), np.ones((2 * ring_r + 1,) * 2, np.uint8)) > 0
-        ring = outer & ~inner & ~lit
-        if ring.sum() < 50:
-            return None
-        px = small[:, ring][~fg[:, ring]]
-        local = colour_model(px if len(px) >= 50 else plate[ring])
-        # and the whole scene seen outside the person's area (colours the ring
-        # misses: the background behind a raised arm may be another object)
-        scene = ~(cv2.dilate(core.view(np.uint8), disk, iterations=3) > 0) & ~lit
-        if scene.sum() < 50:
-            return local
-        return np.logaddexp(local, colour_model(plate[scene])) - np.log(2.0)
-
-    bg_model = ring_model(seeds)
-    if bg_model is None:
+    got = _grow_absorbed(wk, colour_model(px))
+    if got is None:
         return model
-    for _ in range(GROW_STEPS):
-        # (absorbed parts must have a colour seen on the moving person, and grow
-        # by at most the ring's width a round)
-        llr_plate = cv2.blur(log_ratio(plate, person_seen, bg_model), (3, 3))
-        reach = cv2.dilate((seeds | absorbed).view(np.uint8),
-                           np.ones((2 * ring_r + 1,) * 2, np.uint8)) > 0
-        cand = (llr_plate > 0) & ~lit & reach
-        n, lab = cv2.connectedComponents((cand | seeds).view(np.uint8), connectivity=8)
-        keep = np.zeros(n, bool)
-        keep[np.unique(lab[seeds])] = True
-        keep[0] = False
-        grown = cand & keep[lab] & ~foot
-        if grown.sum() > MAX_SHARE * h * w or (grown == absorbed).all():
-            break
-        absorbed = grown
-        bg_model = ring_model(seeds | absorbed)
-        if bg_model is None:
-            return model
-    uncertain = cv2.dilate((never | absorbed).view(np.uint8), disk) > 0
-    # 3. per-sample person by appearance, smoothed over space and time; where the
-    # plate was seen, its own difference also counts.
-    llr = log_ratio(small, person_model, bg_model)
-    llr = _smooth(llr, 2 * r + 1)
-    person = llr > 0
+    absorbed, bg_model = got
+    uncertain = cv2.dilate((wk.never | absorbed).view(np.uint8), wk.disk) > 0
+    # Per sample, person by appearance, smoothed over space and time. Colours never
+    # seen on the person are not impossible for it: a uniform share.
+    llr = log_ratio(wk.small, colour_model(px, uniform=PRIOR_UNSEEN), bg_model)
+    person = _smooth(llr, 2 * wk.r + 1) > 0
     # (a one-pixel margin: the outline at this resolution mixes person and scene)
     box3 = np.ones((3, 3), np.uint8)
     covered = np.stack([cv2.dilate(p.view(np.uint8), box3) for p in person & uncertain[None]])
     seen = (covered == 0) & uncertain[None]
+    return _retake(model, frames, gains, wk, uncertain, seen)
+
+
+def _retake(model, frames, gains, wk: _Work, uncertain, seen):
+    """The plate re-taken at full resolution where uncertain, from the samples that
+    show it uncovered; the rest of the uncertain area is never seen, inpainted."""
+    from vidcap.video.platemedian import robust_plate
+
+    k = wk.k
     count = seen.sum(axis=0)
     ok = count >= max(MIN_SEEN, int(np.ceil(MIN_SEEN_SHARE * k)))
-    # 4. plate re-taken at full resolution where uncertain
-    up = np.stack([cv2.resize(x.view(np.uint8), (ww, hh), interpolation=cv2.INTER_NEAREST)
-                   for x in seen])
-    again = robust_plate(frames, gains, up)
-    unc_full = cv2.resize(uncertain.view(np.uint8), (ww, hh),
-                          interpolation=cv2.INTER_NEAREST) > 0
-    ok_full = cv2.resize(ok.view(np.uint8), (ww, hh), interpolation=cv2.INTER_NEAREST) > 0
+    again = robust_plate(frames, gains, np.stack([wk.up(x) for x in seen]))
+    unc_full, ok_full = wk.up(uncertain) > 0, wk.up(ok) > 0
     new_never = unc_full & ~ok_full
     if model.self_lit is not None:
         new_never &= ~model.self_lit
-    plate_new = model.plate.copy()
-    take = unc_full & ok_full
-    plate_new[take] = again[take]
     never_full = (model.never_seen & ~unc_full) | new_never
     if never_full.sum() < MIN_KEPT_NEVER * model.never_seen.sum():
         # Appearance alone un-flagged most of what no sample showed uncovered: the
-        # person's colour model missed a static part (seen only on the limbs that
-        # move, it does not know the shirt): not trusted.
+        # person's colour model missed a static part: not trusted.
         return model
+    plate = model.plate.copy()
+    take = unc_full & ok_full
+    plate[take] = again[take]
     if never_full.any():
         # The pixels around were re-taken outside the person: the guess starts
         # right at the never-seen area's edge.
         fill = cv2.dilate(never_full.view(np.uint8), np.ones((3, 3), np.uint8))
-        plate_new = cv2.inpaint(plate_new, fill, 5, cv2.INPAINT_TELEA)
-    cnt_full = cv2.resize(count.astype(np.float32), (ww, hh), interpolation=cv2.INTER_NEAREST)
-    conf = np.where(unc_full, cnt_full / k, model.confidence).astype(np.float32)
-    return replace(model, plate=plate_new, never_seen=never_full, confidence=conf)
+        plate = cv2.inpaint(plate, fill, 5, cv2.INPAINT_TELEA)
+    hh, ww = wk.full
+    cnt = cv2.resize(count.astype(np.float32), (ww, hh), interpolation=cv2.INTER_NEAREST)
+    conf = np.where(unc_full, cnt / k, model.confidence).astype(np.float32)
+    return replace(model, plate=plate, never_seen=never_full, confidence=conf)
