@@ -1,7 +1,7 @@
 """Silhouettes on real footage and on in-place renders over real backgrounds.
 
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
-        [--only NAME] [--quick]
+        [--only NAME] [--quick] [--pck]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -30,6 +30,10 @@ Clips:
   trial seen by three cameras, one visit of onebyone_room): every column is scored
   against MediaPipe's person masks instead of a truth ("vs MediaPipe" in the name),
   so the MediaPipe column is empty there.
+
+``--pck`` adds, for renders, the PCK@0.05 (share of joints within 5 % of the body
+height) of the 2D fit (per frame, :func:`vidcap.video.fit.pose2d.fit_sequence`) on
+vidcap's silhouettes beside the same fit on the true masks.
 
 Renders and MediaPipe masks are cached under ``$VIDCAP_DATA/sil/`` (outside git);
 without ``VIDCAP_DATA`` the renders go to a temporary folder and MediaPipe is
@@ -141,6 +145,26 @@ def render(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
     video, tpath = out_dir / f"{stem}.mp4", out_dir / f"{stem}_truth.npz"
     if video.exists() and tpath.exists():
         return video, np.load(tpath)["masks"]
+    frames, truth, fps = _render_frames(motion, yaw, which, n_frames, rng_seed)
+    write_video(video, frames, fps, crf=23)
+    np.savez_compressed(tpath, masks=truth["masks"], joints2d=truth["joints2d"])
+    return video, truth["masks"]
+
+
+def truth_joints(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
+    """The render's true 2D joints (F, 15, 2), re-rendered in memory when the cached
+    truth predates them (the render is seeded: the same clip)."""
+    stem = name.replace(" / ", "_").replace(" ", "_").replace("/", "-")
+    tpath = out_dir / f"{stem}_truth.npz"
+    got = np.load(tpath)
+    if "joints2d" in got:
+        return got["joints2d"]
+    _, truth, _ = _render_frames(motion, yaw, which, n_frames, rng_seed)
+    np.savez_compressed(tpath, masks=got["masks"], joints2d=truth["joints2d"])
+    return truth["joints2d"]
+
+
+def _render_frames(motion, yaw, which, n_frames, rng_seed):
     rng = np.random.default_rng(rng_seed)
     plate = real_plate(which)
     lamp = lamp_mask(plate.shape[:2], rng)
@@ -157,9 +181,7 @@ def render(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
     a = (lamp * ~truth["masks"])[..., None]
     noise = rng.normal(0, 2.0, frames.shape[:3] + (1,)).astype(np.float32)
     frames = np.clip(frames * (1 - a) + a * (bright + noise), 0, 255).astype(np.uint8)
-    write_video(video, frames, mo.fps, crf=23)
-    np.savez_compressed(tpath, masks=truth["masks"])
-    return video, truth["masks"]
+    return frames, truth, mo.fps
 
 
 def real_clip(fname, a, b, cache: Path):
@@ -215,18 +237,37 @@ def opencv_subtractor(frames, make):
                      for f in frames])
 
 
+def pck_pair(masks, truth_masks, joints2d):
+    """PCK@0.05 of body height of the 2D fit (per frame, the seed's) on vidcap's
+    silhouettes and on the true ones, same clip."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from pose2d_accuracy import body_height_px, side_agnostic_errors
+
+    from vidcap.video.fit.pose2d import fit_sequence
+
+    h = body_height_px(joints2d)[:, None]
+    out = []
+    for m in (masks, truth_masks):
+        pred = fit_sequence(np.asarray(m, bool)).joints2d
+        err, _ = side_agnostic_errors(pred, joints2d)
+        e = err / h
+        out.append(float(np.mean(e[np.isfinite(e)] <= 0.05)))
+    return tuple(out)
+
+
 def run_vidcap(video, method):
     bg = estimate_background(video, method=method)
     sil = extract_silhouettes(video, bg, require_person=False, progress=False)
     return np.asarray(sil.masks), bg
 
 
-def score_clip(name, use, video, truth, mp, quick=False):
+def score_clip(name, use, video, truth, mp, quick=False, joints2d=None):
     row = {"clip": name, "use": use, "frames": len(truth)}
     t = time.perf_counter()
     masks, bg = run_vidcap(video, "felzenszwalb")
     row["secs"] = time.perf_counter() - t
     row["vidcap"] = stats(iou(masks, truth))
+    row["pck"] = None if joints2d is None else pck_pair(masks, truth, joints2d)
     row["never"] = (100 * bg.never_seen_fraction, 100 * float(np.all(truth, axis=0).mean()))
     if quick:
         row.update({"median": None, "MOG2": None, "GSOC": None, "MediaPipe": None})
@@ -248,6 +289,8 @@ def main(argv=None) -> int:
     ap.add_argument("--no-mediapipe", action="store_true")
     ap.add_argument("--only", help="only clips whose name contains this")
     ap.add_argument("--quick", action="store_true", help="vidcap only (no baselines)")
+    ap.add_argument("--pck", action="store_true",
+                    help="renders: PCK@0.05 of the 2D fit on vidcap's and the true masks")
     args = ap.parse_args(argv)
     data = os.environ.get("VIDCAP_DATA")
     tmp = None
@@ -264,7 +307,7 @@ def main(argv=None) -> int:
         print("(../shared/data absent: no real clip, no real plates)")
         return 0
     clips = [("ido_walk (Weizmann, real)", "tuning", SHARED / "ido_walk.avi",
-              np.load(SHARED / "ido_walk_masks.npz")["masks"].astype(bool))]
+              np.load(SHARED / "ido_walk_masks.npz")["masks"].astype(bool), None)]
     for name, motion, yaw, which, use in RENDERS:
         if args.only and args.only not in name:
             continue
@@ -272,7 +315,9 @@ def main(argv=None) -> int:
             print(f"({name}: skipped, $VIDCAP_DATA/video/onebyone_room.mp4 absent)")
             continue
         video, truth = render(name, motion, yaw, which, args.frames, cache)
-        clips.append((name, use, video, truth))
+        joints = (truth_joints(name, motion, yaw, which, args.frames, cache)
+                  if args.pck else None)
+        clips.append((name, use, video, truth, joints))
     for name, fname, a, b in REAL_CLIPS:
         if args.only and args.only not in name:
             continue
@@ -280,20 +325,26 @@ def main(argv=None) -> int:
         if got is None:
             print(f"({name}: skipped, $VIDCAP_DATA/video/{fname} or its MediaPipe masks absent)")
             continue
-        clips.append((name, "validation", got[0], got[1]))
-    for name, use, video, truth in clips:
+        clips.append((name, "validation", got[0], got[1], None))
+    for name, use, video, truth, joints in clips:
         if args.only and args.only not in name:
             continue
         mp = None if "MediaPipe" in name else mediapipe_masks(video, mp_cache)
-        rows.append(score_clip(name, use, video, truth, mp, args.quick))
+        rows.append(score_clip(name, use, video, truth, mp, args.quick, joints))
     cols = ["vidcap", "median", "MOG2", "GSOC", "MediaPipe"]
+    pck = args.pck
     print("| clip | use | " + " | ".join(f"{c} med / p10" for c in cols)
-          + " | never seen (truth) | vidcap s |")
-    print("|---" * (len(cols) + 4) + "|")
+          + " | never seen (truth) | vidcap s |" + (" PCK@0.05 vidcap / true masks |"
+                                                     if pck else ""))
+    print("|---" * (len(cols) + 4 + pck) + "|")
     for r in rows:
         cells = ["—" if r[c] is None else f"{r[c][0]:.3f} / {r[c][1]:.3f}" for c in cols]
+        tail = ""
+        if pck:
+            tail = " — |" if r["pck"] is None else (
+                f" {100 * r['pck'][0]:.1f} / {100 * r['pck'][1]:.1f} % |")
         print(f"| {r['clip']} | {r['use']} | " + " | ".join(cells)
-              + f" | {r['never'][0]:.1f} % ({r['never'][1]:.1f} %) | {r['secs']:.1f} |")
+              + f" | {r['never'][0]:.1f} % ({r['never'][1]:.1f} %) | {r['secs']:.1f} |" + tail)
     n_val = sum(r["use"] == "validation" for r in rows)
     print(f"\n{n_val} of {len(rows)} clips are validation (chose no threshold).")
     if tmp is not None:
