@@ -268,7 +268,8 @@ def score_clip(name, use, video, truth, mp, quick=False, joints2d=None):
     row["secs"] = time.perf_counter() - t
     row["vidcap"] = stats(iou(masks, truth))
     row["pck"] = None if joints2d is None else pck_pair(masks, truth, joints2d)
-    row["never"] = (100 * bg.never_seen_fraction, 100 * float(np.all(truth, axis=0).mean()))
+    row["never"] = (100 * bg.never_seen_fraction, None if "MediaPipe" in name
+                    else 100 * float(np.all(truth, axis=0).mean()))
     if quick:
         row.update({"median": None, "MOG2": None, "GSOC": None, "MediaPipe": None})
         return row
@@ -281,6 +282,10 @@ def score_clip(name, use, video, truth, mp, quick=False, joints2d=None):
     row["MediaPipe"] = None if mp is None or "MediaPipe" in name else stats(
         iou(mp[:len(truth)], truth))
     return row
+
+
+def truth_never(row) -> str:
+    return "—" if row["never"][1] is None else f"{row['never'][1]:.1f} %"
 
 
 def main(argv=None) -> int:
@@ -344,7 +349,7 @@ def main(argv=None) -> int:
             tail = " — |" if r["pck"] is None else (
                 f" {100 * r['pck'][0]:.1f} / {100 * r['pck'][1]:.1f} % |")
         print(f"| {r['clip']} | {r['use']} | " + " | ".join(cells)
-              + f" | {r['never'][0]:.1f} % ({r['never'][1]:.1f} %) | {r['secs']:.1f} |" + tail)
+              + f" | {r['never'][0]:.1f} % ({truth_never(r)}) | {r['secs']:.1f} |" + tail)
     n_val = sum(r["use"] == "validation" for r in rows)
     print(f"\n{n_val} of {len(rows)} clips are validation (chose no threshold).")
     if tmp is not None:
