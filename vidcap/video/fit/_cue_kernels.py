@@ -131,6 +131,40 @@ def scale_tensor(stack, s):
 
 
 @numba.njit(cache=True, nogil=True)
+def masked_copy(stack, mask, out):
+    """``out = stack``, zero where ``mask`` (h, w) is set (every channel)."""
+    h, w, c = stack.shape
+    for i in range(h):
+        for j in range(w):
+            m = mask[i, j]
+            for k in range(c):
+                out[i, j, k] = 0.0 if m else stack[i, j, k]
+
+
+@numba.njit(cache=True, nogil=True)
+def fine_grid(u0, l0, du, dl, max_bend, ua, la, dirs_u, dirs_l):
+    """:func:`vidcap.video.fit.cues._fine_grid` into ``ua``, ``la`` (N,) and
+    ``dirs_u``, ``dirs_l`` (N, 2) of the offsets ``du``, ``dl`` (N,) about
+    ``(u0, l0)``; returns how many pairs it kept (the first rows)."""
+    n = 0
+    two_pi = 2 * np.pi
+    for i in range(du.shape[0]):
+        u = u0 + du[i]
+        v = l0 + dl[i]
+        if _gap(v, u) <= max_bend:
+            u = np.mod(u, two_pi)
+            v = np.mod(v, two_pi)
+            ua[n] = u
+            la[n] = v
+            dirs_u[n, 0] = np.cos(u)
+            dirs_u[n, 1] = -np.sin(u)
+            dirs_l[n, 0] = np.cos(v)
+            dirs_l[n, 1] = -np.sin(v)
+            n += 1
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
 def _gap(a, b):
     """|a - b| wrapped to [0, pi] (:func:`vidcap.video.fit.cues._angle_gap`)."""
     return abs(np.mod(a - b + np.pi, 2 * np.pi) - np.pi)
@@ -162,7 +196,8 @@ def greedy_apart(ua, la, jj, u0, l0, apart, keep):
     return m
 
 
-__all__ = ["arm_cue_grid", "arm_cue_terms", "cue_stack", "greedy_apart", "scale_tensor"]
+__all__ = ["arm_cue_grid", "arm_cue_terms", "cue_stack", "fine_grid", "greedy_apart", "masked_copy",
+           "scale_tensor"]
 
 
 @numba.njit(cache=True, nogil=True)

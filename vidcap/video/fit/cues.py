@@ -368,6 +368,12 @@ def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float):
     """(upper, lower) pairs within ``half_deg`` of ``(u0, l0)``, ``step_deg`` apart, the
     bend within the limit, as :func:`pair_grid` returns them."""
     du, dl = _offsets(float(half_deg), float(step_deg))
+    kernels = cue_kernels()
+    if kernels is not None:
+        n = len(du)
+        ua, la, d_u, d_l = np.empty(n), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
+        k = kernels.fine_grid(float(u0), float(l0), du, dl, MAX_BEND + 1e-9, ua, la, d_u, d_l)
+        return ua[:k], la[:k], d_u[:k], d_l[:k]
     ua, la = u0 + du, l0 + dl
     keep = _angle_gap(la, ua) <= MAX_BEND + 1e-9
     ua, la = np.mod(ua[keep], 2 * np.pi), np.mod(la[keep], 2 * np.pi)
@@ -395,16 +401,29 @@ def _fore_options(fu: float, fl: float) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
-def _fore_steps(fore):
-    """Foreshortenings near ``fore`` (the upper arm 0.1 and 0.2, the forearm 0.1 either
-    way, within [0.3, 1]), ``fore`` left out."""
+@functools.lru_cache(maxsize=512)
+def _fore_steps(fore: tuple[float, float]) -> tuple[tuple[float, float], ...]:
+    """Foreshortenings near ``fore`` (the upper arm 0.1 and 0.2 either way, within
+    [0.3, 1]), ``fore`` left out."""
     opts = []
     for a in (-0.2, -0.1, 0.0, 0.1, 0.2):
         for b in (0.0,):
             f = (min(max(fore[0] + a, 0.3), 1.0), min(max(fore[1] + b, 0.3), 1.0))
             if f != fore and f not in opts:
                 opts.append(f)
-    return opts
+    return tuple(opts)
+
+
+def _masked(stack: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """A copy of ``stack`` (h, w, C), zero where ``mask`` (h, w) is set."""
+    kernels = cue_kernels()
+    if kernels is None:
+        out = stack.copy()
+        out[mask] = 0.0
+        return out
+    out = np.empty_like(stack)
+    kernels.masked_copy(stack, mask, out)
+    return out
 
 
 def _pair_scorer(eng, st: FitState, up: int, lo: int, root: np.ndarray):
@@ -435,6 +454,11 @@ def _pair_scorer(eng, st: FitState, up: int, lo: int, root: np.ndarray):
         return out
 
     return score
+
+
+#: A tracked frame's cue search: pairs within this many degrees of the arm in place
+#: (each segment), 10 degrees apart, then 2.5 degrees apart about the best.
+LOCAL_HALF_DEG = 30.0
 
 
 def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
@@ -479,9 +503,7 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     oth = draw_pose(joints, eng.R, eng.sil.shape,
                     segments=[S[f"{other}_upper_arm"], S[f"{other}_lower_arm"]], caps=True)
     oth |= draw_pose(joints, eng.R * 1.25, eng.sil.shape, segments=[S["head"]], caps=True)
-    stack = maps.stack.copy()
-    stack[oth] = 0.0
-    own = CueMaps(stack, maps.bins)
+    own = CueMaps(_masked(maps.stack, oth), maps.bins)
 
     pair_s = _pair_scorer(eng, st, up, lo, shoulder)
     lengths = np.array([eng.L[up], eng.L[lo]])
@@ -498,7 +520,7 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
         return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
 
     if local:
-        coarse = _fine_grid(st.angles[up], st.angles[lo], 2 * coarse_deg, 10.0)
+        coarse = _fine_grid(st.angles[up], st.angles[lo], LOCAL_HALF_DEG, 10.0)
         half = 5.0
     else:
         coarse, half = pair_grid(float(coarse_deg)), coarse_deg
@@ -518,7 +540,7 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     if fore != fore0 or fore0[0] > 0.95 or fore0[1] > 0.95:
         # an arm the cues lengthened (or drawn whole): its lengths between the coarse
         # options, too
-        steps = _fore_steps(fore)
+        steps = _fore_steps(tuple(fore))
     j_steps = score(fine, [fore, *steps])
     j_fine = j_steps[0]
     for f, j_f in zip(steps, j_steps[1:], strict=True):
