@@ -142,16 +142,20 @@ def masked_copy(stack, mask, out):
 
 
 @numba.njit(cache=True, nogil=True)
-def fine_grid(u0, l0, du, dl, max_bend, ua, la, dirs_u, dirs_l):
-    """:func:`vidcap.video.fit.cues._fine_grid` into ``ua``, ``la`` (N,) and
-    ``dirs_u``, ``dirs_l`` (N, 2) of the offsets ``du``, ``dl`` (N,) about
-    ``(u0, l0)``; returns how many pairs it kept (the first rows)."""
+def fine_grid(u0, l0, du, dl, max_bend, here, ua, la, dirs_u, dirs_l):
+    """:func:`vidcap.video.fit.cues._fine_grid` into ``ua``, ``la`` (N + 1,) and
+    ``dirs_u``, ``dirs_l`` (N + 1, 2) of the offsets ``du``, ``dl`` (N,) about
+    ``(u0, l0)``, and with ``here`` ``(u0, l0)`` itself last, whatever its bend;
+    returns how many pairs it wrote (the first rows)."""
     n = 0
     two_pi = 2 * np.pi
-    for i in range(du.shape[0]):
-        u = u0 + du[i]
-        v = l0 + dl[i]
-        if _gap(v, u) <= max_bend:
+    for i in range(du.shape[0] + 1):
+        if i == du.shape[0] and not here:
+            break
+        last = i == du.shape[0]
+        u = u0 if last else u0 + du[i]
+        v = l0 if last else l0 + dl[i]
+        if last or _gap(v, u) <= max_bend:
             u = np.mod(u, two_pi)
             v = np.mod(v, two_pi)
             ua[n] = u

@@ -364,19 +364,24 @@ def _offsets(half_deg: float, step_deg: float):
     return du, dl
 
 
-def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float):
+def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float, *, here: bool = False):
     """(upper, lower) pairs within ``half_deg`` of ``(u0, l0)``, ``step_deg`` apart, the
-    bend within the limit, as :func:`pair_grid` returns them."""
+    bend within the limit, as :func:`pair_grid` returns them; with ``here``, the pair
+    ``(u0, l0)`` itself last (whatever its bend)."""
     du, dl = _offsets(float(half_deg), float(step_deg))
     kernels = cue_kernels()
     if kernels is not None:
-        n = len(du)
+        n = len(du) + 1
         ua, la, d_u, d_l = np.empty(n), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
-        k = kernels.fine_grid(float(u0), float(l0), du, dl, MAX_BEND + 1e-9, ua, la, d_u, d_l)
+        k = kernels.fine_grid(float(u0), float(l0), du, dl, MAX_BEND + 1e-9, here, ua, la,
+                              d_u, d_l)
         return ua[:k], la[:k], d_u[:k], d_l[:k]
     ua, la = u0 + du, l0 + dl
     keep = _angle_gap(la, ua) <= MAX_BEND + 1e-9
-    ua, la = np.mod(ua[keep], 2 * np.pi), np.mod(la[keep], 2 * np.pi)
+    ua, la = ua[keep], la[keep]
+    if here:
+        ua, la = np.append(ua, u0), np.append(la, l0)
+    ua, la = np.mod(ua, 2 * np.pi), np.mod(la, 2 * np.pi)
     return ua, la, direction(ua), direction(la)
 
 
@@ -427,28 +432,29 @@ def _masked(stack: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 
 def _pair_scorer(eng, st: FitState, up: int, lo: int, root: np.ndarray):
-    """``score(grid, fore)``: S of every candidate of ``grid`` (:func:`pair_grid`'s
-    form), the limb ``up``, ``lo`` from ``root`` at foreshortenings ``fore`` (upper,
-    lower), the rest of the model as in ``st``: :func:`grids._pair_scores`, with the
-    still segments' tables drawn once for every grid and foreshortening (they do not
-    depend on the moving limb's)."""
+    """``score(grid, fores)``: S of every candidate of ``grid`` (:func:`pair_grid`'s
+    form), (len(fores), N), the limb ``up``, ``lo`` from ``root`` at each of the
+    foreshortenings ``fores`` ((upper, lower) pairs), the rest of the model as in
+    ``st``: :func:`grids._pair_scores`, with the still segments' tables drawn once for
+    every grid and foreshortening (they do not depend on the moving limb's)."""
     kernels = fit_kernels()
     if kernels is None:
-        def numpy_score(grid, fore):
-            at = st.with_entries(fore=([up, lo], list(fore)))
-            return _pair_scores(eng, at, up, lo, root, grid)
+        def numpy_score(grid, fores):
+            return np.stack([_pair_scores(eng, st.with_entries(fore=([up, lo], list(f))), up,
+                                          lo, root, grid) for f in fores])
         return numpy_score
     (r0, r1), cum, a, m_base, i_base = still_tables(eng, st, None, np.array([up, lo]), None)
     radii = _carray(eng.R[[up, lo]], np.float64)
     root = _carray(root, np.float64)
     m0, i0, caps = int(m_base[0]), int(i_base[0]), bool(eng.caps)
+    len_u, len_l = eng.L[up], eng.L[lo]
 
-    def score(grid, fore):
+    def score(grid, fores):
         _, _, du, dl = grid
-        out, q = np.empty(len(du)), np.empty(len(du))
-        kernels.arm_pair_terms(du, dl, root, float(eng.L[up] * fore[0]),
-                               float(eng.L[lo] * fore[1]), radii, cum, r0, r1, caps, a,
-                               m0, i0, out, q)
+        out, q = np.empty((len(fores), len(du))), np.empty((len(fores), len(du)))
+        for f, (fu, fl) in enumerate(fores):
+            kernels.arm_pair_terms(du, dl, root, float(len_u * fu), float(len_l * fl), radii,
+                                   cum, r0, r1, caps, a, m0, i0, out[f], q[f])
         np.exp(out, out=out)  # S = exp(-p - n) (1 - p), as grids._pair_scores
         out *= q
         return out
@@ -483,8 +489,8 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     weights : dict, optional
         :data:`WEIGHTS`' keys.
     local : bool
-        Only pairs within one coarse step of the arm in place (a tracked frame: the
-        arm moved little since the last frame), 5 then 2.5 degrees apart.
+        Only pairs within :data:`LOCAL_HALF_DEG` of the arm in place (a tracked
+        frame: the arm moved little since the last frame), 10 then 2.5 degrees apart.
     out : dict, optional
         Filled with ``out[s]``: the arm's candidates for the solve over time
         (:func:`_candidates`).
@@ -511,7 +517,7 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     def score(grid, fores):
         """J of every candidate of ``grid`` at each of ``fores``, (len(fores), N)."""
         ua, la, du, dl = grid
-        sim = np.stack([pair_s(grid, f) for f in fores])
+        sim = pair_s(grid, fores)
         skin, edge = arm_cue_grid_terms(own, shoulder, du, dl, lengths * np.array(fores),
                                         r_u, r_l)
         # a segment the outline drew short is one it hardly sees: its angle is held
@@ -519,23 +525,26 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
         gap = fore0[0] * _angle_gap(ua, prior[0]) + fore0[1] * _angle_gap(la, prior[1])
         return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
 
+    # the arm in place (even beyond the bend limit, where the outline fit left it)
+    # is scored with the coarse grid (one batch, its last), at its own foreshortening
     if local:
-        coarse = _fine_grid(st.angles[up], st.angles[lo], LOCAL_HALF_DEG, 10.0)
+        with_here = _fine_grid(st.angles[up], st.angles[lo], LOCAL_HALF_DEG, 10.0, here=True)
         half = 5.0
     else:
-        coarse, half = pair_grid(float(coarse_deg)), coarse_deg
+        g, half = pair_grid(float(coarse_deg)), coarse_deg
+        a_here = np.mod([st.angles[up]], 2 * np.pi), np.mod([st.angles[lo]], 2 * np.pi)
+        here = (*a_here, direction(a_here[0]), direction(a_here[1]))
+        with_here = tuple(np.concatenate([c, h]) for c, h in zip(g, here, strict=True))
+    coarse = tuple(x[:-1] for x in with_here)
+    here = tuple(x[-1:] for x in with_here)
     fores = fore_options(*fore0)  # fores[0] is fore0
-    # the arm in place (even beyond the bend limit, where the outline fit left it),
-    # scored with the coarse grid (one batch) at its own foreshortening
-    a_here = np.mod([st.angles[up]], 2 * np.pi), np.mod([st.angles[lo]], 2 * np.pi)
-    here = (*a_here, direction(a_here[0]), direction(a_here[1]))
-    j_all = score(tuple(np.concatenate([c, h]) for c, h in zip(coarse, here, strict=True)),
-                  fores)
+    j_all = score(with_here, fores)
     j_coarse, j_here = j_all[:, :-1], j_all[0, -1:]
     v = int(np.argmax(j_coarse.max(axis=1)))
-    fore = fores[v]
     k = int(np.argmax(j_coarse[v]))
-    fine = _fine_grid(coarse[0][k], coarse[1][k], half, 2.5)
+    u_k, l_k = coarse[0][k], coarse[1][k]
+    fore = fores[v]
+    fine = _fine_grid(u_k, l_k, half, 2.5)
     steps = []
     if fore != fore0 or fore0[0] > 0.95 or fore0[1] > 0.95:
         # an arm the cues lengthened (or drawn whole): its lengths between the coarse
