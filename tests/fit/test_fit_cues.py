@@ -202,7 +202,19 @@ def test_compiled_cue_terms_match_the_numpy_path(monkeypatch):
     skin, edge = cues.arm_cue_grid_terms(maps, shoulder, du, dl, lens, 2.5, 2.0)
     jj = np.round(rng.normal(size=30), 1)  # ties broken by listed order
     keep = cues._greedy_apart(ua, la, jj, 0.3, 0.2)
+    grids = [cues._fine_grid(u, low, 30.0, 10.0, here=here)
+             for u, low, here in ((0.2, 6.1, True), (1.0, 3.9, True), (5.0, 5.5, False))]
+    hole = rng.random((h, w)) < 0.2
+    masked = cues._masked(maps.stack, hole)
     _numpy_paths(monkeypatch)
+    for g, (u, low, here) in zip(grids, ((0.2, 6.1, True), (1.0, 3.9, True),
+                                         (5.0, 5.5, False)), strict=True):
+        for a, b in zip(g, cues._fine_grid(u, low, 30.0, 10.0, here=here), strict=True):
+            np.testing.assert_array_equal(a, b)
+    assert len(grids[1][0]) < 50  # (1.0, 3.9) bends beyond the limit: pairs dropped, here kept
+    assert np.isclose(grids[1][0][-1], 1.0) and np.isclose(grids[1][1][-1], 3.9)
+    np.testing.assert_array_equal(masked, cues._masked(maps.stack, hole))
+    assert not masked[hole].any()
     maps_np = cues.cue_maps(img, sil, model)
     # the channel sums in another order: float32 rounding apart
     np.testing.assert_allclose(maps.stack, maps_np.stack, rtol=1e-5, atol=1e-6)
