@@ -175,3 +175,53 @@ def test_a_chunked_fit_with_cues_agrees_with_the_serial_fit_with_cues():
     # one job: the serial path, the same fit exactly
     one = fit_sequence_chunked(masks, frames=frames, jobs=1)
     np.testing.assert_array_equal(one.joints2d, serial.joints2d)
+
+
+def _numpy_paths(monkeypatch):
+    from vidcap.video.fit import cues, engine
+    monkeypatch.setattr(cues, "_kernels", lambda: None)
+    monkeypatch.setattr(engine, "_kernels", lambda: None)
+
+
+def test_compiled_cue_terms_match_the_numpy_path(monkeypatch):
+    from vidcap.video.fit import cues
+    rng = np.random.default_rng(2)
+    h, w = 50, 40
+    img = rng.uniform(0, 255, (h, w, 3)).astype(np.float32)
+    sil = np.zeros((h, w), bool)
+    sil[5:45, 8:32] = True
+    model = ColourModel()
+    bins = chroma_bins(img)
+    model.learn(bins, sil & (rng.random((h, w)) < 0.3), sil & (rng.random((h, w)) < 0.3))
+    ua = rng.uniform(0, 2 * np.pi, 30)
+    la = ua + rng.uniform(-1.5, 1.5, 30)
+    du, dl = cues.direction(np.repeat(ua[:10], 3)), cues.direction(la)  # shared uppers
+    shoulder = np.array([20.0, 12.0])
+    lens = np.array([[12.0, 11.0], [8.4, 11.0], [12.0, 7.7]])
+    maps = cues.cue_maps(img, sil, model)
+    skin, edge = cues.arm_cue_grid_terms(maps, shoulder, du, dl, lens, 2.5, 2.0)
+    jj = np.round(rng.normal(size=30), 1)  # ties broken by listed order
+    keep = cues._greedy_apart(ua, la, jj, 0.3, 0.2)
+    grids = [cues._fine_grid(u, low, 30.0, 10.0, here=here)
+             for u, low, here in ((0.2, 6.1, True), (1.0, 3.9, True), (5.0, 5.5, False))]
+    hole = rng.random((h, w)) < 0.2
+    masked = cues._masked(maps.stack, hole)
+    _numpy_paths(monkeypatch)
+    for g, (u, low, here) in zip(grids, ((0.2, 6.1, True), (1.0, 3.9, True),
+                                         (5.0, 5.5, False)), strict=True):
+        for a, b in zip(g, cues._fine_grid(u, low, 30.0, 10.0, here=here), strict=True):
+            np.testing.assert_array_equal(a, b)
+    assert len(grids[1][0]) < 50  # (1.0, 3.9) bends beyond the limit: pairs dropped, here kept
+    assert np.isclose(grids[1][0][-1], 1.0) and np.isclose(grids[1][1][-1], 3.9)
+    np.testing.assert_array_equal(masked, cues._masked(maps.stack, hole))
+    assert not masked[hole].any()
+    maps_np = cues.cue_maps(img, sil, model)
+    # the channel sums in another order: float32 rounding apart
+    np.testing.assert_allclose(maps.stack, maps_np.stack, rtol=1e-5, atol=1e-6)
+    skin_np, edge_np = cues.arm_cue_grid_terms(maps, shoulder, du, dl, lens, 2.5, 2.0)
+    assert skin.shape == edge.shape == (3, 30)
+    assert edge.max() > 0 and skin.max() > 0
+    np.testing.assert_allclose(skin, skin_np, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(edge, edge_np, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(keep, cues._greedy_apart(ua, la, jj, 0.3, 0.2))
+    assert len(keep) == cues.N_CANDIDATES - 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -37,14 +38,35 @@ def _bilinear(stack, x, y, c):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _border(stack, ax, ay, nx, ny, r):
-    """Edge strength across a border at ``(ax, ay) +- r (nx, ny)``: both sides summed."""
+    """Edge strength across a border at ``(ax, ay) +- r (nx, ny)``: both sides summed.
+
+    The structure tensor's three channels are read with one set of bilinear weights
+    (each channel's sum in :func:`_bilinear`'s order: the same floats)."""
+    h, w = stack.shape[0], stack.shape[1]
     total = 0.0
     for side in (-1.0, 1.0):
         px = ax + side * r * nx
         py = ay + side * r * ny
-        a = _bilinear(stack, px, py, 1)
-        b = _bilinear(stack, px, py, 2)
-        c = _bilinear(stack, px, py, 3)
+        x0 = math.floor(px)
+        y0 = math.floor(py)
+        fx = px - x0
+        fy = py - y0
+        a = 0.0
+        b = 0.0
+        c = 0.0
+        for dy in range(2):
+            yy = int(y0) + dy
+            if yy < 0 or yy >= h:
+                continue
+            wy = fy if dy else 1.0 - fy
+            for dx in range(2):
+                xx = int(x0) + dx
+                if xx < 0 or xx >= w:
+                    continue
+                wx = fx if dx else 1.0 - fx
+                a += wy * wx * stack[yy, xx, 1]
+                b += wy * wx * stack[yy, xx, 2]
+                c += wy * wx * stack[yy, xx, 3]
         v = nx * nx * a + 2.0 * nx * ny * b + ny * ny * c
         total += min(math.sqrt(max(v, 0.0)), 1.0)
     return total
@@ -53,16 +75,21 @@ def _border(stack, ax, ay, nx, ny, r):
 @numba.njit(cache=True, nogil=True)
 def arm_cue_terms(stack, shoulder, du, dl, len_u, len_l, r_u, r_l, t_skin, t_axis, skin, edge):
     """Skin and edge terms of whole-arm candidates into ``skin`` and ``edge`` (N,);
-    see :func:`vidcap.video.fit.cues.arm_cue_terms`."""
+    see :func:`vidcap.video.fit.cues.arm_cue_terms`.
+
+    The candidates of one upper arm direction (consecutive rows of ``du``, as the
+    grids list them) share its border samples: summed once per direction (the same
+    partial sum, so the same floats)."""
     n_skin = t_skin.shape[0] * 3
     n_edge = t_axis.shape[0] * 4
+    prev_x, prev_y = np.nan, np.nan
+    e_up = 0.0
     for b in range(du.shape[0]):
         ex = shoulder[0] + du[b, 0] * len_u
         ey = shoulder[1] + du[b, 1] * len_u
         lx = dl[b, 0] * len_l
         ly = dl[b, 1] * len_l
         nlx, nly = -dl[b, 1], dl[b, 0]
-        nux, nuy = -du[b, 1], du[b, 0]
         s = 0.0
         for t in t_skin:
             ax = ex + lx * t
@@ -70,16 +97,111 @@ def arm_cue_terms(stack, shoulder, du, dl, len_u, len_l, r_u, r_l, t_skin, t_axi
             for k in (-1.0, 0.0, 1.0):
                 s += _bilinear(stack, ax + nlx * (0.5 * r_l * k), ay + nly * (0.5 * r_l * k), 0)
         skin[b] = s / n_skin
-        e = 0.0
-        for t in t_axis:
-            e += _border(stack, shoulder[0] + du[b, 0] * len_u * t,
-                         shoulder[1] + du[b, 1] * len_u * t, nux, nuy, r_u)
+        if not (du[b, 0] == prev_x and du[b, 1] == prev_y):  # a new upper arm
+            prev_x, prev_y = du[b, 0], du[b, 1]
+            nux, nuy = -du[b, 1], du[b, 0]
+            e_up = 0.0
+            for t in t_axis:
+                e_up += _border(stack, shoulder[0] + du[b, 0] * len_u * t,
+                                shoulder[1] + du[b, 1] * len_u * t, nux, nuy, r_u)
+        e = e_up
         for t in t_axis:
             e += _border(stack, ex + lx * t, ey + ly * t, nlx, nly, r_l)
         edge[b] = e / n_edge
 
 
-__all__ = ["arm_cue_terms"]
+@numba.njit(cache=True, nogil=True)
+def arm_cue_grid(stack, shoulder, du, dl, lens, r_u, r_l, t_skin, t_axis, skin, edge):
+    """:func:`arm_cue_terms` of one grid at several drawn lengths: row f of ``skin``
+    and ``edge`` (F, N) with the upper and lower arm ``lens[f]`` (F, 2) long."""
+    for f in range(lens.shape[0]):
+        arm_cue_terms(stack, shoulder, du, dl, lens[f, 0], lens[f, 1], r_u, r_l, t_skin,
+                      t_axis, skin[f], edge[f])
+
+
+@numba.njit(cache=True, nogil=True)
+def scale_tensor(stack, s):
+    """``stack[..., 1:] *= s`` (float32), in place: the edge channels of
+    :func:`cue_stack`'s output scaled (numpy's strided multiply is slow here)."""
+    h, w = stack.shape[0], stack.shape[1]
+    for i in range(h):
+        for j in range(w):
+            for c in range(1, 4):
+                stack[i, j, c] *= s
+
+
+@numba.njit(cache=True, nogil=True)
+def masked_copy(stack, mask, out):
+    """``out = stack``, zero where ``mask`` (h, w) is set (every channel)."""
+    h, w, c = stack.shape
+    for i in range(h):
+        for j in range(w):
+            m = mask[i, j]
+            for k in range(c):
+                out[i, j, k] = 0.0 if m else stack[i, j, k]
+
+
+@numba.njit(cache=True, nogil=True)
+def fine_grid(u0, l0, du, dl, max_bend, here, ua, la, dirs_u, dirs_l):
+    """:func:`vidcap.video.fit.cues._fine_grid` into ``ua``, ``la`` (N + 1,) and
+    ``dirs_u``, ``dirs_l`` (N + 1, 2) of the offsets ``du``, ``dl`` (N,) about
+    ``(u0, l0)``, and with ``here`` ``(u0, l0)`` itself last, whatever its bend;
+    returns how many pairs it wrote (the first rows)."""
+    n = 0
+    two_pi = 2 * np.pi
+    for i in range(du.shape[0] + 1):
+        if i == du.shape[0] and not here:
+            break
+        last = i == du.shape[0]
+        u = u0 if last else u0 + du[i]
+        v = l0 if last else l0 + dl[i]
+        if last or _gap(v, u) <= max_bend:
+            u = np.mod(u, two_pi)
+            v = np.mod(v, two_pi)
+            ua[n] = u
+            la[n] = v
+            dirs_u[n, 0] = np.cos(u)
+            dirs_u[n, 1] = -np.sin(u)
+            dirs_l[n, 0] = np.cos(v)
+            dirs_l[n, 1] = -np.sin(v)
+            n += 1
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
+def _gap(a, b):
+    """|a - b| wrapped to [0, pi] (:func:`vidcap.video.fit.cues._angle_gap`)."""
+    return abs(np.mod(a - b + np.pi, 2 * np.pi) - np.pi)
+
+
+@numba.njit(cache=True, nogil=True)
+def greedy_apart(ua, la, jj, u0, l0, apart, keep):
+    """:func:`vidcap.video.fit.cues._greedy_apart` into ``keep`` (K,): returns how
+    many it kept (at most K)."""
+    n = ua.shape[0]
+    order = np.argsort(-jj, kind="mergesort")  # stable: ties in listed order
+    ku = np.empty(keep.shape[0] + 1)
+    kl = np.empty(keep.shape[0] + 1)
+    ku[0], kl[0] = u0, l0
+    m = 0
+    for i in range(n):
+        if m >= keep.shape[0]:
+            break
+        k = order[i]
+        ok = True
+        for j in range(m + 1):
+            if _gap(ku[j], ua[k]) + _gap(kl[j], la[k]) < apart:
+                ok = False
+                break
+        if ok:
+            keep[m] = k
+            m += 1
+            ku[m], kl[m] = ua[k], la[k]
+    return m
+
+
+__all__ = ["arm_cue_grid", "arm_cue_terms", "cue_stack", "fine_grid", "greedy_apart", "masked_copy",
+           "scale_tensor"]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -22,11 +22,14 @@ The weights are :data:`WEIGHTS` (chosen on the four tuning clips of
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
+from vidcap.video.fit.candidates import still_tables
+from vidcap.video.fit.engine import fit_kernels
 from vidcap.video.fit.grids import _pair_scores, pair_grid
 from vidcap.video.fit.limits import MAX_BEND, J, S
 from vidcap.video.fit.normalise import NormalisedMask
@@ -187,7 +190,11 @@ def _scale_edges(stack: np.ndarray, energy: np.ndarray) -> None:
     k = int(0.9 * (energy.size - 1))
     scale = float(np.partition(energy, k)[k])
     if scale > 0:
-        stack[..., 1:] *= np.float32(1.0 / scale)
+        kernels = cue_kernels()
+        if kernels is None:
+            stack[..., 1:] *= np.float32(1.0 / scale)
+        else:
+            kernels.scale_tensor(stack, np.float32(1.0 / scale))
     else:
         stack[..., 1:] = 0.0
 
@@ -279,6 +286,35 @@ def arm_cue_terms(maps: CueMaps, shoulder: np.ndarray, du: np.ndarray, dl: np.nd
     return skin, edge
 
 
+def arm_cue_grid_terms(maps: CueMaps, shoulder: np.ndarray, du: np.ndarray, dl: np.ndarray,
+                       lens: np.ndarray, r_u: float, r_l: float):
+    """:func:`arm_cue_terms` of one set of candidates at several drawn lengths.
+
+    Parameters
+    ----------
+    lens : numpy.ndarray, shape (F, 2)
+        Drawn lengths of the upper and lower arm, normalised pixels, one row per
+        foreshortening.
+
+    Returns
+    -------
+    skin, edge : numpy.ndarray, shape (F, N)
+        Row f: :func:`arm_cue_terms` with the lengths ``lens[f]``.
+    """
+    kernels = cue_kernels()
+    lens = np.asarray(lens, np.float64).reshape(-1, 2)
+    if kernels is None:
+        rows = [_arm_cue_terms_numpy(maps, shoulder, du, dl, lu, ll, r_u, r_l)
+                for lu, ll in lens]
+        return (np.array([r[0] for r in rows]).reshape(len(lens), len(du)),
+                np.array([r[1] for r in rows]).reshape(len(lens), len(du)))
+    skin, edge = np.empty((len(lens), len(du))), np.empty((len(lens), len(du)))
+    kernels.arm_cue_grid(maps.stack, _carray(shoulder, np.float64), _carray(du, np.float64),
+                         _carray(dl, np.float64), _carray(lens, np.float64), float(r_u),
+                         float(r_l), _T_SKIN, _T_AXIS, skin, edge)
+    return skin, edge
+
+
 def cue_kernels():
     """The compiled cue kernel module, or None (numpy path; the same terms)."""
     if _kernels() is None:  # the fit's switch (tests turn the compiled paths off)
@@ -314,20 +350,48 @@ def _arm_cue_terms_numpy(maps, shoulder, du, dl, len_u, len_l, r_u, r_l):
 
 
 def _angle_gap(a, b):
-    return np.abs(np.angle(np.exp(1j * (np.asarray(a) - b))))
+    """|a - b| wrapped to [0, pi], radians (elementwise)."""
+    return np.abs(np.mod(np.asarray(a) - b + np.pi, 2 * np.pi) - np.pi)
 
 
-def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float):
-    """(upper, lower) pairs within ``half_deg`` of ``(u0, l0)``, ``step_deg`` apart, the
-    bend within the limit, as :func:`pair_grid` returns them."""
+@functools.lru_cache(maxsize=8)
+def _offsets(half_deg: float, step_deg: float):
+    """The (upper, lower) offset pairs of :func:`_fine_grid`, radians, each (N,)."""
     off = np.deg2rad(np.arange(-half_deg, half_deg + 1e-9, step_deg))
-    ua, la = (g.ravel() for g in np.meshgrid(u0 + off, l0 + off, indexing="ij"))
+    du, dl = (g.ravel() for g in np.meshgrid(off, off, indexing="ij"))
+    for x in (du, dl):
+        x.flags.writeable = False
+    return du, dl
+
+
+def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float, *, here: bool = False):
+    """(upper, lower) pairs within ``half_deg`` of ``(u0, l0)``, ``step_deg`` apart, the
+    bend within the limit, as :func:`pair_grid` returns them; with ``here``, the pair
+    ``(u0, l0)`` itself last (whatever its bend)."""
+    du, dl = _offsets(float(half_deg), float(step_deg))
+    kernels = cue_kernels()
+    if kernels is not None:
+        n = len(du) + 1
+        ua, la, d_u, d_l = np.empty(n), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
+        k = kernels.fine_grid(float(u0), float(l0), du, dl, MAX_BEND + 1e-9, here, ua, la,
+                              d_u, d_l)
+        return ua[:k], la[:k], d_u[:k], d_l[:k]
+    ua, la = u0 + du, l0 + dl
     keep = _angle_gap(la, ua) <= MAX_BEND + 1e-9
-    ua, la = np.mod(ua[keep], 2 * np.pi), np.mod(la[keep], 2 * np.pi)
+    ua, la = ua[keep], la[keep]
+    if here:
+        ua, la = np.append(ua, u0), np.append(la, l0)
+    ua, la = np.mod(ua, 2 * np.pi), np.mod(la, 2 * np.pi)
     return ua, la, direction(ua), direction(la)
 
 
 def fore_options(fu: float, fl: float) -> list[tuple[float, float]]:
+    """:func:`_fore_options` (a new list of its cached options)."""
+    return list(_fore_options(float(fu), float(fl)))
+
+
+@functools.lru_cache(maxsize=512)
+def _fore_options(fu: float, fl: float) -> tuple[tuple[float, float], ...]:
     """The (upper, lower) foreshortenings :func:`search_arm_cues` tries: the arm's own
     (the outline's), its forearm at full length, and the whole arm at full length.
 
@@ -339,19 +403,68 @@ def fore_options(fu: float, fl: float) -> list[tuple[float, float]]:
         opt = (float(opt[0]), float(opt[1]))
         if min(max(abs(a - b) for a, b in zip(opt, o, strict=True)) for o in out) > 0.05:
             out.append(opt)
-    return out
+    return tuple(out)
 
 
-def _fore_steps(fore):
-    """Foreshortenings near ``fore`` (the upper arm 0.1 and 0.2, the forearm 0.1 either
-    way, within [0.3, 1]), ``fore`` left out."""
+@functools.lru_cache(maxsize=512)
+def _fore_steps(fore: tuple[float, float]) -> tuple[tuple[float, float], ...]:
+    """Foreshortenings near ``fore`` (the upper arm 0.1 and 0.2 either way, within
+    [0.3, 1]), ``fore`` left out."""
     opts = []
     for a in (-0.2, -0.1, 0.0, 0.1, 0.2):
         for b in (0.0,):
             f = (min(max(fore[0] + a, 0.3), 1.0), min(max(fore[1] + b, 0.3), 1.0))
             if f != fore and f not in opts:
                 opts.append(f)
-    return opts
+    return tuple(opts)
+
+
+def _masked(stack: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """A copy of ``stack`` (h, w, C), zero where ``mask`` (h, w) is set."""
+    kernels = cue_kernels()
+    if kernels is None:
+        out = stack.copy()
+        out[mask] = 0.0
+        return out
+    out = np.empty_like(stack)
+    kernels.masked_copy(stack, mask, out)
+    return out
+
+
+def _pair_scorer(eng, st: FitState, up: int, lo: int, root: np.ndarray):
+    """``score(grid, fores)``: S of every candidate of ``grid`` (:func:`pair_grid`'s
+    form), (len(fores), N), the limb ``up``, ``lo`` from ``root`` at each of the
+    foreshortenings ``fores`` ((upper, lower) pairs), the rest of the model as in
+    ``st``: :func:`grids._pair_scores`, with the still segments' tables drawn once for
+    every grid and foreshortening (they do not depend on the moving limb's)."""
+    kernels = fit_kernels()
+    if kernels is None:
+        def numpy_score(grid, fores):
+            return np.stack([_pair_scores(eng, st.with_entries(fore=([up, lo], list(f))), up,
+                                          lo, root, grid) for f in fores])
+        return numpy_score
+    (r0, r1), cum, a, m_base, i_base = still_tables(eng, st, None, np.array([up, lo]), None)
+    radii = _carray(eng.R[[up, lo]], np.float64)
+    root = _carray(root, np.float64)
+    m0, i0, caps = int(m_base[0]), int(i_base[0]), bool(eng.caps)
+    len_u, len_l = eng.L[up], eng.L[lo]
+
+    def score(grid, fores):
+        _, _, du, dl = grid
+        out, q = np.empty((len(fores), len(du))), np.empty((len(fores), len(du)))
+        for f, (fu, fl) in enumerate(fores):
+            kernels.arm_pair_terms(du, dl, root, float(len_u * fu), float(len_l * fl), radii,
+                                   cum, r0, r1, caps, a, m0, i0, out[f], q[f])
+        np.exp(out, out=out)  # S = exp(-p - n) (1 - p), as grids._pair_scores
+        out *= q
+        return out
+
+    return score
+
+
+#: A tracked frame's cue search: pairs within this many degrees of the arm in place
+#: (each segment), 10 degrees apart, then 2.5 degrees apart about the best.
+LOCAL_HALF_DEG = 30.0
 
 
 def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
@@ -376,8 +489,8 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     weights : dict, optional
         :data:`WEIGHTS`' keys.
     local : bool
-        Only pairs within one coarse step of the arm in place (a tracked frame: the
-        arm moved little since the last frame), 5 then 2.5 degrees apart.
+        Only pairs within :data:`LOCAL_HALF_DEG` of the arm in place (a tracked
+        frame: the arm moved little since the last frame), 10 then 2.5 degrees apart.
     out : dict, optional
         Filled with ``out[s]``: the arm's candidates for the solve over time
         (:func:`_candidates`).
@@ -396,44 +509,52 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     oth = draw_pose(joints, eng.R, eng.sil.shape,
                     segments=[S[f"{other}_upper_arm"], S[f"{other}_lower_arm"]], caps=True)
     oth |= draw_pose(joints, eng.R * 1.25, eng.sil.shape, segments=[S["head"]], caps=True)
-    stack = maps.stack.copy()
-    stack[oth] = 0.0
-    own = CueMaps(stack, maps.bins)
+    own = CueMaps(_masked(maps.stack, oth), maps.bins)
 
-    def score(grid, fore):
+    pair_s = _pair_scorer(eng, st, up, lo, shoulder)
+    lengths = np.array([eng.L[up], eng.L[lo]])
+
+    def score(grid, fores):
+        """J of every candidate of ``grid`` at each of ``fores``, (len(fores), N)."""
         ua, la, du, dl = grid
-        at = st if fore == fore0 else st.with_entries(fore=([up, lo], list(fore)))
-        sim = _pair_scores(eng, at, up, lo, shoulder, grid)
-        skin, edge = arm_cue_terms(own, shoulder, du, dl, eng.L[up] * fore[0],
-                                   eng.L[lo] * fore[1], r_u, r_l)
+        sim = pair_s(grid, fores)
+        skin, edge = arm_cue_grid_terms(own, shoulder, du, dl, lengths * np.array(fores),
+                                        r_u, r_l)
         # a segment the outline drew short is one it hardly sees: its angle is held
         # by the prior that much less
         gap = fore0[0] * _angle_gap(ua, prior[0]) + fore0[1] * _angle_gap(la, prior[1])
         return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
 
+    # the arm in place (even beyond the bend limit, where the outline fit left it)
+    # is scored with the coarse grid (one batch, its last), at its own foreshortening
     if local:
-        coarse = _fine_grid(st.angles[up], st.angles[lo], 2 * coarse_deg, 10.0)
+        with_here = _fine_grid(st.angles[up], st.angles[lo], LOCAL_HALF_DEG, 10.0, here=True)
         half = 5.0
     else:
-        coarse, half = pair_grid(float(coarse_deg)), coarse_deg
-    fores = fore_options(*fore0)
-    j_coarse = [score(coarse, f) for f in fores]
-    v = int(np.argmax([jc.max() for jc in j_coarse]))
-    fore = fores[v]
+        g, half = pair_grid(float(coarse_deg)), coarse_deg
+        a_here = np.mod([st.angles[up]], 2 * np.pi), np.mod([st.angles[lo]], 2 * np.pi)
+        here = (*a_here, direction(a_here[0]), direction(a_here[1]))
+        with_here = tuple(np.concatenate([c, h]) for c, h in zip(g, here, strict=True))
+    coarse = tuple(x[:-1] for x in with_here)
+    here = tuple(x[-1:] for x in with_here)
+    fores = fore_options(*fore0)  # fores[0] is fore0
+    j_all = score(with_here, fores)
+    j_coarse, j_here = j_all[:, :-1], j_all[0, -1:]
+    v = int(np.argmax(j_coarse.max(axis=1)))
     k = int(np.argmax(j_coarse[v]))
-    fine = _fine_grid(coarse[0][k], coarse[1][k], half, 2.5)
-    # the arm in place (even beyond the bend limit, where the outline fit left it)
-    a_here = np.mod([st.angles[up]], 2 * np.pi), np.mod([st.angles[lo]], 2 * np.pi)
-    here = (*a_here, direction(a_here[0]), direction(a_here[1]))
-    j_here = score(here, fore0)
-    j_fine = score(fine, fore)
+    u_k, l_k = coarse[0][k], coarse[1][k]
+    fore = fores[v]
+    fine = _fine_grid(u_k, l_k, half, 2.5)
+    steps = []
     if fore != fore0 or fore0[0] > 0.95 or fore0[1] > 0.95:
         # an arm the cues lengthened (or drawn whole): its lengths between the coarse
         # options, too
-        for f in _fore_steps(fore):
-            j_f = score(fine, f)
-            if j_f.max() > j_fine.max():
-                j_fine, fore = j_f, f
+        steps = _fore_steps(tuple(fore))
+    j_steps = score(fine, [fore, *steps])
+    j_fine = j_steps[0]
+    for f, j_f in zip(steps, j_steps[1:], strict=True):
+        if j_f.max() > j_fine.max():
+            j_fine, fore = j_f, f
     if j_fine.max() > j_here[0]:
         best = int(np.argmax(j_fine))
         d_best, j_best = (fine[2][best], fine[3][best]), float(j_fine[best])
@@ -470,23 +591,37 @@ def _candidates(eng, shoulder, len_u, len_l, grids, scores, du_best, dl_best, j_
     du = np.concatenate([g[2] for g in grids])
     dl = np.concatenate([g[3] for g in grids])
     jj = np.concatenate(scores)
-    order = np.argsort(-jj, kind="stable")
-    keep_u, keep_l = [np.arctan2(-du_best[1], du_best[0])], [np.arctan2(-dl_best[1], dl_best[0])]
-    kept_du, kept_dl, cost = [du_best], [dl_best], [0.0]
-    for k in order:
-        if len(cost) >= N_CANDIDATES:
-            break
-        gap = _angle_gap(keep_u, ua[k]) + _angle_gap(keep_l, la[k])
-        if (gap < _APART).any():
-            continue
-        keep_u.append(ua[k])
-        keep_l.append(la[k])
-        kept_du.append(du[k])
-        kept_dl.append(dl[k])
-        cost.append(max(float(j_best - jj[k]), 0.0))
+    u, low = np.arctan2(-du_best[1], du_best[0]), np.arctan2(-dl_best[1], dl_best[0])
+    keep = _greedy_apart(ua, la, jj, u, low)
+    kept_du = [du_best, *du[keep]]
+    kept_dl = [dl_best, *dl[keep]]
+    cost = [0.0, *(max(float(j_best - jj[k]), 0.0) for k in keep)]
     elbow = shoulder + np.array(kept_du) * len_u
     wrist = elbow + np.array(kept_dl) * len_l
     return (eng.norm.to_original(elbow), eng.norm.to_original(wrist), np.array(cost))
+
+
+def _greedy_apart(ua, la, jj, u0, l0):
+    """Indices of up to ``N_CANDIDATES - 1`` candidates (angles ``ua``, ``la``, J
+    ``jj``), best J first (ties: first listed), each at least ``_APART`` (the upper
+    plus lower angle difference) from ``(u0, l0)`` and from those kept before it."""
+    kernels = cue_kernels()
+    if kernels is not None:
+        keep = np.empty(N_CANDIDATES - 1, np.int64)
+        n = kernels.greedy_apart(_carray(ua, np.float64), _carray(la, np.float64),
+                                 _carray(jj, np.float64), float(u0), float(l0), _APART, keep)
+        return keep[:n]
+    order = np.argsort(-jj, kind="stable")
+    alive = np.ones(len(jj), bool)
+    u, low, keep = u0, l0, []
+    while len(keep) < N_CANDIDATES - 1:
+        alive &= _angle_gap(ua[order], u) + _angle_gap(la[order], low) >= _APART
+        if not alive.any():
+            break
+        k = order[int(np.argmax(alive))]
+        keep.append(k)
+        u, low = ua[k], la[k]
+    return np.array(keep, np.int64)
 
 
 def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
@@ -503,10 +638,9 @@ def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
     return st
 
 
-__all__ = ["CUE_MODES", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues", "arm_cue_terms",
-           "chroma_bins",
-           "cue_image", "cue_maps", "fore_options", "learn_colours", "refine_arms_with_cues",
-           "search_arm_cues"]
+__all__ = ["CUE_MODES", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues", "arm_cue_grid_terms",
+           "arm_cue_terms", "chroma_bins", "cue_image", "cue_maps", "fore_options",
+           "learn_colours", "refine_arms_with_cues", "search_arm_cues"]
 
 
 def apply_cues(eng, st: FitState, image: np.ndarray, model: ColourModel, *,
