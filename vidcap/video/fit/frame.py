@@ -179,7 +179,7 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     eng = _MaskEngine(norm, caps=options.caps, body=options.body)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
     if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
-                 or eng.similarity(st) < LEAN_BELOW):
+                 or (options.fallback > 0 and eng.similarity(st) < LEAN_BELOW)):
         # the track is slipping: fit this frame from scratch, keep the better fit
         fresh, fresh_crossed, _ = fit_normalised(eng, options=options)
         if eng.similarity(fresh) > eng.similarity(st):
