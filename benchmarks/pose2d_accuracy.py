@@ -38,6 +38,11 @@ few points with any change to the search, so the mean over clips nobody tuned on
 the steadier figure. It also counts label flips of the default fit, and of the same fit
 relabelled by the solve over time (``fit_sequence(relabel=True)``).
 
+``--torso`` (issue 27 item 4) fits the ``--held-out`` clips once each, tracked, outline
+only (that table's "cues outline" column) and prints each clip's torso angle error
+(fitted pelvis -> neck against the true one, mean and max over frames) beside its
+PCK@0.05 and the true torso's largest lean from upright.
+
 ``--proportions`` (issue 27) renders bodies scaled away from the seed's ratios (legs
 +15 %, arms -10 %, shoulders +20 %; and a second body, legs -8 %, arms +8 %, shoulders
 -10 %, limbs 20 % wider) and the seed's own body, on clips and yaws, estimates the
@@ -49,7 +54,7 @@ proportions (same run). Errors are fractions of the true standing height in pixe
 
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
-[--proportions]``
+[--proportions] [--torso]``
 """
 
 from __future__ import annotations
@@ -283,6 +288,54 @@ def held_out(frames: int = 60, cues: str = "all") -> int:
     return 0
 
 
+def torso_angles_deg(joints: np.ndarray) -> np.ndarray:
+    """Image angle of pelvis -> neck per frame, degrees (90: upright, y up)."""
+    d = joints[:, JOINT_INDEX["neck"]] - joints[:, JOINT_INDEX["pelvis"]]
+    return np.degrees(np.arctan2(-d[:, 1], d[:, 0]))
+
+
+def torso_table(frames: int = 60) -> int:
+    """The ``--torso`` table (issue 27 item 4): the held-out clips fitted tracked with the
+    outline only (the ``--held-out`` table's "cues outline" column, one fit per clip,
+    without the cue and relabelled fits), with the mean and largest torso-angle error
+    per clip (fitted pelvis -> neck against the true one) and the true torso's largest
+    lean from upright, so a clip's misses can be put down to the torso or not."""
+    from vidcap.synth import make_motion, render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
+
+    full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
+            "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
+                                 fps=30.0)}
+    print(f"Tracked 2D fit, outline only, held-out clips ({frames} frames): PCK@0.05, "
+          "median error / height, torso angle error (deg, mean and max), true lean (max)")
+    print(f"{'clip':16} {'yaw':>4} {'PCK.05':>7} {'median':>7} {'torso':>6} {'max':>6} "
+          f"{'lean':>5}")
+    rows = []
+    for name, source, first, yaws in HELD_OUT:
+        if source in full:
+            n = len(full[source].root_positions)
+            start = first if first >= 0 else n + first
+            motion = full[source].frames(start, min(start + frames, n))
+        else:
+            motion = make_motion(source, n_frames=frames)
+        for yaw in yaws:
+            _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                   rng=np.random.default_rng(0))
+            tj = truth["joints2d"]
+            joints = fit_sequence(truth["masks"], cues="outline").joints2d
+            err, _ = side_agnostic_errors(joints, tj)
+            summary = summarise(err / body_height_px(tj)[:, None])
+            true = torso_angles_deg(tj)
+            off = np.abs(torso_angles_deg(joints) - true)
+            rows.append((summary["pck05"], summary["median"], np.nanmean(off)))
+            print(f"{name:16} {yaw:>4g} {summary['pck05']:7.1%} {summary['median']:7.4f} "
+                  f"{np.nanmean(off):6.1f} {np.nanmax(off):6.1f} "
+                  f"{np.nanmax(np.abs(true - 90)):5.0f}", flush=True)
+    r = np.asarray(rows)
+    print(f"{'mean':21} {r[:, 0].mean():7.2%} {np.median(r[:, 1]):7.4f} {r[:, 2].mean():6.1f}")
+    return 0
+
+
 #: ``--proportions``: the bodies (factors of :func:`vidcap.body.body_with_proportions`).
 BODIES = (
     ("A", {"legs": 1.15, "arms": 0.9, "shoulders": 1.2}),
@@ -385,7 +438,11 @@ def main(argv=None) -> int:
     ap.add_argument("--proportions", action="store_true",
                     help="bodies scaled away from the seed's ratios: recovered lengths and "
                          "the fit with estimated / seed / true proportions")
+    ap.add_argument("--torso", action="store_true",
+                    help="held-out clips, outline only: PCK and the torso angle's error")
     args = ap.parse_args(argv)
+    if args.torso:
+        return torso_table(args.frames)
     if args.proportions:
         return proportions(args.frames)
     if args.poses:

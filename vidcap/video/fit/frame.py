@@ -29,7 +29,12 @@ from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FALLBACK, FitOptions
 from vidcap.video.fit.result import FramePose
 from vidcap.video.fit.state import FitState
-from vidcap.video.fit.torso import fit_torso_head, place_torso, search_torso_about_neck
+from vidcap.video.fit.torso import (
+    fit_torso_head,
+    fit_torso_lean,
+    place_torso,
+    search_torso_about_neck,
+)
 
 #: Spread below which shoulders and hips nearly coincide in the image (a side view), so
 #: a fresh fit's image-side limb names mean nothing and a track's are kept
@@ -37,6 +42,15 @@ from vidcap.video.fit.torso import fit_torso_head, place_torso, search_torso_abo
 #: shoulder it hangs from, which the image shows.
 SIDE_SPREAD = 0.3
 LABEL_TIE = 0.002  # S a fresh fit may lose to keep a track's limb names
+#: A fresh fit below this S is fitted again with the torso found by
+#: :func:`~vidcap.video.fit.torso.fit_torso_lean` (a body bent forward, crouched, in a
+#: lunge; issue 27 item 4), and the better of the two kept: an upright body's fresh fit
+#: scores above it, so the second fit costs time only where the image asks for it.
+LEAN_BELOW = 0.7
+#: ... and so is a fresh fit whose torso leans this far from upright (radians): near the
+#: seed's limits (45 degrees) the seed's search about a pelvis placed for an upright
+#: body stops short of a deeper bend.
+LEAN_FROM = np.deg2rad(35.0)
 _UPPERS = [S[f"{s}_upper_{p}"] for p in ("arm", "leg") for s in "lr"]
 _LEAVES = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "lr"]
 
@@ -74,7 +88,12 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     # a fresh fit from the rest pose (where a warm start was tried: at its root and spread)
     st = st.replace(angles=np.deg2rad(REST_DEG), fore=np.ones(10),
                              drawn=np.zeros(10, dtype=bool))
-    st, crossed = _fit_fresh(eng, st, options, searched)
+    rest = st
+    st, crossed = _fit_fresh(eng, rest, options, searched)
+    if eng.similarity(st) < LEAN_BELOW or abs(st.angles[S["torso"]] - np.pi / 2) >= LEAN_FROM:
+        lean, lean_crossed = _fit_fresh(eng, rest, options, searched, lean=True)
+        if eng.similarity(lean) > eng.similarity(st):
+            st, crossed = lean, lean_crossed
     return st, crossed, False
 
 
@@ -104,10 +123,11 @@ def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool)
 
 
 def _fit_fresh(eng: _MaskEngine, st: FitState, options: FitOptions,
-               spread: bool) -> tuple[FitState, bool]:
+               spread: bool, lean: bool = False) -> tuple[FitState, bool]:
     """The seed's order (torso and head, arms and lower legs by contour, upper legs,
-    foreshortening) and, with ``options.refine``, the refinement beyond it."""
-    st = fit_torso_head(eng, st)
+    foreshortening) and, with ``options.refine``, the refinement beyond it.
+    ``lean``: the torso and head by :func:`fit_torso_lean` instead of the seed's."""
+    st = fit_torso_lean(eng, st) if lean else fit_torso_head(eng, st)
     st = contour_arms(eng, st)
     st, crossed = contour_lower_legs(eng, st)
     if crossed:
@@ -158,7 +178,8 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     """
     eng = _MaskEngine(norm, caps=options.caps, body=options.body)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
-    if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity):
+    if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
+                 or (options.fallback > 0 and eng.similarity(st) < LEAN_BELOW)):
         # the track is slipping: fit this frame from scratch, keep the better fit
         fresh, fresh_crossed, _ = fit_normalised(eng, options=options)
         if eng.similarity(fresh) > eng.similarity(st):

@@ -43,6 +43,11 @@ Beyond the seed:
   the head lines up with the silhouette and the torso is searched again turning
   about the neck (the silhouette's middle is pulled by arms and legs; the head is
   not), so a leaning torso under an upright head is found.
+* Bodies far from upright (issue 27 item 4): a fresh fit with S below 0.7 or a torso
+  35 degrees or more from upright is fitted again with the torso turned about a neck
+  placed under the head over 15-165 degrees (:func:`vidcap.video.fit.torso.fit_torso_lean`,
+  the seed's limits are 45-135), and the better fit kept; a tracked frame below S 0.7
+  is challenged by a fresh fit. The searches about the neck reach 15-165 degrees.
 * Arms: residual slivers along the torso's edges are removed (an opening about an
   arm's width) before the contour curves are built; the curves are rings of
   distance from the shoulder rather than horizontal scan lines, so a raised or

@@ -13,12 +13,18 @@ import numpy as np
 from vidcap.video.fit.candidates import pose_ends, search
 from vidcap.video.fit.contour import row_runs
 from vidcap.video.fit.engine import _MaskEngine, fit_kernels
-from vidcap.video.fit.limits import LIMITS, ONE_DEGREE, J, S, median
+from vidcap.video.fit.limits import ONE_DEGREE, J, S, median
 from vidcap.video.fit.modes import SEARCH_POSE_TORSO_NECK
 from vidcap.video.fit.moves import search_angle, search_root
 from vidcap.video.fit.raster import _carray, direction
 from vidcap.video.fit.search import SearchResult
 from vidcap.video.fit.state import FitState
+
+#: Torso directions the searches about the neck may reach (degrees from the image's +x,
+#: y up): wider than the seed's Table 3.3 limits (45-135) so a body bent forward or
+#: leaning into a crouch or lunge is not clamped at 45 degrees from the vertical
+#: (issue 27 item 4). The seed's own search about the pelvis keeps the seed's limits.
+TORSO_WIDE = (np.deg2rad(15.0), np.deg2rad(165.0))
 
 
 def place_torso(eng: _MaskEngine, st: FitState) -> FitState:
@@ -97,8 +103,60 @@ def fit_torso_head(eng: _MaskEngine, st: FitState, *, warm: bool = False) -> Fit
     return st
 
 
+def fit_torso_lean(eng: _MaskEngine, st: FitState) -> FitState:
+    """The torso and head of a body far from upright (beyond the seed; issue 27 item 4).
+
+    The seed hangs the torso from the pelvis placed by the Table 3.1 ratios, which
+    holds for an upright body only: bent forward, crouched or in a lunge the pelvis is
+    lower and to one side. The head still tops the silhouette, so the neck is put one
+    head length below the silhouette's top, under the middle of the head's rows, and
+    the torso (head attached upright) is turned about it over :data:`TORSO_WIDE`,
+    then the head searched. Writes ``angles``, ``scores``, ``margins`` of torso and
+    head, and ``root``.
+    """
+    head_len = eng.L[S["head"]]
+    band = eng.sil[int(round(eng.top)): int(round(eng.top + head_len)) + 1]
+    kernels = fit_kernels()
+    x = _band_middle_numpy(band) if kernels is None else _band_middle_compiled(kernels, band)
+    if x is None:
+        return st
+    neck = np.array([x, eng.top + head_len])
+    up = np.pi / 2
+    length = eng.L[S["torso"]] * st.fore[S["torso"]]
+    ang = st.angles.copy()
+    ang[S["torso"]] = up
+    ang[S["head"]] = up
+    st = st.replace(angles=ang, root=neck - direction(up) * length).drawing(
+        [S["torso"], S["head"]])
+    lo, hi = TORSO_WIDE
+    # one step per 5 degrees first: over so wide a range the score has more than one peak
+    st, _ = search_torso_about_neck(eng, st, start=up, interval=hi - lo, divisions=30)
+    # a bent head is no longer a head length tall: turn it with the torso, search it,
+    # move the model to the silhouette, and look at torso and head again, narrower
+    st = st.with_entries(angles=(S["head"], st.angles[S["torso"]]))
+    st, _ = _search_head(eng, st, interval=np.deg2rad(90))
+    st, _ = search_root(eng, st, 1, 0.1 * eng.H)
+    st, _ = search_root(eng, st, 0, 0.1 * eng.H)
+    for _ in range(2):
+        # about the pelvis with the head attached (the seed's move), then about the neck
+        st, _ = search_angle(eng, st, S["torso"], with_segments=(S["head"],), lo=lo, hi=hi,
+                             start=st.angles[S["torso"]], interval=np.deg2rad(40))
+        st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]],
+                                        interval=np.deg2rad(40))
+        st, _ = _search_head(eng, st, interval=np.deg2rad(40))
+    return st
+
+
+def _search_head(eng: _MaskEngine, st: FitState, *, interval) -> tuple[FitState, SearchResult]:
+    """Algorithm 1 on the head about its current angle, within :data:`TORSO_WIDE`."""
+    neck_y = eng.joints(st)[J["neck"], 1]
+    return search_angle(eng, st, S["head"], rows=(0, neck_y + eng.R[S["torso"]]),
+                        lo=TORSO_WIDE[0], hi=TORSO_WIDE[1], start=st.angles[S["head"]],
+                        interval=interval)
+
+
 def search_torso_about_neck(eng: _MaskEngine, st: FitState, *, start, interval, rows=None,
-                            alone=False) -> tuple[FitState, SearchResult]:
+                            alone=False, divisions=8) -> tuple[FitState, SearchResult]:
     """Algorithm 1 on the torso angle with the neck held still (beyond the seed).
 
     Writes the torso's ``angles``, ``scores``, ``margins`` and ``root`` (the pelvis
@@ -107,7 +165,7 @@ def search_torso_about_neck(eng: _MaskEngine, st: FitState, *, start, interval, 
     """
     seg = S["torso"]
     st = st.drawing(seg)
-    lo, hi = LIMITS["torso"]
+    lo, hi = TORSO_WIDE
     neck = eng.joints(st)[J["neck"]].copy()
     length = eng.L[seg] * st.fore[seg]
     moving = [seg] if alone else [d for d in range(10) if st.drawn[d]]
@@ -118,11 +176,12 @@ def search_torso_about_neck(eng: _MaskEngine, st: FitState, *, start, interval, 
 
     ends = pose_ends(eng, st, make, moving, (SEARCH_POSE_TORSO_NECK, [seg], [0.0], neck,
                                              length))
-    res = search(eng, st, ends, moving, rows, lo, hi, divisions=8, min_step=ONE_DEGREE,
+    res = search(eng, st, ends, moving, rows, lo, hi, divisions=divisions, min_step=ONE_DEGREE,
                  start=start, interval=interval)
     st = st.with_entries(angles=(seg, res.value), scores=(seg, res.score),
                          margins=(seg, res.margin))
     return st.replace(root=neck - direction(res.value) * length), res
 
 
-__all__ = ["fit_torso_head", "place_torso", "search_torso_about_neck"]
+__all__ = ["TORSO_WIDE", "fit_torso_head", "fit_torso_lean", "place_torso",
+           "search_torso_about_neck"]
