@@ -64,3 +64,22 @@ def test_fit_sequence_checks_its_options_and_masks_before_fitting(monkeypatch):
     with pytest.raises(ValueError, match=r"\(F, H, W\)"):
         tracking.fit_sequence(masks[0])
     assert calls == []
+
+
+def test_a_state_keeps_its_memo_while_its_pose_is_the_same_bits():
+    st = FitState.rest(spread=0.5)
+    st.__dict__["_joints"] = "memo"  # what an engine memoises (_MaskEngine._posed)
+    st.__dict__["_similarity"] = "S"
+    same = st.with_entries(angles=(3, st.angles[3]), scores=(3, 0.7))
+    assert same.__dict__.get("_joints") == "memo" and same.__dict__.get("_similarity") == "S"
+    assert same.scores[3] == 0.7 and st.scores[3] == 0.0
+    moved = st.with_entries(angles=(3, st.angles[3] + 1e-12))
+    assert "_joints" not in moved.__dict__ and "_similarity" not in moved.__dict__
+    drawn = st.drawing(3)  # the same pose, more of it drawn: the joints hold, S does not
+    assert drawn.__dict__.get("_joints") == "memo" and "_similarity" not in drawn.__dict__
+    assert st.replace(spread=0.5).__dict__.get("_joints") == "memo"
+    assert "_joints" not in st.replace(spread=0.25).__dict__
+    # a zero spread is recomputed whatever its sign (0.0 == -0.0, their joints may differ)
+    zero = FitState.rest(spread=0.0)
+    zero.__dict__["_joints"] = "memo"
+    assert "_joints" not in zero.replace(spread=-0.0).__dict__

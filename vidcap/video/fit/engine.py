@@ -91,19 +91,22 @@ class _MaskEngine:
     # Memoised on the state itself (a FitState is never changed; FitState.replace
     # passes a memo on only while the fields it depends on are the same).
     def _posed(self, st: FitState):
-        memo = st.__dict__.get("_joints")
-        if memo is None or memo[0] is not self:
-            j = pose_joints(self, st)
-            memo = st.__dict__["_joints"] = (self, j, j[_PROX], j[_DIST])
+        j = pose_joints(self, st)
+        memo = st.__dict__["_joints"] = (self, j, j[_PROX], j[_DIST])
         return memo
 
     def joints(self, st: FitState) -> np.ndarray:
         """Joints of ``st``, (15, 2), normalised pixels (shared: not to be written to)."""
-        return self._posed(st)[1]
+        memo = st.__dict__.get("_joints")
+        if memo is None or memo[0] is not self:
+            memo = self._posed(st)
+        return memo[1]
 
     def ends(self, st: FitState) -> tuple[np.ndarray, np.ndarray]:
         """Every segment's proximal and distal joint in ``st``, each (10, 2)."""
-        memo = self._posed(st)
+        memo = st.__dict__.get("_joints")
+        if memo is None or memo[0] is not self:
+            memo = self._posed(st)
         return memo[2], memo[3]
 
     def model(self, st: FitState, segments=None) -> np.ndarray:

@@ -59,37 +59,73 @@ class FitState:
         """:func:`dataclasses.replace` without its per-call set-up (every move makes
         a state): the fields in ``changes`` replaced, the rest shared. What an engine
         memoised on this state (its joints, its S) goes along where the fields it
-        depends on are unchanged."""
+        depends on are unchanged (bit for bit: a search that ends where it started
+        costs no new joints)."""
         new = object.__new__(FitState)
         memo = new.__dict__
-        memo.update(self.__dict__)
-        if not _POSE.isdisjoint(changes):
-            memo.pop("_joints", None)
-            memo.pop("_similarity", None)
-        elif "drawn" in changes:
-            memo.pop("_similarity", None)
+        old = self.__dict__
+        memo.update(old)
         memo.update(changes)
+        if "_joints" in old or "_similarity" in old:
+            _forget(memo, old, changes)
         return new
 
     def with_entries(self, **entries) -> FitState:
         """A copy with some entries of array fields set: ``field=(index, values)``
         (``index`` as numpy indexing takes it), e.g. ``st.with_entries(angles=(3, a),
         drawn=([2, 3], True))``."""
-        changed = {}
+        new = object.__new__(FitState)
+        memo = new.__dict__
+        old = self.__dict__
+        memo.update(old)
         for name, (index, values) in entries.items():
-            a = getattr(self, name).copy()
+            a = old[name].copy()
             a[index] = values
-            changed[name] = a
-        return self.replace(**changed)
+            memo[name] = a
+        if "_joints" in old or "_similarity" in old:
+            _forget(memo, old, entries)
+        return new
 
     def drawing(self, segments) -> FitState:
         """This state with ``segments`` drawn (``slice(None)``: all of them)."""
-        if self.drawn[segments].all():
+        drawn = self.drawn
+        if segments.__class__ is int:  # the common cases without numpy's reductions
+            if drawn[segments]:
+                return self
+        elif segments.__class__ is slice and segments == _ALL:
+            if drawn.tobytes() == _ALL_DRAWN:
+                return self
+        elif drawn[segments].all():
             return self
         return self.with_entries(drawn=(segments, True))
 
 
 _POSE = frozenset({"root", "angles", "fore", "spread"})  # what the joints depend on
+_ALL = slice(None)
+_ALL_DRAWN = np.ones(10, dtype=bool).tobytes()
+
+
+def _same(a, b) -> bool:
+    """``a`` and ``b`` hold the same bits (arrays: also the same dtype and shape)."""
+    if a is b:
+        return True
+    if isinstance(a, np.ndarray):
+        return (isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape
+                and a.tobytes() == b.tobytes())
+    # a float (the spread): equal and not a zero (0.0 and -0.0 compare equal)
+    return type(a) is type(b) and a == b and a != 0
+
+
+def _forget(memo: dict, old: dict, changed) -> None:
+    """Drop from a new state's ``memo`` what an engine memoised on the ``old`` state
+    and the ``changed`` fields invalidate (joints: the pose; S: the pose or drawn)."""
+    for name in changed:
+        if name in _POSE and not _same(memo[name], old[name]):
+            memo.pop("_joints", None)
+            memo.pop("_similarity", None)
+            return
+    if "drawn" in changed and not _same(memo["drawn"], old["drawn"]):
+        memo.pop("_similarity", None)
 
 
 def hang(st: FitState) -> float:
