@@ -87,15 +87,17 @@ def search(eng: _MaskEngine, st: FitState, ends, moving, rows, lo, hi, *, divisi
     kernels = fit_kernels()
     moving = np.asarray(moving, dtype=np.int64)
     r0, r1 = eng.rows(rows)
-    interval_args = dict(divisions=divisions, min_step=min_step, start=start,
-                         interval=interval, periodic=periodic, prefer=prefer)
     if kernels is None or divisions < 3 or action is None or r1 <= r0:
-        return interval_search(scorer(eng, st, ends, moving, rows), lo, hi, **interval_args)
+        return interval_search(scorer(eng, st, ends, moving, rows), lo, hi, divisions=divisions,
+                               min_step=min_step, start=start, interval=interval,
+                               periodic=periodic, prefer=prefer)
     return _search_compiled(kernels, eng, st, action, moving, (r0, r1), lo, hi,
-                            **interval_args)
+                            divisions=divisions, min_step=min_step, start=start,
+                            interval=interval, periodic=periodic, prefer=prefer)
 
 
-def _search_compiled(kernels, eng, st, action, moving, rows, lo, hi, **interval_args):
+def _search_compiled(kernels, eng, st, action, moving, rows, lo, hi, *, divisions, min_step,
+                     start, interval, periodic, prefer):
     """:func:`search` of a pose action as one compiled call (:func:`_kernels.pose_fit`)."""
     r0, r1 = rows
     mode, idx, coef, neck, length = action[:5]
@@ -117,7 +119,8 @@ def _search_compiled(kernels, eng, st, action, moving, rows, lo, hi, **interval_
                          0.0 if np.isnan(pref) else pref, not np.isnan(pref), out)
         return searched(out)
 
-    return interval_search(None, lo, hi, run=run, **interval_args)
+    return interval_search(None, lo, hi, divisions=divisions, min_step=min_step, start=start,
+                           interval=interval, periodic=periodic, prefer=prefer, run=run)
 
 
 def scorer(eng: _MaskEngine, st: FitState, ends, moving, rows=None):
@@ -190,15 +193,16 @@ def pose_ends(eng: _MaskEngine, st: FitState, make, moving, action=None):
     return ends
 
 
-def limb_search_compiled(eng: _MaskEngine, st: FitState, seg, form, scale, rows, lo, hi,
-                         **interval_args) -> SearchResult | None:
+def limb_search_compiled(eng: _MaskEngine, st: FitState, seg, form, scale, rows, lo, hi, *,
+                         divisions, min_step, start=None, interval=None, periodic=None,
+                         prefer=None) -> SearchResult | None:
     """One limb segment's angle (``form='angle'``, ``scale`` its drawn length) or
     foreshortening (``'ratio'``, ``scale`` its full (2,) vector) searched as one
     compiled call that also sets the search up (:func:`_kernels.limb_fit`); None
     where that call does not apply (then :func:`search` of :func:`limb_ends` does
     it, with the same floats)."""
     kernels = fit_kernels()
-    if kernels is None or interval_args["divisions"] < 3:
+    if kernels is None or divisions < 3:
         return None
     r0, r1 = eng.rows(rows)
     if r1 <= r0:
@@ -219,7 +223,8 @@ def limb_search_compiled(eng: _MaskEngine, st: FitState, seg, form, scale, rows,
                          0.0 if np.isnan(pref) else pref, not np.isnan(pref), out)
         return searched(out)
 
-    return interval_search(None, lo, hi, run=run, **interval_args)
+    return interval_search(None, lo, hi, divisions=divisions, min_step=min_step, start=start,
+                           interval=interval, periodic=periodic, prefer=prefer, run=run)
 
 
 def limb_ends(eng: _MaskEngine, st: FitState, seg, moving, form, scale):

@@ -91,7 +91,9 @@ class _MaskEngine:
     # Memoised on the state itself (a FitState is never changed; FitState.replace
     # passes a memo on only while the fields it depends on are the same).
     def _posed(self, st: FitState):
-        j = pose_joints(self, st)
+        kernels = fit_kernels()
+        j = (_pose_joints_numpy(self, st) if kernels is None
+             else _pose_joints_compiled(kernels, self, st))
         memo = st.__dict__["_joints"] = (self, j, j[_PROX], j[_DIST])
         return memo
 

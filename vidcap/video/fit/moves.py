@@ -62,13 +62,14 @@ def search_angle(eng: _MaskEngine, st: FitState, seg: int, *, with_segments=(), 
         start = into_range(start, lo, hi)
     if prefer is not None and periodic is None:
         prefer = into_range(prefer, lo, hi)
-    interval_args = dict(divisions=divisions, min_step=min_step, start=start,
-                         interval=interval, periodic=periodic, prefer=prefer)
+    # the interval search's arguments spelled out, not passed on as **kwargs: a call
+    # with ** is not inlined by the interpreter (every move pays it)
     limb = seg >= 2 and not with_segments
     if limb:
         st = st.drawing(seg)
         res = limb_search_compiled(eng, st, seg, "angle", eng.L[seg] * st.fore[seg], rows, lo,
-                                   hi, **interval_args)
+                                   hi, divisions=divisions, min_step=min_step, start=start,
+                                   interval=interval, periodic=periodic, prefer=prefer)
         if res is not None:
             return st.with_entries(angles=(seg, np.mod(res.value, TWO_PI)),
                                    scores=(seg, res.score), margins=(seg, res.margin)), res
@@ -85,7 +86,8 @@ def search_angle(eng: _MaskEngine, st: FitState, seg: int, *, with_segments=(), 
 
         ends = pose_ends(eng, st, make, moving, (SEARCH_POSE_ANGLES, together, offsets,
                                                  NOWHERE, 0.0))
-    res = search(eng, st, ends, moving, rows, lo, hi, **interval_args)
+    res = search(eng, st, ends, moving, rows, lo, hi, divisions=divisions, min_step=min_step,
+                 start=start, interval=interval, periodic=periodic, prefer=prefer)
     return st.with_entries(angles=(together, np.mod(res.value + offsets, TWO_PI)),
                            scores=(together, res.score), margins=(together, res.margin)), res
 
@@ -163,10 +165,11 @@ def search_group(eng: _MaskEngine, st: FitState, segs, *, kind="angle", start=No
         value, best, runner = _group_compiled(kernels, eng, st, *args)
     else:  # batch by batch
         value, best, runner = _group_numpy(eng, st, *args)
-    field = "angles" if kind == "angle" else "fore"
-    value = np.mod(value, TWO_PI) if kind == "angle" else value
-    return st.with_entries(**{field: (segs, value)}, scores=(segs, best),
-                           margins=(segs, np.where(np.isfinite(runner), best - runner, best)))
+    margins = (segs, np.where(np.isfinite(runner), best - runner, best))
+    if kind == "angle":
+        return st.with_entries(angles=(segs, np.mod(value, TWO_PI)), scores=(segs, best),
+                               margins=margins)
+    return st.with_entries(fore=(segs, value), scores=(segs, best), margins=margins)
 
 
 def _group_compiled(kernels, eng, st, consts, form, scale, lo, hi, start, interval, periodic,
