@@ -78,12 +78,19 @@ class FitState:
         memo = new.__dict__
         old = self.__dict__
         memo.update(old)
+        check = "_joints" in old or "_similarity" in old  # a memo to keep or drop
         for name, (index, values) in entries.items():
-            a = old[name].copy()
+            was = old[name]
+            a = was.copy()
             a[index] = values
             memo[name] = a
-        if "_joints" in old or "_similarity" in old:
-            _forget(memo, old, entries)
+            # _forget inlined (the hottest call of the fit): a copy has the dtype and
+            # shape it was copied from, so the bytes tell
+            if check and name in _MEMOISED_ON and a.tobytes() != was.tobytes():
+                memo.pop("_similarity", None)
+                if name != "drawn":
+                    memo.pop("_joints", None)
+                    check = False
         return new
 
     def drawing(self, segments) -> FitState:
@@ -101,6 +108,7 @@ class FitState:
 
 
 _POSE = frozenset({"root", "angles", "fore", "spread"})  # what the joints depend on
+_MEMOISED_ON = _POSE | {"drawn"}  # what the joints and S depend on
 _ALL = slice(None)
 _ALL_DRAWN = np.ones(10, dtype=bool).tobytes()
 
