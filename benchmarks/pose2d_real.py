@@ -16,7 +16,14 @@ git); when absent it is made with the reference tool
 ``~/.cache/vidcap-mediapipe-reference``), and the clip is skipped, saying why, when neither
 exists. No clip here chose a threshold of the fit (validation).
 
-Usage: ``PYTHONPATH=. python benchmarks/pose2d_real.py``
+Then every clip of ``real_clips.py`` (``$VIDCAP_DATA/video``: onebyone_room's two
+one-person stretches, the three pose2sim_balance cameras) and ido_walk again, this time
+through vidcap's own pipeline (silhouettes from the video, the tracked fit, default
+options), with ``--cues outline`` (the default) and ``--cues all``: one row per clip, the
+median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
+joints, and per joint for the default cues. All are validation clips.
+
+Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]``
 """
 
 from __future__ import annotations
@@ -54,6 +61,9 @@ def reference(name: str, video: Path) -> Path | None:
     out = Path(data) / "fit2d" / f"{name}.mediapipe.npz"
     if out.exists():
         return out
+    lifted = Path(data) / "lift" / f"{name}_mediapipe.npz"  # the same tool's output
+    if lifted.exists():
+        return lifted
     if not TOOL_PY.exists():
         print(f"{name}: skipped (no cached reference and no MediaPipe tool at {TOOL_PY})")
         return None
@@ -69,12 +79,18 @@ def score(ref: Path, masks: np.ndarray) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         pred = Path(tmp) / "pose2d.npz"
         pose.save(pred)
-        run = subprocess.run([sys.executable, str(TOOL / "compare.py"), str(ref), str(pred),
-                              "--json"], check=True, capture_output=True, text=True)
+        return compare(ref, pred)
+
+
+def compare(ref: Path, pred: Path) -> dict:
+    """The mediapipe-reference tool's ``compare.py --json`` joint scores."""
+    run = subprocess.run([sys.executable, str(TOOL / "compare.py"), str(ref), str(pred),
+                          "--json"], check=True, capture_output=True, text=True)
     return json.loads(run.stdout)["joints"]
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
     print("2D pose on real clips: 12 limb joints against MediaPipe Pose (image-side labels "
           "matched either way per frame)")
     print(f"{'clip':10} {'joint':11} {'median':>7} {'>10 %':>6}")
@@ -96,6 +112,10 @@ def main() -> int:
         print(f"{name:10} {'12 joints':11} {np.median(medians):7.1%}   (median of the joints' "
               f"medians; {res['frames_with_reference']} frames, height "
               f"{res['median_height_px']:.0f} px)")
+    from pose2d_real_pipeline import pipeline_tables
+
+    pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS,
+                    cues=("outline",) if "--no-all" in argv else ("outline", "all"))
     return 0
 
 

@@ -1,0 +1,72 @@
+"""``pose2d_real.py``'s second part: every real clip through vidcap's own pipeline
+(silhouettes from the video, the tracked 2D fit) against MediaPipe's landmarks (issue 27).
+
+See ``real_clips.py`` for the clips, the frame ranges and the pipeline options. Per clip and
+``cues``: frames scored (MediaPipe found a person in the range), the share of those where
+vidcap gave joints, the median of the 12 limb joints' median distances (per cent of the
+height: the larger side of the box around MediaPipe's 33 landmarks, about 0.9 of
+stature), the share of (frame, joint) pairs more than 10 % apart, and the worst joint by
+that share. Then per joint (default cues): median / share > 10 %.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from real_clips import RealClip, pipeline_result, real_clips, stretch
+
+from vidcap.body import JOINT_NAMES
+
+
+def _score(clip: RealClip, res, compare) -> tuple[dict, float]:
+    """compare.py's joint scores of ``res``'s image joints over ``clip``'s range, and the
+    share of the reference's frames where vidcap gave joints."""
+    with np.load(clip.reference) as d:
+        landmarks = stretch(d["landmarks"], clip)
+        names = d["names_vidcap_map"]
+    joints = stretch(res.image_joints2d, clip)
+    seen = np.isfinite(landmarks).all(axis=(1, 2))
+    covered = float(np.isfinite(joints[seen]).all(axis=(1, 2)).mean()) if seen.any() else 0.0
+    with tempfile.TemporaryDirectory() as tmp:
+        ref, pred = Path(tmp) / "ref.npz", Path(tmp) / "pred.npz"
+        np.savez(ref, landmarks=landmarks, names_vidcap_map=names)
+        np.savez(pred, joints2d=joints, joint_names=np.array(JOINT_NAMES))
+        return compare(ref, pred), covered
+
+
+def pipeline_tables(ido, reference, compare, limb_joints, *, cues=("outline", "all")):
+    """Print the tables. ``ido``: (name, video) of ido_walk; ``reference(name, video)``:
+    its MediaPipe npz or None; ``compare(ref, pred)``: compare.py's joint scores."""
+    print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit, default "
+          "options; validation: nothing was tuned on these clips). MediaPipe is a reference, "
+          "not the truth (~2.4 % of height off on lab footage).")
+    clips = real_clips()
+    name, video = ido
+    ref = reference(name, video) if video.exists() else None
+    if ref is not None:
+        clips.insert(0, RealClip(name, video, ref, 0, None))
+    if not clips:
+        print("  no real clip found")
+        return
+    print(f"{'clip':26} {'cues':8} {'frames':>6} {'vidcap':>6} {'median':>7} {'>10 %':>6}  "
+          "worst joint (>10 %)")
+    per_joint = []
+    for clip in clips:
+        for c in cues:
+            res, covered = _score(clip, pipeline_result(clip.video, c), compare)
+            shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]
+            medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
+            worst = int(np.nanargmax(shares))
+            print(f"{clip.name:26} {c:8} {res['frames_with_reference']:6d} {covered:6.1%} "
+                  f"{np.median(medians):7.1%} {np.nanmean(shares):6.0%}  "
+                  f"{limb_joints[worst]} ({shares[worst]:.0%})")
+            if c == cues[0]:
+                per_joint.append((clip.name, medians, shares))
+    print(f"\nPer joint, cues {cues[0]}: median % of height / share of frames > 10 % apart")
+    print(f"{'clip':26} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
+                                      for j in limb_joints))
+    for name, medians, shares in per_joint:
+        print(f"{name:26} " + " ".join(f"{m * 100:5.1f}/{s * 100:3.0f}"
+                                       for m, s in zip(medians, shares, strict=True)))

@@ -1,0 +1,83 @@
+"""The real clips with a MediaPipe reference, shared by ``pose2d_real.py`` and
+``lift_accuracy.py --solve`` (issues 27 and 33).
+
+Every ``$VIDCAP_DATA/video/<clip>.mp4`` (or ``.avi``) with ``<clip>.mediapipe.npz`` beside
+it (the mediapipe-reference tool's ``reference.py --masks`` output; listed in
+``benchmarks/DATA.md`` and ``$VIDCAP_DATA/video/CLIPS.md``). None has true masks or joints:
+MediaPipe is a reference, not the truth (about 2.4 % of height off on lab footage). No
+threshold or weight of vidcap was chosen on any of them: all are validation clips.
+
+Each clip goes through vidcap's own pipeline, as ``vidcap convert`` runs it (plate and
+silhouettes from the video, the tracked 2D fit; default options, ``cues`` as asked), on
+the WHOLE video: the plate of ``onebyone_room`` then sees the empty room between visits
+(a user would hand vidcap the whole file too). Scores are taken over the frame ranges in
+:data:`STRETCHES` (one person present; the whole clip for the others), and the 3D lift is
+run on each range's 2D joints alone, as if the video had been cut there.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The pipeline's stage cache (plate, silhouettes, 2D fit; not in git): the two benchmarks
+#: and the two ``cues`` share the plate and the silhouettes.
+CACHE = ROOT / ".vidcap-cache"
+#: Scored frame ranges [start, stop) per clip, default the whole clip. onebyone_room: the
+#: two visits CLIPS.md names as good one-person stretches (233-445 and 510-694 inclusive:
+#: one man walks in, stands, leaves; the next walks in, stands, leaves).
+STRETCHES = {"onebyone_room": ((233, 446), (510, 695))}
+
+
+@dataclass
+class RealClip:
+    """One scored stretch of a real clip."""
+
+    name: str  # clip name, with the frame range when only part is scored
+    video: Path
+    reference: Path  # the mediapipe-reference npz
+    start: int
+    stop: int | None  # None: to the end
+
+
+def real_clips(log=print) -> list[RealClip]:
+    """The stretches of every real clip in ``$VIDCAP_DATA/video`` with a MediaPipe
+    reference, sorted by clip name; ``log`` is told about videos skipped and why."""
+    data = os.environ.get("VIDCAP_DATA")
+    if not data:
+        log("new real clips: skipped (VIDCAP_DATA is not set; see benchmarks/DATA.md)")
+        return []
+    folder = Path(data) / "video"
+    if not folder.is_dir():
+        log(f"new real clips: skipped (no folder {folder}; benchmarks/get_data.sh makes it)")
+        return []
+    out = []
+    for video in sorted(p for p in folder.iterdir() if p.suffix in (".mp4", ".avi")):
+        ref = video.with_suffix(".mediapipe.npz")
+        if not ref.exists():
+            log(f"{video.stem}: skipped (no MediaPipe reference {ref.name}: run "
+                "../shared/tools/mediapipe-reference/reference.py VIDEO OUT.npz --masks)")
+            continue
+        for start, stop in STRETCHES.get(video.stem, ((0, None),)):
+            name = video.stem if stop is None else f"{video.stem} {start}-{stop - 1}"
+            out.append(RealClip(name, video, ref, start, stop))
+    return out
+
+
+def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75):
+    """vidcap's :func:`vidcap.video.pipeline.run` on the whole ``video`` (default options but
+    ``cues``; no smoothing, the per-segment lift: the 3D is re-run per stretch), cached by
+    stage in :data:`CACHE`."""
+    from vidcap.video.pipeline import run
+
+    return run(video, height=height, smooth_sigma=0.0, progress=False, cache_dir=CACHE,
+               lift="segment", cues=cues)
+
+
+def stretch(arr, clip: RealClip):
+    """``arr`` (F, ...) cut to the clip's frame range."""
+    return None if arr is None else np.asarray(arr)[clip.start:clip.stop]
