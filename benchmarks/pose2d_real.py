@@ -21,7 +21,8 @@ one-person stretches, the three pose2sim_balance cameras) and ido_walk again, th
 through vidcap's own pipeline (silhouettes from the video, the tracked fit, default
 options), with ``--cues outline`` (the default) and ``--cues all``: one row per clip, the
 median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
-joints, and per joint for the default cues. All are validation clips.
+joints, and per joint for the default cues; and the fit to MediaPipe's masks instead of
+vidcap's silhouettes (``mp-masks``). All are validation clips.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]``
 """
@@ -115,7 +116,8 @@ def main(argv=None) -> int:
     from pose2d_real_pipeline import pipeline_tables
 
     pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS,
-                    cues=("outline",) if "--no-all" in argv else ("outline", "all"))
+                    cues=("outline", "mp-masks") if "--no-all" in argv
+                    else ("outline", "all", "mp-masks"))
     return 0
 
 

@@ -6,7 +6,9 @@ See ``real_clips.py`` for the clips, the frame ranges and the pipeline options. 
 vidcap gave joints, the median of the 12 limb joints' median distances (per cent of the
 height: the larger side of the box around MediaPipe's 33 landmarks, about 0.9 of
 stature), the share of (frame, joint) pairs more than 10 % apart, and the worst joint by
-that share. Then per joint (default cues): median / share > 10 %.
+that share; ``mp-masks``: the same fit to MediaPipe's masks instead of vidcap's own
+silhouettes (which part of the error is the silhouettes'). Then per joint (default cues):
+median / share > 10 %.
 """
 
 from __future__ import annotations
@@ -20,13 +22,15 @@ from real_clips import RealClip, pipeline_result, real_clips, stretch
 from vidcap.body import JOINT_NAMES
 
 
-def _score(clip: RealClip, res, compare) -> tuple[dict, float]:
-    """compare.py's joint scores of ``res``'s image joints over ``clip``'s range, and the
-    share of the reference's frames where vidcap gave joints."""
+def _score(clip: RealClip, joints, compare) -> tuple[dict, float]:
+    """compare.py's joint scores of ``joints`` (F, 15, 2) px, the whole video's or the
+    range's, over ``clip``'s range, and the share of the reference's frames where vidcap
+    gave joints."""
     with np.load(clip.reference) as d:
         landmarks = stretch(d["landmarks"], clip)
         names = d["names_vidcap_map"]
-    joints = stretch(res.image_joints2d, clip)
+    if len(joints) != len(landmarks):
+        joints = stretch(joints, clip)
     seen = np.isfinite(landmarks).all(axis=(1, 2))
     covered = float(np.isfinite(joints[seen]).all(axis=(1, 2)).mean()) if seen.any() else 0.0
     with tempfile.TemporaryDirectory() as tmp:
@@ -36,9 +40,27 @@ def _score(clip: RealClip, res, compare) -> tuple[dict, float]:
         return compare(ref, pred), covered
 
 
-def pipeline_tables(ido, reference, compare, limb_joints, *, cues=("outline", "all")):
+def _has_masks(path: Path) -> bool:
+    with np.load(path) as d:
+        return "masks" in d.files
+
+
+def _fit_reference_masks(clip: RealClip) -> np.ndarray:
+    """The tracked fit (outline) to MediaPipe's masks over ``clip``'s range: what the fit
+    does with silhouettes better than vidcap's own (cues column ``mp-masks``)."""
+    from vidcap.video.fit.tracking import fit_sequence
+
+    with np.load(clip.reference) as d:
+        masks = stretch(d["masks"], clip).astype(bool)
+    return fit_sequence(masks, cues="outline").joints2d
+
+
+def pipeline_tables(ido, reference, compare, limb_joints, *,
+                    cues=("outline", "all", "mp-masks")):
     """Print the tables. ``ido``: (name, video) of ido_walk; ``reference(name, video)``:
-    its MediaPipe npz or None; ``compare(ref, pred)``: compare.py's joint scores."""
+    its MediaPipe npz or None; ``compare(ref, pred)``: compare.py's joint scores.
+    ``cues``: ``vidcap convert --cues`` values, and ``mp-masks``: the fit (outline) to
+    MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks)."""
     print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit, default "
           "options; validation: nothing was tuned on these clips). MediaPipe is a reference, "
           "not the truth (~2.4 % of height off on lab footage).")
@@ -55,7 +77,11 @@ def pipeline_tables(ido, reference, compare, limb_joints, *, cues=("outline", "a
     per_joint = []
     for clip in clips:
         for c in cues:
-            res, covered = _score(clip, pipeline_result(clip.video, c), compare)
+            if c == "mp-masks" and not _has_masks(clip.reference):
+                continue
+            joints = (_fit_reference_masks(clip) if c == "mp-masks"
+                      else pipeline_result(clip.video, c).image_joints2d)
+            res, covered = _score(clip, joints, compare)
             shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]
             medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
             worst = int(np.nanargmax(shares))
