@@ -540,37 +540,50 @@ ONEBYONE_VISITS = ((66, 195), (233, 446), (510, 695), (749, 866), (936, 1196), (
 
 
 def _real_clips():
-    """(video, MediaPipe reference npz, frames mask or None) of the real clips present:
-    ido_walk (reference under $VIDCAP_DATA/lift/) and those of $VIDCAP_DATA/video/CLIPS.md."""
+    """(label, video, MediaPipe reference npz, frames mask or None) of the real clips:
+    ido_walk (reference under $VIDCAP_DATA/lift/) and those of $VIDCAP_DATA/video/CLIPS.md;
+    onebyone_room on its six visits together, then on each one-person stretch of
+    ``real_clips.STRETCHES`` (the ones pose2d_real.py scores) alone."""
     import os
 
+    from real_clips import STRETCHES
+
     data = Path(os.environ.get("VIDCAP_DATA", "/nonexistent"))
-    out = [(DATA.parent / "video" / "ido_walk.avi", data / "lift" / "ido_walk_mediapipe.npz",
-            None)]
+    out = [(None, DATA.parent / "video" / "ido_walk.avi",
+            data / "lift" / "ido_walk_mediapipe.npz", None)]
     for video in sorted((data / "video").glob("*.mp4")):
         frames = None
         if video.stem == "onebyone_room":
             frames = np.zeros(1394, bool)
             for a, b in ONEBYONE_VISITS:
                 frames[a:b] = True
-        out.append((video, video.with_suffix(".mediapipe.npz"), frames))
+            out.append((f"{video.name} (6 visits)", video, video.with_suffix(".mediapipe.npz"),
+                        frames))
+            for a, b in STRETCHES.get(video.stem, ()):
+                frames = np.zeros(1394, bool)
+                frames[a:b] = True
+                out.append((f"{video.name} {a}-{b - 1}", video,
+                            video.with_suffix(".mediapipe.npz"), frames))
+            continue
+        out.append((None, video, video.with_suffix(".mediapipe.npz"), frames))
     return out
 
 
 def _real_table(st, body):
     """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz),
     skipped with the reason when absent."""
-    print("\nReal footage, PA-MPJPE against MediaPipe Pose's world landmarks (validation):")
+    print("\nReal footage, PA-MPJPE against MediaPipe Pose's world landmarks (validation; "
+          "MediaPipe is a reference, not the truth). 'standing pose': one fixed pose, arms "
+          "down, for every frame (no video read):")
     print("clip | frames | lift | PA-MPJPE mm")
     print("--- | --- | --- | ---")
-    for video, ref, frames in _real_clips():
+    for label, video, ref, frames in _real_clips():
         if not (video.exists() and ref.exists()):
             print(f"  skipped: needs {video} and {ref} (run ../shared/tools/mediapipe-reference/"
                   "reference.py VIDEO OUT.npz with VIDCAP_DATA set)")
             continue
-        for r in st.real_rows(video, ref, body, frames):
+        for r in st.real_rows(video, ref, body, frames, label):
             print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f}")
-
 
 if __name__ == "__main__":
     main()

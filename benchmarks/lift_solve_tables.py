@@ -185,15 +185,19 @@ def mediapipe_world(path, joint_names) -> np.ndarray:
     return out
 
 
-def real_rows(video, reference, body, frames=None):
+def real_rows(video, reference, body, frames=None, label=None):
     """PA-MPJPE (mm) of both lifts on a real clip against MediaPipe's world landmarks, on
     the frames where MediaPipe has every limb joint (and within ``frames``, (F,) bool,
-    when given: the stretches a person is in the picture)."""
+    when given: the stretches a person is in the picture), and of a fixed standing pose
+    (:func:`standing_baseline_mm`) on the same frames. The pipeline runs on the whole
+    clip (``real_clips.pipeline_result``: default options, stage cache), both lifts too.
+    Rows: (label, default the video's name; frames; lift; mm)."""
+    from real_clips import pipeline_result
+
     from vidcap.body import JOINT_NAMES
     from vidcap.video.lifting import lift_pose
-    from vidcap.video.pipeline import run
 
-    res = run(video, height=body.height, smooth_sigma=0.0, progress=False, lift="segment")
+    res = pipeline_result(Path(video), height=body.height)
     ref = mediapipe_world(reference, JOINT_NAMES)
     size = (res.masks.shape[2], res.masks.shape[1])
     n = min(len(ref), len(res.image_joints2d))
@@ -201,11 +205,29 @@ def real_rows(video, reference, body, frames=None):
     ok &= np.isfinite(res.image_joints2d[:n]).all(axis=(1, 2))
     if frames is not None:
         ok &= np.asarray(frames, bool)[:n]
+    label = label or Path(video).name
     rows = []
     for method in ("segment", "solve"):
         lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
                        spread=res.spread, track=res.track, frame_size=size,
                        model_height=res.model_height, method=method)
-        rows.append((Path(video).name, int(ok.sum()), method,
+        rows.append((label, int(ok.sum()), method,
                      pa_mpjpe_mm(lr.joints3d[:n][ok], ref[:n][ok])))
+    rows.append((label, int(ok.sum()), "standing pose", standing_baseline_mm(ref[:n][ok], body)))
     return rows
+
+
+def standing_baseline_mm(ref, body) -> float:
+    """PA-MPJPE (mm) of one fixed pose for every frame of ``ref`` (F, 15, 3): the body
+    model standing with its arms hanging down (no video read). A lift that does not beat
+    it has not yet read the pose from the image."""
+    from vidcap.body import JOINT_INDEX as J
+
+    pose = body.rest_positions().copy()
+    for side in "lr":
+        shoulder = pose[J[f"{side}_shoulder"]]
+        upper = np.linalg.norm(pose[J[f"{side}_elbow"]] - shoulder)
+        fore = np.linalg.norm(pose[J[f"{side}_wrist"]] - pose[J[f"{side}_elbow"]])
+        pose[J[f"{side}_elbow"]] = shoulder - [0.0, upper, 0.0]
+        pose[J[f"{side}_wrist"]] = shoulder - [0.0, upper + fore, 0.0]
+    return pa_mpjpe_mm(np.broadcast_to(pose, ref.shape), ref)
