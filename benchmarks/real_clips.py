@@ -25,7 +25,9 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The pipeline's stage cache (plate, silhouettes, 2D fit; not in git): the two benchmarks
-#: and the two ``cues`` share the plate and the silhouettes.
+#: and the two ``cues`` share the plate and the silhouettes. Its keys name the video and
+#: the options, not the code: delete it (``rm -r .vidcap-cache``) after changing the
+#: silhouettes or the fit, or the benchmarks score the old code's output.
 CACHE = ROOT / ".vidcap-cache"
 #: Scored frame ranges [start, stop) per clip, default the whole clip. onebyone_room: the
 #: two visits CLIPS.md names as good one-person stretches (233-445 and 510-694 inclusive:
