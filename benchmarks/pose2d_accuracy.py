@@ -220,6 +220,23 @@ HELD_OUT = (
 )
 
 
+def held_out_motions(frames: int):
+    """The held-out clips' motions: ``(name, motion of ``frames`` frames, yaws)`` per
+    :data:`HELD_OUT` row, the two real motions cut at their rows' first frame."""
+    from vidcap.synth import make_motion
+
+    full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
+            "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
+                                 fps=30.0)}
+    for name, source, first, yaws in HELD_OUT:
+        if source in full:
+            n = len(full[source].root_positions)
+            start = first if first >= 0 else n + first
+            yield name, full[source].frames(start, min(start + frames, n)), yaws
+        else:
+            yield name, make_motion(source, n_frames=frames), yaws
+
+
 def view_of(yaw: float) -> str:
     """'side', 'three-quarter' or 'front' for a camera yaw in degrees (0: facing it)."""
     f = abs(((float(yaw) + 180.0) % 360.0) - 180.0)
@@ -232,12 +249,9 @@ def held_out(frames: int = 60, cues: str = "all") -> int:
     frame's cues (``cues``) and with the outline only (same run), and the means per
     view, so a change to the search is judged on clips it was not tuned on rather than
     on the four above alone."""
-    from vidcap.synth import make_motion, render_clip
+    from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
 
-    full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
-            "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
-                                 fps=30.0)}
     variants = ((f"cues {cues}", {"cues": cues}), ("cues outline", {"cues": "outline"}))
     print(f"Tracked 2D fit on held-out clips ({frames} frames, 640x480, 30 fps): "
           "PCK@0.05 of all joints; label flips without and with the solve over time "
@@ -245,13 +259,7 @@ def held_out(frames: int = 60, cues: str = "all") -> int:
     print(f"{'clip':16} {'yaw':>4} " + " ".join(f"{v:>16}" for v, _ in variants)
           + f" {'flips':>5} {'relabelled':>10}")
     table, flips, views, medians = [], [], [], []
-    for name, source, first, yaws in HELD_OUT:
-        if source in full:
-            n = len(full[source].root_positions)
-            start = first if first >= 0 else n + first
-            motion = full[source].frames(start, min(start + frames, n))
-        else:
-            motion = make_motion(source, n_frames=frames)
+    for name, motion, yaws in held_out_motions(frames):
         for yaw in yaws:
             video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                        rng=np.random.default_rng(0))
@@ -300,24 +308,15 @@ def torso_table(frames: int = 60) -> int:
     without the cue and relabelled fits), with the mean and largest torso-angle error
     per clip (fitted pelvis -> neck against the true one) and the true torso's largest
     lean from upright, so a clip's misses can be put down to the torso or not."""
-    from vidcap.synth import make_motion, render_clip
+    from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
 
-    full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
-            "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
-                                 fps=30.0)}
     print(f"Tracked 2D fit, outline only, held-out clips ({frames} frames): PCK@0.05, "
           "median error / height, torso angle error (deg, mean and max), true lean (max)")
     print(f"{'clip':16} {'yaw':>4} {'PCK.05':>7} {'median':>7} {'torso':>6} {'max':>6} "
           f"{'lean':>5}")
     rows = []
-    for name, source, first, yaws in HELD_OUT:
-        if source in full:
-            n = len(full[source].root_positions)
-            start = first if first >= 0 else n + first
-            motion = full[source].frames(start, min(start + frames, n))
-        else:
-            motion = make_motion(source, n_frames=frames)
+    for name, motion, yaws in held_out_motions(frames):
         for yaw in yaws:
             _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                    rng=np.random.default_rng(0))

@@ -54,6 +54,20 @@ def _jacobi(a, v, n):
                     v[k, q] = s * vkp + c * vkq
 
 
+@njit(cache=True, inline="always")
+def _quat_to_rot(rot, f, w, x, y, z):
+    """Write the rotation matrix of the unit quaternion ``(w, x, y, z)`` into ``rot[f]``."""
+    rot[f, 0, 0] = w * w + x * x - y * y - z * z
+    rot[f, 0, 1] = 2.0 * (x * y - w * z)
+    rot[f, 0, 2] = 2.0 * (x * z + w * y)
+    rot[f, 1, 0] = 2.0 * (x * y + w * z)
+    rot[f, 1, 1] = w * w - x * x + y * y - z * z
+    rot[f, 1, 2] = 2.0 * (y * z - w * x)
+    rot[f, 2, 0] = 2.0 * (x * z - w * y)
+    rot[f, 2, 1] = 2.0 * (y * z + w * x)
+    rot[f, 2, 2] = w * w - x * x - y * y + z * z
+
+
 @njit(cache=True)
 def rotations_from_cross(h):
     """Rotations (F, 3, 3) and singular values (F, 3), descending, of cross-covariances
@@ -91,15 +105,7 @@ def rotations_from_cross(h):
         w, x, y, z = v[0, best], v[1, best], v[2, best], v[3, best]
         nrm = np.sqrt(w * w + x * x + y * y + z * z)
         w, x, y, z = w / nrm, x / nrm, y / nrm, z / nrm
-        rot[f, 0, 0] = w * w + x * x - y * y - z * z
-        rot[f, 0, 1] = 2.0 * (x * y - w * z)
-        rot[f, 0, 2] = 2.0 * (x * z + w * y)
-        rot[f, 1, 0] = 2.0 * (x * y + w * z)
-        rot[f, 1, 1] = w * w - x * x + y * y - z * z
-        rot[f, 1, 2] = 2.0 * (y * z - w * x)
-        rot[f, 2, 0] = 2.0 * (x * z - w * y)
-        rot[f, 2, 1] = 2.0 * (y * z + w * x)
-        rot[f, 2, 2] = w * w - x * x - y * y + z * z
+        _quat_to_rot(rot, f, w, x, y, z)
         for i in range(3):  # g = sᵀ s
             for j in range(3):
                 g[i, j] = s[0, i] * s[0, j] + s[1, i] * s[1, j] + s[2, i] * s[2, j]
@@ -226,15 +232,7 @@ def _rotation_newton(s, e0, adj, rot, f):
                + x * (n01 * w + n11 * x + n12 * y + n13 * z)
                + y * (n02 * w + n12 * x + n22 * y + n23 * z)
                + z * (n03 * w + n13 * x + n23 * y + n33 * z))
-    rot[f, 0, 0] = w * w + x * x - y * y - z * z
-    rot[f, 0, 1] = 2.0 * (x * y - w * z)
-    rot[f, 0, 2] = 2.0 * (x * z + w * y)
-    rot[f, 1, 0] = 2.0 * (x * y + w * z)
-    rot[f, 1, 1] = w * w - x * x + y * y - z * z
-    rot[f, 1, 2] = 2.0 * (y * z - w * x)
-    rot[f, 2, 0] = 2.0 * (x * z - w * y)
-    rot[f, 2, 1] = 2.0 * (y * z + w * x)
-    rot[f, 2, 2] = w * w - x * x - y * y + z * z
+    _quat_to_rot(rot, f, w, x, y, z)
     return True
 
 
