@@ -63,14 +63,6 @@ _CHUNKS_PER_JOB = 2
 DEFAULT_CUES = "outline"
 
 
-def check_cues(cues: str) -> None:
-    """ValueError unless ``cues`` is one of :data:`vidcap.video.fit.cues.CUE_MODES`."""
-    from vidcap.video.fit.cues import CUE_MODES
-
-    if cues not in CUE_MODES:
-        raise ValueError(f"unknown cues {cues!r}; expected one of {', '.join(CUE_MODES)}")
-
-
 #: Bumped when the silhouette stage's results change for the same video and options
 #: (2: no shadow test on grey video; 3: the person followed, not the largest blob), so
 #: caches written by older versions are redone.
@@ -235,8 +227,10 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
 def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
+    from vidcap.video.fit.cues import CUE_MODES
+
     _check_choice("proportions", proportions, ("seed", "auto"))
-    check_cues(cues)
+    _check_choice("cues", cues, tuple(CUE_MODES))
 
 
 def _streamed_fit(pool, n_frames: int, jobs: int, per_job: int, cues: str):
