@@ -77,3 +77,35 @@ def test_rate_from_the_packets_when_the_header_is_absurd(tmp_path, monkeypatch):
     monkeypatch.setattr(video, "_fps", real)
     assert info.n_frames == 20
     assert info.fps == pytest.approx(10.0, rel=0.01)
+
+
+def _ts_clip(path, width, height, frames, seed):
+    """A short MPEG-TS H.264 clip: a block crossing a grey, noisy scene."""
+    import av
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    with av.open(str(path), "w", format="mpegts") as out:
+        stream = out.add_stream("libx264", rate=25)
+        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
+        for i in range(frames):
+            img = np.full((height, width, 3), 120, np.uint8)
+            img[height // 4:3 * height // 4, 10 + 3 * i:30 + 3 * i] = (200, 40, 40)
+            img = img + rng.integers(0, 5, img.shape, dtype=np.uint8)
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(img, format="rgb24")))
+        out.mux(stream.encode())
+
+
+def test_frame_size_change_mid_stream_is_named(tmp_path):
+    """Two MPEG-TS streams of different sizes joined byte for byte decode as one video whose
+    frames change size at the join: `convert` names the file and the frame, exit 2."""
+    a, b, bad = tmp_path / "a.ts", tmp_path / "b.ts", tmp_path / "joined.ts"
+    _ts_clip(a, 160, 120, 30, 0)
+    _ts_clip(b, 200, 150, 30, 1)
+    bad.write_bytes(a.read_bytes() + b.read_bytes())
+    a.unlink()
+    b.unlink()
+    run, got = _run(tmp_path, bad, "convert", bad, "-o", tmp_path / "o.bvh", "--no-cache")
+    assert got == "clean error", run.stderr[-800:]
+    line = first_error(run)
+    assert "joined.ts" in line and "frame size changes mid-stream" in line, line
