@@ -73,3 +73,20 @@ def test_keyframes_threshold_must_be_a_similarity(video, capsys, value):
     assert code == 2
     assert err == [f"vidcap: error: --keyframes is a fit similarity between 0 and 1, got "
                    f"{float(value)}"]
+
+
+def test_a_bug_of_ours_is_one_line_not_a_traceback(tmp_path, video, capsys, monkeypatch):
+    """An exception vidcap did not expect (a bug, not bad input) ends the command with one
+    line and exit 1; `--debug` shows the traceback."""
+    import vidcap.commands.convert as convert_command
+
+    def broken(args):
+        raise IndexError("index 46 is out of bounds for axis 0 with size 45")
+
+    monkeypatch.setattr(convert_command, "run", broken)
+    code, err = _error(capsys, ["convert", video, "-o", tmp_path / "o.bvh"])
+    assert code == 1 and len(err) == 1, err
+    assert err[0].startswith("vidcap: internal error: IndexError: index 46") and "--debug" in err[0]
+    assert not (tmp_path / "o.bvh").exists()
+    with pytest.raises(IndexError):
+        main(["--debug", "convert", str(video), "-o", str(tmp_path / "o.bvh")])

@@ -29,6 +29,7 @@ from vidcap import __version__
 from vidcap.errors import VidcapError
 
 EXIT_USER_ERROR = 2
+EXIT_INTERNAL_ERROR = 1  # a bug in vidcap (bad input is EXIT_USER_ERROR)
 
 
 def _command_modules():
@@ -90,6 +91,17 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"vidcap: error: {exc}", file=sys.stderr)
         return EXIT_USER_ERROR
+    except MemoryError:
+        print("vidcap: error: not enough memory for this input (try a shorter or smaller "
+              "video, or --jobs 1)", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except Exception as exc:  # noqa: BLE001 - a bug of ours: one line, not a traceback
+        if args.debug:
+            raise
+        print(f"vidcap: internal error: {type(exc).__name__}: {exc} (a bug in vidcap, not in "
+              "your input: rerun with --debug for the traceback and report it)",
+              file=sys.stderr)
+        return EXIT_INTERNAL_ERROR
     except KeyboardInterrupt:  # SIGINT, or SIGTERM (interrupt.install)
         print("vidcap: interrupted", file=sys.stderr)
         if as_command:

@@ -536,3 +536,19 @@ def test_relabel_only_renames_limbs_of_a_tracked_fit():
             swapped = np.array_equal(a[left + right], b[right + left])
             assert kept or swapped
     np.testing.assert_array_equal(plain.similarity, named.similarity)
+
+
+def test_small_blob_at_a_much_larger_body_height_is_fitted_not_crashed():
+    """A person mostly out of the picture: a blob a few pixels high fitted at a body height
+    known from other frames puts the legs' search rows below the normalised image. Seen on
+    a real 1000x1000 clip (IndexError inside `vidcap convert`); every such fit must end with
+    finite joints and a similarity in [0, 1]."""
+    rng = np.random.default_rng(0)
+    for _ in range(12):
+        mask = np.zeros((200, 200), bool)
+        h, w = int(rng.integers(5, 16)), int(rng.integers(5, 36))
+        y, x = int(rng.integers(0, 150)), int(rng.integers(0, 150))
+        mask[y:y + h, x:x + w] = True
+        pose = fit_pose(mask, body_height=float(rng.uniform(150, 300)))
+        assert np.isfinite(pose.joints).all()
+        assert 0.0 <= pose.similarity <= 1.0

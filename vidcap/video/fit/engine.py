@@ -130,7 +130,10 @@ class _MaskEngine:
         """A search's rows ``(r0, r1)``: all of them (None), or ``rows`` within the image."""
         if rows is None:
             return 0, self.h
-        return max(0, int(rows[0])), min(self.h, int(rows[1]))
+        # Both ends clamped: a small silhouette fitted at a body height known apart from
+        # it (a person half out of the picture) puts a limb's rows below the image.
+        r0 = min(max(0, int(rows[0])), self.h)
+        return r0, min(max(r0, int(rows[1])), self.h)
 
     def pixels(self, r0: int, r1: int) -> int:
         """Silhouette pixels in rows ``[r0, r1)``."""
