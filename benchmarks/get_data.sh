@@ -30,12 +30,85 @@ take perfanalytics+pose2sim $P2S Pose2Sim/Demo_SinglePerson/videos/cam03.mp4 pos
 take perfanalytics+pose2sim $P2S Pose2Sim/Demo_SinglePerson/videos/cam04.mp4 pose2sim_balance_cam4.mp4
 take perfanalytics+pose2sim $P2S Pose2Sim/Demo_SinglePerson/videos/cam01.mp4 pose2sim_balance_cam1.mp4
 
+# Validation clips added by the issue-26 realdata helper (nobody tuned on them). Clips
+# longer than ~300 frames or larger than 1000 px are cut / scaled (H.264 crf 18, by
+# vidcap's own reader and writer) so the benchmarks stay fast; the others are taken as is.
+cut() {  # cut IN OUT FIRST STOP SCALE: frames FIRST..STOP-1 of IN, scaled by SCALE, to OUT
+    [ -f "$DATA/$1" ] || return 0
+    PYTHONPATH="${PYTHONPATH:-$(cd "$(dirname "$0")/.." && pwd)}" python - "$DATA/$1" "$DATA/$2" "$3" "$4" "$5" <<'PY'
+import sys
+
+import cv2
+
+from vidcap.io.video import probe, read_frames, write_video
+
+src, out, a, b, scale = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5])
+frames = read_frames(src, start=a, stop=b)
+if scale != 1.0:
+    h, w = frames.shape[1:3]
+    size = (round(w * scale / 2) * 2, round(h * scale / 2) * 2)
+    frames = [cv2.resize(f, size, interpolation=cv2.INTER_AREA) for f in frames]
+print(out, write_video(out, frames, probe(src).fps, crf=18), "frames")
+PY
+    rm -f "$DATA/$1"
+}
+# Sports2D demos (BSD 3-Clause): demo4, a woman walks across a white brick wall in side
+# view, turns, walks back (fixed camera; frames 40-339 of 401, where MediaPipe finds her,
+# 1280x720 -> 960x540); demo3, a woman runs past a chain-link fence and foliage outdoors
+# (frames 0-32 of 47, where she is in view; 480x352).
+S2D=4573cde7b1aa8ab3ccd1b0cf55c580ae9f5a9980
+take davidpagnon+Sports2D $S2D Sports2D/Demo/demo4.mp4 sports2d_demo4_full.mp4
+cut sports2d_demo4_full.mp4 sports2d_walk_turn.mp4 40 340 0.75
+take davidpagnon+Sports2D $S2D Sports2D/Demo/demo3.mp4 sports2d_demo3_full.mp4
+cut sports2d_demo3_full.mp4 sports2d_run.mp4 0 33 1.0
+# TensorFlow.js models' pose-detection test videos (Apache 2.0): a woman doing squats with a
+# resistance band in a studio (65 frames at 5 fps, 720x1280 -> 540x960), and a woman
+# dancing in place in front of a still interior (120 frames, 576x576, taken as is).
+TFJS=18a73420e555a3c1948209ebfa807c7086c7ff0c
+take tensorflow+tfjs-models $TFJS pose-detection/test_data/pose_squats.mp4 tfjs_squats_full.mp4
+cut tfjs_squats_full.mp4 tfjs_squats.mp4 0 65 0.75
+take tensorflow+tfjs-models $TFJS pose-detection/test_data/pose_1.mp4 tfjs_dance.mp4
+
+# CMU motion capture 14_19 (mocap.cs.cmu.edu, free for all uses; subject 14: arm raises,
+# bending forward, stepping in place), the CMU site's own BVH as kept by lawrennd/mocap.
+# silhouettes_real.py renders it (validation). Its joints are named the Poser way (hip,
+# rShldr, rThigh, ...), which vidcap's readers do not map: 14_19_humanik.bvh is the same
+# file with the 15 mapped joints renamed to HumanIK names and an end site 18 cm above the
+# head joint (the head top; end sites carry no channels, so the motion data is unchanged).
+LAW=7e192332050e0be6ccc5d45c3fb762b6f5da8fac
+if [ -d "$MIRROR/lawrennd+mocap/repo" ]; then
+    mkdir -p "$DATA/../mocap/cmu"
+    git --git-dir="$MIRROR/lawrennd+mocap/repo" show "$LAW:python/files/14_19.bvh" \
+        > "$DATA/../mocap/cmu/14_19.bvh"
+    python - "$DATA/../mocap/cmu/14_19.bvh" "$DATA/../mocap/cmu/14_19_humanik.bvh" <<'PY'
+import re
+import sys
+
+names = {"hip": "Hips", "neck": "Neck", "head": "Head",
+         "rShldr": "RightArm", "rForeArm": "RightForeArm", "rHand": "RightHand",
+         "lShldr": "LeftArm", "lForeArm": "LeftForeArm", "lHand": "LeftHand",
+         "rThigh": "RightUpLeg", "rShin": "RightLeg", "rFoot": "RightFoot",
+         "lThigh": "LeftUpLeg", "lShin": "LeftLeg", "lFoot": "LeftFoot"}
+hierarchy, motion = open(sys.argv[1]).read().split("MOTION", 1)
+hierarchy = re.sub(r"^(\s*(?:ROOT|JOINT) )(\w+)",
+                   lambda m: m.group(1) + names.get(m.group(2), m.group(2)), hierarchy, flags=re.M)
+hierarchy = re.sub(r"(JOINT Head\n(\s*)\{\n\s*OFFSET[^\n]*\n\s*CHANNELS[^\n]*\n)",
+                   lambda m: (m.group(1) + f"{m.group(2)}  End Site\n{m.group(2)}  {{\n"
+                              f"{m.group(2)}    OFFSET 0 18 0\n{m.group(2)}  }}\n"), hierarchy)
+open(sys.argv[2], "w").write(hierarchy + "MOTION" + motion)
+print(sys.argv[2])
+PY
+else
+    echo "skip 14_19.bvh: $MIRROR/lawrennd+mocap/repo missing (fetch github:lawrennd/mocap first)" >&2
+fi
+
 # MediaPipe references (person masks + landmarks), with the reference tool's own python
 # (set NO_MEDIAPIPE=1 to skip):
 MP_PY=/root/.cache/vidcap-mediapipe-reference/bin/python
 REF=/work/shared/tools/mediapipe-reference/reference.py
 if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
-    for v in onebyone_room pose2sim_balance_cam3 pose2sim_balance_cam4 pose2sim_balance_cam1; do
+    for v in onebyone_room pose2sim_balance_cam3 pose2sim_balance_cam4 pose2sim_balance_cam1 \
+             sports2d_walk_turn sports2d_run tfjs_squats tfjs_dance; do
         [ -f "$DATA/$v.mp4" ] && [ ! -f "$DATA/$v.mediapipe.npz" ] && \
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
     done

@@ -26,10 +26,16 @@ Clips:
   at time windows and yaws not used before, and ``arms`` at 150 degrees, over the
   same real plates and the empty room of ``onebyone_room.mp4`` ($VIDCAP_DATA/video,
   from the wt-data helper; see benchmarks/DATA.md).
-* Real in-place clips without true masks ($VIDCAP_DATA/video: the pose2sim balance
-  trial seen by three cameras, one visit of onebyone_room): every column is scored
-  against MediaPipe's person masks instead of a truth ("vs MediaPipe" in the name),
-  so the MediaPipe column is empty there.
+* Validation renders added by the issue-26 realdata helper (chose nothing): CMU 14_19
+  (arm raises, bending forward, stepping in place; subject 14, not 13 or 16) at three
+  time windows, side / three-quarter / front, over the three real plates
+  ($VIDCAP_DATA/mocap/cmu/14_19_humanik.bvh, made by benchmarks/get_data.sh).
+* Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
+  the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
+  Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
+  pose2d_real.py and lift_accuracy.py's real table): every column is scored against
+  MediaPipe's person masks instead of a truth ("vs MediaPipe" in the name), so the
+  MediaPipe column is empty there.
 
 ``--pck`` adds, for renders, the PCK@0.05 (share of joints within 5 % of the body
 height) of the 2D fit (per frame, :func:`vidcap.video.fit.pose2d.fit_sequence`) on
@@ -88,23 +94,21 @@ RENDERS = [
     ("131_01 2-5 s 120 deg / Weizmann plate", ("131_01.bvh", 240, 600), 120, "ido",
      "validation"),
     ("arms 150 deg / room plate", "arms", 150, "room", "validation"),
+    # Validation renders added by the issue-26 realdata helper (nothing tuned on them):
+    # CMU 14_19 (a subject no benchmark or prior uses) at 2-5 s, 10-13 s, 17-20 s.
+    ("14_19 2-5 s side / PETS plate", ("14_19", 240, 600), 90, "vtest", "validation"),
+    ("14_19 10-13 s 3/4 / room plate", ("14_19", 1200, 1560), 45, "room", "validation"),
+    ("14_19 17-20 s front / Weizmann plate", ("14_19", 2040, 2400), 0, "ido", "validation"),
 ]
+#: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
+EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
 
-#: Real in-place clips without true masks (wt-data's /work/data/video/CLIPS.md):
-#: scored against MediaPipe's person masks, a second reference, not the truth.
-#: (name, file under $VIDCAP_DATA/video, first frame, last frame, use). cam1 is
-#: tuning since the appearance pass's regression there was diagnosed on it (gates
-#: measured on it; see benchmarks/RESULTS.md, Silhouettes).
-REAL_CLIPS = [
-    ("pose2sim balance cam3 (real, vs MediaPipe)", "pose2sim_balance_cam3.mp4", 0, 100,
-     "validation"),
-    ("pose2sim balance cam4 (real, vs MediaPipe)", "pose2sim_balance_cam4.mp4", 0, 100,
-     "validation"),
-    ("pose2sim balance cam1 (real, vs MediaPipe)", "pose2sim_balance_cam1.mp4", 0, 100,
-     "tuning"),
-    ("onebyone room 233-445 (real, vs MediaPipe)", "onebyone_room.mp4", 233, 446,
-     "validation"),
-]
+#: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
+#: real-footage benchmarks), scored against MediaPipe's person masks, a second
+#: reference, not the truth. All are validation but these: cam1 is tuning since the
+#: appearance pass's regression there was diagnosed on it (gates measured on it; see
+#: benchmarks/RESULTS.md, Silhouettes).
+REAL_TUNING = {"pose2sim_balance_cam1"}
 
 
 def iou(a, b):
@@ -176,7 +180,8 @@ def _render_frames(motion, yaw, which, n_frames, rng_seed):
     lamp = lamp_mask(plate.shape[:2], rng)
     if isinstance(motion, tuple):
         f, a, b = motion
-        mo = synth.make_motion(MOTION / f, frame_range=(a, b), fps=30.0)
+        mo = synth.make_motion(EXTRA_MOTIONS.get(f, MOTION / f), frame_range=(a, b),
+                               fps=30.0)
     else:
         mo = synth.make_motion(motion, n_frames=n_frames, rng=rng)
     frames, truth = synth.render_clip(mo, rng=rng, yaw_deg=yaw, background=plate,
@@ -191,9 +196,9 @@ def _render_frames(motion, yaw, which, n_frames, rng_seed):
 
 
 def real_clip(fname, a, b, cache: Path):
-    """A real clip cut to frames a..b-1 (re-encoded at crf 18 once, unless it is the
-    whole clip), with MediaPipe's masks of the same frames as the reference; None
-    when absent."""
+    """A real clip cut to frames a..b-1 (``b`` None: to the end; re-encoded at crf 18
+    once, unless it is the whole clip), with MediaPipe's masks of the same frames as
+    the reference; None when absent."""
     if not REAL:
         return None
     src = Path(REAL) / "video" / fname
@@ -203,6 +208,7 @@ def real_clip(fname, a, b, cache: Path):
     from vidcap.io.video import probe
 
     info = probe(src)
+    b = info.n_frames if b is None else b
     out = cache / f"{src.stem}_{a}-{b}.mp4"
     if a == 0 and b >= info.n_frames:
         out = src
@@ -325,17 +331,25 @@ def main(argv=None) -> int:
         if which == "room" and not (data and Path(data, "video", "onebyone_room.mp4").exists()):
             print(f"({name}: skipped, $VIDCAP_DATA/video/onebyone_room.mp4 absent)")
             continue
+        if isinstance(motion, tuple) and motion[0] in EXTRA_MOTIONS and not (
+                data and EXTRA_MOTIONS[motion[0]].exists()):
+            print(f"({name}: skipped, {EXTRA_MOTIONS[motion[0]]} absent: "
+                  "benchmarks/get_data.sh)")
+            continue
         video, truth = render(name, motion, yaw, which, args.frames, cache)
         joints = (truth_joints(name, motion, yaw, which, args.frames, cache)
                   if args.pck else None)
         clips.append((name, use, video, truth, joints))
-    for name, fname, a, b, use in REAL_CLIPS:
+    from real_clips import real_clips
+
+    for clip in real_clips(log=lambda msg: print(f"({msg})")):
+        name = f"{clip.name} (real, vs MediaPipe)"
         if args.only and args.only not in name:
             continue
-        got = real_clip(fname, a, b, cache)
+        got = real_clip(clip.video.name, clip.start, clip.stop, cache)
         if got is None:
-            print(f"({name}: skipped, $VIDCAP_DATA/video/{fname} or its MediaPipe masks absent)")
             continue
+        use = "tuning" if clip.video.stem in REAL_TUNING else "validation"
         clips.append((name, use, got[0], got[1], None))
     for name, use, video, truth, joints in clips:
         if args.only and args.only not in name:
