@@ -370,12 +370,14 @@ def main(argv=None):
                     help="with --solve: skip the held-out renders (each needs a 2D fit)")
     ap.add_argument("--real-only", action="store_true",
                     help="with --solve: only the real-footage table (MediaPipe references)")
+    ap.add_argument("--only", metavar="NAME",
+                    help="with --solve --real-only: just the real clips whose name contains NAME")
     args = ap.parse_args(argv)
     body = BodyModel()
     if args.solve and args.real_only:
         import lift_solve_tables as st
 
-        return _real_table(st, body)
+        return _real_table(st, body, args.only)
     if args.solve:
         return solve_tables(args.frames, body, renders=not args.no_renders)
     motions = {
@@ -569,7 +571,7 @@ def _real_clips():
     return out
 
 
-def _real_table(st, body):
+def _real_table(st, body, only=None):
     """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz),
     skipped with the reason when absent."""
     print("\nReal footage, PA-MPJPE against MediaPipe Pose's world landmarks (validation; "
@@ -578,6 +580,8 @@ def _real_table(st, body):
     print("clip | frames | lift | PA-MPJPE mm")
     print("--- | --- | --- | ---")
     for label, video, ref, frames in _real_clips():
+        if only and only not in (label or video.name):
+            continue
         if not (video.exists() and ref.exists()):
             print(f"  skipped: needs {video} and {ref} (run ../shared/tools/mediapipe-reference/"
                   "reference.py VIDEO OUT.npz with VIDCAP_DATA set)")

@@ -24,7 +24,8 @@ median of the 12 joints' medians, the share of frames more than 10 % apart over 
 joints, and per joint for the default cues; and the fit to MediaPipe's masks instead of
 vidcap's silhouettes (``mp-masks``). All are validation clips.
 
-Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]``
+Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
+[--only NAME]`` (``--only``: just the clips whose name contains NAME).
 """
 
 from __future__ import annotations
@@ -92,10 +93,13 @@ def compare(ref: Path, pred: Path) -> dict:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    only = argv[argv.index("--only") + 1] if "--only" in argv else None
     print("2D pose on real clips: 12 limb joints against MediaPipe Pose (image-side labels "
           "matched either way per frame)")
     print(f"{'clip':10} {'joint':11} {'median':>7} {'>10 %':>6}")
     for name, video, masks_file, key in CLIPS:
+        if only and only not in name:
+            continue
         if not (video.exists() and masks_file.exists()):
             print(f"{name}: skipped ({video.name} or {masks_file.name} absent)")
             continue
@@ -117,7 +121,7 @@ def main(argv=None) -> int:
 
     pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS,
                     cues=("outline", "mp-masks") if "--no-all" in argv
-                    else ("outline", "all", "mp-masks"))
+                    else ("outline", "all", "mp-masks"), only=only)
     return 0
 
 

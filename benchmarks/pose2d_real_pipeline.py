@@ -56,11 +56,12 @@ def _fit_reference_masks(clip: RealClip) -> np.ndarray:
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,
-                    cues=("outline", "all", "mp-masks")):
+                    cues=("outline", "all", "mp-masks"), only=None):
     """Print the tables. ``ido``: (name, video) of ido_walk; ``reference(name, video)``:
     its MediaPipe npz or None; ``compare(ref, pred)``: compare.py's joint scores.
     ``cues``: ``vidcap convert --cues`` values, and ``mp-masks``: the fit (outline) to
-    MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks)."""
+    MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks).
+    ``only``: just the clips whose name contains it."""
     print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit, default "
           "options; validation: nothing was tuned on these clips). MediaPipe is a reference, "
           "not the truth (~2.4 % of height off on lab footage).")
@@ -69,6 +70,7 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
     ref = reference(name, video) if video.exists() else None
     if ref is not None:
         clips.insert(0, RealClip(name, video, ref, 0, None))
+    clips = [c for c in clips if not only or only in c.name]
     if not clips:
         print("  no real clip found")
         return

@@ -1,11 +1,14 @@
-"""The real clips with a MediaPipe reference, shared by ``pose2d_real.py`` and
-``lift_accuracy.py --solve`` (issues 27 and 33).
+"""The real clips with a MediaPipe reference, shared by ``pose2d_real.py``,
+``lift_accuracy.py --solve`` and ``silhouettes_real.py`` (issues 26, 27 and 33): the one
+list of the real-footage benchmarks.
 
 Every ``$VIDCAP_DATA/video/<clip>.mp4`` (or ``.avi``) with ``<clip>.mediapipe.npz`` beside
 it (the mediapipe-reference tool's ``reference.py --masks`` output; listed in
-``benchmarks/DATA.md`` and ``$VIDCAP_DATA/video/CLIPS.md``). None has true masks or joints:
-MediaPipe is a reference, not the truth (about 2.4 % of height off on lab footage). No
-threshold or weight of vidcap was chosen on any of them: all are validation clips.
+``benchmarks/DATA.md`` and ``$VIDCAP_DATA/video/CLIPS.md``; ``benchmarks/get_data.sh``
+rebuilds them). None has true masks or joints: MediaPipe is a reference, not the truth
+(about 2.4 % of height off on lab footage). No threshold or weight of vidcap was chosen on
+any of them (validation clips), except pose2sim_balance_cam1 for the silhouettes
+(``silhouettes_real.REAL_TUNING``).
 
 Each clip goes through vidcap's own pipeline, as ``vidcap convert`` runs it (plate and
 silhouettes from the video, the tracked 2D fit; default options, ``cues`` as asked), on
