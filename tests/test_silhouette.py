@@ -65,6 +65,26 @@ def test_threshold_override_and_shadows():
 
 
 
+def test_soft_shade_on_a_lit_wall_is_dropped_dark_clothes_are_kept():
+    """A body darkens a bright wall around it by a few per cent with the wall's colour
+    kept but a little chroma noise (real walk past a white wall: 3-24 % darker); that shade
+    is not the person. Dark grey clothes of the wall's hue (60 % darker) are."""
+    rng = np.random.default_rng(17)
+    plate = np.clip(rng.normal((200, 205, 210), 1.5, (90, 120, 3)), 0, 255).astype(np.uint8)
+    frame = plate.astype(np.float32)
+    frame[10:80, 50:70] = plate[10:80, 50:70] * 0.4         # dark clothes, the wall's hue
+    halo = np.zeros((90, 120), bool)
+    halo[5:85, 35:85] = True
+    halo[10:80, 50:70] = False
+    frame[halo] = plate[halo] * 0.95 + rng.normal(0, 2.0, (halo.sum(), 3))  # the shade
+    frame = np.clip(frame, 0, 255).astype(np.uint8)
+    bg = BackgroundModel.from_plate(plate, noise_sigma=1.5)
+    sil = extract_silhouettes(frame[None], bg)
+    assert sil.masks[0, 12:78, 52:68].mean() > 0.98
+    assert sil.masks[0][halo].mean() < 0.15
+    assert extract_silhouettes(frame[None], bg, shadows=False).masks[0][halo].mean() > 0.8
+
+
 def test_grey_video_keeps_a_person_darker_than_the_background():
     """In grey video every pixel has the plate's (absent) colour, so the shadow test
     would cut out a person 5-40 % darker than the background; it is off there."""
