@@ -29,6 +29,57 @@ from vidcap.video.masks import MaskStack
 
 #: Normalised silhouettes :func:`fit_sequence` keeps for backward re-tracking (frames)
 _NORMS_KEPT = 64
+#: Segments a warm start carries forward at their last frame-to-frame turn
+#: (:func:`predicted_start`): the legs'. Where two legs meet in the image (the knees
+#: passing in a step seen three-quarter on) the silhouette scores a leg that passes the
+#: other and one that bounces back alike, and a search starting where the leg was
+#: ends wherever the tie falls (half the time on the other knee: the leg then hangs
+#: from the wrong hip for the rest of the step); started where the leg is heading, it
+#: passes. Arms measured no better (RESULTS.md).
+PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
+                           for p in ("upper", "lower"))
+
+
+def predicted_start(prev: FramePose, before: FramePose | None,
+                    segments=PREDICTED_SEGMENTS) -> FramePose:
+    """The warm start for the frame after ``prev``: ``prev`` with ``segments``' angles
+    turned on by their turn from ``before`` (the frame before it) to ``prev``.
+
+    Parameters
+    ----------
+    prev : FramePose
+        The last frame's fit.
+    before : FramePose or None
+        The fit of the frame before ``prev``, when ``prev`` was tracked from it (the
+        same limbs under the same names); None: ``prev`` is returned unchanged.
+    segments : sequence of int
+        Segment indices (:data:`vidcap.body.SEGMENT_NAMES`) to carry forward.
+
+    Returns
+    -------
+    FramePose
+        ``prev`` with those angles ``prev + wrap(prev - before)``, radians in [0, 2 pi).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vidcap.video.fit.result import FramePose
+    >>> def pose(a):
+    ...     return FramePose(np.zeros((15, 2)), np.full(10, a), np.ones(10), np.zeros(10),
+    ...                      np.zeros(10), 0.5, False, 0.9, True, 100.0)
+    >>> out = predicted_start(pose(6.2), pose(6.1), segments=[6])
+    >>> round(float(out.angles[6]), 6), round(float(out.angles[0]), 6)
+    (0.016815, 6.2)
+    """
+    if before is None or prev is None:
+        return prev
+    seg = list(segments)
+    turn = np.angle(np.exp(1j * (prev.angles[seg] - before.angles[seg])))  # wrapped
+    angles = np.array(prev.angles, dtype=float)
+    angles[seg] = np.mod(angles[seg] + turn, 2 * np.pi)
+    return dataclasses.replace(prev, angles=angles)
+
+
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
@@ -36,7 +87,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, relabel: bool = False, frames=None,
-                 cues: str = "all", arm_solve: bool = True, **kw) -> Pose2D:
+                 cues: str = "all", arm_solve: bool = True, predict: bool = True,
+                 **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -106,6 +158,12 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         frame among the cue search's candidates by the solve over time
         (:func:`vidcap.video.fit.temporal.arm_path`), so a one-frame misplacement is
         outvoted by its neighbours.
+    predict : bool
+        Tracked mode: a frame tracked from the one before starts its legs where they
+        were heading (each leg segment turned on by its last frame-to-frame turn,
+        :func:`predicted_start`) rather than where they were, so a leg passing the
+        other in the image keeps its hip (beyond the seed). False: the last frame's
+        pose, as before.
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -134,7 +192,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     it = range(n) if progress is None else progress(range(n), total=n)
     normalised = _Normalised(masks, options, frames if cues == "all" else None)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
-           back_tie=back_tie, options=options)
+           back_tie=back_tie, options=options, predict=predict)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
@@ -217,9 +275,9 @@ class _Normalised:
 
 
 def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, reinit_every: int,
-           back_tie: float | None, options: FitOptions) -> None:
+           back_tie: float | None, options: FitOptions, predict: bool = True) -> None:
     """The main pass of :func:`fit_sequence` over ``frames`` (in place into ``out``)."""
-    prev = None
+    prev = before = None
     start = 0  # first frame of the current track
     last_fresh = -reinit_every  # the last frame fitted from scratch (the first one is)
     for k in frames:
@@ -230,8 +288,9 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         # a fresh fit that took over (a slipping track) challenged the track as well
         challenge = bool(reinit_every) and k - last_fresh >= reinit_every
         norm = normalised(k)
-        fp = fit_frame(norm, previous=prev if tracked else None, challenge=challenge,
-                       options=options, cues=normalised.cues(k, norm))
+        start_pose = predicted_start(prev, before) if predict else prev
+        fp = fit_frame(norm, previous=start_pose if tracked else None,
+                       challenge=challenge, options=options, cues=normalised.cues(k, norm))
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
@@ -240,6 +299,7 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
             _retrack_backward(normalised, out, fp, range(k - 1, start - 1, -1), back_tie,
                               options)
             start = k
+        before = prev if fp.warm else None  # a fresh fit's names need not be prev's
         prev = fp
 
 
@@ -441,4 +501,4 @@ def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Fr
             refitted = k
 
 
-__all__ = ["body_heights", "fit_sequence"]
+__all__ = ["PREDICTED_SEGMENTS", "body_heights", "fit_sequence", "predicted_start"]
