@@ -23,7 +23,7 @@ from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
 from vidcap.video.fit.raster import image_angle
 from vidcap.video.fit.result import FramePose, Pose2D
-from vidcap.video.fit.temporal import arm_path, label_path
+from vidcap.video.fit.temporal import arm_path, elbow_bend_signs, label_path
 from vidcap.video.fit.temporal import relabel as temporal_relabel
 from vidcap.video.masks import MaskStack
 
@@ -214,7 +214,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
 def _choose_arms(out: _Frames) -> None:
     """Each arm's elbows and wrists as :func:`arm_path` chooses them (in place; the
     arms' angles follow; the foreshortening stays the frame's)."""
-    chosen = arm_path(out.joints, out.height, out.candidates)
+    chosen = arm_path(out.joints, out.height, out.candidates,
+                      bend_sign=elbow_bend_signs(out.joints, out.spread))
     for s, (elbow, wrist) in chosen.items():
         ie, iw = JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]
         moved = np.flatnonzero((np.abs(out.joints[:, ie] - elbow) > 1e-9).any(-1)
