@@ -35,7 +35,7 @@ _NORMS_KEPT = 64
 #: other and one that bounces back alike, and a search starting where the leg was
 #: ends wherever the tie falls (half the time on the other knee: the leg then hangs
 #: from the wrong hip for the rest of the step); started where the leg is heading, it
-#: passes. Arms measured no better (RESULTS.md).
+#: passes (``fit_sequence(predict=True)``). Arms measured no better (RESULTS.md).
 PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
                            for p in ("upper", "lower"))
 
@@ -87,7 +87,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, relabel: bool = False, frames=None,
-                 cues: str = "all", arm_solve: bool = True, predict: bool = True,
+                 cues: str = "all", arm_solve: bool = True, predict: bool = False,
                  **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
@@ -162,8 +162,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         Tracked mode: a frame tracked from the one before starts its legs where they
         were heading (each leg segment turned on by its last frame-to-frame turn,
         :func:`predicted_start`) rather than where they were, so a leg passing the
-        other in the image keeps its hip (beyond the seed). False: the last frame's
-        pose, as before.
+        other in the image keeps its hip (beyond the seed). Off by default: on the
+        tuning clips +1.3 points of PCK@0.05 with the cues, -0.1 with the outline
+        only; on the held-out clips +0.2 and -0.2 (RESULTS.md).
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -276,7 +277,7 @@ class _Normalised:
 
 
 def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, reinit_every: int,
-           back_tie: float | None, options: FitOptions, predict: bool = True) -> None:
+           back_tie: float | None, options: FitOptions, predict: bool = False) -> None:
     """The main pass of :func:`fit_sequence` over ``frames`` (in place into ``out``)."""
     prev = before = None
     start = 0  # first frame of the current track
