@@ -80,8 +80,6 @@ def predicted_start(prev: FramePose, before: FramePose | None,
     return dataclasses.replace(prev, angles=angles)
 
 
-
-
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
                  progress=None, reinit_every: int = 10, spread_window: int = 31,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
