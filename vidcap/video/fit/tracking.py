@@ -137,10 +137,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     relabel : bool
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
         solve over time (:func:`vidcap.video.fit.temporal.label_path`), so a fresh fit
-        whose image-side names came out swapped against its neighbours (for one
-        frame or from then on) is outvoted by them. Off by default: a clip fitted in
-        chunks (:mod:`vidcap.video.fit.parallel`) would be relabelled chunk by chunk, which
-        can differ from the whole clip's solve.
+        whose image-side names came out swapped against its neighbours is outvoted by
+        them. Off by default: chunked fits (:mod:`vidcap.video.fit.parallel`) would be
+        relabelled chunk by chunk, and held-out PCK with each pair's names matched once
+        per clip measured lower with it (RESULTS.md).
     frames : numpy.ndarray, shape (F, H, W, 3), uint8, or FrameCrops, optional
         The colour frames the silhouettes were cut from (BGR, or a sequence of
         frames), or their crops around the silhouettes
@@ -152,17 +152,11 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     cues : {'all', 'outline'}
         ``'outline'``: the seed's silhouette-only score even when ``frames`` are given.
     arm_solve : bool
-        Tracked mode with cues: after the priors, choose each arm's placement per
-        frame among the cue search's candidates by the solve over time
-        (:func:`vidcap.video.fit.temporal.arm_path`), so a one-frame misplacement is
-        outvoted by its neighbours.
+        Tracked mode with cues: after the priors, each arm's placement per frame among
+        the cue search's candidates by the solve over time (:func:`_choose_arms`), so a
+        one-frame misplacement is outvoted by its neighbours.
     predict : bool
-        Tracked mode: a frame tracked from the one before starts its legs where they
-        were heading (each leg segment turned on by its last frame-to-frame turn,
-        :func:`predicted_start`) rather than where they were, so a leg passing the
-        other in the image keeps its hip (beyond the seed). Off by default: on the
-        tuning clips +1.3 points of PCK@0.05 with the cues, -0.1 with the outline
-        only; on the held-out clips +0.2 and -0.2 (RESULTS.md).
+        Warm starts carry the legs on (:func:`predicted_start`; off: no held-out gain).
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -203,16 +197,22 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     if tracked and arm_solve and any(c is not None for c in out.candidates):
         _choose_arms(out)
     if tracked and relabel:
-        swaps = label_path(out.joints, out.height, out.linked)
-        temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
-                          "scores": out.scores, "margins": out.margins}, swaps)
+        _relabel(out)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
                   out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
 
 
+def _relabel(out: _Frames) -> None:
+    """The limb pairs relabelled over the clip by :func:`label_path` (in place)."""
+    swaps = label_path(out.joints, out.height, out.linked)
+    temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
+                      "scores": out.scores, "margins": out.margins}, swaps)
+
+
 def _choose_arms(out: _Frames) -> None:
-    """Each arm's elbows and wrists as :func:`arm_path` chooses them (in place; the
-    arms' angles follow; the foreshortening stays the frame's)."""
+    """Each arm's elbows and wrists as :func:`arm_path` chooses them, elbows held to
+    the way the clip's knees say the body faces (:func:`elbow_bend_signs`), in place;
+    the arms' angles follow, the foreshortening stays the frame's."""
     chosen = arm_path(out.joints, out.height, out.candidates,
                       bend_sign=elbow_bend_signs(out.joints, out.spread))
     for s, (elbow, wrist) in chosen.items():
