@@ -86,3 +86,56 @@ def test_legs_crossing_in_a_side_view_keep_their_tracked_labels():
     assert not swaps["legs"].any()
     knee = JOINT_INDEX["l_knee"]
     assert np.ptp(truth[:, knee, 0]) > 10  # the legs did swing past each other
+
+
+def _side_view_legs(n: int, knee_dx: float) -> np.ndarray:
+    """(n, 15, 2) joints: a body seen from the side with both knees bent, the shins
+    turning back towards ``-knee_dx`` (pixels, y down)."""
+    j = np.zeros((n, 15, 2))
+    for s in "lr":
+        j[:, JOINT_INDEX[f"{s}_hip"]] = (100.0, 100.0)
+        j[:, JOINT_INDEX[f"{s}_knee"]] = (100.0 + knee_dx, 140.0)
+        j[:, JOINT_INDEX[f"{s}_ankle"]] = (100.0, 180.0)
+    return j
+
+
+def test_elbows_bend_against_the_knees_in_a_side_view_only():
+    from vidcap.video.fit.temporal import elbow_bend_signs, turn
+
+    # knees forward at +x: thigh down-right, shin down-left = a clockwise turn (y up)
+    j = _side_view_legs(8, 15.0)
+    knee = turn(j[0, JOINT_INDEX["l_knee"]] - j[0, JOINT_INDEX["l_hip"]],
+                j[0, JOINT_INDEX["l_ankle"]] - j[0, JOINT_INDEX["l_knee"]])
+    assert knee < 0
+    spread = np.array([0.1] * 6 + [0.9, np.nan])
+    signs = elbow_bend_signs(j, spread)
+    assert signs.tolist() == [1.0] * 6 + [0.0, 0.0]  # elbows counter-clockwise; front: 0
+    assert elbow_bend_signs(_side_view_legs(8, -15.0), spread)[0] == -1.0  # mirrored
+    assert not elbow_bend_signs(_side_view_legs(8, 2.0), spread).any()  # straight legs
+    assert not elbow_bend_signs(_side_view_legs(4, 15.0), spread[:4]).any()  # too few
+
+
+def test_the_arm_solve_prefers_the_elbow_bent_the_way_the_body_faces():
+    from vidcap.video.fit.temporal import arm_path
+
+    n = 6
+    joints = _side_view_legs(n, 15.0)  # facing +x: elbows bend counter-clockwise
+    sh, ie, iw = (JOINT_INDEX[f"l_{k}"] for k in ("shoulder", "elbow", "wrist"))
+    joints[:, sh] = (100.0, 40.0)
+    joints[:, ie] = (100.0, 70.0)  # upper arm hanging
+    forward, back = np.array([125.0, 85.0]), np.array([75.0, 85.0])  # forearm 60 deg
+    joints[:, iw] = back  # the fit bent it backwards (inside the torso: a tie)
+    cands = [{"l": (np.array([joints[f, ie]] * 2), np.array([back, forward]),
+                    np.array([0.0, 0.001]))} for f in range(n)]
+    spread = np.full(n, 0.1)
+    from vidcap.video.fit.temporal import elbow_bend_signs
+
+    sign = elbow_bend_signs(joints, spread)
+    _, wrist = arm_path(joints, np.full(n, 175.0), cands, bend_sign=sign)["l"]
+    np.testing.assert_allclose(wrist, np.tile(forward, (n, 1)))
+    _, wrist = arm_path(joints, np.full(n, 175.0), cands)["l"]  # without: as fitted
+    np.testing.assert_allclose(wrist, np.tile(back, (n, 1)))
+    # a backward bend the image clearly prefers (0.5 of S) stays
+    cands = [{"l": (c["l"][0], c["l"][1], np.array([0.0, 0.5]))} for c in cands]
+    _, wrist = arm_path(joints, np.full(n, 175.0), cands, bend_sign=sign)["l"]
+    np.testing.assert_allclose(wrist, np.tile(back, (n, 1)))

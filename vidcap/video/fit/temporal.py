@@ -141,10 +141,64 @@ def relabel(arrays: dict[str, np.ndarray], swaps: dict[str, np.ndarray]) -> None
 #: Weight of an arm candidate's cost (J below the frame's best, units of S) against
 #: the movement of its elbow and wrist between frames (body heights, mean of the two).
 ARM_FIT_WEIGHT = 10.0
+#: Cost per radian an arm candidate's elbow turns against the way the clip's elbows
+#: bend (:func:`elbow_bend_signs`), beyond :data:`BEND_FREE` (chosen on the tuning
+#: clips: 0.5, 2, 5, 20 and 100 gave +0.1, +0.3, +0.3, +0.3, +0.3 points).
+ARM_BEND_WEIGHT = 5.0
+#: A knee or elbow turned less than this either way says nothing of which way the
+#: body faces, and an elbow may turn this far against the clip's bend for free.
+BEND_FREE = np.deg2rad(10.0)
+#: Spread from which the shoulders stand far enough apart in the image (a body turned
+#: towards the camera) that an elbow's bend there no longer shows which way it faces.
+BEND_SPREAD = 0.7
+#: Fewest bent knees (legs x frames) to tell the way the clip's body faces.
+BEND_SURE = 10
+
+
+def turn(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Signed turn from image vectors ``a`` to ``b`` (..., 2) in pixels (y down):
+    radians in (-pi, pi], counter-clockwise with y up (the fit's angle convention)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return np.angle(np.exp(1j * (np.arctan2(-b[..., 1], b[..., 0])
+                                 - np.arctan2(-a[..., 1], a[..., 0]))))
+
+
+def elbow_bend_signs(joints2d: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """The way an elbow bends in the image per frame: +1 (counter-clockwise from upper
+    to lower arm, y up), -1, or 0 (either way).
+
+    A knee bends back and an elbow forward, so seen from the side the two turn
+    opposite ways: the elbows' sign is the opposite of the median turn of the clip's
+    knees bent more than :data:`BEND_FREE`. 0 where the spread is at least
+    :data:`BEND_SPREAD` (a view near the front: the forearm bends towards or away from
+    the camera), and everywhere when fewer than :data:`BEND_SURE` knees are bent.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        The fitted joints, pixels (NaN: no fit).
+    spread : numpy.ndarray, shape (F,)
+        The fitted spread per frame (NaN: no fit).
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,), float
+    """
+    j = np.asarray(joints2d, dtype=float)
+    knees = np.concatenate([
+        turn(j[:, JOINT_INDEX[f"{s}_knee"]] - j[:, JOINT_INDEX[f"{s}_hip"]],
+             j[:, JOINT_INDEX[f"{s}_ankle"]] - j[:, JOINT_INDEX[f"{s}_knee"]])
+        for s in "lr"])
+    bent = knees[np.isfinite(knees) & (np.abs(knees) > BEND_FREE)]
+    if len(bent) < BEND_SURE:
+        return np.zeros(len(j))
+    side = np.nan_to_num(np.asarray(spread, dtype=float), nan=1.0) < BEND_SPREAD
+    return np.where(side, -np.sign(np.median(bent)), 0.0)
 
 
 def arm_path(joints2d: np.ndarray, height_px: np.ndarray, candidates, *,
-             fit_weight: float = ARM_FIT_WEIGHT) -> dict[str, np.ndarray]:
+             fit_weight: float = ARM_FIT_WEIGHT, bend_sign: np.ndarray | None = None,
+             bend_weight: float = ARM_BEND_WEIGHT) -> dict[str, np.ndarray]:
     """Each arm's placement per frame chosen over the clip among its candidates.
 
     Parameters
@@ -160,6 +214,12 @@ def arm_path(joints2d: np.ndarray, height_px: np.ndarray, candidates, *,
     fit_weight : float
         Cost per unit of S a candidate fits worse than the frame's best, against one
         body height of elbow and wrist movement between frames.
+    bend_sign : numpy.ndarray, shape (F,), optional
+        The way elbows bend per frame (:func:`elbow_bend_signs`; 0: either way). A
+        candidate whose elbow turns the other way by more than :data:`BEND_FREE` costs
+        ``bend_weight`` per radian beyond it (an arm inside the torso's outline fits
+        bent either way; a real elbow bends one way only). None: no such cost.
+    bend_weight : float
 
     Returns
     -------
@@ -182,6 +242,11 @@ def arm_path(joints2d: np.ndarray, height_px: np.ndarray, candidates, *,
                 e, w, cost = c[s]
                 ends[f, :len(cost), 0], ends[f, :len(cost), 1] = e, w
                 unary[f, :len(cost)] = fit_weight * cost
+                if bend_sign is not None and bend_sign[f]:
+                    bend = turn(np.asarray(e) - j[f, JOINT_INDEX[f"{s}_shoulder"]],
+                                np.asarray(w) - np.asarray(e))
+                    against = np.maximum(-bend_sign[f] * bend - BEND_FREE, 0.0)
+                    unary[f, :len(cost)] += bend_weight * against
         big = 1e6  # a slot a frame does not have: never chosen
         unary = np.where(np.isfinite(unary), unary, big)
         scale = np.nan_to_num(np.nanmean(np.stack([h[:-1], h[1:]]), axis=0), nan=1.0)
@@ -193,4 +258,5 @@ def arm_path(joints2d: np.ndarray, height_px: np.ndarray, candidates, *,
     return out
 
 
-__all__ = ["ARM_FIT_WEIGHT", "LINK_COST", "arm_path", "best_path", "label_path", "relabel"]
+__all__ = ["ARM_BEND_WEIGHT", "ARM_FIT_WEIGHT", "BEND_FREE", "LINK_COST", "arm_path",
+           "best_path", "elbow_bend_signs", "label_path", "relabel", "turn"]

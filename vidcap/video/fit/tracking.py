@@ -23,12 +23,61 @@ from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
 from vidcap.video.fit.raster import image_angle
 from vidcap.video.fit.result import FramePose, Pose2D
-from vidcap.video.fit.temporal import arm_path, label_path
+from vidcap.video.fit.temporal import arm_path, elbow_bend_signs, label_path
 from vidcap.video.fit.temporal import relabel as temporal_relabel
 from vidcap.video.masks import MaskStack
 
 #: Normalised silhouettes :func:`fit_sequence` keeps for backward re-tracking (frames)
 _NORMS_KEPT = 64
+#: Segments a warm start carries forward at their last frame-to-frame turn
+#: (:func:`predicted_start`): the legs'. Where two legs meet in the image (the knees
+#: passing in a step seen three-quarter on) the silhouette scores a leg that passes the
+#: other and one that bounces back alike, and a search starting where the leg was
+#: ends wherever the tie falls (half the time on the other knee: the leg then hangs
+#: from the wrong hip for the rest of the step); started where the leg is heading, it
+#: passes (``fit_sequence(predict=True)``). Arms measured no better (RESULTS.md).
+PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
+                           for p in ("upper", "lower"))
+
+
+def predicted_start(prev: FramePose, before: FramePose | None,
+                    segments=PREDICTED_SEGMENTS) -> FramePose:
+    """The warm start for the frame after ``prev``: ``prev`` with ``segments``' angles
+    turned on by their turn from ``before`` (the frame before it) to ``prev``.
+
+    Parameters
+    ----------
+    prev : FramePose
+        The last frame's fit.
+    before : FramePose or None
+        The fit of the frame before ``prev``, when ``prev`` was tracked from it (the
+        same limbs under the same names); None: ``prev`` is returned unchanged.
+    segments : sequence of int
+        Segment indices (:data:`vidcap.body.SEGMENT_NAMES`) to carry forward.
+
+    Returns
+    -------
+    FramePose
+        ``prev`` with those angles ``prev + wrap(prev - before)``, radians in [0, 2 pi).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vidcap.video.fit.result import FramePose
+    >>> def pose(a):
+    ...     return FramePose(np.zeros((15, 2)), np.full(10, a), np.ones(10), np.zeros(10),
+    ...                      np.zeros(10), 0.5, False, 0.9, True, 100.0)
+    >>> out = predicted_start(pose(6.2), pose(6.1), segments=[6])
+    >>> round(float(out.angles[6]), 6), round(float(out.angles[0]), 6)
+    (0.016815, 6.2)
+    """
+    if before is None or prev is None:
+        return prev
+    seg = list(segments)
+    turn = np.angle(np.exp(1j * (prev.angles[seg] - before.angles[seg])))  # wrapped
+    angles = np.array(prev.angles, dtype=float)
+    angles[seg] = np.mod(angles[seg] + turn, 2 * np.pi)
+    return dataclasses.replace(prev, angles=angles)
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
@@ -36,7 +85,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, relabel: bool = False, frames=None,
-                 cues: str = "all", arm_solve: bool = True, **kw) -> Pose2D:
+                 cues: str = "all", arm_solve: bool = True, predict: bool = False,
+                 **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -87,10 +137,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     relabel : bool
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
         solve over time (:func:`vidcap.video.fit.temporal.label_path`), so a fresh fit
-        whose image-side names came out swapped against its neighbours (for one
-        frame or from then on) is outvoted by them. Off by default: a clip fitted in
-        chunks (:mod:`vidcap.video.fit.parallel`) would be relabelled chunk by chunk, which
-        can differ from the whole clip's solve.
+        whose image-side names came out swapped against its neighbours is outvoted by
+        them. Off by default: chunked fits (:mod:`vidcap.video.fit.parallel`) would be
+        relabelled chunk by chunk, and held-out PCK with each pair's names matched once
+        per clip measured lower with it (RESULTS.md).
     frames : numpy.ndarray, shape (F, H, W, 3), uint8, or FrameCrops, optional
         The colour frames the silhouettes were cut from (BGR, or a sequence of
         frames), or their crops around the silhouettes
@@ -102,10 +152,11 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     cues : {'all', 'outline'}
         ``'outline'``: the seed's silhouette-only score even when ``frames`` are given.
     arm_solve : bool
-        Tracked mode with cues: after the priors, choose each arm's placement per
-        frame among the cue search's candidates by the solve over time
-        (:func:`vidcap.video.fit.temporal.arm_path`), so a one-frame misplacement is
-        outvoted by its neighbours.
+        Tracked mode with cues: after the priors, each arm's placement per frame among
+        the cue search's candidates by the solve over time (:func:`_choose_arms`), so a
+        one-frame misplacement is outvoted by its neighbours.
+    predict : bool
+        Warm starts carry the legs on (:func:`predicted_start`; off: no held-out gain).
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -134,7 +185,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     it = range(n) if progress is None else progress(range(n), total=n)
     normalised = _Normalised(masks, options, frames if cues == "all" else None)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
-           back_tie=back_tie, options=options)
+           back_tie=back_tie, options=options, predict=predict)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
@@ -146,17 +197,24 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     if tracked and arm_solve and any(c is not None for c in out.candidates):
         _choose_arms(out)
     if tracked and relabel:
-        swaps = label_path(out.joints, out.height, out.linked)
-        temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
-                          "scores": out.scores, "margins": out.margins}, swaps)
+        _relabel(out)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
                   out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
 
 
+def _relabel(out: _Frames) -> None:
+    """The limb pairs relabelled over the clip by :func:`label_path` (in place)."""
+    swaps = label_path(out.joints, out.height, out.linked)
+    temporal_relabel({"joints": out.joints, "angles": out.angles, "fore": out.fore,
+                      "scores": out.scores, "margins": out.margins}, swaps)
+
+
 def _choose_arms(out: _Frames) -> None:
-    """Each arm's elbows and wrists as :func:`arm_path` chooses them (in place; the
-    arms' angles follow; the foreshortening stays the frame's)."""
-    chosen = arm_path(out.joints, out.height, out.candidates)
+    """Each arm's elbows and wrists as :func:`arm_path` chooses them, elbows held to
+    the way the clip's knees say the body faces (:func:`elbow_bend_signs`), in place;
+    the arms' angles follow, the foreshortening stays the frame's."""
+    chosen = arm_path(out.joints, out.height, out.candidates,
+                      bend_sign=elbow_bend_signs(out.joints, out.spread))
     for s, (elbow, wrist) in chosen.items():
         ie, iw = JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"]
         moved = np.flatnonzero((np.abs(out.joints[:, ie] - elbow) > 1e-9).any(-1)
@@ -217,9 +275,9 @@ class _Normalised:
 
 
 def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, reinit_every: int,
-           back_tie: float | None, options: FitOptions) -> None:
+           back_tie: float | None, options: FitOptions, predict: bool = False) -> None:
     """The main pass of :func:`fit_sequence` over ``frames`` (in place into ``out``)."""
-    prev = None
+    prev = before = None
     start = 0  # first frame of the current track
     last_fresh = -reinit_every  # the last frame fitted from scratch (the first one is)
     for k in frames:
@@ -230,8 +288,9 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         # a fresh fit that took over (a slipping track) challenged the track as well
         challenge = bool(reinit_every) and k - last_fresh >= reinit_every
         norm = normalised(k)
-        fp = fit_frame(norm, previous=prev if tracked else None, challenge=challenge,
-                       options=options, cues=normalised.cues(k, norm))
+        start_pose = predicted_start(prev, before) if predict else prev
+        fp = fit_frame(norm, previous=start_pose if tracked else None,
+                       challenge=challenge, options=options, cues=normalised.cues(k, norm))
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
@@ -240,6 +299,7 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
             _retrack_backward(normalised, out, fp, range(k - 1, start - 1, -1), back_tie,
                               options)
             start = k
+        before = prev if fp.warm else None  # a fresh fit's names need not be prev's
         prev = fp
 
 
@@ -441,4 +501,4 @@ def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Fr
             refitted = k
 
 
-__all__ = ["body_heights", "fit_sequence"]
+__all__ = ["PREDICTED_SEGMENTS", "body_heights", "fit_sequence", "predicted_start"]
