@@ -92,6 +92,15 @@ PLANE_WEIGHT = 3.0
 #: walk, arms and jacks: 100 -> 300 at 2 % noise takes sliding 7.6 -> 3.1 mm/frame at equal
 #: PA-MPJPE; 1000 costs 4 mm of it).
 CONTACT_WEIGHT = 100.0
+#: Weight of the pose prior (``Problem.prior_weight``, :mod:`vidcap.video.solve.prior`) at
+#: 1 % of the height of 2D noise, growing as (noise / 1 %) ** PRIOR_POWER, the noise
+#: taken as at least PRIOR_NOISE_FLOOR. Like the in-plane prior it speaks where the
+#: image leaves a pose open, which the noise measures. Chosen on the synth walk, arms
+#: and jacks at yaw 90 and 45 with 1-4 % noise (three noise draws at 2 %): weights 0.3,
+#: 0.5, 1 and 3, powers 0.5 and 1, with and without the prior's Cauchy tail.
+PRIOR_WEIGHT = 0.5
+PRIOR_POWER = 0.5
+PRIOR_NOISE_FLOOR = 0.0
 
 
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
@@ -118,11 +127,13 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
             raise ValueError(f"contact must be 'auto', 'off' or an (F, 2) array, got {contact!r}")
         contact = (foot_contacts(j, geometry, fps) if contact == "auto"
                    else np.zeros((F, 2), bool))
-    if "plane_weight" not in weights or "contact_weight" not in weights:
+    if not {"plane_weight", "contact_weight", "prior_weight"} <= set(weights):
         from vidcap.video.solve.noise import noise_fraction
 
         noise = noise_fraction(j, geometry, body)
         weights.setdefault("plane_weight", PLANE_WEIGHT * float(np.sqrt(noise / 0.01)))
+        weights.setdefault("prior_weight", PRIOR_WEIGHT * float(
+            (max(noise, PRIOR_NOISE_FLOOR) / 0.01) ** PRIOR_POWER))
         # a planted foot holds against the noisy 2D's pull, which grows with the noise
         weights.setdefault("contact_weight", CONTACT_WEIGHT * (1.0 + noise / 0.01))
     return Problem(
