@@ -53,3 +53,17 @@ def test_the_in_plane_prior_and_contact_grow_with_the_noise():
     assert 0.0 < w[1] < w[2] < 3 * w[1]  # as the square root of the noise
     c = [pb.contact_weight for pb in pbs]
     assert c[0] == 100.0 and c[0] < c[1] < c[2]
+
+
+def test_the_pose_prior_grows_with_the_noise_and_holds_a_floor_for_fitted_joints():
+    from vidcap.video.solve.clip import FITTED_NOISE_FLOOR, PRIOR_WEIGHT
+
+    j2, s = _walk()
+    rng = np.random.default_rng(4)
+    noisy = [j2 + rng.normal(0.0, f * BODY.height * s, j2.shape) for f in (0.0, 0.01, 0.04)]
+    w = [make_problem(j, scale=s, fps=30.0, body=BODY, yaw=np.zeros(len(j2)),
+                      contact="off").prior_weight for j in noisy]
+    assert w[0] == 0.0 and 0.0 < w[1] < w[2] < 3 * w[1]  # the square root of the noise
+    floored = make_problem(j2, scale=s, fps=30.0, body=BODY, yaw=np.zeros(len(j2)),
+                           contact="off", noise_floor=FITTED_NOISE_FLOOR).prior_weight
+    assert floored == PRIOR_WEIGHT * np.sqrt(FITTED_NOISE_FLOOR / 0.01)

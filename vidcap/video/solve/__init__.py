@@ -7,8 +7,8 @@ scale), :mod:`~vidcap.video.solve.residuals` (residuals, sparse Jacobian),
 :mod:`~vidcap.video.solve.gauss_newton` (the banded Levenberg-Marquardt) on
 :mod:`~vidcap.video.solve.blocksolve` (LAPACK's banded Cholesky),
 :mod:`~vidcap.video.solve.signs` (depth signs and their confidence),
-:mod:`~vidcap.video.solve.repair` (outlier frames re-started), :mod:`~vidcap.video.solve.clip`
-(the whole solve).
+:mod:`~vidcap.video.solve.repair` (outlier frames re-started), :mod:`~vidcap.video.solve.prior`
+(the pose prior learned from motion capture), :mod:`~vidcap.video.solve.clip` (the whole solve).
 """
 
 from vidcap.video.solve.clip import ClipSolve, solve_clip, solve_problem

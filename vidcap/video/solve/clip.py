@@ -92,20 +92,37 @@ PLANE_WEIGHT = 3.0
 #: walk, arms and jacks: 100 -> 300 at 2 % noise takes sliding 7.6 -> 3.1 mm/frame at equal
 #: PA-MPJPE; 1000 costs 4 mm of it).
 CONTACT_WEIGHT = 100.0
+#: Weight of the pose prior (``Problem.prior_weight``, :mod:`vidcap.video.solve.prior`) at
+#: 1 % of the height of 2D noise, growing as (noise / 1 %) ** PRIOR_POWER, the noise
+#: taken as at least PRIOR_NOISE_FLOOR. Like the in-plane prior it speaks where the
+#: image leaves a pose open, which the noise measures. Chosen on the synth walk, arms
+#: and jacks at yaw 90 and 45 with 1-4 % noise (three noise draws at 2 %): weights 0.3,
+#: 0.5, 1 and 3, powers 0.5 and 1, with and without the prior's Cauchy tail.
+PRIOR_WEIGHT = 0.5
+PRIOR_POWER = 0.5
+#: The noise (fraction of the height) the pose prior assumes at least for joints from
+#: vidcap's 2D fit (``noise_floor`` of :func:`make_problem`, passed by the 3D stage and the
+#: annotate app's re-solves): the fit's errors are correlated over frames (a swapped leg,
+#: a misplaced arm for a stretch), so the second-difference measure reads them low. Chosen
+#: on renders of the synth walk (yaw 60, 120), jacks (30) and arms (120) through the 2D
+#: fit: floor 0, 1, 2, 4, 6, 8, 12 % gave PA-MPJPE 129, 126, 124, 118, 116, 116, 117 mm.
+#: ``solve_clip`` itself uses no floor (true 2D plus noise: the measure is right there).
+FITTED_NOISE_FLOOR = 0.06
 
 
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
                  prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                  segment_scale=None, principal_point=None, contact="auto",
-                 **weights) -> Problem:
+                 noise_floor: float = 0.0, **weights) -> Problem:
     """The :class:`Problem` of a clip of 2D joints (F, 15, 2), body-side named.
 
     ``yaw`` (F,) radians and ``yaw_sigma`` (one or (F,), radians) the torso's yaw
     prior; ``prior_signs``/``hard_signs`` (F, 10) in {-1, 0, 1}; ``confidence`` (F,
     15) each 2D joint's weight (default 1); ``contact`` 'auto' (:func:`foot_contacts`), 'off', or
     an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights (the in-plane
-    prior's and the contact's defaults grow with the 2D joints' measured noise:
-    :data:`PLANE_WEIGHT`, :data:`CONTACT_WEIGHT`).
+    prior's, the contact's and the pose prior's defaults grow with the 2D joints' measured
+    noise: :data:`PLANE_WEIGHT`, :data:`CONTACT_WEIGHT`, :data:`PRIOR_WEIGHT`, the last
+    with the noise taken as at least ``noise_floor``: :data:`FITTED_NOISE_FLOOR`).
     """
     body = body or BodyModel()
     j = np.asarray(joints2d, dtype=float)
@@ -118,11 +135,13 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
             raise ValueError(f"contact must be 'auto', 'off' or an (F, 2) array, got {contact!r}")
         contact = (foot_contacts(j, geometry, fps) if contact == "auto"
                    else np.zeros((F, 2), bool))
-    if "plane_weight" not in weights or "contact_weight" not in weights:
+    if not {"plane_weight", "contact_weight", "prior_weight"} <= set(weights):
         from vidcap.video.solve.noise import noise_fraction
 
         noise = noise_fraction(j, geometry, body)
         weights.setdefault("plane_weight", PLANE_WEIGHT * float(np.sqrt(noise / 0.01)))
+        weights.setdefault("prior_weight", PRIOR_WEIGHT * float(
+            (max(noise, noise_floor) / 0.01) ** PRIOR_POWER))
         # a planted foot holds against the noisy 2D's pull, which grows with the noise
         weights.setdefault("contact_weight", CONTACT_WEIGHT * (1.0 + noise / 0.01))
     return Problem(
@@ -152,7 +171,8 @@ def warm_start(problem: Problem, joints2d, *, scale, body: BodyModel, segment_sc
 def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
                prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                segment_scale=None, principal_point=None, contact="auto", sweeps: int = 2,
-               max_iter: int = 30, robust: float | None = None, **weights) -> ClipSolve:
+               max_iter: int = 30, robust: float | None = None, noise_floor: float = 0.0,
+               **weights) -> ClipSolve:
     """Fit the skeleton to a clip's 2D joints (see the module docstring).
 
     Parameters
@@ -183,6 +203,9 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
     robust : float, optional
         After the first solve, re-weight the 2D joints by their misfit
         (:func:`robust_weights`, this many sigmas) and solve again.
+    noise_floor : float
+        The 2D noise (fraction of the height) the pose prior assumes at least
+        (:data:`FITTED_NOISE_FLOOR` for joints from the 2D fit).
     **weights
         Override :class:`vidcap.video.solve.residuals.Problem`'s weights.
 
@@ -195,7 +218,7 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
     pb = make_problem(j2, scale=scale, fps=fps, body=body, yaw=yaw, prior_signs=prior_signs,
                       hard_signs=hard_signs, confidence=confidence, yaw_sigma=yaw_sigma,
                       segment_scale=segment_scale, principal_point=principal_point,
-                      contact=contact, **weights)
+                      contact=contact, noise_floor=noise_floor, **weights)
     p0 = warm_start(pb, j2, scale=scale, body=body, segment_scale=segment_scale,
                     principal_point=principal_point)
     return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust)

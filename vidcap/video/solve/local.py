@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from vidcap.body import BodyModel
-from vidcap.video.solve.clip import make_problem, solve_problem, warm_start
+from vidcap.video.solve.clip import FITTED_NOISE_FLOOR, make_problem, solve_problem, warm_start
 from vidcap.video.solve.residuals import segment_zeta
 
 #: Frames held either side of a window (the second differences reach two frames).
@@ -68,7 +68,7 @@ def resolve_window(params, joints3d, window, joints2d, *, scale, fps: float, bod
     pb = make_problem(joints2d[sl], scale=cut(scale), fps=fps, body=body, yaw=cut(yaw),
                       prior_signs=cut(prior_signs), hard_signs=cut(hard_signs),
                       yaw_sigma=cut(yaw_sigma), segment_scale=cut(segment_scale),
-                      confidence=cut(confidence),
+                      confidence=cut(confidence), noise_floor=FITTED_NOISE_FLOOR,
                       principal_point=principal_point,
                       contact="off" if contact is None else cut(contact))
     p0 = np.array(params[sl], dtype=float)

@@ -12,7 +12,9 @@ Per frame (the *unary* residuals, which depend on that frame's 24 parameters):
 * the torso's yaw against the orientation's, over ``sigma_yaw`` (per frame);
 * the root's depth against 0, weakly (orthography cannot tell it; contact can);
 * every segment's ``dZ / length`` against 0 over ``sigma_plane`` (the in-plane prior:
-  where 2D noise leaves a segment's depth open, :func:`vidcap.video.solve.clip.plane_weight`).
+  where 2D noise leaves a segment's depth open, :func:`vidcap.video.solve.clip.plane_weight`);
+* the pose prior learned from motion capture (:mod:`vidcap.video.solve.prior`): the
+  head's and limbs' directions in the torso frame, whitened, times ``prior_weight``.
 
 Across frames, linear in the joints: the second difference of every joint over
 ``sigma_acc`` (temporal smoothness), and the planted ankle's frame-to-frame motion
@@ -37,6 +39,13 @@ from vidcap.video.solve.limits import (
     limit_excess,
     limit_jacobian,
     params_limit_angles,
+)
+from vidcap.video.solve.prior import (
+    N_ROWS,
+    feature_jacobian,
+    features,
+    load_prior,
+    prior_residuals,
 )
 from vidcap.video.solve.skeleton import (
     N_PARAMS,
@@ -65,7 +74,7 @@ class Problem:
     yaw : (F,) radians; yaw_weight : (F,) 1/rad.
     contact : (F, 2) bool, planted left/right ankle.
     sign_weight, hard_weight, limit_weight, acc_weight, contact_weight, depth_weight,
-    plane_weight : the inverse sigmas of the module docstring.
+    plane_weight, prior_weight : the inverse sigmas of the module docstring.
     """
 
     offsets: np.ndarray
@@ -84,6 +93,7 @@ class Problem:
     contact_weight: float = 100.0
     depth_weight: float = 0.01
     plane_weight: float = 0.0
+    prior_weight: float = 0.0
 
     @property
     def n_frames(self) -> int:
@@ -97,7 +107,8 @@ class Problem:
                        self.prior_signs[sl], self.hard_signs[sl], self.yaw[sl],
                        self.yaw_weight[sl], self.contact[sl], self.sign_weight,
                        self.hard_weight, self.limit_weight, self.acc_weight,
-                       self.contact_weight, self.depth_weight, self.plane_weight)
+                       self.contact_weight, self.depth_weight, self.plane_weight,
+                       self.prior_weight)
 
 
 def segment_zeta(joints, lengths) -> np.ndarray:
@@ -117,17 +128,16 @@ def unary(problem: Problem, params, frames=None):
     ``frames`` (...) indexes the problem's frames the poses belong to (default all,
     params (F, 24)).
     """
-    joints, _, _ = forward_kinematics(params, problem.offsets)
+    joints, root, _ = forward_kinematics(params, problem.offsets)
     lim = limit_excess(params_limit_angles(params))
-    return unary_from_joints(problem, joints, None, params, frames, excess=lim), joints
+    return unary_from_joints(problem, joints, root, params, frames, excess=lim), joints
 
 
 def unary_from_joints(problem: Problem, joints, root, params, frames=None, *,
                       excess=None) -> np.ndarray:
     """:func:`unary`'s residuals (..., U) of world ``joints`` (..., 15, 3) with the
     torso's rotation ``root`` (..., 3, 3); ``params`` (..., 24) give the yaw, pitch,
-    roll and root depth; ``excess`` (..., 15) the joint limits' excess when known
-    (then ``root`` is not read)."""
+    roll and root depth; ``excess`` (..., 15) the joint limits' excess when known."""
     pb = problem
     idx = np.arange(pb.n_frames) if frames is None else frames
     proj = (joints[..., :2] - pb.target[idx]) * pb.weight[idx][..., None]
@@ -140,10 +150,19 @@ def unary_from_joints(problem: Problem, joints, root, params, frames=None, *,
     depth = params[..., ROOT_POS.start + 2] * pb.depth_weight
     return np.concatenate([proj.reshape(proj.shape[:-2] + (-1,)), lim * pb.limit_weight,
                            soft, hard, yaw[..., None], depth[..., None],
-                           zeta * pb.plane_weight], axis=-1)
+                           zeta * pb.plane_weight, pose_prior(pb, joints, root)], axis=-1)
 
 
-N_UNARY = 15 * 2 + len(LIMITS) + 10 + 10 + 2 + 10
+N_UNARY = 15 * 2 + len(LIMITS) + 10 + 10 + 2 + 10 + N_ROWS
+
+
+def pose_prior(problem: Problem, joints, root) -> np.ndarray:
+    """The pose prior's residuals (..., 32) (:func:`vidcap.video.solve.prior.prior_residuals`)
+    times ``prior_weight``."""
+    if not problem.prior_weight:
+        return np.zeros(joints.shape[:-2] + (N_ROWS,))
+    f = features(joints, root, problem.lengths)
+    return problem.prior_weight * prior_residuals(f, *load_prior())
 
 
 def contact_pairs(contact) -> tuple[np.ndarray, np.ndarray]:
@@ -219,6 +238,10 @@ def linearise(problem: Problem, params) -> Linearisation:
     ju[:, at, YAW] = pb.yaw_weight
     ju[:, at + 1, ROOT_POS.start + 2] = pb.depth_weight
     ju[:, at + 2:at + 12] = pb.plane_weight * dzeta
+    if pb.prior_weight:
+        _, jp = prior_residuals(features(joints, root, pb.lengths), *load_prior(),
+                                jacobian=feature_jacobian(jk, root, pb.lengths))
+        ju[:, at + 12:] = pb.prior_weight * jp
     return Linearisation(r, ju, jk.reshape(F, 45, N_PARAMS))
 
 

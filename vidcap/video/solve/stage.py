@@ -14,7 +14,7 @@ import numpy as np
 
 from vidcap.body import BodyModel
 from vidcap.video.proposals import SignProposal
-from vidcap.video.solve.clip import ClipSolve, solve_clip
+from vidcap.video.solve.clip import FITTED_NOISE_FLOOR, ClipSolve, solve_clip
 from vidcap.video.solve.residuals import segment_zeta
 
 #: Solve cost (half a sum of squared residuals, each one 2D joint's misfit in units of
@@ -77,7 +77,7 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
         confidence = np.where(placed, USER_JOINT_WEIGHT, 1.0)
     sol = solve_clip(joints2d, scale=scale, fps=fps, body=body, yaw=yaw,
                      prior_signs=proposal.signs, hard_signs=user_signs, yaw_sigma=sigma,
-                     confidence=confidence,
+                     confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
                      segment_scale=segment_scale, principal_point=principal_point)
     margin = np.where(np.isfinite(sol.confidence), sol.confidence / COST_PER_MARGIN,
                       proposal.margin)
