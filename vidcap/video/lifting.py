@@ -340,8 +340,8 @@ def lift_pose(
     track : array_like, shape (F,), optional
         Horizontal image position of the subject (walking direction).
     smooth_2d : float
-        Gaussian smoothing of the 2D joints over time before lifting, in frames
-        (0 = none): Eq. 2.2 amplifies image noise where a segment is nearly in plane.
+        Gaussian smoothing of the 2D joints over time before lifting, in frames (0 =
+        none; Eq. 2.2 amplifies image noise where a segment is nearly in plane).
     yaw_window_s : float
         Running-median window (seconds) of the torso's horizontal foreshortening.
     scale_window_s : float
@@ -368,19 +368,17 @@ def lift_pose(
     Examples
     --------
     The model's rest pose, seen from the front at 200 px per metre for 30 frames,
-    comes back at its own size (within 0.1 m: the solve's pose prior, which assumes the
-    2D fit's errors, bends the straight knees out of the image plane by up to 8 cm;
-    ``method="segment"`` returns it exactly):
+    comes back at its own size (within 0.1 m: the solve's pose prior bends straight knees
+    out of the image plane by up to 8 cm; ``method="segment"`` returns it exactly):
 
     >>> import numpy as np
     >>> from vidcap.body import BodyModel
     >>> rest = BodyModel().rest_positions()  # (15, 3) m, Y up
     >>> uv = np.c_[320 + 200 * rest[:, 0], 400 - 200 * rest[:, 1]]  # px, y down
     >>> res = lift_pose(np.repeat(uv[None], 30, axis=0), fps=30.0, image_sides=False)
-    >>> res.joints3d.shape, float(res.scale)
-    ((30, 15, 3), 200.0)
-    >>> bool(np.allclose(res.joints3d[0] - res.joints3d[0, 0], rest - rest[0], atol=0.1))
-    True
+    >>> res.joints3d.shape, float(res.scale), bool(np.allclose(
+    ...     res.joints3d[0] - res.joints3d[0, 0], rest - rest[0], atol=0.1))
+    ((30, 15, 3), 200.0, True)
     >>> seg = lift_pose(np.repeat(uv[None], 30, axis=0), fps=30.0, image_sides=False,
     ...                 method="segment")
     >>> bool(np.allclose(seg.joints3d[0] - seg.joints3d[0, 0], rest - rest[0], atol=1e-6))
