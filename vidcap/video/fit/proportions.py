@@ -49,6 +49,27 @@ PLATEAU_TIE = 0.0015
 LIMITS = (0.7, 1.45)
 #: Relative step and steps either side of each round of the search.
 STEPS = ((0.05, 4), (0.025, 3))
+#: The share of the standing height above the ankles (the feet below them: the fit's
+#: ``foot`` option is one minus it), and the values its search may reach.
+FOOT, FOOT_LIMITS = "above_feet", (0.8, 1.0)
+#: A real adult's proportions as factors on the seed's ratios (``proportions='human'``):
+#: the joint heights of Drillis & Contini's anthropometric table as a fraction of the
+#: stature H (Winter, *Biomechanics and Motor Control of Human Movement*, 4th ed. 2009,
+#: Fig. 4.1): shoulder 0.818, elbow 0.630, wrist 0.485, hip 0.530, knee 0.285, ankle
+#: 0.039, the head's top 1. The seed's model (Table 3.1) puts the shoulders at the neck
+#: (0.143 H below the top, not 0.182), the elbow 0.086 H too high, the hips at the waist
+#: and the ankles on the floor; a silhouette does not show where a hanging arm's elbow
+#: or a standing body's hips are, so the fit cannot correct that itself. Head = top to
+#: shoulders, torso = shoulders to hips, upper arm = shoulder to elbow, lower arm =
+#: elbow to wrist; the ankles 0.039 H above the soles (the model ends there). The
+#: model's head top is the stature's (the table's eye height 0.936 is below it).
+HUMAN = {"head": 0.182 / (25 / 175), "torso": 0.288 / (52 / 175),
+         "upper_legs": 0.245 / (46 / 175), "lower_legs": 0.246 / (52 / 175),
+         "upper_arms": 0.188 / (25 / 175), "lower_arms": 0.145 / (35 / 175),
+         FOOT: 0.961}
+#: What ``proportions=`` may be: the seed's ratios, the subject's estimated from the
+#: clip (:func:`estimate_proportions`), or a real adult's (:func:`human_proportions`).
+PROPORTION_CHOICES = ("seed", "auto", "human")
 #: Frames per window and windows per clip fitted for each candidate body.
 WINDOW, WINDOWS = 30, 3
 #: Fewest frames that must pin a knee for the thigh/shin split to be measured.
@@ -78,9 +99,17 @@ class ProportionEstimate:
     evidence: dict = field(default_factory=dict)
     similarity: tuple = (float("nan"), float("nan"))
 
+    @property
+    def foot(self) -> float:
+        """The share of the standing height below the ankles (0: the seed's body)."""
+        return 1.0 - self.factors.get(FOOT, 1.0)
+
     def body(self, height: float = DEFAULT_HEIGHT_M) -> BodyModel:
-        """The body with these proportions, ``height`` metres tall standing."""
-        return body_with_proportions(height, self.factors)
+        """The body with these proportions for a subject ``height`` metres tall
+        standing: its head top to ankles is ``height`` less the feet (:attr:`foot`,
+        not part of the model)."""
+        return body_with_proportions(height * (1.0 - self.foot),
+                                     {k: v for k, v in self.factors.items() if k != FOOT})
 
     def ratios(self) -> dict[str, float]:
         """Length per group (pooled left/right) as a fraction of the standing height,
@@ -97,6 +126,12 @@ class ProportionEstimate:
         cells = [f"{k.replace('_', ' ')} {100 * v:.1f}% ({100 * (v / seed[k] - 1):+.0f}%)"
                  for k, v in self.ratios().items()]
         return "body proportions (of height, vs the seed's): " + ", ".join(cells)
+
+
+def human_proportions() -> ProportionEstimate:
+    """A real adult's proportions (:data:`HUMAN`: an anthropometric table's, nothing
+    measured from the clip), for ``proportions='human'``."""
+    return ProportionEstimate(factors=dict(HUMAN), evidence=dict.fromkeys(HUMAN, 0))
 
 
 def sample_windows(masks, *, window: int = WINDOW, windows: int = WINDOWS) -> list[slice]:
@@ -154,8 +189,8 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
     n_frames = sum(len(range(len(masks))[w]) for w in wins)
 
     def score(factors):
-        body = body_with_proportions(DEFAULT_HEIGHT_M, factors)
-        sims = [fit_sequence(masks[w], body=body, height=height, **fit_kw).similarity
+        kw = fit_keywords(factors)
+        sims = [fit_sequence(masks[w], height=height, **kw, **fit_kw).similarity
                 for w in wins]
         s = np.concatenate(sims)
         return float(np.mean(s[s > 0])) if (s > 0).any() else 0.0
@@ -174,6 +209,16 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
                               similarity=(seed_s, score(factors)))
 
 
+def fit_keywords(factors: dict) -> dict:
+    """The fit's options (``body``, ``foot``) for ``factors`` (1.70 m standing: only the
+    ratios matter to a 2D fit)."""
+    lengths = {k: v for k, v in factors.items() if k != FOOT}
+    out = {"body": body_with_proportions(DEFAULT_HEIGHT_M, lengths)}
+    if FOOT in factors:
+        out["foot"] = 1.0 - factors[FOOT]
+    return out
+
+
 def _search(score, factors: dict, name: str, step: float, reach: int):
     """One coordinate: S at ``factors[name]`` times ``1 + k step`` for ``|k| <= reach``
     (within :data:`LIMITS`), then the vertex of a parabola fitted (least squares) to
@@ -181,7 +226,8 @@ def _search(score, factors: dict, name: str, step: float, reach: int):
     the fit's own noise (a small change of the model moves a search by a pixel here
     and there). Returns the factors with ``name``'s chosen."""
     cur = factors.get(name, 1.0)
-    values = np.unique(np.clip(cur * (1 + step * np.arange(-reach, reach + 1)), *LIMITS))
+    values = np.unique(np.clip(cur * (1 + step * np.arange(-reach, reach + 1)),
+                               *(FOOT_LIMITS if name == FOOT else LIMITS)))
     s = np.array([score({**factors, name: float(v)}) for v in values])
     i = int(np.argmax(s))
     if name in PLATEAU:  # longer than the subject's fits as well, foreshortened
@@ -203,19 +249,21 @@ def _leg_split(masks, wins, factors, height, fit_kw):
     :data:`MIN_FRAMES`."""
     from vidcap.video.fit.tracking import fit_sequence
 
-    body = body_with_proportions(DEFAULT_HEIGHT_M, factors)
+    kw = fit_keywords(factors)
+    body, above = kw["body"], 1.0 - kw.get("foot", fit_kw.get("foot", 0.0))
     ul = [SEGMENT_INDEX["l_upper_leg"], SEGMENT_INDEX["r_upper_leg"]]
     ll = [SEGMENT_INDEX["l_lower_leg"], SEGMENT_INDEX["r_lower_leg"]]
     ratios = []
     for w in wins:
         sub = masks[w]
-        pose = fit_sequence(sub, body=body, height=height, **fit_kw)
+        pose = fit_sequence(sub, height=height, **kw, **fit_kw)
         for k in range(len(sub)):
             if not pose.similarity[k] > 0:
                 continue
             lengths, _ = length_profiles(np.asarray(sub[k]), pose.joints2d[k],
                                          pose.angles[k], pose.foreshortening[k],
-                                         float(pose.spread[k]), float(pose.model_height[k]),
+                                         float(pose.spread[k]),
+                                         above * float(pose.model_height[k]),
                                          body=body)
             r = lengths[ul] / (lengths[ul] + lengths[ll])  # NaN where either is unknown
             ratios.extend(r[np.isfinite(r)].tolist())
@@ -230,5 +278,5 @@ def _leg_split(masks, wins, factors, height, fit_kw):
         len(ratios)
 
 
-__all__ = ["LIMITS", "SEARCHED", "ProportionEstimate", "estimate_proportions",
-           "sample_windows"]
+__all__ = ["FOOT", "HUMAN", "LIMITS", "PROPORTION_CHOICES", "SEARCHED", "ProportionEstimate",
+           "estimate_proportions", "fit_keywords", "human_proportions", "sample_windows"]
