@@ -47,7 +47,6 @@ from vidcap.video.lifting import (
     plane_passages,
     swap_pairs,
 )
-from vidcap.video.fit.proportions import PROPORTION_CHOICES
 from vidcap.video.masks import MaskStack
 from vidcap.video.motion import MotionResult, build_motion, keyframes_by_confidence
 from vidcap.video.person import partly_outside, person_track
@@ -233,6 +232,7 @@ def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
     from vidcap.video.fit.cues import CUE_MODES
+    from vidcap.video.fit.proportions import PROPORTION_CHOICES
 
     _check_choice("proportions", proportions, PROPORTION_CHOICES)
     _check_choice("cues", cues, tuple(CUE_MODES))

@@ -55,16 +55,21 @@ FOOT, FOOT_LIMITS = "above_feet", (0.8, 1.0)
 #: A real adult's proportions as factors on the seed's ratios (``proportions='human'``):
 #: the joint heights of Drillis & Contini's anthropometric table as a fraction of the
 #: stature H (Winter, *Biomechanics and Motor Control of Human Movement*, 4th ed. 2009,
-#: Fig. 4.1): shoulder 0.818, elbow 0.630, wrist 0.485, hip 0.530, knee 0.285, ankle
-#: 0.039, the head's top 1. The seed's model (Table 3.1) puts the shoulders at the neck
+#: Fig. 4.1): shoulder 0.818, elbow 0.630, wrist 0.485, knee 0.285, ankle 0.039, the
+#: head's top 1; the hips at 0.500, not the table's 0.530 (its greater trochanter):
+#: where MediaPipe Pose and motion-capture hip centres put them, chosen on the tuning
+#: clips of ``benchmarks/pose2d_real.py`` (pose2sim_balance cam1, whose hips it centres,
+#: and onebyone_room 233-445; 0.530 / 0.515 / 0.500 / 0.485 gave median joint errors
+#: 7.5 / 7.5 / 7.0 / 6.7 % and 9.8 / 9.4 / 8.9 / 8.8 % of height, 0.485 putting cam1's
+#: hips below MediaPipe's). The seed's model (Table 3.1) puts the shoulders at the neck
 #: (0.143 H below the top, not 0.182), the elbow 0.086 H too high, the hips at the waist
 #: and the ankles on the floor; a silhouette does not show where a hanging arm's elbow
 #: or a standing body's hips are, so the fit cannot correct that itself. Head = top to
 #: shoulders, torso = shoulders to hips, upper arm = shoulder to elbow, lower arm =
 #: elbow to wrist; the ankles 0.039 H above the soles (the model ends there). The
 #: model's head top is the stature's (the table's eye height 0.936 is below it).
-HUMAN = {"head": 0.182 / (25 / 175), "torso": 0.288 / (52 / 175),
-         "upper_legs": 0.245 / (46 / 175), "lower_legs": 0.246 / (52 / 175),
+HUMAN = {"head": 0.182 / (25 / 175), "torso": 0.318 / (52 / 175),
+         "upper_legs": 0.215 / (46 / 175), "lower_legs": 0.246 / (52 / 175),
          "upper_arms": 0.188 / (25 / 175), "lower_arms": 0.145 / (35 / 175),
          FOOT: 0.961}
 #: What ``proportions=`` may be: the seed's ratios, the subject's estimated from the
