@@ -142,3 +142,18 @@ def test_foot_option_checked():
         FitOptions(foot=-0.1)
     assert fit_keywords({"legs": 1.1})["body"].custom and "foot" not in fit_keywords({})
     assert fit_keywords({FOOT: 0.95})["foot"] == pytest.approx(0.05)
+
+
+def test_rows_below_the_image_are_none():
+    """A search's rows starting below the normalised image (a pelvis placed under a tiny
+    silhouette's bottom) are empty, not an index past the row table."""
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.normalise import normalise_mask
+
+    mask = np.zeros((40, 40), bool)
+    mask[10:30, 15:25] = True
+    eng = _MaskEngine(normalise_mask(mask, height=20), caps=False)
+    assert eng.rows((eng.h + 5, eng.h + 50)) == (eng.h, eng.h)
+    assert eng.pixels(*eng.rows((eng.h + 5, eng.h + 50))) == 0
+    assert eng.rows((-3, 4)) == (0, 4)
+    assert eng.pixels(*eng.rows(None)) == int(eng.sil.sum())
