@@ -157,3 +157,28 @@ def test_rows_below_the_image_are_none():
     assert eng.pixels(*eng.rows((eng.h + 5, eng.h + 50))) == 0
     assert eng.rows((-3, 4)) == (0, 4)
     assert eng.pixels(*eng.rows(None)) == int(eng.sil.sum())
+
+
+def test_proportions_stage_with_fixed_human_body(tmp_path):
+    """The pipeline's proportions stage with ``fixed`` proportions: no estimate, the clip
+    fitted with them, the pose's model height the model's (the feet left out), cached."""
+    from vidcap.synth import make_motion, render_clip
+    from vidcap.video.bodystage import proportions_stage
+    from vidcap.video.fit.tracking import fit_sequence
+    from vidcap.video.stagecache import StageCache
+
+    motion = make_motion("walk", n_frames=6)
+    _, t = render_clip(motion, yaw_deg=90, size=(160, 120), noise=0.0,
+                       rng=np.random.default_rng(0))
+    cache = StageCache(tmp_path)
+    human = human_proportions()
+    pose, est = proportions_stage(cache, "k", t["masks"], jobs=1, per_job=1, progress=False,
+                                  fixed=human)
+    assert est.factors == human.factors
+    direct = fit_sequence(t["masks"], **fit_keywords(human.factors))
+    np.testing.assert_allclose(pose["joints2d"], direct.joints2d)
+    np.testing.assert_allclose(pose["model_height"], direct.model_height * 0.961)
+    again, est2 = proportions_stage(cache, "k", t["masks"], jobs=1, per_job=1,
+                                    progress=False, fixed=human)
+    assert est2.factors == pytest.approx(human.factors)
+    np.testing.assert_allclose(again["joints2d"], pose["joints2d"])

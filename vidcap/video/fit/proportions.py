@@ -31,6 +31,7 @@ import numpy as np
 
 from vidcap.body import (
     DEFAULT_HEIGHT_M,
+    PROPORTION_ALIASES,
     PROPORTION_GROUPS,
     SEGMENT_INDEX,
     BodyModel,
@@ -163,7 +164,7 @@ def sample_windows(masks, *, window: int = WINDOW, windows: int = WINDOWS) -> li
 
 def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
                          windows: int = WINDOWS, searched=SEARCHED, steps=STEPS,
-                         **fit_kw) -> ProportionEstimate:
+                         base: dict | None = None, **fit_kw) -> ProportionEstimate:
     """Estimate the subject's proportions from a clip's silhouettes.
 
     Parameters
@@ -178,6 +179,9 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
         The factors searched by S (:data:`SEARCHED`), in order.
     steps : sequence of (float, int)
         Relative step and steps either side of the current factor, per round.
+    base : dict, optional
+        Factors the search starts from and multiplies (e.g. :data:`HUMAN`); the
+        thigh/shin split is then the base's (not profiled). Default: the seed's.
     **fit_kw
         Other options of :func:`vidcap.video.fit.tracking.fit_sequence`.
 
@@ -194,7 +198,7 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
     n_frames = sum(len(range(len(masks))[w]) for w in wins)
 
     def score(factors):
-        kw = fit_keywords(factors)
+        kw = fit_keywords(compose(base, factors))
         sims = [fit_sequence(masks[w], height=height, **kw, **fit_kw).similarity
                 for w in wins]
         s = np.concatenate(sims)
@@ -206,12 +210,31 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
         for name in searched:
             factors = _search(score, factors, name, step, reach)
     evidence = dict.fromkeys(searched, n_frames)
-    split, n_split = _leg_split(masks, wins, factors, height, fit_kw)
+    split, n_split = (None, 0) if base else _leg_split(masks, wins, factors, height, fit_kw)
     if split is not None:
         factors.update(split)
     evidence["upper_legs"] = evidence["lower_legs"] = n_split
-    return ProportionEstimate(factors=dict(factors), evidence=evidence,
+    return ProportionEstimate(factors=compose(base, factors), evidence=evidence,
                               similarity=(seed_s, score(factors)))
+
+
+def compose(base: dict | None, factors: dict) -> dict:
+    """``factors`` applied on top of ``base`` (None: ``factors``): every group's, width's
+    and the feet's factor the product of the two, aliases (``legs``, ``arms``)
+    resolved to their groups (a group's own factor wins over its alias's)."""
+    if not base:
+        return dict(factors)
+
+    def resolved(f: dict) -> dict:
+        out = {}
+        for alias, groups in PROPORTION_ALIASES.items():
+            if alias in f:
+                out.update(dict.fromkeys(groups, f[alias]))
+        out.update({k: v for k, v in f.items() if k not in PROPORTION_ALIASES})
+        return out
+
+    b, f = resolved(base), resolved(factors)
+    return {k: b.get(k, 1.0) * f.get(k, 1.0) for k in sorted(set(b) | set(f))}
 
 
 def fit_keywords(factors: dict) -> dict:
