@@ -9,6 +9,7 @@ from vidcap.video.fit.lengthprofile import length_profiles
 from vidcap.video.fit.proportions import (
     FOOT,
     ProportionEstimate,
+    compose,
     estimate_proportions,
     fit_keywords,
     human_proportions,
@@ -182,3 +183,11 @@ def test_proportions_stage_with_fixed_human_body(tmp_path):
                                     progress=False, fixed=human)
     assert est2.factors == pytest.approx(human.factors)
     np.testing.assert_allclose(again["joints2d"], pose["joints2d"])
+
+
+def test_compose_multiplies_groups_and_resolves_aliases():
+    base = {"legs": 0.8, "upper_arms": 1.3, FOOT: 0.96}
+    out = compose(base, {"legs": 1.1, "arms": 0.5, "upper_legs": 2.0, "shoulders": 1.2})
+    assert out == pytest.approx({"upper_legs": 1.6, "lower_legs": 0.88, "upper_arms": 0.65,
+                                 "lower_arms": 0.5, "shoulders": 1.2, FOOT: 0.96})
+    assert compose(None, {"legs": 1.1}) == {"legs": 1.1}
