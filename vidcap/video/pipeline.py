@@ -124,8 +124,7 @@ def run(
         The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
     proportions : {'seed', 'auto', 'human'}
-        The seed's ratios, the subject's from the clip, or a real adult's from an
-        anthropometric table, the ankles above the soles (:func:`_fit_stage`).
+        The seed's ratios, the subject's from the clip, or a real adult's (:func:`_fit_stage`).
     cues : {'outline', 'all'}
         The 2D fit reads the silhouette only, or the frame's cues inside it too.
 
