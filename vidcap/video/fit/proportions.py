@@ -96,7 +96,8 @@ class ProportionEstimate:
         Per factor, what measured it: frames fitted for a searched factor, frames
         with a determined length for a profiled one (0: kept at 1, the seed's).
     similarity : tuple of float
-        Mean S of the sample windows fitted with the seed's proportions and with these
+        Mean S of the sample windows fitted with the seed's proportions (or the
+        search's ``base``) and with these
         (the parabola's vertex is kept even where a single fit there scores a little
         lower than a grid point: the fit's noise is of that size).
     """
