@@ -23,10 +23,14 @@ through vidcap's own pipeline (silhouettes from the video, the tracked fit, defa
 options), with ``--cues outline`` (the default) and ``--cues all``: one row per clip, the
 median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
 joints, and per joint for the default cues; and the fit to MediaPipe's masks instead of
-vidcap's silhouettes (``mp-masks``). All are validation clips.
+vidcap's silhouettes (``mp-masks``); and both again with ``proportions='human'`` (``human``,
+``mp-human``: an anthropometric table's body, the ankles above the soles). Tuning clips
+for the ``human`` choices (with or without the feet): pose2sim_balance cam1 and
+onebyone_room 233-445; the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
-[--only NAME]`` (``--only``: just the clips whose name contains NAME).
+[--only NAME] [--human]`` (``--only``: just the clips whose name contains NAME; ``--human``:
+the first table with ``proportions='human'``).
 """
 
 from __future__ import annotations
@@ -76,9 +80,12 @@ def reference(name: str, video: Path) -> Path | None:
     return out
 
 
-def score(ref: Path, masks: np.ndarray) -> dict:
-    """compare.py's joint scores of the tracked fit to ``masks`` against ``ref``."""
-    pose = fit_sequence(masks)
+def score(ref: Path, masks: np.ndarray, human: bool = False) -> dict:
+    """compare.py's joint scores of the tracked fit to ``masks`` against ``ref``
+    (``human``: with ``proportions='human'``)."""
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions
+
+    pose = fit_sequence(masks, **(fit_keywords(human_proportions().factors) if human else {}))
     with tempfile.TemporaryDirectory() as tmp:
         pred = Path(tmp) / "pose2d.npz"
         pose.save(pred)
@@ -109,7 +116,7 @@ def main(argv=None) -> int:
             continue
         with np.load(masks_file) as d:
             masks = d[key].astype(bool)
-        res = score(ref, masks)
+        res = score(ref, masks, human="--human" in argv)
         medians = []
         for joint in LIMB_JOINTS:
             s = res["joints"][joint]["swap"]
@@ -120,9 +127,10 @@ def main(argv=None) -> int:
               f"{res['median_height_px']:.0f} px)")
     from pose2d_real_pipeline import pipeline_tables
 
+    rows = ("outline", "mp-masks", "human", "mp-human")
     pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS,
-                    cues=("outline", "mp-masks") if "--no-all" in argv
-                    else ("outline", "all", "mp-masks"), only=only)
+                    cues=rows if "--no-all" in argv else rows[:1] + ("all",) + rows[1:],
+                    only=only)
     return 0
 
 

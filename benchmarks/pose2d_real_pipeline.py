@@ -7,8 +7,9 @@ vidcap gave joints, the median of the 12 limb joints' median distances (per cent
 height: the larger side of the box around MediaPipe's 33 landmarks, about 0.9 of
 stature), the share of (frame, joint) pairs more than 10 % apart, and the worst joint by
 that share; ``mp-masks``: the same fit to MediaPipe's masks instead of vidcap's own
-silhouettes (which part of the error is the silhouettes'). Then per joint (default cues):
-median / share > 10 %.
+silhouettes (which part of the error is the silhouettes'); ``human`` and ``mp-human``: the
+same two with ``proportions='human'`` (an anthropometric table's body, the ankles above
+the soles). Then per joint (each row kind): median / share > 10 %.
 """
 
 from __future__ import annotations
@@ -45,25 +46,40 @@ def _has_masks(path: Path) -> bool:
         return "masks" in d.files
 
 
-def _fit_reference_masks(clip: RealClip) -> np.ndarray:
+def _fit_reference_masks(clip: RealClip, proportions: str = "seed") -> np.ndarray:
     """The tracked fit (outline) to MediaPipe's masks over ``clip``'s range: what the fit
-    does with silhouettes better than vidcap's own (cues column ``mp-masks``)."""
+    does with silhouettes better than vidcap's own (cues column ``mp-masks``;
+    ``mp-human``: with ``proportions='human'``)."""
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions
     from vidcap.video.fit.tracking import fit_sequence
 
     with np.load(clip.reference) as d:
         masks = stretch(d["masks"], clip).astype(bool)
-    return fit_sequence(masks, cues="outline").joints2d
+    kw = fit_keywords(human_proportions().factors) if proportions == "human" else {}
+    return fit_sequence(masks, cues="outline", **kw).joints2d
+
+
+def _joints(clip: RealClip, row: str):
+    """The 2D joints of one row kind (see the module's docstring)."""
+    if row.startswith("mp-"):
+        return _fit_reference_masks(clip, "human" if row == "mp-human" else "seed")
+    if row == "human":
+        return pipeline_result(clip.video, "outline", proportions="human").image_joints2d
+    return pipeline_result(clip.video, row).image_joints2d
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,
-                    cues=("outline", "all", "mp-masks"), only=None):
+                    cues=("outline", "all", "mp-masks", "human", "mp-human"), only=None):
     """Print the tables. ``ido``: (name, video) of ido_walk; ``reference(name, video)``:
     its MediaPipe npz or None; ``compare(ref, pred)``: compare.py's joint scores.
-    ``cues``: ``vidcap convert --cues`` values, and ``mp-masks``: the fit (outline) to
-    MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks).
-    ``only``: just the clips whose name contains it."""
+    ``cues``: ``vidcap convert --cues`` values, ``mp-masks``: the fit (outline) to
+    MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks),
+    ``human`` / ``mp-human``: the same with ``proportions='human'``. ``only``: just the
+    clips whose name contains it."""
     print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit, default "
-          "options; validation: nothing was tuned on these clips). MediaPipe is a reference, "
+          "options; proportions='human' in the human rows: its hips and feet were chosen on "
+          "pose2sim_balance_cam1 and onebyone_room 233-445 (tuning), the others are "
+          "validation). MediaPipe is a reference, "
           "not the truth (~2.4 % of height off on lab footage).")
     clips = real_clips()
     name, video = ido
@@ -79,10 +95,9 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
     per_joint = []
     for clip in clips:
         for c in cues:
-            if c == "mp-masks" and not _has_masks(clip.reference):
+            if c.startswith("mp-") and not _has_masks(clip.reference):
                 continue
-            joints = (_fit_reference_masks(clip) if c == "mp-masks"
-                      else pipeline_result(clip.video, c).image_joints2d)
+            joints = _joints(clip, c)
             res, covered = _score(clip, joints, compare)
             shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]
             medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
@@ -90,11 +105,10 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
             print(f"{clip.name:26} {c:8} {res['frames_with_reference']:6d} {covered:6.1%} "
                   f"{np.median(medians):7.1%} {np.nanmean(shares):6.0%}  "
                   f"{limb_joints[worst]} ({shares[worst]:.0%})")
-            if c == cues[0]:
-                per_joint.append((clip.name, medians, shares))
-    print(f"\nPer joint, cues {cues[0]}: median % of height / share of frames > 10 % apart")
-    print(f"{'clip':26} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
-                                      for j in limb_joints))
-    for name, medians, shares in per_joint:
-        print(f"{name:26} " + " ".join(f"{m * 100:5.1f}/{s * 100:3.0f}"
-                                       for m, s in zip(medians, shares, strict=True)))
+            per_joint.append((clip.name, c, medians, shares))
+    print("\nPer joint: median % of height / share of frames > 10 % apart")
+    print(f"{'clip':26} {'row':8} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
+                                               for j in limb_joints))
+    for name, c, medians, shares in sorted(per_joint, key=lambda r: cues.index(r[1])):
+        print(f"{name:26} {c:8} " + " ".join(f"{m * 100:5.1f}/{s * 100:3.0f}"
+                                             for m, s in zip(medians, shares, strict=True)))

@@ -73,14 +73,15 @@ def real_clips(log=print) -> list[RealClip]:
     return out
 
 
-def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75):
+def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75,
+                    proportions: str = "seed"):
     """vidcap's :func:`vidcap.video.pipeline.run` on the whole ``video`` (default options but
-    ``cues``; no smoothing, the per-segment lift: the 3D is re-run per stretch), cached by
-    stage in :data:`CACHE`."""
+    ``cues`` and ``proportions``; no smoothing, the per-segment lift: the 3D is re-run per
+    stretch), cached by stage in :data:`CACHE`."""
     from vidcap.video.pipeline import run
 
     return run(video, height=height, smooth_sigma=0.0, progress=False, cache_dir=CACHE,
-               lift="segment", cues=cues)
+               lift="segment", cues=cues, proportions=proportions)
 
 
 def stretch(arr, clip: RealClip):

@@ -98,3 +98,24 @@ def test_cues_default_and_pose_cache_key():
     assert keys["all"] != keys["outline"]  # a fit with cues is not read back as one without
     with pytest.raises(ValueError, match="cues"):
         pipeline.run("nothing.mp4", cues="skin")
+
+
+def test_pose2d_cli_human_proportions(tmp_path, cli):
+    """``--proportions human``: the fit uses a real adult's proportions, written as
+    fractions of the stature (the upper arm longer than the seed's, the lower arm
+    shorter; head top to ankles 0.961 of it: the feet below)."""
+    video, masks, _ = _clip(tmp_path)
+    out = tmp_path / "pose2d.npz"
+    r = cli("pose2d", video, "--masks", masks, "-o", out, "--proportions", "human")
+    assert r.returncode == 0, r.stderr
+    assert "body proportions" in r.stdout
+    d = np.load(out)
+    from vidcap.body import SEGMENT_INDEX
+
+    lengths = d["body_lengths"]
+    assert lengths[SEGMENT_INDEX["l_upper_arm"]] == pytest.approx(0.188, abs=1e-3)
+    assert lengths[SEGMENT_INDEX["l_lower_arm"]] == pytest.approx(0.145, abs=1e-3)
+    legs = lengths[SEGMENT_INDEX["l_upper_leg"]] + lengths[SEGMENT_INDEX["l_lower_leg"]]
+    assert legs + lengths[SEGMENT_INDEX["torso"]] + lengths[SEGMENT_INDEX["head"]] \
+        == pytest.approx(0.961, abs=1e-3)
+    assert np.isfinite(Pose2D.load(out).joints2d).all()

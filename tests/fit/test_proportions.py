@@ -4,11 +4,15 @@ bodies scaled away from the seed's ratios."""
 import numpy as np
 import pytest
 
-from vidcap.body import SEGMENT_INDEX, body_with_proportions
+from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, body_with_proportions
 from vidcap.video.fit.lengthprofile import length_profiles
 from vidcap.video.fit.proportions import (
+    FOOT,
     ProportionEstimate,
+    compose,
     estimate_proportions,
+    fit_keywords,
+    human_proportions,
     sample_windows,
 )
 from vidcap.video.fit.raster import draw_pose, model_dimensions, pose_joints
@@ -71,3 +75,119 @@ def test_legs_and_shoulders_recovered_within_5_percent(factors):
     for group in ("upper_legs", "lower_legs", "torso", "shoulders"):
         assert got[group] == pytest.approx(want[group], rel=0.05), group
     assert np.isfinite(est.similarity).all()
+
+
+def _standing_with_feet(body, foot_px: float, h: float = 200.0):
+    """A standing model (legs a little apart, arms down) ``h`` px head top to ankles,
+    with a foot block ``foot_px`` tall under each ankle; its true joints."""
+    L, R, sh, hip = model_dimensions(h, body)
+    angles = np.deg2rad([90, 90, 265, 270, 275, 270, 265, 270, 275, 270]).astype(float)
+    joints = pose_joints(np.array([160.0, 40.0 + L[0] + L[1]]), angles, np.ones(10), 1.0,
+                         L, sh, hip)
+    mask = draw_pose(joints, R, (320, 320), caps=False)
+    for name in ("l_ankle", "r_ankle"):
+        x, y = joints[JOINT_INDEX[name]]
+        r = R[SEGMENT_INDEX["l_lower_leg"]]
+        mask[int(round(y)): int(round(y + foot_px)), int(round(x - r)): int(round(x + r))] = True
+    return mask, joints
+
+
+def test_the_feet_below_the_ankles_are_left_out():
+    """A body drawn with feet under its ankles (6 % of its standing height): fitted
+    with ``foot=0.06`` its ankles are found within 2 px; with the seed's body (ankles on
+    the floor) they sit at the soles."""
+    from vidcap.video.fit.tracking import fit_sequence
+
+    body = human_proportions().body(1.0)
+    foot_px = 0.06 / 0.94 * 200.0  # 6 % of head top to soles
+    mask, truth = _standing_with_feet(body, foot_px)
+    masks = np.repeat(mask[None], 3, axis=0)
+    ankles = [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]]
+    with_feet = fit_sequence(masks, cues="outline", body=body, foot=0.06).joints2d[-1]
+    without = fit_sequence(masks, cues="outline", body=body).joints2d[-1]
+    err = np.abs(with_feet[ankles, 1] - truth[ankles, 1])
+    assert err.max() < 2.0
+    assert (without[ankles, 1] - truth[ankles, 1]).min() > 0.6 * foot_px  # at the soles
+    knees = [JOINT_INDEX["l_knee"], JOINT_INDEX["r_knee"]]
+    assert np.abs(with_feet[knees] - truth[knees]).max() < 3.0
+
+
+def test_human_proportions_put_the_joints_of_the_table():
+    """The human body's joints standing (arms down), as fractions of the stature, are
+    the anthropometric table's: shoulder 0.818, elbow 0.630, wrist 0.485, knee 0.285,
+    ankle 0.039 (the feet below the model); the hips at 0.500 (chosen on real clips)."""
+    est = human_proportions()
+    assert est.foot == pytest.approx(0.039)
+    body = est.body(1.0)  # stature 1: head top to ankles 0.961
+    assert body.standing_height == pytest.approx(0.961)
+    top = 1.0
+    shoulder = top - body.length("head")
+    assert shoulder == pytest.approx(0.818, abs=1e-3)
+    assert shoulder - body.length("l_upper_arm") == pytest.approx(0.630, abs=1e-3)
+    assert shoulder - body.length("l_upper_arm") - body.length("l_lower_arm") \
+        == pytest.approx(0.485, abs=1e-3)
+    hip = shoulder - body.length("torso")
+    assert hip == pytest.approx(0.500, abs=1e-3)
+    assert hip - body.length("l_upper_leg") == pytest.approx(0.285, abs=1e-3)
+    assert hip - body.length("l_upper_leg") - body.length("l_lower_leg") \
+        == pytest.approx(0.039, abs=1e-3)
+    assert "above feet" not in est.summary()
+
+
+def test_foot_option_checked():
+    from vidcap.video.fit.options import FitOptions
+
+    with pytest.raises(ValueError, match="foot"):
+        FitOptions(foot=0.5)
+    with pytest.raises(ValueError, match="foot"):
+        FitOptions(foot=-0.1)
+    assert fit_keywords({"legs": 1.1})["body"].custom and "foot" not in fit_keywords({})
+    assert fit_keywords({FOOT: 0.95})["foot"] == pytest.approx(0.05)
+
+
+def test_rows_below_the_image_are_none():
+    """A search's rows starting below the normalised image (a pelvis placed under a tiny
+    silhouette's bottom) are empty, not an index past the row table."""
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.normalise import normalise_mask
+
+    mask = np.zeros((40, 40), bool)
+    mask[10:30, 15:25] = True
+    eng = _MaskEngine(normalise_mask(mask, height=20), caps=False)
+    assert eng.rows((eng.h + 5, eng.h + 50)) == (eng.h, eng.h)
+    assert eng.pixels(*eng.rows((eng.h + 5, eng.h + 50))) == 0
+    assert eng.rows((-3, 4)) == (0, 4)
+    assert eng.pixels(*eng.rows(None)) == int(eng.sil.sum())
+
+
+def test_proportions_stage_with_fixed_human_body(tmp_path):
+    """The pipeline's proportions stage with ``fixed`` proportions: no estimate, the clip
+    fitted with them, the pose's model height the model's (the feet left out), cached."""
+    from vidcap.synth import make_motion, render_clip
+    from vidcap.video.bodystage import proportions_stage
+    from vidcap.video.fit.tracking import fit_sequence
+    from vidcap.video.stagecache import StageCache
+
+    motion = make_motion("walk", n_frames=6)
+    _, t = render_clip(motion, yaw_deg=90, size=(160, 120), noise=0.0,
+                       rng=np.random.default_rng(0))
+    cache = StageCache(tmp_path)
+    human = human_proportions()
+    pose, est = proportions_stage(cache, "k", t["masks"], jobs=1, per_job=1, progress=False,
+                                  fixed=human)
+    assert est.factors == human.factors
+    direct = fit_sequence(t["masks"], **fit_keywords(human.factors))
+    np.testing.assert_allclose(pose["joints2d"], direct.joints2d)
+    np.testing.assert_allclose(pose["model_height"], direct.model_height * 0.961)
+    again, est2 = proportions_stage(cache, "k", t["masks"], jobs=1, per_job=1,
+                                    progress=False, fixed=human)
+    assert est2.factors == pytest.approx(human.factors)
+    np.testing.assert_allclose(again["joints2d"], pose["joints2d"])
+
+
+def test_compose_multiplies_groups_and_resolves_aliases():
+    base = {"legs": 0.8, "upper_arms": 1.3, FOOT: 0.96}
+    out = compose(base, {"legs": 1.1, "arms": 0.5, "upper_legs": 2.0, "shoulders": 1.2})
+    assert out == pytest.approx({"upper_legs": 1.6, "lower_legs": 0.88, "upper_arms": 0.65,
+                                 "lower_arms": 0.5, "shoulders": 1.2, FOOT: 0.96})
+    assert compose(None, {"legs": 1.1}) == {"legs": 1.1}

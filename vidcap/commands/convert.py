@@ -83,10 +83,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="3D from the 2D joints: one kinematic solve over the clip "
                         "(default; bone lengths constant, joint limits, smooth, feet planted "
                         "on walks and stands) or the seed's per-segment lift (segment)")
-    parser.add_argument("--proportions", default="seed", choices=("seed", "auto"),
-                        help="the body's proportions: the seed's ratios (default) or auto: "
+    parser.add_argument("--proportions", default="seed", choices=("seed", "auto", "human"),
+                        help="the body's proportions: the seed's ratios (default), auto: "
                         "this subject's segment lengths and widths estimated from the clip, "
-                        "the 2D fit done again with them and the lift and skeleton built "
+                        "or human: a real adult's from an anthropometric table (joints where "
+                        "a person's are, the ankles above the soles); with auto and human "
+                        "the 2D fit is done again with them and the lift and skeleton built "
                         "on them (--height stays the standing height)")
     add_cues_argument(parser)
     parser.add_argument("--save", metavar="OUT.npz",

@@ -33,11 +33,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="silhouette height after normalisation (default 80)")
     parser.add_argument("--no-refine", action="store_true",
                         help="skip the extra Algorithm 1 pass over the limbs")
-    parser.add_argument("--proportions", default="seed", choices=("seed", "auto"),
-                        help="the model's proportions: the seed's ratios (default) or auto: "
+    parser.add_argument("--proportions", default="seed", choices=("seed", "auto", "human"),
+                        help="the model's proportions: the seed's ratios (default), auto: "
                         "this subject's, estimated from the clip, and the clip fitted again "
-                        "with them (written as body_lengths/body_widths, fractions of the "
-                        "standing height)")
+                        "with them, or human: a real adult's from an anthropometric table, "
+                        "the ankles above the soles (written as body_lengths/body_widths, "
+                        "fractions of the standing height)")
     add_cues_argument(parser)
 
 
@@ -106,18 +107,24 @@ def run(args) -> int:
         if len(frames) != len(masks):
             raise InputFileError(f"{len(masks)} masks but {len(frames)} video frames",
                                  args.masks or args.video)
-    body, extra, estimate = None, {}, None
-    if args.proportions == "auto":
-        from vidcap.video.fit.proportions import estimate_proportions
+    fit_kw, extra, estimate = {}, {}, None
+    if args.proportions != "seed":
+        from vidcap.video.fit.proportions import (
+            estimate_proportions,
+            fit_keywords,
+            human_proportions,
+        )
 
-        estimate = estimate_proportions(masks, height=args.height, refine=not args.no_refine)
+        estimate = (human_proportions() if args.proportions == "human" else
+                    estimate_proportions(masks, height=args.height, refine=not args.no_refine))
+        fit_kw = fit_keywords(estimate.factors)
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),
                  "body_widths": 2.0 * body.segment_radii()}
     pose = fit_sequence(
         masks, tracked=not args.per_frame, height=args.height, refine=not args.no_refine,
         progress=lambda it, total: progress(it, total=total, desc="pose2d", unit="frame"),
-        body=body, frames=frames, cues=cues,
+        frames=frames, cues=cues, **fit_kw,
     )
     from vidcap.fileio import savez_atomic
 

@@ -9,16 +9,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from vidcap.video.fit.proportions import ProportionEstimate, estimate_proportions
+from vidcap.video.fit.proportions import ProportionEstimate, estimate_proportions, fit_keywords
 from vidcap.video.stagecache import StageCache, stage_key
 
 #: Bumped when the estimator's results change for the same silhouettes.
-_VERSION = 1
+_VERSION = 2
 
 
 def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_job: int,
-                      progress) -> tuple[dict, ProportionEstimate]:
+                      progress, fixed: ProportionEstimate | None = None,
+                      ) -> tuple[dict, ProportionEstimate]:
     """The subject's proportions and the 2D pose fitted with them, cached or computed.
+
+    ``fixed``: these proportions (e.g. :data:`vidcap.video.fit.proportions.HUMAN`'s)
+    instead of an estimate from the clip. The pose's ``model_height`` is the model's
+    (head top to ankles: the feet, :attr:`ProportionEstimate.foot`, left out), which
+    the lift reads against the body's height.
 
     Returns
     -------
@@ -30,7 +36,8 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
     from vidcap.video.fit.parallel import chunk_bounds, fit_sequence_chunked
 
     key = stage_key("proportions", _VERSION, k_sil,
-                    chunk_bounds(len(masks), jobs, per_job=per_job))
+                    chunk_bounds(len(masks), jobs, per_job=per_job),
+                    None if fixed is None else sorted(fixed.factors.items()))
     names = ("factor_names", "factor_values", "evidence", "seed_similarity")
     hit = cache.load("proportions", key, required=names + ("model_height",))
     if hit is not None:
@@ -41,16 +48,17 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
         est = ProportionEstimate(factors, evidence, (float(hit["seed_similarity"][0]),
                                                      float(hit["seed_similarity"][1])))
         return {k: v for k, v in hit.items() if k not in names}, est
-    est = estimate_proportions(masks)
+    est = estimate_proportions(masks) if fixed is None else fixed
 
     def wrap(it, total):
         return bar(it, total=total, desc="2D pose (own proportions)", unit="frame",
                    enabled=progress)
 
     pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
-                                body=est.body())
+                                **fit_keywords(est.factors))
     out = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
-           "similarity": pose.similarity, "model_height": pose.model_height}
+           "similarity": pose.similarity,
+           "model_height": pose.model_height * (1.0 - est.foot)}
     names_in = sorted(est.factors)
     cache.save("proportions", key, **out, factor_names=np.array(names_in, dtype=str),
                factor_values=np.array([est.factors[n] for n in names_in], float),

@@ -123,8 +123,8 @@ def run(
     lift : {'solve', 'segment'}
         The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
-    proportions : {'seed', 'auto'}
-        The seed's ratios or the subject's, from the clip (:func:`_fit_stage`).
+    proportions : {'seed', 'auto', 'human'}
+        The seed's ratios, the subject's from the clip, or a real adult's (:func:`_fit_stage`).
     cues : {'outline', 'all'}
         The 2D fit reads the silhouette only, or the frame's cues inside it too.
 
@@ -203,7 +203,8 @@ def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
                progress, timings, log, cues=(DEFAULT_CUES, None, None)):
     """The 2D pose (:func:`_pose_stage`) and, with ``proportions='auto'``, the subject's
-    own proportions estimated from it and the clip fitted again with them
+    own proportions estimated from it (``'human'``: a real adult's,
+    :func:`vidcap.video.fit.proportions.human_proportions`) and the clip fitted again with them
     (:func:`vidcap.video.bodystage.proportions_stage`): the 3D lift and the motion's
     skeleton then use them, ``body``'s height still the standing height. Returns
     (pose, body, estimate or None). ``cues``: ``(cues, crops, video)`` of
@@ -213,13 +214,15 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
                            streamed=streamed, progress=progress, cues=cues[0],
                            crops=cues[1], video=cues[2])
-    if proportions != "auto":
+    if proportions == "seed":
         return pose, body, None
     from vidcap.video.bodystage import proportions_stage
+    from vidcap.video.fit.proportions import human_proportions
 
+    fixed = human_proportions() if proportions == "human" else None
     with _timed(timings, "proportions"):
         pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
-                                           progress=progress)
+                                           progress=progress, fixed=fixed)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
 
@@ -228,8 +231,9 @@ def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
     from vidcap.video.fit.cues import CUE_MODES
+    from vidcap.video.fit.proportions import PROPORTION_CHOICES
 
-    _check_choice("proportions", proportions, ("seed", "auto"))
+    _check_choice("proportions", proportions, PROPORTION_CHOICES)
     _check_choice("cues", cues, tuple(CUE_MODES))
 
 

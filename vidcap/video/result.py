@@ -173,7 +173,8 @@ class ConvertResult:
 
     def _body_arrays(self) -> dict:
         """``body_lengths`` and ``body_widths`` (10,) m, ``body_height`` () m, and
-        ``body_estimated`` () bool (the subject's own proportions, not the seed's)."""
+        ``body_estimated`` () bool (proportions other than the seed's: the subject's own
+        or, with ``proportions='human'``, a real adult's)."""
         from vidcap.body import BodyModel
 
         body = self.body if self.body is not None else BodyModel()

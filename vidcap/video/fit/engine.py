@@ -63,7 +63,8 @@ class _MaskEngine:
         Segments drawn as capsules (else rectangles).
     """
 
-    def __init__(self, norm: NormalisedMask, *, caps: bool, body: BodyModel | None = None):
+    def __init__(self, norm: NormalisedMask, *, caps: bool, body: BodyModel | None = None,
+                 foot: float = 0.0):
         self.norm = norm
         self.sil = norm.mask
         self.h, self.w = self.sil.shape
@@ -75,9 +76,12 @@ class _MaskEngine:
         else:  # the subject's own proportions (vidcap.video.fit.proportions)
             ends = (body.radius("head") + body.radius("l_lower_leg")) / body.height
         height = norm.body_height
-        self.H = height / (1.0 + ends) if caps else height
+        # a real person's feet reach below the ankles, where the model ends: the model
+        # is the standing height less the feet's share (``foot``, 0: the seed's body)
+        self.foot = foot * height
+        self.H = (height - self.foot) / (1.0 + ends) if caps else height - self.foot
         # a silhouette taller than the body (raised arms): its top need not be the head
-        self.taller = norm.height > 1.02 * self.H
+        self.taller = norm.height > 1.02 * (self.H + self.foot)
         self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H, body)
         self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
         self.caps = caps

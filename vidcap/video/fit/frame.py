@@ -176,7 +176,7 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     :class:`~vidcap.video.fit.cues.ColourModel`: the arms are then placed by the
     frame's cues as well (:func:`vidcap.video.fit.cues.apply_cues`); None: outline only.
     """
-    eng = _MaskEngine(norm, caps=options.caps, body=options.body)
+    eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
     if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
                  or (options.fallback > 0 and eng.similarity(st) < LEAN_BELOW)):

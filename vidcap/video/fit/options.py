@@ -44,6 +44,10 @@ class FitOptions:
     body : BodyModel or None
         The subject's proportions the model is drawn with (its lengths and widths
         relative to its standing height; None: the seed's Table 3.1/3.2 ratios).
+    foot : float
+        The share of the standing height (head top to soles) below the ankles, where the
+        model ends: a real person's feet (0: the seed's body, whose ankles are on the
+        floor; in [0, 0.3)).
     """
 
     height: int = 80
@@ -60,6 +64,7 @@ class FitOptions:
     body_height: float | None = None
     tie: float = 0.01
     body: BodyModel | None = None
+    foot: float = 0.0
 
     def __post_init__(self):
         if not (isinstance(self.height, int) or float(self.height).is_integer()) \
@@ -76,6 +81,8 @@ class FitOptions:
             raise ValueError(f"spread_value must be in [0, 1], got {self.spread_value!r}")
         if self.body_height is not None and not self.body_height > 0:
             raise ValueError(f"body_height must be positive, got {self.body_height}")
+        if not 0.0 <= self.foot < 0.3:
+            raise ValueError(f"foot must be in [0, 0.3), got {self.foot!r}")
         if self.body is not None and not isinstance(self.body, BodyModel):
             raise ValueError(f"body must be a BodyModel, got {type(self.body).__name__}")
 

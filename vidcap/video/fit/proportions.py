@@ -31,6 +31,7 @@ import numpy as np
 
 from vidcap.body import (
     DEFAULT_HEIGHT_M,
+    PROPORTION_ALIASES,
     PROPORTION_GROUPS,
     SEGMENT_INDEX,
     BodyModel,
@@ -49,6 +50,32 @@ PLATEAU_TIE = 0.0015
 LIMITS = (0.7, 1.45)
 #: Relative step and steps either side of each round of the search.
 STEPS = ((0.05, 4), (0.025, 3))
+#: The share of the standing height above the ankles (the feet below them: the fit's
+#: ``foot`` option is one minus it), and the values its search may reach.
+FOOT, FOOT_LIMITS = "above_feet", (0.8, 1.0)
+#: A real adult's proportions as factors on the seed's ratios (``proportions='human'``):
+#: the joint heights of Drillis & Contini's anthropometric table as a fraction of the
+#: stature H (Winter, *Biomechanics and Motor Control of Human Movement*, 4th ed. 2009,
+#: Fig. 4.1): shoulder 0.818, elbow 0.630, wrist 0.485, knee 0.285, ankle 0.039, the
+#: head's top 1; the hips at 0.500, not the table's 0.530 (its greater trochanter):
+#: where MediaPipe Pose and motion-capture hip centres put them, chosen on the tuning
+#: clips of ``benchmarks/pose2d_real.py`` (pose2sim_balance cam1, whose hips it centres,
+#: and onebyone_room 233-445; 0.530 / 0.515 / 0.500 / 0.485 gave median joint errors
+#: 7.5 / 7.5 / 7.0 / 6.7 % and 9.8 / 9.4 / 8.9 / 8.8 % of height, 0.485 putting cam1's
+#: hips below MediaPipe's). The seed's model (Table 3.1) puts the shoulders at the neck
+#: (0.143 H below the top, not 0.182), the elbow 0.086 H too high, the hips at the waist
+#: and the ankles on the floor; a silhouette does not show where a hanging arm's elbow
+#: or a standing body's hips are, so the fit cannot correct that itself. Head = top to
+#: shoulders, torso = shoulders to hips, upper arm = shoulder to elbow, lower arm =
+#: elbow to wrist; the ankles 0.039 H above the soles (the model ends there). The
+#: model's head top is the stature's (the table's eye height 0.936 is below it).
+HUMAN = {"head": 0.182 / (25 / 175), "torso": 0.318 / (52 / 175),
+         "upper_legs": 0.215 / (46 / 175), "lower_legs": 0.246 / (52 / 175),
+         "upper_arms": 0.188 / (25 / 175), "lower_arms": 0.145 / (35 / 175),
+         FOOT: 0.961}
+#: What ``proportions=`` may be: the seed's ratios, the subject's estimated from the
+#: clip (:func:`estimate_proportions`), or a real adult's (:func:`human_proportions`).
+PROPORTION_CHOICES = ("seed", "auto", "human")
 #: Frames per window and windows per clip fitted for each candidate body.
 WINDOW, WINDOWS = 30, 3
 #: Fewest frames that must pin a knee for the thigh/shin split to be measured.
@@ -69,7 +96,8 @@ class ProportionEstimate:
         Per factor, what measured it: frames fitted for a searched factor, frames
         with a determined length for a profiled one (0: kept at 1, the seed's).
     similarity : tuple of float
-        Mean S of the sample windows fitted with the seed's proportions and with these
+        Mean S of the sample windows fitted with the seed's proportions (or the
+        search's ``base``) and with these
         (the parabola's vertex is kept even where a single fit there scores a little
         lower than a grid point: the fit's noise is of that size).
     """
@@ -78,9 +106,17 @@ class ProportionEstimate:
     evidence: dict = field(default_factory=dict)
     similarity: tuple = (float("nan"), float("nan"))
 
+    @property
+    def foot(self) -> float:
+        """The share of the standing height below the ankles (0: the seed's body)."""
+        return 1.0 - self.factors.get(FOOT, 1.0)
+
     def body(self, height: float = DEFAULT_HEIGHT_M) -> BodyModel:
-        """The body with these proportions, ``height`` metres tall standing."""
-        return body_with_proportions(height, self.factors)
+        """The body with these proportions for a subject ``height`` metres tall
+        standing: its head top to ankles is ``height`` less the feet (:attr:`foot`,
+        not part of the model)."""
+        return body_with_proportions(height * (1.0 - self.foot),
+                                     {k: v for k, v in self.factors.items() if k != FOOT})
 
     def ratios(self) -> dict[str, float]:
         """Length per group (pooled left/right) as a fraction of the standing height,
@@ -97,6 +133,12 @@ class ProportionEstimate:
         cells = [f"{k.replace('_', ' ')} {100 * v:.1f}% ({100 * (v / seed[k] - 1):+.0f}%)"
                  for k, v in self.ratios().items()]
         return "body proportions (of height, vs the seed's): " + ", ".join(cells)
+
+
+def human_proportions() -> ProportionEstimate:
+    """A real adult's proportions (:data:`HUMAN`: an anthropometric table's, nothing
+    measured from the clip), for ``proportions='human'``."""
+    return ProportionEstimate(factors=dict(HUMAN), evidence=dict.fromkeys(HUMAN, 0))
 
 
 def sample_windows(masks, *, window: int = WINDOW, windows: int = WINDOWS) -> list[slice]:
@@ -123,7 +165,7 @@ def sample_windows(masks, *, window: int = WINDOW, windows: int = WINDOWS) -> li
 
 def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
                          windows: int = WINDOWS, searched=SEARCHED, steps=STEPS,
-                         **fit_kw) -> ProportionEstimate:
+                         base: dict | None = None, **fit_kw) -> ProportionEstimate:
     """Estimate the subject's proportions from a clip's silhouettes.
 
     Parameters
@@ -138,6 +180,9 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
         The factors searched by S (:data:`SEARCHED`), in order.
     steps : sequence of (float, int)
         Relative step and steps either side of the current factor, per round.
+    base : dict, optional
+        Factors the search starts from and multiplies (e.g. :data:`HUMAN`); the
+        thigh/shin split is then the base's (not profiled). Default: the seed's.
     **fit_kw
         Other options of :func:`vidcap.video.fit.tracking.fit_sequence`.
 
@@ -154,8 +199,8 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
     n_frames = sum(len(range(len(masks))[w]) for w in wins)
 
     def score(factors):
-        body = body_with_proportions(DEFAULT_HEIGHT_M, factors)
-        sims = [fit_sequence(masks[w], body=body, height=height, **fit_kw).similarity
+        kw = fit_keywords(compose(base, factors))
+        sims = [fit_sequence(masks[w], height=height, **kw, **fit_kw).similarity
                 for w in wins]
         s = np.concatenate(sims)
         return float(np.mean(s[s > 0])) if (s > 0).any() else 0.0
@@ -166,12 +211,41 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
         for name in searched:
             factors = _search(score, factors, name, step, reach)
     evidence = dict.fromkeys(searched, n_frames)
-    split, n_split = _leg_split(masks, wins, factors, height, fit_kw)
+    split, n_split = (None, 0) if base else _leg_split(masks, wins, factors, height, fit_kw)
     if split is not None:
         factors.update(split)
     evidence["upper_legs"] = evidence["lower_legs"] = n_split
-    return ProportionEstimate(factors=dict(factors), evidence=evidence,
+    return ProportionEstimate(factors=compose(base, factors), evidence=evidence,
                               similarity=(seed_s, score(factors)))
+
+
+def compose(base: dict | None, factors: dict) -> dict:
+    """``factors`` applied on top of ``base`` (None: ``factors``): every group's, width's
+    and the feet's factor the product of the two, aliases (``legs``, ``arms``)
+    resolved to their groups (a group's own factor wins over its alias's)."""
+    if not base:
+        return dict(factors)
+
+    def resolved(f: dict) -> dict:
+        out = {}
+        for alias, groups in PROPORTION_ALIASES.items():
+            if alias in f:
+                out.update(dict.fromkeys(groups, f[alias]))
+        out.update({k: v for k, v in f.items() if k not in PROPORTION_ALIASES})
+        return out
+
+    b, f = resolved(base), resolved(factors)
+    return {k: b.get(k, 1.0) * f.get(k, 1.0) for k in sorted(set(b) | set(f))}
+
+
+def fit_keywords(factors: dict) -> dict:
+    """The fit's options (``body``, ``foot``) for ``factors`` (1.70 m standing: only the
+    ratios matter to a 2D fit)."""
+    lengths = {k: v for k, v in factors.items() if k != FOOT}
+    out = {"body": body_with_proportions(DEFAULT_HEIGHT_M, lengths)}
+    if FOOT in factors:
+        out["foot"] = 1.0 - factors[FOOT]
+    return out
 
 
 def _search(score, factors: dict, name: str, step: float, reach: int):
@@ -181,7 +255,8 @@ def _search(score, factors: dict, name: str, step: float, reach: int):
     the fit's own noise (a small change of the model moves a search by a pixel here
     and there). Returns the factors with ``name``'s chosen."""
     cur = factors.get(name, 1.0)
-    values = np.unique(np.clip(cur * (1 + step * np.arange(-reach, reach + 1)), *LIMITS))
+    values = np.unique(np.clip(cur * (1 + step * np.arange(-reach, reach + 1)),
+                               *(FOOT_LIMITS if name == FOOT else LIMITS)))
     s = np.array([score({**factors, name: float(v)}) for v in values])
     i = int(np.argmax(s))
     if name in PLATEAU:  # longer than the subject's fits as well, foreshortened
@@ -203,19 +278,21 @@ def _leg_split(masks, wins, factors, height, fit_kw):
     :data:`MIN_FRAMES`."""
     from vidcap.video.fit.tracking import fit_sequence
 
-    body = body_with_proportions(DEFAULT_HEIGHT_M, factors)
+    kw = fit_keywords(factors)
+    body, above = kw["body"], 1.0 - kw.get("foot", fit_kw.get("foot", 0.0))
     ul = [SEGMENT_INDEX["l_upper_leg"], SEGMENT_INDEX["r_upper_leg"]]
     ll = [SEGMENT_INDEX["l_lower_leg"], SEGMENT_INDEX["r_lower_leg"]]
     ratios = []
     for w in wins:
         sub = masks[w]
-        pose = fit_sequence(sub, body=body, height=height, **fit_kw)
+        pose = fit_sequence(sub, height=height, **kw, **fit_kw)
         for k in range(len(sub)):
             if not pose.similarity[k] > 0:
                 continue
             lengths, _ = length_profiles(np.asarray(sub[k]), pose.joints2d[k],
                                          pose.angles[k], pose.foreshortening[k],
-                                         float(pose.spread[k]), float(pose.model_height[k]),
+                                         float(pose.spread[k]),
+                                         above * float(pose.model_height[k]),
                                          body=body)
             r = lengths[ul] / (lengths[ul] + lengths[ll])  # NaN where either is unknown
             ratios.extend(r[np.isfinite(r)].tolist())
@@ -230,5 +307,5 @@ def _leg_split(masks, wins, factors, height, fit_kw):
         len(ratios)
 
 
-__all__ = ["LIMITS", "SEARCHED", "ProportionEstimate", "estimate_proportions",
-           "sample_windows"]
+__all__ = ["FOOT", "HUMAN", "LIMITS", "PROPORTION_CHOICES", "SEARCHED", "ProportionEstimate",
+           "estimate_proportions", "fit_keywords", "human_proportions", "sample_windows"]

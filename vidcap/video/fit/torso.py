@@ -39,7 +39,7 @@ def place_torso(eng: _MaskEngine, st: FitState) -> FitState:
     pelvis_y = neck_y + eng.L[S["torso"]]
     if eng.taller:  # stand on the silhouette's bottom
         legs = eng.L[S["l_upper_leg"]] + eng.L[S["l_lower_leg"]]
-        pelvis_y = eng.norm.bottom - legs
+        pelvis_y = eng.norm.bottom - eng.foot - legs
         neck_y = pelvis_y - eng.L[S["torso"]]
     band = eng.sil[int(round(neck_y)) : int(round(pelvis_y)) + 1]
     kernels = fit_kernels()
