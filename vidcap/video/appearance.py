@@ -43,7 +43,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-__all__ = ["appearance_plate", "colour_model", "log_ratio"]
+__all__ = ["appearance_plate", "colour_model", "log_ratio", "person_scene_models"]
 
 #: Quantisation levels per colour channel of the colour models.
 BINS = 16
@@ -280,6 +280,47 @@ def _grow_absorbed(wk: _Work, person_seen: np.ndarray):
         if bg_model is None:
             return None
     return absorbed, bg_model
+
+
+def person_scene_models(model, frames: np.ndarray, gains: np.ndarray, *,
+                        work_size: int = WORK_SIZE):
+    """The person's and the scene's colour models over the clip, for any clip.
+
+    The person: what differs by a margin from the plate where it was seen, over all
+    samples (and what the samples show in the never-seen area); the scene: a ring
+    round the person's footprint where it is not foreground, mixed with the plate
+    outside it (see :func:`_scene_model`).
+
+    Parameters
+    ----------
+    model : vidcap.video.background.BackgroundModel
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+        The samples the plate was estimated from.
+    gains : numpy.ndarray, shape (K, 3)
+    work_size : int
+        Long side of the working resolution, pixels.
+
+    Returns
+    -------
+    tuple of numpy.ndarray, each (BINS**3,), or None
+        ``(person, scene)`` log-probabilities (the person's with a share
+        :data:`PRIOR_UNSEEN` spread over every colour); None when the samples show
+        too little of the person.
+    """
+    if len(frames) < 2:
+        return None
+    wk = _Work(model, frames, gains, work_size)
+    px = _person_colours(wk)
+    if px is None:
+        # (a person who never leaves the never-seen area: what the samples show there)
+        core = cv2.erode(wk.never.view(np.uint8), wk.disk) > 0
+        if core.sum() < 50:
+            return None
+        px = wk.small[:, core].reshape(-1, 3)
+    scene = _scene_model(wk, wk.foot | wk.never, hull=True)
+    if scene is None:
+        return None
+    return colour_model(px, uniform=PRIOR_UNSEEN), scene
 
 
 def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,

@@ -1,0 +1,199 @@
+"""The silhouette's uncertain band decided by a graph cut over space and time (issue 26,
+Build 2).
+
+The thresholded difference from the plate decides most pixels of a frame well; it
+is unsure along the person's outline (mixed pixels, a limb the colour of the wall)
+and wherever the plate itself is a guess (the never-seen area, inpainted). There
+each pixel is re-decided by a minimum cut (Boykov and Jolly 2001; Rother et al.
+2004) of an energy that sums, per pixel, evidence for "person":
+
+* the **plate difference** ``log2(l1 / threshold)``, clipped to +-2 (weighted down
+  where the plate was never seen: it is a guess there);
+* the **colour models** of the person and of the scene learned over the clip
+  (:func:`clip_colours`, from the plate stage's samples): the log-likelihood ratio,
+  clipped;
+* **time**: the previous frame's label (a limb that was person in frame k-1 is
+  likely person in frame k), a pull of a fixed size;
+
+and, between 4-neighbours, a contrast-sensitive cost for cutting them apart
+(``exp(-beta * |I_p - I_q|^2)``): the outline follows the image's edges. Pixels
+outside the band keep the threshold's decision (hard constraints), so the graph is
+a crop round the person, not the frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+__all__ = ["CutParams", "clip_colours", "cut_frame"]
+
+#: Half-width of the band re-decided around the thresholded outline, work pixels.
+BAND = 3
+#: Weight of the plate difference term where the plate was never seen (a guess).
+NEVER_WEIGHT = 0.25
+#: Weight of the colour term; its log-ratio is clipped to +- COLOUR_CLIP.
+COLOUR_WEIGHT, COLOUR_CLIP = 0.5, 3.0
+#: Pull towards the previous frame's label.
+TIME_WEIGHT = 0.3
+#: Weight of the pairwise (smoothness) term.
+SMOOTH = 1.0
+#: Plate pixels whose colour's log-ratio person/scene exceeds this are uncertain
+#: like never-seen ones (None: only the never-seen area).
+PLATE_LIKE: float | None = 0.0
+
+
+def clip_colours(model, frames: np.ndarray, gains: np.ndarray) -> np.ndarray | None:
+    """The colour models of the person and of the scene over the clip.
+
+    Parameters
+    ----------
+    model : vidcap.video.background.BackgroundModel
+        The plate (final).
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+        The samples it was estimated from.
+    gains : numpy.ndarray, shape (K, 3)
+        Their per-channel gains relative to the plate.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2, BINS**3), float32, or None
+        log P(colour | person) and log P(colour | scene) per quantised colour
+        (:func:`vidcap.video.appearance.colour_model`), colours divided by the
+        frame's gain; None when the samples show too little of the person.
+    """
+    from vidcap.video.appearance import person_scene_models
+
+    got = person_scene_models(model, frames, gains)
+    return None if got is None else np.stack(got).astype(np.float32)
+
+
+@dataclass
+class CutParams:
+    """What :func:`cut_frame` needs, at the silhouette stage's working resolution.
+
+    Attributes
+    ----------
+    table : numpy.ndarray, shape (BINS**3,), float32
+        Colour evidence per quantised colour (weighted, clipped log-ratio).
+    never : numpy.ndarray, shape (h, w), bool
+        Never-seen pixels of the plate.
+    band, never_weight, time_weight, smooth : float
+        See the module's constants.
+    prev : numpy.ndarray or None
+        The previous frame's result (h, w) uint8, updated by :func:`cut_frame`.
+    """
+
+    table: np.ndarray
+    never: np.ndarray
+    band: int = BAND
+    never_weight: float = NEVER_WEIGHT
+    time_weight: float = TIME_WEIGHT
+    smooth: float = SMOOTH
+    prev: np.ndarray | None = field(default=None, repr=False)
+
+    @classmethod
+    def make(cls, colours: np.ndarray, never: np.ndarray, plate: np.ndarray,
+             **kw) -> CutParams:
+        """From :func:`clip_colours`' models, the never-seen map and the plate (work
+        size). The plate is a guess in the never-seen area, and may be the person
+        where its own colour is more likely the person's (a part it absorbed): there
+        the plate difference weighs less (``never_weight``)."""
+        llr = np.clip(colours[0] - colours[1], -COLOUR_CLIP, COLOUR_CLIP)
+        never = np.asarray(never, bool)
+        if PLATE_LIKE is not None:
+            never = never | (llr[_quantise(plate)] > PLATE_LIKE)
+        kw = {"band": BAND, "never_weight": NEVER_WEIGHT, "time_weight": TIME_WEIGHT,
+              "smooth": SMOOTH, **kw}
+        return cls(table=(COLOUR_WEIGHT * llr).astype(np.float32), never=never, **kw)
+
+
+def _quantise(img: np.ndarray) -> np.ndarray:
+    from vidcap.video.appearance import BINS
+
+    q = (img.astype(np.uint16) * BINS) >> 8
+    return (q[..., 0] * BINS + q[..., 1]) * BINS + q[..., 2]
+
+
+def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarray,
+              gain: np.ndarray, cp: CutParams) -> np.ndarray:
+    """Re-decide one frame's uncertain band by a minimum cut.
+
+    Parameters
+    ----------
+    frame : numpy.ndarray, shape (h, w, 3), uint8
+        The frame at the working resolution, BGR.
+    l1 : numpy.ndarray, shape (h, w), uint8
+        Its L1 difference from the (gain-scaled) plate.
+    tmap : numpy.ndarray, shape (h, w), uint8
+        The per-pixel threshold.
+    fg : numpy.ndarray, shape (h, w), uint8
+        The thresholded, cleaned foreground (0 / 255).
+    gain : numpy.ndarray, shape (3,)
+        The frame's per-channel gain (the colour models are of gain-divided colours).
+    cp : CutParams
+
+    Returns
+    -------
+    numpy.ndarray, shape (h, w), uint8
+        The foreground (0 / 255) with the band round its largest blob re-decided
+        (``fg`` itself when it is empty).
+    """
+    import maxflow
+
+    n, lab, st, _ = cv2.connectedComponentsWithStats(fg, connectivity=8)
+    if n <= 1:
+        cp.prev = None
+        return fg
+    big = 1 + int(np.argmax(st[1:, cv2.CC_STAT_AREA]))
+    x, y, w, h = st[big, :4]
+    H, W = fg.shape
+    r = cp.band
+    m = 2 * r + max(2, int(0.1 * max(w, h)))
+    x0, y0, x1, y1 = max(0, x - m), max(0, y - m), min(W, x + w + m), min(H, y + h + m)
+    f = fg[y0:y1, x0:x1]
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    inner = cv2.erode(f, disk)
+    near = cv2.dilate(f, disk)
+    never = cp.never[y0:y1, x0:x1]
+    band = ((near > 0) & (inner == 0)) | never
+    if not band.any():
+        return fg
+    img = frame[y0:y1, x0:x1]
+    # Evidence for the person (positive) per pixel.
+    t = tmap[y0:y1, x0:x1].astype(np.float32) + 1.0
+    e = np.clip(np.log2((l1[y0:y1, x0:x1].astype(np.float32) + 1.0) / t), -2.0, 2.0)
+    e[never] *= cp.never_weight
+    norm = np.clip(img.astype(np.float32) / np.asarray(gain, np.float32), 0, 255)
+    e += cp.table[_quantise(norm.astype(np.uint8))]
+    if cp.prev is not None:
+        e += np.where(cp.prev[y0:y1, x0:x1] > 0, cp.time_weight, -cp.time_weight)
+    big_inf = np.float32(1e6)
+    src = np.where(band, np.maximum(e, 0), np.where(f > 0, big_inf, 0)).astype(np.float64)
+    snk = np.where(band, np.maximum(-e, 0), np.where(f > 0, 0, big_inf)).astype(np.float64)
+    # Contrast-sensitive smoothness between 4-neighbours.
+    fi = img.astype(np.float32)
+    dx = np.square(fi[:, 1:] - fi[:, :-1]).sum(axis=-1)
+    dy = np.square(fi[1:] - fi[:-1]).sum(axis=-1)
+    beta = 1.0 / max(2.0 * float(np.concatenate([dx.ravel(), dy.ravel()]).mean()), 1e-6)
+    wx = np.zeros(f.shape, np.float64)
+    wy = np.zeros(f.shape, np.float64)
+    wx[:, :-1] = cp.smooth * np.exp(-beta * dx)
+    wy[:-1] = cp.smooth * np.exp(-beta * dy)
+    g = maxflow.Graph[float]()
+    ids = g.add_grid_nodes(f.shape)
+    g.add_grid_edges(ids, weights=wx, structure=_RIGHT, symmetric=True)
+    g.add_grid_edges(ids, weights=wy, structure=_DOWN, symmetric=True)
+    g.add_grid_tedges(ids, src, snk)
+    g.maxflow()
+    person = ~g.get_grid_segments(ids)  # (True = sink side = scene)
+    out = fg.copy()
+    out[y0:y1, x0:x1] = np.where(person, 255, 0).astype(np.uint8)
+    cp.prev = out
+    return out
+
+
+_RIGHT = np.array([[0, 0, 0], [0, 0, 1], [0, 0, 0]])
+_DOWN = np.array([[0, 0, 0], [0, 0, 0], [0, 1, 0]])
