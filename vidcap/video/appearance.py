@@ -60,6 +60,9 @@ GROW_STEPS, MAX_SHARE = 3, 0.15
 #: The pass is refused when it leaves less than this share of the first never-seen
 #: area never seen.
 MIN_KEPT_NEVER = 0.5
+#: Per sample, the person in the uncertain area by a graph cut over the samples
+#: (:func:`vidcap.video.graphcut.cut_samples`) rather than the smoothed log-ratio.
+SAMPLE_CUT = True
 #: A pixel needs this many samples (and this share) outside the person to be seen.
 MIN_SEEN, MIN_SEEN_SHARE = 2, 0.1
 
@@ -361,7 +364,12 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     # Per sample, person by appearance, smoothed over space and time. Colours never
     # seen on the person are not impossible for it: a uniform share.
     llr = log_ratio(wk.small, colour_model(px, uniform=PRIOR_UNSEEN), bg_model)
-    person = _smooth(llr, 2 * wk.r + 1) > 0
+    if SAMPLE_CUT:
+        from vidcap.video.graphcut import cut_samples
+
+        person = cut_samples(wk.small, llr, uncertain)
+    else:
+        person = _smooth(llr, 2 * wk.r + 1) > 0
     # (a one-pixel margin: the outline at this resolution mixes person and scene)
     box3 = np.ones((3, 3), np.uint8)
     covered = np.stack([cv2.dilate(p.view(np.uint8), box3) for p in person & uncertain[None]])

@@ -212,7 +212,7 @@ class _Params:
             if s > 1:
                 never = cv2.resize(never.view(np.uint8), (w, h),
                                    interpolation=cv2.INTER_NEAREST) > 0
-            self.cut = CutParams.make(colours, never, plate)
+            self.cut = CutParams.make(colours, never)
 
 
 def _gain(frame: np.ndarray, p: _Params) -> np.ndarray:
