@@ -62,7 +62,8 @@ GROW_STEPS, MAX_SHARE = 3, 0.15
 MIN_KEPT_NEVER = 0.5
 #: Per sample, the person in the uncertain area by a graph cut over the samples
 #: (:func:`vidcap.video.graphcut.cut_samples`) rather than the smoothed log-ratio.
-SAMPLE_CUT = True
+SAMPLE_CUT = False
+SMOOTH_FIRST = True
 #: A pixel needs this many samples (and this share) outside the person to be seen.
 MIN_SEEN, MIN_SEEN_SHARE = 2, 0.1
 
@@ -367,7 +368,8 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     if SAMPLE_CUT:
         from vidcap.video.graphcut import cut_samples
 
-        person = cut_samples(wk.small, llr, uncertain)
+        person = cut_samples(wk.small, _smooth(llr, 2 * wk.r + 1) if SMOOTH_FIRST else llr,
+                             uncertain)
     else:
         person = _smooth(llr, 2 * wk.r + 1) > 0
     # (a one-pixel margin: the outline at this resolution mixes person and scene)

@@ -156,14 +156,11 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
         The foreground (0 / 255) with the band round its largest blob re-decided
         (``fg`` itself when it is empty).
     """
-    import maxflow
-
-    n, lab, st, _ = cv2.connectedComponentsWithStats(fg, connectivity=8)
-    if n <= 1:
+    contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
         cp.prev = None
         return fg
-    big = 1 + int(np.argmax(st[1:, cv2.CC_STAT_AREA]))
-    x, y, w, h = st[big, :4]
+    x, y, w, h = cv2.boundingRect(max(contours, key=cv2.contourArea))
     H, W = fg.shape
     r = cp.band
     m = 2 * r + max(2, int(0.1 * max(w, h)))
@@ -171,8 +168,9 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     # The crop takes in the whole of each never-seen part it touches (a static torso
     # beside the moving arm that is the largest blob).
     lab, boxes = cp.parts
-    touched = np.unique(lab[y0:y1, x0:x1])
-    if len(touched) > 1:
+    sub = lab[y0:y1, x0:x1]
+    touched = np.unique(sub[sub > 0])
+    if len(touched):
         b = boxes[touched]
         x0, y0 = min(x0, int(b[:, 0].min())), min(y0, int(b[:, 1].min()))
         x1, y1 = max(x1, int(b[:, 2].max())), max(y1, int(b[:, 3].max()))
@@ -185,42 +183,66 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     if not band.any():
         return fg
     img = frame[y0:y1, x0:x1]
-    # Evidence for the person (positive) per pixel.
-    t = tmap[y0:y1, x0:x1].astype(np.float32) + 1.0
-    e = np.clip(np.log2((l1[y0:y1, x0:x1].astype(np.float32) + 1.0) / t), -2.0, 2.0)
-    norm = np.clip(img.astype(np.float32) / np.asarray(gain, np.float32), 0, 255)
-    col = cp.table[_quantise(norm.astype(np.uint8))]
-    e = np.where(never, cp.never_weight * e + cp.colour_weight * col,
-                 e + cp.seen_colour * col)
+    # Evidence for the person (positive), per band pixel.
+    ys, xs = np.nonzero(band)
+    t = tmap[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0
+    e = np.clip(np.log2((l1[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0) / t), -2.0, 2.0)
+    px = img[ys, xs].astype(np.float32) / np.asarray(gain, np.float32)
+    col = cp.table[_quantise(np.clip(px, 0, 255).astype(np.uint8))]
+    nv = never[ys, xs]
+    e = np.where(nv, cp.never_weight * e + cp.colour_weight * col, e + cp.seen_colour * col)
     if cp.prev is not None and cp.time_weight:
-        e += np.where(cp.prev[y0:y1, x0:x1] > 0, cp.time_weight, -cp.time_weight)
-    big_inf = np.float32(1e6)
-    src = np.where(band, np.maximum(e, 0), np.where(f > 0, big_inf, 0)).astype(np.float64)
-    snk = np.where(band, np.maximum(-e, 0), np.where(f > 0, 0, big_inf)).astype(np.float64)
-    # Contrast-sensitive smoothness between 4-neighbours.
-    fi = img.astype(np.float32)
-    dx = np.square(fi[:, 1:] - fi[:, :-1]).sum(axis=-1)
-    dy = np.square(fi[1:] - fi[:-1]).sum(axis=-1)
-    beta = 1.0 / max(2.0 * float(np.concatenate([dx.ravel(), dy.ravel()]).mean()), 1e-6)
-    wx = np.zeros(f.shape, np.float64)
-    wy = np.zeros(f.shape, np.float64)
-    wx[:, :-1] = cp.smooth * np.exp(-beta * dx)
-    wy[:-1] = cp.smooth * np.exp(-beta * dy)
-    g = maxflow.Graph[float]()
-    ids = g.add_grid_nodes(f.shape)
-    g.add_grid_edges(ids, weights=wx, structure=_RIGHT, symmetric=True)
-    g.add_grid_edges(ids, weights=wy, structure=_DOWN, symmetric=True)
-    g.add_grid_tedges(ids, src, snk)
-    g.maxflow()
-    person = ~g.get_grid_segments(ids)  # (True = sink side = scene)
+        e += np.where(cp.prev[y0:y1, x0:x1][ys, xs] > 0, cp.time_weight, -cp.time_weight)
+    person = _band_cut(band, f > 0, e, img, cp.smooth)
     out = fg.copy()
-    out[y0:y1, x0:x1] = np.where(person, 255, 0).astype(np.uint8)
+    out[y0:y1, x0:x1][band] = np.where(person, 255, 0).astype(np.uint8)
     cp.prev = out
     return out
 
 
-_RIGHT = np.array([[0, 0, 0], [0, 0, 1], [0, 0, 0]])
-_DOWN = np.array([[0, 0, 0], [0, 0, 0], [0, 1, 0]])
+def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarray,
+              smooth: float) -> np.ndarray:
+    """The minimum cut over the band's pixels only.
+
+    ``e``: evidence for the person per band pixel (row order); between
+    4-neighbours a contrast-sensitive cost ``smooth * exp(-beta * |I_p - I_q|^2)``
+    (``beta`` from the mean over the pairs touching the band, Rother et al. 2004).
+    A link to a pixel outside the band (whose label ``fixed`` is kept) is folded
+    into the band pixel's terminal link: the graph is the band, not its bounding
+    box, and the cost grows with the outline, not with the person's area. Returns
+    (N,) bool, person, for the band's pixels in row order."""
+    import maxflow
+
+    n = len(e)
+    idx = np.full(band.shape, -1, np.int64)
+    idx[band] = np.arange(n)
+    src = np.maximum(e, 0).astype(np.float64)
+    snk = np.maximum(-e, 0).astype(np.float64)
+    pairs = []
+    for a, b in (((slice(None), slice(None, -1)), (slice(None), slice(1, None))),
+                 ((slice(None, -1), slice(None)), (slice(1, None), slice(None)))):
+        sel = band[a] | band[b]
+        d = img[a][sel].astype(np.float32) - img[b][sel].astype(np.float32)
+        pairs.append((idx[a][sel], idx[b][sel], fixed[a][sel], fixed[b][sel],
+                      np.einsum("ij,ij->i", d, d)))
+    d2 = np.concatenate([p[4] for p in pairs])
+    beta = 1.0 / max(2.0 * float(d2.mean()), 1e-6) if len(d2) else 0.0
+    g = maxflow.Graph[float](n, 2 * n)
+    nodes = g.add_nodes(n)
+    for ia, ib, fa, fb, dd in pairs:
+        w = smooth * np.exp(-beta * dd)
+        both = (ia >= 0) & (ib >= 0)
+        if both.any():
+            g.add_edges(nodes[ia[both]], nodes[ib[both]], w[both], w[both])
+        # One end fixed: cutting the pair costs w when the band pixel takes the
+        # other label.
+        for here, there, fx in ((ia, ib, fb), (ib, ia, fa)):
+            one = (here >= 0) & (there < 0)
+            np.add.at(src, here[one & fx], w[one & fx])
+            np.add.at(snk, here[one & ~fx], w[one & ~fx])
+    g.add_grid_tedges(nodes, src, snk)
+    g.maxflow()
+    return ~g.get_grid_segments(nodes)  # (True = sink side = scene)
 
 
 def _contrast_weights(img: np.ndarray, smooth: float):
