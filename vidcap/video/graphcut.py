@@ -12,13 +12,20 @@ each pixel is re-decided by a minimum cut (Boykov and Jolly 2001; Rother et al.
 * the **colour models** of the person and of the scene learned over the clip
   (:func:`clip_colours`, from the plate stage's samples): the log-likelihood ratio,
   clipped;
-* **time**: the previous frame's label (a limb that was person in frame k-1 is
-  likely person in frame k), a pull of a fixed size;
+* **time** (off by default, :data:`TIME_WEIGHT`): the previous frame's label;
 
 and, between 4-neighbours, a contrast-sensitive cost for cutting them apart
 (``exp(-beta * |I_p - I_q|^2)``): the outline follows the image's edges. Pixels
-outside the band keep the threshold's decision (hard constraints), so the graph is
-a crop round the person, not the frame.
+outside the band keep the threshold's decision; their links are folded into the
+band pixels' terminal links, so the graph is the band (the outline and the
+never-seen parts the person's crop touches), not the frame.
+
+Opt-in (``extract_silhouettes(..., graph_cut=True)``): on the tuning clips it adds
+0.001-0.013 median IoU to the renders and ido_walk but costs pose2sim cam1 0.03
+(its never-seen area holds a wall the colour of the subject's skin: the colour
+term fills it in), and it adds ~50 % to the silhouette stage's time. Over the plate
+stage's samples, :func:`cut_samples` replaces the appearance pass's smoothed ratio
+when ``vidcap.video.appearance.SAMPLE_CUT`` is set (off: measured mixed).
 """
 
 from __future__ import annotations
@@ -42,6 +49,9 @@ COLOUR_WEIGHT, SEEN_COLOUR, COLOUR_CLIP = 1.0, 0.3, 3.0
 #: 0.916 / 0.914, ido_walk 0.931 / 0.927). Time is used over the plate stage's
 #: samples instead (:func:`cut_samples`, both neighbours).
 TIME_WEIGHT = 0.0
+#: The never-seen parts the person's crop touches are re-decided too (not only the
+#: outline band).
+WITH_NEVER = True
 #: Weight of the pairwise (smoothness) term.
 SMOOTH = 1.0
 #: Over the plate stage's samples: the pull between a pixel's labels in neighbouring
@@ -179,7 +189,7 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     inner = cv2.erode(f, disk)
     near = cv2.dilate(f, disk)
     never = cp.never[y0:y1, x0:x1]
-    band = ((near > 0) & (inner == 0)) | never
+    band = ((near > 0) & (inner == 0)) | (never if WITH_NEVER else False)
     if not band.any():
         return fg
     img = frame[y0:y1, x0:x1]
