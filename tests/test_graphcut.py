@@ -105,3 +105,18 @@ def test_the_sample_cut_keeps_a_limb_through_a_sample_where_its_colour_is_ambigu
     # Without neighbours the ambiguous sample alone is scene.
     alone = cut_samples(small[2:3], llr[2:3], uncertain)
     assert not alone[0, limb].any()
+
+
+def test_the_plate_stage_learns_the_colours_and_the_cut_helps_an_in_place_clip():
+    from tests.test_appearance import _in_place, _iou
+    from vidcap.video.background import estimate_background
+    from vidcap.video.silhouette import extract_silhouettes
+
+    frames, masks = _in_place()
+    bg = estimate_background(frames, rng=np.random.default_rng(0))
+    assert bg.colours is not None and bg.colours.shape == (2, 16 ** 3)
+    red = (np.array(RED) * 16 // 256) @ (256, 16, 1)
+    assert bg.colours[0, red] > bg.colours[1, red] + 2    # the torso's red is the person's
+    plain = _iou(extract_silhouettes(frames, bg, progress=False).masks, masks)
+    cut = _iou(extract_silhouettes(frames, bg, graph_cut=True, progress=False).masks, masks)
+    assert np.median(cut) >= np.median(plain) and cut.min() > plain.min() + 0.05

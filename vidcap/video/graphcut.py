@@ -52,6 +52,9 @@ TIME_WEIGHT = 0.0
 #: The never-seen parts the person's crop touches are re-decided too (not only the
 #: outline band).
 WITH_NEVER = True
+#: Share of the scene's colour model taken from the frame itself, round the person
+#: (the crop outside the band), per frame; 0 = the clip's model only.
+LOCAL_SCENE = 1.0
 #: Weight of the pairwise (smoothness) term.
 SMOOTH = 1.0
 #: Over the plate stage's samples: the pull between a pixel's labels in neighbouring
@@ -110,6 +113,8 @@ class CutParams:
     colour_weight: float = COLOUR_WEIGHT
     seen_colour: float = SEEN_COLOUR
     prev: np.ndarray | None = field(default=None, repr=False)
+    #: The clip's models, (2, BINS**3) log-probabilities (for :data:`LOCAL_SCENE`).
+    colours: np.ndarray | None = field(default=None, repr=False)
     #: The never-seen area's 8-connected parts: labels (h, w) and boxes (n, 4)
     #: ``x0, y0, x1, y1`` (label 0, the rest, has an empty box).
     parts: tuple | None = field(default=None, repr=False)
@@ -132,7 +137,8 @@ class CutParams:
         kw = {"band": BAND, "never_weight": NEVER_WEIGHT, "time_weight": TIME_WEIGHT,
               "smooth": SMOOTH, "colour_weight": COLOUR_WEIGHT,
               "seen_colour": SEEN_COLOUR, **kw}
-        return cls(table=llr.astype(np.float32), never=never, **kw)
+        return cls(table=llr.astype(np.float32), never=never,
+                   colours=np.asarray(colours, np.float32), **kw)
 
 
 def _quantise(img: np.ndarray) -> np.ndarray:
@@ -198,7 +204,11 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     t = tmap[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0
     e = np.clip(np.log2((l1[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0) / t), -2.0, 2.0)
     px = img[ys, xs].astype(np.float32) / np.asarray(gain, np.float32)
-    col = cp.table[_quantise(np.clip(px, 0, 255).astype(np.uint8))]
+    q = _quantise(np.clip(px, 0, 255).astype(np.uint8))
+    if LOCAL_SCENE > 0 and cp.colours is not None:
+        col = _local_llr(img, (near == 0) & ~never, gain, cp.colours)[q]
+    else:
+        col = cp.table[q]
     nv = never[ys, xs]
     e = np.where(nv, cp.never_weight * e + cp.colour_weight * col, e + cp.seen_colour * col)
     if cp.prev is not None and cp.time_weight:
@@ -208,6 +218,21 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     out[y0:y1, x0:x1][band] = np.where(person, 255, 0).astype(np.uint8)
     cp.prev = out
     return out
+
+
+def _local_llr(img, outside, gain, colours):
+    """The colour log-ratio with the scene's model mixed with this frame's scene
+    round the person (the crop outside the band): :data:`LOCAL_SCENE` of it."""
+    from vidcap.video.appearance import colour_model
+
+    px = img[outside].astype(np.float32) / np.asarray(gain, np.float32)
+    if len(px) < 50:
+        return np.clip(colours[0] - colours[1], -COLOUR_CLIP, COLOUR_CLIP)
+    scene = colour_model(np.clip(px, 0, 255))
+    if LOCAL_SCENE < 1:
+        scene = np.logaddexp(np.log1p(-LOCAL_SCENE) + colours[1],
+                             np.log(LOCAL_SCENE) + scene)
+    return np.clip(colours[0] - scene, -COLOUR_CLIP, COLOUR_CLIP)
 
 
 def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarray,
