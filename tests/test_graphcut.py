@@ -86,7 +86,7 @@ def test_an_empty_foreground_is_returned_unchanged():
 
 
 def test_the_sample_cut_keeps_a_limb_through_a_sample_where_its_colour_is_ambiguous():
-    from vidcap.video.graphcut import cut_samples
+    from vidcap.video.samplecut import cut_samples
 
     k, h, w = 5, 40, 50
     small = np.zeros((k, h, w, 3), np.float32)

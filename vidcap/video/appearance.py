@@ -61,7 +61,7 @@ GROW_STEPS, MAX_SHARE = 3, 0.15
 #: area never seen.
 MIN_KEPT_NEVER = 0.5
 #: Per sample, the person in the uncertain area by a graph cut over space and the
-#: samples (:func:`vidcap.video.graphcut.cut_samples`) rather than the smoothed
+#: samples (:func:`vidcap.video.samplecut.cut_samples`) rather than the smoothed
 #: log-ratio. Off: measured mixed on the tuning renders (median IoU, box -> cut:
 #: jacks side 0.884 -> 0.855 (never seen 6.5 -> 7.7 %, truth 4.2 %), jacks 3/4
 #: 0.902 -> 0.918, arms 3/4 0.890 -> 0.896, arms front 0.931 -> 0.937, arms side
@@ -372,7 +372,7 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     # seen on the person are not impossible for it: a uniform share.
     llr = log_ratio(wk.small, colour_model(px, uniform=PRIOR_UNSEEN), bg_model)
     if SAMPLE_CUT:
-        from vidcap.video.graphcut import cut_samples
+        from vidcap.video.samplecut import cut_samples
 
         person = cut_samples(wk.small, _smooth(llr, 2 * wk.r + 1) if SMOOTH_FIRST else llr,
                              uncertain)

@@ -9,9 +9,11 @@ each pixel is re-decided by a minimum cut (Boykov and Jolly 2001; Rother et al.
 
 * the **plate difference** ``log2(l1 / threshold)``, clipped to +-2 (weighted down
   where the plate was never seen: it is a guess there);
-* the **colour models** of the person and of the scene learned over the clip
-  (:func:`clip_colours`, from the plate stage's samples): the log-likelihood ratio,
-  clipped;
+* **colour**: the person's colour model learned over the clip (:func:`clip_colours`,
+  from the plate stage's samples) against the scene's, taken from the frame itself
+  round the person (the crop outside the band; :data:`LOCAL_SCENE`): the
+  log-likelihood ratio, clipped (the clip-wide scene model instead: jacks side
+  0.884, the frame's own 0.923 median IoU);
 * **time** (off by default, :data:`TIME_WEIGHT`): the previous frame's label;
 
 and, between 4-neighbours, a contrast-sensitive cost for cutting them apart
@@ -20,12 +22,15 @@ outside the band keep the threshold's decision; their links are folded into the
 band pixels' terminal links, so the graph is the band (the outline and the
 never-seen parts the person's crop touches), not the frame.
 
-Opt-in (``extract_silhouettes(..., graph_cut=True)``): on the tuning clips it adds
-0.001-0.013 median IoU to the renders and ido_walk but costs pose2sim cam1 0.03
-(its never-seen area holds a wall the colour of the subject's skin: the colour
-term fills it in), and it adds ~50 % to the silhouette stage's time. Over the plate
-stage's samples, :func:`cut_samples` replaces the appearance pass's smoothed ratio
-when ``vidcap.video.appearance.SAMPLE_CUT`` is set (off: measured mixed).
+Opt-in (``extract_silhouettes(..., graph_cut=True)``). On the tuning clips (median
+IoU, without -> with): jacks side 0.884 -> 0.923, jacks 3/4 0.902 -> 0.915, arms 3/4
+0.890 -> 0.902, arms front 0.931 -> 0.940, arms side 0.980 -> 0.987, jacks front
+0.981 -> 0.982, ido_walk 0.928 -> 0.932, but pose2sim cam1 (vs MediaPipe's masks)
+0.362 -> 0.343: its never-seen area holds a wall the colour of the subject's skin,
+which the colour term fills in. It adds ~50 % to the silhouette stage's time.
+Over the plate stage's samples, :func:`vidcap.video.samplecut.cut_samples` replaces
+the appearance pass's smoothed ratio when ``vidcap.video.appearance.SAMPLE_CUT`` is
+set (off: measured mixed).
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-__all__ = ["CutParams", "clip_colours", "cut_frame", "cut_samples"]
+__all__ = ["CutParams", "clip_colours", "cut_frame"]
 
 #: Half-width of the band re-decided around the thresholded outline, work pixels.
 BAND = 3
@@ -47,7 +52,7 @@ COLOUR_WEIGHT, SEEN_COLOUR, COLOUR_CLIP = 1.0, 0.3, 3.0
 #: Pull towards the previous frame's label. Off: causal, it carries a part lost in
 #: one frame into the next ones (arms front 0.937 without, 0.919 at 0.3; jacks 3/4
 #: 0.916 / 0.914, ido_walk 0.931 / 0.927). Time is used over the plate stage's
-#: samples instead (:func:`cut_samples`, both neighbours).
+#: samples instead (:mod:`vidcap.video.samplecut`, both neighbours).
 TIME_WEIGHT = 0.0
 #: The never-seen parts the person's crop touches are re-decided too (not only the
 #: outline band).
@@ -57,9 +62,6 @@ WITH_NEVER = True
 LOCAL_SCENE = 1.0
 #: Weight of the pairwise (smoothness) term.
 SMOOTH = 1.0
-#: Over the plate stage's samples: the pull between a pixel's labels in neighbouring
-#: samples, and the smoothness within a sample (:func:`cut_samples`).
-SAMPLE_TIME, SAMPLE_SMOOTH = 0.5, 1.0
 
 
 
@@ -95,7 +97,8 @@ class CutParams:
     Attributes
     ----------
     table : numpy.ndarray, shape (BINS**3,), float32
-        Colour evidence per quantised colour (weighted, clipped log-ratio).
+        Colour evidence per quantised colour with the clip's scene model (clipped
+        log-ratio; used when :data:`LOCAL_SCENE` is 0).
     never : numpy.ndarray, shape (h, w), bool
         Never-seen pixels of the plate.
     band, never_weight, time_weight, smooth, colour_weight, seen_colour : float
@@ -278,68 +281,3 @@ def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarra
     g.add_grid_tedges(nodes, src, snk)
     g.maxflow()
     return ~g.get_grid_segments(nodes)  # (True = sink side = scene)
-
-
-def _contrast_weights(img: np.ndarray, smooth: float):
-    """Contrast-sensitive weights to the right and below, (..., h, w) each, of images
-    (..., h, w, 3): ``smooth * exp(-beta * |I_p - I_q|^2)``, ``beta`` from the
-    mean squared difference (Rother et al. 2004)."""
-    fi = img.astype(np.float32)
-    dx = np.square(fi[..., :, 1:, :] - fi[..., :, :-1, :]).sum(axis=-1)
-    dy = np.square(fi[..., 1:, :, :] - fi[..., :-1, :, :]).sum(axis=-1)
-    beta = 1.0 / max(float(dx.mean() + dy.mean()), 1e-6)
-    wx = np.zeros(fi.shape[:-1], np.float64)
-    wy = np.zeros(fi.shape[:-1], np.float64)
-    wx[..., :, :-1] = smooth * np.exp(-beta * dx)
-    wy[..., :-1, :] = smooth * np.exp(-beta * dy)
-    return wx, wy
-
-
-def cut_samples(small: np.ndarray, llr: np.ndarray, uncertain: np.ndarray, *,
-                clip: float = COLOUR_CLIP) -> np.ndarray:
-    """The person in the samples by one minimum cut over space and time.
-
-    Parameters
-    ----------
-    small : numpy.ndarray, shape (K, h, w, 3)
-        The samples (gain-divided colours) in time order.
-    llr : numpy.ndarray, shape (K, h, w), float32
-        Log-likelihood ratio person / scene per pixel (clipped to +- ``clip``).
-    uncertain : numpy.ndarray, shape (h, w), bool
-        Where the labels are wanted; the cut runs over its bounding box (and a
-        margin), elsewhere the sign of ``llr`` is returned.
-
-    Returns
-    -------
-    numpy.ndarray, shape (K, h, w), bool
-        Person.
-    """
-    import maxflow
-
-    out = llr > 0
-    if not uncertain.any():
-        return out
-    k, h, w = llr.shape
-    x, y, bw, bh = cv2.boundingRect(uncertain.view(np.uint8))
-    m = 3
-    x0, y0, x1, y1 = max(0, x - m), max(0, y - m), min(w, x + bw + m), min(h, y + bh + m)
-    e = np.clip(llr[:, y0:y1, x0:x1], -clip, clip).astype(np.float64)
-    wx, wy = _contrast_weights(small[:, y0:y1, x0:x1], SAMPLE_SMOOTH)
-    g = maxflow.Graph[float]()
-    ids = g.add_grid_nodes(e.shape)
-    g.add_grid_edges(ids, weights=wx, structure=_T_RIGHT, symmetric=True)
-    g.add_grid_edges(ids, weights=wy, structure=_T_DOWN, symmetric=True)
-    if k > 1 and SAMPLE_TIME > 0:
-        g.add_grid_edges(ids, weights=SAMPLE_TIME, structure=_T_NEXT, symmetric=True)
-    g.add_grid_tedges(ids, np.maximum(e, 0), np.maximum(-e, 0))
-    g.maxflow()
-    out[:, y0:y1, x0:x1] = ~g.get_grid_segments(ids)
-    return out
-
-
-_T_RIGHT = np.zeros((3, 3, 3))
-_T_RIGHT[1, 1, 2] = 1
-_T_DOWN = np.zeros((3, 3, 3))
-_T_DOWN[1, 2, 1] = 1
-_T_NEXT = np.zeros((3, 3, 3))
-_T_NEXT[2, 1, 1] = 1
