@@ -298,6 +298,9 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             shadow |= (alpha > lo) & (alpha < hi) & (cd < share * p.threshold)
         fg[y:y + h, x:x + w][shadow] = 0
         fg = cv2.medianBlur(fg, 3)
+        if p.cut is not None:  # a shadow is no difference from the plate for the cut
+            l1 = l1.copy()
+            l1[y:y + h, x:x + w][shadow] = 0
     fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, p.kernel)
     if p.cut is not None:
         from vidcap.video.graphcut import cut_frame
