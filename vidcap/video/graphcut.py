@@ -22,14 +22,16 @@ outside the band keep the threshold's decision; their links are folded into the
 band pixels' terminal links, so the graph is the band (the outline and the
 never-seen parts the person's crop touches), not the frame.
 
-Opt-in (``extract_silhouettes(..., graph_cut=True)``). On the tuning clips (median
-IoU, without -> with): jacks side 0.884 -> 0.923, jacks 3/4 0.902 -> 0.915, arms 3/4
-0.890 -> 0.902, arms front 0.931 -> 0.940, arms side 0.980 -> 0.987, jacks front
-0.981 -> 0.982, ido_walk 0.928 -> 0.932, but pose2sim cam1 (vs MediaPipe's masks)
-0.362 -> 0.343: its never-seen area holds a wall the colour of the subject's skin,
-which the colour term fills in. It costs time: the silhouette stage at 640x480
-takes 4.0 ms of CPU a frame with it, 1.6 without (benchmarks/silhouette_speed.py's
-clip; half of the cut is the maxflow, a third the frame's scene histogram).
+Opt-in (``extract_silhouettes(..., graph_cut=True)``;
+``benchmarks/silhouettes_real.py --graph-cut``). Tuning clips, median IoU without ->
+with (main f5880ab's silhouettes): jacks side 0.884 -> 0.917, jacks 3/4 0.902 ->
+0.915, arms 3/4 0.890 -> 0.902, arms side 0.980 -> 0.987, arms front 0.920 -> 0.920,
+ido_walk 0.921 -> 0.922, sports2d_walk_turn 0.846 -> 0.849 (vs MediaPipe), but
+pose2sim cam1 (vs MediaPipe's masks) 0.347 -> 0.317: its never-seen area holds a
+wall the colour of the subject's skin, which the colour term fills in. It costs
+time: the silhouette stage at 640x480 takes 4.0 ms of CPU a frame with it, 1.6
+without (benchmarks/silhouette_speed.py's clip; half of the cut is the maxflow, a
+third the frame's scene histogram).
 Over the plate stage's samples, :func:`vidcap.video.samplecut.cut_samples` replaces
 the appearance pass's smoothed ratio when ``vidcap.video.appearance.SAMPLE_CUT`` is
 set (off: measured mixed).
