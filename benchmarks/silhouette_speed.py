@@ -64,6 +64,8 @@ def main() -> int:
         t_both, _ = best_of(lambda: extract_silhouettes(video, bg), a.repeat)
         t_full, sil_full = best_of(lambda: extract_silhouettes(mem, bg, work_scale=1),
                                    a.repeat)
+        t_cut, sil_cut = best_of(lambda: extract_silhouettes(mem, bg, graph_cut=True),
+                                 a.repeat)
     def iou_of(s):
         return (s.masks & masks).sum((1, 2)) / np.maximum((s.masks | masks).sum((1, 2)), 1)
 
@@ -80,6 +82,8 @@ def main() -> int:
         ("silhouettes incl. decode (file)", t_both, n / t_both, t_both / t_dec, ""),
         ("silhouettes, in memory, work_scale=1", t_full, n / t_full, t_full / t_dec,
          f"IoU {np.median(iou_full):.3f} vs {np.median(iou):.3f} at the default scale"),
+        ("silhouettes, in memory, graph_cut=True", t_cut, n / t_cut, t_cut / t_dec,
+         f"IoU {np.median(iou_of(sil_cut)):.3f}"),
     ]
     print(f"{n} frames {w}x{h}, best and median of {a.repeat}; fps and ratios from the best; "
           f"median IoU vs truth {np.median(iou):.3f}")

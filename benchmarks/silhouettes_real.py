@@ -1,7 +1,7 @@
 """Silhouettes on real footage and on in-place renders over real backgrounds.
 
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
-        [--only NAME] [--quick] [--pck]
+        [--only NAME] [--quick] [--pck] [--graph-cut]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -268,9 +268,13 @@ def pck_pair(masks, truth_masks, joints2d):
     return tuple(out)
 
 
+GRAPH_CUT = False  # --graph-cut: the silhouette stage's graph cut (vidcap/video/graphcut.py)
+
+
 def run_vidcap(video, method):
     bg = estimate_background(video, method=method)
-    sil = extract_silhouettes(video, bg, require_person=False, progress=False)
+    sil = extract_silhouettes(video, bg, require_person=False, progress=False,
+                              graph_cut=GRAPH_CUT)
     return np.asarray(sil.masks), bg
 
 
@@ -309,7 +313,11 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="vidcap only (no baselines)")
     ap.add_argument("--pck", action="store_true",
                     help="renders: PCK@0.05 of the 2D fit on vidcap's and the true masks")
+    ap.add_argument("--graph-cut", action="store_true",
+                    help="vidcap with the graph cut over the uncertain band (opt-in)")
     args = ap.parse_args(argv)
+    global GRAPH_CUT
+    GRAPH_CUT = args.graph_cut
     data = os.environ.get("VIDCAP_DATA")
     tmp = None
     if data:

@@ -107,6 +107,10 @@ class BackgroundModel:
         they did (``person_plate``); also in ``never_seen``, their plate inpainted.
     person_plate : numpy.ndarray, shape (H, W, 3), uint8, optional
         The plate before the still parts were inpainted: their own colour.
+    colours : numpy.ndarray, shape (2, 4096), float32, optional
+        Log-probabilities of the person's and the scene's colours over the clip
+        (:func:`vidcap.video.graphcut.clip_colours`), for the silhouette stage's
+        graph cut.
     """
 
     plate: np.ndarray
@@ -122,6 +126,7 @@ class BackgroundModel:
     self_lit: np.ndarray | None = None
     still_person: np.ndarray | None = None
     person_plate: np.ndarray | None = None
+    colours: np.ndarray | None = None
 
     @property
     def never_seen_fraction(self) -> float:

@@ -66,7 +66,9 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
     model = _second_pass(model, frames, gains)
     if still_parts:
         model = _with_still_parts(model, frames, gains, small_hw)
-    return model
+    from vidcap.video.graphcut import clip_colours
+
+    return replace(model, colours=clip_colours(model, frames, gains))
 
 
 def _with_still_parts(model, frames, gains, small_hw):

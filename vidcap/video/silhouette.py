@@ -128,7 +128,7 @@ class Silhouettes:
 class _Params:
     def __init__(self, bg: BackgroundModel, threshold, local_factor, shadows, min_area,
                  other_fraction, close_size, work_scale=1, edge_band=0,
-                 edge_fraction=0.3):
+                 edge_fraction=0.3, graph_cut=False):
         full_h, full_w = bg.plate.shape[:2]
         self.full_shape = (full_h, full_w)
         s = max(1, int(work_scale))
@@ -203,6 +203,16 @@ class _Params:
         self.plate_inv = 1.0 / (sub[self.gain_sel] + 1.0)
         # Plate channels (+1 against division by zero) for the shadow test.
         self.plate_planes = cv2.split(self.plate_f + 1.0)
+        self.cut = None
+        colours = getattr(bg, "colours", None)
+        if graph_cut and colours is not None:
+            from vidcap.video.graphcut import CutParams
+
+            never = bg.never_seen
+            if s > 1:
+                never = cv2.resize(never.view(np.uint8), (w, h),
+                                   interpolation=cv2.INTER_NEAREST) > 0
+            self.cut = CutParams.make(colours, never)
 
 
 def _gain(frame: np.ndarray, p: _Params) -> np.ndarray:
@@ -288,7 +298,16 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             shadow |= (alpha > lo) & (alpha < hi) & (cd < share * p.threshold)
         fg[y:y + h, x:x + w][shadow] = 0
         fg = cv2.medianBlur(fg, 3)
+        if p.cut is not None:  # a shadow is no difference from the plate for the cut
+            l1 = l1.copy()
+            l1[y:y + h, x:x + w][shadow] = 0
     fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, p.kernel)
+    if p.cut is not None:
+        from vidcap.video.graphcut import cut_frame
+
+        fg = cut_frame(frame, l1, p.tmap, fg, g, p.cut)
+        if keep is not None:
+            fg = cv2.bitwise_and(fg, keep[0])
     contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     mask = np.zeros(p.full_shape, np.uint8)
     bbox = np.full(4, -1, np.int64)
@@ -437,7 +456,7 @@ def _to_full(contour: np.ndarray, p: _Params) -> np.ndarray:
 
 def _params_for(background, frames_for_noise, threshold, local_factor, shadows, min_area,
                 other_fraction, close_size, work_scale=None, edge_band=None,
-                edge_fraction=0.3):
+                edge_fraction=0.3, graph_cut=False):
     thr = threshold
     if thr is None:
         thr = background.threshold
@@ -459,7 +478,7 @@ def _params_for(background, frames_for_noise, threshold, local_factor, shadows, 
         # plate decides, not the first frames, which may be black (a fade-in).
         shadows = False
     return _Params(background, thr, local_factor, shadows, min_area, other_fraction,
-                   close_size, work_scale, edge_band, edge_fraction)
+                   close_size, work_scale, edge_band, edge_fraction, graph_cut)
 
 
 def is_monochrome(frames, *, max_spread: int = 4) -> bool:
@@ -501,7 +520,7 @@ def iter_silhouettes(
     local_factor: float = 3.0, shadows: bool = True, min_area: int | None = None,
     other_fraction: float = 0.2, close_size: int | None = None, chunk_size: int = 64,
     work_scale: int | None = None, edge_band: int | None = None,
-    edge_fraction: float = 0.3, regions=None,
+    edge_fraction: float = 0.3, regions=None, graph_cut: bool = False,
 ) -> Iterator[tuple[np.ndarray, list[FrameSilhouette], np.ndarray]]:
     """Silhouettes chunk by chunk (for long videos); see :func:`extract_silhouettes`.
 
@@ -535,7 +554,7 @@ def iter_silhouettes(
             # (the noise is measured on the first 8 frames)
             params = _params_for(background, np.asarray(chunk[:8]), threshold, local_factor,
                                  shadows, min_area, other_fraction, close_size, work_scale,
-                                 edge_band, edge_fraction)
+                                 edge_band, edge_fraction, graph_cut)
         results, gains = [], []
         for frame in chunk:
             if frame.shape[:2] != background.plate.shape[:2]:
@@ -563,6 +582,7 @@ def extract_silhouettes(
     progress: bool | None = None, require_person: bool = True,
     work_scale: int | None = None, edge_band: int | None = None,
     edge_fraction: float = 0.3, on_masks=None, regions=None, crops=None,
+    graph_cut: bool = False,
 ) -> Silhouettes:
     """Separate the person from the background in every frame.
 
@@ -627,6 +647,10 @@ def extract_silhouettes(
         Each frame's colour crop around its silhouette is appended to it
         (:class:`vidcap.video.fit.cueframes.FrameCrops`, the 2D fit's cues), before
         ``on_masks`` is called for the chunk.
+    graph_cut : bool
+        Re-decide the band round the person and the never-seen area by a graph cut
+        over space and time (:mod:`vidcap.video.graphcut`: plate difference, the
+        clip's colour models, the previous frame); needs ``background.colours``.
 
     Returns
     -------
@@ -642,7 +666,7 @@ def extract_silhouettes(
     options = dict(threshold=threshold, local_factor=local_factor, shadows=shadows,
                    min_area=min_area, other_fraction=other_fraction, close_size=close_size,
                    chunk_size=chunk_size, work_scale=work_scale, edge_band=edge_band,
-                   edge_fraction=edge_fraction, regions=regions)
+                   edge_fraction=edge_fraction, regions=regions, graph_cut=graph_cut)
     acc = _Collected()
     acc.run(source, background, options, progress, on_masks, crops)
     name = None if isinstance(source, np.ndarray) else source

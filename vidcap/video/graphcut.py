@@ -1,0 +1,287 @@
+"""The silhouette's uncertain band decided by a graph cut over space and time (issue 26,
+Build 2).
+
+The thresholded difference from the plate decides most pixels of a frame well; it
+is unsure along the person's outline (mixed pixels, a limb the colour of the wall)
+and wherever the plate itself is a guess (the never-seen area, inpainted). There
+each pixel is re-decided by a minimum cut (Boykov and Jolly 2001; Rother et al.
+2004) of an energy that sums, per pixel, evidence for "person":
+
+* the **plate difference** ``log2(l1 / threshold)``, clipped to +-2 (weighted down
+  where the plate was never seen: it is a guess there);
+* **colour**: the person's colour model learned over the clip (:func:`clip_colours`,
+  from the plate stage's samples) against the scene's, taken from the frame itself
+  round the person (the crop outside the band; :data:`LOCAL_SCENE`): the
+  log-likelihood ratio, clipped (the clip-wide scene model instead: jacks side
+  0.884, the frame's own 0.923 median IoU);
+* **time** (off by default, :data:`TIME_WEIGHT`): the previous frame's label;
+
+and, between 4-neighbours, a contrast-sensitive cost for cutting them apart
+(``exp(-beta * |I_p - I_q|^2)``): the outline follows the image's edges. Pixels
+outside the band keep the threshold's decision; their links are folded into the
+band pixels' terminal links, so the graph is the band (the outline and the
+never-seen parts the person's crop touches), not the frame.
+
+Opt-in (``extract_silhouettes(..., graph_cut=True)``;
+``benchmarks/silhouettes_real.py --graph-cut``). Tuning clips, median IoU without ->
+with (main f5880ab's silhouettes): jacks side 0.884 -> 0.917, jacks 3/4 0.902 ->
+0.915, arms 3/4 0.890 -> 0.902, arms side 0.980 -> 0.987, arms front 0.920 -> 0.920,
+ido_walk 0.921 -> 0.922, sports2d_walk_turn 0.846 -> 0.849 (vs MediaPipe), but
+pose2sim cam1 (vs MediaPipe's masks) 0.347 -> 0.317: its never-seen area holds a
+wall the colour of the subject's skin, which the colour term fills in. It costs
+time: the silhouette stage at 640x480 takes 4.0 ms of CPU a frame with it, 1.6
+without (benchmarks/silhouette_speed.py's clip; half of the cut is the maxflow, a
+third the frame's scene histogram).
+Over the plate stage's samples, :func:`vidcap.video.samplecut.cut_samples` replaces
+the appearance pass's smoothed ratio when ``vidcap.video.appearance.SAMPLE_CUT`` is
+set (off: measured mixed).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+__all__ = ["CutParams", "clip_colours", "cut_frame"]
+
+#: Half-width of the band re-decided around the thresholded outline, work pixels.
+BAND = 3
+#: Weight of the plate difference term where the plate was never seen (a guess).
+NEVER_WEIGHT = 0.25
+#: Weight of the colour term where the plate is uncertain, and where it was seen;
+#: the log-ratio is clipped to +- COLOUR_CLIP.
+COLOUR_WEIGHT, SEEN_COLOUR, COLOUR_CLIP = 1.0, 0.3, 3.0
+#: Pull towards the previous frame's label. Off: causal, it carries a part lost in
+#: one frame into the next ones (arms front 0.937 without, 0.919 at 0.3; jacks 3/4
+#: 0.916 / 0.914, ido_walk 0.931 / 0.927). Time is used over the plate stage's
+#: samples instead (:mod:`vidcap.video.samplecut`, both neighbours).
+TIME_WEIGHT = 0.0
+#: The never-seen parts the person's crop touches are re-decided too (not only the
+#: outline band).
+WITH_NEVER = True
+#: Share of the scene's colour model taken from the frame itself, round the person
+#: (the crop outside the band), per frame; 0 = the clip's model only.
+LOCAL_SCENE = 1.0
+#: Weight of the pairwise (smoothness) term.
+SMOOTH = 1.0
+
+
+
+def clip_colours(model, frames: np.ndarray, gains: np.ndarray) -> np.ndarray | None:
+    """The colour models of the person and of the scene over the clip.
+
+    Parameters
+    ----------
+    model : vidcap.video.background.BackgroundModel
+        The plate (final).
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+        The samples it was estimated from.
+    gains : numpy.ndarray, shape (K, 3)
+        Their per-channel gains relative to the plate.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2, BINS**3), float32, or None
+        log P(colour | person) and log P(colour | scene) per quantised colour
+        (:func:`vidcap.video.appearance.colour_model`), colours divided by the
+        frame's gain; None when the samples show too little of the person.
+    """
+    from vidcap.video.appearance import person_scene_models
+
+    got = person_scene_models(model, frames, gains)
+    return None if got is None else np.stack(got).astype(np.float32)
+
+
+@dataclass
+class CutParams:
+    """What :func:`cut_frame` needs, at the silhouette stage's working resolution.
+
+    Attributes
+    ----------
+    table : numpy.ndarray, shape (BINS**3,), float32
+        Colour evidence per quantised colour with the clip's scene model (clipped
+        log-ratio; used when :data:`LOCAL_SCENE` is 0).
+    never : numpy.ndarray, shape (h, w), bool
+        Never-seen pixels of the plate.
+    band, never_weight, time_weight, smooth, colour_weight, seen_colour : float
+        See the module's constants.
+    prev : numpy.ndarray or None
+        The previous frame's result (h, w) uint8, updated by :func:`cut_frame`.
+    """
+
+    table: np.ndarray
+    never: np.ndarray
+    band: int = BAND
+    never_weight: float = NEVER_WEIGHT
+    time_weight: float = TIME_WEIGHT
+    smooth: float = SMOOTH
+    colour_weight: float = COLOUR_WEIGHT
+    seen_colour: float = SEEN_COLOUR
+    prev: np.ndarray | None = field(default=None, repr=False)
+    #: The clip's models, (2, BINS**3) log-probabilities (for :data:`LOCAL_SCENE`).
+    colours: np.ndarray | None = field(default=None, repr=False)
+    #: The never-seen area's 8-connected parts: labels (h, w) and boxes (n, 4)
+    #: ``x0, y0, x1, y1`` (label 0, the rest, has an empty box).
+    parts: tuple | None = field(default=None, repr=False)
+
+    def __post_init__(self):
+        n, lab, st, _ = cv2.connectedComponentsWithStats(self.never.view(np.uint8),
+                                                         connectivity=8)
+        boxes = np.column_stack([st[:, 0], st[:, 1], st[:, 0] + st[:, 2],
+                                 st[:, 1] + st[:, 3]])
+        boxes[0] = (1 << 30, 1 << 30, -1, -1)
+        self.parts = (lab, boxes)
+
+    @classmethod
+    def make(cls, colours: np.ndarray, never: np.ndarray, **kw) -> CutParams:
+        """From :func:`clip_colours`' models and the never-seen map (work size).
+        (Plate pixels whose own colour is the person's were tried as uncertain
+        too: pose2sim cam1 0.338 -> 0.275, the renders within 0.003.)"""
+        llr = np.clip(colours[0] - colours[1], -COLOUR_CLIP, COLOUR_CLIP)
+        never = np.asarray(never, bool)
+        kw = {"band": BAND, "never_weight": NEVER_WEIGHT, "time_weight": TIME_WEIGHT,
+              "smooth": SMOOTH, "colour_weight": COLOUR_WEIGHT,
+              "seen_colour": SEEN_COLOUR, **kw}
+        return cls(table=llr.astype(np.float32), never=never,
+                   colours=np.asarray(colours, np.float32), **kw)
+
+
+def _quantise(img: np.ndarray) -> np.ndarray:
+    from vidcap.video.appearance import BINS
+
+    q = (img.astype(np.uint16) * BINS) >> 8
+    return (q[..., 0] * BINS + q[..., 1]) * BINS + q[..., 2]
+
+
+def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarray,
+              gain: np.ndarray, cp: CutParams) -> np.ndarray:
+    """Re-decide one frame's uncertain band by a minimum cut.
+
+    Parameters
+    ----------
+    frame : numpy.ndarray, shape (h, w, 3), uint8
+        The frame at the working resolution, BGR.
+    l1 : numpy.ndarray, shape (h, w), uint8
+        Its L1 difference from the (gain-scaled) plate.
+    tmap : numpy.ndarray, shape (h, w), uint8
+        The per-pixel threshold.
+    fg : numpy.ndarray, shape (h, w), uint8
+        The thresholded, cleaned foreground (0 / 255).
+    gain : numpy.ndarray, shape (3,)
+        The frame's per-channel gain (the colour models are of gain-divided colours).
+    cp : CutParams
+
+    Returns
+    -------
+    numpy.ndarray, shape (h, w), uint8
+        The foreground (0 / 255) with the band round its largest blob re-decided
+        (``fg`` itself when it is empty).
+    """
+    contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
+        cp.prev = None
+        return fg
+    x, y, w, h = cv2.boundingRect(max(contours, key=cv2.contourArea))
+    H, W = fg.shape
+    r = cp.band
+    m = 2 * r + max(2, int(0.1 * max(w, h)))
+    x0, y0, x1, y1 = max(0, x - m), max(0, y - m), min(W, x + w + m), min(H, y + h + m)
+    # The crop takes in the whole of each never-seen part it touches (a static torso
+    # beside the moving arm that is the largest blob).
+    lab, boxes = cp.parts
+    sub = lab[y0:y1, x0:x1]
+    touched = np.unique(sub[sub > 0])
+    if len(touched):
+        b = boxes[touched]
+        x0, y0 = min(x0, int(b[:, 0].min())), min(y0, int(b[:, 1].min()))
+        x1, y1 = max(x1, int(b[:, 2].max())), max(y1, int(b[:, 3].max()))
+    f = fg[y0:y1, x0:x1]
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    inner = cv2.erode(f, disk)
+    near = cv2.dilate(f, disk)
+    never = cp.never[y0:y1, x0:x1]
+    band = ((near > 0) & (inner == 0)) | (never if WITH_NEVER else False)
+    if not band.any():
+        return fg
+    img = frame[y0:y1, x0:x1]
+    # Evidence for the person (positive), per band pixel.
+    ys, xs = np.nonzero(band)
+    t = tmap[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0
+    e = np.clip(np.log2((l1[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0) / t), -2.0, 2.0)
+    px = img[ys, xs].astype(np.float32) / np.asarray(gain, np.float32)
+    q = _quantise(np.clip(px, 0, 255).astype(np.uint8))
+    if LOCAL_SCENE > 0 and cp.colours is not None:
+        col = _local_llr(img, (near == 0) & ~never, gain, cp.colours)[q]
+    else:
+        col = cp.table[q]
+    nv = never[ys, xs]
+    e = np.where(nv, cp.never_weight * e + cp.colour_weight * col, e + cp.seen_colour * col)
+    if cp.prev is not None and cp.time_weight:
+        e += np.where(cp.prev[y0:y1, x0:x1][ys, xs] > 0, cp.time_weight, -cp.time_weight)
+    person = _band_cut(band, f > 0, e, img, cp.smooth)
+    out = fg.copy()
+    out[y0:y1, x0:x1][band] = np.where(person, 255, 0).astype(np.uint8)
+    cp.prev = out
+    return out
+
+
+def _local_llr(img, outside, gain, colours):
+    """The colour log-ratio with the scene's model mixed with this frame's scene
+    round the person (the crop outside the band): :data:`LOCAL_SCENE` of it."""
+    from vidcap.video.appearance import colour_model
+
+    px = img[outside].astype(np.float32) / np.asarray(gain, np.float32)
+    if len(px) < 50:
+        return np.clip(colours[0] - colours[1], -COLOUR_CLIP, COLOUR_CLIP)
+    scene = colour_model(np.clip(px, 0, 255))
+    if LOCAL_SCENE < 1:
+        scene = np.logaddexp(np.log1p(-LOCAL_SCENE) + colours[1],
+                             np.log(LOCAL_SCENE) + scene)
+    return np.clip(colours[0] - scene, -COLOUR_CLIP, COLOUR_CLIP)
+
+
+def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarray,
+              smooth: float) -> np.ndarray:
+    """The minimum cut over the band's pixels only.
+
+    ``e``: evidence for the person per band pixel (row order); between
+    4-neighbours a contrast-sensitive cost ``smooth * exp(-beta * |I_p - I_q|^2)``
+    (``beta`` from the mean over the pairs touching the band, Rother et al. 2004).
+    A link to a pixel outside the band (whose label ``fixed`` is kept) is folded
+    into the band pixel's terminal link: the graph is the band, not its bounding
+    box, and the cost grows with the outline, not with the person's area. Returns
+    (N,) bool, person, for the band's pixels in row order."""
+    import maxflow
+
+    n = len(e)
+    idx = np.full(band.shape, -1, np.int64)
+    idx[band] = np.arange(n)
+    src = np.maximum(e, 0).astype(np.float64)
+    snk = np.maximum(-e, 0).astype(np.float64)
+    pairs = []
+    for a, b in (((slice(None), slice(None, -1)), (slice(None), slice(1, None))),
+                 ((slice(None, -1), slice(None)), (slice(1, None), slice(None)))):
+        sel = band[a] | band[b]
+        d = img[a][sel].astype(np.float32) - img[b][sel].astype(np.float32)
+        pairs.append((idx[a][sel], idx[b][sel], fixed[a][sel], fixed[b][sel],
+                      np.einsum("ij,ij->i", d, d)))
+    d2 = np.concatenate([p[4] for p in pairs])
+    beta = 1.0 / max(2.0 * float(d2.mean()), 1e-6) if len(d2) else 0.0
+    g = maxflow.Graph[float](n, 2 * n)
+    nodes = g.add_nodes(n)
+    for ia, ib, fa, fb, dd in pairs:
+        w = smooth * np.exp(-beta * dd)
+        both = (ia >= 0) & (ib >= 0)
+        if both.any():
+            g.add_edges(nodes[ia[both]], nodes[ib[both]], w[both], w[both])
+        # One end fixed: cutting the pair costs w when the band pixel takes the
+        # other label.
+        for here, there, fx in ((ia, ib, fb), (ib, ia, fa)):
+            one = (here >= 0) & (there < 0)
+            np.add.at(src, here[one & fx], w[one & fx])
+            np.add.at(snk, here[one & ~fx], w[one & ~fx])
+    g.add_grid_tedges(nodes, src, snk)
+    g.maxflow()
+    return ~g.get_grid_segments(nodes)  # (True = sink side = scene)
