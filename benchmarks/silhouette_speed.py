@@ -64,7 +64,8 @@ def main() -> int:
         t_both, _ = best_of(lambda: extract_silhouettes(video, bg), a.repeat)
         t_full, sil_full = best_of(lambda: extract_silhouettes(mem, bg, work_scale=1),
                                    a.repeat)
-        t_cut, sil_cut = best_of(lambda: extract_silhouettes(mem, bg, graph_cut=True),
+        bg_cut = estimate_background(video, colour_models=True)  # the cut's colour models
+        t_cut, sil_cut = best_of(lambda: extract_silhouettes(mem, bg_cut, graph_cut=True),
                                  a.repeat)
     def iou_of(s):
         return (s.masks & masks).sum((1, 2)) / np.maximum((s.masks | masks).sum((1, 2)), 1)

@@ -272,7 +272,7 @@ GRAPH_CUT = False  # --graph-cut: the silhouette stage's graph cut (vidcap/video
 
 
 def run_vidcap(video, method):
-    bg = estimate_background(video, method=method)
+    bg = estimate_background(video, method=method, colour_models=GRAPH_CUT)
     sil = extract_silhouettes(video, bg, require_person=False, progress=False,
                               graph_cut=GRAPH_CUT)
     return np.asarray(sil.masks), bg

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from vidcap.video.appearance import colour_model
 from vidcap.video.graphcut import CutParams, cut_frame
@@ -113,10 +114,24 @@ def test_the_plate_stage_learns_the_colours_and_the_cut_helps_an_in_place_clip()
     from vidcap.video.silhouette import extract_silhouettes
 
     frames, masks = _in_place()
-    bg = estimate_background(frames, rng=np.random.default_rng(0))
+    bg = estimate_background(frames, rng=np.random.default_rng(0), colour_models=True)
     assert bg.colours is not None and bg.colours.shape == (2, 16 ** 3)
     red = (np.array(RED) * 16 // 256) @ (256, 16, 1)
     assert bg.colours[0, red] > bg.colours[1, red] + 2    # the torso's red is the person's
     plain = _iou(extract_silhouettes(frames, bg, progress=False).masks, masks)
     cut = _iou(extract_silhouettes(frames, bg, graph_cut=True, progress=False).masks, masks)
     assert np.median(cut) >= np.median(plain) and cut.min() > plain.min() + 0.05
+
+
+def test_the_cut_without_colour_models_is_refused_not_skipped():
+    """A plate estimated without the colour models cannot feed the cut: asking for it
+    says so instead of silently returning the plain silhouettes."""
+    from tests.test_appearance import _in_place
+    from vidcap.video.background import estimate_background
+    from vidcap.video.silhouette import extract_silhouettes
+
+    frames, _ = _in_place()
+    bg = estimate_background(frames, rng=np.random.default_rng(0))
+    assert bg.colours is None
+    with pytest.raises(ValueError, match="colour_models=True"):
+        extract_silhouettes(frames, bg, graph_cut=True, progress=False)

@@ -260,6 +260,7 @@ def estimate_background(
     source, *, method: str = "felzenszwalb", n_samples: int = 24,
     work_size: int = 160, segment_scale: float = 60.0, min_region: int = 12,
     rng: np.random.Generator | None = None, progress: bool | None = None,
+    colour_models: bool = False,
 ) -> BackgroundModel:
     """Estimate the background plate of a static-camera video.
 
@@ -282,6 +283,10 @@ def estimate_background(
         Jitters which frames are sampled.
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).
+    colour_models : bool
+        Also learn the person's and the scene's colours over the clip
+        (``BackgroundModel.colours``), which ``extract_silhouettes(graph_cut=True)``
+        needs; about a tenth of the plate's time (``felzenszwalb`` only).
 
     Returns
     -------
@@ -323,7 +328,8 @@ def estimate_background(
     model = _finish_regions(frames, gains, weights_small, idx, name, holes)
     from vidcap.video.platepass import refine_plate
 
-    return refine_plate(model, frames, gains, weights_small.shape[1:])
+    return refine_plate(model, frames, gains, weights_small.shape[1:],
+                        colour_models=colour_models)
 
 
 def _frame_gains(frames: np.ndarray) -> np.ndarray:

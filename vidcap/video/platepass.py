@@ -35,7 +35,7 @@ PERSON_MARGIN = 0.02
 
 
 def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
-                 still_parts: bool = False) -> object:
+                 still_parts: bool = False, colour_models: bool = False) -> object:
     """Self-lit pixels, then one plate -> person -> plate pass (then, when asked, the
     still parts of the person by appearance).
 
@@ -54,6 +54,9 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
         Off by default: on a side-view jumping-jacks render it lifts the median IoU
         from 0.06 to 0.53, but on a walker with empty stretches it took background for
         still parts (see benchmarks/RESULTS.md, Silhouettes).
+    colour_models : bool
+        Learn the clip's person and scene colours for the silhouettes' graph cut
+        (:func:`vidcap.video.graphcut.clip_colours`); off unless the cut is asked for.
 
     Returns
     -------
@@ -66,6 +69,8 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
     model = _second_pass(model, frames, gains)
     if still_parts:
         model = _with_still_parts(model, frames, gains, small_hw)
+    if not colour_models:
+        return model
     from vidcap.video.graphcut import clip_colours
 
     return replace(model, colours=clip_colours(model, frames, gains))

@@ -205,7 +205,10 @@ class _Params:
         self.plate_planes = cv2.split(self.plate_f + 1.0)
         self.cut = None
         colours = getattr(bg, "colours", None)
-        if graph_cut and colours is not None:
+        if graph_cut and colours is None:
+            raise ValueError("graph_cut needs the clip's colour models: estimate the plate "
+                             "with estimate_background(..., colour_models=True)")
+        if graph_cut:
             from vidcap.video.graphcut import CutParams
 
             never = bg.never_seen
@@ -650,7 +653,9 @@ def extract_silhouettes(
     graph_cut : bool
         Re-decide the band round the person and the never-seen area by a graph cut
         over space and time (:mod:`vidcap.video.graphcut`: plate difference, the
-        clip's colour models, the previous frame); needs ``background.colours``.
+        clip's colour models); needs a plate estimated with ``colour_models=True``.
+        Opt-in: it lifts most in-place renders and real clips but loses on some (see
+        benchmarks/RESULTS.md, Silhouettes) and costs ~2.5x the silhouettes' time.
 
     Returns
     -------
