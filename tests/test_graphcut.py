@@ -86,28 +86,6 @@ def test_an_empty_foreground_is_returned_unchanged():
     assert not out.any() and cp.prev is None
 
 
-def test_the_sample_cut_keeps_a_limb_through_a_sample_where_its_colour_is_ambiguous():
-    from vidcap.video.samplecut import cut_samples
-
-    k, h, w = 5, 40, 50
-    small = np.zeros((k, h, w, 3), np.float32)
-    small[:] = GREENS[0]
-    limb = np.zeros((h, w), bool)
-    limb[10:30, 20:26] = True
-    small[:, limb] = RED
-    llr = np.full((k, h, w), -2.0, np.float32)
-    llr[:, limb] = 2.0
-    llr[2, limb] = -0.3                        # sample 2: the limb's colour is unsure
-    uncertain = np.zeros((h, w), bool)
-    uncertain[5:35, 10:40] = True
-    person = cut_samples(small, llr, uncertain)
-    assert person[:, limb].all()               # the neighbours' labels carry it
-    assert not person[:, ~limb].any()          # and nothing spreads round it
-    # Without neighbours the ambiguous sample alone is scene.
-    alone = cut_samples(small[2:3], llr[2:3], uncertain)
-    assert not alone[0, limb].any()
-
-
 def test_the_plate_stage_learns_the_colours_and_the_cut_helps_an_in_place_clip():
     from tests.test_appearance import _in_place, _iou
     from vidcap.video.background import estimate_background

@@ -60,16 +60,6 @@ GROW_STEPS, MAX_SHARE = 3, 0.15
 #: The pass is refused when it leaves less than this share of the first never-seen
 #: area never seen.
 MIN_KEPT_NEVER = 0.5
-#: Per sample, the person in the uncertain area by a graph cut over space and the
-#: samples (:func:`vidcap.video.samplecut.cut_samples`) rather than the smoothed
-#: log-ratio. Off: measured mixed on the tuning renders (median IoU, box -> cut:
-#: jacks side 0.884 -> 0.855 (never seen 6.5 -> 7.7 %, truth 4.2 %), jacks 3/4
-#: 0.902 -> 0.918, arms 3/4 0.890 -> 0.896, arms front 0.931 -> 0.937, arms side
-#: 0.980 -> 0.984, pose2sim cam1 0.362 -> 0.332; other weights and the cut on the
-#: smoothed ratio (SMOOTH_FIRST) traded one clip against another).
-SAMPLE_CUT = False
-#: With SAMPLE_CUT: the cut's unary is the smoothed ratio, not the raw one.
-SMOOTH_FIRST = True
 #: A pixel needs this many samples (and this share) outside the person to be seen.
 MIN_SEEN, MIN_SEEN_SHARE = 2, 0.1
 
@@ -371,13 +361,10 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     # Per sample, person by appearance, smoothed over space and time. Colours never
     # seen on the person are not impossible for it: a uniform share.
     llr = log_ratio(wk.small, colour_model(px, uniform=PRIOR_UNSEEN), bg_model)
-    if SAMPLE_CUT:
-        from vidcap.video.samplecut import cut_samples
-
-        person = cut_samples(wk.small, _smooth(llr, 2 * wk.r + 1) if SMOOTH_FIRST else llr,
-                             uncertain)
-    else:
-        person = _smooth(llr, 2 * wk.r + 1) > 0
+    # (A graph cut over space and the samples instead of the box filter measured mixed
+    # on the tuning renders: jacks side 0.884 -> 0.855, jacks 3/4 0.902 -> 0.918, cam1
+    # 0.362 -> 0.332; session 15, in git history.)
+    person = _smooth(llr, 2 * wk.r + 1) > 0
     # (a one-pixel margin: the outline at this resolution mixes person and scene)
     box3 = np.ones((3, 3), np.uint8)
     covered = np.stack([cv2.dilate(p.view(np.uint8), box3) for p in person & uncertain[None]])

@@ -32,9 +32,6 @@ wall the colour of the subject's skin, which the colour term fills in. It costs
 time: the silhouette stage at 640x480 takes 4.0 ms of CPU a frame with it, 1.6
 without (benchmarks/silhouette_speed.py's clip; half of the cut is the maxflow, a
 third the frame's scene histogram).
-Over the plate stage's samples, :func:`vidcap.video.samplecut.cut_samples` replaces
-the appearance pass's smoothed ratio when ``vidcap.video.appearance.SAMPLE_CUT`` is
-set (off: measured mixed).
 """
 
 from __future__ import annotations
@@ -55,8 +52,8 @@ NEVER_WEIGHT = 0.25
 COLOUR_WEIGHT, SEEN_COLOUR, COLOUR_CLIP = 1.0, 0.3, 3.0
 #: Pull towards the previous frame's label. Off: causal, it carries a part lost in
 #: one frame into the next ones (arms front 0.937 without, 0.919 at 0.3; jacks 3/4
-#: 0.916 / 0.914, ido_walk 0.931 / 0.927). Time is used over the plate stage's
-#: samples instead (:mod:`vidcap.video.samplecut`, both neighbours).
+#: 0.916 / 0.914, ido_walk 0.931 / 0.927). (A cut over the plate stage's
+#: samples, both neighbours, measured mixed and was not kept.)
 TIME_WEIGHT = 0.0
 #: The never-seen parts the person's crop touches are re-decided too (not only the
 #: outline band).
