@@ -102,6 +102,59 @@ else
     echo "skip 14_19.bvh: $MIRROR/lawrennd+mocap/repo missing (fetch github:lawrennd/mocap first)" >&2
 fi
 
+# Real clips WITH TRUE PERSON MASKS (issue 26 validation rows of silhouettes_real.py), in
+# $VIDCAP_DATA/masks/: <clip>.mp4 (the dataset's JPEG frames, H.264 crf 18 by vidcap's own
+# writer, nominal 30 fps) and <clip>.truth.npz (masks (F,H,W) bool: ground-truth value 255,
+# the moving person; ignore (F,H,W) bool: 85 outside the ROI or the temporal ROI, 170 unknown
+# (motion-blurred borders); 50, hard shadow, and 0 count as background; frames (F,) int: the
+# dataset's frame numbers). CDnet 2014 sequences vendored in zhaochenqiu/UBgS_ADNNet.
+MASKS="$DATA/../masks"
+cdnet() {  # cdnet OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST (dataset frame numbers, inclusive)
+    local git_dir="$MIRROR/$1/repo"
+    if [ ! -d "$git_dir" ]; then
+        echo "skip $4: $git_dir missing (fetch github:${1/+//} first)" >&2
+        return 0
+    fi
+    [ -f "$MASKS/$4.truth.npz" ] && return 0
+    mkdir -p "$MASKS"
+    local tmp
+    tmp=$(mktemp -d)
+    git --git-dir="$git_dir" archive "$2" "$3/input" "$3/groundtruth" "$3/temporalROI.txt" \
+        | tar -x -C "$tmp"
+    PYTHONPATH="${PYTHONPATH:-$(cd "$(dirname "$0")/.." && pwd)}" python - "$tmp/$3" \
+        "$MASKS/$4" "$5" "$6" <<'PY'
+import sys
+
+import cv2
+import numpy as np
+
+from vidcap.io.video import write_video
+
+seq, out, first, last = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+roi_a, roi_b = (int(v) for v in open(f"{seq}/temporalROI.txt").read().split()[:2])
+numbers = np.arange(first, last + 1)
+frames = [cv2.imread(f"{seq}/input/in{i:06d}.jpg", cv2.IMREAD_COLOR) for i in numbers]
+gt = np.stack([cv2.imread(f"{seq}/groundtruth/gt{i:06d}.png", cv2.IMREAD_GRAYSCALE)
+               for i in numbers])
+ignore = (gt == 85) | (gt == 170)
+ignore[(numbers < roi_a) | (numbers > roi_b)] = True  # frames the dataset does not score
+n = write_video(out + ".mp4", frames, 30.0, crf=18)
+np.savez_compressed(out + ".truth.npz", masks=gt == 255, ignore=ignore, frames=numbers)
+print(out + ".mp4", n, "frames;", int((gt == 255).any((1, 2)).sum()), "with the person")
+PY
+    rm -rf "$tmp"
+}
+# baseline/office (2050 frames, 360x240): an empty office; a man in a red T-shirt walks in
+# (frame 582), stands reading a book by a bookcase for ~45 s (arms, head and a step now and
+# then), turns and leaves (2041). Two cuts: 500-1099 (empty office, walk in, stand: the plate
+# sees the empty scene) and 1100-1399 (he is in every frame, nearly still: never uncovered).
+# baseline/pedestrians (1099 frames, 360x240, outdoors, bright path and lawn): 711-1099, the
+# path empty, one woman walks across right to left (829-1051), empty again.
+ADN=7131e056d39fbedbace68a3b38049539303e2572
+cdnet zhaochenqiu+UBgS_ADNNet $ADN data/baseline/office cdnet_office_enter 500 1099
+cdnet zhaochenqiu+UBgS_ADNNet $ADN data/baseline/office cdnet_office_stand 1100 1399
+cdnet zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians 711 1099
+
 # MediaPipe references (person masks + landmarks), with the reference tool's own python
 # (set NO_MEDIAPIPE=1 to skip):
 MP_PY=/root/.cache/vidcap-mediapipe-reference/bin/python
@@ -111,6 +164,11 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
              sports2d_walk_turn sports2d_run tfjs_squats tfjs_dance; do
         [ -f "$DATA/$v.mp4" ] && [ ! -f "$DATA/$v.mediapipe.npz" ] && \
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
+    done
+    for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians; do
+        if [ -f "$MASKS/$v.mp4" ] && [ ! -f "$MASKS/$v.mediapipe.npz" ]; then
+            "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
+        fi
     done
 fi
 exit 0

@@ -73,6 +73,59 @@ def real_clips(log=print) -> list[RealClip]:
     return out
 
 
+#: Real clips WITH true person masks (issue 26): ``$VIDCAP_DATA/masks/<clip>.mp4`` with
+#: ``<clip>.truth.npz`` beside it (made by ``benchmarks/get_data.sh`` from CDnet 2014
+#: sequences; listed in ``benchmarks/DATA.md``) and, when made, ``<clip>.mediapipe.npz``.
+#: All are validation clips: no threshold or weight of vidcap was chosen on them. They are
+#: not in :func:`real_clips` (pose2d_real.py and lift_accuracy.py keep their list).
+MASKED_TUNING: set[str] = set()
+
+
+@dataclass
+class MaskedClip:
+    """A real clip with the dataset's own person masks."""
+
+    name: str
+    video: Path
+    truth: Path  # npz: masks (F,H,W) bool, ignore (F,H,W) bool, frames (F,) int
+    reference: Path | None  # the mediapipe-reference npz, None when not made
+
+    @property
+    def use(self) -> str:
+        return "tuning" if self.name in MASKED_TUNING else "validation"
+
+
+def masked_clips(log=print) -> list[MaskedClip]:
+    """Every ``$VIDCAP_DATA/masks/<clip>.mp4`` with its ``<clip>.truth.npz``, sorted by
+    name; ``log`` is told about what is skipped and why."""
+    data = os.environ.get("VIDCAP_DATA")
+    if not data:
+        log("real clips with true masks: skipped (VIDCAP_DATA is not set)")
+        return []
+    folder = Path(data) / "masks"
+    if not folder.is_dir():
+        log(f"real clips with true masks: skipped (no folder {folder}; "
+            "benchmarks/get_data.sh makes it)")
+        return []
+    out = []
+    for video in sorted(folder.glob("*.mp4")):
+        truth = video.with_suffix(".truth.npz")
+        if not truth.exists():
+            log(f"{video.stem}: skipped (no {truth.name}: benchmarks/get_data.sh)")
+            continue
+        ref = video.with_suffix(".mediapipe.npz")
+        out.append(MaskedClip(video.stem, video, truth, ref if ref.exists() else None))
+    return out
+
+
+def load_truth(clip: MaskedClip) -> tuple[np.ndarray, np.ndarray]:
+    """The clip's true person masks and its ignore masks, both (F, H, W) bool: pixels the
+    dataset leaves unscored (outside its region of interest, or unknown, such as blurred
+    borders) are True in ``ignore``; shadows are background (False in both)."""
+    with np.load(clip.truth) as z:
+        return z["masks"].astype(bool), z["ignore"].astype(bool)
+
+
 def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75,
                     proportions: str = "seed"):
     """vidcap's :func:`vidcap.video.pipeline.run` on the whole ``video`` (default options but

@@ -30,6 +30,13 @@ Clips:
   (arm raises, bending forward, stepping in place; subject 14, not 13 or 16) at three
   time windows, side / three-quarter / front, over the three real plates
   ($VIDCAP_DATA/mocap/cmu/14_19_humanik.bvh, made by benchmarks/get_data.sh).
+* Real clips WITH true person masks (validation, chose nothing): every clip of
+  ``real_clips.masked_clips`` ($VIDCAP_DATA/masks, from benchmarks/get_data.sh: CDnet
+  2014 baseline/office, a man walks into an empty office and stands reading, cut into
+  frames 500-1099 and 1100-1399, and baseline/pedestrians 711-1099, one woman walks across
+  a path). Scored against the dataset's masks (value 255; hard shadow counts as
+  background) on the frames where the truth shows the person; pixels the dataset marks
+  outside its region of interest or unknown (blurred borders) count in no IoU.
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -112,8 +119,12 @@ EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_1
 REAL_TUNING = {"pose2sim_balance_cam1", "sports2d_walk_turn"}
 
 
-def iou(a, b):
+def iou(a, b, ignore=None):
+    """Per-frame IoU of masks ``a`` and ``b`` (F, H, W); pixels True in ``ignore`` (the
+    dataset's unscored pixels) count in neither the intersection nor the union."""
     a, b = np.asarray(a, bool), np.asarray(b, bool)
+    if ignore is not None:
+        a, b = a & ~ignore, b & ~ignore
     return (a & b).sum((1, 2)) / np.maximum((a | b).sum((1, 2)), 1)
 
 
@@ -221,9 +232,11 @@ def real_clip(fname, a, b, cache: Path):
 
 def mediapipe_masks(video: Path, cache: Path | None):
     """MediaPipe's person masks from the reference tool, cached beside the clip."""
-    if cache is None or not MP_PY.exists():
+    if cache is None:
         return None
     out = cache / f"{video.stem}.mediapipe.npz"
+    if not out.exists() and not MP_PY.exists():
+        return None
     if not out.exists():
         subprocess.run([str(MP_PY), str(MP_TOOL), str(video), str(out), "--masks"],
                        check=True, capture_output=True)
@@ -278,26 +291,36 @@ def run_vidcap(video, method):
     return np.asarray(sil.masks), bg
 
 
-def score_clip(name, use, video, truth, mp, quick=False, joints2d=None):
+def score_clip(name, use, video, truth, mp, quick=False, joints2d=None, ignore=None):
+    """One table row. ``ignore`` (F, H, W) bool, for clips with the dataset's own masks:
+    pixels left out of every IoU, and only frames whose truth shows the person (outside
+    ``ignore``) are scored; every method still runs on the whole clip."""
+    scored = slice(None)
+    if ignore is not None:
+        scored = (truth & ~ignore).any((1, 2))
+        ignore = ignore[scored]
+
+    def score(masks):
+        return stats(iou(np.asarray(masks)[scored], truth[scored], ignore))
+
     row = {"clip": name, "use": use, "frames": len(truth)}
     t = time.perf_counter()
     masks, bg = run_vidcap(video, "felzenszwalb")
     row["secs"] = time.perf_counter() - t
-    row["vidcap"] = stats(iou(masks, truth))
+    row["vidcap"] = score(masks)
     row["pck"] = None if joints2d is None else pck_pair(masks, truth, joints2d)
     row["never"] = (100 * bg.never_seen_fraction, None if "MediaPipe" in name
                     else 100 * float(np.all(truth, axis=0).mean()))
     if quick:
         row.update({"median": None, "MOG2": None, "GSOC": None, "MediaPipe": None})
         return row
-    row["median"] = stats(iou(run_vidcap(video, "median")[0], truth))
+    row["median"] = score(run_vidcap(video, "median")[0])
     frames = read_frames(video)
-    row["MOG2"] = stats(iou(opencv_subtractor(
-        frames, lambda: cv2.createBackgroundSubtractorMOG2(detectShadows=True)), truth))
-    row["GSOC"] = stats(iou(opencv_subtractor(
-        frames, cv2.bgsegm.createBackgroundSubtractorGSOC), truth))
-    row["MediaPipe"] = None if mp is None or "MediaPipe" in name else stats(
-        iou(mp[:len(truth)], truth))
+    row["MOG2"] = score(opencv_subtractor(
+        frames, lambda: cv2.createBackgroundSubtractorMOG2(detectShadows=True)))
+    row["GSOC"] = score(opencv_subtractor(
+        frames, cv2.bgsegm.createBackgroundSubtractorGSOC))
+    row["MediaPipe"] = None if mp is None or "MediaPipe" in name else score(mp[:len(truth)])
     return row
 
 
@@ -349,8 +372,15 @@ def main(argv=None) -> int:
         joints = (truth_joints(name, motion, yaw, which, args.frames, cache)
                   if args.pck else None)
         clips.append((name, use, video, truth, joints))
-    from real_clips import real_clips
+    from real_clips import load_truth, masked_clips, real_clips
 
+    ignores = {}
+    for clip in masked_clips(log=lambda msg: print(f"({msg})")):
+        name = f"{clip.name} (CDnet, real, true masks)"
+        if args.only and args.only not in name:
+            continue
+        truth, ignores[name] = load_truth(clip)
+        clips.append((name, clip.use, clip.video, truth, None))
     for clip in real_clips(log=lambda msg: print(f"({msg})")):
         name = f"{clip.name} (real, vs MediaPipe)"
         if args.only and args.only not in name:
@@ -363,8 +393,10 @@ def main(argv=None) -> int:
     for name, use, video, truth, joints in clips:
         if args.only and args.only not in name:
             continue
-        mp = None if "MediaPipe" in name else mediapipe_masks(video, mp_cache)
-        rows.append(score_clip(name, use, video, truth, mp, args.quick, joints))
+        mp = None if "MediaPipe" in name else mediapipe_masks(
+            video, (None if args.no_mediapipe else video.parent) if name in ignores else mp_cache)
+        rows.append(score_clip(name, use, video, truth, mp, args.quick, joints,
+                               ignores.get(name)))
     cols = ["vidcap", "median", "MOG2", "GSOC", "MediaPipe"]
     pck = args.pck
     print("| clip | use | " + " | ".join(f"{c} med / p10" for c in cols)
