@@ -103,13 +103,18 @@ else
 fi
 
 # Real clips WITH TRUE PERSON MASKS (issue 26 validation rows of silhouettes_real.py), in
-# $VIDCAP_DATA/masks/: <clip>.mp4 (the dataset's JPEG frames, H.264 crf 18 by vidcap's own
-# writer, nominal 30 fps) and <clip>.truth.npz (masks (F,H,W) bool: ground-truth value 255,
-# the moving person; ignore (F,H,W) bool: 85 outside the ROI or the temporal ROI, 170 unknown
-# (motion-blurred borders); 50, hard shadow, and 0 count as background; frames (F,) int: the
-# dataset's frame numbers). CDnet 2014 sequences vendored in zhaochenqiu/UBgS_ADNNet.
+# $VIDCAP_DATA/masks/: <clip>.mp4 (the dataset's frames, H.264 crf 18 by vidcap's own writer,
+# nominal 30 fps: neither dataset states a frame rate) and <clip>.truth.npz (masks (F,H,W)
+# bool: ground-truth value 255, the moving person; ignore (F,H,W) bool: 85 outside the ROI,
+# 170 unknown (blurred borders), every frame outside the sequence's temporalROI.txt if it has
+# one, and the left-behind object of IGNORE_STATIC below; 50, hard shadow, and 0 are
+# background; frames (F,) int: the dataset's frame numbers).
 MASKS="$DATA/../masks"
-cdnet() {  # cdnet OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST (dataset frame numbers, inclusive)
+masked() {  # masked OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST [STATIC_FROM STATIC_TO]
+    # FIRST..LAST: the dataset's frame numbers (the digits ending the file names), inclusive.
+    # STATIC_FROM..STATIC_TO: frames where an object the person put down lies alone; the
+    # truth pixels common to all of them (the object, not a person), dilated by 5 px, are
+    # ignored in every frame (the dataset marks it as foreground; it is not the person).
     local git_dir="$MIRROR/$1/repo"
     if [ ! -d "$git_dir" ]; then
         echo "skip $4: $git_dir missing (fetch github:${1/+//} first)" >&2
@@ -119,31 +124,46 @@ cdnet() {  # cdnet OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST (dataset frame num
     mkdir -p "$MASKS"
     local tmp
     tmp=$(mktemp -d)
-    git --git-dir="$git_dir" archive "$2" "$3/input" "$3/groundtruth" "$3/temporalROI.txt" \
-        | tar -x -C "$tmp"
+    git --git-dir="$git_dir" archive "$2" "$3" | tar -x -C "$tmp"
     PYTHONPATH="${PYTHONPATH:-$(cd "$(dirname "$0")/.." && pwd)}" python - "$tmp/$3" \
-        "$MASKS/$4" "$5" "$6" <<'PY'
+        "$MASKS/$4" "$5" "$6" "${7:-}" "${8:-}" <<'PY'
+import re
 import sys
+from pathlib import Path
 
 import cv2
 import numpy as np
 
 from vidcap.io.video import write_video
 
-seq, out, first, last = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
-roi_a, roi_b = (int(v) for v in open(f"{seq}/temporalROI.txt").read().split()[:2])
+seq, out, first, last = Path(sys.argv[1]), sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+
+
+def numbered(folder):
+    return {int(re.search(r"(\d+)\.\w+$", p.name).group(1)): p
+            for p in (seq / folder).iterdir() if p.suffix in (".jpg", ".png")}
+
+
+inputs, gts = numbered("input"), numbered("groundtruth")
 numbers = np.arange(first, last + 1)
-frames = [cv2.imread(f"{seq}/input/in{i:06d}.jpg", cv2.IMREAD_COLOR) for i in numbers]
-gt = np.stack([cv2.imread(f"{seq}/groundtruth/gt{i:06d}.png", cv2.IMREAD_GRAYSCALE)
-               for i in numbers])
+frames = [cv2.imread(str(inputs[i]), cv2.IMREAD_COLOR) for i in numbers]
+gt = np.stack([cv2.imread(str(gts[i]), cv2.IMREAD_GRAYSCALE) for i in numbers])
 ignore = (gt == 85) | (gt == 170)
-ignore[(numbers < roi_a) | (numbers > roi_b)] = True  # frames the dataset does not score
+roi = seq / "temporalROI.txt"
+if roi.exists():  # frames the dataset does not score
+    roi_a, roi_b = (int(v) for v in roi.read_text().split()[:2])
+    ignore[(numbers < roi_a) | (numbers > roi_b)] = True
+if sys.argv[5]:
+    a, b = int(sys.argv[5]), int(sys.argv[6])
+    still = np.all(gt[(numbers >= a) & (numbers <= b)] == 255, axis=0).astype(np.uint8)
+    ignore |= cv2.dilate(still, np.ones((11, 11), np.uint8)).astype(bool)[None]
 n = write_video(out + ".mp4", frames, 30.0, crf=18)
 np.savez_compressed(out + ".truth.npz", masks=gt == 255, ignore=ignore, frames=numbers)
 print(out + ".mp4", n, "frames;", int((gt == 255).any((1, 2)).sum()), "with the person")
 PY
     rm -rf "$tmp"
 }
+# CDnet 2014 (changedetection.net), as vendored in zhaochenqiu/UBgS_ADNNet (every frame).
 # baseline/office (2050 frames, 360x240): an empty office; a man in a red T-shirt walks in
 # (frame 582), stands reading a book by a bookcase for ~45 s (arms, head and a step now and
 # then), turns and leaves (2041). Two cuts: 500-1099 (empty office, walk in, stand: the plate
@@ -151,9 +171,19 @@ PY
 # baseline/pedestrians (1099 frames, 360x240, outdoors, bright path and lawn): 711-1099, the
 # path empty, one woman walks across right to left (829-1051), empty again.
 ADN=7131e056d39fbedbace68a3b38049539303e2572
-cdnet zhaochenqiu+UBgS_ADNNet $ADN data/baseline/office cdnet_office_enter 500 1099
-cdnet zhaochenqiu+UBgS_ADNNet $ADN data/baseline/office cdnet_office_stand 1100 1399
-cdnet zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians 711 1099
+masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/office cdnet_office_enter 500 1099
+masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/office cdnet_office_stand 1100 1399
+masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians 711 1099
+# SBI2015 (Maddalena & Petrosino) with the per-frame foreground masks of Wang, Luo & Jodoin
+# (2017), as vendored in lim-anggun/FgSegNet. CaVignal (258 frames, 200x136, outdoors): a
+# man stands still on the left for ~170 frames, then walks slowly to the right; he is in
+# every frame. Candela_m1.10 (350 frames, 352x288, a lounge seen from high up, wide-angle):
+# a man walks in with a bag, sits down on a sofa and stays seated (~230 frames), gets up and
+# leaves without the bag; the truth marks the bag too, so the bag where it lies alone
+# (frames 293-349) is ignored.
+FGS=7aa31e2eba2bbe29f4725c040288e0090c453316
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/CaVignal sbi_cavignal 0 257
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/Candela_m1.10 sbi_candela 0 349 293 349
 
 # MediaPipe references (person masks + landmarks), with the reference tool's own python
 # (set NO_MEDIAPIPE=1 to skip):
@@ -165,7 +195,7 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
         [ -f "$DATA/$v.mp4" ] && [ ! -f "$DATA/$v.mediapipe.npz" ] && \
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
     done
-    for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians; do
+    for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians sbi_cavignal sbi_candela; do
         if [ -f "$MASKS/$v.mp4" ] && [ ! -f "$MASKS/$v.mediapipe.npz" ]; then
             "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
         fi

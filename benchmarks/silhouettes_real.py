@@ -34,7 +34,9 @@ Clips:
   ``real_clips.masked_clips`` ($VIDCAP_DATA/masks, from benchmarks/get_data.sh: CDnet
   2014 baseline/office, a man walks into an empty office and stands reading, cut into
   frames 500-1099 and 1100-1399, and baseline/pedestrians 711-1099, one woman walks across
-  a path). Scored against the dataset's masks (value 255; hard shadow counts as
+  a path; SBI2015 CaVignal, a man stands still for ~170 frames then walks slowly away,
+  and Candela_m1.10, a man walks into a lounge and sits on a sofa for ~230 frames). Scored
+  against the dataset's masks (value 255; hard shadow counts as
   background) on the frames where the truth shows the person; pixels the dataset marks
   outside its region of interest or unknown (blurred borders) count in no IoU.
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
@@ -376,7 +378,7 @@ def main(argv=None) -> int:
 
     ignores = {}
     for clip in masked_clips(log=lambda msg: print(f"({msg})")):
-        name = f"{clip.name} (CDnet, real, true masks)"
+        name = f"{clip.name} (real, true masks)"
         if args.only and args.only not in name:
             continue
         truth, ignores[name] = load_truth(clip)
