@@ -185,6 +185,20 @@ FGS=7aa31e2eba2bbe29f4725c040288e0090c453316
 masked lim-anggun+FgSegNet $FGS SBI2015_dataset/CaVignal sbi_cavignal 0 257
 masked lim-anggun+FgSegNet $FGS SBI2015_dataset/Candela_m1.10 sbi_candela 0 349 293 349
 
+# A multi-view 3D reference for the Pose2Sim balance trial (issue 33): the four views and the
+# Qualisys calibration in $VIDCAP_DATA/lift/pose2sim/; MediaPipe's 2D landmarks of each view
+# (below) are triangulated by benchmarks/triangulate_pose2sim.py.
+LIFT="$DATA/../lift/pose2sim"
+if [ -d "$MIRROR/perfanalytics+pose2sim/repo" ]; then
+    mkdir -p "$LIFT"
+    for i in 1 2 3 4; do
+        git --git-dir="$MIRROR/perfanalytics+pose2sim/repo" show \
+            "$P2S:Pose2Sim/Demo_SinglePerson/videos/cam0$i.mp4" > "$LIFT/cam0$i.mp4"
+    done
+    git --git-dir="$MIRROR/perfanalytics+pose2sim/repo" show \
+        "$P2S:Pose2Sim/Demo_SinglePerson/calibration/Calib.qca.txt" > "$LIFT/Calib.qca.txt"
+fi
+
 # MediaPipe references (person masks + landmarks), with the reference tool's own python
 # (set NO_MEDIAPIPE=1 to skip):
 MP_PY=/root/.cache/vidcap-mediapipe-reference/bin/python
@@ -200,5 +214,15 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
             "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
         fi
     done
+    for i in 1 2 3 4; do
+        if [ -f "$LIFT/cam0$i.mp4" ] && [ ! -f "$LIFT/cam0$i.mediapipe.npz" ]; then
+            "$MP_PY" "$REF" "$LIFT/cam0$i.mp4" "$LIFT/cam0$i.mediapipe.npz"
+        fi
+    done
+fi
+if [ -f "$LIFT/cam04.mediapipe.npz" ]; then
+    VIDCAP_DATA="${VIDCAP_DATA:-/work/data}" \
+        PYTHONPATH="${PYTHONPATH:-$(cd "$(dirname "$0")/.." && pwd)}" \
+        python "$(dirname "$0")/triangulate_pose2sim.py"
 fi
 exit 0
