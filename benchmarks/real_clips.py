@@ -6,9 +6,11 @@ Every ``$VIDCAP_DATA/video/<clip>.mp4`` (or ``.avi``) with ``<clip>.mediapipe.np
 it (the mediapipe-reference tool's ``reference.py --masks`` output; listed in
 ``benchmarks/DATA.md`` and ``$VIDCAP_DATA/video/CLIPS.md``; ``benchmarks/get_data.sh``
 rebuilds them). None has true masks or joints: MediaPipe is a reference, not the truth
-(about 2.4 % of height off on lab footage). No threshold or weight of vidcap was chosen on
-any of them (validation clips), except pose2sim_balance_cam1 for the silhouettes
-(``silhouettes_real.REAL_TUNING``).
+(about 2.4 % of height off on lab footage). The real clips that DO have the dataset's own
+person masks (CDnet 2014, SBI2015) are a separate list, :func:`masked_clips`
+(``$VIDCAP_DATA/masks``), scored by silhouettes_real.py only. No threshold or weight of
+vidcap was chosen on any of them (validation clips), except pose2sim_balance_cam1 for the
+silhouettes (``silhouettes_real.REAL_TUNING``).
 
 Each clip goes through vidcap's own pipeline, as ``vidcap convert`` runs it (plate and
 silhouettes from the video, the tracked 2D fit; default options, ``cues`` as asked), on
