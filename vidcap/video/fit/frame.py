@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from vidcap.video.fit.crossing import choose_crossing
 from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.foreshortening import fit_foreshortening
@@ -42,6 +43,11 @@ from vidcap.video.fit.torso import (
 #: shoulder it hangs from, which the image shows.
 SIDE_SPREAD = 0.3
 LABEL_TIE = 0.002  # S a fresh fit may lose to keep a track's limb names
+#: Spread from which a tracked frame also tries its legs exchanged between the hips
+#: (:func:`~vidcap.video.fit.crossing.choose_crossing`): with the hips apart in the
+#: image a leg hung from the wrong one misses its hip; nearer a side view the
+#: exchange only renames the legs (chosen on the tuning clips, RESULTS.md).
+CROSSING_SPREAD = 0.4
 #: A fresh fit below this S is fitted again with the torso found by
 #: :func:`~vidcap.video.fit.torso.fit_torso_lean` (a body bent forward, crouched, in a
 #: lunge; issue 27 item 4), and the better of the two kept: an upright body's fresh fit
@@ -168,8 +174,14 @@ def _refine(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -
 
 
 def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
-              challenge: bool = False, options: FitOptions, cues=None) -> FramePose:
+              challenge: bool = False, options: FitOptions, cues=None,
+              heading: np.ndarray | None = None) -> FramePose:
     """:func:`fit_pose` of a normalised silhouette with options already checked.
+
+    ``heading``: where the knees and ankles (left knee, left ankle, right knee, right
+    ankle; (4, 2) original pixels) are heading by the last two frames; a tracked frame
+    then also tries its legs exchanged between the hips
+    (:func:`vidcap.video.fit.crossing.choose_crossing`, legs passing each other).
 
     ``cues``: ``(image, colour_model)``, the colour frame on ``norm``'s grid
     (:func:`vidcap.video.fit.cues.cue_image`) and the clip's
@@ -188,6 +200,9 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
                 fresh = keep_labels(eng, fresh, norm.to_normalised(previous.joints),
                                     tie=LABEL_TIE)
             st, crossed, warm = fresh, fresh_crossed, False
+    if heading is not None and (warm or not challenge) and st.spread >= CROSSING_SPREAD:
+        st = choose_crossing(eng, st, norm.to_normalised(heading),
+                             interval=8 * np.deg2rad(options.warm_step_deg))
     if cues is not None:
         # a tracked frame's arms moved little: searched near where they are, unless
         # challenged (then over every angle pair, as a fresh fit's)

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
+from vidcap.video.fit.crossing import legs_heading
 from vidcap.video.fit.cueframes import as_frame_crops
 from vidcap.video.fit.cues import CUE_MODES, ColourModel
 from vidcap.video.fit.frame import fit_frame
@@ -86,7 +87,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, relabel: bool = False, frames=None,
                  cues: str = "all", arm_solve: bool = True, predict: bool = False,
-                 **kw) -> Pose2D:
+                 crossing: bool = True, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -157,6 +158,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         one-frame misplacement is outvoted by its neighbours.
     predict : bool
         Warm starts carry the legs on (:func:`predicted_start`; off: no held-out gain).
+    crossing : bool
+        Tracked frames also try their legs exchanged between the hips, judged by where
+        the last two frames' knees were heading
+        (:func:`vidcap.video.fit.crossing.choose_crossing`: knees passing each other).
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -185,7 +190,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     it = range(n) if progress is None else progress(range(n), total=n)
     normalised = _Normalised(masks, options, frames if cues == "all" else None)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
-           back_tie=back_tie, options=options, predict=predict)
+           back_tie=back_tie, options=options, predict=predict, crossing=crossing)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
@@ -275,7 +280,8 @@ class _Normalised:
 
 
 def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, reinit_every: int,
-           back_tie: float | None, options: FitOptions, predict: bool = False) -> None:
+           back_tie: float | None, options: FitOptions, predict: bool = False,
+           crossing: bool = False) -> None:
     """The main pass of :func:`fit_sequence` over ``frames`` (in place into ``out``)."""
     prev = before = None
     start = 0  # first frame of the current track
@@ -289,8 +295,12 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         challenge = bool(reinit_every) and k - last_fresh >= reinit_every
         norm = normalised(k)
         start_pose = predicted_start(prev, before) if predict else prev
+        # the heading of two tracked frames (a fresh fit's legs may have jumped)
+        heading = (legs_heading(prev.joints, before.joints)
+                   if crossing and tracked and before is not None and before.warm else None)
         fp = fit_frame(norm, previous=start_pose if tracked else None,
-                       challenge=challenge, options=options, cues=normalised.cues(k, norm))
+                       challenge=challenge, options=options, cues=normalised.cues(k, norm),
+                       heading=heading)
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
@@ -299,7 +309,9 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
             _retrack_backward(normalised, out, fp, range(k - 1, start - 1, -1), back_tie,
                               options)
             start = k
-        before = prev if fp.warm else None  # a fresh fit's names need not be prev's
+        # a fresh fit's names need not be prev's (unless its legs were chosen by where
+        # they were heading)
+        before = prev if fp.warm or heading is not None else None
         prev = fp
 
 
