@@ -166,6 +166,18 @@ def choose_crossing(eng: _MaskEngine, st: FitState, heading: np.ndarray, *,
     return best
 
 
+def exchange_nearer(joints: np.ndarray, heading: np.ndarray) -> bool:
+    """Are the legs of ``joints`` (15, 2) nearer ``heading`` (4, 2, the same units)
+    with their legs, ankles or knees exchanged than as they are? (What
+    :func:`choose_crossing` tries; False where either holds NaN.)"""
+    k = np.asarray(joints, dtype=float)[_LEG_POINTS]
+    if not (np.isfinite(heading).all() and np.isfinite(k).all()):
+        return False
+    kept = np.hypot(*(k - heading).T).sum()
+    return any(np.hypot(*(k[order] - heading).T).sum() < kept
+               for order in (_EXCHANGED, _ANKLES_EXCHANGED, _KNEES_EXCHANGED))
+
+
 def legs_heading(prev_joints: np.ndarray | None,
                  before_joints: np.ndarray | None) -> np.ndarray | None:
     """Where the knees and ankles are heading: the last frame's carried on by their
@@ -179,5 +191,5 @@ def legs_heading(prev_joints: np.ndarray | None,
 
 
 __all__ = ["HEADING_WEIGHT", "choose_crossing", "exchange_ankles", "exchange_knees",
-           "exchange_legs", "leg_distance",
+           "exchange_legs", "exchange_nearer", "leg_distance",
            "legs_heading"]

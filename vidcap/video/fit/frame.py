@@ -9,6 +9,8 @@ door: it checks the options once.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from vidcap.video.fit.crossing import choose_crossing
@@ -225,6 +227,31 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     )
 
 
+def recross(norm: NormalisedMask, fp: FramePose, heading: np.ndarray, *,
+            options: FitOptions) -> FramePose:
+    """A fitted frame ``fp`` judged again by where its legs were heading
+    (:func:`~vidcap.video.fit.crossing.choose_crossing`), e.g. by the frames after it
+    (:func:`vidcap.video.fit.tracking.fit_sequence`'s backward sweep): ``fp`` itself
+    unless its legs exchanged fit better. ``norm`` must be the silhouette ``fp`` was
+    fitted on; ``heading`` (4, 2) original pixels, as :func:`fit_frame` takes it."""
+    if fp.spread < CROSSING_SPREAD:
+        return fp
+    eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
+    st = FitState(norm.to_normalised(fp.joints[0]), np.array(fp.angles, dtype=float),
+                  np.array(fp.foreshortening, dtype=float), float(fp.spread),
+                  np.array(fp.scores, dtype=float), np.array(fp.margins, dtype=float),
+                  np.ones(10, dtype=bool))
+    chosen = choose_crossing(eng, st, norm.to_normalised(heading),
+                             interval=8 * np.deg2rad(options.warm_step_deg))
+    if chosen is st:
+        return fp
+    return dataclasses.replace(fp, joints=norm.to_original(eng.joints(chosen)),
+                               angles=np.mod(chosen.angles, TWO_PI),
+                               foreshortening=chosen.fore.copy(), scores=chosen.scores.copy(),
+                               margins=chosen.margins.copy(),
+                               similarity=eng.similarity(chosen))
+
+
 def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = None,
              height: int = 80, refine: bool = True, spread: bool = True,
              verify_crossing: bool = True, caps: bool = False, warm_threshold: float = 0.55,
@@ -312,4 +339,5 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
     return fit_frame(norm, previous=previous, challenge=challenge, options=options)
 
 
-__all__ = ["LABEL_TIE", "SIDE_SPREAD", "fit_frame", "fit_normalised", "fit_pose"]
+__all__ = ["CROSSING_SPREAD", "LABEL_TIE", "SIDE_SPREAD", "fit_frame", "fit_normalised",
+           "fit_pose", "recross"]

@@ -16,10 +16,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
-from vidcap.video.fit.crossing import legs_heading
+from vidcap.video.fit.crossing import exchange_nearer, legs_heading
 from vidcap.video.fit.cueframes import as_frame_crops
 from vidcap.video.fit.cues import CUE_MODES, ColourModel
-from vidcap.video.fit.frame import fit_frame
+from vidcap.video.fit.frame import fit_frame, recross
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
 from vidcap.video.fit.raster import image_angle
@@ -191,6 +191,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     normalised = _Normalised(masks, options, frames if cues == "all" else None)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
            back_tie=back_tie, options=options, predict=predict, crossing=crossing)
+    if tracked and crossing and n > 2:
+        _cross_backward(normalised, out, options)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
@@ -313,6 +315,25 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         # they were heading)
         before = prev if fp.warm or heading is not None else None
         prev = fp
+
+
+def _cross_backward(normalised: _Normalised, out: _Frames, options: FitOptions) -> None:
+    """The legs' crossing judged backward (in place): from the clip's end, each frame's
+    legs against where the two frames after it say they came from
+    (:func:`~vidcap.video.fit.frame.recross`). The forward pass has no heading at a
+    track's first frames (a fresh fit hangs the legs from either hip); the frames
+    after them have. Only within a track (frames linked by warm starts)."""
+    for k in range(len(out.sim) - 3, -1, -1):
+        if not (out.linked[k + 1] and out.linked[k + 2]):
+            continue  # k, k + 1, k + 2 not one track (a fresh fit's legs may jump)
+        heading = legs_heading(out.joints[k + 1], out.joints[k + 2])
+        if heading is None or not exchange_nearer(out.joints[k], heading):
+            continue  # nothing to try (the pixels are the same as the heading's units)
+        fp = out.get(k, height_px=out.height[k])
+        new = recross(normalised(k), fp, heading, options=options)
+        if new is not fp:
+            out.put(k, dataclasses.replace(new, arm_candidates=out.candidates[k]),
+                    warm=False)
 
 
 def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, frames,
