@@ -88,9 +88,9 @@ def test_a_three_quarter_walk_keeps_its_hips_where_the_legs_pass():
     # the built-in walk seen three-quarter on from behind: the knees pass in the image
     # once a step; tracked without the crossing hypothesis the legs bounce back there
     # and hang from the wrong hips for the rest of the step (tests/fit/test_fit_predict)
+    from tests.fit.test_fit_predict import _hip_misses
     from vidcap.synth import make_motion, render_clip
     from vidcap.video.fit.tracking import fit_sequence
-    from tests.fit.test_fit_predict import _hip_misses
 
     _, truth = render_clip(make_motion("walk", n_frames=36), size=(320, 240), yaw_deg=135.0,
                            noise=0.0, rng=np.random.default_rng(0))

@@ -13,7 +13,8 @@ modules that hold them). Where each part lives:
   :mod:`vidcap.video.fit.limbs` (steps 4-5 and the refinement), :mod:`vidcap.video.fit.legs`
   (step 6, crossings), :mod:`vidcap.video.fit.foreshortening` (step 7),
   :mod:`vidcap.video.fit.moves` (Algorithm 1, group, spread and shift searches),
-  :mod:`vidcap.video.fit.grids` (whole-limb grids), :mod:`vidcap.video.fit.labels` (limb names).
+  :mod:`vidcap.video.fit.grids` (whole-limb grids), :mod:`vidcap.video.fit.labels` (limb names),
+  :mod:`vidcap.video.fit.crossing` (legs passing each other in a track).
 * :mod:`vidcap.video.fit.result` - :class:`FramePose` and :class:`Pose2D` and their I/O;
   :mod:`vidcap.video.fit.options` - :class:`~vidcap.video.fit.options.FitOptions`.
 
@@ -88,6 +89,10 @@ Beyond the seed:
   the track (so a wrong but stable track is left). In a side view (spread < 0.3) a fresh fit that
   takes over keeps the track's limb names (:func:`vidcap.video.fit.labels.keep_labels`): its
   image-side names would swap the legs against the frames before after every crossing.
+  With the hips apart (spread >= 0.4) a tracked frame also tries its legs exchanged
+  between the hips (or the ankles, or the knees) and keeps what fits best by S and by
+  where the last two frames' knees and ankles were heading, forward and then backward
+  within each track (:mod:`vidcap.video.fit.crossing`: legs passing each other).
   ``tracked=False`` (``--per-frame``) fits every frame independently, as the seed does.
 * Temporal priors in tracked mode (:func:`fit_sequence`): when a fresh fit replaces
   the track, the frames before it are re-tracked backward from it while that fits

@@ -299,7 +299,8 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         start_pose = predicted_start(prev, before) if predict else prev
         # the heading of two tracked frames (a fresh fit's legs may have jumped)
         heading = (legs_heading(prev.joints, before.joints)
-                   if crossing and tracked and before is not None and before.warm else None)
+                   if crossing and tracked and prev is not None and before is not None
+                   and before.warm else None)
         fp = fit_frame(norm, previous=start_pose if tracked else None,
                        challenge=challenge, options=options, cues=normalised.cues(k, norm),
                        heading=heading)
