@@ -156,12 +156,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         Tracked mode with cues: after the priors, each arm's placement per frame among
         the cue search's candidates by the solve over time (:func:`_choose_arms`), so a
         one-frame misplacement is outvoted by its neighbours.
-    predict : bool
-        Warm starts carry the legs on (:func:`predicted_start`; off: no held-out gain).
-    crossing : bool
-        Tracked frames also try their legs exchanged between the hips, judged by where
-        the last two frames' knees were heading
-        (:func:`vidcap.video.fit.crossing.choose_crossing`: knees passing each other).
+    predict, crossing : bool
+        Legs carried on by warm starts (:func:`predicted_start`); passing legs (:mod:`.crossing`).
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
         checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
@@ -191,8 +187,6 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     normalised = _Normalised(masks, options, frames if cues == "all" else None)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
            back_tie=back_tie, options=options, predict=predict, crossing=crossing)
-    if tracked and crossing and n > 2:
-        _cross_backward(normalised, out, options)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
@@ -316,6 +310,8 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         # they were heading)
         before = prev if fp.warm or heading is not None else None
         prev = fp
+    if tracked and crossing and len(out.sim) > 2:
+        _cross_backward(normalised, out, options)
 
 
 def _cross_backward(normalised: _Normalised, out: _Frames, options: FitOptions) -> None:
