@@ -366,6 +366,16 @@ class Annotations:
                 out[e.frame:, PAIRS.index(e.key)] = e.value
         return out
 
+    def sides_set(self, n_frames: int) -> np.ndarray:
+        """(F, 2) bool: the (frame, pair) a sides event covers (from the pair's first
+        event on), whichever way it set them (columns :data:`PAIRS`)."""
+        F = int(n_frames)
+        out = np.zeros((F, len(PAIRS)), dtype=bool)
+        for e in self.events:
+            if e.type == "sides" and e.frame < F:
+                out[e.frame:, PAIRS.index(e.key)] = True
+        return out
+
     # ------------------------------------------------------------------ files
     def to_json(self) -> dict:
         """The whole file as a JSON-ready dict."""

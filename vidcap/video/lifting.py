@@ -320,6 +320,7 @@ def lift_pose(
     model_height=None,
     view: str = "auto",
     method: str = "solve",
+    labels: bool = False,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -360,6 +361,13 @@ def lift_pose(
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
+    labels : bool
+        With the solve: let it choose which 2D arm and leg is the body's left one per
+        frame (:mod:`vidcap.video.solve.labels`; never where the user set the sides,
+        placed a joint or a depth sign); the result's ``joints2d`` carries its names.
+        Off by default: on orthographic renders it made the body consistent but, where
+        the proposed orientation has front and back the wrong way, consistently
+        mirrored (benchmarks/RESULTS.md, issue 33).
 
     Returns
     -------
@@ -416,8 +424,11 @@ def lift_pose(
         sol, final = solve_lift(j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale,
                                 yaw=yaw, proposal=final, user_signs=user_signs,
                                 user_orientation=user_orient, principal_point=centre,
-                                user_joints=user_joints)
+                                user_joints=user_joints, labels=labels,
+                                user_sides_set=annotations.sides_set(F))
         joints3d, params, contact = sol.joints3d, sol.params, sol.contact
+        if sol.swapped is not None and sol.swapped.any():
+            j2 = swap_pairs(j2, sol.swapped)
     return LiftResult(
         joints2d=j2, joints3d=joints3d, proposed_signs=free.signs, signs=final.signs,
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,

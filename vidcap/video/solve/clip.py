@@ -20,6 +20,7 @@ from vidcap.body import BodyModel
 from vidcap.video.lift import lift
 from vidcap.video.solve.contact import foot_contacts
 from vidcap.video.solve.gauss_newton import levenberg_marquardt
+from vidcap.video.solve.labels import choose_labels, relabel
 from vidcap.video.solve.repair import repair_outliers
 from vidcap.video.solve.residuals import Problem, segment_zeta
 from vidcap.video.solve.signs import sweep_signs
@@ -41,8 +42,11 @@ class ClipSolve:
     joints3d : (F, 15, 3) their joints, metres, camera-aligned world.
     signs : (F, 10) int8, the solved depth signs (+1 distal joint nearer the camera).
     confidence : (F, 10) clip cost of the other sign (:mod:`vidcap.video.solve.signs`).
-    contact : (F, 2) bool, planted ankles used (all False when contact was off).
+    contact : (F, 2) bool, planted ankles used (all False when contact was off), as
+        the solve named the legs.
     cost : float, iterations : int.
+    swapped : (F, 2) bool, the arms (column 0) and legs (1) whose 2D names the solve
+        exchanged (:mod:`vidcap.video.solve.labels`).
     """
 
     params: np.ndarray
@@ -52,6 +56,7 @@ class ClipSolve:
     contact: np.ndarray
     cost: float
     iterations: int
+    swapped: np.ndarray | None = None
 
 
 def image_targets(joints2d, scale, segment_scale=None, principal_point=None) -> np.ndarray:
@@ -172,7 +177,7 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                segment_scale=None, principal_point=None, contact="auto", sweeps: int = 2,
                max_iter: int = 30, robust: float | None = None, noise_floor: float = 0.0,
-               **weights) -> ClipSolve:
+               labels: bool = False, held_labels=None, **weights) -> ClipSolve:
     """Fit the skeleton to a clip's 2D joints (see the module docstring).
 
     Parameters
@@ -206,6 +211,11 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
     noise_floor : float
         The 2D noise (fraction of the height) the pose prior assumes at least
         (:data:`FITTED_NOISE_FLOOR` for joints from the 2D fit).
+    labels : bool
+        Choose which 2D arm and leg is the left one per frame
+        (:func:`vidcap.video.solve.labels.choose_labels`).
+    held_labels : array_like of bool, shape (F, 2), optional
+        (Frame, pair: arms, legs) whose names are the user's: never exchanged.
     **weights
         Override :class:`vidcap.video.solve.residuals.Problem`'s weights.
 
@@ -221,14 +231,18 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                       contact=contact, noise_floor=noise_floor, **weights)
     p0 = warm_start(pb, j2, scale=scale, body=body, segment_scale=segment_scale,
                     principal_point=principal_point)
-    return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust)
+    return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust,
+                         labels=labels, held_labels=held_labels)
 
 
 def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 30,
-                  fixed=None, robust: float | None = None) -> ClipSolve:
+                  fixed=None, robust: float | None = None, labels: bool = False,
+                  held_labels=None) -> ClipSolve:
     """Solve ``problem`` from ``params`` (F, 24): LM, then ``sweeps`` rounds of sign
     choice (:func:`vidcap.video.solve.signs.sweep_signs`) and LM; ``fixed`` (F,) bool
-    frames are held (a local re-solve's boundary).
+    frames are held (a local re-solve's boundary); with ``labels`` the arms' and legs'
+    names are chosen after the first LM (:func:`vidcap.video.solve.labels.choose_labels`,
+    never on ``held_labels`` (F, 2)).
 
     BLAS runs on one thread here: the solve's dense blocks are 48 x 48, where more
     threads only add waiting, ten-fold when other processes hold the cores."""
@@ -236,7 +250,7 @@ def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 
 
     with threadpool_limits(1):
         return _solve_problem(problem, params, sweeps=sweeps, max_iter=max_iter, fixed=fixed,
-                              robust=robust)
+                              robust=robust, labels=labels, held_labels=held_labels)
 
 
 def robust_weights(problem: Problem, joints, scale: float) -> Problem:
@@ -251,7 +265,8 @@ def robust_weights(problem: Problem, joints, scale: float) -> Problem:
 
 
 def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixed,
-                   robust: float | None = None) -> ClipSolve:
+                   robust: float | None = None, labels: bool = False,
+                   held_labels=None) -> ClipSolve:
     # the first solve only brings the clip near enough for the sign sweep to read it;
     # the re-solve after the sweep finishes (a full first solve: 2x the time, equal
     # accuracy on the tuning clips)
@@ -263,6 +278,12 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
         sol = levenberg_marquardt(problem, p, max_iter=max_iter, fixed=fixed)
         p, iters = sol.params, iters + sol.iterations
         joints, root, _ = forward_kinematics(p, problem.offsets)
+    swapped = np.zeros((len(p), 2), bool)
+    if labels:
+        swapped, p = choose_labels(problem, p, held=held_labels, fixed=fixed)
+        if swapped.any():
+            problem = relabel(problem, swapped)
+            joints, root, _ = forward_kinematics(p, problem.offsets)
     sw = None
     for _ in range(sweeps):
         sw = sweep_signs(problem, joints, root, p)
@@ -288,4 +309,5 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
         sw = sweep_signs(problem, joints, root, p)
     zeta = segment_zeta(joints, problem.lengths)
     signs = np.where(zeta < 0, -1, 1).astype(np.int8)
-    return ClipSolve(p, joints, signs, sw.confidence, problem.contact.copy(), sol.cost, iters)
+    return ClipSolve(p, joints, signs, sw.confidence, problem.contact.copy(), sol.cost, iters,
+                     swapped)

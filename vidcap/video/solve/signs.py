@@ -66,7 +66,7 @@ def _reflect(joints, chain, state) -> np.ndarray:
 _NONE = 1e30
 
 
-def _min_sum(unary, pair):
+def min_sum(unary, pair):
     """Min-sum over frames of C chains at once: unary (C, F, S), pair (C, F-1, S, S).
 
     Returns (best (C, F) states, min-marginals (C, F, S))."""
@@ -133,7 +133,7 @@ def sweep_signs(problem: Problem, joints, root, params, *, step_weight: float = 
         d = pos[1:, None] - pos[:-1, :, None]  # (F-1, n, n, m, 3)
         pair[c, :, :n, :n] = 0.5 * step_weight ** 2 * np.sum(d ** 2, axis=(-1, -2))
         at += n
-    best, marg = _min_sum(un, pair)
+    best, marg = min_sum(un, pair)
     for c, (chain, st) in enumerate(zip(CHAINS, states, strict=True)):
         n = len(st)
         sel = st[best[c]]

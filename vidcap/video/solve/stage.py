@@ -39,7 +39,8 @@ def check_method(method: str) -> None:
 
 def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, yaw,
                proposal: SignProposal, user_signs, user_orientation, principal_point=None,
-               user_joints=None) -> tuple[ClipSolve, SignProposal]:
+               user_joints=None, labels: bool = False,
+               user_sides_set=None) -> tuple[ClipSolve, SignProposal]:
     """Solve the clip with the 3D stage's proposals and the user's events.
 
     Parameters
@@ -61,6 +62,12 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
     user_joints : numpy.ndarray, shape (F, 15, 2), optional
         The user's joints, NaN where none: weighted :data:`USER_JOINT_WEIGHT` times a
         fitted joint.
+    labels : bool
+        Let the solve choose which 2D arm and leg is the left one
+        (:mod:`vidcap.video.solve.labels`), never where the user spoke
+        (:func:`held_labels`).
+    user_sides_set : numpy.ndarray of bool, shape (F, 2), optional
+        (Frame, pair: arms, legs) a sides event of the user covers.
 
     Returns
     -------
@@ -78,12 +85,34 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
     sol = solve_clip(joints2d, scale=scale, fps=fps, body=body, yaw=yaw,
                      prior_signs=proposal.signs, hard_signs=user_signs, yaw_sigma=sigma,
                      confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
-                     segment_scale=segment_scale, principal_point=principal_point)
+                     segment_scale=segment_scale, principal_point=principal_point,
+                     labels=labels,
+                     held_labels=held_labels(user_signs, user_joints, user_sides_set))
     margin = np.where(np.isfinite(sol.confidence), sol.confidence / COST_PER_MARGIN,
                       proposal.margin)
     margin = np.where(np.asarray(user_signs) != 0, np.inf, margin)
     zeta = np.abs(segment_zeta(sol.joints3d, body.segment_lengths()))
     return sol, SignProposal(signs=sol.signs, margin=margin, zeta=np.clip(zeta, 0.0, 1.0))
+
+
+def held_labels(user_signs, user_joints=None, user_sides_set=None) -> np.ndarray:
+    """(F, 2) bool: the (frame, pair: arms, legs) whose 2D names the user fixed, which
+    the solve's label choice must keep: a sides event covers it, or the user placed one
+    of the pair's joints or set a depth sign on one of its segments there."""
+    from vidcap.body import LIMB_PAIR_JOINTS
+    from vidcap.video.annotations import PAIRS
+
+    signs = np.asarray(user_signs)
+    out = np.zeros((len(signs), len(PAIRS)), bool)
+    for col, pair in enumerate(PAIRS):
+        left, right = LIMB_PAIR_JOINTS[pair]
+        segs = [2, 3, 4, 5] if pair == "arms" else [6, 7, 8, 9]  # body.SEGMENT_NAMES
+        out[:, col] = (signs[:, segs] != 0).any(axis=1)
+        if user_joints is not None:
+            out[:, col] |= np.isfinite(np.asarray(user_joints)[:, left + right]).any(axis=(1, 2))
+    if user_sides_set is not None:
+        out |= np.asarray(user_sides_set, bool)
+    return out
 
 
 def solved_motion(params, fps: float, *, body: BodyModel, keys=None, smooth_sigma: float = 0.0,

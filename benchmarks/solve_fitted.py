@@ -1,0 +1,167 @@
+"""The clip solve on fitted 2D only, quickly: the 2D fit's joints are computed once and
+kept (``$VIDCAP_DATA/cache/solve_fitted/*.npz``, not in git), then only the 3D stage runs.
+
+Clips: tuning renders (vidcap.synth's walk at yaw 60 and 120, jacks at 30, arms at 120,
+60 frames: the set ``FITTED_NOISE_FLOOR`` was chosen on) and validation (the three
+samples, the four held-out renders of ``lift_accuracy.py --solve``). The validation rows
+are for reporting: choose nothing on them.
+
+Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import lift_solve_tables as st  # noqa: E402
+from lift_accuracy import DATA, SOLVE_RENDERS, truth_in_camera_frame  # noqa: E402
+
+from vidcap.body import BodyModel  # noqa: E402
+from vidcap.synth import make_motion  # noqa: E402
+
+TUNING = (("walk yaw 60", "walk", 60.0), ("walk yaw 120", "walk", 120.0),
+          ("jacks yaw 30", "jacks", 30.0), ("arms yaw 120", "arms", 120.0))
+FRAMES = 60
+
+
+def _cache_dir() -> Path:
+    d = Path(os.environ.get("VIDCAP_DATA", "/tmp")) / "cache" / "solve_fitted"
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def _render_fit(motion, yaw):
+    from vidcap.synth import render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
+
+    _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                           rng=np.random.default_rng(0))
+    pose = fit_sequence(truth["masks"])
+    return dict(joints2d=pose.joints2d, spread=pose.spread, model_height=pose.model_height,
+                true3=truth_in_camera_frame(truth), true2=truth["joints2d"],
+                fps=float(truth["fps"]), size=np.array([640, 480]))
+
+
+def _clip(name, make):
+    path = _cache_dir() / (name.replace(" ", "_").replace("/", "_") + ".npz")
+    if not path.exists():
+        np.savez(path, **make())
+    return dict(np.load(path))
+
+
+def tuning_clips(body):
+    out = []
+    for name, motion_name, yaw in TUNING:
+        def make(motion_name=motion_name, yaw=yaw):
+            m = make_motion(motion_name, body=body, fps=30.0, n_frames=FRAMES,
+                            rng=np.random.default_rng(0))
+            return _render_fit(m, yaw)
+        out.append((name + " (tuning)", _clip(name, make)))
+    return out
+
+
+def validation_clips(body):
+    from vidcap.video.pipeline import run
+
+    out = []
+    for video in sorted((ROOT / "sample_videos").glob("*.mp4")):
+        truth_path = video.with_name(video.stem + "_truth.npz")
+        if not truth_path.exists():
+            continue
+
+        def make(video=video, truth_path=truth_path):
+            t = dict(np.load(truth_path))
+            res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
+                      cache_dir=ROOT / ".vidcap-cache", lift="segment")
+            return dict(joints2d=res.image_joints2d, spread=res.spread,
+                        model_height=res.model_height, track=res.track,
+                        true3=truth_in_camera_frame(t), true2=t["joints2d"],
+                        fps=float(t["fps"]),
+                        size=np.array([res.masks.shape[2], res.masks.shape[1]]))
+        out.append((f"{video.stem} (sample)", _clip(video.stem, make)))
+    full = {}
+    for name, source, first, yaw in SOLVE_RENDERS:
+        def make(name=name, source=source, first=first, yaw=yaw):
+            if source not in full:
+                full[source] = (make_motion(DATA / "131_01.bvh", body=body, fps=30.0)
+                                if source == "131_01" else
+                                make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body,
+                                            fps=30.0))
+            m = full[source]
+            start = first if first >= 0 else m.n_frames + first
+            return _render_fit(m.frames(start, min(start + 60, m.n_frames)), yaw)
+        out.append((f"{name} yaw {yaw:.0f} (held out)", _clip(f"{name} yaw {yaw:.0f}", make)))
+    return out
+
+
+def pa_per_frame(pred, true):
+    """PA-MPJPE of each frame (F,), mm."""
+    return np.array([st.pa_mpjpe_mm(pred[f:f + 1], true[f:f + 1]) for f in range(len(pred))])
+
+
+def mirrored(true3):
+    """The truth reflected through the image plane with its sides renamed: the body an
+    orthographic image cannot tell from it (front/back)."""
+    from vidcap.video.lift import swap_sides
+
+    return swap_sides(true3 * np.array([1.0, 1.0, -1.0]))
+
+
+def evaluate(clips, body, method="solve"):
+    """Rows (name, frames, PA-MPJPE mm, MPJPE mm, 2D error % of height, CPU s, PA-MPJPE
+    with the front/back mirror free per frame mm)."""
+    from vidcap.video.lifting import lift_pose
+
+    rows = []
+    for name, c in clips:
+        t0 = time.process_time()
+        lr = lift_pose(c["joints2d"], fps=float(c["fps"]), body=body, image_sides=True,
+                       spread=c["spread"], track=c.get("track"),
+                       frame_size=tuple(int(v) for v in c["size"]),
+                       model_height=c["model_height"], method=method)
+        secs = time.process_time() - t0
+        e2 = np.linalg.norm(lr.joints2d - c["true2"], axis=-1).mean()
+        h_px = np.mean(lr.scale) * body.height
+        rows.append((name, len(lr.joints3d), st.pa_mpjpe_mm(lr.joints3d, c["true3"]),
+                     st.mpjpe_mm(lr.joints3d, c["true3"]), e2 / h_px * 100, secs,
+                     float(np.minimum(pa_per_frame(lr.joints3d, c["true3"]),
+                                      pa_per_frame(lr.joints3d, mirrored(c["true3"]))).mean())))
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--tuning-only", action="store_true")
+    ap.add_argument("--method", default="solve")
+    args = ap.parse_args(argv)
+    body = BodyModel()
+    clips = tuning_clips(body)
+    if not args.tuning_only:
+        clips += validation_clips(body)
+    rows = evaluate(clips, body, args.method)
+    print("clip | frames | PA-MPJPE mm | PA-MPJPE, front/back free mm | MPJPE mm | "
+          "2D error % of height (body sides) | CPU s")
+    print("--- | --- | --- | --- | --- | --- | ---")
+    for r in rows:
+        print(f"{r[0]} | {r[1]} | {r[2]:.0f} | {r[6]:.0f} | {r[3]:.0f} | {r[4]:.1f} | "
+              f"{r[5]:.2f}")
+    for tag in ("tuning", "sample", "held out"):
+        sel = [(r[2], r[6]) for r in rows if tag in r[0]]
+        if sel:
+            m = np.mean(sel, axis=0)
+            print(f"mean PA-MPJPE, {tag}: {m[0]:.1f} mm (front/back free {m[1]:.1f} mm)")
+    return 0
+
+
+if __name__ == "__main__":
+    main()
