@@ -33,6 +33,7 @@ from vidcap.video.solve.clip import make_problem, solve_problem, warm_start  # n
 from vidcap.video.solve.gauss_newton import levenberg_marquardt  # noqa: E402
 from vidcap.video.solve.residuals import residuals, sparsity  # noqa: E402
 from vidcap.video.solve.skeleton import forward_kinematics  # noqa: E402
+from vidcap.video.solve.stage import ROBUST_FITTED  # noqa: E402
 
 
 def _clip(body, frames):
@@ -76,6 +77,13 @@ def main(argv=None) -> int:
         print(f"the whole solve (LM, sign sweeps, re-solves, repair) | {frames} | {cpu:.2f} | "
               f"{wall:.2f} | {frames / cpu:.0f} | {pa_mpjpe_mm(whole.joints3d, true3):.0f} | "
               f"{whole.cost:.1f}")
+        for label, kw in (("the whole solve as the 3D stage runs it (+ robust re-weighting)",
+                           dict(robust=ROBUST_FITTED)),
+                          ("the same with the limbs' names chosen (labels=True)",
+                           dict(robust=ROBUST_FITTED, labels=True))):
+            whole, wall, cpu = _timed(lambda pb=pb, p0=p0, kw=kw: solve_problem(pb, p0, **kw))
+            print(f"{label} | {frames} | {cpu:.2f} | {wall:.2f} | {frames / cpu:.0f} | "
+                  f"{pa_mpjpe_mm(whole.joints3d, true3):.0f} | {whole.cost:.1f}")
         if frames != args.lsq_frames:
             continue
         jac = sparsity(pb)

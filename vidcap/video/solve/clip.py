@@ -207,7 +207,8 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
         Levenberg-Marquardt iterations per solve.
     robust : float, optional
         After the first solve, re-weight the 2D joints by their misfit
-        (:func:`robust_weights`, this many sigmas) and solve again.
+        (:func:`robust_weights`, this many sigmas) and solve again; the joints whose
+        ``confidence`` is above 1 (the user's) keep their weight.
     noise_floor : float
         The 2D noise (fraction of the height) the pose prior assumes at least
         (:data:`FITTED_NOISE_FLOOR` for joints from the 2D fit).
@@ -231,18 +232,20 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                       contact=contact, noise_floor=noise_floor, **weights)
     p0 = warm_start(pb, j2, scale=scale, body=body, segment_scale=segment_scale,
                     principal_point=principal_point)
+    kept = None if confidence is None else np.asarray(confidence, float) > 1.0
     return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust,
-                         labels=labels, held_labels=held_labels)
+                         labels=labels, held_labels=held_labels, robust_kept=kept)
 
 
 def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 30,
                   fixed=None, robust: float | None = None, labels: bool = False,
-                  held_labels=None) -> ClipSolve:
+                  held_labels=None, robust_kept=None) -> ClipSolve:
     """Solve ``problem`` from ``params`` (F, 24): LM, then ``sweeps`` rounds of sign
     choice (:func:`vidcap.video.solve.signs.sweep_signs`) and LM; ``fixed`` (F,) bool
     frames are held (a local re-solve's boundary); with ``labels`` the arms' and legs'
     names are chosen after the first LM (:func:`vidcap.video.solve.labels.choose_labels`,
-    never on ``held_labels`` (F, 2)).
+    never on ``held_labels`` (F, 2)); with ``robust`` the joints are re-weighted by
+    their misfit after it (:func:`robust_weights`), but for ``robust_kept`` (F, 15).
 
     BLAS runs on one thread here: the solve's dense blocks are 48 x 48, where more
     threads only add waiting, ten-fold when other processes hold the cores."""
@@ -250,23 +253,28 @@ def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 
 
     with threadpool_limits(1):
         return _solve_problem(problem, params, sweeps=sweeps, max_iter=max_iter, fixed=fixed,
-                              robust=robust, labels=labels, held_labels=held_labels)
+                              robust=robust, labels=labels, held_labels=held_labels,
+                              robust_kept=robust_kept)
 
 
-def robust_weights(problem: Problem, joints, scale: float) -> Problem:
+def robust_weights(problem: Problem, joints, scale: float, *, kept=None) -> Problem:
     """``problem`` with each 2D joint's weight divided by sqrt(1 + (e / scale)^2), e its
     misfit at ``joints`` in units of its own sigma (one re-weighting step of a Cauchy
     loss): a joint the 2D fit put far from where the rest of the clip says it is
-    counts less, and the smoothness and the other joints carry its frame."""
+    counts less, and the smoothness and the other joints carry its frame. ``kept``
+    (F, 15) bool: joints whose weight stays (the user's placed joints: near hard)."""
     from dataclasses import replace
 
     e = np.linalg.norm(joints[..., :2] - problem.target, axis=-1) * problem.weight
-    return replace(problem, weight=problem.weight / np.sqrt(1.0 + (e / scale) ** 2))
+    w = problem.weight / np.sqrt(1.0 + (e / scale) ** 2)
+    if kept is not None:
+        w = np.where(kept, problem.weight, w)
+    return replace(problem, weight=w)
 
 
 def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixed,
                    robust: float | None = None, labels: bool = False,
-                   held_labels=None) -> ClipSolve:
+                   held_labels=None, robust_kept=None) -> ClipSolve:
     # the first solve only brings the clip near enough for the sign sweep to read it;
     # the re-solve after the sweep finishes (a full first solve: 2x the time, equal
     # accuracy on the tuning clips)
@@ -274,8 +282,10 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
     p, iters = sol.params, sol.iterations
     joints, root, _ = forward_kinematics(p, problem.offsets)
     if robust:
-        problem = robust_weights(problem, joints, robust)
-        sol = levenberg_marquardt(problem, p, max_iter=max_iter, fixed=fixed)
+        problem = robust_weights(problem, joints, robust, kept=robust_kept)
+        # like the first solve, only near enough for the sweep (a full solve here: 1.6x
+        # the time of the whole solve at equal accuracy on the tuning renders)
+        sol = levenberg_marquardt(problem, p, max_iter=min(max_iter, FIRST_ITER), fixed=fixed)
         p, iters = sol.params, iters + sol.iterations
         joints, root, _ = forward_kinematics(p, problem.offsets)
     swapped = np.zeros((len(p), 2), bool)

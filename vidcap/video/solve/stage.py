@@ -27,6 +27,16 @@ YAW_SIGMA_PROPOSED = 0.5
 YAW_SIGMA_USER = 0.15
 #: Weight of a 2D joint the user placed, relative to a fitted one's (1): near hard.
 USER_JOINT_WEIGHT = 30.0
+#: Misfit (in 2D sigmas, 1 % of the height each) at which a fitted joint's weight is
+#: divided by sqrt(2) after the first solve (:func:`vidcap.video.solve.clip.robust_weights`,
+#: one Cauchy re-weighting): the 2D fit's errors are outliers more than noise (a limb
+#: misplaced for a stretch, a joint on the other leg), and a joint far from where the
+#: rest of the clip puts it then drags the body less. The user's placed joints keep
+#: their weight. Chosen on the tuning renders (``benchmarks/solve_fitted.py``: synth walk
+#: at yaw 60 and 120, jacks 30, arms 120): none / 1 / 1.5 / 2 / 3 / 4 gave a mean
+#: PA-MPJPE of 115.1 / 112.8 / 112.3 / 113.0 / 112.8 / 113.5 mm; a second re-weighting
+#: after the sign sweeps 111.5 mm for one more solve (not kept).
+ROBUST_FITTED = 1.5
 #: The lifts ``lift_pose`` offers.
 METHODS = ("solve", "segment")
 
@@ -85,6 +95,7 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
     sol = solve_clip(joints2d, scale=scale, fps=fps, body=body, yaw=yaw,
                      prior_signs=proposal.signs, hard_signs=user_signs, yaw_sigma=sigma,
                      confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
+                     robust=ROBUST_FITTED,
                      segment_scale=segment_scale, principal_point=principal_point,
                      labels=labels,
                      held_labels=held_labels(user_signs, user_joints, user_sides_set))
