@@ -39,6 +39,7 @@ lengths and the solve's speed.
 
 Run:  python benchmarks/lift_accuracy.py [--frames 82] [--synth] [--end-to-end] [--approach]
       python benchmarks/lift_accuracy.py --solve [--frames 82] [--no-renders] [--real-only]
+                                         [--labels]
 """
 
 from __future__ import annotations
@@ -370,10 +371,17 @@ def main(argv=None):
                     help="with --solve: skip the held-out renders (each needs a 2D fit)")
     ap.add_argument("--real-only", action="store_true",
                     help="with --solve: only the real-footage table (MediaPipe references)")
+    ap.add_argument("--labels", action="store_true",
+                    help="with --solve: the solve on fitted 2D chooses the limbs' names "
+                         "(lift_pose labels=True)")
     ap.add_argument("--only", metavar="NAME",
                     help="with --solve --real-only: just the real clips whose name contains NAME")
     args = ap.parse_args(argv)
     body = BodyModel()
+    if args.labels:
+        import lift_solve_tables as st
+
+        st.SOLVE_OPTIONS["labels"] = True
     if args.solve and args.real_only:
         import lift_solve_tables as st
 
