@@ -113,6 +113,14 @@ PRIOR_POWER = 0.5
 #: fit: floor 0, 1, 2, 4, 6, 8, 12 % gave PA-MPJPE 129, 126, 124, 118, 116, 116, 117 mm.
 #: ``solve_clip`` itself uses no floor (true 2D plus noise: the measure is right there).
 FITTED_NOISE_FLOOR = 0.06
+#: Weight of the proposed depth signs (``Problem.sign_weight``, default 5) for joints
+#: from vidcap's 2D fit (passed by the 3D stage and the annotate app's re-solves): the
+#: proposals are the per-segment lift's reading of the same fitted joints, wrong where
+#: they are, and at the default they held the solve there. Chosen on the tuning
+#: renders (benchmarks/solve_fitted.py, with the robust re-weighting): weights 0 / 1 / 2 /
+#: 5 / 12 gave a mean PA-MPJPE of 106.7 / 106.8 / 108.8 / 112.6 / 117.0 mm; 1 keeps the
+#: proposals as a tie-breaker. The user's depth events stay hard (``hard_weight``).
+FITTED_SIGN_WEIGHT = 1.0
 
 
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,

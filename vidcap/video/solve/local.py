@@ -14,7 +14,13 @@ from __future__ import annotations
 import numpy as np
 
 from vidcap.body import BodyModel
-from vidcap.video.solve.clip import FITTED_NOISE_FLOOR, make_problem, solve_problem, warm_start
+from vidcap.video.solve.clip import (
+    FITTED_NOISE_FLOOR,
+    FITTED_SIGN_WEIGHT,
+    make_problem,
+    solve_problem,
+    warm_start,
+)
 from vidcap.video.solve.residuals import segment_zeta
 
 #: Frames held either side of a window (the second differences reach two frames).
@@ -69,6 +75,7 @@ def resolve_window(params, joints3d, window, joints2d, *, scale, fps: float, bod
                       prior_signs=cut(prior_signs), hard_signs=cut(hard_signs),
                       yaw_sigma=cut(yaw_sigma), segment_scale=cut(segment_scale),
                       confidence=cut(confidence), noise_floor=FITTED_NOISE_FLOOR,
+                      sign_weight=FITTED_SIGN_WEIGHT,
                       principal_point=principal_point,
                       contact="off" if contact is None else cut(contact))
     p0 = np.array(params[sl], dtype=float)

@@ -14,7 +14,12 @@ import numpy as np
 
 from vidcap.body import BodyModel
 from vidcap.video.proposals import SignProposal
-from vidcap.video.solve.clip import FITTED_NOISE_FLOOR, ClipSolve, solve_clip
+from vidcap.video.solve.clip import (
+    FITTED_NOISE_FLOOR,
+    FITTED_SIGN_WEIGHT,
+    ClipSolve,
+    solve_clip,
+)
 from vidcap.video.solve.residuals import segment_zeta
 
 #: Solve cost (half a sum of squared residuals, each one 2D joint's misfit in units of
@@ -95,7 +100,7 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
     sol = solve_clip(joints2d, scale=scale, fps=fps, body=body, yaw=yaw,
                      prior_signs=proposal.signs, hard_signs=user_signs, yaw_sigma=sigma,
                      confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
-                     robust=ROBUST_FITTED,
+                     robust=ROBUST_FITTED, sign_weight=FITTED_SIGN_WEIGHT,
                      segment_scale=segment_scale, principal_point=principal_point,
                      labels=labels,
                      held_labels=held_labels(user_signs, user_joints, user_sides_set))
