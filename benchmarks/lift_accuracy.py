@@ -373,15 +373,15 @@ def main(argv=None):
                     help="with --solve: only the real-footage table (MediaPipe references)")
     ap.add_argument("--labels", action="store_true",
                     help="with --solve: the solve on fitted 2D chooses the limbs' names "
-                         "(lift_pose labels=True)")
+                         "(vidcap.video.solve.stage.LABELS)")
     ap.add_argument("--only", metavar="NAME",
                     help="with --solve --real-only: just the real clips whose name contains NAME")
     args = ap.parse_args(argv)
     body = BodyModel()
-    if args.labels:
-        import lift_solve_tables as st
+    if args.labels:  # the solve on fitted 2D chooses the limbs' names
+        import vidcap.video.solve.stage as solve_stage
 
-        st.SOLVE_OPTIONS["labels"] = True
+        solve_stage.LABELS = True
     if args.solve and args.real_only:
         import lift_solve_tables as st
 

@@ -34,8 +34,6 @@ LIMB_JOINTS = np.array([JOINT_INDEX[f"{s}_{j}"] for s in "lr" for j in
                         ("shoulder", "elbow", "wrist", "hip", "knee", "ankle")])
 ANKLES = np.array([JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]])
 NOISE = (0.0, 0.01, 0.02, 0.04)
-#: Extra ``lift_pose`` options of the solve rows on fitted 2D (``lift_accuracy.py --labels``).
-SOLVE_OPTIONS: dict = {}
 
 
 def mpjpe_mm(pred, true) -> float:
@@ -151,8 +149,7 @@ def end_to_end_rows(clips, body):
             t0 = time.perf_counter()
             lr = lift_pose(fit["joints2d"], fps=fps, body=body, image_sides=True,
                            spread=fit["spread"], track=fit.get("track"), frame_size=size,
-                           model_height=fit["model_height"], method=method,
-                           **(SOLVE_OPTIONS if method == "solve" else {}))
+                           model_height=fit["model_height"], method=method)
             secs = time.perf_counter() - t0
             e2 = np.linalg.norm(lr.joints2d - truth["joints2d"], axis=-1).mean()
             h_px = np.mean(lr.scale) * body.height
@@ -213,8 +210,7 @@ def real_rows(video, reference, body, frames=None, label=None):
     for method in ("segment", "solve"):
         lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
                        spread=res.spread, track=res.track, frame_size=size,
-                       model_height=res.model_height, method=method,
-                       **(SOLVE_OPTIONS if method == "solve" else {}))
+                       model_height=res.model_height, method=method)
         rows.append((label, int(ok.sum()), method,
                      pa_mpjpe_mm(lr.joints3d[:n][ok], ref[:n][ok])))
     rows.append((label, int(ok.sum()), "standing pose", standing_baseline_mm(ref[:n][ok], body)))

@@ -117,7 +117,7 @@ def mirrored(true3):
     return swap_sides(true3 * np.array([1.0, 1.0, -1.0]))
 
 
-def evaluate(clips, body, method="solve", labels=False):
+def evaluate(clips, body, method="solve"):
     """Rows (name, frames, PA-MPJPE mm, MPJPE mm, 2D error % of height, CPU s, PA-MPJPE
     with the front/back mirror free per frame mm)."""
     from vidcap.video.lifting import lift_pose
@@ -128,7 +128,7 @@ def evaluate(clips, body, method="solve", labels=False):
         lr = lift_pose(c["joints2d"], fps=float(c["fps"]), body=body, image_sides=True,
                        spread=c["spread"], track=c.get("track"),
                        frame_size=tuple(int(v) for v in c["size"]),
-                       model_height=c["model_height"], method=method, labels=labels)
+                       model_height=c["model_height"], method=method)
         secs = time.process_time() - t0
         e2 = np.linalg.norm(lr.joints2d - c["true2"], axis=-1).mean()
         h_px = np.mean(lr.scale) * body.height
@@ -144,13 +144,18 @@ def main(argv=None):
     ap.add_argument("--tuning-only", action="store_true")
     ap.add_argument("--method", default="solve")
     ap.add_argument("--labels", action="store_true",
-                    help="let the solve choose the arms' and legs' names (labels=True)")
+                    help="let the solve choose the arms' and legs' names "
+                         "(vidcap.video.solve.stage.LABELS)")
     args = ap.parse_args(argv)
     body = BodyModel()
     clips = tuning_clips(body)
     if not args.tuning_only:
         clips += validation_clips(body)
-    rows = evaluate(clips, body, args.method, args.labels)
+    if args.labels:
+        import vidcap.video.solve.stage as solve_stage
+
+        solve_stage.LABELS = True
+    rows = evaluate(clips, body, args.method)
     print("clip | frames | PA-MPJPE mm | PA-MPJPE, front/back free mm | MPJPE mm | "
           "2D error % of height (body sides) | CPU s")
     print("--- | --- | --- | --- | --- | --- | ---")

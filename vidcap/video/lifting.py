@@ -320,7 +320,6 @@ def lift_pose(
     model_height=None,
     view: str = "auto",
     method: str = "solve",
-    labels: bool = False,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -361,13 +360,6 @@ def lift_pose(
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
-    labels : bool
-        With the solve: let it choose which 2D arm and leg is the body's left one per
-        frame (:mod:`vidcap.video.solve.labels`; never where the user set the sides,
-        placed a joint or a depth sign); the result's ``joints2d`` carries its names.
-        Off by default: on orthographic renders it made the body consistent but, where
-        the proposed orientation has front and back the wrong way, consistently
-        mirrored (benchmarks/RESULTS.md, issue 33).
 
     Returns
     -------
@@ -410,8 +402,7 @@ def lift_pose(
     proposed_orient = constrain_orientation(proposed_orient, view)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
-                                      image_sides=image_sides,
-                                      user_sides=annotations.sides(F))
+                                      image_sides=image_sides, user_sides=annotations.sides(F))
     free = propose_signs(j2, yaw, scale=geometry, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \
@@ -424,11 +415,9 @@ def lift_pose(
         sol, final = solve_lift(j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale,
                                 yaw=yaw, proposal=final, user_signs=user_signs,
                                 user_orientation=user_orient, principal_point=centre,
-                                user_joints=user_joints, labels=labels,
-                                user_sides_set=annotations.sides_set(F))
+                                user_joints=user_joints, user_sides_set=annotations.sides_set(F))
         joints3d, params, contact = sol.joints3d, sol.params, sol.contact
-        if sol.swapped is not None and sol.swapped.any():
-            j2 = swap_pairs(j2, sol.swapped)
+        j2 = swap_pairs(j2, sol.swapped)
     return LiftResult(
         joints2d=j2, joints3d=joints3d, proposed_signs=free.signs, signs=final.signs,
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,

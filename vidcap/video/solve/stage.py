@@ -42,6 +42,13 @@ USER_JOINT_WEIGHT = 30.0
 #: PA-MPJPE of 115.1 / 112.8 / 112.3 / 113.0 / 112.8 / 113.5 mm; a second re-weighting
 #: after the sign sweeps 111.5 mm for one more solve (not kept).
 ROBUST_FITTED = 1.5
+#: Whether the 3D stage lets the solve choose which 2D arm and leg is the body's left one
+#: (:mod:`vidcap.video.solve.labels`; never where the user set the sides, placed a joint
+#: or a depth sign; ``LiftResult.joints2d`` then carries its names). Off: on the tuning
+#: renders it made the body consistent with its hips but, where the proposed orientation
+#: has front and back the wrong way round, consistently mirrored (106.8 -> 119.9 mm;
+#: benchmarks/RESULTS.md, issue 33, session 16).
+LABELS = False
 #: The lifts ``lift_pose`` offers.
 METHODS = ("solve", "segment")
 
@@ -54,7 +61,7 @@ def check_method(method: str) -> None:
 
 def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, yaw,
                proposal: SignProposal, user_signs, user_orientation, principal_point=None,
-               user_joints=None, labels: bool = False,
+               user_joints=None, labels: bool | None = None,
                user_sides_set=None) -> tuple[ClipSolve, SignProposal]:
     """Solve the clip with the 3D stage's proposals and the user's events.
 
@@ -77,10 +84,10 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
     user_joints : numpy.ndarray, shape (F, 15, 2), optional
         The user's joints, NaN where none: weighted :data:`USER_JOINT_WEIGHT` times a
         fitted joint.
-    labels : bool
+    labels : bool, optional
         Let the solve choose which 2D arm and leg is the left one
         (:mod:`vidcap.video.solve.labels`), never where the user spoke
-        (:func:`held_labels`).
+        (:func:`held_labels`); default :data:`LABELS`.
     user_sides_set : numpy.ndarray of bool, shape (F, 2), optional
         (Frame, pair: arms, legs) a sides event of the user covers.
 
@@ -102,7 +109,7 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
                      confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
                      robust=ROBUST_FITTED, sign_weight=FITTED_SIGN_WEIGHT,
                      segment_scale=segment_scale, principal_point=principal_point,
-                     labels=labels,
+                     labels=LABELS if labels is None else labels,
                      held_labels=held_labels(user_signs, user_joints, user_sides_set))
     margin = np.where(np.isfinite(sol.confidence), sol.confidence / COST_PER_MARGIN,
                       proposal.margin)
