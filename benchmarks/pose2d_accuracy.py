@@ -229,21 +229,22 @@ HELD_OUT = (
 VIEWS = ("side", "three-quarter", "front")
 
 
-def held_out_motions(frames: int):
+def held_out_motions(frames: int, body=None):
     """The held-out clips' motions: ``(name, motion of ``frames`` frames, yaws)`` per
-    :data:`HELD_OUT` row, the two real motions cut at their rows' first frame."""
+    :data:`HELD_OUT` row, the two real motions cut at their rows' first frame, on
+    ``body``'s skeleton (default: the seed's)."""
     from vidcap.synth import make_motion
 
-    full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0),
+    full = {"131_01": make_motion(MOTION_DIR / "131_01.bvh", fps=30.0, body=body),
             "07_07": make_motion(MOTION_DIR / "07.asf", amc=MOTION_DIR / "07_07.amc",
-                                 fps=30.0)}
+                                 fps=30.0, body=body)}
     for name, source, first, yaws in HELD_OUT:
         if source in full:
             n = len(full[source].root_positions)
             start = first if first >= 0 else n + first
             yield name, full[source].frames(start, min(start + frames, n)), yaws
         else:
-            yield name, make_motion(source, n_frames=frames), yaws
+            yield name, make_motion(source, n_frames=frames, body=body), yaws
 
 
 def view_of(yaw: float) -> str:
@@ -342,6 +343,72 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
     print(f"median error / height over clips (cues {cues}): {np.median(medians):.4f}")
     if save:
         np.savez_compressed(save, **saved)
+    return 0
+
+
+#: ``--bodies``: the bodies rendered and fitted, as (name, ``ProportionEstimate`` factory):
+#: the seed's (Table 3.1/3.2, ankles on the floor) and a real adult's
+#: (:data:`vidcap.video.fit.proportions.HUMAN`, feet drawn below the ankles).
+BODY_NAMES = ("seed", "human")
+
+
+def _estimate(name: str):
+    from vidcap.video.fit.proportions import ProportionEstimate, human_proportions
+
+    return human_proportions() if name == "human" else ProportionEstimate()
+
+
+def body_combinations(frames: int = 60, views: tuple[str, ...] = VIEWS,
+                      every: int = 1) -> int:
+    """The ``--bodies`` table: the held-out clips rendered with the seed's body and with
+    a real adult's (feet and all), each fitted (tracked, cues as the default) with either
+    body's proportions: the four combinations side by side, PCK@0.05 and median error
+    as fractions of the standing height (head top to soles, from the camera's scale).
+    ``every``: every n-th clip only (a quicker subset, said in the header)."""
+    from vidcap.synth import render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.fit.proportions import fit_keywords
+
+    combos = [(r, f) for r in BODY_NAMES for f in BODY_NAMES]
+    print(f"Tracked 2D fit on held-out clips ({frames} frames, 640x480; every {every}. "
+          "clip): PCK@0.05 (median error) of the standing height, render body / fit body")
+    print(f"{'clip':16} {'yaw':>4} {'view':5} " + " ".join(f"{r + '/' + f:>16}"
+                                                          for r, f in combos))
+    rows, seen, k = [], [], -1
+    clips = {r: list(held_out_motions(frames, _estimate(r).body(1.75))) for r in BODY_NAMES}
+    for i, (name, _, yaws) in enumerate(clips["seed"]):
+        for yaw in yaws:
+            if view_of(yaw) not in views:
+                continue
+            k += 1
+            if k % every:
+                continue
+            cells = []
+            for r in BODY_NAMES:
+                est = _estimate(r)
+                motion = clips[r][i][1]
+                video, truth = render_clip(motion, body=est.body(1.75), foot=est.foot,
+                                           yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                           rng=np.random.default_rng(0))
+                tj = truth["joints2d"]
+                hpx = 1.75 * np.linalg.norm(truth["camera"][0, :3])
+                for f in BODY_NAMES:
+                    kw = fit_keywords(_estimate(f).factors)
+                    joints = fit_sequence(truth["masks"], frames=video, **kw).joints2d
+                    s = summarise(side_agnostic_errors(joints, tj)[0] / hpx)
+                    cells.append((s["pck05"], s["median"]))
+            rows.append(cells)
+            seen.append(view_of(yaw))
+            print(f"{name:16} {yaw:>4g} {seen[-1][:5]:5} "
+                  + " ".join(f"{p:8.1%} ({m:.4f})" for p, m in cells), flush=True)
+    r, seen = np.asarray(rows), np.asarray(seen)
+    for view in (None, *VIEWS):
+        here = np.ones(len(r), bool) if view is None else seen == view
+        if here.any():
+            p, m = r[here, :, 0].mean(0), np.median(r[here, :, 1], axis=0)
+            print(f"{'mean ' + (view or 'all'):27} "
+                  + " ".join(f"{a:8.2%} ({b:.4f})" for a, b in zip(p, m, strict=True))
+                  + f"   ({here.sum()} clips)")
     return 0
 
 
@@ -493,11 +560,18 @@ def main(argv=None) -> int:
     ap.add_argument("--proportions", action="store_true",
                     help="bodies scaled away from the seed's ratios: recovered lengths and "
                          "the fit with estimated / seed / true proportions")
+    ap.add_argument("--bodies", action="store_true",
+                    help="held-out clips rendered with the seed's body and a real adult's, "
+                         "each fitted with either body's proportions")
+    ap.add_argument("--every", type=int, default=1,
+                    help="--bodies: every n-th held-out clip only (a quicker subset)")
     ap.add_argument("--torso", action="store_true",
                     help="held-out clips, outline only: PCK and the torso angle's error")
     args = ap.parse_args(argv)
     if args.torso:
         return torso_table(args.frames)
+    if args.bodies:
+        return body_combinations(args.frames, tuple(args.views.split(",")), args.every)
     if args.proportions:
         return proportions(args.frames)
     if args.poses:

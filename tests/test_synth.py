@@ -464,3 +464,47 @@ def test_sample_videos_match_their_truth():
         assert t["masks"].shape == (info.n_frames, info.height, info.width)
         assert np.isclose(float(t["fps"]), info.fps)
         np.testing.assert_allclose(project(t["camera"], t["joints3d"]), t["joints2d"], atol=0.5)
+
+
+def test_a_body_with_feet_stands_on_soles_below_its_ankles():
+    """``foot``: a standing body seen from the side gets feet whose soles are
+    ``foot`` x the stature below the ankles and which point the way it faces (toes
+    three times as far ahead of the ankle as the heel is behind it, within a pixel);
+    nothing else changes, and ``foot=0`` (the default) draws none."""
+    from vidcap.synth.camera import make_camera
+    from vidcap.synth.render import render_body
+    from vidcap.video.fit.proportions import human_proportions
+
+    est = human_proportions()
+    body = est.body(1.75)  # head top to ankles: 1.75 less the feet
+    joints = body.rest_positions()
+    cam = make_camera(joints[None], size=(200, 240), yaw_deg=90, height=1.75,
+                      radius=body.radius("torso"))
+    bg = np.zeros((240, 200, 3), np.uint8)
+    _, bare = render_body(joints, cam, body, bg)
+    _, shod = render_body(joints, cam, body, bg, foot=est.foot)
+    ankle = cam.project(joints)[JOINT_INDEX["l_ankle"]]
+    foot_px = est.foot * 1.75 * cam.pixels_per_metre  # 7 px
+    assert np.flatnonzero(bare.any(1)).max() <= ankle[1] + 0.5
+    assert abs(np.flatnonzero(shod.any(1)).max() + 1 - (ankle[1] + foot_px)) <= 1.0
+    assert not (bare & ~shod).any()  # the feet add pixels, remove none
+    sole = np.flatnonzero(shod[int(ankle[1] + foot_px) - 2])
+    ahead, behind = sole.max() + 1 - ankle[0], ankle[0] - sole.min()
+    assert ahead > 2 * behind > 0  # yaw 90 faces image right
+    assert abs((ahead + behind) / cam.pixels_per_metre / 1.75 - 0.145) < 0.01
+
+
+def test_synth_cli_human_body_has_feet(tmp_path, cli):
+    """``vidcap synth --proportions human``: a real adult's body, its silhouette
+    reaching below the ankles by the feet (the seed's ends at them)."""
+    lows = {}
+    for name in ("seed", "human"):
+        out = tmp_path / f"{name}.mp4"
+        res = cli("synth", "--frames", "2", "--size", "160x120", "--proportions", name,
+                  "--noise", "0", "-o", out)
+        assert res.returncode == 0, res.stderr
+        t = np.load(tmp_path / f"{name}_truth.npz")
+        ankles = t["joints2d"][0, [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]], 1].max()
+        height = np.ptp(t["joints2d"][0, :, 1])
+        lows[name] = (np.flatnonzero(t["masks"][0].any(1)).max() + 1 - ankles) / height
+    assert lows["seed"] < 0.02 < 0.03 < lows["human"]

@@ -97,8 +97,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="relative amplitude of a slow brightness/colour drift (e.g. 0.1)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--height", type=float, default=1.75, help="body height in metres")
-    parser.add_argument("--proportions", metavar="NAME=FACTOR,...",
-                        help="a body scaled away from the seed's ratios, e.g. "
+    parser.add_argument("--proportions", metavar="seed|human|NAME=FACTOR,...",
+                        help="the body: the seed's ratios (seed, the default), a real adult's "
+                        "(human: the fit's --proportions human, feet drawn below the ankles), "
+                        "or one scaled away from the seed's ratios, e.g. "
                         "legs=1.15,arms=0.9,shoulders=1.2 (groups: head, torso, upper_arms, "
                         "lower_arms, upper_legs, lower_legs, arms, legs; widths: shoulders, "
                         "head_width, arm_width, leg_width); --height stays the standing height")
@@ -120,8 +122,16 @@ def run(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     out = Path(args.output)
     truth = Path(args.truth) if args.truth else out.with_name(out.stem + "_truth.npz")
-    body = (BodyModel(height=args.height) if not args.proportions
-            else body_with_proportions(args.height, parse_proportions(args.proportions)))
+    foot = 0.0
+    if args.proportions in (None, "seed"):
+        body = BodyModel(height=args.height)
+    elif args.proportions == "human":
+        from vidcap.video.fit.proportions import human_proportions
+
+        est = human_proportions()
+        body, foot = est.body(args.height), est.foot
+    else:
+        body = body_with_proportions(args.height, parse_proportions(args.proportions))
     rng = np.random.default_rng(args.seed)
     motion = make_motion(
         args.motion, body=body, amc=args.amc, frame_range=parse_range(args.range),
@@ -131,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         out, truth, motion, bvh_path=args.bvh, rng=rng, body=body, size=size,
         yaw_deg=args.yaw, elevation_deg=args.elevation, pixels_per_metre=args.ppm,
         floor_frac=args.floor, background=args.background, noise=args.noise,
-        lighting_drift=args.lighting_drift,
+        lighting_drift=args.lighting_drift, foot=foot,
     )
     print(f"wrote {out} ({len(result['joints3d'])} frames, {size[0]}x{size[1]}, "
           f"{motion.fps:g} fps) and {truth}")

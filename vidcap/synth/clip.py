@@ -48,6 +48,9 @@ class Clip:
         Lighting gain per frame and channel.
     noise : float
         Gaussian pixel noise sigma, grey levels.
+    foot : float
+        Share of the standing height (head top to soles) below the ankles, drawn as
+        feet (0: none, the seed's body standing on its ankles).
     """
 
     motion: Motion
@@ -57,6 +60,7 @@ class Clip:
     background: np.ndarray
     gains: np.ndarray
     noise: float
+    foot: float = 0.0
 
     @property
     def n_frames(self) -> int:
@@ -77,6 +81,7 @@ def prepare_clip(
     noise: float = 2.0,
     lighting_drift: float = 0.0,
     rng: np.random.Generator | None = None,
+    foot: float = 0.0,
 ) -> Clip:
     """Set up camera, background and lighting for ``motion`` (on our skeleton).
 
@@ -86,7 +91,10 @@ def prepare_clip(
     :func:`make_background`. ``rng`` (default ``default_rng(0)``) drives the
     background texture and the lighting phase. ``noise`` is the Gaussian pixel noise
     sigma (grey levels); ``lighting_drift`` the relative amplitude of a slow global
-    brightness/colour change (:func:`lighting_gains`).
+    brightness/colour change (:func:`lighting_gains`). ``foot`` is the share of the
+    standing height below the ankles, drawn as feet (:func:`vidcap.synth.render.foot_segments`;
+    0: none, the seed's body; e.g. :data:`vidcap.video.fit.proportions.HUMAN`'s
+    ``1 - above_feet`` with that body), ``body.height`` then head top to ankles.
     """
     import cv2
 
@@ -100,6 +108,8 @@ def prepare_clip(
                                       + off[J["l_ankle"]]))
     if noise < 0 or lighting_drift < 0:
         raise UsageError("noise and lighting drift must not be negative")
+    if not 0.0 <= foot < 0.3:
+        raise UsageError(f"foot must be in [0, 0.3), got {foot!r}")
     joints3d = motion.positions()
     camera = make_camera(
         joints3d, size=size, yaw_deg=yaw_deg, elevation_deg=elevation_deg,
@@ -122,12 +132,14 @@ def prepare_clip(
     else:
         bg = load_background(background, (W, H))
     gains = lighting_gains(motion.n_frames, motion.fps, lighting_drift, rng)
-    return Clip(motion, body, camera, joints3d, bg, gains.astype(np.float32), float(noise))
+    return Clip(motion, body, camera, joints3d, bg, gains.astype(np.float32), float(noise),
+                float(foot))
 
 
 def render_frame(clip: Clip, i: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Frame ``i`` of ``clip``: BGR uint8 (H, W, 3) with noise, and its mask (H, W) bool."""
-    img, mask = render_body(clip.joints3d[i], clip.camera, clip.body, clip.background)
+    img, mask = render_body(clip.joints3d[i], clip.camera, clip.body, clip.background,
+                            foot=clip.foot)
     return finish_frame(img, rng, noise=clip.noise, gain=clip.gains[i]), mask
 
 

@@ -18,10 +18,17 @@ from vidcap.synth.camera import (
     OrthoCamera,
 )
 
-#: Clothing colours (BGR): a red shirt, dark blue trousers, skin.
+#: Clothing colours (BGR): a red shirt, dark blue trousers, skin, dark grey shoes.
 SHIRT = (40, 45, 190)
 TROUSERS = (95, 45, 25)
 SKIN = (120, 160, 215)
+SHOES = (55, 55, 60)
+#: A foot (drawn only for a body with feet, ``foot > 0``): a capsule whose radius is half
+#: the ankle's height above the soles, from below the ankle forward to the toes, its
+#: centre line ``FOOT_REACH`` x the stature long. With the capsule's rounded ends the
+#: foot is 0.145 of the stature from heel to toe (Drillis & Contini's foot length
+#: 0.152 H, Winter Fig. 4.1); the ankle sits a quarter of it from the heel.
+FOOT_REACH = 0.106
 _SEGMENT_COLOUR = {
     "torso": SHIRT, "head": SKIN,
     "l_upper_arm": SHIRT, "r_upper_arm": SHIRT, "l_lower_arm": SKIN, "r_lower_arm": SKIN,
@@ -115,6 +122,7 @@ def render_body(
     background: np.ndarray,
     *,
     colours: dict | None = None,
+    foot: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Draw the posed cylinder body over a background, nearest surface on top.
 
@@ -128,6 +136,10 @@ def render_body(
     background : numpy.ndarray, shape (H, W, 3) uint8
     colours : dict, optional
         BGR colour per segment name (default: shirt, trousers, skin).
+    foot : float
+        The share of the standing height (head top to soles) below the ankles: a foot is
+        drawn under each ankle (:func:`foot_segments`; 0, the default: none, the seed's
+        body, whose ankles are on the floor). ``body.height`` is head top to ankles.
 
     Returns
     -------
@@ -153,7 +165,56 @@ def render_body(
             img, zbuf, uv[p], uv[d], np.float32(z[p] * s), np.float32(z[d] * s),
             np.float32(body.radius(name) * s), axis_v, colours[name], _ROUND_ENDS[name],
         )
+    if foot > 0:
+        heels, toes, radius = foot_segments(joints3d, body.height / (1.0 - foot), foot)
+        zh, zt = camera.depth(heels) * s, camera.depth(toes) * s
+        uh, ut = camera.project(heels).astype(np.float32), camera.project(toes).astype(np.float32)
+        for k in range(2):
+            bone = toes[k] - heels[k]
+            axis_v = (bone @ camera.view_dir) / max(np.linalg.norm(bone), 1e-9)
+            _draw_segment(img, zbuf, uh[k], ut[k], np.float32(zh[k]), np.float32(zt[k]),
+                          np.float32(radius * s), axis_v, SHOES, (True, True))
     return img, np.isfinite(zbuf)
+
+
+def foot_segments(joints3d: np.ndarray, stature: float, foot: float):
+    """The two feet of a posed body as capsules: heel and toe centres and the radius.
+
+    Each foot hangs from its ankle: its sole is ``foot * stature`` below the ankle
+    along the shin (a foot held at a right angle to the shin), and it points along
+    the body's forward direction (from the hips and shoulders) made square to the
+    shin.
+
+    Parameters
+    ----------
+    joints3d : numpy.ndarray, shape (15, 3)
+        One frame's joints, metres, Y up.
+    stature : float
+        Head top to soles, metres.
+    foot : float
+        Share of the stature below the ankles (> 0).
+
+    Returns
+    -------
+    heels, toes : numpy.ndarray, shape (2, 3)
+        Capsule end centres (left, right), metres.
+    radius : float
+        Metres.
+    """
+    from vidcap.body import JOINT_INDEX
+    from vidcap.synth.camera import body_forward
+
+    radius = 0.5 * foot * stature
+    fwd = body_forward(joints3d[None])[0]
+    heels, toes = np.empty((2, 3)), np.empty((2, 3))
+    for k, side in enumerate("lr"):
+        knee, ankle = joints3d[JOINT_INDEX[f"{side}_knee"]], joints3d[JOINT_INDEX[f"{side}_ankle"]]
+        down = unit(ankle - knee)
+        ahead = fwd - (fwd @ down) * down
+        ahead = unit(ahead) if np.linalg.norm(ahead) > 1e-6 else fwd
+        heels[k] = ankle + radius * down - 0.25 * FOOT_REACH * stature * ahead
+        toes[k] = heels[k] + FOOT_REACH * stature * ahead
+    return heels, toes, float(radius)
 
 
 def lighting_gains(

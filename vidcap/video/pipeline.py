@@ -153,7 +153,8 @@ def run(
     k_sil = _silhouette_key(ident, k_plate, region_cache_part(ann))
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
-    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues)
+    fit_kw = _fixed_body_keywords(proportions)
+    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues, fit_kw)
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
@@ -162,7 +163,8 @@ def run(
         if plate_notice(plate):
             log(plate_notice(plate))
         with _timed(timings, "silhouettes"):
-            streamed, crops = _streamed_fit(pool, info.n_frames or 0, jobs, per_job, cues)
+            streamed, crops = _streamed_fit(pool, info.n_frames or 0, jobs, per_job, cues,
+                                            fit_kw)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
                                     progress=progress, regions=_regions(ann, plate))
         _report_silhouettes(sil, info.n_frames, log)
@@ -200,29 +202,45 @@ def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
                          + " or ".join(repr(c) for c in choices))
 
 
+def _fixed_body_keywords(proportions: str) -> dict:
+    """The 2D fit's ``body`` and ``foot`` for a body known before the fit
+    (``proportions='human'``: :func:`vidcap.video.fit.proportions.human_proportions`);
+    {} for the seed's (the fit's default) and for ``'auto'`` (estimated after a first fit)."""
+    if proportions != "human":
+        return {}
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions
+
+    return fit_keywords(human_proportions().factors)
+
+
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
                progress, timings, log, cues=(DEFAULT_CUES, None, None)):
-    """The 2D pose (:func:`_pose_stage`) and, with ``proportions='auto'``, the subject's
-    own proportions estimated from it (``'human'``: a real adult's,
-    :func:`vidcap.video.fit.proportions.human_proportions`) and the clip fitted again with them
-    (:func:`vidcap.video.bodystage.proportions_stage`): the 3D lift and the motion's
-    skeleton then use them, ``body``'s height still the standing height. Returns
-    (pose, body, estimate or None). ``cues``: ``(cues, crops, video)`` of
-    :func:`_pose_stage` (the refit with the subject's proportions reads the outline only).
+    """The 2D pose (:func:`_pose_stage`) fitted with the body's proportions: the seed's,
+    a real adult's (``'human'``, :func:`vidcap.video.fit.proportions.human_proportions`,
+    one fit with them), or with ``'auto'`` the subject's own estimated from a first fit
+    with the seed's and the clip fitted again with them
+    (:func:`vidcap.video.bodystage.proportions_stage`, the outline only): the 3D lift
+    and the motion's skeleton then use them, ``body``'s height still the standing
+    height. Returns (pose, body, estimate or None). ``cues``: ``(cues, crops, video)``
+    of :func:`_pose_stage`.
     """
     with _timed(timings, "pose2d"):
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
                            streamed=streamed, progress=progress, cues=cues[0],
-                           crops=cues[1], video=cues[2])
+                           crops=cues[1], video=cues[2],
+                           fit_kw=_fixed_body_keywords(proportions))
     if proportions == "seed":
         return pose, body, None
-    from vidcap.video.bodystage import proportions_stage
     from vidcap.video.fit.proportions import human_proportions
 
-    fixed = human_proportions() if proportions == "human" else None
-    with _timed(timings, "proportions"):
-        pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
-                                           progress=progress, fixed=fixed)
+    if proportions == "human":
+        estimate = human_proportions()
+    else:
+        from vidcap.video.bodystage import proportions_stage
+
+        with _timed(timings, "proportions"):
+            pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs,
+                                               per_job=per_job, progress=progress)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
 
@@ -237,16 +255,19 @@ def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
     _check_choice("cues", cues, tuple(CUE_MODES))
 
 
-def _streamed_fit(pool, n_frames: int, jobs: int, per_job: int, cues: str):
+def _streamed_fit(pool, n_frames: int, jobs: int, per_job: int, cues: str,
+                  fit_kw: dict | None = None):
     """The :class:`vidcap.video.fit.parallel.StreamedFit` that fits each chunk of frames as
     soon as its silhouettes are there (None without ``pool``), and the
     :class:`vidcap.video.fit.cueframes.FrameCrops` to fill with the colour crops the cues
-    read as the silhouettes are extracted (None for ``cues='outline'``)."""
+    read as the silhouettes are extracted (None for ``cues='outline'``). ``fit_kw``: the
+    fit's body keywords (:func:`_fixed_body_keywords`)."""
     from vidcap.video.fit.cueframes import FrameCrops
     from vidcap.video.fit.parallel import StreamedFit
 
     streamed = (None if pool is None
-                else StreamedFit(pool, n_frames, jobs=jobs, per_job=per_job, cues=cues))
+                else StreamedFit(pool, n_frames, jobs=jobs, per_job=per_job, cues=cues,
+                                 **(fit_kw or {})))
     return streamed, (FrameCrops() if cues == "all" else None)
 
 
@@ -287,7 +308,7 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
 
 
 def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
-                       per_job: int, cues: str = DEFAULT_CUES):
+                       per_job: int, cues: str = DEFAULT_CUES, fit_kw: dict | None = None):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
     plate and extracts the silhouettes; None when the fit is serial or cached."""
@@ -296,7 +317,7 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
     expected = chunk_bounds(n_frames, jobs, per_job=per_job)
     if len(expected) < 2:
         return None
-    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues))
+    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues, fit_kw))
     if pose_path and pose_path.exists():
         return None
     return FitPool(min(jobs, len(expected)))
@@ -474,16 +495,20 @@ def _report_silhouettes(sil: _Silhouettes, n_expected: int | None, log) -> None:
 
 
 # --------------------------------------------------------------------------- 3. 2D pose
-def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES) -> str:
+def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES, fit_kw: dict | None = None) -> str:
     # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
     parts = ("pose2d", k_sil) if len(chunks) < 2 else ("pose2d", k_sil, chunks)
+    if fit_kw:  # a body other than the seed's (the seed's keeps the key it had)
+        body = fit_kw["body"]
+        parts += (f"body={body.segment_lengths().round(6).tolist()}"
+                  f"{body.segment_radii().round(6).tolist()}", f"foot={fit_kw.get('foot', 0):.6f}")
     # the outline-only fit keeps the key it had before the cues existed
     return stage_key(*parts) if cues == "outline" else stage_key(*parts, f"cues={cues}")
 
 
 def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, per_job: int,
                 streamed, progress, cues: str = DEFAULT_CUES, crops=None,
-                video=None) -> dict:
+                video=None, fit_kw: dict | None = None) -> dict:
     """The 2D pose, cached or fitted (by ``streamed`` when it was fed the silhouettes,
     else by :func:`vidcap.video.fit.parallel.fit_sequence_chunked`), with the colour
     frames' cues (``cues='all'``: ``crops``, filled while the silhouettes were
@@ -499,7 +524,8 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
     from vidcap.fileio import progress as bar
     from vidcap.video.fit.parallel import chunk_bounds, fit_sequence_chunked
 
-    key = _pose_key(k_sil, chunk_bounds(len(masks), jobs, per_job=per_job), cues)
+    fit_kw = fit_kw or {}
+    key = _pose_key(k_sil, chunk_bounds(len(masks), jobs, per_job=per_job), cues, fit_kw)
     # entries written before the model's height was kept lack it: fit again
     hit = cache.load("pose2d", key, required=("model_height",))
     if hit is not None:
@@ -520,9 +546,11 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
         pose = streamed.finish(masks, frames=frames, progress=wrap)
     else:
         pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
-                                    frames=frames, cues=cues)
+                                    frames=frames, cues=cues, **fit_kw)
+    # the model's height is head top to ankles: a body with feet leaves them out
     hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
-           "similarity": pose.similarity, "model_height": pose.model_height}
+           "similarity": pose.similarity,
+           "model_height": pose.model_height * (1.0 - fit_kw.get("foot", 0.0))}
     cache.save("pose2d", key, **hit)
     return hit
 
