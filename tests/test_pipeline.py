@@ -296,3 +296,32 @@ def test_a_failure_while_the_fit_workers_start_ends_them_at_once(tmp_path):
     assert time.perf_counter() - t0 < 4.0  # (it used to wait 5 s for a stopped worker)
     assert not multiprocessing.active_children()
     assert not list(tmp_path.glob("*.bvh"))
+
+
+def test_run_fits_the_default_human_body_once(tmp_path):
+    """``run``'s default body is a real adult's (``proportions='human'``): the 2D fit is
+    done once, with that body (the seed's never fitted first), its model height head top
+    to ankles (the feet left out), and the motion's skeleton is that body's."""
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.fit.proportions import HUMAN, fit_keywords, human_proportions
+    from vidcap.video.fit.tracking import fit_sequence
+    from vidcap.video.pipeline import DEFAULT_PROPORTIONS, run
+
+    assert DEFAULT_PROPORTIONS == "human"
+    est = human_proportions()
+    body = est.body(1.75)
+    video = tmp_path / "walk.mp4"
+    motion = make_motion("walk", body=body, n_frames=12)
+    synth_clip(video, tmp_path / "t.npz", motion, body=body, foot=est.foot, size=(160, 120),
+               rng=np.random.default_rng(0))
+    said = []
+    res = run(video, progress=False, jobs=1, log=said.append)
+    assert "proportions" not in res.timings  # no second fit
+    assert res.proportions.factors == HUMAN and any("body proportions" in m for m in said)
+    direct = fit_sequence(res.masks, cues="outline", **fit_keywords(HUMAN))
+    np.testing.assert_array_equal(res.similarity, direct.similarity)
+    np.testing.assert_allclose(res.model_height, direct.model_height * (1 - est.foot))
+    np.testing.assert_allclose(res.motion.skeleton.offsets, body.skeleton().offsets)
+    seed = run(video, progress=False, jobs=1, proportions="seed")
+    assert seed.proportions is None
+    assert not np.array_equal(seed.similarity, res.similarity)

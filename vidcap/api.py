@@ -26,7 +26,7 @@ from vidcap.errors import UsageError
 
 def check_convert_options(*, height: float, jobs: int | None, view: str = "auto",
                           smooth: float = 1.0, keyframes: float | None = None,
-                          cues: str = "outline") -> None:
+                          cues: str = "outline", proportions: str = "human") -> None:
     """Raise :class:`UsageError` for an option of ``convert`` that cannot work.
 
     Shared by :func:`convert` and ``vidcap convert``, so both refuse the same values.
@@ -44,6 +44,11 @@ def check_convert_options(*, height: float, jobs: int | None, view: str = "auto"
     if view not in VIEWS:
         raise UsageError(f"unknown view {view!r}; use one of {', '.join(VIEWS)}")
     check_cues_option(cues)
+    from vidcap.video.fit.proportions import PROPORTION_CHOICES
+
+    if proportions not in PROPORTION_CHOICES:
+        raise UsageError(f"unknown proportions {proportions!r}; use one of "
+                         + ", ".join(PROPORTION_CHOICES))
 
 
 def check_cues_option(cues: str) -> None:
@@ -112,7 +117,8 @@ class VideoMotion:
 
 def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None = None,
             height: float = 1.75, view: str = "auto", jobs: int | None = None,
-            progress: bool = False, cues: str | None = None) -> VideoMotion:
+            progress: bool = False, cues: str | None = None,
+            proportions: str | None = None) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -135,6 +141,10 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         What places the 2D model: the silhouette's outline and the colour frame's cues
         inside it (``'all'``: skin colour and edges place the arms), or the outline
         only (the seed); default :data:`vidcap.video.pipeline.DEFAULT_CUES`.
+    proportions : {'human', 'seed', 'auto'}, optional
+        The body fitted, lifted and written: a real adult's (``'human'``), the seed's
+        Table 3.1/3.2 ratios, or the subject's estimated from the clip; default
+        :data:`vidcap.video.pipeline.DEFAULT_PROPORTIONS`.
 
     Returns
     -------
@@ -151,12 +161,14 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
     vidcap.errors.UsageError
         If an option is invalid.
     """
-    from vidcap.video.pipeline import DEFAULT_CUES, run
+    from vidcap.video.pipeline import DEFAULT_CUES, DEFAULT_PROPORTIONS, run
 
     cues = DEFAULT_CUES if cues is None else cues
-    check_convert_options(height=height, jobs=jobs, view=view, cues=cues)
+    proportions = DEFAULT_PROPORTIONS if proportions is None else proportions
+    check_convert_options(height=height, jobs=jobs, view=view, cues=cues,
+                          proportions=proportions)
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
-              progress=progress, cues=cues)
+              progress=progress, cues=cues, proportions=proportions)
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))

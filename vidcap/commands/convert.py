@@ -33,6 +33,9 @@ RIG_CHOICES = ("vidcap", "mixamo", "humanik")
 #: ``--cues`` default (:data:`vidcap.video.pipeline.DEFAULT_CUES`, spelled here for a
 #: light ``--help``; a test checks they agree).
 DEFAULT_CUES = "outline"
+#: ``--proportions`` default (:data:`vidcap.video.pipeline.DEFAULT_PROPORTIONS`, spelled
+#: here for a light ``--help``; a test checks they agree).
+DEFAULT_PROPORTIONS = "human"
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
 
@@ -83,13 +86,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="3D from the 2D joints: one kinematic solve over the clip "
                         "(default; bone lengths constant, joint limits, smooth, feet planted "
                         "on walks and stands) or the seed's per-segment lift (segment)")
-    parser.add_argument("--proportions", default="seed", choices=("seed", "auto", "human"),
-                        help="the body's proportions: the seed's ratios (default), auto: "
-                        "this subject's segment lengths and widths estimated from the clip, "
-                        "or human: a real adult's from an anthropometric table (joints where "
-                        "a person's are, the ankles above the soles); with auto and human "
-                        "the 2D fit is done again with them and the lift and skeleton built "
-                        "on them (--height stays the standing height)")
+    parser.add_argument("--proportions", default=DEFAULT_PROPORTIONS,
+                        choices=("human", "seed", "auto"),
+                        help="the body's proportions: human (default): a real adult's from an "
+                        "anthropometric table (joints where a person's are, the ankles above "
+                        "the soles), seed: the seed's Table 3.1/3.2 ratios, or auto: this "
+                        "subject's segment lengths and widths estimated from the clip (the "
+                        "2D fit done again with them); the 2D fit, the lift and the skeleton "
+                        "use them (--height stays the standing height)")
     add_cues_argument(parser)
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "

@@ -97,9 +97,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="relative amplitude of a slow brightness/colour drift (e.g. 0.1)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--height", type=float, default=1.75, help="body height in metres")
-    parser.add_argument("--proportions", metavar="seed|human|NAME=FACTOR,...",
-                        help="the body: the seed's ratios (seed, the default), a real adult's "
-                        "(human: the fit's --proportions human, feet drawn below the ankles), "
+    parser.add_argument("--proportions", metavar="human|seed|NAME=FACTOR,...",
+                        default="human",
+                        help="the body: a real adult's (human, the default: the body vidcap "
+                        "convert and pose2d fit by default, feet drawn below the ankles), the "
+                        "seed's Table 3.1/3.2 ratios (seed: ankles on the floor), "
                         "or one scaled away from the seed's ratios, e.g. "
                         "legs=1.15,arms=0.9,shoulders=1.2 (groups: head, torso, upper_arms, "
                         "lower_arms, upper_legs, lower_legs, arms, legs; widths: shoulders, "

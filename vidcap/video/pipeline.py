@@ -61,6 +61,13 @@ _CHUNKS_PER_JOB = 2
 
 #: The fit's cues by default (``run``'s ``cues``; ``vidcap convert --cues``).
 DEFAULT_CUES = "outline"
+#: The body's proportions by default (``run``'s ``proportions``; ``vidcap convert`` and
+#: ``vidcap pose2d --proportions``): a real adult's (an anthropometric table's, the
+#: ankles above the soles). On real footage it is nearer MediaPipe's joints than the
+#: seed's Table 3.1/3.2 body in 9 of 10 clips, and on renders each body is fitted best
+#: with its own proportions (``benchmarks/RESULTS.md``, "the default body"); ``'seed'``
+#: keeps the seed's.
+DEFAULT_PROPORTIONS = "human"
 
 
 #: Bumped when the silhouette stage's results change for the same video and options
@@ -84,7 +91,7 @@ def run(
     log=None,
     jobs: int | None = None,
     view: str = "auto",
-    lift: str = "solve", proportions: str = "seed",
+    lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS,
     cues: str = DEFAULT_CUES,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
@@ -123,8 +130,9 @@ def run(
     lift : {'solve', 'segment'}
         The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
-    proportions : {'seed', 'auto', 'human'}
-        The seed's ratios, the subject's from the clip, or a real adult's (:func:`_fit_stage`).
+    proportions : {'human', 'seed', 'auto'}
+        A real adult's (the default, :data:`DEFAULT_PROPORTIONS`), the seed's ratios, or
+        the subject's estimated from the clip (:func:`_fit_stage`).
     cues : {'outline', 'all'}
         The 2D fit reads the silhouette only, or the frame's cues inside it too.
 
