@@ -55,11 +55,11 @@ def main(argv=None):
         cv2.imwrite(str(d / "plate.png"), plate.plate)
         t0 = time.perf_counter()
         res = convert(video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
-                      progress=False, jobs=args.jobs)
+                      progress=False, jobs=args.jobs, proportions="seed")
         t_conv = time.perf_counter() - t0
         t0 = time.perf_counter()
         serial = convert(video, d / "walk1.bvh", background=d / "plate.png", cache_dir=None,
-                         progress=False, jobs=1)
+                         progress=False, jobs=1, proportions="seed")
         t_serial = time.perf_counter() - t0
     jobs = default_jobs() if args.jobs is None else args.jobs
     rows = [("decode only", t_decode), ("plate estimation", t_plate),

@@ -305,7 +305,9 @@ def end_to_end(samples: Path, body):
             continue
         t = dict(np.load(truth_path))
         t0 = time.perf_counter()
-        res = run(video, height=body.height, smooth_sigma=0.0, progress=False)
+        # the sample clips are renders of the seed's body: fitted with it
+        res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
+                  proportions="seed")
         secs = time.perf_counter() - t0
         true3 = truth_in_camera_frame(t)
         ours = res.lifted.joints3d
@@ -496,7 +498,7 @@ def _sample_clips(body):
             continue
         t = dict(np.load(truth_path))
         res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
-                  cache_dir=cache, lift="segment")
+                  cache_dir=cache, lift="segment", proportions="seed")  # seed renders
         fit = {"joints2d": res.image_joints2d, "spread": res.spread,
                "model_height": res.model_height, "track": res.track}
         out.append((f"{video.stem} (sample)", fit, t, truth_in_camera_frame(t),

@@ -7,7 +7,9 @@ BLAS threads pinned to 1):
 * decoding the video with PyAV (:func:`vidcap.io.video.iter_frames`): the reference;
 * normalising the silhouette (crop + resize to the fitting height);
 * fitting every frame independently (the seed's method, ``--per-frame``);
-* fitting with tracking (warm start from the previous frame; the default).
+* fitting with tracking (warm start from the previous frame; the default);
+* the same walk rendered with a real adult's body (feet and all) and fitted tracked with
+  its proportions (``proportions='human'``, ``vidcap convert``'s default body).
 
 The first fit of a process also loads (or, on a cold cache, compiles) the numba
 kernels of :mod:`vidcap.video.fit.raster` and imports ``scipy.ndimage`` (the tracked
@@ -72,6 +74,17 @@ def main(argv=None) -> int:
         n = len(masks)
         t_decode = cpu(lambda: sum(1 for _ in iter_frames(video))) / n
         frames = np.array(list(iter_frames(video)))  # what the cues read (BGR)
+        # the same walk, a real adult's body (convert's default) drawn and fitted
+        from vidcap.video.fit.proportions import fit_keywords, human_proportions
+
+        est = human_proportions()
+        body = est.body(1.75)
+        synth_clip(video, truth, make_motion("walk", n_frames=args.frames, body=body),
+                   body=body, foot=est.foot, size=(640, 480), rng=np.random.default_rng(0),
+                   show_progress=False)
+        masks_h = np.load(truth)["masks"]
+        frames_h = np.array(list(iter_frames(video)))
+        human_kw = fit_keywords(est.factors)
     # the compiled kernels are loaded (or compiled) once per process: timed apart
     # (and scipy.ndimage imported by the tracked mode's spread prior)
     t_first = cpu(lambda: fit_sequence(masks[:3], tracked=True, height=args.height), 1)
@@ -85,6 +98,10 @@ def main(argv=None) -> int:
     t_no_legs = cpu(lambda: fit_sequence(masks, tracked=True, height=args.height,
                                          leg_grid=False), r) / n
     warm = fit_sequence(masks, tracked=True, height=args.height).warm
+    t_human = cpu(lambda: fit_sequence(masks_h, tracked=True, height=args.height, **human_kw),
+                  r) / n
+    t_human_cues = cpu(lambda: fit_sequence(masks_h, tracked=True, height=args.height,
+                                            frames=frames_h, **human_kw), r) / n
     prev = fit_pose(masks[0], height=args.height)
     t_warm = cpu(lambda: fit_pose(masks[1], previous=prev, height=args.height), 5 * r)
 
@@ -98,6 +115,8 @@ def main(argv=None) -> int:
         (f"fit, tracked ({warm.mean():.0%} frames warm)", t_track),
         ("fit, tracked, cues inside the outline", t_cues),
         ("fit, tracked, no whole-leg grid", t_no_legs),
+        ("human body, fit tracked", t_human),
+        ("human body, fit tracked, cues", t_human_cues),
         ("fit, one warm frame", t_warm),
         ("seed 004 (C#, 2.7 GHz Celeron)", 1.0),
     ]

@@ -94,6 +94,13 @@ def test_cues_default_and_pose_cache_key():
     from vidcap.video import pipeline
 
     assert convert_cmd.DEFAULT_CUES == pipeline.DEFAULT_CUES
+    assert convert_cmd.DEFAULT_PROPORTIONS == pipeline.DEFAULT_PROPORTIONS
+    # a fit with another body is not read back as the seed's; the seed's keeps its key
+    from vidcap.video.fit.proportions import HUMAN, fit_keywords
+
+    seed_key = pipeline._pose_key("sil", [(0, 0, 100)], "outline")
+    assert pipeline._pose_key("sil", [(0, 0, 100)], "outline", {}) == seed_key
+    assert pipeline._pose_key("sil", [(0, 0, 100)], "outline", fit_keywords(HUMAN)) != seed_key
     keys = {cues: pipeline._pose_key("sil", [(0, 0, 100)], cues) for cues in ("all", "outline")}
     assert keys["all"] != keys["outline"]  # a fit with cues is not read back as one without
     with pytest.raises(ValueError, match="cues"):
