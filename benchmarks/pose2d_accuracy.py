@@ -359,17 +359,20 @@ def _estimate(name: str):
 
 
 def body_combinations(frames: int = 60, views: tuple[str, ...] = VIEWS,
-                      every: int = 1) -> int:
+                      every: int = 1, combos: tuple[str, ...] | None = None) -> int:
     """The ``--bodies`` table: the held-out clips rendered with the seed's body and with
     a real adult's (feet and all), each fitted (tracked, cues as the default) with either
     body's proportions: the four combinations side by side, PCK@0.05 and median error
     as fractions of the standing height (head top to soles, from the camera's scale).
-    ``every``: every n-th clip only (a quicker subset, said in the header)."""
+    ``every``: every n-th clip only (a quicker subset, said in the header); ``combos``:
+    only these ``render/fit`` pairs (e.g. ``human/human``)."""
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
     from vidcap.video.fit.proportions import fit_keywords
 
-    combos = [(r, f) for r in BODY_NAMES for f in BODY_NAMES]
+    combos = [(r, f) for r in BODY_NAMES for f in BODY_NAMES
+              if combos is None or f"{r}/{f}" in combos]
+    renders = [r for r in BODY_NAMES if any(c[0] == r for c in combos)]
     print(f"Tracked 2D fit on held-out clips ({frames} frames, 640x480; every {every}. "
           "clip): PCK@0.05 (median error) of the standing height, render body / fit body")
     print(f"{'clip':16} {'yaw':>4} {'view':5} " + " ".join(f"{r + '/' + f:>16}"
@@ -384,7 +387,7 @@ def body_combinations(frames: int = 60, views: tuple[str, ...] = VIEWS,
             if k % every:
                 continue
             cells = []
-            for r in BODY_NAMES:
+            for r in renders:
                 est = _estimate(r)
                 motion = clips[r][i][1]
                 video, truth = render_clip(motion, body=est.body(1.75), foot=est.foot,
@@ -392,7 +395,7 @@ def body_combinations(frames: int = 60, views: tuple[str, ...] = VIEWS,
                                            rng=np.random.default_rng(0))
                 tj = truth["joints2d"]
                 hpx = 1.75 * np.linalg.norm(truth["camera"][0, :3])
-                for f in BODY_NAMES:
+                for f in (f for rr, f in combos if rr == r):
                     kw = fit_keywords(_estimate(f).factors)
                     joints = fit_sequence(truth["masks"], frames=video, **kw).joints2d
                     s = summarise(side_agnostic_errors(joints, tj)[0] / hpx)
@@ -563,6 +566,8 @@ def main(argv=None) -> int:
     ap.add_argument("--bodies", action="store_true",
                     help="held-out clips rendered with the seed's body and a real adult's, "
                          "each fitted with either body's proportions")
+    ap.add_argument("--combos", default=None,
+                    help="--bodies: only these render/fit pairs, e.g. human/human,seed/human")
     ap.add_argument("--every", type=int, default=1,
                     help="--bodies: every n-th held-out clip only (a quicker subset)")
     ap.add_argument("--torso", action="store_true",
@@ -571,7 +576,8 @@ def main(argv=None) -> int:
     if args.torso:
         return torso_table(args.frames)
     if args.bodies:
-        return body_combinations(args.frames, tuple(args.views.split(",")), args.every)
+        return body_combinations(args.frames, tuple(args.views.split(",")), args.every,
+                                 None if args.combos is None else tuple(args.combos.split(",")))
     if args.proportions:
         return proportions(args.frames)
     if args.poses:

@@ -19,12 +19,13 @@ exists. No clip here chose a threshold of the fit (validation).
 Then every clip of ``real_clips.py`` (``$VIDCAP_DATA/video``: onebyone_room's two
 one-person stretches, the three pose2sim_balance cameras, the Sports2D walk and run,
 the TensorFlow.js squats and dance) and ido_walk again, this time
-through vidcap's own pipeline (silhouettes from the video, the tracked fit, default
-options), with ``--cues outline`` (the default) and ``--cues all``: one row per clip, the
+through vidcap's own pipeline (silhouettes from the video, the tracked fit, the seed's body:
+``proportions='seed'``), with ``--cues outline`` (the default) and ``--cues all``: one row per clip, the
 median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
 joints, and per joint for the default cues; and the fit to MediaPipe's masks instead of
 vidcap's silhouettes (``mp-masks``); and both again with ``proportions='human'`` (``human``,
-``mp-human``: an anthropometric table's body, the ankles above the soles). Tuning clips
+``mp-human``: an anthropometric table's body, the ankles above the soles; ``vidcap
+convert``'s default body). Tuning clips
 for the ``human`` choices (with or without the feet): pose2sim_balance cam1 and
 onebyone_room 233-445; the others are validation.
 

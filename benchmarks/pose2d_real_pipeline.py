@@ -76,8 +76,10 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
     MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks),
     ``human`` / ``mp-human``: the same with ``proportions='human'``. ``only``: just the
     clips whose name contains it."""
-    print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit, default "
-          "options; proportions='human' in the human rows: its hips and feet were chosen on "
+    print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit; the seed's "
+          "body (proportions='seed') in the outline, all and mp-masks rows, a real adult's "
+          "(proportions='human', the default since wt-human) in the human rows: its hips and "
+          "feet were chosen on "
           "pose2sim_balance_cam1 and onebyone_room 233-445 (tuning), the others are "
           "validation). MediaPipe is a reference, "
           "not the truth (~2.4 % of height off on lab footage).")
