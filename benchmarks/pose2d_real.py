@@ -20,8 +20,8 @@ Then every clip of ``real_clips.py`` (``$VIDCAP_DATA/video``: onebyone_room's tw
 one-person stretches, the three pose2sim_balance cameras, the Sports2D walk and run,
 the TensorFlow.js squats and dance) and ido_walk again, this time
 through vidcap's own pipeline (silhouettes from the video, the tracked fit, the seed's body:
-``proportions='seed'``), with ``--cues outline`` (the default) and ``--cues all``: one row per clip, the
-median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
+``proportions='seed'``), with ``--cues outline`` (the default) and ``--cues all``: one row
+per clip, the median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
 joints, and per joint for the default cues; and the fit to MediaPipe's masks instead of
 vidcap's silhouettes (``mp-masks``); and both again with ``proportions='human'`` (``human``,
 ``mp-human``: an anthropometric table's body, the ankles above the soles; ``vidcap

@@ -241,3 +241,27 @@ def test_refit_changed_frames_only():
         assert np.array_equal(new[k][outside], old[k][outside], equal_nan=True), k
     legs = new["joints2d"][21, 9:15]  # hips, knees, ankles: drawn within the cut mask
     assert np.nanmax(legs[:, 1]) < np.nanmax(old["joints2d"][21, 9:15, 1])
+
+
+def test_refit_changed_keeps_the_fits_body():
+    """A fit made with a real adult's body (``vidcap convert``'s default) is refitted with
+    the same body: the refit window is ``fit_sequence`` with that body, its model height
+    head top to ankles (the feet left out), as the pipeline keeps it."""
+    from vidcap.video.fit.proportions import HUMAN, fit_keywords
+    from vidcap.video.fit.tracking import fit_sequence
+
+    if not WALK.exists():
+        pytest.skip("sample_videos/ not present")
+    masks = np.load(WALK.with_name("walk_side_truth.npz"))["masks"][:30]
+    kw = fit_keywords(HUMAN)
+    old = {k: np.asarray(v) for k, v in fit_sequence(masks, **kw).arrays().items()}
+    cut = masks.copy()
+    cut[12, 200:] = False
+    changed = np.arange(len(masks)) == 12
+    new = refit_changed(MaskStack.from_masks(cut), old, changed, whole_share=1.0, fit_kw=kw)
+    (start, begin, end), = refit_windows(changed)
+    direct = fit_sequence(cut[start:end], **kw)
+    np.testing.assert_array_equal(new["similarity"][begin:end],
+                                  direct.similarity[begin - start:])
+    np.testing.assert_allclose(new["model_height"][begin:end],
+                               direct.model_height[begin - start:] * (1 - kw["foot"]))

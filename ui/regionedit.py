@@ -77,7 +77,7 @@ def resegment(clip, regions: Annotations, *, progress=None) -> Resegmented:
     changed = changed_frames(old, masks)
     pose = {k: np.array(v, copy=True) for k, v in clip.pose.items()}
     if changed.any():
-        pose = refit_changed(masks, pose, changed,
+        pose = refit_changed(masks, pose, changed, fit_kw=clip.fit_kw,
                              progress=lambda done, total: report("fit", done, total))
     return Resegmented(masks, pose, changed, time.perf_counter() - t0)
 

@@ -79,6 +79,9 @@ class ClipData:
     pose : dict, optional
         The 2D fit's arrays (:data:`vidcap.video.refit.POSE_KEYS`) the frames of changed
         silhouettes are refitted from; needed with ``resegment``.
+    fit_kw : dict, optional
+        The body keywords (``body``, ``foot``) the 2D fit used, for those refits
+        (default: the seed's body).
     """
 
     video: Path
@@ -95,6 +98,7 @@ class ClipData:
     size: tuple[int, int] = field(default=(0, 0))
     resegment: Callable | None = None
     pose: dict | None = None
+    fit_kw: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -623,11 +627,21 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     image_sides=True, spread=None if spread is None else spread[:n],
                     track=None if track is None else track[:n],
                     model_height=None if res.model_height is None else res.model_height[:n],
-                    body=BodyModel(height=height), size=size,
+                    body=res.body or BodyModel(height=height), size=size,
+                    fit_kw=_fit_keywords(res.proportions),
                     resegment=_resegmenter(video, cache_dir, log),
                     pose={"joints2d": joints2d[:n], "scores": res.scores[:n],
                           "similarity": res.similarity[:n], "spread": spread[:n],
                           "model_height": res.model_height[:n]})
+
+
+def _fit_keywords(proportions) -> dict:
+    """The 2D fit's ``body``/``foot`` keywords for a run's proportions (None: the seed's)."""
+    if proportions is None:
+        return {}
+    from vidcap.video.fit.proportions import fit_keywords
+
+    return fit_keywords(proportions.factors)
 
 
 def _file_regions(path, video: Path):

@@ -79,7 +79,7 @@ def _swap(arrays: dict, swaps: dict) -> dict:
 
 
 def refit_changed(masks: MaskStack, pose: dict, changed, *, progress=None,
-                  whole_share: float = WHOLE_CLIP_SHARE) -> dict:
+                  whole_share: float = WHOLE_CLIP_SHARE, fit_kw: dict | None = None) -> dict:
     """The 2D pose ``pose`` refitted (in this process) where the silhouettes changed.
 
     Parameters
@@ -97,6 +97,11 @@ def refit_changed(masks: MaskStack, pose: dict, changed, *, progress=None,
     whole_share : float
         When the refit windows would cover more than this share of the clip, the
         whole clip is refitted (as ``vidcap convert`` would).
+    fit_kw : dict, optional
+        The body the old fit used (``body`` and ``foot`` of :func:`fit_sequence`, e.g.
+        :func:`vidcap.video.fit.proportions.fit_keywords` of the run's proportions;
+        default: the seed's); ``model_height`` is then head top to ankles, as the
+        pipeline keeps it.
 
     Returns
     -------
@@ -121,8 +126,9 @@ def refit_changed(masks: MaskStack, pose: dict, changed, *, progress=None,
                 if progress is not None:
                     progress(base + i + 1, grand)
 
-        new = fit_sequence(masks[start:end], progress=report).arrays()
+        new = fit_sequence(masks[start:end], progress=report, **(fit_kw or {})).arrays()
         new = {k: np.asarray(new[k]) for k in POSE_KEYS}
+        new["model_height"] = new["model_height"] * (1.0 - (fit_kw or {}).get("foot", 0.0))
         same = ~changed[start:end]  # frames the old fit saw the same silhouette in
         if same.any() and (start, end) != (0, n):
             new = _swap(new, reconcile_labels({"joints2d": out["joints2d"][start:end][same]},
