@@ -131,8 +131,7 @@ def run(
         The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
         seed's per-segment lift (:func:`vidcap.video.lift.lift`).
     proportions : {'human', 'seed', 'auto'}
-        A real adult's (the default, :data:`DEFAULT_PROPORTIONS`), the seed's ratios, or
-        the subject's estimated from the clip (:func:`_fit_stage`).
+        A real adult's (:data:`DEFAULT_PROPORTIONS`), the seed's, the subject's (``_fit_stage``).
     cues : {'outline', 'all'}
         The 2D fit reads the silhouette only, or the frame's cues inside it too.
 
@@ -161,8 +160,7 @@ def run(
     k_sil = _silhouette_key(ident, k_plate, region_cache_part(ann))
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
-    fit_kw = _fixed_body_keywords(proportions)
-    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues, fit_kw)
+    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues, proportions)
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
@@ -171,8 +169,7 @@ def run(
         if plate_notice(plate):
             log(plate_notice(plate))
         with _timed(timings, "silhouettes"):
-            streamed, crops = _streamed_fit(pool, info.n_frames or 0, jobs, per_job, cues,
-                                            fit_kw)
+            streamed, crops = _streamed_fit(pool, info.n_frames, jobs, per_job, cues, proportions)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
                                     progress=progress, regions=_regions(ann, plate))
         _report_silhouettes(sil, info.n_frames, log)
@@ -263,19 +260,19 @@ def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
     _check_choice("cues", cues, tuple(CUE_MODES))
 
 
-def _streamed_fit(pool, n_frames: int, jobs: int, per_job: int, cues: str,
-                  fit_kw: dict | None = None):
+def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,
+                  proportions: str = "seed"):
     """The :class:`vidcap.video.fit.parallel.StreamedFit` that fits each chunk of frames as
     soon as its silhouettes are there (None without ``pool``), and the
     :class:`vidcap.video.fit.cueframes.FrameCrops` to fill with the colour crops the cues
-    read as the silhouettes are extracted (None for ``cues='outline'``). ``fit_kw``: the
-    fit's body keywords (:func:`_fixed_body_keywords`)."""
+    read as the silhouettes are extracted (None for ``cues='outline'``). ``proportions``:
+    the fit's body (:func:`_fixed_body_keywords`); ``n_frames`` None: 0 (not known)."""
     from vidcap.video.fit.cueframes import FrameCrops
     from vidcap.video.fit.parallel import StreamedFit
 
     streamed = (None if pool is None
-                else StreamedFit(pool, n_frames, jobs=jobs, per_job=per_job, cues=cues,
-                                 **(fit_kw or {})))
+                else StreamedFit(pool, n_frames or 0, jobs=jobs, per_job=per_job, cues=cues,
+                                 **_fixed_body_keywords(proportions)))
     return streamed, (FrameCrops() if cues == "all" else None)
 
 
@@ -316,7 +313,7 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
 
 
 def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
-                       per_job: int, cues: str = DEFAULT_CUES, fit_kw: dict | None = None):
+                       per_job: int, cues: str = DEFAULT_CUES, proportions: str = "seed"):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
     plate and extracts the silhouettes; None when the fit is serial or cached."""
@@ -325,7 +322,8 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
     expected = chunk_bounds(n_frames, jobs, per_job=per_job)
     if len(expected) < 2:
         return None
-    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues, fit_kw))
+    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues,
+                                               _fixed_body_keywords(proportions)))
     if pose_path and pose_path.exists():
         return None
     return FitPool(min(jobs, len(expected)))
