@@ -82,7 +82,8 @@ def validation_clips(body):
         def make(video=video, truth_path=truth_path):
             t = dict(np.load(truth_path))
             res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
-                      cache_dir=ROOT / ".vidcap-cache", lift="segment")
+                      cache_dir=ROOT / ".vidcap-cache", lift="segment",
+                      proportions="seed")  # the samples are renders of the seed's body
             return dict(joints2d=res.image_joints2d, spread=res.spread,
                         model_height=res.model_height, track=res.track,
                         true3=truth_in_camera_frame(t), true2=t["joints2d"],
