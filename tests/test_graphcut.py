@@ -98,7 +98,9 @@ def test_the_plate_stage_learns_the_colours_and_the_cut_helps_an_in_place_clip()
     assert bg.colours[0, red] > bg.colours[1, red] + 2    # the torso's red is the person's
     plain = _iou(extract_silhouettes(frames, bg, progress=False).masks, masks)
     cut = _iou(extract_silhouettes(frames, bg, graph_cut=True, progress=False).masks, masks)
-    assert np.median(cut) >= np.median(plain) and cut.min() > plain.min() + 0.05
+    # (the plate's retake of absorbed pixels, vidcap/video/absorbed.py, lifted the plain
+    # worst frame 0.64 -> 0.76: the cut's margin there is 0.04 now)
+    assert np.median(cut) >= np.median(plain) and cut.min() > plain.min() + 0.03
 
 
 def test_the_cut_without_colour_models_is_refused_not_skipped():

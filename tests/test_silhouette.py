@@ -225,3 +225,25 @@ def test_blurred_outline_is_decided_by_the_persons_own_contrast():
     # A lower share keeps more of the band, never less than the half test.
     low = extract_silhouettes(frames, bg, edge_fraction=0.2)
     assert (low.areas >= ours.areas).all() and (low.areas <= plain.areas).all()
+
+
+def test_a_person_cut_in_two_by_a_plate_error_stays_whole():
+    """A band of the person the plate absorbed (a leg's colour where it stands most)
+    splits torso and legs into two blobs of similar size: both are the person (a gap
+    under a twentieth of the height), also when the previous frame's box covers only
+    the legs; a blob further away is not."""
+    from vidcap.video.silhouette import _params_for, silhouette_frame
+
+    plate = np.full((200, 160, 3), 128, np.uint8)
+    frame = plate.copy()
+    frame[10:90, 60:90] = (30, 30, 200)    # torso, 80 rows
+    frame[90:93, 60:90] = 128              # the absorbed band: a 3-pixel gap
+    frame[93:180, 64:86] = (200, 60, 30)   # legs
+    frame[60:100, 120:135] = (30, 200, 30)  # something else, 34 px away
+    bg = BackgroundModel.from_plate(plate, noise_sigma=1.0)
+    p = _params_for(bg, frame[None], None, 3.0, True, None, 0.2, None)
+    for prev in (None, np.array([64, 93, 86, 180])):
+        r, _ = silhouette_frame(frame, p, prev)
+        assert r.mask[12:88, 62:88].all() and r.mask[95:178, 66:84].all()
+        assert not r.mask[60:100, 120:135].any()
+        assert len(r.others) == 1

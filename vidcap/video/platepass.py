@@ -62,10 +62,12 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
     -------
     vidcap.video.background.BackgroundModel
     """
+    from vidcap.video.absorbed import retake_absorbed
     from vidcap.video.appearance import appearance_plate
 
     model = _with_self_lit(model, frames, gains, small_hw)
     model = appearance_plate(model, frames, gains)
+    model = retake_absorbed(model, frames, gains)
     model = _second_pass(model, frames, gains)
     if still_parts:
         model = _with_still_parts(model, frames, gains, small_hw)

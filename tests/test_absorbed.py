@@ -1,0 +1,68 @@
+"""Plate pixels that show the person although the scene was seen there (issue 26,
+vidcap/video/absorbed.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video.absorbed import retake_absorbed
+from vidcap.video.background import BackgroundModel
+
+RED, BLUE = (40, 45, 190), (150, 60, 30)
+GREY, LIGHT = (110, 120, 115), (150, 160, 150)
+
+
+def _scene(h=120, w=160):
+    xs = np.arange(w)
+    out = np.zeros((h, w, 3), np.uint8)
+    out[:] = np.where((xs // 8 % 2 == 0)[None, :, None], GREY, LIGHT)
+    return out
+
+
+def _stepping(n=20, seed=0):
+    """A red torso swaying a few pixels; its blue leg stands at x 70-82 in all
+    samples but every fifth, when it steps to x 90-102. Returns frames, the scene and
+    the plate a majority vote gives (the leg where it stands most)."""
+    rng = np.random.default_rng(seed)
+    scene = _scene()
+    frames = []
+    for t in range(n):
+        f = scene.copy()
+        dx = int(round(4 * np.sin(2 * np.pi * t / 7)))
+        f[30:70, 68 + dx:100 + dx] = RED
+        x0 = 90 if t % 5 == 0 else 70
+        f[70:110, x0:x0 + 12] = BLUE
+        frames.append(np.clip(f + rng.normal(0, 2, f.shape), 0, 255).astype(np.uint8))
+    plate = scene.copy()
+    plate[70:110, 70:82] = BLUE
+    return np.array(frames), scene, plate
+
+
+def test_a_leg_the_plate_absorbed_is_retaken_from_the_samples_that_show_the_floor():
+    frames, scene, plate = _stepping()
+    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    err = np.abs(again.plate.astype(int) - scene.astype(int)).sum(-1)
+    assert np.median(err[72:108, 72:80]) < 12  # the floor, not the leg
+    before = np.abs(plate.astype(int) - scene.astype(int)).sum(-1)
+    outside = np.ones(err.shape, bool)
+    outside[65:115, 60:110] = False
+    assert (err[outside] == before[outside]).all()  # nothing else changes
+
+
+def test_a_scene_the_colour_of_the_person_that_never_shows_otherwise_stays():
+    """A blue block of the scene right beside where the leg steps (inside the motion
+    footprint; every sample shows it) keeps its colour: no sample shows anything else
+    there."""
+    frames, scene, _ = _stepping()
+    scene[70:110, 104:116] = BLUE
+    frames[:, 70:110, 104:116] = BLUE
+    model = BackgroundModel.from_plate(scene, noise_sigma=2.0)
+    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    assert (again.plate[70:110, 104:116] == BLUE).all()
+
+
+def test_too_few_samples_leave_the_plate_alone():
+    frames, _, plate = _stepping(n=3)
+    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    assert retake_absorbed(model, frames, np.ones((3, 3), np.float32)) is model
