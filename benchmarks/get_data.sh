@@ -199,6 +199,73 @@ if [ -d "$MIRROR/perfanalytics+pose2sim/repo" ]; then
         "$P2S:Pose2Sim/Demo_SinglePerson/calibration/Calib.qca.txt" > "$LIFT/Calib.qca.txt"
 fi
 
+# CMU 02_05, 02_06, 02_09 (in place) for silhouettes_real.py's validation renders: the
+# pose prior's iClone files ($VIDCAP_DATA/mocap/cmu_iclone, see benchmarks/DATA.md) with
+# the 15 mapped joints renamed to HumanIK names and the face under the head replaced by
+# an end site 18 cm up the head (the head top; the face's motion columns dropped).
+ICL="$DATA/../mocap/cmu_iclone"
+if [ -f "$ICL/002_05.bvh" ]; then
+    mkdir -p "$DATA/../mocap/cmu_iclone_humanik"
+    for t in 002_05 002_06 002_09; do
+        python - "$ICL/$t.bvh" "$DATA/../mocap/cmu_iclone_humanik/${t}_humanik.bvh" <<'PY'
+import re
+import sys
+
+NAMES = {"CC_Base_Hip": "Hips", "CC_Base_NeckTwist01": "Neck", "CC_Base_Head": "Head",
+         "CC_Base_L_Upperarm": "LeftArm", "CC_Base_L_Forearm": "LeftForeArm",
+         "CC_Base_L_Hand": "LeftHand", "CC_Base_R_Upperarm": "RightArm",
+         "CC_Base_R_Forearm": "RightForeArm", "CC_Base_R_Hand": "RightHand",
+         "CC_Base_L_Thigh": "LeftUpLeg", "CC_Base_L_Calf": "LeftLeg", "CC_Base_L_Foot": "LeftFoot",
+         "CC_Base_R_Thigh": "RightUpLeg", "CC_Base_R_Calf": "RightLeg",
+         "CC_Base_R_Foot": "RightFoot"}
+src, dst = sys.argv[1], sys.argv[2]
+hier, motion = open(src).read().split("MOTION", 1)
+lines = hier.splitlines()
+out, cols, col, skip_depth, depth = [], [], 0, None, 0
+i = 0
+while i < len(lines):
+    ln = lines[i]
+    s = ln.strip()
+    if skip_depth is None and s.startswith("JOINT CC_Base_FacialBone"):
+        # the face (jaw, tongue, eyes): replaced by the head top, 18 cm up the head
+        ind = ln[:len(ln) - len(ln.lstrip())]
+        out += [f"{ind}End Site", f"{ind}{{", f"{ind}    OFFSET 0.000000 18.000000 0.000000",
+                f"{ind}}}"]
+        skip_depth = depth
+    if s.startswith("{"):
+        depth += 1
+    elif s.startswith("}"):
+        depth -= 1
+    if s.startswith("CHANNELS"):
+        n = int(s.split()[1])
+        if skip_depth is None:
+            cols += list(range(col, col + n))
+        col += n
+    if skip_depth is not None:
+        if s.startswith("}") and depth == skip_depth:
+            skip_depth = None
+        i += 1
+        continue
+    m = re.match(r"^(\s*(?:ROOT|JOINT) )(\w+)", ln)
+    if m and m.group(2) in NAMES:
+        ln = m.group(1) + NAMES[m.group(2)]
+    out.append(ln)
+    i += 1
+mlines = motion.strip("\n").splitlines()
+head, data = mlines[:2], mlines[2:]
+rows = []
+for r in data:
+    v = r.split()
+    assert len(v) == col, (len(v), col)
+    rows.append(" ".join(v[c] for c in cols))
+open(dst, "w").write("\n".join(out) + "\nMOTION\n" + "\n".join(head) + "\n" + "\n".join(rows) + "\n")
+print(dst, len(rows), "frames,", len(cols), "of", col, "channels")
+PY
+    done
+else
+    echo "skip the 02_0x renders' motions: $ICL/002_05.bvh missing (see benchmarks/DATA.md)" >&2
+fi
+
 # MediaPipe references (person masks + landmarks), with the reference tool's own python
 # (set NO_MEDIAPIPE=1 to skip):
 MP_PY=/root/.cache/vidcap-mediapipe-reference/bin/python
