@@ -66,3 +66,23 @@ def test_too_few_samples_leave_the_plate_alone():
     frames, _, plate = _stepping(n=3)
     model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
     assert retake_absorbed(model, frames, np.ones((3, 3), np.float32)) is model
+
+
+def test_a_never_seen_flag_over_where_the_scene_shows_is_lifted_and_the_torso_kept():
+    """The never-seen flag covers the torso (red in every sample) and spread beside it
+    where the samples show the scene in all but a few: that part is re-taken and
+    un-flagged, the torso stays flagged with its plate untouched."""
+    from dataclasses import replace
+
+    frames, scene, plate = _stepping()
+    guess = plate.copy()
+    guess[30:70, 60:110] = (128, 128, 128)  # an inpainted guess over the whole flag
+    never = np.zeros(scene.shape[:2], bool)
+    never[30:70, 60:110] = True  # the torso sways over x 64-104
+    model = replace(BackgroundModel.from_plate(guess, noise_sigma=2.0), never_seen=never)
+    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    assert again.never_seen[32:68, 74:94].all()  # the torso: red in every sample
+    assert (again.plate[32:68, 74:94] == 128).all()
+    assert not again.never_seen[32:68, 60:62].any()  # beside it: the scene shows
+    err = np.abs(again.plate.astype(int) - scene.astype(int)).sum(-1)
+    assert np.median(err[32:68, 60:62]) < 12
