@@ -9,6 +9,10 @@ sampled frames:
   would differ in every frame without ever moving and be taken for a person. They
   are found (:func:`vidcap.video.stillparts.self_lit`), their plate is the median as
   recorded, and the silhouette stage compares them unscaled.
+* **Pixels the plate took from the person although the scene was seen there**
+  (:mod:`vidcap.video.absorbed`: a leg that stands on the same floorboards in most
+  samples), after the appearance pass, re-taken from the samples that show the scene's
+  colours there.
 * **Plate, person, plate again.** The silhouettes of the samples are extracted with
   the first plate; each pixel's plate is then re-taken from the samples in which
   it lies outside the (dilated) person. A pixel the vote or the never-seen
@@ -36,8 +40,8 @@ PERSON_MARGIN = 0.02
 
 def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
                  still_parts: bool = False, colour_models: bool = False) -> object:
-    """Self-lit pixels, then one plate -> person -> plate pass (then, when asked, the
-    still parts of the person by appearance).
+    """Self-lit pixels, the appearance pass, absorbed pixels re-taken, then one plate ->
+    person -> plate pass (then, when asked, the still parts of the person by appearance).
 
     Parameters
     ----------
