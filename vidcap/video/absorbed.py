@@ -110,14 +110,19 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     if not ok.any():
         return model
     seen &= ok[None]
-    again = robust_plate(frames, gains, np.stack([wk.up(x) for x in seen]))
     take = wk.up(ok) > 0
-    far = np.abs(again.astype(np.int16) - model.plate.astype(np.int16)).sum(axis=-1)
-    take &= far > model.threshold
+    # (the medians only inside the box of what is re-taken: the footprint is small
+    # next to a large frame)
+    x, y, w, h = cv2.boundingRect(take.view(np.uint8))
+    box = (slice(y, y + h), slice(x, x + w))
+    masks = np.stack([wk.up(m)[box] for m in seen])
+    again = robust_plate(np.ascontiguousarray(frames[:, box[0], box[1]]), gains, masks)
+    far = np.abs(again.astype(np.int16) - model.plate[box].astype(np.int16)).sum(axis=-1)
+    take[box] &= far > model.threshold
     if not take.any():
         return model
     plate = model.plate.copy()
-    plate[take] = again[take]
+    plate[box][take[box]] = again[take[box]]
     hh, ww = wk.full
     cnt = cv2.resize(count.astype(np.float32), (ww, hh), interpolation=cv2.INTER_NEAREST)
     conf = np.where(take, cnt / k, model.confidence).astype(np.float32)
