@@ -15,6 +15,7 @@ the reference measured in the same run. Reported: wall and CPU seconds (children
 system), best of ``--repeat``.
 
 Run:  VIDCAP_DATA=/work/data python benchmarks/convert_real_speed.py [--ref TREE] [--repeat 2]
+      [--graph-cut-too]
 """
 
 from __future__ import annotations
@@ -59,15 +60,18 @@ def make_lab_sized_clip(source: Path, out: Path) -> None:
         container.mux(stream.encode())
 
 
-def timed_convert(tree: Path, clip: Path, out_dir: Path) -> tuple[float, float, int]:
-    """Wall s, children's CPU s and exit code of one `vidcap convert` from ``tree``."""
+def timed_convert(tree: Path, clip: Path, out_dir: Path,
+                  extra: tuple[str, ...] = ()) -> tuple[float, float, int]:
+    """Wall s, children's CPU s and exit code of one `vidcap convert` from ``tree``
+    (with the options ``extra``)."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
     out = out_dir / f"{clip.stem}.bvh"
     out.unlink(missing_ok=True)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     run = subprocess.run([sys.executable, "-m", "vidcap", "convert", str(clip), "-o", str(out),
-                          "--no-cache"], cwd=out_dir, env=env, capture_output=True, text=True)
+                          "--no-cache", *extra], cwd=out_dir, env=env, capture_output=True,
+                         text=True)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -82,6 +86,8 @@ def main(argv=None):
                     help="another vidcap checkout to time in the same run (before/after)")
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--only", default=None, help="only clips whose name contains this")
+    ap.add_argument("--graph-cut-too", action="store_true",
+                    help="also time this checkout with --graph-cut (the silhouettes' graph cut)")
     args = ap.parse_args(argv)
     data = os.environ.get("VIDCAP_DATA")
     if not data or not (Path(data) / "video" / "onebyone_room.mp4").exists():
@@ -89,8 +95,10 @@ def main(argv=None):
               "(see benchmarks/DATA.md)")
         return 0
     video_dir = Path(data) / "video"
-    trees = [("this checkout", ROOT)] + ([("ref " + str(args.ref), args.ref.resolve())]
-                                         if args.ref else [])
+    trees = [("this checkout", ROOT, ())] + (
+        [("this checkout --graph-cut", ROOT, ("--graph-cut",))]
+        if args.graph_cut_too else []) + (
+        [("ref " + str(args.ref), args.ref.resolve(), ())] if args.ref else [])
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
         lab = d / "onebyone_1000x1000_394.mp4"
@@ -107,13 +115,13 @@ def main(argv=None):
             for frame in iter_frames(clip):
                 n, shape = n + 1, frame.shape
             t_decode = time.perf_counter() - t0
-            best = {name: (float("inf"), float("inf"), 0) for name, _ in trees}
+            best = {name: (float("inf"), float("inf"), 0) for name, _, _ in trees}
             for _ in range(args.repeat):
-                for name, tree in trees:
-                    wall, cpu, rc = timed_convert(tree, clip, d)
+                for name, tree, extra in trees:
+                    wall, cpu, rc = timed_convert(tree, clip, d, extra)
                     if wall < best[name][0]:
                         best[name] = (wall, cpu, rc)
-            for name, _ in trees:
+            for name, _, _ in trees:
                 wall, cpu, rc = best[name]
                 note = "" if rc == 0 else f" (exit {rc})"
                 print(f"{clip.name} | {n} | {shape[1]}x{shape[0]} | {t_decode:.2f} | {name} | "

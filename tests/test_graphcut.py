@@ -115,3 +115,162 @@ def test_the_cut_without_colour_models_is_refused_not_skipped():
     assert bg.colours is None
     with pytest.raises(ValueError, match="colour_models=True"):
         extract_silhouettes(frames, bg, graph_cut=True, progress=False)
+
+
+def test_the_stage_cache_keeps_the_colour_models_and_the_cut_is_used(tmp_path):
+    """The pipeline's plate and silhouette stages with ``graph_cut``: the plate entry
+    keeps the colour models (its own key: the plain entry stays), the silhouettes are
+    the cut's (the torso the plate absorbed is recovered), and a second call reads
+    both stages from the cache."""
+    from tests.test_appearance import _in_place, _iou
+    from vidcap.io.video import write_video
+    from vidcap.video.annotations import Annotations
+    from vidcap.video.pipeline import silhouettes_only
+
+    frames, masks = _in_place()
+    video = tmp_path / "still.mkv"
+    write_video(video, frames, 25, crf=12)
+    cache = tmp_path / "cache"
+    said = []
+    plain = silhouettes_only(video, Annotations(), cache_dir=cache, graph_cut=False)
+    cut = silhouettes_only(video, Annotations(), cache_dir=cache, graph_cut=True,
+                           log=said.append)
+    assert not any("skipped" in m for m in said), said
+    plates = sorted(cache.glob("plate-*.npz"))
+    assert len(plates) == 2 and len(list(cache.glob("silhouettes-*.npz"))) == 2
+    with_colours = [p for p in plates if "colours" in np.load(p).files]
+    assert len(with_colours) == 1 and np.load(with_colours[0])["colours"].shape == (2, 4096)
+    iou_plain, iou_cut = _iou(plain.masks[:], masks), _iou(cut.masks[:], masks)
+    assert np.median(iou_cut) >= np.median(iou_plain) and iou_cut.min() > iou_plain.min()
+    said.clear()
+    again = silhouettes_only(video, Annotations(), cache_dir=cache, graph_cut=True,
+                             log=said.append)
+    assert not any("estimating" in m for m in said)
+    np.testing.assert_array_equal(again.masks[:], cut.masks[:])
+
+
+def test_convert_with_graph_cut_runs_the_cut_and_without_it_does_not(tmp_path, monkeypatch):
+    """``run(graph_cut=True)`` (``vidcap convert --graph-cut``) asks the silhouette stage
+    for the cut on a plate with colour models; ``graph_cut=False`` does not; a given
+    plate falls back to the plain threshold with a notice."""
+    import cv2
+
+    from tests._synthframes import background, figure_mask
+    from vidcap.io.video import write_video
+    from vidcap.video import pipeline, silhouette
+
+    rng = np.random.default_rng(3)
+    h, w, n = 120, 160, 16
+    bg = background(h, w, rng)
+    frames = [np.where((figure_mask(h, w, 2 * np.pi * i / 12, cx=(0.3 + 0.4 * i / n) * w)
+                        > 0)[..., None], np.uint8([40, 50, 160]), bg) for i in range(n)]
+    video = tmp_path / "walk.mp4"
+    write_video(video, frames, 12.0)
+    asked = []
+    real = silhouette.extract_silhouettes
+
+    class Seen(Exception):
+        pass
+
+    def spy(source, plate, **kw):  # the stage's call, then stop (the fit is not under test)
+        cut = real(source, plate, **kw)
+        asked.append((kw.get("graph_cut", False), getattr(plate, "colours", None) is not None,
+                      cut.masks[:].sum()))
+        raise Seen
+
+    monkeypatch.setattr(silhouette, "extract_silhouettes", spy)
+    for flag in (True, False):
+        with pytest.raises(Seen):
+            pipeline.run(video, progress=False, graph_cut=flag, jobs=1)
+    assert [a[:2] for a in asked] == [(True, True), (False, False)]
+    assert asked[0][2] > 0.5 * asked[1][2]  # (the cut keeps the walker)
+    plate = tmp_path / "plate.png"
+    cv2.imwrite(str(plate), bg)
+    said = []
+    with pytest.raises(Seen):
+        pipeline.run(video, progress=False, graph_cut=True, jobs=1, background=plate,
+                     log=said.append)
+    assert asked[-1][:2] == (False, False) and any("graph cut" in m for m in said)
+
+
+def test_convert_command_flag_and_default_agree_with_the_pipeline():
+    import argparse
+
+    from vidcap.commands import convert as convert_cmd
+    from vidcap.video import pipeline
+
+    assert convert_cmd.DEFAULT_GRAPH_CUT == pipeline.DEFAULT_GRAPH_CUT
+    ap = argparse.ArgumentParser()
+    convert_cmd.add_arguments(ap)
+    assert ap.parse_args(["v.mp4", "-o", "o.bvh", "--graph-cut"]).graph_cut is True
+    assert ap.parse_args(["v.mp4", "-o", "o.bvh", "--no-graph-cut"]).graph_cut is False
+    assert ap.parse_args(["v.mp4", "-o", "o.bvh"]).graph_cut is None  # the pipeline's default
+
+
+def test_lost_share_counts_the_seen_part_of_the_plain_blob_the_cut_leaves_out():
+    import cv2
+
+    from vidcap.video.graphcut import _lost_share
+
+    fg = np.zeros((40, 40), np.uint8)
+    fg[10:20, 10:20] = 255
+    plain = max(cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)[0],
+                key=cv2.contourArea)
+    cut = fg[5:35, 5:35].copy()                     # a crop at (5, 5)
+    cut[5 + 4:5 + 5] = 0                            # the row y = 14 cut away ...
+    never = np.zeros(cut.shape, bool)
+    # ... leaving rows 15-19 (50 px) as the largest blob: rows 10-14 (50 of 100) lost
+    assert _lost_share(plain, cut, never, (5, 5)) == pytest.approx(0.5)
+    never[5:10] = True                              # rows 10-14 never seen: not counted
+    assert _lost_share(plain, cut, never, (5, 5)) == pytest.approx(0.0)
+
+
+def test_a_cut_that_breaks_the_person_in_two_keeps_the_plain_frame(monkeypatch):
+    """A waist the scene's colour that differs from the plate by nothing (a shadow
+    test's pixels): the cut takes it for the scene and splits the person; the larger
+    half keeps under LOST_MAX of the plain blob, so the frame stays as thresholded."""
+    import vidcap.video.graphcut as gc
+
+    rng = np.random.default_rng(4)
+    scene = _scene()
+    frame = scene.copy()
+    fgm = np.zeros(scene.shape[:2], bool)
+    fgm[10:30, 40:60] = True                        # chest
+    fgm[34:56, 40:60] = True                        # legs
+    waist = np.zeros_like(fgm)
+    waist[30:34, 48:52] = True                      # a narrow waist (in the band)
+    frame[fgm] = RED
+    frame[waist] = GREENS[0]
+    frame = np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+    l1 = np.where(fgm, 200, 0).astype(np.uint8)     # the waist: no difference
+    tmap = np.full(fgm.shape, 30, np.uint8)
+    fg = np.where(fgm | waist, 255, 0).astype(np.uint8)
+    never = np.zeros_like(fgm)
+    models = _models(scene, rng)
+    out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, never))
+    np.testing.assert_array_equal(out, fg)
+    monkeypatch.setattr(gc, "LOST_MAX", 1.0)        # without the guard: cut in two
+    out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, never))
+    assert not out[waist].any() and out[fgm].mean() > 250
+
+
+def test_an_interrupt_inside_a_compiled_kernel_comes_out_as_keyboard_interrupt():
+    """Python reports a Ctrl-C handled while numba boxes a kernel's results as a
+    SystemError caused by the KeyboardInterrupt; the cut raises the interrupt itself
+    (vidcap.interrupt's exit 130), and other errors as they are."""
+    from vidcap.video.graphcut import _compiled
+
+    def interrupted():
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("returned a result with an exception set") from exc
+
+    def broken():
+        raise SystemError("something else")
+
+    with pytest.raises(KeyboardInterrupt):
+        _compiled(interrupted)
+    with pytest.raises(SystemError, match="something else"):
+        _compiled(broken)
+    assert _compiled(lambda a, b: a + b, 2, 3) == 5

@@ -118,7 +118,8 @@ class VideoMotion:
 def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None = None,
             height: float = 1.75, view: str = "auto", jobs: int | None = None,
             progress: bool = False, cues: str | None = None,
-            proportions: str | None = None) -> VideoMotion:
+            proportions: str | None = None,
+            graph_cut: bool | None = None) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -145,6 +146,10 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         The body fitted, lifted and written: a real adult's (``'human'``), the seed's
         Table 3.1/3.2 ratios, or the subject's estimated from the clip; default
         :data:`vidcap.video.pipeline.DEFAULT_PROPORTIONS`.
+    graph_cut : bool, optional
+        Re-decide a band round the person by a graph cut on the clip's colours
+        (``vidcap convert --graph-cut``); default
+        :data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`.
 
     Returns
     -------
@@ -168,7 +173,8 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
     check_convert_options(height=height, jobs=jobs, view=view, cues=cues,
                           proportions=proportions)
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
-              progress=progress, cues=cues, proportions=proportions)
+              progress=progress, cues=cues, proportions=proportions,
+              graph_cut=graph_cut)
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))

@@ -36,6 +36,9 @@ DEFAULT_CUES = "outline"
 #: ``--proportions`` default (:data:`vidcap.video.pipeline.DEFAULT_PROPORTIONS`, spelled
 #: here for a light ``--help``; a test checks they agree).
 DEFAULT_PROPORTIONS = "human"
+#: ``--graph-cut`` default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`, spelled here
+#: for a light ``--help``; a test checks they agree).
+DEFAULT_GRAPH_CUT = False
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
 
@@ -95,6 +98,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "2D fit done again with them); the 2D fit, the lift and the skeleton "
                         "use them (--height stays the standing height)")
     add_cues_argument(parser)
+    parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
+                        help="re-decide a band round the person (and the parts of the scene "
+                        "never seen uncovered) by a graph cut on the clip's person and scene "
+                        "colours (the plate stage learns them); better on the in-place "
+                        "renders and most clips scored against MediaPipe, worse on most real "
+                        "clips with true masks (benchmarks/RESULTS.md, Silhouettes); not "
+                        "with --background. Default: "
+                        + ("on" if DEFAULT_GRAPH_CUT else "off"))
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "
                         "signs, orientation and scores")
@@ -123,7 +134,7 @@ def run(args) -> int:
         annotations=args.annotations, background=args.background, height=args.height,
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
         view=args.view, rig=args.rig, lift=args.lift, proportions=args.proportions,
-        cues=cues,
+        cues=cues, graph_cut=args.graph_cut,
     )
     if not args.quiet:
         lr = res.lifted

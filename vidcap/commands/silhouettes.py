@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -29,10 +30,11 @@ def add_arguments(parser) -> None:
                         help="frames sampled for the background (default 24)")
     parser.add_argument("--no-shadows", action="store_true",
                         help="do not suppress shadows")
-    parser.add_argument("--graph-cut", action="store_true",
-                        help="experimental: re-decide a band round the person by a graph cut "
-                             "on the clip's colours (better on most in-place clips, worse on "
-                             "some real ones, ~2.5x slower; see benchmarks/RESULTS.md)")
+    parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
+                        help="re-decide a band round the person by a graph cut on the clip's "
+                             "colours (default as in vidcap convert: off; better on the in-place "
+                             "renders, worse on most real clips with true masks; see "
+                             "benchmarks/RESULTS.md); needs the estimated felzenszwalb plate")
     parser.add_argument("--plate-out", type=Path, metavar="PNG",
                         help="also write the background plate as an image")
 
@@ -53,10 +55,15 @@ def run(args) -> int:
         raise UsageError(f"--threshold must be in (0, 765), got {args.threshold}")
     if args.samples < 2:
         raise UsageError("--samples must be at least 2")
-    if args.graph_cut and (args.background is not None or args.method != "felzenszwalb"):
+    from vidcap.video.pipeline import DEFAULT_GRAPH_CUT
+
+    graph_cut = DEFAULT_GRAPH_CUT if args.graph_cut is None else args.graph_cut
+    if graph_cut and (args.background is not None or args.method != "felzenszwalb"):
         # the cut's colour models are learnt by the plate stage's own estimate
-        raise UsageError("--graph-cut needs the estimated plate (not --background, not "
-                         "--method median)")
+        if args.graph_cut:
+            raise UsageError("--graph-cut needs the estimated plate (not --background, not "
+                             "--method median)")
+        graph_cut = False
     info = probe(args.video)
     if args.background is not None:
         bg = load_plate(args.background)
@@ -66,9 +73,10 @@ def run(args) -> int:
                 f"video is {info.width}x{info.height}", args.background)
     else:
         bg = estimate_background(args.video, method=args.method, n_samples=args.samples,
-                                 colour_models=args.graph_cut)
+                                 colour_models=graph_cut)
     sil = extract_silhouettes(args.video, bg, threshold=args.threshold,
-                              shadows=not args.no_shadows, graph_cut=args.graph_cut)
+                              shadows=not args.no_shadows,
+                              graph_cut=graph_cut and bg.colours is not None)
     savez_atomic(
         args.output, masks=sil.masks, bbox=sil.bbox, heights=sil.heights, areas=sil.areas,
         found=sil.found, n_other_blobs=sil.n_other_blobs, others=sil.others,

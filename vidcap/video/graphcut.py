@@ -22,16 +22,20 @@ outside the band keep the threshold's decision; their links are folded into the
 band pixels' terminal links, so the graph is the band (the outline and the
 never-seen parts the person's crop touches), not the frame.
 
-Opt-in (``extract_silhouettes(..., graph_cut=True)``;
+Opt-in (``extract_silhouettes(..., graph_cut=True)``; ``vidcap silhouettes
+--graph-cut``, ``vidcap convert --graph-cut``;
 ``benchmarks/silhouettes_real.py --graph-cut``). Tuning clips, median IoU without ->
 with (main f5880ab's silhouettes): jacks side 0.884 -> 0.917, jacks 3/4 0.902 ->
 0.915, arms 3/4 0.890 -> 0.902, arms side 0.980 -> 0.987, arms front 0.920 -> 0.920,
 ido_walk 0.921 -> 0.922, sports2d_walk_turn 0.846 -> 0.849 (vs MediaPipe), but
 pose2sim cam1 (vs MediaPipe's masks) 0.347 -> 0.317: its never-seen area holds a
-wall the colour of the subject's skin, which the colour term fills in. It costs
-time: the silhouette stage at 640x480 takes 4.0 ms of CPU a frame with it, 1.6
-without (benchmarks/silhouette_speed.py's clip; half of the cut is the maxflow, a
-third the frame's scene histogram).
+wall the colour of the subject's skin, which the colour term fills in.
+
+Speed: the band, its data terms, the scene's histogram and the links are one compiled
+pass over the crop each (:mod:`vidcap.video._graphcut_kernels`); as whole-array numpy
+calls (some sixty a frame on crops of a few thousand pixels) the call overhead, not
+the flow, was the cost: 3.4 -> 0.9 ms of CPU a frame on benchmarks/silhouette_speed.py's
+walker at 640x480 (work 320x240), the same masks bit for bit.
 """
 
 from __future__ import annotations
@@ -63,6 +67,13 @@ WITH_NEVER = True
 LOCAL_SCENE = 1.0
 #: Weight of the pairwise (smoothness) term.
 SMOOTH = 1.0
+#: A frame whose cut leaves out more than this share of the plain foreground's largest
+#: blob (where the plate was seen) keeps the plain foreground: the cut has broken the
+#: person up (a dark waist taken for the hedge behind it, sports2d_run, which cut the
+#: runner in two; then a false blob was followed, pose2sim cam4). Chosen on the tuning
+#: rows (median IoU flat for 0.40-0.50 on all of them; the in-place renders' cut
+#: legitimately drops up to 0.33 of it, 90th percentile, jacks side).
+LOST_MAX = 0.45
 
 
 
@@ -145,13 +156,6 @@ class CutParams:
                    colours=np.asarray(colours, np.float32), **kw)
 
 
-def _quantise(img: np.ndarray) -> np.ndarray:
-    from vidcap.video.appearance import BINS
-
-    q = (img.astype(np.uint16) * BINS) >> 8
-    return (q[..., 0] * BINS + q[..., 1]) * BINS + q[..., 2]
-
-
 def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarray,
               gain: np.ndarray, cp: CutParams) -> np.ndarray:
     """Re-decide one frame's uncertain band by a minimum cut.
@@ -180,7 +184,8 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     if not contours:
         cp.prev = None
         return fg
-    x, y, w, h = cv2.boundingRect(max(contours, key=cv2.contourArea))
+    biggest = max(contours, key=cv2.contourArea)
+    x, y, w, h = cv2.boundingRect(biggest)
     H, W = fg.shape
     r = cp.band
     m = 2 * r + max(2, int(0.1 * max(w, h)))
@@ -199,40 +204,109 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     inner = cv2.erode(f, disk)
     near = cv2.dilate(f, disk)
     never = cp.never[y0:y1, x0:x1]
-    band = ((near > 0) & (inner == 0)) | (never if WITH_NEVER else False)
-    if not band.any():
-        return fg
     img = frame[y0:y1, x0:x1]
-    # Evidence for the person (positive), per band pixel.
-    ys, xs = np.nonzero(band)
-    t = tmap[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0
-    e = np.clip(np.log2((l1[y0:y1, x0:x1][ys, xs].astype(np.float32) + 1.0) / t), -2.0, 2.0)
-    px = img[ys, xs].astype(np.float32) / np.asarray(gain, np.float32)
-    q = _quantise(np.clip(px, 0, 255).astype(np.uint8))
+    band, qb, e, nv, hist, n_scene = _compiled(
+        _kernels().crop_terms, f, inner, near, never, img, _colour_lut(gain),
+        l1[y0:y1, x0:x1], tmap[y0:y1, x0:x1], WITH_NEVER, len(cp.table))
+    if not len(qb):
+        return fg
+    # Evidence for the person (positive), per band pixel (row order).
     if LOCAL_SCENE > 0 and cp.colours is not None:
-        col = _local_llr(img, (near == 0) & ~never, gain, cp.colours)[q]
+        col = _local_llr(hist, n_scene, cp.colours)[qb]
     else:
-        col = cp.table[q]
-    nv = never[ys, xs]
+        col = cp.table[qb]
     e = np.where(nv, cp.never_weight * e + cp.colour_weight * col, e + cp.seen_colour * col)
     if cp.prev is not None and cp.time_weight:
-        e += np.where(cp.prev[y0:y1, x0:x1][ys, xs] > 0, cp.time_weight, -cp.time_weight)
+        e += np.where(cp.prev[y0:y1, x0:x1][band] > 0, cp.time_weight, -cp.time_weight)
     person = _band_cut(band, f > 0, e, img, cp.smooth)
     out = fg.copy()
     out[y0:y1, x0:x1][band] = np.where(person, 255, 0).astype(np.uint8)
+    if _lost_share(biggest, out[y0:y1, x0:x1], never, (x0, y0)) > LOST_MAX:
+        out = fg  # the cut broke the person up: the plain threshold's frame
     cp.prev = out
     return out
 
 
-def _local_llr(img, outside, gain, colours):
-    """The colour log-ratio with the scene's model mixed with this frame's scene
-    round the person (the crop outside the band): :data:`LOCAL_SCENE` of it."""
-    from vidcap.video.appearance import colour_model
+def _lost_share(plain, cut, never, origin) -> float:
+    """Share of the plain foreground's largest blob (contour ``plain``, frame pixels),
+    where the plate was seen, that the cut's largest blob in the crop (``cut``, 0 /
+    255, at ``origin`` ``(x0, y0)``) leaves out; 0 when nothing of it was seen."""
+    h, w = cut.shape
+    shift = (-origin[0], -origin[1])
+    before = np.zeros((h, w), np.uint8)
+    cv2.drawContours(before, [plain], 0, 1, cv2.FILLED, offset=shift)
+    before[never] = 0
+    n = cv2.countNonZero(before)
+    if not n:
+        return 0.0
+    contours, _ = cv2.findContours(cut, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if contours:
+        cv2.drawContours(before, [max(contours, key=cv2.contourArea)], 0, 0, cv2.FILLED)
+    return cv2.countNonZero(before) / n
 
-    px = img[outside].astype(np.float32) / np.asarray(gain, np.float32)
-    if len(px) < 50:
+
+def _kernels():
+    from vidcap.video import _graphcut_kernels
+
+    return _graphcut_kernels
+
+
+def _compiled(kernel, *args):
+    """``kernel(*args)``, with a Ctrl-C or SIGTERM that lands while the compiled code
+    runs raised as the ``KeyboardInterrupt`` it is: Python runs the signal handler as
+    numba boxes the results, and reports it as a ``SystemError`` "returned a result with
+    an exception set" caused by it (:mod:`vidcap.interrupt` expects the interrupt)."""
+    try:
+        return kernel(*args)
+    except SystemError as exc:
+        cause = exc.__cause__ or exc.__context__
+        if isinstance(cause, BaseException) and not isinstance(cause, Exception):
+            raise cause from None
+        raise
+
+
+def _colour_lut(gain: np.ndarray) -> np.ndarray:
+    """(3, 256) int32: per channel, the bin of each level divided by ``gain``
+    (:func:`vidcap.video.appearance.colour_model`'s bins, ``floor(min(v / gain, 255) /
+    256 * BINS)``), times the channel's place in the colour's index."""
+    from vidcap.video.appearance import BINS
+
+    v = np.arange(256, dtype=np.float32)[None, :] / np.asarray(gain, np.float32)[:, None]
+    bins = (np.clip(v, 0, 255).astype(np.uint8).astype(np.int32) * BINS) >> 8
+    return bins * np.array([[BINS * BINS], [BINS], [1]], np.int32)
+
+
+def _smoothing(bins: int, sigma: float = 1.0) -> np.ndarray:
+    """(bins, bins) matrix of :func:`scipy.ndimage.gaussian_filter`'s 1-D kernel
+    (truncate 4, ``mode='constant'``): the histogram smoothed axis by axis by three
+    small products instead of a filter call."""
+    r = int(4.0 * sigma + 0.5)
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+    k /= k.sum()
+    off = np.arange(bins)[:, None] - np.arange(bins)[None, :]
+    return np.where(np.abs(off) <= r, k[np.clip(off + r, 0, 2 * r)], 0.0).astype(np.float32)
+
+
+_SMOOTH_MATRIX: dict = {}
+
+
+def _local_llr(hist: np.ndarray, n_scene: int, colours: np.ndarray) -> np.ndarray:
+    """The colour log-ratio with the scene's model mixed with this frame's scene round
+    the person (``hist``: the histogram of the quantised colours of the crop outside
+    the band, ``n_scene`` pixels): :data:`LOCAL_SCENE` of it. The scene's model is
+    :func:`vidcap.video.appearance.colour_model` of those pixels (smooth 1 bin)."""
+    from vidcap.video.appearance import BINS
+
+    if n_scene < 50:
         return np.clip(colours[0] - colours[1], -COLOUR_CLIP, COLOUR_CLIP)
-    scene = colour_model(np.clip(px, 0, 255))
+    g = _SMOOTH_MATRIX.get(BINS)
+    if g is None:
+        g = _SMOOTH_MATRIX[BINS] = _smoothing(BINS)
+    hist = hist.reshape((BINS,) * 3)
+    hist = np.einsum("ai,ijk->ajk", g, hist)
+    hist = np.einsum("bj,ajk->abk", g, hist)
+    hist = np.einsum("ck,abk->abc", g, hist).ravel()
+    scene = np.log(hist / max(float(hist.sum()), 1.0) + 1e-7).astype(np.float32)
     if LOCAL_SCENE < 1:
         scene = np.logaddexp(np.log1p(-LOCAL_SCENE) + colours[1],
                              np.log(LOCAL_SCENE) + scene)
@@ -249,36 +323,17 @@ def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarra
     A link to a pixel outside the band (whose label ``fixed`` is kept) is folded
     into the band pixel's terminal link: the graph is the band, not its bounding
     box, and the cost grows with the outline, not with the person's area. Returns
-    (N,) bool, person, for the band's pixels in row order."""
+    (N,) bool, person, for the band's pixels in row order. The links come from one
+    compiled pass (:func:`vidcap.video._graphcut_kernels.band_graph`)."""
     import maxflow
 
     n = len(e)
-    idx = np.full(band.shape, -1, np.int64)
-    idx[band] = np.arange(n)
-    src = np.maximum(e, 0).astype(np.float64)
-    snk = np.maximum(-e, 0).astype(np.float64)
-    pairs = []
-    for a, b in (((slice(None), slice(None, -1)), (slice(None), slice(1, None))),
-                 ((slice(None, -1), slice(None)), (slice(1, None), slice(None)))):
-        sel = band[a] | band[b]
-        d = img[a][sel].astype(np.float32) - img[b][sel].astype(np.float32)
-        pairs.append((idx[a][sel], idx[b][sel], fixed[a][sel], fixed[b][sel],
-                      np.einsum("ij,ij->i", d, d)))
-    d2 = np.concatenate([p[4] for p in pairs])
-    beta = 1.0 / max(2.0 * float(d2.mean()), 1e-6) if len(d2) else 0.0
-    g = maxflow.Graph[float](n, 2 * n)
+    ia, ib, wt, src, snk = _compiled(_kernels().band_graph, band, fixed,
+                                     np.ascontiguousarray(img), float(smooth))
+    g = maxflow.Graph[float](n, len(wt))
     nodes = g.add_nodes(n)
-    for ia, ib, fa, fb, dd in pairs:
-        w = smooth * np.exp(-beta * dd)
-        both = (ia >= 0) & (ib >= 0)
-        if both.any():
-            g.add_edges(nodes[ia[both]], nodes[ib[both]], w[both], w[both])
-        # One end fixed: cutting the pair costs w when the band pixel takes the
-        # other label.
-        for here, there, fx in ((ia, ib, fb), (ib, ia, fa)):
-            one = (here >= 0) & (there < 0)
-            np.add.at(src, here[one & fx], w[one & fx])
-            np.add.at(snk, here[one & ~fx], w[one & ~fx])
-    g.add_grid_tedges(nodes, src, snk)
+    if len(wt):
+        g.add_edges(ia, ib, wt, wt)
+    g.add_grid_tedges(nodes, np.maximum(e, 0) + src, np.maximum(-e, 0) + snk)
     g.maxflow()
     return ~g.get_grid_segments(nodes)  # (True = sink side = scene)

@@ -77,6 +77,13 @@ _SILHOUETTE_VERSION = 4
 #: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts).
 _PLATE_VERSION = 2
 
+#: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
+#: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). Off: it beats the
+#: plain threshold on every render and on 11 of the 12 validation rows scored against
+#: MediaPipe's masks, but loses on 4 of the 5 real clips with true masks (CDnet office,
+#: SBI) and costs convert ~8 % more CPU (benchmarks/RESULTS.md, Silhouettes).
+DEFAULT_GRAPH_CUT = False
+
 
 def run(
     video: str | os.PathLike,
@@ -93,6 +100,7 @@ def run(
     view: str = "auto",
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS,
     cues: str = DEFAULT_CUES,
+    graph_cut: bool | None = None,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -134,6 +142,9 @@ def run(
         A real adult's (:data:`DEFAULT_PROPORTIONS`), the seed's, the subject's (``_fit_stage``).
     cues : {'outline', 'all'}
         The 2D fit reads the silhouette only, or the frame's cues inside it too.
+    graph_cut : bool, optional
+        The silhouettes' graph cut (:mod:`vidcap.video.graphcut`; default
+        :data:`DEFAULT_GRAPH_CUT`); see :func:`_graph_cut_option`.
 
     Returns
     -------
@@ -155,23 +166,19 @@ def run(
     # a given plate is read first: a bad file is reported before any worker starts
     with _timed(timings, "plate"):
         plate = load_plate(background) if background is not None else None
-    ident = video_identity(video)
-    k_plate = _plate_key(ident, background)
-    k_sil = _silhouette_key(ident, k_plate, region_cache_part(ann))
+    graph_cut, k_plate, k_sil = _stage_keys(video, background, ann, graph_cut, log)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
     pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues, proportions)
     try:
         with _timed(timings, "plate"):
-            plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log)
-        from vidcap.video.inputchecks import plate_notice
-
-        if plate_notice(plate):
-            log(plate_notice(plate))
+            plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log,
+                                 colour_models=graph_cut, notice=True)
         with _timed(timings, "silhouettes"):
             streamed, crops = _streamed_fit(pool, info.n_frames, jobs, per_job, cues, proportions)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
-                                    progress=progress, regions=_regions(ann, plate))
+                                    progress=progress, regions=_regions(ann, plate),
+                                    graph_cut=graph_cut, log=log)
         _report_silhouettes(sil, info.n_frames, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
                                           per_job=per_job, streamed=streamed, log=log,
@@ -330,31 +337,78 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
 
 
 # --------------------------------------------------------------------------- 1. plate
-def _plate_key(video_id: dict, background) -> str:
+def _plate_key(video_id: dict, background, colour_models: bool = False) -> str:
     if background is not None:
         return stage_key("plate-file", video_identity(background))
-    return stage_key("plate", _PLATE_VERSION, video_id)
+    # the colour models join the key only when asked for: entries without them stay valid
+    extra = ("colours",) if colour_models else ()
+    return stage_key("plate", _PLATE_VERSION, video_id, *extra)
 
 
-def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, log):
+def _stage_keys(video: Path, background, ann: Annotations, graph_cut: bool | None, log):
+    """``(graph_cut, plate key, silhouette key)``: whether the cut runs
+    (:func:`_graph_cut_option`) and the keys of the two image stages."""
+    ident = video_identity(video)
+    graph_cut = _graph_cut_option(graph_cut, background, log)
+    k_plate = _plate_key(ident, background, graph_cut)
+    return graph_cut, k_plate, _silhouette_key(ident, k_plate, region_cache_part(ann),
+                                               graph_cut)
+
+
+def _graph_cut_option(graph_cut: bool | None, background, log) -> bool:
+    """Whether the silhouette stage runs the graph cut: ``graph_cut``, or
+    :data:`DEFAULT_GRAPH_CUT` when None; never with a given ``background`` plate (it has
+    no colour models: the plain threshold decides, with a notice through ``log`` when the
+    cut was asked for explicitly)."""
+    use = DEFAULT_GRAPH_CUT if graph_cut is None else bool(graph_cut)
+    if use and background is not None:
+        if graph_cut:
+            log("notice: the graph cut needs the estimated plate (its colour models), not "
+                "a given one: the plain threshold decides")
+        use = False
+    return use
+
+
+def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, log,
+                 colour_models: bool = False, notice: bool = False):
     """The background plate (:class:`vidcap.video.background.BackgroundModel`): ``plate``
-    when the user gave one, else the cached one, else estimated from the video."""
+    when the user gave one, else the cached one, else estimated from the video (with
+    the clip's colour models for the graph cut when ``colour_models``; ``key`` must
+    say so, :func:`_plate_key`). ``notice``: log the plate's notice
+    (:func:`vidcap.video.inputchecks.plate_notice`), if any."""
+    plate = _plate_of(cache, key, video, plate, progress=progress, log=log,
+                      colour_models=colour_models)
+    if notice:
+        from vidcap.video.inputchecks import plate_notice
+
+        if plate_notice(plate):
+            log(plate_notice(plate))
+    return plate
+
+
+def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
+              colour_models: bool):
     from vidcap.video.background import estimate_background
 
     if plate is not None:
         return plate
-    hit = cache.load("plate", key, required=_PLATE_FIELDS)
+    required = _PLATE_FIELDS + (("colours",) if colour_models else ())
+    hit = cache.load("plate", key, required=required)
     if hit is not None:
         return _plate_from_cache(hit)
     log("estimating the background plate")
-    plate = estimate_background(video, rng=np.random.default_rng(0), progress=progress)
+    plate = estimate_background(video, rng=np.random.default_rng(0), progress=progress,
+                                colour_models=colour_models)
     h, w = plate.plate.shape[:2]
+    # (no colour models: an empty array, read back as None)
+    extra = ({"colours": np.zeros(0, np.float32) if plate.colours is None else plate.colours}
+             if colour_models else {})
     cache.save("plate", key, plate=plate.plate, never_seen=plate.never_seen,
                noise_map=plate.noise_map, noise_sigma=plate.noise_sigma,
                threshold=np.float64(plate.threshold),
                self_lit=np.zeros((h, w), bool) if plate.self_lit is None else plate.self_lit,
                still_person=(np.zeros((h, w), bool) if plate.still_person is None
-                             else plate.still_person))
+                             else plate.still_person), **extra)
     return plate
 
 
@@ -373,7 +427,8 @@ def _plate_from_cache(hit: dict):
         threshold=float(hit["threshold"]), method="felzenszwalb",
         self_lit=hit["self_lit"].astype(bool) if hit["self_lit"].any() else None,
         still_person=(hit["still_person"].astype(bool) if hit["still_person"].any()
-                      else None))
+                      else None),
+        colours=hit["colours"] if "colours" in hit and hit["colours"].size else None)
 
 
 # --------------------------------------------------------------------------- 2. silhouettes
@@ -388,10 +443,11 @@ class _Silhouettes:
     n_other: np.ndarray
 
 
-def _silhouette_key(video_id: dict, k_plate: str, regions: list | None = None) -> str:
+def _silhouette_key(video_id: dict, k_plate: str, regions: list | None = None,
+                    graph_cut: bool = False) -> str:
     # the user's regions join the key only when there are some: the entries of clips
-    # without any stay valid, and no other event ever touches it
-    extra = (regions,) if regions else ()
+    # without any stay valid, and no other event ever touches it (the graph cut alike)
+    extra = ((regions,) if regions else ()) + (("graph-cut",) if graph_cut else ())
     return stage_key("silhouettes", _SILHOUETTE_VERSION, video_id, k_plate, *extra)
 
 
@@ -420,14 +476,18 @@ class _MaskFeed:
 
 
 def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, streamed,
-                      progress, regions=None, on_masks=None, crops=None) -> _Silhouettes:
+                      progress, regions=None, on_masks=None, crops=None,
+                      graph_cut: bool = False, log=None) -> _Silhouettes:
     """The person's silhouettes, cached or extracted; while they are extracted, each
     chunk of frames goes to ``streamed`` (a :class:`vidcap.video.fit.parallel.StreamedFit`,
     or None) as soon as it is complete, or to ``on_masks`` (as ``on_masks(start, masks)``
     of :func:`vidcap.video.silhouette.extract_silhouettes`). ``regions``: the user's
     (:class:`vidcap.video.userregions.UserRegions`), which ``key`` must include.
     ``crops``: a :class:`vidcap.video.fit.cueframes.FrameCrops` filled with each frame's
-    colour crop (None: none; left empty when the silhouettes come from the cache)."""
+    colour crop (None: none; left empty when the silhouettes come from the cache).
+    ``graph_cut``: the band's graph cut, on ``plate``'s colour models (none: the clip's
+    samples showed too little of the person; the plain threshold decides, with a
+    notice through ``log``)."""
     from vidcap.video.silhouette import extract_silhouettes
 
     # entries written before the masks were stored cropped lack mask_boxes: extract again
@@ -439,8 +499,13 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
         return _Silhouettes(masks, hit["bbox"], n_other)
     if streamed is not None:
         on_masks = _MaskFeed(streamed, crops)
+    if graph_cut and getattr(plate, "colours", None) is None:
+        (log or (lambda msg: None))(
+            "notice: the graph cut is skipped: the plate's samples show too little of the "
+            "person to learn their colours")
+        graph_cut = False
     sil = extract_silhouettes(video, plate, progress=progress, on_masks=on_masks,
-                              regions=regions, crops=crops)
+                              regions=regions, crops=crops, graph_cut=graph_cut)
     out = _Silhouettes(sil.masks, sil.bbox, sil.n_other_blobs)
     cache.save("silhouettes", key, bbox=out.bbox, n_other=out.n_other, **out.masks.to_arrays())
     return out
@@ -448,7 +513,7 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
 
 def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
                      cache_dir: str | os.PathLike | None = None, on_masks=None,
-                     log=None) -> _Silhouettes:
+                     log=None, graph_cut: bool | None = None) -> _Silhouettes:
     """The first two stages of :func:`run` only (plate, silhouettes with the user's
     regions), cached as :func:`run` caches them: what the annotate page redoes when
     the user draws a region.
@@ -463,6 +528,8 @@ def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
     on_masks : callable, optional
         ``on_masks(start, masks)`` after each chunk of frames (progress).
     log : callable, optional
+    graph_cut : bool, optional
+        As :func:`run`'s (default :data:`DEFAULT_GRAPH_CUT`).
 
     Returns
     -------
@@ -478,11 +545,14 @@ def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
     annotations.check_frame_size(info.width, info.height, video)
     cache = StageCache(cache_dir, log=log)
     ident = video_identity(video)
-    k_plate = _plate_key(ident, None)
-    plate = _plate_stage(cache, k_plate, video, None, progress=False, log=log)
-    key = _silhouette_key(ident, k_plate, region_cache_part(annotations))
+    graph_cut = DEFAULT_GRAPH_CUT if graph_cut is None else bool(graph_cut)
+    k_plate = _plate_key(ident, None, graph_cut)
+    plate = _plate_stage(cache, k_plate, video, None, progress=False, log=log,
+                         colour_models=graph_cut)
+    key = _silhouette_key(ident, k_plate, region_cache_part(annotations), graph_cut)
     return _silhouette_stage(cache, key, video, plate, streamed=None, progress=False,
-                             regions=_regions(annotations, plate), on_masks=on_masks)
+                             regions=_regions(annotations, plate), on_masks=on_masks,
+                             graph_cut=graph_cut, log=log)
 
 
 def _report_silhouettes(sil: _Silhouettes, n_expected: int | None, log) -> None:
@@ -681,8 +751,9 @@ def convert(
 
 # the stages' names, defined in their own modules since issue 31 and imported from
 # here by existing callers
-__all__ = ["MIXED_VIEW", "NEAR_PLANE", "POOR_FIT", "SCALE_WINDOW_S", "VIEWS", "ConvertResult",
-           "LiftResult", "StageCache", "apply_user_view", "constrain_orientation", "convert",
+__all__ = ["DEFAULT_GRAPH_CUT", "MIXED_VIEW", "NEAR_PLANE", "POOR_FIT", "SCALE_WINDOW_S",
+           "VIEWS", "ConvertResult", "LiftResult", "StageCache", "apply_user_view",
+           "constrain_orientation", "convert",
            "fill_gaps", "frame_runs", "frame_scales", "lift_pose", "model_scales",
            "partly_outside", "person_track", "plane_passages", "run", "swap_pairs",
            "true_runs"]
