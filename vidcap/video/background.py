@@ -256,6 +256,11 @@ def _sample_indices(n: int, k: int, rng) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- estimation
+#: Re-take the plate from samples that show the empty scene
+#: (:mod:`vidcap.video.emptyscene`).
+EMPTY_SCENE = True
+
+
 def estimate_background(
     source, *, method: str = "felzenszwalb", n_samples: int = 24,
     work_size: int = 160, segment_scale: float = 60.0, min_region: int = 12,
@@ -328,8 +333,13 @@ def estimate_background(
     model = _finish_regions(frames, gains, weights_small, idx, name, holes)
     from vidcap.video.platepass import refine_plate
 
-    return refine_plate(model, frames, gains, weights_small.shape[1:],
-                        colour_models=colour_models)
+    model = refine_plate(model, frames, gains, weights_small.shape[1:],
+                         colour_models=colour_models)
+    if EMPTY_SCENE:
+        from vidcap.video.emptyscene import plate_from_empty
+
+        model = plate_from_empty(model, frames, gains)
+    return model
 
 
 def _frame_gains(frames: np.ndarray) -> np.ndarray:
