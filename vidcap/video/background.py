@@ -259,6 +259,9 @@ def _sample_indices(n: int, k: int, rng) -> np.ndarray:
 #: Re-take the plate from samples that show the empty scene
 #: (:mod:`vidcap.video.emptyscene`).
 EMPTY_SCENE = True
+#: Look for a person the plate absorbed with a person detector
+#: (:mod:`vidcap.video.personbox`).
+PERSON_BOX = True
 
 
 def estimate_background(
@@ -339,6 +342,10 @@ def estimate_background(
         from vidcap.video.emptyscene import plate_from_empty
 
         model = plate_from_empty(model, frames, gains)
+    if PERSON_BOX:
+        from vidcap.video.personbox import absorbed_person
+
+        model = absorbed_person(model, frames, gains)
     return model
 
 

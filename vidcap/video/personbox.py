@@ -1,0 +1,186 @@
+"""A person the plate absorbed, found by a person detector and cut out by appearance
+(issue 26, Build 1 and 2).
+
+A person who stands nearly still for the whole clip is never uncovered: the plate's
+vote keeps them, and the difference from the plate shows only what moves (a hand, the
+page of a book). OpenCV's built-in HOG people detector (Dalal and Triggs 2005, no
+model file to download) still sees them in the frames. Where it finds a person and
+the first-pass silhouette covers little of the box, the person is segmented in the
+box by appearance (``cv2.grabCut`` initialised from the box: outside is scene, the
+box's central column probably person, the first-pass silhouette surely person) on a
+few samples; the pixels the cut gives the person in most of them are the person's
+still parts. They are kept as the model's ``still_person`` (with ``person_plate``, the
+plate before, their own colour), flagged never seen and inpainted from around them,
+as :mod:`vidcap.video.stillparts` does: the silhouette stage then counts them as the
+person in every frame where they still look as they did.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+__all__ = ["absorbed_person", "detect_people"]
+
+#: Detections scoring below this (the SVM margin) are dropped.
+MIN_SCORE = 0.5
+#: The first-pass silhouette covering less than this share of a detection box means
+#: the person there is (partly) absorbed. A standing person fills ~30-45 % of the
+#: HOG box (it has a margin round the body).
+MAX_COVER = 0.6
+#: Samples the detector runs on (evenly spread over the plate's samples).
+N_DETECT = 6
+#: Share of the cut samples a pixel must be the person in.
+MIN_AGREE = 0.5
+
+_HOG = None
+
+
+def _hog():
+    global _HOG
+    if _HOG is None:
+        _HOG = cv2.HOGDescriptor()
+        _HOG.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    return _HOG
+
+
+def detect_people(frame: np.ndarray, *, min_score: float = MIN_SCORE
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """People in one frame by OpenCV's HOG detector.
+
+    The frame is padded below by a quarter of its height (a person cut off by the
+    frame's lower edge still fits the detector's window) and shrunk to at most 480
+    rows (the window is 128 rows: larger frames only cost time).
+
+    Parameters
+    ----------
+    frame : numpy.ndarray, shape (H, W, 3), uint8
+    min_score : float
+        Smallest SVM score kept.
+
+    Returns
+    -------
+    boxes : numpy.ndarray, shape (N, 4), int
+        ``x0, y0, x1, y1`` in the frame's pixels (clipped to it), x1, y1 exclusive.
+    scores : numpy.ndarray, shape (N,), float
+    """
+    h, w = frame.shape[:2]
+    s = min(1.0, 480.0 / h)
+    img = frame if s == 1.0 else cv2.resize(frame, (max(1, int(w * s)), max(1, int(h * s))),
+                                            interpolation=cv2.INTER_AREA)
+    img = cv2.copyMakeBorder(img, 0, img.shape[0] // 4, 0, 0, cv2.BORDER_REPLICATE)
+    if img.shape[0] < 128 or img.shape[1] < 64:
+        return np.zeros((0, 4), np.int64), np.zeros(0)
+    rects, weights = _hog().detectMultiScale(img, winStride=(8, 8), padding=(16, 16),
+                                             scale=1.05)
+    if len(rects) == 0:
+        return np.zeros((0, 4), np.int64), np.zeros(0)
+    rects = np.asarray(rects, np.float64) / s
+    scores = np.ravel(weights).astype(np.float64)
+    boxes = np.column_stack([rects[:, 0], rects[:, 1], rects[:, 0] + rects[:, 2],
+                             rects[:, 1] + rects[:, 3]])
+    boxes = np.round(boxes).astype(np.int64)
+    boxes[:, [0, 2]] = np.clip(boxes[:, [0, 2]], 0, w)
+    boxes[:, [1, 3]] = np.clip(boxes[:, [1, 3]], 0, h)
+    keep = (scores >= min_score) & (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
+    return boxes[keep], scores[keep]
+
+
+def cut_in_box(frame: np.ndarray, box, sure: np.ndarray | None = None, *,
+               iterations: int = 4) -> np.ndarray:
+    """The person inside ``box`` by ``cv2.grabCut``.
+
+    Parameters
+    ----------
+    frame : numpy.ndarray, shape (H, W, 3), uint8
+    box : sequence of 4 int
+        ``x0, y0, x1, y1`` (a detector's box, with a margin round the body).
+    sure : numpy.ndarray, shape (H, W), bool, optional
+        Pixels known to be the person (a first-pass silhouette).
+    iterations : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (H, W), bool
+        The person (False outside the box).
+    """
+    h, w = frame.shape[:2]
+    x0, y0, x1, y1 = (int(v) for v in box)
+    bw, bh = x1 - x0, y1 - y0
+    # A crop with a margin of scene round the box (grabCut learns the scene there).
+    mx, my = max(4, bw // 4), max(4, bh // 8)
+    cx0, cy0, cx1, cy1 = max(0, x0 - mx), max(0, y0 - my), min(w, x1 + mx), min(h, y1 + my)
+    crop = np.ascontiguousarray(frame[cy0:cy1, cx0:cx1])
+    m = np.full(crop.shape[:2], cv2.GC_BGD, np.uint8)
+    m[y0 - cy0:y1 - cy0, x0 - cx0:x1 - cx0] = cv2.GC_PR_BGD
+    # The detector centres the body: its middle third of the width, below the head
+    # room, is probably the person.
+    m[y0 - cy0 + bh // 8:y1 - cy0, x0 - cx0 + bw // 3:x1 - cx0 - bw // 3] = cv2.GC_PR_FGD
+    if sure is not None:
+        s = sure[cy0:cy1, cx0:cx1]
+        m[s & (m != cv2.GC_BGD)] = cv2.GC_FGD
+    if not ((m == cv2.GC_BGD).any() and np.isin(m, (cv2.GC_FGD, cv2.GC_PR_FGD)).any()):
+        return np.zeros((h, w), bool)
+    bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
+    cv2.grabCut(crop, m, None, bgd, fgd, iterations, cv2.GC_INIT_WITH_MASK)
+    out = np.zeros((h, w), bool)
+    out[cy0:cy1, cx0:cx1] = (m == cv2.GC_FGD) | (m == cv2.GC_PR_FGD)
+    return out
+
+
+def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
+                    n_detect: int = N_DETECT, max_cover: float = MAX_COVER):
+    """The still parts of a person the plate absorbed (see the module docstring).
+
+    Parameters
+    ----------
+    model : vidcap.video.background.BackgroundModel
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+        The plate's samples.
+    gains : numpy.ndarray, shape (K, 3)
+    n_detect : int
+        Samples the detector runs on.
+    max_cover : float
+        A detection counts as absorbed when the first-pass silhouette covers less
+        than this share of its box.
+
+    Returns
+    -------
+    vidcap.video.background.BackgroundModel
+        With ``still_person`` / ``person_plate`` set and the plate inpainted there;
+        the same model when no absorbed person is found.
+    """
+    from vidcap.video.platepass import _person_masks
+
+    k, hh, ww = frames.shape[:3]
+    if k < 2:
+        return model
+    pick = np.unique(np.linspace(0, k - 1, min(n_detect, k)).round().astype(int))
+    masks = _person_masks(model, frames[pick], gains[pick]) > 0
+    cuts = []
+    for j, t in enumerate(pick):
+        boxes, scores = detect_people(frames[t])
+        if not len(boxes):
+            continue
+        b = boxes[int(np.argmax(scores))]
+        cut = cut_in_box(frames[t], b)
+        if not cut.any():
+            continue
+        cover = masks[j][cut].mean()
+        if cover < max_cover:
+            cuts.append(cut)
+    if len(cuts) < max(2, int(np.ceil(MIN_AGREE * len(pick)))):
+        return model
+    still = np.mean(cuts, axis=0) >= MIN_AGREE
+    if model.self_lit is not None:
+        still &= ~model.self_lit
+    if not still.any():
+        return model
+    full = still.view(np.uint8)
+    ring = cv2.dilate(full, np.ones((5, 5), np.uint8))
+    plate = cv2.inpaint(model.plate, ring, 5, cv2.INPAINT_TELEA)
+    conf = np.where(still, 0.0, model.confidence).astype(np.float32)
+    return replace(model, plate=plate, never_seen=model.never_seen | still, confidence=conf,
+                   still_person=still, person_plate=model.plate)
