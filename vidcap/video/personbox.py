@@ -32,6 +32,9 @@ MIN_SCORE = 0.5
 MAX_COVER = 0.6
 #: Samples the detector runs on (evenly spread over the plate's samples).
 N_DETECT = 6
+#: The detector runs only when the plate left at least this share of the frame never
+#: seen (a guess): a person absorbed for the whole clip leaves some.
+MIN_NEVER_SEEN = 0.005
 #: Share of the cut samples a pixel must be the person in.
 MIN_AGREE = 0.5
 
@@ -158,9 +161,10 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
     if k < 2:
         return model
     pick = np.unique(np.linspace(0, k - 1, min(n_detect, k)).round().astype(int))
-    masks = _person_masks(model, frames[pick], gains[pick]) > 0
+    if model.never_seen_fraction < MIN_NEVER_SEEN:
+        return model  # the plate saw the whole scene: nobody absorbed (and no cost)
     cuts = []
-    for j, t in enumerate(pick):
+    for t in pick:
         boxes, scores = detect_people(frames[t])
         if not len(boxes):
             continue
@@ -168,10 +172,11 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
         cut = cut_in_box(frames[t], b)
         if not cut.any():
             continue
-        cover = masks[j][cut].mean()
-        if cover < max_cover:
-            cuts.append(cut)
-    if len(cuts) < max(2, int(np.ceil(MIN_AGREE * len(pick)))):
+        cover = (_person_masks(model, frames[t:t + 1], gains[t:t + 1])[0] > 0)[cut].mean()
+        if cover >= max_cover:
+            break  # the person shows in the silhouette: nothing absorbed (and cheap)
+        cuts.append(cut)
+    if len(cuts) < 2:
         return model
     still = np.mean(cuts, axis=0) >= MIN_AGREE
     if model.self_lit is not None:
@@ -180,7 +185,33 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
         return model
     full = still.view(np.uint8)
     ring = cv2.dilate(full, np.ones((5, 5), np.uint8))
-    plate = cv2.inpaint(model.plate, ring, 5, cv2.INPAINT_TELEA)
+    base = _steady_scene(model, frames, gains, ring > 0) if STEADY else model.plate
+    plate = cv2.inpaint(base, ring, 5, cv2.INPAINT_TELEA)
     conf = np.where(still, 0.0, model.confidence).astype(np.float32)
     return replace(model, plate=plate, never_seen=model.never_seen | still, confidence=conf,
                    still_person=still, person_plate=model.plate)
+
+
+#: Re-take the plate where every sample agrees on a colour the plate lacks (see
+#: :func:`_steady_scene`).
+STEADY = True
+#: Share of the samples that must agree with their median.
+STEADY_SHARE = 0.9
+
+
+def _steady_scene(model, frames, gains, person):
+    """The plate re-taken where the samples agree with their own median in nearly
+    every sample but not with the plate, outside ``person``: once the still person is
+    known, what stays put and differs from the plate is scene the vote got wrong (an
+    inpainting guess next to the person), not the person."""
+    scaled = np.clip(frames / gains[:, None, None, :], 0, 255).astype(np.float32)
+    med = np.median(scaled, axis=0)
+    tmap = np.maximum(model.threshold, 3.0 * model.noise_map)
+    agree = (np.abs(scaled - med).sum(axis=-1) <= tmap).mean(axis=0) >= STEADY_SHARE
+    far = np.abs(med - model.plate.astype(np.float32)).sum(axis=-1) > tmap
+    redo = agree & far & ~person
+    if model.self_lit is not None:
+        redo &= ~model.self_lit
+    plate = model.plate.copy()
+    plate[redo] = np.clip(med[redo], 0, 255).astype(np.uint8)
+    return plate
