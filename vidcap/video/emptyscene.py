@@ -13,9 +13,10 @@ person and the frame shows the empty scene, it is the other way round: the outli
 is an edge of the plate, and the frame is smooth across it (the wall continues).
 So, per sample and blob, along the blob's outline, the gradient the frame has beyond
 the plate's is summed and compared with the gradient the plate has beyond the
-frame's; a blob whose outline is mostly an edge of the plate is a ghost, the frame shows the scene there, and the plate is re-taken in
-the blob from the samples that show it as a ghost (their median, each scaled by its
-gain).
+frame's; a blob whose outline is mostly an edge of the plate is a ghost, the frame
+shows the scene there, and the plate is re-taken in the blob from the samples that
+show it as a ghost (their median, each scaled by its gain). Applied to every clip
+(~0.3 s CPU on 300 frames of 640x480).
 """
 
 from __future__ import annotations

@@ -1,0 +1,45 @@
+"""The plate from samples that show the empty scene (vidcap.video.emptyscene)."""
+
+import numpy as np
+
+from vidcap.video.background import BackgroundModel
+from vidcap.video.emptyscene import ghost_blobs, plate_from_empty
+
+
+def _wall(rng, h=96, w=128):
+    """A smooth wall (a gentle gradient) with sensor noise, uint8 BGR."""
+    y, x = np.mgrid[0:h, 0:w].astype(np.float32)
+    base = np.stack([90 + 0.3 * x, 110 + 0.2 * y, 130 + 0.1 * (x + y)], axis=-1)
+    return lambda: np.clip(base + rng.normal(0, 2, base.shape), 0, 255).astype(np.uint8)
+
+
+def _block(img, colour=(30, 40, 200)):
+    out = img.copy()
+    out[30:80, 50:70] = colour
+    return out
+
+
+def test_ghost_blobs_tell_the_plate_edge_from_the_frame_edge():
+    rng = np.random.default_rng(0)
+    wall = _wall(rng)
+    mask = np.zeros((96, 128), bool)
+    mask[30:80, 50:70] = True
+    # The plate holds the block, the frame shows the wall: a ghost.
+    assert ghost_blobs(wall(), _block(wall()), mask).sum() == mask.sum()
+    # The frame holds the block, the plate is the wall: a person, not a ghost.
+    assert not ghost_blobs(_block(wall()), wall(), mask).any()
+
+
+def test_an_empty_stretch_gives_the_plate_the_still_block_took():
+    # A plate that kept a block standing still; 6 empty samples, then 18 with the
+    # block: the empty ones give the wall back.
+    rng = np.random.default_rng(1)
+    wall = _wall(rng)
+    model = BackgroundModel.from_plate(_block(wall()), noise_sigma=2.0)
+    frames = np.stack([wall() for _ in range(6)] + [_block(wall()) for _ in range(18)])
+    clean = wall().astype(np.int16)[35:75, 53:67]
+    got = plate_from_empty(model, frames, np.ones((24, 3)))
+    assert np.abs(got.plate[35:75, 53:67].astype(np.int16) - clean).sum(axis=-1).mean() < 15
+    # Without the empty stretch nothing changes.
+    same = plate_from_empty(model, frames[6:], np.ones((18, 3)))
+    assert same is model
