@@ -31,7 +31,7 @@ MIN_SCORE = 0.5
 #: HOG box (it has a margin round the body).
 MAX_COVER = 0.6
 #: Samples the detector runs on (evenly spread over the plate's samples).
-N_DETECT = 6
+N_DETECT = 8
 #: The detector runs only when the plate left at least this share of the frame never
 #: seen (a guess): a person absorbed for the whole clip leaves some.
 MIN_NEVER_SEEN = 0.005
@@ -163,7 +163,7 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
     pick = np.unique(np.linspace(0, k - 1, min(n_detect, k)).round().astype(int))
     if model.never_seen_fraction < MIN_NEVER_SEEN:
         return model  # the plate saw the whole scene: nobody absorbed (and no cost)
-    cuts = []
+    cuts, where, absorbed = [], [], 0
     for t in pick:
         boxes, scores = detect_people(frames[t])
         if not len(boxes):
@@ -172,24 +172,61 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
         cut = cut_in_box(frames[t], b)
         if not cut.any():
             continue
-        cover = (_person_masks(model, frames[t:t + 1], gains[t:t + 1])[0] > 0)[cut].mean()
-        if cover >= max_cover:
-            break  # the person shows in the silhouette: nothing absorbed (and cheap)
+        if absorbed == 0:
+            cover = (_person_masks(model, frames[t:t + 1], gains[t:t + 1])[0] > 0)[cut].mean()
+            if cover >= max_cover:
+                # The person shows in the silhouette: nothing absorbed (and cheap).
+                return model
+            absorbed += 1
         cuts.append(cut)
+        where.append(t)
     if len(cuts) < 2:
         return model
-    still = np.mean(cuts, axis=0) >= MIN_AGREE
+    cuts = np.stack(cuts)
+    plate, seen = _uncovered_plate(model, frames[where], gains[where], cuts)
+    still = (cuts.mean(axis=0) >= MIN_AGREE) & ~seen
     if model.self_lit is not None:
         still &= ~model.self_lit
     if not still.any():
         return model
     full = still.view(np.uint8)
     ring = cv2.dilate(full, np.ones((5, 5), np.uint8))
-    base = _steady_scene(model, frames, gains, ring > 0) if STEADY else model.plate
-    plate = cv2.inpaint(base, ring, 5, cv2.INPAINT_TELEA)
+    if STEADY:
+        plate = _steady_scene(model, frames, gains, ring > 0, plate)
+    plate = cv2.inpaint(plate, ring, 5, cv2.INPAINT_TELEA)
     conf = np.where(still, 0.0, model.confidence).astype(np.float32)
-    return replace(model, plate=plate, never_seen=model.never_seen | still, confidence=conf,
-                   still_person=still, person_plate=model.plate)
+    return replace(model, plate=plate, never_seen=(model.never_seen & ~seen) | still,
+                   confidence=conf, still_person=still, person_plate=model.plate)
+
+
+#: Share of the cut samples (and at least 2) a pixel the person covered must be seen
+#: uncovered in to be re-taken from them (a cut that misses a leg in one sample must
+#: not put the leg in the plate).
+MIN_UNCOVERED = 0.34
+
+
+def _uncovered_plate(model, frames, gains, cuts):
+    """The plate re-taken, where the person was cut in some samples, from the samples
+    that show the pixel outside the (dilated) person; returns the plate and where it
+    was re-taken, (H, W) bool."""
+    from vidcap.video.platemedian import robust_plate
+
+    k = cuts.shape[0]
+    r = max(1, int(round(0.02 * cuts.shape[1])))
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+    covered = np.stack([cv2.dilate(c.view(np.uint8), kernel) for c in cuts]) > 0
+    outside = ~covered
+    need = max(2, int(np.ceil(MIN_UNCOVERED * k)))
+    seen = covered.any(axis=0) & (outside.sum(axis=0) >= need)
+    plate = model.plate.copy()
+    if seen.any():
+        again = robust_plate(frames, gains, outside.view(np.uint8))
+        # Only where the uncovered samples show something else than the plate: the
+        # same colour means they show the person too (a cut that missed a leg).
+        tmap = np.maximum(model.threshold, 3.0 * model.noise_map)
+        seen &= np.abs(again.astype(np.float32) - plate).sum(axis=-1) > tmap
+        plate[seen] = again[seen]
+    return plate, seen
 
 
 #: Re-take the plate where every sample agrees on a colour the plate lacks (see
@@ -199,7 +236,7 @@ STEADY = True
 STEADY_SHARE = 0.9
 
 
-def _steady_scene(model, frames, gains, person):
+def _steady_scene(model, frames, gains, person, plate):
     """The plate re-taken where the samples agree with their own median in nearly
     every sample but not with the plate, outside ``person``: once the still person is
     known, what stays put and differs from the plate is scene the vote got wrong (an
@@ -208,10 +245,10 @@ def _steady_scene(model, frames, gains, person):
     med = np.median(scaled, axis=0)
     tmap = np.maximum(model.threshold, 3.0 * model.noise_map)
     agree = (np.abs(scaled - med).sum(axis=-1) <= tmap).mean(axis=0) >= STEADY_SHARE
-    far = np.abs(med - model.plate.astype(np.float32)).sum(axis=-1) > tmap
+    far = np.abs(med - plate.astype(np.float32)).sum(axis=-1) > tmap
     redo = agree & far & ~person
     if model.self_lit is not None:
         redo &= ~model.self_lit
-    plate = model.plate.copy()
+    plate = plate.copy()
     plate[redo] = np.clip(med[redo], 0, 255).astype(np.uint8)
     return plate
