@@ -4,15 +4,24 @@
 A person who stands nearly still for the whole clip is never uncovered: the plate's
 vote keeps them, and the difference from the plate shows only what moves (a hand, the
 page of a book). OpenCV's built-in HOG people detector (Dalal and Triggs 2005, no
-model file to download) still sees them in the frames. Where it finds a person and
-the first-pass silhouette covers little of the box, the person is segmented in the
-box by appearance (``cv2.grabCut`` initialised from the box: outside is scene, the
-box's central column probably person, the first-pass silhouette surely person) on a
-few samples; the pixels the cut gives the person in most of them are the person's
-still parts. They are kept as the model's ``still_person`` (with ``person_plate``, the
-plate before, their own colour), flagged never seen and inpainted from around them,
-as :mod:`vidcap.video.stillparts` does: the silhouette stage then counts them as the
-person in every frame where they still look as they did.
+model file to download) still sees them in the frames. Only when the plate left part
+of the frame never seen (a guess), the detector runs on up to :data:`N_DETECT` of the
+plate's samples and the person is cut out of its best box by appearance
+(``cv2.grabCut`` initialised from the box: outside is scene, the box's central column
+probably person). The first detection decides: when the first-pass silhouette covers
+:data:`MAX_COVER` or more of the cut, the person is visible and nothing is done
+(cost: one detection and one cut). Otherwise, with the cuts of every detected sample:
+
+* where the person was cut in some samples and a third of them show the pixel
+  uncovered with another colour than the plate, the plate is re-taken from those
+  (the person stood elsewhere for a while);
+* the pixels cut as the person in half of them or more, and never uncovered, are the
+  person's still parts: the model's ``still_person`` (with ``person_plate``, the plate
+  before, their own colour), flagged never seen and inpainted from around them, as
+  :mod:`vidcap.video.stillparts` does; the silhouette stage counts them as the person
+  in every frame where they still look as they did;
+* pixels outside the person that every sample agrees on but the plate does not are
+  re-taken as the samples' median (a plate guess beside the person).
 """
 
 from __future__ import annotations
@@ -26,9 +35,10 @@ __all__ = ["absorbed_person", "detect_people"]
 
 #: Detections scoring below this (the SVM margin) are dropped.
 MIN_SCORE = 0.5
-#: The first-pass silhouette covering less than this share of a detection box means
-#: the person there is (partly) absorbed. A standing person fills ~30-45 % of the
-#: HOG box (it has a margin round the body).
+#: The first-pass silhouette covering less than this share of the person cut in the
+#: detector's box means the person is absorbed. On the tuning clips: 0.32-0.34 where
+#: the man stands still all along (cdnet_office_stand), 0.81-0.99 where he walked in
+#: and the plate is right (cdnet_office_enter).
 MAX_COVER = 0.6
 #: Samples the detector runs on (evenly spread over the plate's samples).
 N_DETECT = 8
@@ -147,7 +157,7 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
         Samples the detector runs on.
     max_cover : float
         A detection counts as absorbed when the first-pass silhouette covers less
-        than this share of its box.
+        than this share of the person cut in its box.
 
     Returns
     -------
