@@ -242,8 +242,10 @@ def _uncovered_plate(model, frames, gains, cuts):
 #: Re-take the plate where every sample agrees on a colour the plate lacks (see
 #: :func:`_steady_scene`).
 STEADY = True
-#: Share of the samples that must agree with their median.
-STEADY_SHARE = 0.9
+#: Share of the samples that must agree with their median. cdnet_office_stand (tuning):
+#: a plate guess at the desk beside the man is steady in 21 of 24 samples (his hand
+#: passes); 0.9 left it, 0.75 re-takes it (0.809 -> 0.823 median IoU).
+STEADY_SHARE = 0.75
 
 
 def _steady_scene(model, frames, gains, person, plate):
