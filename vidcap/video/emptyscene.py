@@ -32,6 +32,8 @@ __all__ = ["ghost_blobs", "plate_from_empty"]
 #: share of the plate's excess. On cdnet_office_enter (tuning) the ghost of the man in
 #: the empty samples scores 0.32-0.36, blobs of the man himself 0.69-2.7.
 GHOST_RATIO = 0.5
+#: Samples (at least) that must show the empty scene at a pixel, agreeing on it.
+MIN_AGREE = 2
 #: Smallest blob considered, share of the frame.
 MIN_BLOB = 2e-3
 
@@ -131,13 +133,24 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
     if model.self_lit is not None:
         ghosts &= ~model.self_lit
     count = ghosts.sum(axis=0)
-    redo = count > 0
+    redo = count >= MIN_AGREE
     if not redo.any():
         return model
     # Median over the samples that show the scene there (NaN elsewhere).
     vals = scaled[:, redo].astype(np.float32)  # (K, N, 3)
     vals[~ghosts[:, redo]] = np.nan
+    med = np.nanmedian(vals, axis=0)
+    # The empty scene is the same in every sample that shows it: at least
+    # MIN_AGREE of them agree with their median (a person taken for a ghost in one
+    # sample, in another pose in the next, does not).
+    tmap = np.maximum(model.threshold, 3.0 * model.noise_map)[redo]
+    near = np.abs(vals - med).sum(axis=-1) <= tmap  # (NaN compares False)
+    ok = near.sum(axis=0) >= MIN_AGREE
+    idx = np.flatnonzero(redo.ravel())
+    redo.ravel()[idx[~ok]] = False
+    if not redo.any():
+        return model
     plate = model.plate.copy()
-    plate[redo] = np.clip(np.nanmedian(vals, axis=0), 0, 255).astype(np.uint8)
+    plate[redo] = np.clip(med[ok], 0, 255).astype(np.uint8)
     conf = np.maximum(model.confidence, np.where(redo, count / k, 0)).astype(np.float32)
     return replace(model, plate=plate, never_seen=model.never_seen & ~redo, confidence=conf)
