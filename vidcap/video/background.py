@@ -32,7 +32,8 @@ the spot) still takes its background from the frames where it is uncovered:
    flagged (``never_seen``) and inpainted from the surrounding background
    (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
 8. Second looks (:func:`vidcap.video.platepass.refine_plate`: self-lit pixels, the
-   appearance pass, plate -> person -> plate); then samples that show the empty
+   appearance pass, plate -> person -> plate); then, opt-in (:data:`EMPTY_SCENE`,
+   :data:`PERSON_BOX`), samples that show the empty
    scene where the plate holds a person who stood still later (a *ghost*, told by
    its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; and,
    when the plate left part of the frame never seen, a person the plate absorbed is
@@ -264,13 +265,19 @@ def _sample_indices(n: int, k: int, rng) -> np.ndarray:
 
 # --------------------------------------------------------------------------- estimation
 #: Re-take the plate from samples that show the empty scene
-#: (:mod:`vidcap.video.emptyscene`; ~0.3 s CPU per 300 frames of 640x480, every clip).
-#: cdnet_office_enter (tuning): 0.525 / 0.398 -> 0.900 / 0.750 (median / p10 IoU).
-EMPTY_SCENE = True
+#: (:mod:`vidcap.video.emptyscene`; ~0.3 s CPU per 300 frames of 640x480). Opt-in
+#: (``silhouettes_real.py --empty-scene``): with it and PERSON_BOX, median / p10 IoU
+#: cdnet_office_enter (tuning) 0.525 / 0.398 -> 0.899 / 0.748, sbi_candela
+#: (validation) 0.335 / 0.000 -> 0.972 / 0.868, but the validation render 14_19 2-5 s
+#: side 0.862 / 0.819 -> 0.610 / 0.150 (a moving person taken for a ghost) and
+#: pose2sim_balance_cam4 0.510 / 0.415 -> 0.447 / 0.000 vs MediaPipe (see
+#: benchmarks/RESULTS.md, Silhouettes).
+EMPTY_SCENE = False
 #: Look for a person the plate absorbed with a person detector
-#: (:mod:`vidcap.video.personbox`; only when the plate left >= 0.5 % never seen).
-#: cdnet_office_stand (tuning): 0.284 / 0.191 -> 0.809 / 0.671.
-PERSON_BOX = True
+#: (:mod:`vidcap.video.personbox`; only when the plate left >= 0.5 % never seen and
+#: the person stands still). Opt-in (``silhouettes_real.py --person-box``):
+#: cdnet_office_stand (tuning) 0.284 / 0.191 -> 0.811 / 0.677.
+PERSON_BOX = False
 
 
 def estimate_background(

@@ -141,6 +141,7 @@ def cut_in_box(frame: np.ndarray, box, sure: np.ndarray | None = None, *,
     if not ((m == cv2.GC_BGD).any() and np.isin(m, (cv2.GC_FGD, cv2.GC_PR_FGD)).any()):
         return np.zeros((h, w), bool)
     bgd, fgd = np.zeros((1, 65), np.float64), np.zeros((1, 65), np.float64)
+    cv2.setRNGSeed(0)  # grabCut seeds its colour models by k-means: the same cut every run
     cv2.grabCut(crop, m, None, bgd, fgd, iterations, cv2.GC_INIT_WITH_MASK)
     out = np.zeros((h, w), bool)
     out[cy0:cy1, cx0:cx1] = (m == cv2.GC_FGD) | (m == cv2.GC_PR_FGD)
