@@ -27,3 +27,23 @@ def test_a_plate_that_saw_everything_is_left_alone():
     frames = np.full((4, 64, 64, 3), 100, np.uint8)
     model = BackgroundModel.from_plate(frames[0], noise_sigma=2.0)
     assert absorbed_person(model, frames, np.ones((4, 3))) is model
+
+
+def test_where_the_still_person_stood_first_the_later_samples_give_the_plate():
+    from vidcap.video.personbox import _uncovered_plate
+
+    rng = np.random.default_rng(2)
+    wall = lambda: rng.integers(99, 102, (60, 80, 3)).astype(np.uint8)  # noqa: E731
+    a = np.zeros((60, 80), bool)
+    a[10:50, 10:25] = True  # where the person stands in samples 0-2
+    b = np.zeros((60, 80), bool)
+    b[10:50, 50:65] = True  # and in samples 3-5
+    frames = np.stack([wall() for _ in range(6)])
+    cuts = np.stack([a, a, a, b, b, b])
+    frames[cuts] = (20, 20, 180)
+    plate0 = frames[0].copy()  # the vote kept the person at A
+    model = BackgroundModel.from_plate(plate0, noise_sigma=2.0)
+    plate, seen = _uncovered_plate(model, frames, np.ones((6, 3)), cuts)
+    assert seen[15:45, 12:23].all()  # A is seen uncovered in samples 3-5
+    assert np.abs(plate[15:45, 12:23].astype(int) - 100).max() <= 6  # the wall
+    assert not seen[:, 40:].any()  # B shows the plate's wall already: nothing to re-take
