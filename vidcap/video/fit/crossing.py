@@ -38,6 +38,15 @@ _KNEES_EXCHANGED = [2, 1, 0, 3]  # ... the knees exchanged
 HEADING_WEIGHT = 1.0
 
 
+
+def _reach(start: np.ndarray, target: np.ndarray, full: np.ndarray):
+    """Image angles and foreshortening (at most 1) of segments of full lengths ``full``
+    (2,) turned from joints ``start`` (2, 2) toward ``target`` (2, 2), pixels: a target
+    beyond a segment's length is reached as far as it goes."""
+    v = target - start
+    fore = np.clip(np.hypot(v[:, 0], v[:, 1]) / full, 1.0 / np.maximum(full, 1.0), 1.0)
+    return image_angle(v), fore
+
 def exchange_legs(eng: _MaskEngine, st: FitState) -> FitState:
     """``st`` with each leg hung from the other hip, the knees and ankles kept.
 
@@ -58,11 +67,9 @@ def exchange_legs(eng: _MaskEngine, st: FitState) -> FitState:
         The legs exchanged (every segment drawn).
     """
     j = eng.joints(st)
-    v = j[_KNEES[::-1]] - j[_HIPS]  # (2, 2): each hip to the other leg's knee
-    length = np.hypot(v[:, 0], v[:, 1])
-    full = eng.L[_UPPER]
-    fore = np.clip(length / full, 1.0 / np.maximum(full, 1.0), 1.0)
-    upper = into_thigh_range(image_angle(v))
+    # each hip to the other leg's knee
+    upper, fore = _reach(j[_HIPS], j[_KNEES[::-1]], eng.L[_UPPER])
+    upper = into_thigh_range(upper)
     return st.with_entries(angles=(_UPPER + _LOWER, np.r_[upper, st.angles[_LOWER[::-1]]]),
                            fore=(_UPPER + _LOWER, np.r_[fore, st.fore[_LOWER[::-1]]]),
                            drawn=(slice(None), True))
@@ -86,11 +93,9 @@ def exchange_ankles(eng: _MaskEngine, st: FitState) -> FitState:
         The ankles exchanged (every segment drawn).
     """
     j = eng.joints(st)
-    v = j[_ANKLES[::-1]] - j[_KNEES]  # (2, 2): each knee to the other leg's ankle
-    length = np.hypot(v[:, 0], v[:, 1])
-    full = eng.L[_LOWER]
-    fore = np.clip(length / full, 1.0 / np.maximum(full, 1.0), 1.0)
-    return st.with_entries(angles=(_LOWER, image_angle(v)), fore=(_LOWER, fore),
+    # each knee to the other leg's ankle
+    lower, fore = _reach(j[_KNEES], j[_ANKLES[::-1]], eng.L[_LOWER])
+    return st.with_entries(angles=(_LOWER, lower), fore=(_LOWER, fore),
                            drawn=(slice(None), True))
 
 
