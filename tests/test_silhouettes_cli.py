@@ -120,3 +120,36 @@ def test_cli_graph_cut_on_an_in_place_clip_and_its_refused_combinations(cli, tmp
     assert ious[True].min() >= ious[False].min() - 0.02
     r = cli("silhouettes", video, "-o", tmp_path / "x.npz", "--graph-cut", "--method", "median")
     assert r.returncode == 2 and "--graph-cut" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_cli_still_person_finds_a_block_that_stood_still_after_an_empty_stretch(cli, tmp_path):
+    """`--still-person` (experimental): 10 frames of the empty wall, then a block that
+    stands still for 90 (2 of the 24 plate samples show the empty wall): without the
+    flag the plate keeps the block and the silhouettes miss it (IoU 0.0 in the session
+    it was made); with it the plate is re-taken from the empty samples (0.996). The
+    flag refuses a given plate."""
+    from tests.test_emptyscene import _block, _wall
+
+    rng = np.random.default_rng(3)
+    wall = _wall(rng)
+    frames = np.stack([wall() for _ in range(10)] + [_block(wall()) for _ in range(90)])
+    truth = np.zeros(frames.shape[:3], bool)
+    truth[10:, 30:80, 50:70] = True
+    video = tmp_path / "stand.mkv"
+    write_video(video, frames, 25, crf=12)
+    ious = {}
+    for flag in ([], ["--still-person"]):
+        out = tmp_path / f"m{len(flag)}.npz"
+        r = cli("silhouettes", video, "-o", out, *flag)
+        assert r.returncode == 0, r.stderr
+        with np.load(out) as z:
+            ious[bool(flag)] = _iou(z["masks"][10:], truth[10:])
+    assert np.median(ious[True]) >= 0.8
+    assert np.median(ious[True]) > np.median(ious[False]) + 0.2
+    plate = tmp_path / "plate.png"
+    import cv2
+
+    cv2.imwrite(str(plate), frames[0])
+    r = cli("silhouettes", video, "-o", tmp_path / "x.npz", "--still-person",
+            "--background", plate)
+    assert r.returncode == 2 and "--still-person" in r.stderr and "Traceback" not in r.stderr

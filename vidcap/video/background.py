@@ -284,7 +284,8 @@ def estimate_background(
     source, *, method: str = "felzenszwalb", n_samples: int = 24,
     work_size: int = 160, segment_scale: float = 60.0, min_region: int = 12,
     rng: np.random.Generator | None = None, progress: bool | None = None,
-    colour_models: bool = False,
+    colour_models: bool = False, empty_scene: bool | None = None,
+    person_box: bool | None = None,
 ) -> BackgroundModel:
     """Estimate the background plate of a static-camera video.
 
@@ -311,6 +312,14 @@ def estimate_background(
         Also learn the person's and the scene's colours over the clip
         (``BackgroundModel.colours``), which ``extract_silhouettes(graph_cut=True)``
         needs; about a tenth of the plate's time (``felzenszwalb`` only).
+    empty_scene : bool, optional
+        Re-take the plate from samples that show the empty scene where it holds a
+        person who stood still later (:mod:`vidcap.video.emptyscene`; experimental,
+        default :data:`EMPTY_SCENE`, off; ``felzenszwalb`` only).
+    person_box : bool, optional
+        Look for a person the plate absorbed with a person detector
+        (:mod:`vidcap.video.personbox`; experimental, default :data:`PERSON_BOX`,
+        off; ``felzenszwalb`` only).
 
     Returns
     -------
@@ -354,11 +363,11 @@ def estimate_background(
 
     model = refine_plate(model, frames, gains, weights_small.shape[1:],
                          colour_models=colour_models)
-    if EMPTY_SCENE:
+    if EMPTY_SCENE if empty_scene is None else empty_scene:
         from vidcap.video.emptyscene import plate_from_empty
 
         model = plate_from_empty(model, frames, gains)
-    if PERSON_BOX:
+    if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 
         model = absorbed_person(model, frames, gains)
