@@ -36,6 +36,8 @@ DEFAULT_CUES = "outline"
 #: ``--proportions`` default (:data:`vidcap.video.pipeline.DEFAULT_PROPORTIONS`, spelled
 #: here for a light ``--help``; a test checks they agree).
 DEFAULT_PROPORTIONS = "human"
+#: ``--proportions`` values of the commands that fit the body model.
+PROPORTION_CHOICES = ("human", "seed", "auto")
 #: ``--graph-cut`` default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`, spelled here
 #: for a light ``--help``; a test checks they agree).
 DEFAULT_GRAPH_CUT = False
@@ -49,6 +51,13 @@ def add_rig_argument(parser: argparse.ArgumentParser) -> None:
                         help="joint names and hierarchy of the BVH/glTF: ours (default), "
                         "Mixamo's (mixamorig:Hips...) or MotionBuilder HumanIK's (Hips...), "
                         "T-pose rest; mixamo and humanik face +Z as those characters do")
+
+
+def add_proportions_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """``--proportions``, shared by ``vidcap convert`` and ``vidcap pose2d`` (one default
+    and one set of choices; ``help_text`` says what the command does with them)."""
+    parser.add_argument("--proportions", default=DEFAULT_PROPORTIONS,
+                        choices=PROPORTION_CHOICES, help=help_text)
 
 
 def add_cues_argument(parser: argparse.ArgumentParser) -> None:
@@ -89,14 +98,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="3D from the 2D joints: one kinematic solve over the clip "
                         "(default; bone lengths constant, joint limits, smooth, feet planted "
                         "on walks and stands) or the seed's per-segment lift (segment)")
-    parser.add_argument("--proportions", default=DEFAULT_PROPORTIONS,
-                        choices=("human", "seed", "auto"),
-                        help="the body's proportions: human (default): a real adult's from an "
-                        "anthropometric table (joints where a person's are, the ankles above "
-                        "the soles), seed: the seed's Table 3.1/3.2 ratios, or auto: this "
-                        "subject's segment lengths and widths estimated from the clip (the "
-                        "2D fit done again with them); the 2D fit, the lift and the skeleton "
-                        "use them (--height stays the standing height)")
+    add_proportions_argument(parser,
+                             "the body's proportions: human (default): a real adult's from an "
+                             "anthropometric table (joints where a person's are, the ankles above "
+                             "the soles), seed: the seed's Table 3.1/3.2 ratios, or auto: this "
+                             "subject's segment lengths and widths estimated from the clip (the "
+                             "2D fit done again with them); the 2D fit, the lift and the skeleton "
+                             "use them (--height stays the standing height)")
     add_cues_argument(parser)
     parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                         help="re-decide a band round the person (and the parts of the scene "

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vidcap.commands.convert import DEFAULT_CUES, DEFAULT_PROPORTIONS, add_cues_argument
+from vidcap.commands.convert import DEFAULT_CUES, add_cues_argument, add_proportions_argument
 from vidcap.errors import InputFileError, UsageError
 
 NAME = "pose2d"
@@ -33,13 +33,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="silhouette height after normalisation (default 80)")
     parser.add_argument("--no-refine", action="store_true",
                         help="skip the extra Algorithm 1 pass over the limbs")
-    parser.add_argument("--proportions", default=DEFAULT_PROPORTIONS,
-                        choices=("human", "seed", "auto"),
-                        help="the model's proportions: human (default): a real adult's from an "
-                        "anthropometric table, the ankles above the soles; seed: the seed's "
-                        "Table 3.1/3.2 ratios; auto: this subject's, estimated from the clip, "
-                        "and the clip fitted again with them (all but seed written as "
-                        "body_lengths/body_widths, fractions of the standing height)")
+    add_proportions_argument(parser,
+                             "the model's proportions: human (default): a real adult's from an "
+                             "anthropometric table, the ankles above the soles; seed: the seed's "
+                             "Table 3.1/3.2 ratios; auto: this subject's, estimated from the clip, "
+                             "and the clip fitted again with them (all but seed written as "
+                             "body_lengths/body_widths, fractions of the standing height)")
     add_cues_argument(parser)
 
 
