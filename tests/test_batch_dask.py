@@ -40,7 +40,10 @@ def cluster():
     """Two single-thread worker processes on loopback; a clip whose workers die twice fails."""
     import dask
 
-    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
+    # worker-saturation 1.0 as vidcap's own local cluster: a healthy clip never waits
+    # on a worker that a dying clip takes down.
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1,
+                          "distributed.scheduler.worker-saturation": 1.0}), \
             distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                      host="127.0.0.1", dashboard_address="127.0.0.1:0",
                                      silence_logs=50) as c, \

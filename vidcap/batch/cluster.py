@@ -59,6 +59,13 @@ def connect(scheduler: str, *, default_workers: int = 1, timeout: float = 10.0):
     kind, value = parse_scheduler(scheduler, default_workers)
     with contextlib.ExitStack() as stack:
         if kind == "local":
+            import dask
+
+            # One clip in hand per single-thread worker: a clip queued behind another
+            # would count as "suspicious" when its neighbour kills the worker, and a
+            # healthy clip could end failed (allowed-failures). Clips are long, so
+            # queuing on the worker saves nothing.
+            stack.enter_context(dask.config.set({"distributed.scheduler.worker-saturation": 1.0}))
             cluster = stack.enter_context(LocalCluster(
                 n_workers=value, threads_per_worker=1, processes=True, host="127.0.0.1",
                 dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR))
