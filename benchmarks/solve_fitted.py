@@ -4,9 +4,17 @@ kept (``$VIDCAP_DATA/cache/solve_fitted/*.npz``, not in git), then only the 3D s
 Clips: tuning renders (vidcap.synth's walk at yaw 60 and 120, jacks at 30, arms at 120,
 60 frames: the set ``FITTED_NOISE_FLOOR`` was chosen on) and validation (the three
 samples, the four held-out renders of ``lift_accuracy.py --solve``). The validation rows
-are for reporting: choose nothing on them.
+are for reporting: choose nothing on them. For the front/back cue of the colour frame
+(``--front``, :mod:`vidcap.video.frontback`) the three samples were tuning too; the
+held-out renders stay validation.
 
-Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment]
+``--front`` reads the clips' colour frames (renders drawn again, the samples decoded;
+kept in ``$VIDCAP_DATA/cache/frontback/``) and hands the 3D stage the near-side cue; the
+extra column "front/back right" is the share of frames (not within 15 degrees of a side
+view) whose solved torso faces the camera as the truth does.
+
+Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment] [--front]
+                                        [--labels]
 """
 
 from __future__ import annotations
@@ -38,6 +46,65 @@ def _cache_dir() -> Path:
     d = Path(os.environ.get("VIDCAP_DATA", "/tmp")) / "cache" / "solve_fitted"
     d.mkdir(parents=True, exist_ok=True)
     return d
+
+
+def _frames_path(name) -> Path:
+    d = Path(os.environ.get("VIDCAP_DATA", "/tmp")) / "cache" / "frontback"
+    d.mkdir(parents=True, exist_ok=True)
+    return d / (name.replace(" ", "_").replace("/", "_") + ".npz")
+
+
+def clip_frames(name, body):
+    """The colour frames (F, H, W, 3) of a clip of :func:`tuning_clips` /
+    :func:`validation_clips` (its name without the tag), rendered or decoded once."""
+    path = _frames_path(name)
+    if not path.exists():
+        np.savez_compressed(path, frames=_make_frames(name, body))
+    return np.load(path)["frames"]
+
+
+def _make_frames(name, body):
+    from vidcap.io.video import iter_frames
+    from vidcap.synth import render_clip
+
+    for n, motion_name, yaw in TUNING:
+        if name == n:
+            m = make_motion(motion_name, body=body, fps=30.0, n_frames=FRAMES,
+                            rng=np.random.default_rng(0))
+            return render_clip(m, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                               rng=np.random.default_rng(0))[0]
+    for n, source, first, yaw in SOLVE_RENDERS:
+        if name == f"{n} yaw {yaw:.0f}":
+            m = _source_motion(source, body)
+            start = first if first >= 0 else m.n_frames + first
+            return render_clip(m.frames(start, min(start + FRAMES, m.n_frames)), yaw_deg=yaw,
+                               size=(640, 480), noise=0.0, rng=np.random.default_rng(0))[0]
+    return np.array(list(iter_frames(ROOT / "sample_videos" / f"{name}.mp4")))
+
+
+def _source_motion(source, body):
+    if source == "131_01":
+        return make_motion(DATA / "131_01.bvh", body=body, fps=30.0)
+    return make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body, fps=30.0)
+
+
+def true_yaw(true3) -> np.ndarray:
+    """The true torso's yaw (F,) radians in the lift's frame (0 facing the camera, +pi/2
+    facing image right), from joints (F, 15, 3) X right, Y up, Z toward the camera."""
+    from vidcap.body import JOINT_INDEX as J
+
+    lat = (true3[:, J["r_hip"]] - true3[:, J["l_hip"]]
+           + true3[:, J["r_shoulder"]] - true3[:, J["l_shoulder"]])
+    fwd = np.cross(np.array([0.0, 1.0, 0.0]), lat)
+    return np.arctan2(fwd[:, 0], fwd[:, 2])
+
+
+def front_back_right(yaw, true3, margin_deg: float = 15.0) -> float:
+    """Share of frames, not within ``margin_deg`` of a side view, whose ``yaw`` (F,)
+    faces the camera (cos > 0) as the truth does; NaN where every frame is a side view."""
+    c = np.cos(true_yaw(true3))
+    m = np.abs(c) > np.sin(np.deg2rad(margin_deg))
+    return float(np.mean(np.sign(np.cos(yaw[m])) == np.sign(c[m]))) if m.any() else np.nan
 
 
 def _render_fit(motion, yaw):
@@ -94,10 +161,7 @@ def validation_clips(body):
     for name, source, first, yaw in SOLVE_RENDERS:
         def make(name=name, source=source, first=first, yaw=yaw):
             if source not in full:
-                full[source] = (make_motion(DATA / "131_01.bvh", body=body, fps=30.0)
-                                if source == "131_01" else
-                                make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body,
-                                            fps=30.0))
+                full[source] = _source_motion(source, body)
             m = full[source]
             start = first if first >= 0 else m.n_frames + first
             return _render_fit(m.frames(start, min(start + 60, m.n_frames)), yaw)
@@ -118,10 +182,20 @@ def mirrored(true3):
     return swap_sides(true3 * np.array([1.0, 1.0, -1.0]))
 
 
-def evaluate(clips, body, method="solve"):
+def near_sides(clips, body):
+    """{clip name: the near-side cue (F,)} from each clip's colour frames."""
+    from vidcap.video.frontback import arm_visibility, near_side
+
+    return {name: near_side(arm_visibility(clip_frames(name.split(" (")[0], body),
+                                           c["joints2d"]))
+            for name, c in clips}
+
+
+def evaluate(clips, body, method="solve", near=None):
     """Rows (name, frames, PA-MPJPE mm, MPJPE mm, 2D error % of height, CPU s, PA-MPJPE
-    with the front/back mirror free per frame mm)."""
+    with the front/back mirror free per frame mm, share of frames front/back right)."""
     from vidcap.video.lifting import lift_pose
+    from vidcap.video.solve.skeleton import YAW
 
     rows = []
     for name, c in clips:
@@ -129,14 +203,17 @@ def evaluate(clips, body, method="solve"):
         lr = lift_pose(c["joints2d"], fps=float(c["fps"]), body=body, image_sides=True,
                        spread=c["spread"], track=c.get("track"),
                        frame_size=tuple(int(v) for v in c["size"]),
-                       model_height=c["model_height"], method=method)
+                       model_height=c["model_height"], method=method,
+                       near_side=None if near is None else near[name])
         secs = time.process_time() - t0
+        yaw = lr.yaw if lr.solve_params is None else lr.solve_params[:, YAW]
         e2 = np.linalg.norm(lr.joints2d - c["true2"], axis=-1).mean()
         h_px = np.mean(lr.scale) * body.height
         rows.append((name, len(lr.joints3d), st.pa_mpjpe_mm(lr.joints3d, c["true3"]),
                      st.mpjpe_mm(lr.joints3d, c["true3"]), e2 / h_px * 100, secs,
                      float(np.minimum(pa_per_frame(lr.joints3d, c["true3"]),
-                                      pa_per_frame(lr.joints3d, mirrored(c["true3"]))).mean())))
+                                      pa_per_frame(lr.joints3d, mirrored(c["true3"]))).mean()),
+                     front_back_right(yaw, c["true3"])))
     return rows
 
 
@@ -147,6 +224,9 @@ def main(argv=None):
     ap.add_argument("--labels", action="store_true",
                     help="let the solve choose the arms' and legs' names "
                          "(vidcap.video.solve.stage.LABELS)")
+    ap.add_argument("--front", action="store_true",
+                    help="the colour frame's near-side cue for front/back "
+                         "(vidcap.video.frontback)")
     args = ap.parse_args(argv)
     body = BodyModel()
     clips = tuning_clips(body)
@@ -156,13 +236,14 @@ def main(argv=None):
         import vidcap.video.solve.stage as solve_stage
 
         solve_stage.LABELS = True
-    rows = evaluate(clips, body, args.method)
+    near = near_sides(clips, body) if args.front else None
+    rows = evaluate(clips, body, args.method, near)
     print("clip | frames | PA-MPJPE mm | PA-MPJPE, front/back free mm | MPJPE mm | "
-          "2D error % of height (body sides) | CPU s")
-    print("--- | --- | --- | --- | --- | --- | ---")
+          "2D error % of height (body sides) | CPU s | front/back right")
+    print("--- | --- | --- | --- | --- | --- | --- | ---")
     for r in rows:
         print(f"{r[0]} | {r[1]} | {r[2]:.0f} | {r[6]:.0f} | {r[3]:.0f} | {r[4]:.1f} | "
-              f"{r[5]:.2f}")
+              f"{r[5]:.2f} | {r[7]:.2f}")
     for tag in ("tuning", "sample", "held out"):
         sel = [(r[2], r[6]) for r in rows if tag in r[0]]
         if sel:

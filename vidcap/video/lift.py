@@ -337,7 +337,7 @@ def swap_sides(joints2d) -> np.ndarray:
     return np.asarray(joints2d)[..., SWAP_JOINTS, :]
 
 
-def assign_sides(joints2d, yaw) -> np.ndarray:
+def assign_sides(joints2d, yaw, swap=None) -> np.ndarray:
     """Rename image-side limbs (``l_*`` = on the image's left) to the body's sides.
 
     A body facing the camera (cos yaw > 0) shows its left on the image's right, so
@@ -351,6 +351,9 @@ def assign_sides(joints2d, yaw) -> np.ndarray:
         Image-side named joints.
     yaw : array_like, shape (F,)
         Body yaw, radians.
+    swap : array_like of bool, shape (F,), optional
+        Which frames face the camera (their names swapped), where something other
+        than the yaw's sector says so (a side view whose front the colour frame shows).
 
     Returns
     -------
@@ -358,7 +361,9 @@ def assign_sides(joints2d, yaw) -> np.ndarray:
         Body-side named joints.
     """
     j = _check_joints2d(joints2d)
-    swap = np.cos(np.asarray(yaw, dtype=float)) > np.sin(_SIDE_HALF)
+    if swap is None:
+        swap = np.cos(np.asarray(yaw, dtype=float)) > np.sin(_SIDE_HALF)
+    swap = np.asarray(swap, bool)
     out = j.copy()
     out[swap] = j[swap][:, SWAP_JOINTS]
     return out

@@ -28,7 +28,7 @@ from vidcap.video.lift import (
     torso_width_ratio,
     yaw_from_orientation,
 )
-from vidcap.video.proposals import propose_orientation, propose_signs
+from vidcap.video.proposals import propose_front, propose_orientation, propose_signs
 from vidcap.video.solve.stage import check_method, solve_lift
 
 #: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
@@ -104,6 +104,9 @@ class LiftResult:
     #: ankles (F, 2) bool; None with the per-segment lift.
     solve_params: np.ndarray | None = None
     contact: np.ndarray | None = None
+    #: Front (+1) or back (-1) per frame from the colour frame's cue
+    #: (:func:`vidcap.video.proposals.propose_front`), 0 where none; None without the cue.
+    facing: np.ndarray | None = None
 
 
 def fill_gaps(joints2d) -> np.ndarray:
@@ -170,8 +173,14 @@ def constrain_orientation(labels, view: str = "auto") -> np.ndarray:
     return facing if view == "side" else np.char.add(f"{view}_", facing)
 
 
+#: How far (radians) a side view's yaw is turned toward the front or back the colour
+#: frame says (``facing``): the side labels carry no front/back, and the side
+#: sector spans 60 to 120 degrees.
+SIDE_TILT = np.deg2rad(15.0)
+
+
 def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,
-                    *, image_sides: bool = True, user_sides=None):
+                    *, image_sides: bool = True, user_sides=None, facing=None):
     """Orientation, yaw and side-named 2D joints once the user's events are applied.
 
     Parameters
@@ -191,6 +200,11 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
     user_sides : array_like of bool, shape (F, 2), optional
         :meth:`vidcap.video.annotations.Annotations.sides`: frames where the user swapped
         the arms' (column 0) or legs' (column 1) left and right.
+    facing : array_like of int, shape (F,), optional
+        Front (+1) or back (-1) from the colour frame (:attr:`LiftResult.facing`), 0
+        where unknown: where the orientation is a side label (``left``, ``right``), the
+        yaw is turned :data:`SIDE_TILT` that way and image-side names are read as that
+        view's (its left on the image's right when it faces the camera).
 
     Returns
     -------
@@ -202,7 +216,13 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
     orientation = np.where(user_orientation != "", user_orientation,
                            proposed_orientation).astype(str)
     yaw = yaw_from_orientation(orientation, spread)
-    j2 = assign_sides(joints2d, yaw) if image_sides else joints2d
+    swap = None
+    if facing is not None:
+        f = np.asarray(facing, dtype=float)
+        tilt = ((orientation == "left") | (orientation == "right")) & (f != 0)
+        yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
+        swap = np.where(tilt, f > 0, np.cos(yaw) > np.sin(np.deg2rad(30.0)))
+    j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
     if user_sides is not None:
         j2 = swap_pairs(j2, user_sides)
     j2 = np.where(np.isfinite(user_joints), user_joints, j2)
@@ -320,6 +340,7 @@ def lift_pose(
     model_height=None,
     view: str = "auto",
     method: str = "solve",
+    near_side=None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -357,6 +378,9 @@ def lift_pose(
         What the user said of the view for the whole clip (:data:`VIEWS`), applied to
         the proposed orientation (:func:`constrain_orientation`); the annotations'
         orientation events still override it from their frames.
+    near_side : array_like, shape (F,), optional
+        Which arm the colour frame shows in front (:func:`vidcap.video.frontback.near_side`,
+        for image-side names): the orientation proposal's front/back.
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
@@ -396,13 +420,18 @@ def lift_pose(
     if smooth_2d > 0 and F > 2:
         j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     rho = _torso_spread(j2, spread, geometry, body, max(1, int(round(yaw_window_s * fps)) | 1))
+    near = near_side if image_sides else None
     proposed_orient = propose_orientation(j2, scale=geometry, fps=fps, body=body,
                                           sides_known=not image_sides, track=track,
-                                          window_s=yaw_window_s, turn_window_s=yaw_window_s)
+                                          window_s=yaw_window_s, turn_window_s=yaw_window_s,
+                                          near_side=near)
     proposed_orient = constrain_orientation(proposed_orient, view)
+    facing = None if near is None else propose_front(
+        near, np.char.endswith(proposed_orient, "right"), fps=fps)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
-                                      image_sides=image_sides, user_sides=annotations.sides(F))
+                                      image_sides=image_sides, user_sides=annotations.sides(F),
+                                      facing=_facing_free(facing, user_orient))
     free = propose_signs(j2, yaw, scale=geometry, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \
@@ -423,7 +452,15 @@ def lift_pose(
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
         clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
         segment_scale=seg_scale, excess=out.excess, solve_params=params, contact=contact,
+        facing=facing,
     )
+
+
+def _facing_free(facing, user_orientation):
+    """``facing`` with 0 where the user set the orientation (theirs rules), or None."""
+    if facing is None:
+        return None
+    return np.where(np.asarray(user_orientation) != "", 0, facing).astype(np.int8)
 
 
 __all__ = ["NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult", "apply_user_view", "check_view",

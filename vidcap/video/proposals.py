@@ -403,6 +403,54 @@ def _read_signs(marg, n_frames: int):
     return signs, margin
 
 
+#: :func:`propose_orientation`'s front/back from the colour frame: the averaging window
+#: (seconds) and threshold of :func:`vidcap.video.frontback.near_side`.
+NEAR_SIDE_WINDOW_S = 2.0
+NEAR_SIDE_MIN = 0.03
+
+
+def propose_front(near_side, right, *, fps: float, min_near: float = NEAR_SIDE_MIN,
+                  window_s: float = NEAR_SIDE_WINDOW_S) -> np.ndarray:
+    """Front or back per frame from the colour frame's near-side cue.
+
+    A body facing image right shows its right side to the camera: its right arm, the
+    one in front of the body, is on the image's left when it faces the camera and on
+    the image's right when it is turned away (mirrored for a body facing left). The
+    cue is averaged over ``window_s`` (the body turns slowly, and the cue is sparse:
+    arms swung clear of the body say nothing); where the average's size exceeds
+    ``min_near`` it decides, elsewhere the nearest frame it decided.
+
+    Parameters
+    ----------
+    near_side : array_like, shape (F,)
+        :func:`vidcap.video.frontback.near_side` (> 0: the image-left arm in front).
+    right : array_like of bool, shape (F,)
+        The body faces image right (the orientation proposal's side).
+    fps : float
+    min_near, window_s : float
+        Threshold (skin likelihood, 0-1) and window (seconds).
+
+    Returns
+    -------
+    numpy.ndarray of int8, shape (F,)
+        +1 facing the camera, -1 turned away, 0 everywhere when no frame decides.
+    """
+    e = np.nan_to_num(np.asarray(near_side, dtype=float)) * np.where(right, 1.0, -1.0)
+    F = len(e)
+    if F > 1:
+        e = uniform_filter1d(e, max(1, int(round(window_s * fps))), mode="nearest")
+    known = np.abs(e) > min_near
+    if not known.any():
+        return np.zeros(F, np.int8)
+    idx = np.flatnonzero(known)
+    pos = np.clip(np.searchsorted(idx, np.arange(F)), 0, len(idx) - 1)
+    before = idx[np.clip(pos - 1, 0, len(idx) - 1)]
+    after = idx[pos]
+    t = np.arange(F)
+    use = np.where(np.abs(before - t) < np.abs(after - t), before, after)
+    return np.where(e[use] > 0, 1, -1).astype(np.int8)
+
+
 def propose_orientation(
     joints2d,
     *,
@@ -415,6 +463,9 @@ def propose_orientation(
     min_fold: float = 0.1,
     window_s: float = 0.5,
     turn_window_s: float | None = 0.2,
+    near_side=None,
+    min_near: float = NEAR_SIDE_MIN,
+    near_window_s: float = NEAR_SIDE_WINDOW_S,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
@@ -434,7 +485,11 @@ def propose_orientation(
     * front vs back: with body-side named joints (``sides_known``), whether the
       body's left shoulder/hip appear on the image's right (facing the camera).
       From a silhouette alone front and back are mirror images (orthographic
-      projection), so without known sides ``front`` is proposed; one orientation
+      projection). With image-side names, the colour frame's ``near_side``
+      (:func:`vidcap.video.frontback.near_side`: > 0 where the image-left arm is
+      in front of the body) decides: a body facing image right shows its right arm
+      nearer the camera, on the image's left when it faces the camera
+      (:func:`propose_front`; ``front`` where no frame decides). One orientation
       event fixes a whole clip.
 
     Parameters
@@ -462,6 +517,10 @@ def propose_orientation(
         side view vs front/back. A turning body passes through the 60-degree side
         sector quickly (at 180 degrees/s in a third of a second), so a window much
         longer than that labels the whole passage with the neighbouring sector.
+    near_side : array_like, shape (F,), optional
+        :func:`vidcap.video.frontback.near_side` (image-side names only).
+    min_near, near_window_s : float
+        Its threshold and averaging window (:func:`propose_front`).
 
     Returns
     -------
@@ -510,6 +569,9 @@ def propose_orientation(
         d = (j2[:, ji["l_shoulder"], 0] - j2[:, ji["r_shoulder"], 0]
              + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])
         front = median_filter(d, size=win, mode="nearest") >= 0
+    elif near_side is not None:
+        front = propose_front(near_side, right, fps=fps, min_near=min_near,
+                              window_s=near_window_s) >= 0
     else:
         front = np.ones(F, bool)
     side = np.where(right, "right", "left")
