@@ -469,6 +469,7 @@ SOLVE_RENDERS = (("131_01 2-4s", "131_01", 60, 60.0), ("131_01 5-7s", "131_01", 
 def _render_clips(body, frames):
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.frontback import arm_visibility, near_side
 
     full = {"131_01": make_motion(DATA / "131_01.bvh", body=body, fps=30.0),
             "07_07": make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body, fps=30.0)}
@@ -477,18 +478,20 @@ def _render_clips(body, frames):
         n = full[source].n_frames
         start = first if first >= 0 else n + first
         motion = full[source].frames(start, min(start + frames, n))
-        _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
-                               rng=np.random.default_rng(0))
+        frames, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                    rng=np.random.default_rng(0))
         pose = fit_sequence(truth["masks"])
         fit = {"joints2d": pose.joints2d, "spread": pose.spread,
-               "model_height": pose.model_height}
+               "model_height": pose.model_height,
+               "near_side": near_side(arm_visibility(frames, pose.joints2d))}
         out.append((f"{name} yaw {yaw:.0f} (held out)", fit, truth,
                     truth_in_camera_frame(truth), (640, 480)))
     return out
 
 
 def _sample_clips(body):
-    from vidcap.video.pipeline import run
+    """The samples through the pipeline (tuning for the front/back cue's constants)."""
+    from vidcap.video.pipeline import front_cue, run
 
     out = []
     cache = ROOT / ".vidcap-cache"  # the 2D stage's cache (not in git)
@@ -500,7 +503,8 @@ def _sample_clips(body):
         res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
                   cache_dir=cache, lift="segment", proportions="seed")  # seed renders
         fit = {"joints2d": res.image_joints2d, "spread": res.spread,
-               "model_height": res.model_height, "track": res.track}
+               "model_height": res.model_height, "track": res.track,
+               "near_side": front_cue(video, res.image_joints2d)}
         out.append((f"{video.stem} (sample)", fit, t, truth_in_camera_frame(t),
                     (res.masks.shape[2], res.masks.shape[1])))
     return out

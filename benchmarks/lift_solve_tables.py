@@ -145,17 +145,25 @@ def end_to_end_rows(clips, body):
     for name, fit, truth, true3, size in clips:
         fps = float(truth["fps"])
         planted = true_planted(true3, fps)
-        for method in ("segment", "solve"):
+        for method in LIFTS:
             t0 = time.perf_counter()
             lr = lift_pose(fit["joints2d"], fps=fps, body=body, image_sides=True,
                            spread=fit["spread"], track=fit.get("track"), frame_size=size,
-                           model_height=fit["model_height"], method=method)
+                           model_height=fit["model_height"], method=method.split()[0],
+                           near_side=fit.get("near_side") if method == FRONT else None)
             secs = time.perf_counter() - t0
             e2 = np.linalg.norm(lr.joints2d - truth["joints2d"], axis=-1).mean()
             h_px = np.mean(lr.scale) * body.height
             rows.append((name, len(lr.joints3d), method,
                          *_row("", lr.joints3d, true3, fps, planted)[1:], e2 / h_px * 100, secs))
     return rows
+
+
+#: The lifts of the end-to-end and real tables: the per-segment lift, the solve without
+#: and with the colour frame's front/back cue (:mod:`vidcap.video.frontback`; the
+#: pipeline's default since issue 33's front/back work), same 2D, same run.
+FRONT = "solve + front cue"
+LIFTS = ("segment", "solve", FRONT)
 
 
 def print_end_to_end(rows):
@@ -196,6 +204,7 @@ def real_rows(video, reference, body, frames=None, label=None):
 
     from vidcap.body import JOINT_NAMES
     from vidcap.video.lifting import lift_pose
+    from vidcap.video.pipeline import front_cue
 
     res = pipeline_result(Path(video), height=body.height)
     ref = mediapipe_world(reference, JOINT_NAMES)
@@ -207,10 +216,12 @@ def real_rows(video, reference, body, frames=None, label=None):
         ok &= np.asarray(frames, bool)[:n]
     label = label or Path(video).name
     rows = []
-    for method in ("segment", "solve"):
+    near = front_cue(video, res.image_joints2d)
+    for method in LIFTS:
         lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
                        spread=res.spread, track=res.track, frame_size=size,
-                       model_height=res.model_height, method=method)
+                       model_height=res.model_height, method=method.split()[0],
+                       near_side=near if method == FRONT else None)
         rows.append((label, int(ok.sum()), method,
                      pa_mpjpe_mm(lr.joints3d[:n][ok], ref[:n][ok])))
     rows.append((label, int(ok.sum()), "standing pose", standing_baseline_mm(ref[:n][ok], body)))

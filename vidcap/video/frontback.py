@@ -107,7 +107,7 @@ def arm_visibility(frames, joints2d, search=SEARCH) -> np.ndarray:
     ----------
     frames : iterable of numpy.ndarray, shape (H, W, 3) uint8
         The clip's colour frames (BGR), in order, one per row of ``joints2d``; ``None``
-        for a frame not available.
+        for a frame not available (frames beyond the last one given count as such).
     joints2d : array_like, shape (F, 15, 2)
         Fitted 2D joints, pixels; NaN where none.
 
@@ -122,7 +122,6 @@ def arm_visibility(frames, joints2d, search=SEARCH) -> np.ndarray:
     F = len(pts["head"])
     names = ("head", "cloth", "arm_left", "arm_right")
     bins = {k: np.full(pts[k].shape[:2], -1, np.int64) for k in names}
-    k = -1
     for k, frame in enumerate(frames):
         if k >= F:
             break
@@ -130,8 +129,6 @@ def arm_visibility(frames, joints2d, search=SEARCH) -> np.ndarray:
             continue
         for name in names:
             bins[name][k] = _bins_at(np.asarray(frame), pts[name][k])
-    if k + 1 < F:
-        raise ValueError(f"{k + 1} frames for {F} frames of joints")
     model = ColourModel()
     n_bins = model.counts.shape[1]
     for c, name in enumerate(("head", "cloth")):

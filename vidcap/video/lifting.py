@@ -176,7 +176,7 @@ def constrain_orientation(labels, view: str = "auto") -> np.ndarray:
 #: How far (radians) a side view's yaw is turned toward the front or back the colour
 #: frame says (``facing``): the side labels carry no front/back, and the side
 #: sector spans 60 to 120 degrees.
-SIDE_TILT = np.deg2rad(15.0)
+SIDE_TILT = 0.0
 
 
 def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,

@@ -196,7 +196,7 @@ def run(
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
                                body=body, annotations=ann, ann_source=ann_source, view=view,
                                smooth_sigma=smooth_sigma, keyframe_score=keyframe_score,
-                               log=log, lift_method=lift)
+                               log=log, lift_method=lift, video=video)
     return ConvertResult(
         video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
         scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
@@ -685,19 +685,38 @@ def _image_joints(pose: dict, masks: MaskStack):
     return joints2d, model_height, outside
 
 
+#: Whether the 3D stage reads front and back from the colour frames
+#: (:mod:`vidcap.video.frontback`: which arm is in front of the body). On: on the tuning
+#: renders and samples the share of frames solved facing the right way rose and
+#: PA-MPJPE fell (benchmarks/RESULTS.md, issue 33, the front/back cue).
+FRONT_CUE = True
+
+
+def front_cue(video, joints2d) -> np.ndarray:
+    """The near-side cue (F,) of ``video``'s frames (decoded again, one at a time) for
+    the image-side named 2D joints (F, 15, 2): :func:`vidcap.video.frontback.near_side`."""
+    from vidcap.io.video import iter_frames
+    from vidcap.video.frontback import arm_visibility, near_side
+
+    return near_side(arm_visibility(iter_frames(video, stop=len(joints2d)), joints2d))
+
+
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
                      annotations: Annotations, ann_source, view: str, smooth_sigma: float,
-                     keyframe_score: float | None, log, lift_method: str = "solve") -> _Lifted:
+                     keyframe_score: float | None, log, lift_method: str = "solve",
+                     video=None) -> _Lifted:
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
-    ``keyframe_score`` is given."""
+    ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
+    front/back cue (:func:`front_cue`)."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
+    near = None if video is None or not FRONT_CUE else front_cue(video, joints2d)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=model_height, view=view,
-                       method=lift_method)
+                       method=lift_method, near_side=near)
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(pose["similarity"], min_score=keyframe_score)
