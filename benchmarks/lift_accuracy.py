@@ -478,12 +478,12 @@ def _render_clips(body, frames):
         n = full[source].n_frames
         start = first if first >= 0 else n + first
         motion = full[source].frames(start, min(start + frames, n))
-        frames, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+        images, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                     rng=np.random.default_rng(0))
         pose = fit_sequence(truth["masks"])
         fit = {"joints2d": pose.joints2d, "spread": pose.spread,
                "model_height": pose.model_height,
-               "near_side": near_side(arm_visibility(frames, pose.joints2d))}
+               "near_side": near_side(arm_visibility(images, pose.joints2d))}
         out.append((f"{name} yaw {yaw:.0f} (held out)", fit, truth,
                     truth_in_camera_frame(truth), (640, 480)))
     return out

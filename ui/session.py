@@ -82,6 +82,10 @@ class ClipData:
     fit_kw : dict, optional
         The body keywords (``body``, ``foot``) the 2D fit used, for those refits
         (default: the seed's body).
+    near_side : numpy.ndarray, shape (F,), optional
+        The colour frames' front/back cue (:func:`vidcap.video.frontback.near_side`), as
+        ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.front_cue`); kept as
+        loaded when silhouettes are recomputed.
     """
 
     video: Path
@@ -99,6 +103,7 @@ class ClipData:
     resegment: Callable | None = None
     pose: dict | None = None
     fit_kw: dict = field(default_factory=dict)
+    near_side: np.ndarray | None = None
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -239,7 +244,8 @@ class AnnotateSession(RegionEditing):
         c = self.clip
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
                          image_sides=c.image_sides, spread=c.spread, track=c.track,
-                         frame_size=c.size, model_height=c.model_height, method=self.lift)
+                         frame_size=c.size, model_height=c.model_height, method=self.lift,
+                         near_side=c.near_side)
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.video.lifting.LiftResult`)."""
@@ -279,7 +285,7 @@ class AnnotateSession(RegionEditing):
         sides = self.annotations.sides(self.n_frames)
         orientation, yaw, j2 = apply_user_view(
             self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
-            image_sides=self.clip.image_sides, user_sides=sides)
+            image_sides=self.clip.image_sides, user_sides=sides, facing=res.facing)
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
         centre = (0.5 * self.clip.size[0], 0.5 * self.clip.size[1])
         if self._params is not None:
@@ -602,17 +608,28 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     regions = _file_regions(annotations, video)
     res = pipeline.run(video, annotations=regions, height=height, cache_dir=cache_dir,
                        progress=progress, log=log)
+    from vidcap.video.frontback import arm_visibility, near_side
+
     joints2d, spread = res.image_joints2d, res.spread
     jpegs = []
     size = (0, 0)
-    for frame in iter_frames(video):
-        h, w = frame.shape[:2]
-        size = (w, h)
-        if w > MAX_DISPLAY_WIDTH:  # kept at the size the page shows (4K: 1/9 the memory)
-            frame = cv2.resize(frame, (MAX_DISPLAY_WIDTH, round(h * MAX_DISPLAY_WIDTH / w)),
-                               interpolation=cv2.INTER_AREA)
-        ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
-        jpegs.append(buf)
+
+    def frames():  # each frame read once: kept for the page, and read for the front cue
+        nonlocal size
+        for frame in iter_frames(video):
+            yield frame
+            h, w = frame.shape[:2]
+            size = (w, h)
+            if w > MAX_DISPLAY_WIDTH:  # kept at the size the page shows (4K: 1/9 the memory)
+                frame = cv2.resize(frame, (MAX_DISPLAY_WIDTH, round(h * MAX_DISPLAY_WIDTH / w)),
+                                   interpolation=cv2.INTER_AREA)
+            ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
+            jpegs.append(buf)
+
+    decoded = frames()
+    near = near_side(arm_visibility(decoded, joints2d)) if pipeline.FRONT_CUE else None
+    for _ in decoded:  # the rest (all of them without the cue)
+        pass
     n = min(len(jpegs), res.n_frames)
 
     def read_frame(i: int) -> np.ndarray:
@@ -632,7 +649,8 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     resegment=_resegmenter(video, cache_dir, log),
                     pose={"joints2d": joints2d[:n], "scores": res.scores[:n],
                           "similarity": res.similarity[:n], "spread": spread[:n],
-                          "model_height": res.model_height[:n]})
+                          "model_height": res.model_height[:n]},
+                    near_side=None if near is None else near[:n])
 
 
 def _fit_keywords(proportions) -> dict:

@@ -175,8 +175,20 @@ def constrain_orientation(labels, view: str = "auto") -> np.ndarray:
 
 #: How far (radians) a side view's yaw is turned toward the front or back the colour
 #: frame says (``facing``): the side labels carry no front/back, and the side
-#: sector spans 60 to 120 degrees.
+#: sector spans 60 to 120 degrees. The names carry it already: 0 / 8 / 15 / 25 degrees
+#: gave 85.1 / 85.9 / 86.4 / 85.3 mm on the tuning renders (samples 95.8 each;
+#: ``benchmarks/solve_fitted.py --front``).
 SIDE_TILT = 0.0
+
+
+#: The torso's foreshortening above which a side view is named by the colour frame's
+#: front/back (``facing``): about 12 degrees or more from a pure side view. Nearer, the
+#: torso is edge-on, a body and its mirror differ only in which arm and leg is which
+#: (a coin toss the front/back cue does not decide: the samples' walk_side went 160 ->
+#: 91 mm with it, the held-out 07_07 end 57 -> 211), so the fit's names are kept. The
+#: tuning walks at yaw 60 and 120 have their side frames at 0.32-0.45, the pure side
+#: views (walk_side; arms raised sideways at yaw 120) at 0-0.1.
+SIDE_FACING_SPREAD = 0.2
 
 
 def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,
@@ -202,9 +214,10 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         the arms' (column 0) or legs' (column 1) left and right.
     facing : array_like of int, shape (F,), optional
         Front (+1) or back (-1) from the colour frame (:attr:`LiftResult.facing`), 0
-        where unknown: where the orientation is a side label (``left``, ``right``), the
-        yaw is turned :data:`SIDE_TILT` that way and image-side names are read as that
-        view's (its left on the image's right when it faces the camera).
+        where unknown: where the orientation is a side label (``left``, ``right``), not
+        the user's, and ``spread`` exceeds :data:`SIDE_FACING_SPREAD`, the yaw is turned
+        :data:`SIDE_TILT` that way and image-side names are read as that view's (its
+        left on the image's right when it faces the camera).
 
     Returns
     -------
@@ -220,6 +233,8 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
     if facing is not None:
         f = np.asarray(facing, dtype=float)
         tilt = ((orientation == "left") | (orientation == "right")) & (f != 0)
+        tilt &= np.asarray(user_orientation) == ""  # the user's side view stays one
+        tilt &= np.asarray(spread, float) > SIDE_FACING_SPREAD
         yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
         swap = np.where(tilt, f > 0, np.cos(yaw) > np.sin(np.deg2rad(30.0)))
     j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
@@ -431,7 +446,7 @@ def lift_pose(
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
-                                      facing=_facing_free(facing, user_orient))
+                                      facing=facing)
     free = propose_signs(j2, yaw, scale=geometry, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \
@@ -454,13 +469,6 @@ def lift_pose(
         segment_scale=seg_scale, excess=out.excess, solve_params=params, contact=contact,
         facing=facing,
     )
-
-
-def _facing_free(facing, user_orientation):
-    """``facing`` with 0 where the user set the orientation (theirs rules), or None."""
-    if facing is None:
-        return None
-    return np.where(np.asarray(user_orientation) != "", 0, facing).astype(np.int8)
 
 
 __all__ = ["NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult", "apply_user_view", "check_view",

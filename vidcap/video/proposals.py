@@ -403,13 +403,33 @@ def _read_signs(marg, n_frames: int):
     return signs, margin
 
 
-#: :func:`propose_orientation`'s front/back from the colour frame: the averaging window
-#: (seconds) and threshold of :func:`vidcap.video.frontback.near_side`.
+#: :func:`propose_front`: the averaging window (seconds) of
+#: :func:`vidcap.video.frontback.near_side` and the averages that decide front and
+#: back. Back needs more: the default is front, and a body read turned away when it
+#: faces the camera is mirrored whole. Chosen on the tuning renders and the samples
+#: (``benchmarks/solve_fitted.py --front``, mean PA-MPJPE of the seven): front/back
+#: thresholds 0.03/0.03 89.7 mm, 0.01/0.03 89.3, 0.01/0.05 88.7, 0.05/0.05 90.9,
+#: 0.01/0.01 and 0.02/0.02 108.6 (the 'arms' sample read turned away); windows 1 / 4 /
+#: 8 s 104.4 / 107.6 / 107.3 at 0.03/0.03 (1 s: the fitted arms' errors decide; 4-8 s:
+#: the weak front cue is averaged away at the side sector's edge).
 NEAR_SIDE_WINDOW_S = 2.0
-NEAR_SIDE_MIN = 0.03
+NEAR_SIDE_MIN_FRONT = 0.01
+NEAR_SIDE_MIN_BACK = 0.05
 
 
-def propose_front(near_side, right, *, fps: float, min_near: float = NEAR_SIDE_MIN,
+def _window_mean(x, window: int) -> np.ndarray:
+    """Mean of ``x`` (F,) over the ``window`` frames centred on each, cut at the clip's
+    ends (not padded: a clip shorter than the window is not outvoted by its end frames
+    repeated)."""
+    c = np.r_[0.0, np.cumsum(x)]
+    t = np.arange(len(x))
+    lo = np.clip(t - window // 2, 0, len(x))
+    hi = np.clip(t + window - window // 2, 0, len(x))
+    return (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
+
+
+def propose_front(near_side, right, *, fps: float, min_front: float = NEAR_SIDE_MIN_FRONT,
+                  min_back: float = NEAR_SIDE_MIN_BACK,
                   window_s: float = NEAR_SIDE_WINDOW_S) -> np.ndarray:
     """Front or back per frame from the colour frame's near-side cue.
 
@@ -417,8 +437,8 @@ def propose_front(near_side, right, *, fps: float, min_near: float = NEAR_SIDE_M
     one in front of the body, is on the image's left when it faces the camera and on
     the image's right when it is turned away (mirrored for a body facing left). The
     cue is averaged over ``window_s`` (the body turns slowly, and the cue is sparse:
-    arms swung clear of the body say nothing); where the average's size exceeds
-    ``min_near`` it decides, elsewhere the nearest frame it decided.
+    arms swung clear of the body say nothing); where the average exceeds ``min_front``
+    or falls below ``-min_back`` it decides, elsewhere the nearest frame it decided.
 
     Parameters
     ----------
@@ -427,19 +447,18 @@ def propose_front(near_side, right, *, fps: float, min_near: float = NEAR_SIDE_M
     right : array_like of bool, shape (F,)
         The body faces image right (the orientation proposal's side).
     fps : float
-    min_near, window_s : float
-        Threshold (skin likelihood, 0-1) and window (seconds).
+    min_front, min_back, window_s : float
+        Thresholds (skin likelihood, 0-1) and window (seconds).
 
     Returns
     -------
     numpy.ndarray of int8, shape (F,)
         +1 facing the camera, -1 turned away, 0 everywhere when no frame decides.
     """
-    e = np.nan_to_num(np.asarray(near_side, dtype=float)) * np.where(right, 1.0, -1.0)
+    e = _window_mean(np.nan_to_num(np.asarray(near_side, dtype=float))
+                     * np.where(right, 1.0, -1.0), max(1, int(round(window_s * fps))))
     F = len(e)
-    if F > 1:
-        e = uniform_filter1d(e, max(1, int(round(window_s * fps))), mode="nearest")
-    known = np.abs(e) > min_near
+    known = (e > min_front) | (e < -min_back)
     if not known.any():
         return np.zeros(F, np.int8)
     idx = np.flatnonzero(known)
@@ -464,8 +483,6 @@ def propose_orientation(
     window_s: float = 0.5,
     turn_window_s: float | None = 0.2,
     near_side=None,
-    min_near: float = NEAR_SIDE_MIN,
-    near_window_s: float = NEAR_SIDE_WINDOW_S,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
@@ -518,9 +535,8 @@ def propose_orientation(
         sector quickly (at 180 degrees/s in a third of a second), so a window much
         longer than that labels the whole passage with the neighbouring sector.
     near_side : array_like, shape (F,), optional
-        :func:`vidcap.video.frontback.near_side` (image-side names only).
-    min_near, near_window_s : float
-        Its threshold and averaging window (:func:`propose_front`).
+        :func:`vidcap.video.frontback.near_side` (image-side names only), read by
+        :func:`propose_front` with its default thresholds.
 
     Returns
     -------
@@ -570,8 +586,7 @@ def propose_orientation(
              + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])
         front = median_filter(d, size=win, mode="nearest") >= 0
     elif near_side is not None:
-        front = propose_front(near_side, right, fps=fps, min_near=min_near,
-                              window_s=near_window_s) >= 0
+        front = propose_front(near_side, right, fps=fps) >= 0
     else:
         front = np.ones(F, bool)
     side = np.where(right, "right", "left")
