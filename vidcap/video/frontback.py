@@ -140,10 +140,12 @@ def arm_visibility(frames, joints2d, search=SEARCH) -> np.ndarray:
     table = model.table()
     for c, name in enumerate(("arm_left", "arm_right")):
         b = bins[name]
-        p = np.where(b >= 0, table[np.maximum(b, 0)], np.nan).reshape(F, -1, len(_ARM_T))
-        seen = (b >= 0).reshape(F, -1, len(_ARM_T)).any(-1).any(-1)
-        with np.errstate(invalid="ignore"):
-            out[seen, c] = np.nanmax(np.nanmean(p[seen], axis=2), axis=1)
+        ok = (b >= 0).reshape(F, -1, len(_ARM_T))
+        p = np.where(b >= 0, table[np.maximum(b, 0)], 0.0).reshape(ok.shape)
+        n = ok.sum(-1)  # (F, A): samples of each tried forearm inside the frame
+        mean = np.where(n > 0, p.sum(-1) / np.maximum(n, 1), -1.0)
+        best = mean.max(-1)
+        out[:, c] = np.where(best >= 0, best, np.nan)
     return out
 
 
