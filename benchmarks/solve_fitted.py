@@ -6,7 +6,8 @@ Clips: tuning renders (vidcap.synth's walk at yaw 60 and 120, jacks at 30, arms 
 samples, the four held-out renders of ``lift_accuracy.py --solve``). The validation rows
 are for reporting: choose nothing on them. For the front/back cue of the colour frame
 (``--front``, :mod:`vidcap.video.frontback`) the three samples were tuning too; the
-held-out renders stay validation.
+held-out renders stay validation, but for 07_07 end (seen when choosing
+``vidcap.video.lifting.SIDE_FACING_SPREAD``).
 
 ``--front`` reads the clips' colour frames (renders drawn again, the samples decoded;
 kept in ``$VIDCAP_DATA/cache/frontback/``) and hands the 3D stage the near-side cue; the

@@ -407,7 +407,8 @@ def _read_signs(marg, n_frames: int):
 #: :func:`vidcap.video.frontback.near_side` and the averages that decide front and
 #: back. Back needs more: the default is front, and a body read turned away when it
 #: faces the camera is mirrored whole. Chosen on the tuning renders and the samples
-#: (``benchmarks/solve_fitted.py --front``, mean PA-MPJPE of the seven): front/back
+#: (``benchmarks/solve_fitted.py --front``, mean PA-MPJPE of the seven, measured before
+#: ``SIDE_FACING_SPREAD`` and the window cut at the clip's ends): front/back
 #: thresholds 0.03/0.03 89.7 mm, 0.01/0.03 89.3, 0.01/0.05 88.7, 0.05/0.05 90.9,
 #: 0.01/0.01 and 0.02/0.02 108.6 (the 'arms' sample read turned away); windows 1 / 4 /
 #: 8 s 104.4 / 107.6 / 107.3 at 0.03/0.03 (1 s: the fitted arms' errors decide; 4-8 s:
