@@ -339,6 +339,20 @@ def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
     return median_filter(rho, size=window, mode="nearest")
 
 
+def _propose_view(j2, geometry, fps, body, *, image_sides, track, window_s, view, near_side):
+    """The proposed orientation labels (F,) within ``view``, and the colour frame's
+    front/back (:func:`vidcap.video.proposals.propose_front`, (F,) int8, or None without
+    ``near_side`` or with body-side names)."""
+    near = near_side if image_sides else None
+    labels = propose_orientation(j2, scale=geometry, fps=fps, body=body,
+                                 sides_known=not image_sides, track=track, window_s=window_s,
+                                 turn_window_s=window_s, near_side=near)
+    labels = constrain_orientation(labels, view)
+    if near is None:
+        return labels, None
+    return labels, propose_front(near, np.char.endswith(labels, "right"), fps=fps)
+
+
 def lift_pose(
     joints2d,
     *,
@@ -368,34 +382,29 @@ def lift_pose(
     annotations : Annotations, optional
         User events (orientation, depth, joint positions), true-side names.
     image_sides : bool
-        ``l_*`` means the image's left limb (the 2D fitter's naming) rather than the
-        body's left (ground truth).
+        ``l_*`` is the image's left limb (the 2D fitter's naming), not the body's left.
     spread : array_like, shape (F,), optional
         Torso horizontal foreshortening (0 side view, 1 front view), e.g.
         :attr:`vidcap.video.fit.pose2d.Pose2D.spread`; default from the 2D shoulders/hips.
     track : array_like, shape (F,), optional
         Horizontal image position of the subject (walking direction).
     smooth_2d : float
-        Gaussian smoothing of the 2D joints over time before lifting, in frames (0 =
-        none; Eq. 2.2 amplifies image noise where a segment is nearly in plane).
+        Gaussian smoothing of the 2D joints over time before lifting, frames (0 = none).
     yaw_window_s : float
         Running-median window (seconds) of the torso's horizontal foreshortening.
     scale_window_s : float
         Window (seconds) of the per-frame scale (:func:`vidcap.video.lift.estimate_scales`).
     frame_size : (int, int), optional
-        (width, height) of the frames in pixels: their centre is the camera's axis
-        when the scale changes per frame.
+        (width, height) in pixels: the centre is the camera's axis (per-frame scales).
     model_height : array_like, shape (F,), optional
         The height in pixels the 2D model was drawn at per frame
         (:attr:`vidcap.video.fit.pose2d.Pose2D.model_height`): segments are then read at
         that frame's scale (:func:`model_scales`), the root at the clip's.
     view : str
-        What the user said of the view for the whole clip (:data:`VIEWS`), applied to
-        the proposed orientation (:func:`constrain_orientation`); the annotations'
-        orientation events still override it from their frames.
+        The user's view of the whole clip (:data:`VIEWS`), applied to the proposed
+        orientation (:func:`constrain_orientation`); orientation events override it.
     near_side : array_like, shape (F,), optional
-        Which arm the colour frame shows in front (:func:`vidcap.video.frontback.near_side`,
-        for image-side names): the orientation proposal's front/back.
+        :func:`vidcap.video.frontback.near_side` (image-side names): front or back.
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
@@ -435,14 +444,9 @@ def lift_pose(
     if smooth_2d > 0 and F > 2:
         j2 = gaussian_filter1d(j2, smooth_2d, axis=0, mode="nearest")
     rho = _torso_spread(j2, spread, geometry, body, max(1, int(round(yaw_window_s * fps)) | 1))
-    near = near_side if image_sides else None
-    proposed_orient = propose_orientation(j2, scale=geometry, fps=fps, body=body,
-                                          sides_known=not image_sides, track=track,
-                                          window_s=yaw_window_s, turn_window_s=yaw_window_s,
-                                          near_side=near)
-    proposed_orient = constrain_orientation(proposed_orient, view)
-    facing = None if near is None else propose_front(
-        near, np.char.endswith(proposed_orient, "right"), fps=fps)
+    proposed_orient, facing = _propose_view(j2, geometry, fps, body, image_sides=image_sides,
+                                            track=track, window_s=yaw_window_s, view=view,
+                                            near_side=near_side)
     _, user_orient, user_joints = annotations.resolve(F)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),

@@ -502,13 +502,9 @@ def propose_orientation(
       30 degrees of a side view);
     * front vs back: with body-side named joints (``sides_known``), whether the
       body's left shoulder/hip appear on the image's right (facing the camera).
-      From a silhouette alone front and back are mirror images (orthographic
-      projection). With image-side names, the colour frame's ``near_side``
-      (:func:`vidcap.video.frontback.near_side`: > 0 where the image-left arm is
-      in front of the body) decides: a body facing image right shows its right arm
-      nearer the camera, on the image's left when it faces the camera
-      (:func:`propose_front`; ``front`` where no frame decides). One orientation
-      event fixes a whole clip.
+      A silhouette cannot tell (orthographic mirror images); with image-side names
+      the colour frame's ``near_side`` decides (:func:`propose_front`: which arm is
+      in front), else ``front``. One orientation event fixes a whole clip.
 
     Parameters
     ----------
