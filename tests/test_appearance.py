@@ -97,3 +97,43 @@ def test_the_absorbed_torso_is_found_under_exposure_drift():
     assert bg.never_seen[always].mean() > 0.7
     assert (bg.never_seen & ~always).mean() < 0.01
     assert np.median(_iou(extract_silhouettes(frames, bg).masks, masks)) > 0.7
+
+
+def test_a_static_block_beside_the_person_stays_scene(monkeypatch):
+    """A still object of the person's colour beside the arms' sweep (a red door frame
+    on pose2sim cam4) touches what moved and looks like the person, but lies beside
+    it, not between moving parts: the plate keeps it and no silhouette takes it."""
+    import vidcap.video.appearance as appearance
+
+    frames, masks = _in_place()
+    block = np.zeros(masks.shape[1:], bool)
+    block[40:80, 128:138] = True  # right of the sweep (arms reach x <= 125)
+    rng = np.random.default_rng(5)
+    frames[:, block] = np.clip(np.array(RED) + rng.normal(0, 2, (len(frames), block.sum(), 3)),
+                               0, 255).astype(np.uint8)
+    always = masks.all(axis=0)
+
+    def run():
+        bg = estimate_background(frames, n_samples=20)
+        sil = np.asarray(extract_silhouettes(frames, bg).masks, bool)
+        return bg, sil[:, block].mean()
+
+    with monkeypatch.context() as m:  # without the gate the block is taken for person
+        m.setattr(appearance, "MIN_BETWEEN", 0.0)
+        bg0, share0 = run()
+    assert bg0.never_seen[block].mean() > 0.4 and share0 > 0.05  # (0.55, 0.11)
+    bg, share = run()
+    assert bg.never_seen[block].mean() < 0.02 and share < 0.01
+    assert bg.never_seen[always].mean() > 0.7  # the absorbed torso is still found
+    assert np.median(_iou(extract_silhouettes(frames, bg).masks, masks)) > 0.7
+
+
+def test_between_moved_has_moved_parts_on_both_sides():
+    from vidcap.video.appearance import between_moved
+
+    m = np.zeros((7, 7), bool)
+    m[3, 1] = m[3, 5] = True   # left and right of (3, 3)
+    m[0, 6] = True             # alone in its row and column
+    out = between_moved(m)
+    assert out[3, 1:6].all() and not out[3, 0] and not out[3, 6]
+    assert out[0, 6] and not out[0, 5] and not out[1, 6]
