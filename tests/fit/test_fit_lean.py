@@ -44,3 +44,41 @@ def test_upright_figure_stays_upright():
     mask, _ = _bent(90.0)
     fp = fit_pose(mask)
     assert _err_deg(fp.angles[TORSO], 90.0) <= 3.0
+
+
+def _bent_arm_up(torso_deg, arm_deg=90.0, shape=(360, 400)):
+    """A figure bent ``torso_deg`` with its right arm raised straight at ``arm_deg``:
+    the hand, not the head, tops the silhouette."""
+    angles = np.full(10, 270.0)
+    angles[[TORSO, HEAD]] = torso_deg
+    angles[[SEGMENT_INDEX["r_upper_arm"], SEGMENT_INDEX["r_lower_arm"]]] = arm_deg
+    root = np.array([shape[1] / 2, 120.0 + L[TORSO]])
+    j = pose_joints(root, np.deg2rad(angles), np.ones(10), 0.0, L, SH, HP)
+    return draw_pose(j, R, shape, caps=False), j
+
+
+@pytest.mark.parametrize("torso_deg", [40.0, 140.0])
+def test_leaning_torso_found_below_a_raised_hand(torso_deg, monkeypatch):
+    """Bent 50 degrees with a hand raised above the head (the pose2sim balance poses):
+    the neck put a head below the silhouette's top lands on the forearm (torso 23
+    degrees off); from the first row as wide as a head it is found (3 degrees)."""
+    import vidcap.video.fit.torso as torso
+
+    mask, _ = _bent_arm_up(torso_deg)
+    fp = fit_pose(mask, body_height=H)
+    assert _err_deg(fp.angles[TORSO], torso_deg) <= 8.0
+    monkeypatch.setattr(torso, "HEAD_ROW_WIDTH", 1e9)  # no row is a head's: the old fit
+    old = fit_pose(mask, body_height=H)
+    assert _err_deg(old.angles[TORSO], torso_deg) > 15.0
+    assert fp.similarity > old.similarity + 0.1
+
+
+def test_head_top_skips_rows_narrower_than_a_head():
+    from vidcap.video.fit.torso import head_top
+
+    sil = np.zeros((30, 20), bool)
+    sil[2:12, 9:11] = True    # a forearm, 2 px wide
+    sil[12:20, 6:14] = True   # a head, 8 px wide
+    assert head_top(sil, 4.0) == 12
+    assert head_top(sil, 1.0) == 2
+    assert head_top(sil, 10.0) is None

@@ -25,6 +25,11 @@ from vidcap.video.fit.state import FitState
 #: leaning into a crouch or lunge is not clamped at 45 degrees from the vertical
 #: (issue 27 item 4). The seed's own search about the pelvis keeps the seed's limits.
 TORSO_WIDE = (np.deg2rad(15.0), np.deg2rad(165.0))
+#: A row of the silhouette at least this many head radii wide can be the head's; the
+#: rows above the first such row are narrower than a head: a raised forearm above it
+#: (:func:`head_top`; chosen on pose2sim_balance cam4, the leaning balance poses with a
+#: hand above the head).
+HEAD_ROW_WIDTH = 1.6
 
 
 def place_torso(eng: _MaskEngine, st: FitState) -> FitState:
@@ -103,24 +108,55 @@ def fit_torso_head(eng: _MaskEngine, st: FitState, *, warm: bool = False) -> Fit
     return st
 
 
+def head_top(sil: np.ndarray, head_radius: float) -> int | None:
+    """The first row of ``sil`` (h, w) bool with a run at least :data:`HEAD_ROW_WIDTH`
+    head radii wide (None: no such row): where the head can begin when narrower parts
+    (a hand raised above the head) top the silhouette.
+
+    Examples
+    --------
+    >>> sil = np.zeros((10, 12), bool)
+    >>> sil[0:4, 5:7] = True   # a forearm, 2 px wide
+    >>> sil[4:10, 3:9] = True  # a head, 6 px wide
+    >>> head_top(sil, 3.0), head_top(sil, 1.0)
+    (4, 0)
+    """
+    rows, c0, c1 = row_runs(sil)
+    wide = (c1 - c0 + 1) >= HEAD_ROW_WIDTH * head_radius
+    return int(rows[wide].min()) if wide.any() else None
+
+
 def fit_torso_lean(eng: _MaskEngine, st: FitState) -> FitState:
     """The torso and head of a body far from upright (beyond the seed; issue 27 item 4).
 
     The seed hangs the torso from the pelvis placed by the Table 3.1 ratios, which
     holds for an upright body only: bent forward, crouched or in a lunge the pelvis is
-    lower and to one side. The head still tops the silhouette, so the neck is put one
+    lower and to one side. The head usually tops the silhouette, so the neck is put one
     head length below the silhouette's top, under the middle of the head's rows, and
     the torso (head attached upright) is turned about it over :data:`TORSO_WIDE`,
-    then the head searched. Writes ``angles``, ``scores``, ``margins`` of torso and
+    then the head searched. Where rows narrower than a head top the silhouette (a hand
+    raised above a leaning body: :func:`head_top` more than half a head below the
+    top), the same is tried from the first row as wide as a head, and the better fit
+    (S of torso and head) kept. Writes ``angles``, ``scores``, ``margins`` of torso and
     head, and ``root``.
     """
+    out = _torso_lean_from(eng, st, eng.top)
+    first = head_top(eng.sil, eng.R[S["head"]])
+    if first is None or first - eng.norm.top < 0.5 * eng.L[S["head"]]:
+        return out
+    lower = _torso_lean_from(eng, st, first + (eng.top - eng.norm.top))
+    return lower if eng.similarity(lower) > eng.similarity(out) else out
+
+
+def _torso_lean_from(eng: _MaskEngine, st: FitState, top: float) -> FitState:
+    """:func:`fit_torso_lean` with the head's top at row ``top`` (normalised px)."""
     head_len = eng.L[S["head"]]
-    band = eng.sil[int(round(eng.top)): int(round(eng.top + head_len)) + 1]
+    band = eng.sil[int(round(top)): int(round(top + head_len)) + 1]
     kernels = fit_kernels()
     x = _band_middle_numpy(band) if kernels is None else _band_middle_compiled(kernels, band)
     if x is None:
         return st
-    neck = np.array([x, eng.top + head_len])
+    neck = np.array([x, top + head_len])
     up = np.pi / 2
     length = eng.L[S["torso"]] * st.fore[S["torso"]]
     ang = st.angles.copy()
@@ -183,5 +219,6 @@ def search_torso_about_neck(eng: _MaskEngine, st: FitState, *, start, interval, 
     return st.replace(root=neck - direction(res.value) * length), res
 
 
-__all__ = ["TORSO_WIDE", "fit_torso_head", "fit_torso_lean", "place_torso",
+__all__ = ["HEAD_ROW_WIDTH", "TORSO_WIDE", "fit_torso_head", "fit_torso_lean", "head_top",
+           "place_torso",
            "search_torso_about_neck"]
