@@ -26,8 +26,10 @@ joints, and per joint for the default cues; and the fit to MediaPipe's masks ins
 vidcap's silhouettes (``mp-masks``); and both again with ``proportions='human'`` (``human``,
 ``mp-human``: an anthropometric table's body, the ankles above the soles; ``vidcap
 convert``'s default body). Tuning clips
-for the ``human`` choices (with or without the feet): pose2sim_balance cam1 and
-onebyone_room 233-445; the others are validation.
+(``pose2d_real_pipeline.TUNING``, the "use" column): pose2sim_balance cam1 and
+onebyone_room 233-445 (the ``human`` body's hips and feet), cam4 and cam3 (wt-cam
+diagnosed their pipeline losses on them and chose the appearance pass's scene-beside
+gate and the lean fit's head row on cam4); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
 [--only NAME] [--human]`` (``--only``: just the clips whose name contains NAME; ``--human``:

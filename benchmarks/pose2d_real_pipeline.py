@@ -22,6 +22,15 @@ from real_clips import RealClip, pipeline_result, real_clips, stretch
 
 from vidcap.body import JOINT_NAMES
 
+#: Clips something of the fit or the plate was chosen or diagnosed on (the rest are
+#: validation): the human body's hips and feet on cam1 and onebyone 233-445 (wt-human);
+#: cam4 and cam3 since wt-cam diagnosed their pipeline losses on them (the appearance
+#: pass's scene-beside gate, vidcap.video.appearance.MIN_BETWEEN, and the lean fit's
+#: head row, vidcap.video.fit.torso.HEAD_ROW_WIDTH, measured on cam4; cam3's frames
+#: looked at). The three pose2sim cameras are one trial: cam1's figures are tuning too.
+TUNING = ("onebyone_room 233-445", "pose2sim_balance_cam1", "pose2sim_balance_cam3",
+          "pose2sim_balance_cam4")
+
 
 def _score(clip: RealClip, joints, compare) -> tuple[dict, float]:
     """compare.py's joint scores of ``joints`` (F, 15, 2) px, the whole video's or the
@@ -78,9 +87,8 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
     clips whose name contains it."""
     print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit; the seed's "
           "body (proportions='seed') in the outline, all and mp-masks rows, a real adult's "
-          "(proportions='human', the default since wt-human) in the human rows: its hips and "
-          "feet were chosen on "
-          "pose2sim_balance_cam1 and onebyone_room 233-445 (tuning), the others are "
+          "(proportions='human', the default since wt-human) in the human rows; 'use': "
+          "tuning clips chose or diagnosed something (TUNING), the others are "
           "validation). MediaPipe is a reference, "
           "not the truth (~2.4 % of height off on lab footage).")
     clips = real_clips()
@@ -92,8 +100,8 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
     if not clips:
         print("  no real clip found")
         return
-    print(f"{'clip':26} {'cues':8} {'frames':>6} {'vidcap':>6} {'median':>7} {'>10 %':>6}  "
-          "worst joint (>10 %)")
+    print(f"{'clip':26} {'use':10} {'cues':8} {'frames':>6} {'vidcap':>6} {'median':>7} "
+          f"{'>10 %':>6}  worst joint (>10 %)")
     per_joint = []
     for clip in clips:
         for c in cues:
@@ -104,7 +112,9 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
             shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]
             medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
             worst = int(np.nanargmax(shares))
-            print(f"{clip.name:26} {c:8} {res['frames_with_reference']:6d} {covered:6.1%} "
+            use = "tuning" if clip.name in TUNING else "validation"
+            print(f"{clip.name:26} {use:10} {c:8} {res['frames_with_reference']:6d} "
+                  f"{covered:6.1%} "
                   f"{np.median(medians):7.1%} {np.nanmean(shares):6.0%}  "
                   f"{limb_joints[worst]} ({shares[worst]:.0%})")
             per_joint.append((clip.name, c, medians, shares))
