@@ -21,7 +21,10 @@ sampled frames, at a reduced resolution:
 2. **Uncertain area**: the never-seen area and plate pixels that look like the
    person (a colour seen on it, more likely under its model than under the
    background's) and touch what moved: a static body part the plate absorbed,
-   grown a ring's width a round while the ring around it finds more.
+   grown a ring's width a round while the ring around it finds more. A grown part that
+   lies beside what moved rather than between moving parts (:data:`MIN_BETWEEN`) is
+   scene of the person's colours (a door frame, a curtain beside the arm's sweep) and
+   is left out.
 3. Per sample, in the uncertain area, the log-likelihood ratio person/background
    is smoothed over space (a box filter, the pairwise term of a graph cut done
    cheaply) and over time (neighbouring samples: a limb that is person in sample
