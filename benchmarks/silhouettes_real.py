@@ -139,8 +139,10 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
 #: zone of the shadow test was chosen on it (vidcap.video.silhouette); cam4 and
 #: sports2d_run since the graph cut's losses there were diagnosed on them and its guard
 #: (vidcap.video.graphcut.LOST_MAX) chosen with them among the tuning rows.
+#: cam3 since the empty-scene pass's loss there was diagnosed on it (the still-person
+#: helper; vidcap.video.emptyscene.MIN_EMPTY_S chosen with it among the tuning rows).
 REAL_TUNING = {"pose2sim_balance_cam1", "sports2d_walk_turn", "pose2sim_balance_cam4",
-               "sports2d_run"}
+               "sports2d_run", "pose2sim_balance_cam3"}
 
 
 def iou(a, b, ignore=None):

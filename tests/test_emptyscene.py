@@ -3,7 +3,7 @@
 import numpy as np
 
 from vidcap.video.background import BackgroundModel
-from vidcap.video.emptyscene import ghost_blobs, plate_from_empty
+from vidcap.video.emptyscene import empty_stretch, ghost_blobs, plate_from_empty
 
 
 def _wall(rng, h=96, w=128):
@@ -31,15 +31,37 @@ def test_ghost_blobs_tell_the_plate_edge_from_the_frame_edge():
 
 
 def test_an_empty_stretch_gives_the_plate_the_still_block_took():
-    # A plate that kept a block standing still; 6 empty samples, then 18 with the
-    # block: the empty ones give the wall back.
+    # A plate that kept a block standing still; 6 empty samples (2.5 s), then 18 with
+    # the block: the empty ones give the wall back.
     rng = np.random.default_rng(1)
     wall = _wall(rng)
     model = BackgroundModel.from_plate(_block(wall()), noise_sigma=2.0)
     frames = np.stack([wall() for _ in range(6)] + [_block(wall()) for _ in range(18)])
+    times = 0.5 * np.arange(24)
     clean = wall().astype(np.int16)[35:75, 53:67]
-    got = plate_from_empty(model, frames, np.ones((24, 3)))
+    got = plate_from_empty(model, frames, np.ones((24, 3)), times=times)
     assert np.abs(got.plate[35:75, 53:67].astype(np.int16) - clean).sum(axis=-1).mean() < 15
     # Without the empty stretch nothing changes.
-    same = plate_from_empty(model, frames[6:], np.ones((18, 3)))
+    same = plate_from_empty(model, frames[6:], np.ones((18, 3)), times=times[6:])
     assert same is model
+    # Nor when the same 6 samples span less than a second (0.1 s apart; a person in
+    # view all along can look like a ghost for a moment) ...
+    assert plate_from_empty(model, frames, np.ones((24, 3)), times=0.1 * np.arange(24)) is model
+    # ... or lie in the middle of the clip (not where the person came in or left).
+    mid = np.concatenate([frames[6:15], frames[:6], frames[15:]])
+    assert plate_from_empty(model, mid, np.ones((24, 3)), times=times) is model
+
+
+def test_empty_stretch_runs_from_an_end_of_the_clip():
+    shown = np.array([[1, 1, 0, 0, 0],
+                      [0, 1, 0, 1, 0],
+                      [1, 1, 0, 1, 1],
+                      [0, 0, 1, 0, 1],
+                      [0, 0, 1, 0, 1]], bool)
+    t = np.arange(5.0)
+    # Column 0: samples 0 and 2 (one missed between, bridged): 2 s from the start.
+    # 1: 0-2. 2: 3-4 at the end, 1 s. 3: samples 1-2, at neither end. 4: 2-4 at the
+    # end, 2 s.
+    assert empty_stretch(shown, t, 2.0).tolist() == [True, True, False, False, True]
+    assert empty_stretch(shown, t, 1.0).tolist() == [True, True, True, False, True]
+    assert not empty_stretch(shown[:1], t[:1], 0.0).any()

@@ -366,12 +366,25 @@ def estimate_background(
     if EMPTY_SCENE if empty_scene is None else empty_scene:
         from vidcap.video.emptyscene import plate_from_empty
 
-        model = plate_from_empty(model, frames, gains)
+        model = plate_from_empty(model, frames, gains, times=idx / _fps(source))
     if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 
         model = absorbed_person(model, frames, gains)
     return model
+
+
+def _fps(source) -> float:
+    """The video's frame rate; :data:`vidcap.video.emptyscene.ASSUMED_FPS` for frames
+    given as an array."""
+    from vidcap.video.emptyscene import ASSUMED_FPS
+
+    if isinstance(source, np.ndarray):
+        return ASSUMED_FPS
+    from vidcap.io.video import probe
+
+    fps = probe(source).fps
+    return float(fps) if fps and np.isfinite(fps) and fps > 0 else ASSUMED_FPS
 
 
 def _frame_gains(frames: np.ndarray) -> np.ndarray:

@@ -34,6 +34,14 @@ __all__ = ["ghost_blobs", "plate_from_empty"]
 GHOST_RATIO = 0.5
 #: Samples (at least) that must show the empty scene at a pixel, agreeing on it.
 MIN_AGREE = 2
+#: Shortest empty stretch, seconds: the samples that show the empty scene at a pixel
+#: must run from the clip's first or last sample over at least this long (the person
+#: came in or left; walking in or out takes longer). On the tuning clips: the true
+#: ghosts of cdnet_office_enter run 4 s from the start; the false ones on
+#: pose2sim_balance cam3 / cam4 (a person in view all along, 1.7 s) at most ~0.7 s.
+MIN_EMPTY_S = 1.0
+#: Frame rate taken for frames given as an array (no file to read it from).
+ASSUMED_FPS = 30.0
 #: Smallest blob considered, share of the frame.
 MIN_BLOB = 2e-3
 
@@ -96,8 +104,43 @@ def ghost_blobs(frame: np.ndarray, plate: np.ndarray, mask: np.ndarray, *,
     return out
 
 
+def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float) -> np.ndarray:
+    """Pixels whose empty-scene samples form a stretch at the clip's start or end.
+
+    Parameters
+    ----------
+    shown : numpy.ndarray, shape (K, N), bool
+        Per sample (in time order) and pixel: the sample shows the empty scene there.
+    times : numpy.ndarray, shape (K,), float
+        The samples' times, seconds.
+    min_span : float
+        Shortest stretch, seconds, from the first (last) sample to the last (first)
+        sample of the stretch that shows the scene.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,), bool
+        The stretch starts at the first sample or ends at the last one, runs over
+        consecutive samples (one sample missing between two that show the scene is
+        bridged: the ghost test misses a sample now and then) and spans ``min_span``.
+    """
+    k = shown.shape[0]
+    out = np.zeros(shown.shape[1], bool)
+    if k < 2:
+        return out
+    for s, t in ((shown, times), (shown[::-1], times[::-1])):
+        fill = s.copy()
+        fill[1:-1] |= s[:-2] & s[2:]
+        run = np.logical_and.accumulate(fill, axis=0) & s
+        # The last sample of the stretch that shows the scene (run is False from the
+        # first gap on, and True at 0 only where the end sample shows it).
+        last = k - 1 - np.argmax(run[::-1], axis=0)
+        out |= run[0] & (np.abs(t[last] - t[0]) >= min_span)
+    return out
+
+
 def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
-                     ratio: float = GHOST_RATIO):
+                     ratio: float = GHOST_RATIO, times: np.ndarray | None = None):
     """Re-take the plate where samples show the empty scene (see the module docstring).
 
     Parameters
@@ -109,6 +152,9 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
         Their per-channel gains relative to the plate.
     ratio : float
         See :func:`ghost_blobs`.
+    times : numpy.ndarray, shape (K,), optional
+        The samples' times, seconds (default: ``model.sample_indices`` at
+        :data:`ASSUMED_FPS`).
 
     Returns
     -------
@@ -146,6 +192,10 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
     tmap = np.maximum(model.threshold, 3.0 * model.noise_map)[redo]
     near = np.abs(vals - med).sum(axis=-1) <= tmap  # (NaN compares False)
     ok = near.sum(axis=0) >= MIN_AGREE
+    if times is None:
+        idx = model.sample_indices if len(model.sample_indices) == k else np.arange(k)
+        times = np.asarray(idx, np.float64) / ASSUMED_FPS
+    ok &= empty_stretch(near, np.asarray(times, np.float64), MIN_EMPTY_S)
     idx = np.flatnonzero(redo.ravel())
     redo.ravel()[idx[~ok]] = False
     if not redo.any():
