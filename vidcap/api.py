@@ -119,7 +119,8 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
             height: float = 1.75, view: str = "auto", jobs: int | None = None,
             progress: bool = False, cues: str | None = None,
             proportions: str | None = None,
-            graph_cut: bool | None = None) -> VideoMotion:
+            graph_cut: bool | None = None,
+            still_person: bool | None = None) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -150,6 +151,10 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         Re-decide a band round the person by a graph cut on the clip's colours
         (``vidcap convert --graph-cut``); default
         :data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`.
+    still_person : bool, optional
+        The plate also from frames that show the empty scene, and a person who never
+        moves looked for by a person detector (``vidcap convert --still-person``);
+        default :func:`vidcap.video.pipeline.default_still_person`.
 
     Returns
     -------
@@ -174,7 +179,7 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
                           proportions=proportions)
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
               progress=progress, cues=cues, proportions=proportions,
-              graph_cut=graph_cut)
+              graph_cut=graph_cut, still_person=still_person)
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))

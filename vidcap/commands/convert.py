@@ -41,6 +41,9 @@ PROPORTION_CHOICES = ("human", "seed", "auto")
 #: ``--graph-cut`` default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`, spelled here
 #: for a light ``--help``; a test checks they agree).
 DEFAULT_GRAPH_CUT = False
+#: ``--still-person`` default (:func:`vidcap.video.pipeline.default_still_person`, spelled
+#: here for a light ``--help``; a test checks they agree).
+DEFAULT_STILL_PERSON = False
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
 
@@ -114,6 +117,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "clips with true masks (benchmarks/RESULTS.md, Silhouettes); not "
                         "with --background. Default: "
                         + ("on" if DEFAULT_GRAPH_CUT else "off"))
+    parser.add_argument("--still-person", action=argparse.BooleanOptionalAction, default=None,
+                        help="the plate stage also re-takes the plate from frames that show "
+                        "the empty scene (a person who came in and stands still) and looks "
+                        "for a person who never moves with a person detector (OpenCV's HOG) "
+                        "and a cut in its box (benchmarks/RESULTS.md, Silhouettes); not with "
+                        "--background. Default: " + ("on" if DEFAULT_STILL_PERSON else "off"))
     parser.add_argument("--save", metavar="OUT.npz",
                         help="also save masks, joints2d, joints3d, proposed and final depth "
                         "signs, orientation and scores")
@@ -142,7 +151,7 @@ def run(args) -> int:
         annotations=args.annotations, background=args.background, height=args.height,
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
         view=args.view, rig=args.rig, lift=args.lift, proportions=args.proportions,
-        cues=cues, graph_cut=args.graph_cut,
+        cues=cues, graph_cut=args.graph_cut, still_person=args.still_person,
     )
     if not args.quiet:
         lr = res.lifted

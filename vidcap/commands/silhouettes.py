@@ -35,12 +35,12 @@ def add_arguments(parser) -> None:
                              "colours (default as in vidcap convert: off; better on the in-place "
                              "renders, worse on most real clips with true masks; see "
                              "benchmarks/RESULTS.md); needs the estimated felzenszwalb plate")
-    parser.add_argument("--still-person", action="store_true",
-                        help="experimental: also re-take the plate from frames that show the "
-                             "empty scene, and look for a person who never moves with a person "
-                             "detector (OpenCV's HOG) and a cut in its box; better on real clips "
-                             "of a person who stands or sits still, worse on some others (see "
-                             "benchmarks/RESULTS.md); needs the estimated felzenszwalb plate")
+    parser.add_argument("--still-person", action=argparse.BooleanOptionalAction, default=None,
+                        help="also re-take the plate from frames that show the empty scene, "
+                             "and look for a person who never moves with a person detector "
+                             "(OpenCV's HOG) and a cut in its box (default as in vidcap "
+                             "convert; see benchmarks/RESULTS.md); needs the estimated "
+                             "felzenszwalb plate")
     parser.add_argument("--plate-out", type=Path, metavar="PNG",
                         help="also write the background plate as an image")
 
@@ -70,9 +70,14 @@ def run(args) -> int:
             raise UsageError("--graph-cut needs the estimated plate (not --background, not "
                              "--method median)")
         graph_cut = False
-    if args.still_person and (args.background is not None or args.method != "felzenszwalb"):
-        raise UsageError("--still-person needs the estimated plate (not --background, not "
-                         "--method median)")
+    from vidcap.video.pipeline import default_still_person
+
+    still = default_still_person() if args.still_person is None else args.still_person
+    if still and (args.background is not None or args.method != "felzenszwalb"):
+        if args.still_person:
+            raise UsageError("--still-person needs the estimated plate (not --background, "
+                             "not --method median)")
+        still = False
     info = probe(args.video)
     if args.background is not None:
         bg = load_plate(args.background)
@@ -82,8 +87,7 @@ def run(args) -> int:
                 f"video is {info.width}x{info.height}", args.background)
     else:
         bg = estimate_background(args.video, method=args.method, n_samples=args.samples,
-                                 colour_models=graph_cut, empty_scene=args.still_person,
-                                 person_box=args.still_person)
+                                 colour_models=graph_cut, empty_scene=still, person_box=still)
     sil = extract_silhouettes(args.video, bg, threshold=args.threshold,
                               shadows=not args.no_shadows,
                               graph_cut=graph_cut and bg.colours is not None)

@@ -85,6 +85,16 @@ _PLATE_VERSION = 2
 DEFAULT_GRAPH_CUT = False
 
 
+def default_still_person() -> bool:
+    """The still-person passes of the plate by default (``run``'s ``still_person``;
+    ``vidcap convert --still-person / --no-still-person``): on when both
+    :data:`vidcap.video.background.EMPTY_SCENE` and
+    :data:`vidcap.video.background.PERSON_BOX` are (read at call time)."""
+    from vidcap.video import background
+
+    return bool(background.EMPTY_SCENE and background.PERSON_BOX)
+
+
 def run(
     video: str | os.PathLike,
     *,
@@ -101,6 +111,7 @@ def run(
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS,
     cues: str = DEFAULT_CUES,
     graph_cut: bool | None = None,
+    still_person: bool | None = None,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -145,6 +156,11 @@ def run(
     graph_cut : bool, optional
         The silhouettes' graph cut (:mod:`vidcap.video.graphcut`; default
         :data:`DEFAULT_GRAPH_CUT`); see :func:`_graph_cut_option`.
+    still_person : bool, optional
+        The plate's still-person passes: re-taken from frames that show the empty scene
+        (:mod:`vidcap.video.emptyscene`) and a person who never moves found by a person
+        detector (:mod:`vidcap.video.personbox`); default :func:`default_still_person`;
+        never with a given ``background``.
 
     Returns
     -------
@@ -166,14 +182,15 @@ def run(
     # a given plate is read first: a bad file is reported before any worker starts
     with _timed(timings, "plate"):
         plate = load_plate(background) if background is not None else None
-    graph_cut, k_plate, k_sil = _stage_keys(video, background, ann, graph_cut, log)
+    graph_cut, still, k_plate, k_sil = _stage_keys(video, background, ann, graph_cut, log,
+                                                   still_person)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
     pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues, proportions)
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log,
-                                 colour_models=graph_cut, notice=True)
+                                 colour_models=graph_cut, still_person=still, notice=True)
         with _timed(timings, "silhouettes"):
             streamed, crops = _streamed_fit(pool, info.n_frames, jobs, per_job, cues, proportions)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
@@ -337,22 +354,41 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
 
 
 # --------------------------------------------------------------------------- 1. plate
-def _plate_key(video_id: dict, background, colour_models: bool = False) -> str:
+def _plate_key(video_id: dict, background, colour_models: bool = False,
+               still_person: bool = False) -> str:
     if background is not None:
         return stage_key("plate-file", video_identity(background))
-    # the colour models join the key only when asked for: entries without them stay valid
-    extra = ("colours",) if colour_models else ()
+    # the colour models and the still-person passes join the key only when asked for:
+    # entries without them stay valid
+    extra = (("colours",) if colour_models else ()) + (
+        ("still-person",) if still_person else ())
     return stage_key("plate", _PLATE_VERSION, video_id, *extra)
 
 
-def _stage_keys(video: Path, background, ann: Annotations, graph_cut: bool | None, log):
-    """``(graph_cut, plate key, silhouette key)``: whether the cut runs
-    (:func:`_graph_cut_option`) and the keys of the two image stages."""
+def _stage_keys(video: Path, background, ann: Annotations, graph_cut: bool | None, log,
+                still_person: bool | None = None):
+    """``(graph_cut, still_person, plate key, silhouette key)``: whether the cut runs
+    (:func:`_graph_cut_option`), whether the plate's still-person passes do
+    (:func:`_still_person_option`) and the keys of the two image stages."""
     ident = video_identity(video)
     graph_cut = _graph_cut_option(graph_cut, background, log)
-    k_plate = _plate_key(ident, background, graph_cut)
-    return graph_cut, k_plate, _silhouette_key(ident, k_plate, region_cache_part(ann),
-                                               graph_cut)
+    still = _still_person_option(still_person, background, log)
+    k_plate = _plate_key(ident, background, graph_cut, still)
+    return graph_cut, still, k_plate, _silhouette_key(ident, k_plate, region_cache_part(ann),
+                                                      graph_cut)
+
+
+def _still_person_option(still_person: bool | None, background, log) -> bool:
+    """Whether the plate stage runs the still-person passes: ``still_person``, or
+    :func:`default_still_person` when None; never with a given ``background`` plate
+    (nothing is estimated; a notice through ``log`` when they were asked for)."""
+    use = default_still_person() if still_person is None else bool(still_person)
+    if use and background is not None:
+        if still_person:
+            log("notice: --still-person works on the estimated plate, not a given one: "
+                "the given plate is used as it is")
+        use = False
+    return use
 
 
 def _graph_cut_option(graph_cut: bool | None, background, log) -> bool:
@@ -370,14 +406,16 @@ def _graph_cut_option(graph_cut: bool | None, background, log) -> bool:
 
 
 def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, log,
-                 colour_models: bool = False, notice: bool = False):
+                 colour_models: bool = False, still_person: bool = False,
+                 notice: bool = False):
     """The background plate (:class:`vidcap.video.background.BackgroundModel`): ``plate``
     when the user gave one, else the cached one, else estimated from the video (with
-    the clip's colour models for the graph cut when ``colour_models``; ``key`` must
-    say so, :func:`_plate_key`). ``notice``: log the plate's notice
-    (:func:`vidcap.video.inputchecks.plate_notice`), if any."""
+    the clip's colour models for the graph cut when ``colour_models``, with the
+    still-person passes when ``still_person``; ``key`` must say so, :func:`_plate_key`).
+    ``notice``: log the plate's notice (:func:`vidcap.video.inputchecks.plate_notice`),
+    if any."""
     plate = _plate_of(cache, key, video, plate, progress=progress, log=log,
-                      colour_models=colour_models)
+                      colour_models=colour_models, still_person=still_person)
     if notice:
         from vidcap.video.inputchecks import plate_notice
 
@@ -387,7 +425,7 @@ def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, l
 
 
 def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
-              colour_models: bool):
+              colour_models: bool, still_person: bool = False):
     from vidcap.video.background import estimate_background
 
     if plate is not None:
@@ -398,7 +436,8 @@ def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
         return _plate_from_cache(hit)
     log("estimating the background plate")
     plate = estimate_background(video, rng=np.random.default_rng(0), progress=progress,
-                                colour_models=colour_models)
+                                colour_models=colour_models, empty_scene=still_person,
+                                person_box=still_person)
     h, w = plate.plate.shape[:2]
     # (no colour models: an empty array, read back as None)
     extra = ({"colours": np.zeros(0, np.float32) if plate.colours is None else plate.colours}
@@ -408,13 +447,16 @@ def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
                threshold=np.float64(plate.threshold),
                self_lit=np.zeros((h, w), bool) if plate.self_lit is None else plate.self_lit,
                still_person=(np.zeros((h, w), bool) if plate.still_person is None
-                             else plate.still_person), **extra)
+                             else plate.still_person),
+               # the still parts' own colour (the plate is inpainted there)
+               person_plate=(np.zeros(0, np.uint8) if plate.person_plate is None
+                             else plate.person_plate), **extra)
     return plate
 
 
 #: What a cached plate holds besides the image: the silhouette stage needs them all.
 _PLATE_FIELDS = ("plate", "never_seen", "noise_map", "noise_sigma", "threshold", "self_lit",
-                 "still_person")
+                 "still_person", "person_plate")
 
 
 def _plate_from_cache(hit: dict):
@@ -428,6 +470,7 @@ def _plate_from_cache(hit: dict):
         self_lit=hit["self_lit"].astype(bool) if hit["self_lit"].any() else None,
         still_person=(hit["still_person"].astype(bool) if hit["still_person"].any()
                       else None),
+        person_plate=hit["person_plate"] if hit["person_plate"].size else None,
         colours=hit["colours"] if "colours" in hit and hit["colours"].size else None)
 
 
@@ -513,7 +556,8 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
 
 def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
                      cache_dir: str | os.PathLike | None = None, on_masks=None,
-                     log=None, graph_cut: bool | None = None) -> _Silhouettes:
+                     log=None, graph_cut: bool | None = None,
+                     still_person: bool | None = None) -> _Silhouettes:
     """The first two stages of :func:`run` only (plate, silhouettes with the user's
     regions), cached as :func:`run` caches them: what the annotate page redoes when
     the user draws a region.
@@ -530,6 +574,8 @@ def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
     log : callable, optional
     graph_cut : bool, optional
         As :func:`run`'s (default :data:`DEFAULT_GRAPH_CUT`).
+    still_person : bool, optional
+        As :func:`run`'s (default :func:`default_still_person`).
 
     Returns
     -------
@@ -546,9 +592,10 @@ def silhouettes_only(video: str | os.PathLike, annotations: Annotations, *,
     cache = StageCache(cache_dir, log=log)
     ident = video_identity(video)
     graph_cut = DEFAULT_GRAPH_CUT if graph_cut is None else bool(graph_cut)
-    k_plate = _plate_key(ident, None, graph_cut)
+    still = _still_person_option(still_person, None, log)
+    k_plate = _plate_key(ident, None, graph_cut, still)
     plate = _plate_stage(cache, k_plate, video, None, progress=False, log=log,
-                         colour_models=graph_cut)
+                         colour_models=graph_cut, still_person=still)
     key = _silhouette_key(ident, k_plate, region_cache_part(annotations), graph_cut)
     return _silhouette_stage(cache, key, video, plate, streamed=None, progress=False,
                              regions=_regions(annotations, plate), on_masks=on_masks,
@@ -772,7 +819,7 @@ def convert(
 # here by existing callers
 __all__ = ["DEFAULT_GRAPH_CUT", "MIXED_VIEW", "NEAR_PLANE", "POOR_FIT", "SCALE_WINDOW_S",
            "VIEWS", "ConvertResult", "LiftResult", "StageCache", "apply_user_view",
-           "constrain_orientation", "convert",
+           "constrain_orientation", "convert", "default_still_person",
            "fill_gaps", "frame_runs", "frame_scales", "lift_pose", "model_scales",
            "partly_outside", "person_track", "plane_passages", "run", "swap_pairs",
            "true_runs"]
