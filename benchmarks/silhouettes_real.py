@@ -1,7 +1,7 @@
 """Silhouettes on real footage and on in-place renders over real backgrounds.
 
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
-        [--only NAME] [--quick] [--pck] [--graph-cut] [--empty-scene] [--person-box]
+        [--only NAME] [--quick] [--pck] [--graph-cut] [--[no-]empty-scene] [--[no-]person-box]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -368,17 +368,19 @@ def main(argv=None) -> int:
     ap.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap with the graph cut over the uncertain band (default: as "
                     "vidcap convert, vidcap.video.pipeline.DEFAULT_GRAPH_CUT)")
-    ap.add_argument("--empty-scene", action="store_true",
+    ap.add_argument("--empty-scene", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap's plate re-taken from samples showing the empty scene "
-                         "(vidcap.video.emptyscene, opt-in)")
-    ap.add_argument("--person-box", action="store_true",
+                         "(vidcap.video.emptyscene; default: background.EMPTY_SCENE)")
+    ap.add_argument("--person-box", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap's plate: a still person found by the HOG detector and "
-                         "grabCut (vidcap.video.personbox, opt-in)")
+                         "grabCut (vidcap.video.personbox; default: background.PERSON_BOX)")
     args = ap.parse_args(argv)
     import vidcap.video.background as background
 
-    background.EMPTY_SCENE = args.empty_scene
-    background.PERSON_BOX = args.person_box
+    if args.empty_scene is not None:
+        background.EMPTY_SCENE = args.empty_scene
+    if args.person_box is not None:
+        background.PERSON_BOX = args.person_box
     global GRAPH_CUT
     from vidcap.video.pipeline import DEFAULT_GRAPH_CUT
 

@@ -43,7 +43,7 @@ PROPORTION_CHOICES = ("human", "seed", "auto")
 DEFAULT_GRAPH_CUT = False
 #: ``--still-person`` default (:func:`vidcap.video.pipeline.default_still_person`, spelled
 #: here for a light ``--help``; a test checks they agree).
-DEFAULT_STILL_PERSON = False
+DEFAULT_STILL_PERSON = True
 #: Segments more than this much longer than the model are reported (a fraction).
 CLAMP_NOTICE = 0.02
 

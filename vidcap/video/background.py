@@ -32,8 +32,8 @@ the spot) still takes its background from the frames where it is uncovered:
    flagged (``never_seen``) and inpainted from the surrounding background
    (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
 8. Second looks (:func:`vidcap.video.platepass.refine_plate`: self-lit pixels, the
-   appearance pass, plate -> person -> plate); then, opt-in (:data:`EMPTY_SCENE`,
-   :data:`PERSON_BOX`), samples that show the empty
+   appearance pass, plate -> person -> plate); then (:data:`EMPTY_SCENE`,
+   :data:`PERSON_BOX`, on by default), samples that show the empty
    scene where the plate holds a person who stood still later (a *ghost*, told by
    its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; and,
    when the plate left part of the frame never seen, a person the plate absorbed is
@@ -264,20 +264,19 @@ def _sample_indices(n: int, k: int, rng) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- estimation
-#: Re-take the plate from samples that show the empty scene
-#: (:mod:`vidcap.video.emptyscene`; ~0.3 s CPU per 300 frames of 640x480). Opt-in
-#: (``silhouettes_real.py --empty-scene``): with it and PERSON_BOX, median / p10 IoU
-#: cdnet_office_enter (tuning) 0.525 / 0.398 -> 0.899 / 0.748, sbi_candela
-#: (validation) 0.335 / 0.000 -> 0.972 / 0.868, but the validation render 14_19 2-5 s
-#: side 0.862 / 0.819 -> 0.610 / 0.150 (a moving person taken for a ghost) and
-#: pose2sim_balance_cam4 0.510 / 0.415 -> 0.447 / 0.000 vs MediaPipe (see
-#: benchmarks/RESULTS.md, Silhouettes).
-EMPTY_SCENE = False
+#: Re-take the plate from samples that show the empty scene for at least a second at
+#: the clip's start or end (:mod:`vidcap.video.emptyscene`). On by default since the
+#: still-person helper gated it by that empty stretch: ``silhouettes_real.py --quick``,
+#: median / p10 IoU, cdnet_office_enter (tuning) 0.407 / 0.359 -> 0.901 / 0.770 (with
+#: PERSON_BOX), sbi_cavignal (validation) 0.913 -> 0.924, every other validation row
+#: unchanged (before the gate it cost 131_01 4-7 s 3/4 p10 0.900 -> 0.824 and
+#: pose2sim cam3 0.805 -> 0.427; benchmarks/RESULTS.md, Silhouettes).
+EMPTY_SCENE = True
 #: Look for a person the plate absorbed with a person detector
 #: (:mod:`vidcap.video.personbox`; only when the plate left >= 0.5 % never seen and
-#: the person stands still). Opt-in (``silhouettes_real.py --person-box``):
-#: cdnet_office_stand (tuning) 0.284 / 0.191 -> 0.811 / 0.677.
-PERSON_BOX = False
+#: the person stands still). On by default: cdnet_office_stand (tuning) 0.232 / 0.213
+#: -> 0.799 / 0.665 (with EMPTY_SCENE), no validation row changed.
+PERSON_BOX = True
 
 
 def estimate_background(
@@ -314,12 +313,12 @@ def estimate_background(
         needs; about a tenth of the plate's time (``felzenszwalb`` only).
     empty_scene : bool, optional
         Re-take the plate from samples that show the empty scene where it holds a
-        person who stood still later (:mod:`vidcap.video.emptyscene`; experimental,
-        default :data:`EMPTY_SCENE`, off; ``felzenszwalb`` only).
+        person who stood still later (:mod:`vidcap.video.emptyscene`; default
+        :data:`EMPTY_SCENE`, on; ``felzenszwalb`` only).
     person_box : bool, optional
         Look for a person the plate absorbed with a person detector
-        (:mod:`vidcap.video.personbox`; experimental, default :data:`PERSON_BOX`,
-        off; ``felzenszwalb`` only).
+        (:mod:`vidcap.video.personbox`; default :data:`PERSON_BOX`, on;
+        ``felzenszwalb`` only).
 
     Returns
     -------
