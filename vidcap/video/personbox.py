@@ -212,6 +212,8 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
             absorbed += 1
         cuts.append(cut)
         where.append(t)
+        if len(cuts) == 3 and max(_iou(cuts[0], cuts[1]), _iou(cuts[1], cuts[2])) < STILL_IOU:
+            return model  # the first three cuts say the person moves (and no more cost)
     if len(cuts) < 2:
         return model
     cuts = np.stack(cuts)
@@ -233,6 +235,10 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
     conf = np.where(still, 0.0, model.confidence).astype(np.float32)
     return replace(model, plate=plate, never_seen=(model.never_seen & ~seen) | still,
                    confidence=conf, still_person=still, person_plate=model.plate)
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float((a & b).sum() / max(1, (a | b).sum()))
 
 
 #: Share of the cut samples (and at least 2) a pixel the person covered must be seen
