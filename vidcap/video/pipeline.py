@@ -108,10 +108,8 @@ def run(
     log=None,
     jobs: int | None = None,
     view: str = "auto",
-    lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS,
-    cues: str = DEFAULT_CUES,
-    graph_cut: bool | None = None,
-    still_person: bool | None = None,
+    lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS, cues: str = DEFAULT_CUES,
+    graph_cut: bool | None = None, still_person: bool | None = None,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -153,14 +151,9 @@ def run(
         A real adult's (:data:`DEFAULT_PROPORTIONS`), the seed's, the subject's (``_fit_stage``).
     cues : {'outline', 'all'}
         The 2D fit reads the silhouette only, or the frame's cues inside it too.
-    graph_cut : bool, optional
-        The silhouettes' graph cut (:mod:`vidcap.video.graphcut`; default
-        :data:`DEFAULT_GRAPH_CUT`); see :func:`_graph_cut_option`.
-    still_person : bool, optional
-        The plate's still-person passes: re-taken from frames that show the empty scene
-        (:mod:`vidcap.video.emptyscene`) and a person who never moves found by a person
-        detector (:mod:`vidcap.video.personbox`); default :func:`default_still_person`;
-        never with a given ``background``.
+    graph_cut, still_person : bool, optional
+        The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) and the plate's
+        still-person passes: see :func:`_graph_cut_option`, :func:`_still_person_option`.
 
     Returns
     -------
