@@ -267,15 +267,15 @@ def _sample_indices(n: int, k: int, rng) -> np.ndarray:
 #: Re-take the plate from samples that show the empty scene for at least a second at
 #: the clip's start or end (:mod:`vidcap.video.emptyscene`). On by default since the
 #: still-person helper gated it by that empty stretch: ``silhouettes_real.py --quick``,
-#: median / p10 IoU, cdnet_office_enter (tuning) 0.407 / 0.359 -> 0.901 / 0.770 (with
+#: median / p10 IoU, cdnet_office_enter (tuning) 0.406 / 0.367 -> 0.901 / 0.768 (with
 #: PERSON_BOX), sbi_cavignal (validation) 0.913 -> 0.924, every other validation row
 #: unchanged (before the gate it cost 131_01 4-7 s 3/4 p10 0.900 -> 0.824 and
 #: pose2sim cam3 0.805 -> 0.427; benchmarks/RESULTS.md, Silhouettes).
 EMPTY_SCENE = True
 #: Look for a person the plate absorbed with a person detector
 #: (:mod:`vidcap.video.personbox`; only when the plate left >= 0.5 % never seen and
-#: the person stands still). On by default: cdnet_office_stand (tuning) 0.232 / 0.213
-#: -> 0.799 / 0.665 (with EMPTY_SCENE), no validation row changed.
+#: the person stands still). On by default: cdnet_office_stand (tuning) 0.244 / 0.229
+#: -> 0.803 / 0.668 (with EMPTY_SCENE), no validation row changed.
 PERSON_BOX = True
 
 
