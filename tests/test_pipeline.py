@@ -325,3 +325,51 @@ def test_run_fits_the_default_human_body_once(tmp_path):
     seed = run(video, progress=False, jobs=1, proportions="seed")
     assert seed.proportions is None
     assert not np.array_equal(seed.similarity, res.similarity)
+
+
+@pytest.mark.parametrize("factors, height", [
+    ({"legs": 1.15, "arms": 1.05, "shoulders": 0.85, "arm_width": 0.8}, 1.92),  # tall, thin
+    ({"legs": 0.9, "arms": 0.95, "shoulders": 1.2, "leg_width": 1.2}, 1.58),  # short, broad
+])
+def test_auto_proportions_reach_the_lift_and_the_bvh(tmp_path, monkeypatch, factors, height):
+    """``proportions='auto'``: the estimate's body (its own bone lengths at the given
+    height) is what the second 2D fit, the 3D lift and the motion's skeleton use, and
+    the BVH written from it carries those lengths (the estimator is replaced by a known
+    answer here; ``tests/fit/test_proportions.py`` checks the estimator itself)."""
+    import vidcap.video.bodystage as bodystage
+    from vidcap.body import SEGMENT_NAMES, SEGMENTS
+    from vidcap.io.bvh import read_bvh, write_bvh
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.fit.proportions import ProportionEstimate
+    from vidcap.video.pipeline import run
+
+    est = ProportionEstimate(factors=factors, evidence=dict.fromkeys(factors, 30))
+    body = est.body(height)
+    seed_body = ProportionEstimate().body(height)
+    video = tmp_path / "walk.mp4"
+    motion = make_motion("walk", body=body, n_frames=10)
+    synth_clip(video, tmp_path / "t.npz", motion, body=body, size=(160, 120),
+               rng=np.random.default_rng(0))
+    calls = []
+    monkeypatch.setattr(bodystage, "estimate_proportions",
+                        lambda masks, **kw: calls.append(len(masks)) or est)
+    said = []
+    res = run(video, progress=False, jobs=1, proportions="auto", height=height,
+              log=said.append, cues="outline")
+    assert calls == [10] and res.proportions is est
+    assert any(est.summary() in m for m in said)
+    np.testing.assert_allclose(res.body.segment_lengths(), body.segment_lengths())
+    assert not np.allclose(body.segment_lengths(), seed_body.segment_lengths(), rtol=0.03)
+    # the lift's bones are the body's (every frame, every segment)
+    j3 = res.lifted.joints3d
+    for name, seg in zip(SEGMENT_NAMES, SEGMENTS, strict=True):
+        bone = np.linalg.norm(j3[:, JOINT_INDEX[seg.distal]] - j3[:, JOINT_INDEX[seg.proximal]],
+                              axis=-1)
+        np.testing.assert_allclose(bone, body.length(name), rtol=1e-3, err_msg=name)
+    # the motion's skeleton, and the BVH's offsets read back, are the body's
+    np.testing.assert_allclose(res.motion.skeleton.offsets, body.skeleton().offsets)
+    write_bvh(tmp_path / "m.bvh", res.motion)
+    back = read_bvh(tmp_path / "m.bvh").skeleton.offsets
+    np.testing.assert_allclose(back, body.skeleton().offsets, atol=1e-5)
+    knee = JOINT_INDEX["l_knee"]
+    assert np.linalg.norm(back[knee]) == pytest.approx(body.length("l_upper_leg"), rel=1e-4)

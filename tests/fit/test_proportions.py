@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from vidcap.body import JOINT_INDEX, SEGMENT_INDEX, body_with_proportions
-from vidcap.video.fit.lengthprofile import length_profiles
+from vidcap.video.fit.lengthprofile import arm_profiles, length_profiles
 from vidcap.video.fit.proportions import (
     FOOT,
     ProportionEstimate,
@@ -39,6 +39,36 @@ def test_length_profile_measures_clear_limbs():
                 "r_lower_leg"):
         assert lengths[SEGMENT_INDEX[seg]] == pytest.approx(true.length(seg), rel=0.04), seg
     assert np.isnan(lengths[:2]).all()  # torso and head are not profiled
+
+
+@pytest.mark.parametrize("arms_deg", [(180, 90, 0, 90), (200, 160, 340, 20), (250, 290, 290, 250)])
+@pytest.mark.parametrize("scale", [1.0, 0.8, 1.15])
+def test_arm_profile_reads_the_whole_arm_whatever_the_model_draws(arms_deg, scale):
+    """Arms standing clear (bent up, spread, hanging out to the sides), drawn with the
+    subject's proportions; a seed-proportioned model in the same pose whose arms are
+    drawn at the subject's length, 20 % shorter or 15 % longer (its elbow misplaced
+    with them) reads each whole arm as the subject's within 2 %; arms hanging over the
+    torso in a side view read nothing."""
+    from vidcap.body import BodyModel
+
+    true, seed = body_with_proportions(1.0, SCALED), BodyModel(height=1.0)
+    h = 200.0
+    L, R, sh, hip = model_dimensions(h, true)
+    want = ((true.length("l_upper_arm") + true.length("l_lower_arm"))
+            / (seed.length("l_upper_arm") + seed.length("l_lower_arm")))
+    fore = true.segment_lengths() / seed.segment_lengths()
+    fore[2:6] *= scale
+    for arms, spread, clear in ((arms_deg, 1.0, True), ((270, 270, 270, 270), 0.0, False)):
+        angles = np.deg2rad([90, 90, *arms, 265, 290, 275, 250]).astype(float)
+        joints = pose_joints(np.array([170.0, 160.0]), angles, np.ones(10), spread, L, sh,
+                             hip)
+        mask = draw_pose(joints, R, (320, 340), caps=False)
+        sp = spread * true.shoulder_half_width / seed.shoulder_half_width
+        got = arm_profiles(mask, joints, angles, fore, sp, h)
+        if clear:
+            np.testing.assert_allclose(got, want, rtol=0.02)
+        else:
+            assert np.isnan(got).all()
 
 
 def test_sample_windows_avoid_empty_frames():
@@ -75,6 +105,26 @@ def test_legs_and_shoulders_recovered_within_5_percent(factors):
     for group in ("upper_legs", "lower_legs", "torso", "shoulders"):
         assert got[group] == pytest.approx(want[group], rel=0.05), group
     assert np.isfinite(est.similarity).all()
+
+
+@pytest.mark.parametrize("factors", [SCALED, {"legs": 0.9, "arms": 1.1, "shoulders": 0.85}])
+def test_arms_recovered_within_5_percent(factors):
+    """Jumping jacks seen from the front (arms raised and spread, where the search's S
+    reads them ~10 % long): the arms' share of the height comes back within 5 % from
+    their length profiles, for arms shorter and longer than the seed's."""
+    from vidcap.synth import make_motion, render_clip
+
+    truth = ProportionEstimate(factors=factors)
+    body = truth.body(1.75)
+    motion = make_motion("jacks", body=body, n_frames=30)
+    _, t = render_clip(motion, body=body, yaw_deg=0, size=(320, 240), noise=0.0,
+                       rng=np.random.default_rng(0))
+    est = estimate_proportions(t["masks"], searched=("legs", "shoulders", "arms"),
+                               steps=((0.05, 4),))
+    got, want = est.ratios(), truth.ratios()
+    for group in ("upper_arms", "lower_arms"):
+        assert got[group] == pytest.approx(want[group], rel=0.05), group
+    assert est.evidence["arms"] >= 10
 
 
 def _standing_with_feet(body, foot_px: float, h: float = 200.0):

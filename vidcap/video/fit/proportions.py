@@ -9,12 +9,16 @@ bodies scaled away from the seed's ratios, ``benchmarks/pose2d_accuracy.py
   consecutive frames are fitted (tracked, as the clip is) with a body whose factor
   for one group is varied, and the factor with the best mean S (Eq. 3.3) kept,
   coordinate by coordinate. S peaks clearly for the legs' share of the height (the
-  pelvis sits where the legs part), the shoulders' breadth, the limbs' widths and,
-  where the arms stand clear in some frames, the arms' length. Left and right are
-  one factor (one subject, one arm length).
-* **Length profiles** (:mod:`vidcap.video.fit.lengthprofile`) split each leg between
-  thigh and shin: with the sample's fitted poses held, the median over the frames
-  whose knee and ankle the outline pins.
+  pelvis sits where the legs part), the shoulders' breadth and the limbs' widths.
+  Left and right are one factor (one subject, one arm length).
+* **Length profiles** (:mod:`vidcap.video.fit.lengthprofile`), with the sample's
+  fitted poses held: each leg split between thigh and shin (the median over the
+  frames whose knee and ankle the outline pins), and the arms' length (the median
+  over the frames whose hand the outline pins of each whole arm's image length,
+  refitted with it until it settles, :data:`ARM_ROUNDS`). S alone reads the arms
+  long: a longer arm fits as well or a little better (Algorithm 6 draws it shorter,
+  and the slack lets the fit mend a shoulder or an elbow), ~10 % long on clips whose
+  arms are raised or spread (jacks, 131_01, 07_07).
 
 Everything is relative to the standing height (head top to ankles), which stays the
 metric scale (``--height``): :meth:`ProportionEstimate.body` builds the
@@ -37,7 +41,7 @@ from vidcap.body import (
     BodyModel,
     body_with_proportions,
 )
-from vidcap.video.fit.lengthprofile import length_profiles
+from vidcap.video.fit.lengthprofile import arm_profiles, length_profiles
 from vidcap.video.masks import frames_with_pixels, touches_border
 
 #: The factors searched by the fit's S, in this order (a group's, or a width's).
@@ -78,6 +82,15 @@ HUMAN = {"head": 0.182 / (25 / 175), "torso": 0.318 / (52 / 175),
 PROPORTION_CHOICES = ("seed", "auto", "human")
 #: Frames per window and windows per clip fitted for each candidate body.
 WINDOW, WINDOWS = 30, 3
+#: The arms' length is measured (:func:`_profiled`) ``ARM_ROUNDS`` times, each with the
+#: model's arms at the last measurement; the median of the measurements of every round
+#: but the first is kept. A model whose arms are much too long misfits them (07_07
+#: 120 deg, body A: arms 1.2 / 1.3 x the truth read 1.11 / 1.10 x, 1.0 / 1.1 x read
+#: 1.04 / 1.02 x), and one round's median moves by a few per cent with a small change
+#: of the model (07_07: +5.8 % at arms x 0.917, +1.7 % at x 0.922): two rounds pooled.
+ARM_ROUNDS = 3
+#: The percentile of a window's model heights taken as its standing height.
+STANDING = 90
 #: Fewest frames that must pin a knee for the thigh/shin split to be measured.
 MIN_FRAMES = 10
 
@@ -165,7 +178,8 @@ def sample_windows(masks, *, window: int = WINDOW, windows: int = WINDOWS) -> li
 
 def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
                          windows: int = WINDOWS, searched=SEARCHED, steps=STEPS,
-                         base: dict | None = None, **fit_kw) -> ProportionEstimate:
+                         base: dict | None = None, arms: bool = True,
+                         **fit_kw) -> ProportionEstimate:
     """Estimate the subject's proportions from a clip's silhouettes.
 
     Parameters
@@ -183,6 +197,10 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
     base : dict, optional
         Factors the search starts from and multiplies (e.g. :data:`HUMAN`); the
         thigh/shin split is then the base's (not profiled). Default: the seed's.
+    arms : bool
+        Measure the arms' length after the search from the fitted frames' arm
+        profiles (:func:`_profiled`, :data:`ARM_ROUNDS`); False: the search's
+        (``'arms'`` in ``searched``) or the base's.
     **fit_kw
         Other options of :func:`vidcap.video.fit.tracking.fit_sequence`.
 
@@ -211,7 +229,19 @@ def estimate_proportions(masks, *, height: int = 80, window: int = WINDOW,
         for name in searched:
             factors = _search(score, factors, name, step, reach)
     evidence = dict.fromkeys(searched, n_frames)
-    split, n_split = (None, 0) if base else _leg_split(masks, wins, factors, height, fit_kw)
+    split, n_split, pooled = None, 0, []
+    for r in range(ARM_ROUNDS if arms else 1):
+        upper, n_split, measured = _profiled(masks, wins, compose(base, factors), height,
+                                             fit_kw, legs=not base, arms=arms)
+        if upper is not None:
+            split = _leg_split(factors, upper)
+        if len(measured) < MIN_FRAMES:
+            break
+        values = factors.get("arms", 1.0) * np.asarray(measured)
+        if r:  # the first round's model (the search's arms) may be far off: not pooled
+            pooled.extend(values.tolist())
+        factors["arms"] = float(np.clip(np.median(pooled if pooled else values), *LIMITS))
+        evidence["arms"] = len(pooled if pooled else values)
     if split is not None:
         factors.update(split)
     evidence["upper_legs"] = evidence["lower_legs"] = n_split
@@ -272,39 +302,65 @@ def _search(score, factors: dict, name: str, step: float, reach: int):
     return {**factors, name: v_best}
 
 
-def _leg_split(masks, wins, factors, height, fit_kw):
-    """Thigh and shin factors from length profiles of the sample's fitted frames (the
-    legs' whole length kept), and how many frames measured them; (None, n) below
-    :data:`MIN_FRAMES`."""
+def _profiled(masks, wins, factors, height, fit_kw, *, legs: bool = True,
+              arms: bool = True):
+    """Length profiles of the sample's frames fitted with ``factors`` (the model's
+    own, base included): the thigh's share of the leg (median over the measured
+    frames and legs; None below :data:`MIN_FRAMES` measurements or when not asked
+    for) and how many measured it, and each measurement of an arm's length as a
+    ratio to the model's (a list, empty when not asked for).
+
+    An arm's measurement is its image length (upper arm + forearm,
+    :func:`~vidcap.video.fit.lengthprofile.arm_profiles`) against the model's arm drawn
+    at the window's standing height: the :data:`STANDING` percentile of the heights
+    the model was drawn at (a walking silhouette is shorter than the standing body,
+    and the fit draws the model at its height: 07_07 120 deg, body A, median 0.974 x
+    the standing height, 90th percentile 0.996 x). The search's S cannot give it: a
+    longer arm than the subject's fits as well or a little better (Algorithm 6 draws
+    it shorter, and the freedom lets the fit correct a shoulder or an elbow), so the
+    search's arms are long by ~10 % on clips where the arms are raised or spread
+    (jacks, 131_01, 07_07); the fit with those long arms draws them at the image's
+    length, which the profile reads where the hand's end is pinned by the outline.
+    An arm out of the image plane reads short, a misfit either way: the median, not
+    a high percentile (the determined frames' top decile read 1.04-1.65 x the truth
+    on the tuning clips, their median 1.00-1.04 x)."""
     from vidcap.video.fit.tracking import fit_sequence
 
     kw = fit_keywords(factors)
     body, above = kw["body"], 1.0 - kw.get("foot", fit_kw.get("foot", 0.0))
     ul = [SEGMENT_INDEX["l_upper_leg"], SEGMENT_INDEX["r_upper_leg"]]
     ll = [SEGMENT_INDEX["l_lower_leg"], SEGMENT_INDEX["r_lower_leg"]]
-    ratios = []
+    ratios, arm = [], []
     for w in wins:
         sub = masks[w]
         pose = fit_sequence(sub, height=height, **kw, **fit_kw)
+        fitted = pose.similarity > 0
+        standing = (float(np.percentile(pose.model_height[fitted], STANDING))
+                    if fitted.any() else 0.0)
         for k in range(len(sub)):
             if not pose.similarity[k] > 0:
                 continue
-            lengths, _ = length_profiles(np.asarray(sub[k]), pose.joints2d[k],
-                                         pose.angles[k], pose.foreshortening[k],
-                                         float(pose.spread[k]),
-                                         above * float(pose.model_height[k]),
-                                         body=body)
-            r = lengths[ul] / (lengths[ul] + lengths[ll])  # NaN where either is unknown
-            ratios.extend(r[np.isfinite(r)].tolist())
-    if len(ratios) < MIN_FRAMES:
-        return None, len(ratios)
-    upper = float(np.median(ratios))
+            args = (np.asarray(sub[k]), pose.joints2d[k], pose.angles[k],
+                    pose.foreshortening[k], float(pose.spread[k]),
+                    above * float(pose.model_height[k]))
+            if legs:
+                lengths, _ = length_profiles(*args, body=body)
+                r = lengths[ul] / (lengths[ul] + lengths[ll])  # NaN where either is unknown
+                ratios.extend(r[np.isfinite(r)].tolist())
+            if arms:
+                a = arm_profiles(*args, body=body) * float(pose.model_height[k]) / standing
+                arm.extend(a[np.isfinite(a)].tolist())
+    upper = float(np.median(ratios)) if len(ratios) >= MIN_FRAMES else None
+    return upper, len(ratios), arm
+
+
+def _leg_split(factors: dict, upper: float) -> dict:
+    """Thigh and shin factors splitting the legs' searched length (``factors['legs']``)
+    with the thigh's share ``upper`` of it."""
     seed = BodyModel(height=1.0)
     u0, l0 = seed.length("l_upper_leg"), seed.length("l_lower_leg")
-    legs = factors.get("legs", 1.0)
-    total = legs * (u0 + l0)  # the legs' length as searched, split as measured
-    return {"upper_legs": upper * total / u0, "lower_legs": (1 - upper) * total / l0}, \
-        len(ratios)
+    total = factors.get("legs", 1.0) * (u0 + l0)
+    return {"upper_legs": upper * total / u0, "lower_legs": (1 - upper) * total / l0}
 
 
 __all__ = ["FOOT", "HUMAN", "LIMITS", "PROPORTION_CHOICES", "SEARCHED", "ProportionEstimate",
