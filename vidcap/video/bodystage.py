@@ -13,7 +13,7 @@ from vidcap.video.fit.proportions import ProportionEstimate, estimate_proportion
 from vidcap.video.stagecache import StageCache, stage_key
 
 #: Bumped when the estimator's results change for the same silhouettes.
-_VERSION = 2
+_VERSION = 3  # 3: the arms measured by length profiles (issue 27)
 
 
 def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_job: int,

@@ -44,10 +44,13 @@ from vidcap.body import (
 from vidcap.video.fit.lengthprofile import arm_profiles, length_profiles
 from vidcap.video.masks import frames_with_pixels, touches_border
 
-#: The factors searched by the fit's S, in this order (a group's, or a width's).
+#: The factors searched by the fit's S, in this order (a group's, or a width's). The
+#: arms' length searched here is only the start of its measurement by length profiles
+#: (``estimate_proportions(arms=True)``, :func:`_profiled`).
 SEARCHED = ("legs", "shoulders", "leg_width", "arms", "arm_width")
 #: Lengths a longer model fits as well as the right one (its segments foreshortened,
-#: Algorithm 6): the shortest factor whose S is within ``PLATEAU_TIE`` of the best.
+#: Algorithm 6): the shortest factor whose S is within ``PLATEAU_TIE`` of the best
+#: (still ~10 % long where the arms are raised or spread: jacks, 131_01, 07_07).
 PLATEAU = ("arms",)
 PLATEAU_TIE = 0.0015
 #: Factors a search may reach (beyond: the seed's ratios are kept for that group).
