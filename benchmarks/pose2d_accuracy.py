@@ -461,13 +461,13 @@ def torso_table(frames: int = 60) -> int:
 #: the seed's own (its estimate should stay near 0 %).
 BODIES = (
     ("A", {"legs": 1.15, "arms": 0.9, "shoulders": 1.2}),
-    ("B", {"legs": 0.9, "arms": 1.1, "shoulders": 0.85, "arm_width": 1.2, "leg_width": 1.2}),
     ("seed", {}),
+    ("B", {"legs": 0.9, "arms": 1.1, "shoulders": 0.85, "arm_width": 1.2, "leg_width": 1.2}),
 )
 #: ``--proportions``: (name, motion source, first frame, yaw). walk 90, 131_01 45,
 #: 07_07 120 and jacks 0 were looked at while the estimator was built (body A; body B
-#: on jacks 0 too, for the arms' measurement): tuning; the rest are other stretches and
-#: yaws (validation).
+#: on jacks 0 too, and body A on jacks 45, for the arms' measurement): tuning; the rest
+#: are other stretches and yaws (validation).
 PROPORTION_CLIPS = (
     ("walk", "walk", 0, 90),
     ("131_01 0-2s", "131_01", 0, 45),
@@ -479,7 +479,7 @@ PROPORTION_CLIPS = (
     ("jacks", "jacks", 0, 45),
 )
 #: (body, clip index) pairs looked at while the estimator was built.
-PROPORTION_TUNING = {("A", 0), ("A", 1), ("A", 2), ("A", 3), ("B", 3)}
+PROPORTION_TUNING = {("A", 0), ("A", 1), ("A", 2), ("A", 3), ("A", 7), ("B", 3)}
 
 
 def _proportion_row(task):
