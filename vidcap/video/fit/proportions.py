@@ -15,7 +15,8 @@ bodies scaled away from the seed's ratios, ``benchmarks/pose2d_accuracy.py
   fitted poses held: each leg split between thigh and shin (the median over the
   frames whose knee and ankle the outline pins), and the arms' length (the median
   over the frames whose hand the outline pins of each whole arm's image length,
-  refitted with it until it settles, :data:`ARM_ROUNDS`). S alone reads the arms
+  the sample refitted twice with it and the two pooled, :data:`ARM_ROUNDS`). S
+  alone reads the arms
   long: a longer arm fits as well or a little better (Algorithm 6 draws it shorter,
   and the slack lets the fit mend a shoulder or an elbow), ~10 % long on clips whose
   arms are raised or spread (jacks, 131_01, 07_07).
@@ -327,15 +328,17 @@ def _profiled(masks, wins, factors, height, fit_kw, *, legs: bool = True,
     the image plane, one held out sideways or forward may point toward the camera and
     read short (jacks 45 deg, body A, arms profiled with the true body: median of all
     0.906 x the truth, of the upright ones 0.959 x; on the other tuning clips the two
-    agree within 1.3 %). The search's S cannot give it: a
-    longer arm than the subject's fits as well or a little better (Algorithm 6 draws
-    it shorter, and the freedom lets the fit correct a shoulder or an elbow), so the
-    search's arms are long by ~10 % on clips where the arms are raised or spread
-    (jacks, 131_01, 07_07); the fit with those long arms draws them at the image's
-    length, which the profile reads where the hand's end is pinned by the outline.
-    An arm out of the image plane reads short, a misfit either way: the median, not
-    a high percentile (the determined frames' top decile read 1.04-1.65 x the truth
-    on the tuning clips, their median 1.00-1.04 x)."""
+    agree within 1.3 %).
+
+    The search's S cannot give the arms' length: a longer arm than the subject's fits
+    as well or a little better (Algorithm 6 draws it shorter, and the freedom lets the
+    fit correct a shoulder or an elbow), so the search's arms are long by ~10 % on
+    clips where the arms are raised or spread (jacks, 131_01, 07_07); the fit with
+    those long arms draws them at the image's length, which the profile reads where
+    the hand's end is pinned by the outline. An arm out of the image plane reads
+    short, a misfit either way: the median, not a high percentile (the determined
+    frames' top decile read 1.04-1.65 x the truth on the tuning clips, their median
+    1.00-1.04 x)."""
     from vidcap.video.fit.tracking import fit_sequence
 
     kw = fit_keywords(factors)
