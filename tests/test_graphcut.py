@@ -54,6 +54,40 @@ def test_a_block_the_plate_absorbed_is_recovered_by_the_cut():
     assert (out & truth).sum() / (out | truth).sum() > 0.95
 
 
+def test_a_frame_whose_scene_has_the_persons_colour_keeps_the_plain_foreground(
+        monkeypatch):
+    """The same absorbed torso, but a strip of the scene round the person is the
+    person's red (a wall the colour of skin): the colour models no longer tell scene
+    from person there, so the frame keeps the thresholded foreground (SCENE_KEPT_MIN);
+    without the gate the cut would decide it, and the trace says why."""
+    import vidcap.video.graphcut as gc
+
+    rng = np.random.default_rng(1)
+    scene = _scene()
+    scene[46:58, 66:95] = RED                      # red scene, seen in every frame
+    frame = scene.copy()
+    body = np.zeros(scene.shape[:2], bool)
+    body[20:60, 40:60] = True
+    arm = np.zeros_like(body)
+    arm[30:34, 60:85] = True
+    frame[body | arm] = RED
+    frame = np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+    plate = scene.copy()
+    plate[body] = RED
+    tmap = np.full(body.shape, 30, np.uint8)
+    l1 = _l1(frame, plate)
+    fg = np.where(l1 > tmap, 255, 0).astype(np.uint8)
+    models = _models(_scene(), rng)
+    monkeypatch.setattr(gc, "TRACE", [])
+    out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, body.copy()))
+    np.testing.assert_array_equal(out, fg)
+    kept = gc.TRACE[0][1]
+    assert 0.5 < kept < gc.SCENE_KEPT_MIN           # the red strip: person by colour
+    monkeypatch.setattr(gc, "SCENE_KEPT_MIN", 0.0)
+    out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, body.copy()))
+    assert (out[body] > 0).mean() > 0.9            # the cut ran: the torso filled in
+
+
 def test_the_cut_does_not_spread_onto_a_textured_background_of_another_colour():
     rng = np.random.default_rng(2)
     scene = _scene(seed=3)

@@ -32,9 +32,10 @@ def add_arguments(parser) -> None:
                         help="do not suppress shadows")
     parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                         help="re-decide a band round the person by a graph cut on the clip's "
-                             "colours (default as in vidcap convert: off; better on the in-place "
-                             "renders, worse on most real clips with true masks; see "
-                             "benchmarks/RESULTS.md); needs the estimated felzenszwalb plate")
+                             "colours where they tell the person from the scene (default as in "
+                             "vidcap convert: on; better on the in-place renders, level on "
+                             "real clips; see benchmarks/RESULTS.md); needs the estimated "
+                             "felzenszwalb plate")
     parser.add_argument("--still-person", action=argparse.BooleanOptionalAction, default=None,
                         help="also re-take the plate from frames that show the empty scene, "
                              "and look for a person who never moves with a person detector "

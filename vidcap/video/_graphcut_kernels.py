@@ -48,6 +48,11 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
         foreground and the never-seen area (the scene round the person).
     n_scene : int
         Pixels in ``hist``.
+    hist_in : (n_colours,) float32
+        Histogram of the quantised colours of the sure person: inside the eroded
+        foreground, seen, above the threshold.
+    n_in : int
+        Pixels in ``hist_in``.
     """
     h, w = f.shape
     band = np.zeros((h, w), np.bool_)
@@ -55,8 +60,10 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
     plate = np.empty(h * w, np.float32)
     nvb = np.empty(h * w, np.bool_)
     hist = np.zeros(n_colours, np.float32)
+    hist_in = np.zeros(n_colours, np.float32)
     n = 0
     n_scene = 0
+    n_in = 0
     for y in range(h):
         for x in range(w):
             q = lut[0, img[y, x, 0]] + lut[1, img[y, x, 1]] + lut[2, img[y, x, 2]]
@@ -71,7 +78,10 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
             elif near[y, x] == 0 and not nv:
                 hist[q] += 1.0
                 n_scene += 1
-    return band, qb[:n], plate[:n], nvb[:n], hist, n_scene
+            elif inner[y, x] > 0 and not nv and l1[y, x] > tmap[y, x]:
+                hist_in[q] += 1.0
+                n_in += 1
+    return band, qb[:n], plate[:n], nvb[:n], hist, n_scene, hist_in, n_in
 
 
 @numba.njit(cache=True, nogil=True)
