@@ -22,9 +22,14 @@ outside the band keep the threshold's decision; their links are folded into the
 band pixels' terminal links, so the graph is the band (the outline and the
 never-seen parts the person's crop touches), not the frame.
 
-Opt-in (``extract_silhouettes(..., graph_cut=True)``; ``vidcap silhouettes
---graph-cut``, ``vidcap convert --graph-cut``;
-``benchmarks/silhouettes_real.py --graph-cut``). Tuning clips, median IoU without ->
+A frame is cut only when the colour models tell its scene from the person
+(:data:`SCENE_KEPT_MIN`: on real footage the scene round the person often holds the
+person's colours, and the cut then fills the never-seen area or the outline with
+scene); else, and when the cut breaks the person up (:data:`LOST_MAX`), the frame
+keeps the plain threshold's foreground. On by default in ``vidcap convert`` and
+``vidcap silhouettes`` (``--no-graph-cut``; ``extract_silhouettes(..., graph_cut=True)``
+on a plate from ``estimate_background(colour_models=True)``;
+``benchmarks/silhouettes_real.py --no-graph-cut``). Tuning clips, median IoU without ->
 with (main f5880ab's silhouettes): jacks side 0.884 -> 0.917, jacks 3/4 0.902 ->
 0.915, arms 3/4 0.890 -> 0.902, arms side 0.980 -> 0.987, arms front 0.920 -> 0.920,
 ido_walk 0.921 -> 0.922, sports2d_walk_turn 0.846 -> 0.849 (vs MediaPipe), but
@@ -65,6 +70,14 @@ WITH_NEVER = True
 #: Share of the scene's colour model taken from the frame itself, round the person
 #: (the crop outside the band), per frame; 0 = the clip's model only.
 LOCAL_SCENE = 1.0
+#: Share of the frame's scene model spread over every colour, as the person's model
+#: has (:data:`vidcap.video.appearance.PRIOR_UNSEEN`). Without it a colour neither
+#: model has seen (the scene inside the never-seen area, which the frame's scene model
+#: leaves out) scores as the person's at the clip's limit. Chosen on the tuning rows:
+#: 0 / 0.1 / 0.3 / 0.5 / 0.7, jacks side 0.921 / 0.922 / 0.931 / 0.931 / 0.935,
+#: office_stand p10 0.002 / 0.213 / 0.213 / 0.213 / 0.213, but sports2d_run 0.764 at
+#: 0.3, 0.746 at 0.5 and 14_19 3/4 0.956 at 0.3, 0.945 at 0.7.
+SCENE_UNIFORM = 0.3
 #: Weight of the pairwise (smoothness) term.
 SMOOTH = 1.0
 #: A frame whose cut leaves out more than this share of the plain foreground's largest
@@ -191,7 +204,9 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     -------
     numpy.ndarray, shape (h, w), uint8
         The foreground (0 / 255) with the band round its largest blob re-decided
-        (``fg`` itself when it is empty).
+        (``fg`` itself when it is empty, when the colours do not tell the sure scene
+        from the person, :data:`SCENE_KEPT_MIN`, or when the cut breaks the person up,
+        :data:`LOST_MAX`).
     """
     contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     if not contours:
@@ -327,7 +342,8 @@ def _local_llr(hist: np.ndarray, n_scene: int, colours: np.ndarray) -> np.ndarra
     hist = np.einsum("ai,ijk->ajk", g, hist)
     hist = np.einsum("bj,ajk->abk", g, hist)
     hist = np.einsum("ck,abk->abc", g, hist).ravel()
-    scene = np.log(hist / max(float(hist.sum()), 1.0) + 1e-7).astype(np.float32)
+    scene = np.log((1 - SCENE_UNIFORM) * hist / max(float(hist.sum()), 1.0)
+                   + SCENE_UNIFORM / hist.size + 1e-7).astype(np.float32)
     if LOCAL_SCENE < 1:
         scene = np.logaddexp(np.log1p(-LOCAL_SCENE) + colours[1],
                              np.log(LOCAL_SCENE) + scene)
