@@ -700,8 +700,11 @@ def extract_silhouettes(
         Re-decide the band round the person and the never-seen area by a graph cut
         over space and time (:mod:`vidcap.video.graphcut`: plate difference, the
         clip's colour models); needs a plate estimated with ``colour_models=True``.
-        Opt-in: it lifts most in-place renders and real clips but loses on some (see
-        benchmarks/RESULTS.md, Silhouettes) and costs ~2.5x the silhouettes' time.
+        Off here (an API of its own); ``vidcap convert`` and ``vidcap silhouettes``
+        turn it on by default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`). A frame
+        whose colours do not tell its scene from the person keeps the plain
+        threshold's foreground (:data:`vidcap.video.graphcut.SCENE_KEPT_MIN`); about
+        1.5x the silhouettes' time (benchmarks/RESULTS.md, Silhouettes).
 
     Returns
     -------
