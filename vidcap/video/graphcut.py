@@ -73,11 +73,12 @@ LOCAL_SCENE = 1.0
 #: Share of the frame's scene model spread over every colour, as the person's model
 #: has (:data:`vidcap.video.appearance.PRIOR_UNSEEN`). Without it a colour neither
 #: model has seen (the scene inside the never-seen area, which the frame's scene model
-#: leaves out) scores as the person's at the clip's limit. Chosen on the tuning rows:
-#: 0 / 0.1 / 0.3 / 0.5 / 0.7, jacks side 0.921 / 0.922 / 0.931 / 0.931 / 0.935,
-#: office_stand p10 0.002 / 0.213 / 0.213 / 0.213 / 0.213, but sports2d_run 0.764 at
-#: 0.3, 0.746 at 0.5 and 14_19 3/4 0.956 at 0.3, 0.945 at 0.7.
-SCENE_UNIFORM = 0.3
+#: leaves out) scores as the person's at the clip's limit. Chosen on the tuning rows, on
+#: main 7ebb303's plates (the appearance pass's scene-beside gate): 0 / 0.3 / 0.5 /
+#: 0.7, jacks side 0.872 / 0.905 / 0.923 / 0.930 (plain 0.918), 131_01 side 0.971 at
+#: 0.3, 0.968 at 0.5, 0.964 at 0.7, 14_19 3/4 0.956 / 0.954 / 0.945; on the plates
+#: before that gate office_stand's p10 0.002 at 0, 0.213 from 0.1 on.
+SCENE_UNIFORM = 0.5
 #: Weight of the pairwise (smoothness) term.
 SMOOTH = 1.0
 #: A frame whose cut leaves out more than this share of the plain foreground's largest
