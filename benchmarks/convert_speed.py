@@ -98,10 +98,10 @@ def _convert_cached_plate(video: Path, d: Path, jobs):
     from vidcap.video.stagecache import StageCache
 
     cache_dir = d / "cache"
-    graph_cut, k_plate, _ = pipeline._stage_keys(video, None, Annotations(), None,
-                                                 lambda m: None)
+    graph_cut, still, k_plate, _ = pipeline._stage_keys(video, None, Annotations(), None,
+                                                        lambda m: None)
     pipeline._plate_stage(StageCache(cache_dir), k_plate, video, None, progress=False,
-                          log=lambda m: None, colour_models=graph_cut)
+                          log=lambda m: None, colour_models=graph_cut, still_person=still)
     t0 = time.perf_counter()
     res = convert(video, d / "walk2.bvh", cache_dir=cache_dir, progress=False, jobs=jobs,
                   proportions="seed")
