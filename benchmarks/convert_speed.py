@@ -81,7 +81,7 @@ def main(argv=None):
         print(f"{name} | {t:.2f} | {n / t:.0f} | {t / t_decode:.1f}")
     print(f"\nconvert excluding plate estimation: {n / t_conv:.0f} fps with {jobs} fitting "
           f"processes, {n / t_serial:.0f} fps with one, {n / t_cut:.0f} fps on the estimated "
-          "plate (the default graph cut; target >= 100)")
+          f"plate (graph cut: {cut_on}; target >= 100)")
     d2 = np.linalg.norm(res.image_joints2d - serial.image_joints2d, axis=-1)
     d3 = np.linalg.norm(res.lifted.joints3d - serial.lifted.joints3d, axis=-1)
     print(f"chunked vs serial fit: {np.mean(d2.max(1) > 1e-6):.0%} of frames differ; 2D joints "

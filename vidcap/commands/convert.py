@@ -40,7 +40,7 @@ DEFAULT_PROPORTIONS = "human"
 PROPORTION_CHOICES = ("human", "seed", "auto")
 #: ``--graph-cut`` default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`, spelled here
 #: for a light ``--help``; a test checks they agree).
-DEFAULT_GRAPH_CUT = True
+DEFAULT_GRAPH_CUT = False
 #: ``--still-person`` default (:func:`vidcap.video.pipeline.default_still_person`, spelled
 #: here for a light ``--help``; a test checks they agree).
 DEFAULT_STILL_PERSON = True
@@ -113,9 +113,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="re-decide a band round the person (and the parts of the scene "
                         "never seen uncovered) by a graph cut on the clip's person and scene "
                         "colours (the plate stage learns them), in the frames where those "
-                        "colours tell the person from the scene; better on the in-place "
-                        "renders, no real clip measured loses more than 0.01 median IoU "
-                        "(benchmarks/RESULTS.md, Silhouettes); not with --background. "
+                        "colours tell the person from the scene; better silhouettes on the "
+                        "in-place renders, no real clip measured loses more than 0.01 median "
+                        "IoU, but the 2D fit and the 3D on them lose on the samples and "
+                        "ido_walk (benchmarks/RESULTS.md, Silhouettes); not with --background. "
                         "Default: "
                         + ("on" if DEFAULT_GRAPH_CUT else "off"))
     parser.add_argument("--still-person", action=argparse.BooleanOptionalAction, default=None,

@@ -60,8 +60,8 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
         still parts (see benchmarks/RESULTS.md, Silhouettes).
     colour_models : bool
         Learn the clip's person and scene colours for the silhouettes' graph cut
-        (:func:`vidcap.video.graphcut.clip_colours`); on when the cut runs (the
-        pipeline's default).
+        (:func:`vidcap.video.graphcut.clip_colours`); on when the cut runs
+        (``--graph-cut``).
 
     Returns
     -------

@@ -700,8 +700,9 @@ def extract_silhouettes(
         Re-decide the band round the person and the never-seen area by a graph cut
         over space and time (:mod:`vidcap.video.graphcut`: plate difference, the
         clip's colour models); needs a plate estimated with ``colour_models=True``.
-        Off here (an API of its own); ``vidcap convert`` and ``vidcap silhouettes``
-        turn it on by default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`). A frame
+        Off here, and in ``vidcap convert`` and ``vidcap silhouettes`` by default
+        (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`: the fit on its silhouettes
+        loses on the samples). A frame
         whose colours do not tell its scene from the person keeps the plain
         threshold's foreground (:data:`vidcap.video.graphcut.SCENE_KEPT_MIN`); about
         1.5x the silhouettes' time (benchmarks/RESULTS.md, Silhouettes).
