@@ -337,6 +337,22 @@ def swap_sides(joints2d) -> np.ndarray:
     return np.asarray(joints2d)[..., SWAP_JOINTS, :]
 
 
+def faces_camera(yaw) -> np.ndarray:
+    """Which frames face the camera beyond the side sector (cos yaw > sin 30 degrees):
+    there the body's left shows on the image's right, so image-side names swap.
+
+    Parameters
+    ----------
+    yaw : array_like, shape (F,)
+        Body yaw, radians.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F,)
+    """
+    return np.cos(np.asarray(yaw, dtype=float)) > np.sin(_SIDE_HALF)
+
+
 def assign_sides(joints2d, yaw, swap=None) -> np.ndarray:
     """Rename image-side limbs (``l_*`` = on the image's left) to the body's sides.
 
@@ -361,9 +377,7 @@ def assign_sides(joints2d, yaw, swap=None) -> np.ndarray:
         Body-side named joints.
     """
     j = _check_joints2d(joints2d)
-    if swap is None:
-        swap = np.cos(np.asarray(yaw, dtype=float)) > np.sin(_SIDE_HALF)
-    swap = np.asarray(swap, bool)
+    swap = faces_camera(yaw) if swap is None else np.asarray(swap, bool)
     out = j.copy()
     out[swap] = j[swap][:, SWAP_JOINTS]
     return out

@@ -24,6 +24,7 @@ from vidcap.video.annotations import PAIRS, Annotations
 from vidcap.video.lift import (
     assign_sides,
     estimate_scales,
+    faces_camera,
     lift,
     torso_width_ratio,
     yaw_from_orientation,
@@ -236,7 +237,7 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         tilt &= np.asarray(user_orientation) == ""  # the user's side view stays one
         tilt &= np.asarray(spread, float) > SIDE_FACING_SPREAD
         yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
-        swap = np.where(tilt, f > 0, np.cos(yaw) > np.sin(np.deg2rad(30.0)))
+        swap = np.where(tilt, f > 0, faces_camera(yaw))
     j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
     if user_sides is not None:
         j2 = swap_pairs(j2, user_sides)
