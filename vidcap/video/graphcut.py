@@ -26,10 +26,12 @@ A frame is cut only when the colour models tell its scene from the person
 (:data:`SCENE_KEPT_MIN`: on real footage the scene round the person often holds the
 person's colours, and the cut then fills the never-seen area or the outline with
 scene); else, and when the cut breaks the person up (:data:`LOST_MAX`), the frame
-keeps the plain threshold's foreground. On by default in ``vidcap convert`` and
-``vidcap silhouettes`` (``--no-graph-cut``; ``extract_silhouettes(..., graph_cut=True)``
+keeps the plain threshold's foreground. Opt-in in ``vidcap convert`` and
+``vidcap silhouettes`` (``--graph-cut``; ``extract_silhouettes(..., graph_cut=True)``
 on a plate from ``estimate_background(colour_models=True)``;
-``benchmarks/silhouettes_real.py --no-graph-cut``). Tuning clips, median IoU without ->
+``benchmarks/silhouettes_real.py --graph-cut``): the silhouettes gain, but the 2D fit
+on them loses on the samples and ido_walk (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`).
+Tuning clips, median IoU without ->
 with (main f5880ab's silhouettes): jacks side 0.884 -> 0.917, jacks 3/4 0.902 ->
 0.915, arms 3/4 0.890 -> 0.902, arms side 0.980 -> 0.987, arms front 0.920 -> 0.920,
 ido_walk 0.921 -> 0.922, sports2d_walk_turn 0.846 -> 0.849 (vs MediaPipe), but
