@@ -225,3 +225,58 @@ def test_compiled_cue_terms_match_the_numpy_path(monkeypatch):
     np.testing.assert_allclose(edge, edge_np, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(keep, cues._greedy_apart(ua, la, jj, 0.3, 0.2))
     assert len(keep) == cues.N_CANDIDATES - 1
+
+
+def _hanging_arm_and_forearm_cues(angle_deg=297.0):
+    """A side-view walk frame's outline fit (its image-left arm hangs straight down)
+    and cue maps that draw a forearm bent ``angle_deg`` (image angle) from that arm's
+    elbow: strong edges along both of its borders only, and the same with skin inside
+    it (engine, state, edges-only maps, edges-and-skin maps)."""
+    from vidcap.synth import render_clip
+    from vidcap.video.fit.cues import CueMaps
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.frame import fit_normalised
+    from vidcap.video.fit.limits import J, S
+    from vidcap.video.fit.options import FitOptions
+
+    _, truth = render_clip(make_motion("walk", n_frames=1), yaw_deg=90, size=(320, 240),
+                           noise=0.0, rng=np.random.default_rng(0))
+    opts = FitOptions.from_keywords({})
+    eng = _MaskEngine(normalise_mask(truth["masks"][0], height=opts.height), caps=opts.caps,
+                      body=opts.body, foot=opts.foot)
+    st, _, _ = fit_normalised(eng, options=opts)
+    up, lo = S["l_upper_arm"], S["l_lower_arm"]
+    bent = st.with_entries(angles=([lo], [np.deg2rad(angle_deg)])).drawing([up, lo])
+    joints = eng.joints(bent)
+    elbow, wrist = joints[J["l_elbow"]], joints[J["l_wrist"]]
+    h, w = eng.sil.shape
+    yy, xx = np.mgrid[0:h, 0:w]
+    p = np.stack([xx, yy], -1).astype(float)
+    ab = wrist - elbow
+    t = np.clip(((p - elbow) @ ab) / (ab @ ab), 0.0, 1.0)
+    dist = np.linalg.norm(p - (elbow + t[..., None] * ab), axis=-1)
+    r = float(eng.R[lo])
+    edges = np.zeros((h, w, 4), np.float32)
+    border = (dist > 0.5 * r) & (dist < 1.5 * r)
+    edges[border, 1] = edges[border, 3] = 1.0  # edge energy across any direction
+    skin = edges.copy()
+    skin[dist < r, 0] = 1.0
+    bins = np.zeros((h, w), np.int64)
+    return eng, st, CueMaps(edges, bins), CueMaps(skin, bins)
+
+
+def test_edges_alone_do_not_move_an_arm_but_a_forearm_on_skin_does():
+    from vidcap.video.fit.cues import SKIN_MIN, search_arm_cues
+    from vidcap.video.fit.limits import S
+
+    eng, st, edges, skin = _hanging_arm_and_forearm_cues(297.0)
+    up, lo = S["l_upper_arm"], S["l_lower_arm"]
+    assert abs(np.degrees(st.angles[lo]) - 270.0) < 10.0  # the outline fit: hanging
+    strong = {"skin": 0.03, "edge": 0.2, "prior": 0.01}  # edges ten times their weight
+    moved = search_arm_cues(eng, st, "l", edges, weights=strong, skin_min=0.0)
+    assert abs(np.degrees(moved.angles[lo]) - 297.0) <= 7.5  # without the skin rule
+    kept = search_arm_cues(eng, st, "l", edges, weights=strong)
+    assert SKIN_MIN > 0
+    np.testing.assert_array_equal(kept.angles[[up, lo]], st.angles[[up, lo]])
+    found = search_arm_cues(eng, st, "l", skin)  # the default weights: skin shows the arm
+    assert abs(np.degrees(found.angles[lo]) - 297.0) <= 7.5

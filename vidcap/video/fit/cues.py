@@ -45,6 +45,13 @@ CUE_MODES = ("outline", "all")
 #: arm's borders (0-1); ``prior``, per radian away from the arm's prior (the previous
 #: frame's arm, else hanging), so an arm with no evidence either way stays put.
 WEIGHTS = {"skin": 0.03, "edge": 0.02, "prior": 0.01}
+#: A cue move must put the forearm on skin: the mean skin likelihood along the chosen
+#: forearm (:func:`arm_cue_terms`) at least this, else the arm stays where the outline
+#: fit (or the last frame) left it. Edges alone do not move an arm: inside the torso's
+#: outline the far arm of a side view is hidden behind the torso, and the edges and
+#: stray skin it can reach there are the torso's shading, the other arm's borders or
+#: the neck's. Chosen on the tuning renders (0.1-0.4 all gained; RESULTS.md).
+SKIN_MIN = 0.2
 
 _BINS = 32  # chromaticity histogram bins per axis
 _EPS = 1e-6
@@ -469,7 +476,7 @@ LOCAL_HALF_DEG = 30.0
 
 def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
                     weights=None, coarse_deg: float = 15.0, local: bool = False,
-                    out: dict | None = None) -> FitState:
+                    out: dict | None = None, skin_min: float = SKIN_MIN) -> FitState:
     """One whole arm placed by S and the frame's cues together (beyond the seed).
 
     Every (upper, lower) pair ``coarse_deg`` apart, at each foreshortening of
@@ -494,6 +501,9 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     out : dict, optional
         Filled with ``out[s]``: the arm's candidates for the solve over time
         (:func:`_candidates`).
+    skin_min : float
+        The arm is moved only to a place whose forearm shows at least this mean skin
+        likelihood (:data:`SKIN_MIN`; 0: wherever J is best).
     """
     w = WEIGHTS if weights is None else weights
     up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
@@ -572,6 +582,12 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
                              (cg, both), (cj, j_both), d_best[0], d_best[1], j_best)
     if best < 0:
         return st
+    if skin_min > 0:
+        skin, _ = arm_cue_terms(own, shoulder, fine[2][best:best + 1], fine[3][best:best + 1],
+                                float(lengths[0] * fore[0]), float(lengths[1] * fore[1]),
+                                r_u, r_l)
+        if skin[0] < skin_min:  # no skin where the arm would go: the cues show no arm
+            return st
     return st.with_entries(angles=([up, lo], [fine[0][best], fine[1][best]]),
                            fore=([up, lo], list(fore)))
 
@@ -638,9 +654,9 @@ def refine_arms_with_cues(eng, st: FitState, maps: CueMaps, *, priors=None,
     return st
 
 
-__all__ = ["CUE_MODES", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues", "arm_cue_grid_terms",
-           "arm_cue_terms", "chroma_bins", "cue_image", "cue_maps", "fore_options",
-           "learn_colours", "refine_arms_with_cues", "search_arm_cues"]
+__all__ = ["CUE_MODES", "SKIN_MIN", "ColourModel", "CueMaps", "WEIGHTS", "apply_cues",
+           "arm_cue_grid_terms", "arm_cue_terms", "chroma_bins", "cue_image", "cue_maps",
+           "fore_options", "learn_colours", "refine_arms_with_cues", "search_arm_cues"]
 
 
 def apply_cues(eng, st: FitState, image: np.ndarray, model: ColourModel, *,
