@@ -565,11 +565,17 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     for f, j_f in zip(steps, j_steps[1:], strict=True):
         if j_f.max() > j_fine.max():
             j_fine, fore = j_f, f
-    if j_fine.max() > j_here[0]:
-        best = int(np.argmax(j_fine))
+    best = int(np.argmax(j_fine)) if j_fine.max() > j_here[0] else -1
+    if best >= 0 and skin_min > 0:
+        skin, _ = arm_cue_terms(own, shoulder, fine[2][best:best + 1], fine[3][best:best + 1],
+                                float(lengths[0] * fore[0]), float(lengths[1] * fore[1]),
+                                r_u, r_l)
+        if skin[0] < skin_min:  # no skin where the arm would go: the cues show no arm
+            best = -1
+    if best >= 0:
         d_best, j_best = (fine[2][best], fine[3][best]), float(j_fine[best])
     else:
-        best, fore = -1, fore0
+        fore = fore0
         d_best, j_best = (here[2][0], here[3][0]), float(j_here[0])
     if out is not None:
         # the candidates at the chosen foreshortening (the solve over time compares
@@ -582,12 +588,6 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
                              (cg, both), (cj, j_both), d_best[0], d_best[1], j_best)
     if best < 0:
         return st
-    if skin_min > 0:
-        skin, _ = arm_cue_terms(own, shoulder, fine[2][best:best + 1], fine[3][best:best + 1],
-                                float(lengths[0] * fore[0]), float(lengths[1] * fore[1]),
-                                r_u, r_l)
-        if skin[0] < skin_min:  # no skin where the arm would go: the cues show no arm
-            return st
     return st.with_entries(angles=([up, lo], [fine[0][best], fine[1][best]]),
                            fore=([up, lo], list(fore)))
 
