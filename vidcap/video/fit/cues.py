@@ -14,7 +14,10 @@ limb's borders as image edges. This module gives the fit
   (Sobel over the three colour channels), both zero outside the silhouette;
 - :func:`search_arms_cues`: each arm scored over (upper, lower) angle pairs by
   J = S + w_skin * skin(forearm) + w_edge * edges(limb borders) - w_prior * |angles -
-  prior|, S computed by the same batched kernel as the outline-only arm grid.
+  prior|, S computed by the same batched kernel as the outline-only arm grid; the
+  arm is moved only where its forearm shows skin (:data:`SKIN_MIN`): inside the
+  torso's outline edges alone do not tell an arm (the far arm of a side view is hidden
+  there, and the edges it finds are the torso's shading and the other arm's).
 
 The weights are :data:`WEIGHTS` (chosen on the four tuning clips of
 ``benchmarks/pose2d_accuracy.py``; the held-out clips measure them).
