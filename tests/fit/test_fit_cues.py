@@ -275,8 +275,14 @@ def test_edges_alone_do_not_move_an_arm_but_a_forearm_on_skin_does():
     strong = {"skin": 0.03, "edge": 0.2, "prior": 0.01}  # edges ten times their weight
     moved = search_arm_cues(eng, st, "l", edges, weights=strong, skin_min=0.0)
     assert abs(np.degrees(moved.angles[lo]) - 297.0) <= 7.5  # without the skin rule
-    kept = search_arm_cues(eng, st, "l", edges, weights=strong)
+    out = {}
+    kept = search_arm_cues(eng, st, "l", edges, weights=strong, out=out)
     assert SKIN_MIN > 0
     np.testing.assert_array_equal(kept.angles[[up, lo]], st.angles[[up, lo]])
+    # the solve over time gets the arm as kept as the frame's first candidate
+    elbows, wrists, costs = out["l"]
+    joints = eng.norm.to_original(eng.joints(kept.drawing([up, lo])))
+    assert costs[0] == 0.0
+    np.testing.assert_allclose(wrists[0], joints[JOINT_INDEX["l_wrist"]], atol=1e-6)
     found = search_arm_cues(eng, st, "l", skin)  # the default weights: skin shows the arm
     assert abs(np.degrees(found.angles[lo]) - 297.0) <= 7.5
