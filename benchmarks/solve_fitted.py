@@ -14,8 +14,14 @@ kept in ``$VIDCAP_DATA/cache/frontback/``) and hands the 3D stage the near-side 
 extra column "front/back right" is the share of frames (not within 15 degrees of a side
 view) whose solved torso faces the camera as the truth does.
 
+``--attribute`` prints where the error comes from instead (front/back cue on): each clip
+solved again with the truth in place of one thing the 3D stage reads (the 2D joints, the
+limbs' names, the depth signs, front/back, the yaw), alone and all but one
+(:mod:`solve_attribution`), and the per-joint 2D error of walk_side as named and with the
+truth's names.
+
 Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment] [--front]
-                                        [--labels]
+                                        [--labels] [--attribute]
 """
 
 from __future__ import annotations
@@ -218,6 +224,26 @@ def evaluate(clips, body, method="solve", near=None):
     return rows
 
 
+def attribute(clips, body):
+    """Print the oracle attribution table (:mod:`solve_attribution`)."""
+    import solve_attribution as sa
+
+    from vidcap.video.frontback import arm_visibility, near_side
+
+    def near_fn(name, joints2d):
+        return near_side(arm_visibility(clip_frames(name.split(" (")[0], body), joints2d))
+
+    print("PA-MPJPE mm, the 3D stage (front/back cue on) with the truth in place of ...")
+    sa.print_attribution(sa.attribution_rows(clips, body, near_fn))
+    for name, c in clips:
+        if name.startswith("walk_side"):
+            print(f"\n{name}: 2D error per joint, % of height: as the stage names it | "
+                  "with the truth's names")
+            for j, a, b in sa.joint_errors(c, body, near_fn(name, c["joints2d"])):
+                print(f"{j} | {a:.1f} | {b:.1f}")
+    return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--tuning-only", action="store_true")
@@ -228,6 +254,8 @@ def main(argv=None):
     ap.add_argument("--front", action="store_true",
                     help="the colour frame's near-side cue for front/back "
                          "(vidcap.video.frontback)")
+    ap.add_argument("--attribute", action="store_true",
+                    help="oracle substitutions: where the error comes from")
     args = ap.parse_args(argv)
     body = BodyModel()
     clips = tuning_clips(body)
@@ -237,6 +265,8 @@ def main(argv=None):
         import vidcap.video.solve.stage as solve_stage
 
         solve_stage.LABELS = True
+    if args.attribute:
+        return attribute(clips, body)
     near = near_sides(clips, body) if args.front else None
     rows = evaluate(clips, body, args.method, near)
     print("clip | frames | PA-MPJPE mm | PA-MPJPE, front/back free mm | MPJPE mm | "
