@@ -22,10 +22,10 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
+import lift_solve_tables as st
 import numpy as np
 
-import lift_solve_tables as st
-from vidcap.body import LIMB_PAIR_JOINTS, SEGMENT_JOINTS, JOINT_NAMES
+from vidcap.body import JOINT_NAMES, LIMB_PAIR_JOINTS, SEGMENT_JOINTS
 from vidcap.video.annotations import PAIRS
 
 ORACLES = ("2D", "names", "signs", "front/back", "yaw")

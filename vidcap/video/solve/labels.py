@@ -35,11 +35,11 @@ _JOINTS = {"arms": ("shoulder", ("elbow", "wrist")), "legs": ("hip", ("knee", "a
 _SEGMENTS = {"arms": (2, 3, 4, 5), "legs": (6, 7, 8, 9)}
 #: 1 / metres: a transition costs 0.5 (STEP_WEIGHT d)^2 for the pair's joints moving d
 #: between frames (summed over them).
-STEP_WEIGHT = float(__import__("os").environ.get("STEP_WEIGHT", "10.0"))
+STEP_WEIGHT = 10.0
 #: Levenberg-Marquardt iterations of each swapped labeling's solve.
 LABEL_ITER = 8
 #: Cost of a frame with a pair's names exchanged, over its own: ties keep the names.
-SWAP_BIAS = float(__import__("os").environ.get("SWAP_BIAS", "1.0"))
+SWAP_BIAS = 1.0
 _NONE = 1e30
 
 
