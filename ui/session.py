@@ -285,7 +285,8 @@ class AnnotateSession(RegionEditing):
         sides = self.annotations.sides(self.n_frames)
         orientation, yaw, j2 = apply_user_view(
             self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
-            image_sides=self.clip.image_sides, user_sides=sides, facing=res.facing)
+            image_sides=self.clip.image_sides, user_sides=sides, facing=res.facing,
+            names_swapped=getattr(res, "names_swapped", None))
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
         centre = (0.5 * self.clip.size[0], 0.5 * self.clip.size[1])
         if self._params is not None:

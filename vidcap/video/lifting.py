@@ -4,10 +4,11 @@
 scale per frame (:func:`frame_scales`, :func:`model_scales`), the body's orientation
 proposed and constrained to what the user said of the view
 (:func:`constrain_orientation`), the user's orientation, sides and joints applied
-(:func:`apply_user_view`, :func:`swap_pairs`), the depth signs proposed and fixed where
-the user set them (held until the segment next passes through the image plane,
-:func:`plane_passages`), then the scaled orthographic lift itself
-(:func:`vidcap.video.lift.lift`). The stage is cheap (milliseconds per clip) and is rerun
+(:func:`apply_user_view`, :func:`swap_pairs`; with the clip solve, the limbs' names first
+made consistent where the 2D fit's jump from one limb to the other, :func:`consistent_names`),
+the depth signs proposed and fixed where the user set them (held until the segment next
+passes through the image plane, :func:`plane_passages`), then the scaled orthographic lift
+itself (:func:`vidcap.video.lift.lift`). The stage is cheap (milliseconds per clip) and is rerun
 after every annotation edit (``ui/session.py``).
 """
 
@@ -30,6 +31,7 @@ from vidcap.video.lift import (
     yaw_from_orientation,
 )
 from vidcap.video.proposals import propose_front, propose_orientation, propose_signs
+from vidcap.video.solve.labels import consistent_labels, exchange_distal
 from vidcap.video.solve.stage import check_method, solve_lift
 
 #: Foreshortening |dZ|/length below which a segment counts as "in the image plane"
@@ -105,6 +107,9 @@ class LiftResult:
     #: ankles (F, 2) bool; None with the per-segment lift.
     solve_params: np.ndarray | None = None
     contact: np.ndarray | None = None
+    #: The arms' (column 0) and legs' (1) distal joints the 3D stage exchanged against
+    #: the 2D fit's names (:func:`consistent_names`), None where it did not run.
+    names_swapped: np.ndarray | None = None
     #: Front (+1) or back (-1) per frame from the colour frame's cue
     #: (:func:`vidcap.video.proposals.propose_front`), 0 where none; None without the cue.
     facing: np.ndarray | None = None
@@ -193,7 +198,8 @@ SIDE_FACING_SPREAD = 0.2
 
 
 def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, user_joints,
-                    *, image_sides: bool = True, user_sides=None, facing=None):
+                    *, image_sides: bool = True, user_sides=None, facing=None,
+                    names_swapped=None):
     """Orientation, yaw and side-named 2D joints once the user's events are applied.
 
     Parameters
@@ -219,6 +225,9 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         the user's, and ``spread`` exceeds :data:`SIDE_FACING_SPREAD`, the yaw is turned
         :data:`SIDE_TILT` that way and image-side names are read as that view's (its
         left on the image's right when it faces the camera).
+    names_swapped : array_like of bool, shape (F, 2), optional
+        Frames whose arms' (column 0), legs' (1) elbows and wrists, knees and ankles are
+        exchanged before the user's sides apply (:func:`consistent_names`).
 
     Returns
     -------
@@ -239,6 +248,8 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
         swap = np.where(tilt, f > 0, faces_camera(yaw))
     j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
+    if names_swapped is not None:
+        j2 = exchange_distal(j2, names_swapped)
     if user_sides is not None:
         j2 = swap_pairs(j2, user_sides)
     j2 = np.where(np.isfinite(user_joints), user_joints, j2)
@@ -269,6 +280,22 @@ def swap_pairs(joints2d, swapped) -> np.ndarray:
         rows = np.flatnonzero(sw[:, col])
         j[np.ix_(rows, left + right)] = j[np.ix_(rows, right + left)]
     return j
+
+
+#: Whether the clip solve's 3D stage re-names the limbs where the 2D fit's names jump
+#: from one limb to the other and back (:func:`consistent_names`).
+CONSISTENT_NAMES = True
+
+
+def consistent_names(j2, rho, unit) -> np.ndarray:
+    """(F, 2) bool: the frames whose arms' (column 0), legs' (1) distal joints
+    :func:`vidcap.video.solve.labels.consistent_labels` exchanges in the body-side named
+    2D joints ``j2`` (F, 15, 2), ``unit`` pixels per 1 % of the height. Frames whose
+    torso is edge-on (``rho`` below :data:`SIDE_FACING_SPREAD`) keep the fit's names: there
+    a body and its mirror differ only in which limb is which, and the smoothest naming
+    is as likely the mirror (the samples' walk_side 160 -> 205 mm without this hold)."""
+    held = np.repeat((np.asarray(rho, float) <= SIDE_FACING_SPREAD)[:, None], 2, axis=1)
+    return consistent_labels(j2, unit, held=held)
 
 
 #: Knot spacing (seconds) of the per-frame scale (:func:`vidcap.video.lift.estimate_scales`).
@@ -328,6 +355,18 @@ def model_scales(model_height, n_frames: int, body: BodyModel | None = None):
         return None
     t = np.arange(n_frames)
     return np.interp(t, t[ok], h[ok]) / body.height
+
+
+def _stage_names(j2, proposed_orient, rho, user_orient, geometry, body, *, image_sides,
+                 facing):
+    """:func:`consistent_names` of the fit's joints as the view names them (before the
+    user's sides and joints), or None when :data:`CONSISTENT_NAMES` is off."""
+    if not CONSISTENT_NAMES:
+        return None
+    _, _, fit_named = apply_user_view(j2, proposed_orient, rho, user_orient,
+                                      np.full_like(j2, np.nan), image_sides=image_sides,
+                                      facing=facing)
+    return consistent_names(fit_named, rho, 0.01 * body.height * np.asarray(geometry))
 
 
 def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
@@ -438,8 +477,7 @@ def lift_pose(
     annotations = annotations or Annotations()
     j2 = fill_gaps(joints2d)
     F = len(j2)
-    # one scale, or one per frame when the subject's distance changes (weak perspective)
-    scale = frame_scales(j2, fps, body, window_s=scale_window_s)
+    scale = frame_scales(j2, fps, body, window_s=scale_window_s)  # (F,): the distance changes
     seg_scale = model_scales(model_height, F, body)
     geometry = scale if seg_scale is None else seg_scale  # what segments are read at
     if smooth_2d > 0 and F > 2:
@@ -449,9 +487,11 @@ def lift_pose(
                                             track=track, window_s=yaw_window_s, view=view,
                                             near_side=near_side)
     _, user_orient, user_joints = annotations.resolve(F)
+    names = _stage_names(j2, proposed_orient, rho, user_orient, geometry, body,
+                         image_sides=image_sides, facing=facing) if method == "solve" else None
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
-                                      facing=facing)
+                                      facing=facing, names_swapped=names)
     free = propose_signs(j2, yaw, scale=geometry, body=body)
     user_signs, _, _ = annotations.resolve(F, near_plane=plane_passages(free.zeta))
     final = propose_signs(j2, yaw, scale=geometry, body=body, fixed=user_signs) \
@@ -472,10 +512,10 @@ def lift_pose(
         proposed_orientation=proposed_orient, orientation=orient, yaw=yaw, scale=scale,
         clamped=out.clamped, checks=final.checks(body), margin=final.margin, zeta=final.zeta,
         segment_scale=seg_scale, excess=out.excess, solve_params=params, contact=contact,
-        facing=facing,
-    )
+        facing=facing, names_swapped=names)
 
 
-__all__ = ["NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult", "apply_user_view", "check_view",
-           "constrain_orientation", "fill_gaps", "frame_scales", "lift_pose", "model_scales",
-           "plane_passages", "swap_pairs"]
+__all__ = ["CONSISTENT_NAMES", "NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult",
+           "apply_user_view", "check_view", "consistent_names", "constrain_orientation",
+           "fill_gaps", "frame_scales", "lift_pose", "model_scales", "plane_passages",
+           "swap_pairs"]

@@ -86,6 +86,109 @@ def exchange_limbs(joints, pair: str) -> np.ndarray:
     return out
 
 
+#: :func:`consistent_labels`: weight of a pair's named 2D joints' second difference over
+#: frames (in units of 1 % of the height): a frame costs 0.5 NAME_ACC_WEIGHT sum_p
+#: min(|a_p|^2, NAME_ACC_CAP^2) over the pair's four distal joints p. The cap (10 % of the
+#: height) makes a single misfit frame cost the same under either naming, so it cannot
+#: pull the names of the frames after it; a jump of the 2D fit from one leg to the other
+#: (20-30 % of the height) still costs the most a frame can. Chosen on the tuning renders
+#: (``benchmarks/solve_fitted.py``): weights 0.003 / 0.02 / 1 gave 82.5 / 90.4 / 65.6 mm,
+#: caps 5 / 10 / 20 / none 68.0 / 65.6 / 65.6 / 65.6 mm.
+NAME_ACC_WEIGHT = 1.0
+NAME_ACC_CAP = 10.0
+#: :func:`consistent_labels`: cost of a frame whose pair is exchanged against the 2D
+#: fit's names (ties keep them; 0.1 and 1 gave the same on the tuning renders).
+NAME_BIAS = 1.0
+
+
+def second_order_labels(unary, x, weight: float, cap: float = np.inf) -> np.ndarray:
+    """Labelings minimising a unary cost plus a second-difference cost over frames.
+
+    Parameters
+    ----------
+    unary : numpy.ndarray, shape (C, F, 2)
+        Cost of each chain's labeling 0 (as named) and 1 (exchanged) per frame.
+    x : numpy.ndarray, shape (C, F, 2, P, 2)
+        Each chain's P points under labeling 0 and 1.
+    weight, cap : float
+        A frame f costs ``0.5 weight sum_p min(|a_p|^2, cap^2)``, ``a_p`` the second
+        difference of point p at f under the labelings of f-1, f, f+1.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (C, F)
+        0 or 1 per chain and frame (min-sum over the state pairs (s_{f-1}, s_f)).
+    """
+    C, F = unary.shape[:2]
+    if F < 3:
+        return np.argmin(unary, axis=2)
+    a_, b_ = np.array([0, 0, 1, 1]), np.array([0, 1, 0, 1])  # state k: (s_k, s_k+1)
+    un = unary[:, 1:][:, :, b_].copy()
+    un[:, 0] += unary[:, 0][:, a_]
+    pair = np.full((C, F - 2, 4, 4), _NONE)
+    for s in range(4):
+        for t in range(4):
+            if b_[s] == a_[t]:  # consecutive states share their frame
+                acc = x[:, 2:, b_[t]] - 2 * x[:, 1:-1, a_[t]] + x[:, :-2, a_[s]]
+                a2 = np.minimum(np.sum(acc ** 2, axis=-1), cap ** 2)
+                pair[:, :, s, t] = 0.5 * weight * np.sum(a2, axis=-1)
+    best, _ = min_sum(un, pair)
+    return np.concatenate([a_[best[:, :1]], b_[best]], axis=1)
+
+
+def consistent_labels(joints2d, unit, *, held=None, weight: float = NAME_ACC_WEIGHT,
+                      cap: float = NAME_ACC_CAP, bias: float = NAME_BIAS) -> np.ndarray:
+    """Where each limb pair's distal 2D joints are best exchanged so that every named
+    joint moves smoothly through the clip.
+
+    The 2D fit names the legs (arms) by tracking them and loses them for stretches of
+    frames: its left knee and ankle jump onto the right leg and back. Each named joint
+    then accelerates hard twice; exchanging the pair over the stretch removes both.
+    Which naming is right where nothing jumps is left to the fit (``bias``).
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Body-side named 2D joints, pixels.
+    unit : float or array_like, shape (F,)
+        Pixels per unit of :data:`NAME_ACC_CAP` (1 % of the height).
+    held : array_like of bool, shape (F, 2), optional
+        (Frame, pair: arms, legs) kept as named.
+    weight, cap, bias : float
+        :data:`NAME_ACC_WEIGHT`, :data:`NAME_ACC_CAP`, :data:`NAME_BIAS`.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F, 2)
+        Frames whose arms' (column 0), legs' (1) distal joints are to be exchanged
+        (:func:`exchange_distal`).
+    """
+    j = np.asarray(joints2d, float)
+    F = len(j)
+    u = np.broadcast_to(np.asarray(unit, float), (F,))[:, None, None, None]
+    x, unary = [], np.zeros((len(PAIRS), F, 2))
+    for c, pair in enumerate(PAIRS):
+        left, right, _, _ = _distal(pair)
+        x.append(np.stack([j[:, left + right], j[:, right + left]], 1) / u)
+        unary[c, :, 1] = bias
+        if held is not None:
+            unary[c, np.asarray(held, bool)[:, c], 1] = _NONE
+    return second_order_labels(unary, np.stack(x), weight, cap).T.astype(bool)
+
+
+def exchange_distal(joints2d, swapped) -> np.ndarray:
+    """A copy of ``joints2d`` (F, 15, D) with each pair's left and right distal joints
+    (elbow and wrist; knee and ankle) exchanged where ``swapped`` (F, 2); the shoulders
+    and hips stay (they are the torso's)."""
+    out = np.array(joints2d, dtype=float)
+    sw = np.asarray(swapped, bool)
+    for c, pair in enumerate(PAIRS):
+        rows = np.flatnonzero(sw[:, c])
+        left, right, _, _ = _distal(pair)
+        out[np.ix_(rows, left + right)] = np.asarray(joints2d, float)[np.ix_(rows, right + left)]
+    return out
+
+
 def choose_labels(problem: Problem, params, *, held=None, fixed=None,
                   step_weight: float = STEP_WEIGHT, max_iter: int = LABEL_ITER,
                   bias: float = SWAP_BIAS):
