@@ -72,6 +72,7 @@ def oracles(clip, used):
 
     import vidcap.video.lifting as lifting
     from vidcap.video.lift import assign_sides
+    from vidcap.video.solve.labels import exchange_distal
 
     true2, true3 = clip["true2"], clip["true3"]
     t_yaw = sf.true_yaw(true3)
@@ -89,6 +90,10 @@ def oracles(clip, used):
             # image-side names read in the true front/back where it is defined, the
             # stage's own (the side rule) within SIDE_MARGIN_DEG of a side view
             read = assign_sides(joints2d, yaw, swap=np.cos(t_yaw) > 0)
+            if kw.get("names_swapped") is not None:  # the stage's consistent names
+                read = exchange_distal(read, kw["names_swapped"])
+            if kw.get("user_sides") is not None:
+                read = lifting.swap_pairs(read, kw["user_sides"])
             j2 = np.where(off_side[:, None, None], read, j2)
             j2 = np.where(np.isfinite(user_joints), user_joints, j2)
         if "names" in used:
