@@ -376,9 +376,9 @@ def main(argv=None):
     ap.add_argument("--labels", action="store_true",
                     help="with --solve: the solve on fitted 2D chooses the limbs' names "
                          "(vidcap.video.solve.stage.LABELS)")
-    ap.add_argument("--no-consistent-names", action="store_true",
-                    help="with --solve: the 3D stage keeps the 2D fit's limb names "
-                         "(vidcap.video.lifting.CONSISTENT_NAMES off)")
+    ap.add_argument("--consistent-names", action="store_true",
+                    help="with --solve: the 3D stage repairs the 2D fit's limb names "
+                         "(vidcap.video.lifting.CONSISTENT_NAMES, off by default)")
     ap.add_argument("--only", metavar="NAME",
                     help="with --solve --real-only: just the real clips whose name contains NAME")
     args = ap.parse_args(argv)
@@ -387,10 +387,10 @@ def main(argv=None):
         import vidcap.video.solve.stage as solve_stage
 
         solve_stage.LABELS = True
-    if args.no_consistent_names:
+    if args.consistent_names:
         import vidcap.video.lifting as lifting
 
-        lifting.CONSISTENT_NAMES = False
+        lifting.CONSISTENT_NAMES = True
     if args.solve and args.real_only:
         import lift_solve_tables as st
 

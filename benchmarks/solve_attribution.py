@@ -89,9 +89,10 @@ def oracles(clip, used):
                 yaw = np.arctan2(np.sin(yaw), np.where(wrong, -1.0, 1.0) * np.cos(yaw))
             # image-side names read in the true front/back where it is defined, the
             # stage's own (the side rule) within SIDE_MARGIN_DEG of a side view
-            read = assign_sides(joints2d, yaw, swap=np.cos(t_yaw) > 0)
-            if kw.get("names_swapped") is not None:  # the stage's consistent names
-                read = exchange_distal(read, kw["names_swapped"])
+            fit = joints2d
+            if kw.get("names_swapped") is not None:  # the stage's repaired names
+                fit = exchange_distal(fit, kw["names_swapped"])
+            read = assign_sides(fit, yaw, swap=np.cos(t_yaw) > 0)
             if kw.get("user_sides") is not None:
                 read = lifting.swap_pairs(read, kw["user_sides"])
             j2 = np.where(off_side[:, None, None], read, j2)

@@ -21,7 +21,7 @@ limbs' names, the depth signs, front/back, the yaw), alone and all but one
 truth's names.
 
 Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment] [--front]
-                                        [--labels] [--attribute] [--no-consistent-names]
+                                        [--labels] [--attribute] [--consistent-names]
 """
 
 from __future__ import annotations
@@ -254,9 +254,9 @@ def main(argv=None):
     ap.add_argument("--front", action="store_true",
                     help="the colour frame's near-side cue for front/back "
                          "(vidcap.video.frontback)")
-    ap.add_argument("--no-consistent-names", action="store_true",
-                    help="keep the 2D fit's limb names (vidcap.video.lifting.CONSISTENT_NAMES "
-                         "off)")
+    ap.add_argument("--consistent-names", action="store_true",
+                    help="repair the 2D fit's limb names where they jump "
+                         "(vidcap.video.lifting.CONSISTENT_NAMES, off by default)")
     ap.add_argument("--attribute", action="store_true",
                     help="oracle substitutions: where the error comes from")
     args = ap.parse_args(argv)
@@ -268,10 +268,10 @@ def main(argv=None):
         import vidcap.video.solve.stage as solve_stage
 
         solve_stage.LABELS = True
-    if args.no_consistent_names:
+    if args.consistent_names:
         import vidcap.video.lifting as lifting
 
-        lifting.CONSISTENT_NAMES = False
+        lifting.CONSISTENT_NAMES = True
     if args.attribute:
         return attribute(clips, body)
     near = near_sides(clips, body) if args.front else None

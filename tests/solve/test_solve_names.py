@@ -102,8 +102,13 @@ def test_apply_user_view_exchanges_before_the_users_sides():
     assert np.array_equal(got[7, knee_l], plain[7, knee_l])  # both: as named
 
 
-def test_lift_pose_undoes_a_planted_jump_and_reports_it():
+def test_lift_pose_undoes_a_planted_jump_and_reports_it(monkeypatch):
+    import vidcap.video.lifting as lifting
+
     j2, _ = _walk()
+    off = lift_pose(_plant(j2, 20, 34)[0], fps=30.0, body=BODY, image_sides=False)
+    assert off.names_swapped is None  # off by default (CONSISTENT_NAMES)
+    monkeypatch.setattr(lifting, "CONSISTENT_NAMES", True)
     bad, planted = _plant(j2, 20, 34)
     res = lift_pose(bad, fps=30.0, body=BODY, image_sides=False)
     assert np.array_equal(res.names_swapped, planted)

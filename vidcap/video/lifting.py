@@ -227,7 +227,7 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         left on the image's right when it faces the camera).
     names_swapped : array_like of bool, shape (F, 2), optional
         Frames whose arms' (column 0), legs' (1) elbows and wrists, knees and ankles are
-        exchanged before the user's sides apply (:func:`consistent_names`).
+        exchanged in ``joints2d`` before it is named (:func:`consistent_names`).
 
     Returns
     -------
@@ -247,9 +247,9 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         tilt &= np.asarray(spread, float) > SIDE_FACING_SPREAD
         yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
         swap = np.where(tilt, f > 0, faces_camera(yaw))
-    j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
     if names_swapped is not None:
-        j2 = exchange_distal(j2, names_swapped)
+        joints2d = exchange_distal(joints2d, names_swapped)
+    j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
     if user_sides is not None:
         j2 = swap_pairs(j2, user_sides)
     j2 = np.where(np.isfinite(user_joints), user_joints, j2)
@@ -283,17 +283,25 @@ def swap_pairs(joints2d, swapped) -> np.ndarray:
 
 
 #: Whether the clip solve's 3D stage re-names the limbs where the 2D fit's names jump
-#: from one limb to the other and back (:func:`consistent_names`).
-CONSISTENT_NAMES = True
+#: from one limb to the other and back (:func:`consistent_names`). Off: on renders it
+#: helps (``benchmarks/solve_fitted.py --front --consistent-names``: tuning renders 86.9
+#: -> 67.1 mm, held-out renders 127.4 -> 122.9, samples 118.8 -> 116.1), but real footage
+#: loses against MediaPipe's world landmarks (sum over the 11 rows 1663 -> 1701 mm:
+#: ido_walk 118 -> 139, pose2sim cam1 196 -> 212, cam4 183 -> 192): with the real fit's
+#: noisier joints and front/back, the smoothest naming is often the mirror
+#: (benchmarks/RESULTS.md, issue 33).
+CONSISTENT_NAMES = False
 
 
 def consistent_names(j2, rho, unit) -> np.ndarray:
     """(F, 2) bool: the frames whose arms' (column 0), legs' (1) distal joints
-    :func:`vidcap.video.solve.labels.consistent_labels` exchanges in the body-side named
-    2D joints ``j2`` (F, 15, 2), ``unit`` pixels per 1 % of the height. Frames whose
-    torso is edge-on (``rho`` below :data:`SIDE_FACING_SPREAD`) keep the fit's names: there
-    a body and its mirror differ only in which limb is which, and the smoothest naming
-    is as likely the mirror (the samples' walk_side 160 -> 205 mm without this hold)."""
+    :func:`vidcap.video.solve.labels.consistent_labels` exchanges in the 2D joints ``j2``
+    (F, 15, 2) as the fit names them (before :func:`vidcap.video.lift.assign_sides`: the
+    fit's tracking is repaired, the view's front/back stays the orientation's), ``unit``
+    pixels per 1 % of the height. Frames whose torso is edge-on (``rho`` at most
+    :data:`SIDE_FACING_SPREAD`) keep the fit's names: there a body and its mirror differ
+    only in which limb is which, and the smoothest naming is as likely the mirror (the
+    samples' walk_side 160 -> 205 mm without this hold; the samples were tuning for it)."""
     held = np.repeat((np.asarray(rho, float) <= SIDE_FACING_SPREAD)[:, None], 2, axis=1)
     return consistent_labels(j2, unit, held=held)
 
@@ -355,18 +363,6 @@ def model_scales(model_height, n_frames: int, body: BodyModel | None = None):
         return None
     t = np.arange(n_frames)
     return np.interp(t, t[ok], h[ok]) / body.height
-
-
-def _stage_names(j2, proposed_orient, rho, user_orient, geometry, body, *, image_sides,
-                 facing):
-    """:func:`consistent_names` of the fit's joints as the view names them (before the
-    user's sides and joints), or None when :data:`CONSISTENT_NAMES` is off."""
-    if not CONSISTENT_NAMES:
-        return None
-    _, _, fit_named = apply_user_view(j2, proposed_orient, rho, user_orient,
-                                      np.full_like(j2, np.nan), image_sides=image_sides,
-                                      facing=facing)
-    return consistent_names(fit_named, rho, 0.01 * body.height * np.asarray(geometry))
 
 
 def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
@@ -487,8 +483,8 @@ def lift_pose(
                                             track=track, window_s=yaw_window_s, view=view,
                                             near_side=near_side)
     _, user_orient, user_joints = annotations.resolve(F)
-    names = _stage_names(j2, proposed_orient, rho, user_orient, geometry, body,
-                         image_sides=image_sides, facing=facing) if method == "solve" else None
+    names = consistent_names(j2, rho, 0.01 * body.height * np.asarray(geometry)) \
+        if method == "solve" and CONSISTENT_NAMES else None  # the fit's names, repaired
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
                                       facing=facing, names_swapped=names)
