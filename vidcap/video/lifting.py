@@ -4,8 +4,8 @@
 scale per frame (:func:`frame_scales`, :func:`model_scales`), the body's orientation
 proposed and constrained to what the user said of the view
 (:func:`constrain_orientation`), the user's orientation, sides and joints applied
-(:func:`apply_user_view`, :func:`swap_pairs`; with the clip solve, the limbs' names first
-made consistent where the 2D fit's jump from one limb to the other, :func:`consistent_names`),
+(:func:`apply_user_view`, :func:`swap_pairs`; with :data:`CONSISTENT_NAMES`, off, the fit's
+limb names are first repaired where they jump from one limb to the other, :func:`consistent_names`),
 the depth signs proposed and fixed where the user set them (held until the segment next
 passes through the image plane, :func:`plane_passages`), then the scaled orthographic lift
 itself (:func:`vidcap.video.lift.lift`). The stage is cheap (milliseconds per clip) and is rerun

@@ -92,8 +92,9 @@ def exchange_limbs(joints, pair: str) -> np.ndarray:
 #: height) makes a single misfit frame cost the same under either naming, so it cannot
 #: pull the names of the frames after it; a jump of the 2D fit from one leg to the other
 #: (20-30 % of the height) still costs the most a frame can. Chosen on the tuning renders
-#: (``benchmarks/solve_fitted.py``): weights 0.003 / 0.02 / 1 gave 82.5 / 90.4 / 65.6 mm,
-#: caps 5 / 10 / 20 / none 68.0 / 65.6 / 65.6 / 65.6 mm.
+#: (``benchmarks/solve_fitted.py --front``, on a first variant: whole limbs exchanged in the
+#: body-side names, no side hold): weights 0.003 / 0.02 / 1 (no cap) gave 82.5 / 90.4 /
+#: 65.6 mm, caps 5 / 10 / 20 / none 68.0 / 65.6 / 65.6 / 65.6 mm; as kept, 67.1 mm.
 NAME_ACC_WEIGHT = 1.0
 NAME_ACC_CAP = 10.0
 #: :func:`consistent_labels`: cost of a frame whose pair is exchanged against the 2D
@@ -149,7 +150,7 @@ def consistent_labels(joints2d, unit, *, held=None, weight: float = NAME_ACC_WEI
     Parameters
     ----------
     joints2d : array_like, shape (F, 15, 2)
-        Body-side named 2D joints, pixels.
+        Named 2D joints (the fit's own names or the body's sides), pixels.
     unit : float or array_like, shape (F,)
         Pixels per unit of :data:`NAME_ACC_CAP` (1 % of the height).
     held : array_like of bool, shape (F, 2), optional
