@@ -381,8 +381,15 @@ def main(argv=None):
                          "(vidcap.video.lifting.CONSISTENT_NAMES, off by default)")
     ap.add_argument("--only", metavar="NAME",
                     help="with --solve --real-only: just the real clips whose name contains NAME")
+    ap.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
+                    help="the pipeline's silhouettes with or without the graph cut (default: "
+                         "vidcap.video.pipeline.DEFAULT_GRAPH_CUT, as vidcap convert)")
     args = ap.parse_args(argv)
     body = BodyModel()
+    if args.graph_cut is not None:  # the stage cache keys on it: no stale silhouettes
+        import vidcap.video.pipeline as pipeline
+
+        pipeline.DEFAULT_GRAPH_CUT = args.graph_cut
     if args.labels:  # the solve on fitted 2D chooses the limbs' names
         import vidcap.video.solve.stage as solve_stage
 

@@ -32,8 +32,10 @@ diagnosed their pipeline losses on them and chose the appearance pass's scene-be
 gate and the lean fit's head row on cam4); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
-[--only NAME] [--human]`` (``--only``: just the clips whose name contains NAME; ``--human``:
-the first table with ``proportions='human'``).
+[--only NAME] [--human] [--graph-cut | --no-graph-cut]`` (``--only``: just the clips whose
+name contains NAME; ``--human``: the first table with ``proportions='human'``;
+``--graph-cut``: the pipeline rows' silhouettes with or without the graph cut, default
+``vidcap.video.pipeline.DEFAULT_GRAPH_CUT``; ``benchmarks/cut_fit.py`` compares the two).
 """
 
 from __future__ import annotations
@@ -105,6 +107,10 @@ def compare(ref: Path, pred: Path) -> dict:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     only = argv[argv.index("--only") + 1] if "--only" in argv else None
+    if "--graph-cut" in argv or "--no-graph-cut" in argv:  # the stage cache keys on it
+        import vidcap.video.pipeline as pipeline
+
+        pipeline.DEFAULT_GRAPH_CUT = "--graph-cut" in argv
     print("2D pose on real clips: 12 limb joints against MediaPipe Pose (image-side labels "
           "matched either way per frame)")
     print(f"{'clip':10} {'joint':11} {'median':>7} {'>10 %':>6}")

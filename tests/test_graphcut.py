@@ -283,7 +283,8 @@ def test_a_cut_that_breaks_the_person_in_two_keeps_the_plain_frame(monkeypatch):
     models = _models(scene, rng)
     out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, never))
     np.testing.assert_array_equal(out, fg)
-    monkeypatch.setattr(gc, "LOST_MAX", 1.0)        # without the guard: cut in two
+    monkeypatch.setattr(gc, "LOST_MAX", 1.0)        # without the guards: cut in two
+    monkeypatch.setattr(gc, "KEEP_PIECES", False)
     out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, never))
     assert not out[waist].any() and out[fgm].mean() > 250
 
@@ -308,3 +309,73 @@ def test_an_interrupt_inside_a_compiled_kernel_comes_out_as_keyboard_interrupt()
     with pytest.raises(SystemError, match="something else"):
         _compiled(broken)
     assert _compiled(lambda a, b: a + b, 2, 3) == 5
+
+
+def _head_on_a_neck():
+    """A body (40 x 20) with a head (8 x 8) on a neck (2 rows x 4 columns) the colour of
+    the scene that differs from the plate by nothing: (frame, l1, fg, body, neck, head)."""
+    rng = np.random.default_rng(5)
+    scene = _scene()
+    frame = scene.copy()
+    body = np.zeros(scene.shape[:2], bool)
+    body[30:70, 40:60] = True
+    head = np.zeros_like(body)
+    head[20:28, 46:54] = True
+    neck = np.zeros_like(body)
+    neck[28:30, 48:52] = True
+    frame[body | head] = RED
+    frame[neck] = GREENS[0]
+    frame = np.clip(frame + rng.normal(0, 2, frame.shape), 0, 255).astype(np.uint8)
+    l1 = np.where(body | head, 200, 0).astype(np.uint8)
+    fg = np.where(body | head | neck, 255, 0).astype(np.uint8)
+    return frame, l1, fg, body, neck, head, _models(scene, rng)
+
+
+def test_a_head_the_cut_splits_off_at_its_neck_is_reattached(monkeypatch):
+    """The cut drops a neck the scene's colour (under LOST_MAX of the blob: the guard
+    does not see it) and the head would be a blob of its own, which the silhouette
+    stage leaves out; keep_pieces gives the neck back."""
+    import cv2
+
+    import vidcap.video.graphcut as gc
+
+    frame, l1, fg, body, neck, head, models = _head_on_a_neck()
+    tmap = np.full(fg.shape, 30, np.uint8)
+    never = np.zeros(fg.shape, bool)
+    monkeypatch.setattr(gc, "KEEP_PIECES", False)
+    out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, never))
+    assert not out[neck].any() and out[head].all()  # split off
+    monkeypatch.setattr(gc, "KEEP_PIECES", True)
+    out = cut_frame(frame, l1, tmap, fg, np.ones(3), CutParams.make(models, never))
+    assert out[neck].all() and out[head].all() and out[body].all()
+    assert cv2.connectedComponents(out, connectivity=8)[0] == 2  # one blob
+
+
+def test_keep_pieces_gives_back_the_plain_pixels_near_a_split_off_piece_only():
+    import cv2
+
+    from vidcap.video.graphcut import keep_pieces
+
+    plain = np.zeros((60, 60), np.uint8)
+    plain[20:50, 20:40] = 255                        # body, 600 px
+    plain[10:18, 26:34] = 255                        # head, 64 px
+    plain[18:20, 28:32] = 255                        # neck
+    plain[45:50, 40:52] = 255                        # a halo on the body's side
+    blob = max(cv2.findContours(plain, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)[0],
+               key=cv2.contourArea)
+    cut = plain.copy()
+    cut[18:20] = 0                                   # the neck dropped
+    cut[45:50, 40:52] = 0                            # the halo trimmed (rightly)
+    out = keep_pieces(cut.copy(), plain, blob, 3)
+    assert (out[18:20, 28:32] == 255).all()          # the neck is back
+    assert not out[45:50, 40:52].any()               # the body's trim is kept
+    np.testing.assert_array_equal(out[:17], plain[:17])
+    # a piece under PIECE_MIN of the blob (a one-pixel speck) is not a head: left alone
+    speck = plain.copy()
+    speck[10:18, 26:34] = 0
+    speck[17, 30] = 255
+    blob = max(cv2.findContours(speck, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)[0],
+               key=cv2.contourArea)
+    cut = speck.copy()
+    cut[18:20] = 0
+    np.testing.assert_array_equal(keep_pieces(cut.copy(), speck, blob, 3), cut)
