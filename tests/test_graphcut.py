@@ -379,3 +379,34 @@ def test_keep_pieces_gives_back_the_plain_pixels_near_a_split_off_piece_only():
     cut = speck.copy()
     cut[18:20] = 0
     np.testing.assert_array_equal(keep_pieces(cut.copy(), speck, blob, 3), cut)
+
+
+def test_the_cuts_blobs_in_the_plain_person_stay_the_person_when_the_cut_widens_a_gap():
+    """Torso and legs, two blobs a row apart, are joined as one person in the plain
+    foreground (JOIN_GAP); the cut trims each by two rows and the gap grows past the
+    join: the torso still counts, because it lies in the plain foreground's person."""
+    from types import SimpleNamespace
+
+    import cv2
+
+    from vidcap.video.silhouette import _person_parts
+
+    p = SimpleNamespace(fx=1.0, fy=1.0, min_area=16)
+    plain = np.zeros((100, 60), np.uint8)
+    plain[10:40, 20:40] = 255                        # torso
+    plain[41:81, 20:40] = 255                        # legs, one row below
+    cut = plain.copy()
+    cut[38:43] = 0                                   # both trimmed: a 5-row gap
+    contours, _ = cv2.findContours(cut, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    areas = np.array([cv2.contourArea(c) for c in contours])
+    _, alone = _person_parts(contours, areas, None, cut, p)
+    assert len(alone) == 1                           # the cut alone: legs only
+    _, parts = _person_parts(contours, areas, None, cut, p, plain)
+    assert sorted(parts) == [0, 1]
+    # a blob of the cut's outside the plain person (a false blob nearby) is not taken
+    cut[90:98, 20:40] = 255
+    contours, _ = cv2.findContours(cut, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    areas = np.array([cv2.contourArea(c) for c in contours])
+    _, parts = _person_parts(contours, areas, None, cut, p, plain)
+    far = next(i for i, c in enumerate(contours) if c[:, 0, 1].min() >= 90)
+    assert len(parts) == 2 and far not in parts
