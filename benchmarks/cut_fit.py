@@ -24,9 +24,10 @@ validation):
   looked at to find the head the cut split off, :func:`vidcap.video.graphcut.keep_pieces`);
   walk_three_quarter validation;
 * ido_walk (tuning; the dataset's true masks) and the real clips of ``real_clips.py``
-  (validation): median IoU against the true masks (ido_walk) or MediaPipe's; the 12 limb
-  joints' median distance from MediaPipe's landmarks (per cent of height, image-side
-  labels matched either way per frame, as ``pose2d_real.py``) with a real adult's body
+  (validation but sports2d_run, :data:`REAL_TUNING`): median IoU against the true masks
+  (ido_walk) or MediaPipe's; the 12 limb joints' median distance from MediaPipe's
+  landmarks (per cent of height, image-side labels matched either way per frame, as
+  ``pose2d_real.py``) with a real adult's body
   (``proportions='human'``, ``vidcap convert``'s default). The fit is the serial tracked
   fit on the scored range's silhouettes (``pose2d_real.py`` fits the whole video,
   chunked: its figures differ a little).
@@ -41,6 +42,7 @@ Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/cut_fit.py [--rep
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -56,6 +58,9 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 FLIP_SHARE = 0.01
 SAMPLES = (("walk_side", "tuning"), ("arms", "tuning"), ("walk_three_quarter", "validation"))
 IDO = ROOT.parent / "shared" / "data" / "video"
+#: Real clips (besides ido_walk) whose frames were looked at to change the cut: the
+#: runner whose torso the cut's trim detached (``silhouette._person_parts``).
+REAL_TUNING = ("sports2d_run",)
 PAIRS = {"arms": ((3, 6), (4, 7), (5, 8)), "legs": ((9, 12), (10, 13), (11, 14))}
 
 
@@ -113,9 +118,8 @@ def _sample_scores(video, truth, masks, body):
 
     from vidcap.video.fit.tracking import fit_sequence
     from vidcap.video.lifting import lift_pose
-    from vidcap.video.pipeline import front_cue
-
     from vidcap.video.person import person_track
+    from vidcap.video.pipeline import front_cue
 
     pose = fit_sequence(masks)
     size = (masks.frame_shape[1], masks.frame_shape[0])
@@ -191,13 +195,13 @@ def real(repeats: int, only: str | None):
 
     kw = fit_keywords(human_proportions().factors)
     clips = []
-    import os
     data = os.environ.get("VIDCAP_DATA")
     if data and (Path(data) / "lift" / "ido_walk_mediapipe.npz").exists():
         clips.append((RealClip("ido_walk", IDO / "ido_walk.avi",
                                Path(data) / "lift" / "ido_walk_mediapipe.npz", 0, None),
                       "tuning", IDO / "ido_walk_masks.npz"))
-    clips += [(c, "validation", None) for c in real_clips()]
+    clips += [(c, "tuning" if c.name in REAL_TUNING else "validation", None)
+              for c in real_clips()]
     clips = [c for c in clips if not only or only in c[0].name]
     print("\nReal clips (human body; 12 limb joints vs MediaPipe, median % of height; IoU "
           "vs the true masks for ido_walk, else MediaPipe's; single run, then mean ± s.e. "

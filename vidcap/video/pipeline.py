@@ -71,9 +71,10 @@ DEFAULT_PROPORTIONS = "human"
 
 
 #: Bumped when the silhouette stage's results change for the same video and options
-#: (2: no shadow test on grey video; 3: the person followed, not the largest blob), so
-#: caches written by older versions are redone.
-_SILHOUETTE_VERSION = 4
+#: (2: no shadow test on grey video; 3: the person followed, not the largest blob; 5: the
+#: graph cut keeps the plain person's pieces and blobs, ``graphcut.keep_pieces``,
+#: ``silhouette._person_parts``), so caches written by older versions are redone.
+_SILHOUETTE_VERSION = 5
 #: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts).
 _PLATE_VERSION = 2
 
