@@ -40,7 +40,7 @@ DEFAULT_PROPORTIONS = "human"
 PROPORTION_CHOICES = ("human", "seed", "auto")
 #: ``--graph-cut`` default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`, spelled here
 #: for a light ``--help``; a test checks they agree).
-DEFAULT_GRAPH_CUT = False
+DEFAULT_GRAPH_CUT = True
 #: ``--still-person`` default (:func:`vidcap.video.pipeline.default_still_person`, spelled
 #: here for a light ``--help``; a test checks they agree).
 DEFAULT_STILL_PERSON = True
@@ -115,9 +115,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "colours (the plate stage learns them), in the frames where those "
                         "colours tell the person from the scene; better silhouettes on the "
                         "in-place renders, no real clip measured loses more than 0.01 median "
-                        "IoU, but the 2D fit and the 3D on them lose on the samples and "
-                        "ido_walk (benchmarks/RESULTS.md, Silhouettes); not with --background. "
-                        "Default: "
+                        "IoU, the 2D fit and the 3D on them level (benchmarks/RESULTS.md, "
+                        "Silhouettes); not with --background. Default: "
                         + ("on" if DEFAULT_GRAPH_CUT else "off"))
     parser.add_argument("--still-person", action=argparse.BooleanOptionalAction, default=None,
                         help="the plate stage also re-takes the plate from frames that show "

@@ -33,7 +33,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                         help="re-decide a band round the person by a graph cut on the clip's "
                              "colours where they tell the person from the scene (default as in "
-                             "vidcap convert: off; better on the in-place renders, level on "
+                             "vidcap convert: on; better on the in-place renders, level on "
                              "real clips; see benchmarks/RESULTS.md); needs the estimated "
                              "felzenszwalb plate")
     parser.add_argument("--still-person", action=argparse.BooleanOptionalAction, default=None,

@@ -26,11 +26,17 @@ A frame is cut only when the colour models tell its scene from the person
 (:data:`SCENE_KEPT_MIN`: on real footage the scene round the person often holds the
 person's colours, and the cut then fills the never-seen area or the outline with
 scene); else, and when the cut breaks the person up (:data:`LOST_MAX`), the frame
-keeps the plain threshold's foreground. Opt-in in ``vidcap convert`` and
-``vidcap silhouettes`` (``--graph-cut``; ``extract_silhouettes(..., graph_cut=True)``
-on a plate from ``estimate_background(colour_models=True)``;
-``benchmarks/silhouettes_real.py --graph-cut``): the silhouettes gain, but the 2D fit
-on them loses on the samples and ido_walk (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`).
+keeps the plain threshold's foreground. The cut trims the outline, and where a part of
+the person hangs on the body by a thin or low-contrast strip it may split that part off
+(a head whose inside the plate absorbed, held by its rim) or widen the gap between two
+blobs the silhouette stage joins (a runner's torso and legs): the plain person's pieces
+are reattached (:func:`keep_pieces`) and its joined blobs kept
+(:func:`vidcap.video.silhouette._person_parts`). With them the 2D fit and the solve on
+the cut's silhouettes are level with the plain threshold's (``benchmarks/cut_fit.py``:
+the mean over perturbed runs; a single run's figures swing with a dozen pixels a frame).
+On by default in ``vidcap convert`` and ``vidcap silhouettes`` (``--no-graph-cut``;
+``extract_silhouettes(..., graph_cut=True)`` on a plate from
+``estimate_background(colour_models=True)``; :data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`).
 Tuning clips, median IoU without ->
 with (main f5880ab's silhouettes): jacks side 0.884 -> 0.917, jacks 3/4 0.902 ->
 0.915, arms 3/4 0.890 -> 0.902, arms side 0.980 -> 0.987, arms front 0.920 -> 0.920,

@@ -79,15 +79,18 @@ _SILHOUETTE_VERSION = 5
 _PLATE_VERSION = 2
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
-#: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). Off: since the cut
-#: decides only frames whose colour models tell the person from the scene
-#: (:data:`vidcap.video.graphcut.SCENE_KEPT_MIN`) no real clip with true or MediaPipe
-#: masks loses more than 0.01 median IoU against the plain threshold and the in-place
-#: renders gain (15 of 17 at >= 0.92, 11 plain), but through the 2D fit and the solve it
-#: loses: ido_walk's joints 4.7 -> 5.4 % of height from MediaPipe's, the samples' 2D
-#: error 3.0 / 7.2 / 3.5 -> 3.2 / 9.2 / 4.4 % and PA-MPJPE 71 / 160 / 118 -> 75 / 204 /
-#: 128 mm, against tfjs_dance 6.0 -> 5.2 % (benchmarks/RESULTS.md, Silhouettes).
-DEFAULT_GRAPH_CUT = False
+#: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
+#: frames whose colour models tell the person from the scene
+#: (:data:`vidcap.video.graphcut.SCENE_KEPT_MIN`), so no real clip with true or MediaPipe
+#: masks loses more than 0.01 median IoU, and the in-place renders gain (15 of 17 at
+#: >= 0.92, 11 plain). Through the 2D fit and the solve it is level once the pieces and
+#: blobs it split off the plain person are kept (``graphcut.keep_pieces``,
+#: ``silhouette._person_parts``), measured as the mean over perturbed runs
+#: (benchmarks/cut_fit.py): a single run's figures on the samples and ido_walk swing
+#: with a dozen pixels a frame (walk_side's PA-MPJPE 160 mm on the plain masks, 204 on
+#: the cut's and on the true masks), which made the cut look worse (RESULTS.md,
+#: Silhouettes).
+DEFAULT_GRAPH_CUT = True
 
 
 def default_still_person() -> bool:
