@@ -287,9 +287,9 @@ def keep_pieces(cut: np.ndarray, plain: np.ndarray, blob: np.ndarray, r: int) ->
     strip and leave the part a blob of its own, which the silhouette stage then leaves
     out (it keeps the largest blob and those of at least
     :data:`vidcap.video.silhouette.JOIN_SHARE` of it): on the arms sample the head went
-    so in 21 of 75 frames. Every blob of the cut's result (in the crop) other than the
-    largest, of at least :data:`PIECE_MIN` of the plain blob's area and at least half
-    inside the plain person's outline ``blob``, is grown through the plain foreground,
+    so in 21 of 75 frames. Every blob of the cut's result inside the plain person's
+    outline ``blob``, other than the largest there and of at least :data:`PIECE_MIN` of
+    the plain blob's area, is grown through the plain foreground,
     a pixel a step, until it touches the largest (at most :data:`PIECE_REACH` times
     ``r`` steps); what it grew through is given back: the strip the cut dropped, and
     the plain foreground as far from the piece as the strip is long.
@@ -311,22 +311,23 @@ def keep_pieces(cut: np.ndarray, plain: np.ndarray, blob: np.ndarray, r: int) ->
     numpy.ndarray
         ``cut``.
     """
-    least = PIECE_MIN * cv2.contourArea(blob)
-    # the blobs' outer contours (those inside another blob's hole too); a blob's pixels
-    # are about its contour's area plus half its perimeter, plus one
-    contours, tree = cv2.findContours(cut, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
+    inside = np.zeros(cut.shape, np.uint8)
+    cv2.drawContours(inside, [blob], 0, 255, cv2.FILLED)
+    held = cut & inside
+    least = PIECE_MIN * cv2.countNonZero(inside)
+    # Most frames hold one blob (and specks): told by the outer contours (those inside
+    # another blob's hole too; a blob's pixels are about its contour's area plus half its
+    # perimeter), ~20 times as fast as labelling the pixels.
+    contours, tree = cv2.findContours(held, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
     outer = [] if tree is None else [c for c, t in zip(contours, tree[0], strict=True)
                                      if t[3] < 0]
-    if sum(cv2.contourArea(c) + 0.5 * cv2.arcLength(c, True) + 1 >= least
+    if sum(cv2.contourArea(c) + 0.5 * cv2.arcLength(c, True) + 1 >= 0.5 * least
            for c in outer) < 2:
-        return cut  # one blob (and specks): nothing split off (most frames; fast)
-    inside = np.zeros(cut.shape, np.uint8)
-    cv2.drawContours(inside, [blob], 0, 1, cv2.FILLED)
-    n, lab, st, _ = cv2.connectedComponentsWithStats(cut, connectivity=8)
+        return cut
+    n, lab, st, _ = cv2.connectedComponentsWithStats(held, connectivity=8)
     area = st[1:, cv2.CC_STAT_AREA]
     main = int(np.argmax(area)) + 1
-    held = np.bincount(lab[inside > 0], minlength=n)[1:]  # pixels in the plain blob
-    pieces = np.flatnonzero((area >= least) & (2 * held >= area)) + 1
+    pieces = np.flatnonzero(area >= least) + 1
     pieces = pieces[pieces != main]
     if not len(pieces):
         return cut
