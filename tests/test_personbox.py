@@ -47,3 +47,60 @@ def test_where_the_still_person_stood_first_the_later_samples_give_the_plate():
     assert seen[15:45, 12:23].all()  # A is seen uncovered in samples 3-5
     assert np.abs(plate[15:45, 12:23].astype(int) - 100).max() <= 6  # the wall
     assert not seen[:, 40:].any()  # B shows the plate's wall already: nothing to re-take
+
+
+def _absorbed_scene(monkeypatch, boxes):
+    """8 samples equal to the plate (so the first-pass silhouette is empty: the person,
+    if any, is absorbed), a plate that left a patch never seen, and a detector that
+    returns ``boxes[i]`` on sample i; returns the samples, the model and the list the
+    cuts are logged to (a cut is the box's middle third)."""
+    from dataclasses import replace
+
+    import vidcap.video.personbox as pb
+
+    rng = np.random.default_rng(3)
+    plate = rng.integers(90, 110, (96, 128, 3)).astype(np.uint8)
+    frames = np.repeat(plate[None], 8, axis=0)
+    never = np.zeros((96, 128), bool)
+    never[40:60, 50:70] = True  # 3 % of the frame never seen: the detector runs
+    model = replace(BackgroundModel.from_plate(plate, noise_sigma=2.0), never_seen=never)
+    lookup = {frames[i].ctypes.data: b for i, b in enumerate(boxes)}
+    cuts = []
+
+    def detect(frame, **_):
+        b = lookup[frame.ctypes.data]
+        return np.array([b]), np.array([1.0])
+
+    def cut(frame, box, *_, **__):
+        x0, y0, x1, y1 = box
+        out = np.zeros(frame.shape[:2], bool)
+        out[y0:y1, x0 + (x1 - x0) // 3:x1 - (x1 - x0) // 3] = True
+        cuts.append(tuple(box))
+        return out
+
+    monkeypatch.setattr(pb, "detect_people", detect)
+    monkeypatch.setattr(pb, "cut_in_box", cut)
+    return frames, model, cuts
+
+
+def test_a_person_whose_boxes_move_is_cut_once(monkeypatch):
+    from vidcap.video.personbox import BOXES_MOVE, find_absorbed
+
+    # A person crossing the frame: each box 30 px right of the last (IoU 0.2).
+    boxes = [(5 + 30 * i, 10, 45 + 30 * i, 90) for i in range(8)]
+    frames, model, cuts = _absorbed_scene(monkeypatch, boxes)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == BOXES_MOVE and out is model
+    assert cuts == [boxes[0]]  # only the first sample was cut (to tell absorbed)
+
+
+def test_a_person_whose_boxes_stay_is_cut_in_every_sample(monkeypatch):
+    from vidcap.video.personbox import ABSORBED, find_absorbed
+
+    # A still person: the detector's box jitters by a pixel or two (IoU > 0.9).
+    boxes = [(50 + i % 2, 10, 90 + i % 2, 90 + i % 3) for i in range(8)]
+    frames, model, cuts = _absorbed_scene(monkeypatch, boxes)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert len(cuts) == 8  # the cuts decide
+    assert reason == ABSORBED and out.still_person is not None
+    assert out.still_person[20:80, 65:75].all() and not out.still_person[:, :55].any()
