@@ -147,7 +147,9 @@ def _person_masks(model, frames, gains) -> np.ndarray:
     lit = model.self_lit
     ones = np.ones((1, 3), np.float32)
     for t in range(k):
-        ref = plate * gains[t]
+        # cv2 multiplies by the gains in float32 too (the same values as plate *
+        # gains[t]), 3x faster than numpy's broadcast over the channels
+        ref = cv2.multiply(plate, tuple(float(g) for g in gains[t]) + (0.0,))
         if lit is not None:
             ref[lit] = plate[lit]
         # |frame - ref| summed over the channels: the same float32 values as numpy's
@@ -159,6 +161,32 @@ def _person_masks(model, frames, gains) -> np.ndarray:
         big = [c for c in contours if cv2.contourArea(c) >= min_area]
         if big:
             cv2.drawContours(out[t], big, -1, 1, cv2.FILLED)
+    return out
+
+
+def dilate_in_box(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """``cv2.dilate(mask, kernel)`` computed in the bounding box of the mask's pixels
+    and the kernel's reach round it: the same values (nothing else is reached) at the
+    cost of the person's area, not the frame's, with a large kernel on a large frame.
+
+    Parameters
+    ----------
+    mask : numpy.ndarray, shape (H, W), uint8
+    kernel : numpy.ndarray, shape (2 * ry + 1, 2 * rx + 1), uint8
+        A structuring element centred on its middle.
+
+    Returns
+    -------
+    numpy.ndarray, shape (H, W), uint8
+    """
+    out = np.zeros_like(mask)
+    x, y, bw, bh = cv2.boundingRect(mask)
+    if bw == 0 or bh == 0:
+        return out
+    h, w = mask.shape
+    ry, rx = kernel.shape[0] // 2, kernel.shape[1] // 2
+    box = (slice(max(0, y - ry), min(h, y + bh + ry)), slice(max(0, x - rx), min(w, x + bw + rx)))
+    out[box] = cv2.dilate(mask[box], kernel)
     return out
 
 
@@ -186,7 +214,7 @@ def _second_pass(model, frames, gains):
     wide = (slice(y0, min(hh, y + bh + r)), slice(x0, min(ww, x + bw + r)))
     box = (slice(y, y + bh), slice(x, x + bw))
     inner = (slice(y - y0, y - y0 + bh), slice(x - x0, x - x0 + bw))
-    covered = np.stack([cv2.dilate(m[wide], kernel)[inner] for m in masks])
+    covered = np.stack([dilate_in_box(m[wide], kernel)[inner] for m in masks])
     seen = (covered == 0).astype(np.uint8)
     count = np.zeros((hh, ww), np.int32)
     count[box] = seen.sum(axis=0, dtype=np.int32)
