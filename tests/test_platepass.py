@@ -106,3 +106,20 @@ def test_the_appearance_cut_recovers_a_block_the_plate_absorbed():
     still = still_parts(frames, absorbed, 30.0)
     assert still[torso].mean() > 0.8
     assert still[~torso].mean() < 0.02
+
+
+def test_dilating_in_the_masks_box_gives_the_full_dilation():
+    import cv2
+
+    from vidcap.video.platepass import dilate_in_box
+
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        h, w = rng.integers(5, 60, 2)
+        m = np.zeros((h, w), np.uint8)
+        for _ in range(rng.integers(0, 4)):  # 0-3 blobs, some at the frame's edge
+            y, x = rng.integers(0, h), rng.integers(0, w)
+            m[y:y + rng.integers(1, 8), x:x + rng.integers(1, 8)] = 1
+        r = int(rng.integers(1, 10))
+        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+        assert np.array_equal(dilate_in_box(m, kernel), cv2.dilate(m, kernel))
