@@ -104,3 +104,26 @@ def test_a_person_whose_boxes_stay_is_cut_in_every_sample(monkeypatch):
     assert len(cuts) == 8  # the cuts decide
     assert reason == ABSORBED and out.still_person is not None
     assert out.still_person[20:80, 65:75].all() and not out.still_person[:, :55].any()
+
+
+def test_a_find_not_seen_again_is_given_up(monkeypatch):
+    from vidcap.video.personbox import GIVE_UP, NOT_AGAIN, find_absorbed
+
+    # One find in sample 0 (the detector's false alarm), nothing after it but a
+    # box in the last sample, which is never looked at.
+    boxes = [(50, 10, 90, 90)] + [(0, 0, 0, 0)] * 6 + [(50, 10, 90, 90)]
+    frames, model, cuts = _absorbed_scene(monkeypatch, boxes)
+    import vidcap.video.personbox as pb
+
+    looked, detect = [], pb.detect_people
+
+    def counting(frame, **kw):
+        looked.append(1)
+        b, s = detect(frame, **kw)
+        keep = b[:, 2] > b[:, 0]
+        return b[keep], s[keep]
+
+    monkeypatch.setattr(pb, "detect_people", counting)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == NOT_AGAIN and out is model
+    assert len(looked) == GIVE_UP + 1 and cuts == [boxes[0]]
