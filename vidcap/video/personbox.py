@@ -10,7 +10,10 @@ plate's samples and the person is cut out of its best box by appearance
 (``cv2.grabCut`` initialised from the box: outside is scene, the box's central column
 probably person). The first detection decides: when the first-pass silhouette covers
 :data:`MAX_COVER` or more of the cut, the person is visible and nothing is done
-(cost: one detection and one cut). Otherwise, with the cuts of every detected sample:
+(cost: one detection and one cut). Before any other sample is cut, the detector's
+boxes must show a person who stays put (the first three overlap :data:`BOX_STILL`)
+and find them again within :data:`GIVE_UP` samples; :func:`find_absorbed` says which
+test decided. Otherwise, with the cuts of every detected sample:
 
 * where the person was cut in some samples and a third of them show the pixel
   uncovered with another colour than the plate, the plate is re-taken from those
