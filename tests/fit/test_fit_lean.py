@@ -82,3 +82,36 @@ def test_head_top_skips_rows_narrower_than_a_head():
     assert head_top(sil, 4.0) == 12
     assert head_top(sil, 1.0) == 2
     assert head_top(sil, 10.0) is None
+
+
+
+def test_warm_start_from_the_last_pelvis_when_the_top_is_a_hand():
+    """A figure bent 40 degrees with a hand raised above the head (the pose2sim balance
+    poses): the warm start's pelvis placed from the silhouette's top, as for an upright
+    body, lands a forearm too high and the last pose put there misses the body; put
+    where the last frame had the pelvis (this frame's pose), it covers the silhouette,
+    and that start is taken. A last pelvis that fits worse is not."""
+    import dataclasses
+
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.frame import _nearer_start
+    from vidcap.video.fit.normalise import normalise_mask
+    from vidcap.video.fit.result import FramePose
+    from vidcap.video.fit.state import FitState
+    from vidcap.video.fit.torso import place_torso
+
+    mask, j = _bent_arm_up(40.0, arm_deg=100.0)
+    norm = normalise_mask(mask)  # a clip's frame: the silhouette's height is the body's
+    eng = _MaskEngine(norm, caps=False)
+    angles = np.deg2rad(np.array([40, 40, 270, 270, 100, 100, 270, 270, 270, 270], float))
+    placed = place_torso(eng, FitState.rest(spread=0.0)).replace(
+        angles=angles, fore=np.ones(10), drawn=np.ones(10, dtype=bool))
+    truth = norm.to_normalised(j[0])
+    assert np.linalg.norm(placed.root - truth) > 0.1 * eng.H  # placed from the top: off
+    last = FramePose(j, angles, np.ones(10), np.zeros(10), np.zeros(10), 0.0, False, 0.8,
+                     True, H)
+    st = _nearer_start(eng, placed, last)
+    np.testing.assert_allclose(st.root, truth, atol=1e-9)
+    assert eng.similarity(st) > eng.similarity(placed) + 0.1
+    far = dataclasses.replace(last, joints=j + np.array([0.5 * H, 0.0]))
+    assert _nearer_start(eng, placed, far) is placed

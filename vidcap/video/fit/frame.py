@@ -26,7 +26,7 @@ from vidcap.video.fit.legs import (
     verify_crossing,
 )
 from vidcap.video.fit.limbs import contour_arms, contour_lower_legs, refine_limbs
-from vidcap.video.fit.limits import REST_DEG, TWO_PI, S
+from vidcap.video.fit.limits import REST_DEG, TWO_PI, J, S
 from vidcap.video.fit.moves import search_group, search_root, search_spread
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FALLBACK, FitOptions
@@ -90,6 +90,8 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
             # the head need not be at the silhouette's top (a shorter silhouette, a
             # crouch, still has the head on top)
             st, _ = search_root(eng, st, 1, 0.25 * eng.H)
+        if eng.similarity(st) < options.warm_threshold:
+            st = _nearer_start(eng, st, previous)
         warm = eng.similarity(st) >= options.warm_threshold
     if warm:
         return _fit_warm(eng, st, options, searched), False, True
@@ -103,6 +105,28 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
         if eng.similarity(lean) > eng.similarity(st):
             st, crossed = lean, lean_crossed
     return st, crossed, False
+
+
+def _nearer_start(eng: _MaskEngine, st: FitState, previous: FramePose) -> FitState:
+    """The warm start ``st`` (the previous pose, its pelvis placed from this silhouette's
+    top as for an upright body) or the same pose with the pelvis where the previous
+    frame had it, whichever fits the silhouette better.
+
+    The pelvis placed from the top moves with whatever is highest: a hand raised above
+    the head lifts it, a body leaning into a balance pose (the head no longer on top)
+    drops it, and the previous pose, put there, no longer covers the silhouette, so a
+    track that was right is dropped for a fresh fit. A body does not jump between
+    frames; its pelvis where it was is the better start there (pose2sim_balance cam1,
+    fitted to MediaPipe's masks: frames 34-53 were fitted fresh, upright, 25 % of
+    height off). Tried only where the start from the top is below the warm threshold:
+    tried everywhere, a track kept its pelvis through frames a fresh fit had read
+    better (tfjs_dance, sports2d_walk_turn lost 0.3-0.9 % of height; RESULTS.md).
+    """
+    pelvis = eng.norm.to_normalised(np.asarray(previous.joints, dtype=float)[J["pelvis"]])
+    if not np.isfinite(pelvis).all():
+        return st
+    kept = st.replace(root=pelvis)
+    return kept if eng.similarity(kept) > eng.similarity(st) else st
 
 
 def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -> FitState:
