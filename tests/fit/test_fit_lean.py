@@ -96,6 +96,7 @@ def test_warm_start_from_the_last_pelvis_when_the_top_is_a_hand():
     from vidcap.video.fit.engine import _MaskEngine
     from vidcap.video.fit.frame import _nearer_start
     from vidcap.video.fit.normalise import normalise_mask
+    from vidcap.video.fit.options import FitOptions
     from vidcap.video.fit.result import FramePose
     from vidcap.video.fit.state import FitState
     from vidcap.video.fit.torso import place_torso
@@ -110,8 +111,38 @@ def test_warm_start_from_the_last_pelvis_when_the_top_is_a_hand():
     assert np.linalg.norm(placed.root - truth) > 0.1 * eng.H  # placed from the top: off
     last = FramePose(j, angles, np.ones(10), np.zeros(10), np.zeros(10), 0.0, False, 0.8,
                      True, H)
-    st = _nearer_start(eng, placed, last)
+    st = _nearer_start(eng, placed, last, FitOptions())
     np.testing.assert_allclose(st.root, truth, atol=1e-9)
     assert eng.similarity(st) > eng.similarity(placed) + 0.1
     far = dataclasses.replace(last, joints=j + np.array([0.5 * H, 0.0]))
-    assert _nearer_start(eng, placed, far) is placed
+    assert _nearer_start(eng, placed, far, FitOptions()) is placed
+
+
+def test_track_below_threshold_keeps_a_track_a_fresh_fit_lost():
+    """A frame whose start from the last pose covers its silhouette below the warm
+    threshold (forced here by a threshold of 0.99) is still tracked from that pose, and
+    the track is kept when it fits better than the fresh fit it is given: from the true
+    pose of the last frame (the figure bent 45 degrees, a hand raised), the tracked
+    joints land within 3 px of the truth, and a poorer fit (the rest pose) loses to it;
+    a fit as good as the track's is kept (None)."""
+    from vidcap.video.fit.engine import _MaskEngine
+    from vidcap.video.fit.frame import track_below_threshold
+    from vidcap.video.fit.normalise import normalise_mask
+    from vidcap.video.fit.options import FitOptions
+    from vidcap.video.fit.result import FramePose
+    from vidcap.video.fit.state import FitState
+    from vidcap.video.fit.torso import place_torso
+
+    mask, j = _bent_arm_up(45.0, arm_deg=100.0)
+    norm = normalise_mask(mask, body_height=H)  # the body's height known (a clip's pass)
+    options = FitOptions(warm_threshold=0.99)
+    eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
+    angles = np.deg2rad(np.array([45, 45, 270, 270, 100, 100, 270, 270, 270, 270], float))
+    last = FramePose(j, angles, np.ones(10), np.zeros(10), np.zeros(10), 0.0, False, 0.8,
+                     True, H)
+    rest = place_torso(eng, FitState.rest(spread=0.5)).drawing(slice(None))
+    tracked = track_below_threshold(eng, rest, last, options)
+    assert tracked is not None
+    err = np.linalg.norm(norm.to_original(eng.joints(tracked)) - j, axis=1)
+    assert err.max() < 3.0
+    assert track_below_threshold(eng, tracked, last, options) is None

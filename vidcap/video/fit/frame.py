@@ -81,20 +81,11 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     st = place_torso(eng, FitState.rest(spread=fixed))
     warm = False
     if previous is not None:
-        st = st.replace(
-            angles=np.array(previous.angles, dtype=float),
-            fore=np.array(previous.foreshortening, dtype=float),
-            spread=float(previous.spread) if searched else fixed,
-            drawn=np.ones(10, dtype=bool))
-        if eng.taller:
-            # the head need not be at the silhouette's top (a shorter silhouette, a
-            # crouch, still has the head on top)
-            st, _ = search_root(eng, st, 1, 0.25 * eng.H)
-        if eng.similarity(st) < options.warm_threshold:
-            st = _nearer_start(eng, st, previous)
-        warm = eng.similarity(st) >= options.warm_threshold
-    if warm:
-        return _fit_warm(eng, st, options, searched), False, True
+        st = _warm_start(eng, st, previous, options)
+        start = _nearer_start(eng, st, previous, options)
+        warm = eng.similarity(start) >= options.warm_threshold
+        if warm:
+            return _fit_warm(eng, start, options, searched), False, True
     # a fresh fit from the rest pose (where a warm start was tried: at its root and spread)
     st = st.replace(angles=np.deg2rad(REST_DEG), fore=np.ones(10),
                              drawn=np.zeros(10, dtype=bool))
@@ -107,7 +98,48 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     return st, crossed, False
 
 
-def _nearer_start(eng: _MaskEngine, st: FitState, previous: FramePose) -> FitState:
+def _warm_start(eng: _MaskEngine, placed: FitState, previous: FramePose,
+                options: FitOptions) -> FitState:
+    """The previous frame's pose on this silhouette, ``placed``'s pelvis (from the
+    silhouette's top; a silhouette taller than the body: searched up and down), or the
+    previous frame's pelvis where that start is below the warm threshold
+    (:func:`_nearer_start`)."""
+    searched = options.spread and options.spread_value is None
+    st = placed.replace(
+        angles=np.array(previous.angles, dtype=float),
+        fore=np.array(previous.foreshortening, dtype=float),
+        spread=float(previous.spread) if searched else placed.spread,
+        drawn=np.ones(10, dtype=bool))
+    if eng.taller:
+        # the head need not be at the silhouette's top (a shorter silhouette, a
+        # crouch, still has the head on top)
+        st, _ = search_root(eng, st, 1, 0.25 * eng.H)
+    return st
+
+
+def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
+                          options: FitOptions) -> FitState | None:
+    """The previous frame's pose tracked onto this silhouette although its start covers
+    it below the warm threshold, when that fits better than ``st`` (the fresh fit
+    :func:`fit_normalised` made instead); None otherwise.
+
+    Where a body leans into a balance pose, bends or raises a hand above its head, S
+    drops for every pose the model can take, and the start from the last frame's pose
+    falls below the threshold although the pose moved by a few degrees; a fresh fit
+    then starts from an upright rest pose and ends in another body (pose2sim_balance
+    cam1 frames 40-53, MediaPipe's masks: fresh fits at S 0.53, 8-25 % of height off;
+    the tuning clips cam1 / cam3 / cam4 through the pipeline 21.1 / 7.6 / 5.1 -> 11.5 /
+    6.9 / 5.5 %). Costs a warm fit only where the start is below the threshold.
+    """
+    fixed = 0.5 if options.spread_value is None else float(options.spread_value)
+    placed = place_torso(eng, FitState.rest(spread=fixed))
+    start = _nearer_start(eng, _warm_start(eng, placed, previous, options), previous, options)
+    tracked = _fit_warm(eng, start, options, options.spread and options.spread_value is None)
+    return tracked if eng.similarity(tracked) > eng.similarity(st) else None
+
+
+def _nearer_start(eng: _MaskEngine, st: FitState, previous: FramePose,
+                  options: FitOptions) -> FitState:
     """The warm start ``st`` (the previous pose, its pelvis placed from this silhouette's
     top as for an upright body) or the same pose with the pelvis where the previous
     frame had it, whichever fits the silhouette better.
@@ -122,6 +154,8 @@ def _nearer_start(eng: _MaskEngine, st: FitState, previous: FramePose) -> FitSta
     tried everywhere, a track kept its pelvis through frames a fresh fit had read
     better (tfjs_dance, sports2d_walk_turn lost 0.3-0.9 % of height; RESULTS.md).
     """
+    if eng.similarity(st) >= options.warm_threshold:
+        return st
     pelvis = eng.norm.to_normalised(np.asarray(previous.joints, dtype=float)[J["pelvis"]])
     if not np.isfinite(pelvis).all():
         return st
@@ -216,6 +250,10 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     """
     eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
+    if previous is not None and not warm:
+        tracked = track_below_threshold(eng, st, previous, options)
+        if tracked is not None:  # then judged as any tracked frame: slipping?
+            st, crossed, warm = tracked, False, True
     if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
                  or (options.fallback > 0 and eng.similarity(st) < LEAN_BELOW)):
         # the track is slipping: fit this frame from scratch, keep the better fit
