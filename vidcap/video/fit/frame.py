@@ -3,8 +3,9 @@
 :func:`fit_normalised` is two short recipes over the moves: :func:`_fit_fresh` (the
 seed's order, with the steps beyond it that :mod:`vidcap.video.fit.pose2d` lists) and
 :func:`_fit_warm` (tracking from the previous frame's pose). :func:`fit_frame` adds
-the fresh fit that challenges a slipping track, and :func:`fit_pose` is the public
-door: it checks the options once.
+the fresh fit that challenges a slipping track and the track that challenges a fresh
+fit (:func:`track_below_threshold`), and :func:`fit_pose` is the public door: it checks
+the options once.
 """
 
 from __future__ import annotations
@@ -100,10 +101,10 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
 
 def _warm_start(eng: _MaskEngine, placed: FitState, previous: FramePose,
                 options: FitOptions) -> FitState:
-    """The previous frame's pose on this silhouette, ``placed``'s pelvis (from the
-    silhouette's top; a silhouette taller than the body: searched up and down), or the
-    previous frame's pelvis where that start is below the warm threshold
-    (:func:`_nearer_start`)."""
+    """The previous frame's pose (angles, foreshortening, spread) at ``placed``'s pelvis
+    (from the silhouette's top; a silhouette taller than the body: searched up and
+    down). A fresh fit starts from its pelvis and spread; a warm fit from it or, below
+    the warm threshold, from the previous frame's pelvis (:func:`_nearer_start`)."""
     searched = options.spread and options.spread_value is None
     st = placed.replace(
         angles=np.array(previous.angles, dtype=float),
@@ -127,9 +128,10 @@ def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
     drops for every pose the model can take, and the start from the last frame's pose
     falls below the threshold although the pose moved by a few degrees; a fresh fit
     then starts from an upright rest pose and ends in another body (pose2sim_balance
-    cam1 frames 40-53, MediaPipe's masks: fresh fits at S 0.53, 8-25 % of height off;
-    the tuning clips cam1 / cam3 / cam4 through the pipeline 21.1 / 7.6 / 5.1 -> 11.5 /
-    6.9 / 5.5 %). Costs a warm fit only where the start is below the threshold.
+    cam1 frames 40-53, MediaPipe's masks: fresh fits at S 0.53, 8-25 % of height off).
+    The fresh fit keeps its own start (the pelvis from the silhouette's top): started
+    from the last pelvis as well it lost 0.74 points of held-out PCK on side views
+    (RESULTS.md). Costs a warm fit only where the start is below the threshold.
     """
     fixed = 0.5 if options.spread_value is None else float(options.spread_value)
     placed = place_torso(eng, FitState.rest(spread=fixed))
@@ -402,4 +404,4 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
 
 
 __all__ = ["CROSSING_SPREAD", "LABEL_TIE", "SIDE_SPREAD", "fit_frame", "fit_normalised",
-           "fit_pose", "recross"]
+           "fit_pose", "recross", "track_below_threshold"]
