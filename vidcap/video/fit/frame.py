@@ -83,10 +83,9 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     warm = False
     if previous is not None:
         st = _warm_start(eng, st, previous, options)
-        start = _nearer_start(eng, st, previous, options)
-        warm = eng.similarity(start) >= options.warm_threshold
+        warm = eng.similarity(st) >= options.warm_threshold
         if warm:
-            return _fit_warm(eng, start, options, searched), False, True
+            return _fit_warm(eng, st, options, searched), False, True
     # a fresh fit from the rest pose (where a warm start was tried: at its root and spread)
     st = st.replace(angles=np.deg2rad(REST_DEG), fore=np.ones(10),
                              drawn=np.zeros(10, dtype=bool))
@@ -103,8 +102,9 @@ def _warm_start(eng: _MaskEngine, placed: FitState, previous: FramePose,
                 options: FitOptions) -> FitState:
     """The previous frame's pose (angles, foreshortening, spread) at ``placed``'s pelvis
     (from the silhouette's top; a silhouette taller than the body: searched up and
-    down). A fresh fit starts from its pelvis and spread; a warm fit from it or, below
-    the warm threshold, from the previous frame's pelvis (:func:`_nearer_start`)."""
+    down). A warm fit starts from it, a fresh fit from its pelvis and spread; below the
+    warm threshold :func:`track_below_threshold` tracks from the previous frame's
+    pelvis (:func:`_nearer_start`) as well."""
     searched = options.spread and options.spread_value is None
     st = placed.replace(
         angles=np.array(previous.angles, dtype=float),
@@ -129,9 +129,11 @@ def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
     falls below the threshold although the pose moved by a few degrees; a fresh fit
     then starts from an upright rest pose and ends in another body (pose2sim_balance
     cam1 frames 40-53, MediaPipe's masks: fresh fits at S 0.53, 8-25 % of height off).
-    The fresh fit keeps its own start (the pelvis from the silhouette's top): started
-    from the last pelvis as well it lost 0.74 points of held-out PCK on side views
-    (RESULTS.md). Costs a warm fit only where the start is below the threshold.
+    Everything else stays as it was: a frame whose start reaches the threshold is
+    tracked from it, and the fresh fit starts from the pelvis placed from the top
+    (started from the last pelvis too, the fresh fits lost 0.74 points of held-out PCK
+    on side views and the walk_three_quarter sample's 2D error rose 3.5 -> 4.0 %;
+    RESULTS.md). Costs a warm fit only where the start is below the threshold.
     """
     fixed = 0.5 if options.spread_value is None else float(options.spread_value)
     placed = place_torso(eng, FitState.rest(spread=fixed))
@@ -252,12 +254,14 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     """
     eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
     st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
+    compared = False  # the track already beat this frame's fresh fit
     if previous is not None and not warm:
         tracked = track_below_threshold(eng, st, previous, options)
-        if tracked is not None:  # then judged as any tracked frame: slipping?
-            st, crossed, warm = tracked, False, True
-    if warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
-                 or (options.fallback > 0 and eng.similarity(st) < LEAN_BELOW)):
+        if tracked is not None:
+            st, crossed, warm, compared = tracked, False, True, True
+    slipping = warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
+                         or (options.fallback > 0 and eng.similarity(st) < LEAN_BELOW))
+    if slipping and not compared:
         # the track is slipping: fit this frame from scratch, keep the better fit
         fresh, fresh_crossed, _ = fit_normalised(eng, options=options)
         if eng.similarity(fresh) > eng.similarity(st):
