@@ -28,6 +28,9 @@ from vidcap.body import JOINT_NAMES
 #: pass's scene-beside gate, vidcap.video.appearance.MIN_BETWEEN, and the lean fit's
 #: head row, vidcap.video.fit.torso.HEAD_ROW_WIDTH, measured on cam4; cam3's frames
 #: looked at). The three pose2sim cameras are one trial: cam1's figures are tuning too.
+#: wt-real2d chose the fit's below-threshold track (vidcap.video.fit.frame.
+#: track_below_threshold) among its variants on these four (frames looked at: cam1, cam3;
+#: the validation clips' frames were looked at for the diagnosis only, nothing chosen).
 TUNING = ("onebyone_room 233-445", "pose2sim_balance_cam1", "pose2sim_balance_cam3",
           "pose2sim_balance_cam4")
 

@@ -275,9 +275,11 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
                              interval=8 * np.deg2rad(options.warm_step_deg))
     if cues is not None:
         # a tracked frame's arms moved little: searched near where they are, unless
-        # challenged (then over every angle pair, as a fresh fit's)
+        # challenged or tracked from a start below the warm threshold (then over every
+        # angle pair, as a fresh fit's)
         candidates = {}
-        st = apply_cues(eng, st, *cues, local=warm and not challenge, out=candidates)
+        st = apply_cues(eng, st, *cues, local=warm and not (challenge or compared),
+                        out=candidates)
     else:
         candidates = None
     return FramePose(
