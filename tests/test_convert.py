@@ -262,10 +262,17 @@ def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
                   jobs=1)
     assert two.n_frames == one.n_frames == 130
     same = np.all(np.abs(two.image_joints2d - one.image_joints2d) < 1e-9, axis=(1, 2))
-    assert same[:60].all()  # the first chunk is the serial fit
+    # the first chunk is the serial fit, but for its last frames: the clip-wide priors
+    # (the body's height, the spread: windows of 91 and 31 frames) see frames past the
+    # chunk in the serial fit and may refit those frames otherwise (with the fit's
+    # below-threshold track, frames 55-59 here)
+    assert same[:50].all()
     with np.load(tmp_path / "truth.npz") as truth:
         names = list(truth["joint_names"])
         true2d = truth["joints2d"][:, [names.index(n) for n in JOINT_NAMES]]
+    edge_two, edge_one = (np.linalg.norm(r.image_joints2d - true2d, axis=-1)[50:60].mean()
+                          for r in (two, one))
+    assert edge_two <= 1.15 * edge_one + 0.5, (edge_two, edge_one)
     err_two, err_one = (np.linalg.norm(r.image_joints2d - true2d, axis=-1)[60:].mean()
                         for r in (two, one))
     assert err_two <= 1.15 * err_one + 0.5, (err_two, err_one)  # px, 240-pixel frames
