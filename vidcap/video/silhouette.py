@@ -365,7 +365,9 @@ def _person_parts(contours, areas, prev_box, fg, p: _Params, plain=None):
     if prev_box is not None and len(order) > 1:
         best = _follow(contours, areas, order, prev_box, p)
     parts = [best] + _joined(contours, areas, best, fg, p)
-    if plain is not None and len(contours) > len(parts):
+    # Most frames hold no other blob as large as JOIN_SHARE of the person (specks at
+    # most): then the plain person's blobs need not be found at all.
+    if plain is not None and (np.delete(areas, parts) >= JOIN_SHARE * areas[parts[0]]).any():
         parts += _in_plain_person(contours, areas, parts, fg, plain, prev_box, p)
     return order, parts
 
