@@ -62,23 +62,12 @@ def run(args) -> int:
         raise UsageError(f"--threshold must be in (0, 765), got {args.threshold}")
     if args.samples < 2:
         raise UsageError("--samples must be at least 2")
-    from vidcap.video.pipeline import DEFAULT_GRAPH_CUT
+    from vidcap.video.pipeline import DEFAULT_GRAPH_CUT, default_still_person
 
-    graph_cut = DEFAULT_GRAPH_CUT if args.graph_cut is None else args.graph_cut
-    if graph_cut and (args.background is not None or args.method != "felzenszwalb"):
-        # the cut's colour models are learnt by the plate stage's own estimate
-        if args.graph_cut:
-            raise UsageError("--graph-cut needs the estimated plate (not --background, not "
-                             "--method median)")
-        graph_cut = False
-    from vidcap.video.pipeline import default_still_person
-
-    still = default_still_person() if args.still_person is None else args.still_person
-    if still and (args.background is not None or args.method != "felzenszwalb"):
-        if args.still_person:
-            raise UsageError("--still-person needs the estimated plate (not --background, "
-                             "not --method median)")
-        still = False
+    # the cut's colour models and the still-person passes are the plate stage's own
+    graph_cut = _on_estimated_plate(args, "--graph-cut", args.graph_cut, DEFAULT_GRAPH_CUT)
+    still = _on_estimated_plate(args, "--still-person", args.still_person,
+                                default_still_person())
     info = probe(args.video)
     if args.background is not None:
         bg = load_plate(args.background)
@@ -121,3 +110,19 @@ def run(args) -> int:
         print(f"warning: {unreliable} frames differ from the background almost everywhere "
               "(camera moved or lighting jumped); their masks are unreliable", file=sys.stderr)
     return 0
+
+
+def _on_estimated_plate(args, flag: str, asked: bool | None, default: bool) -> bool:
+    """Whether an option of the estimated plate (``flag``) is on: ``asked`` (None: not
+    given, then ``default``), off where the plate is not estimated by the Felzenszwalb
+    regions (``--background``, ``--method median``), and an error where the user asked
+    for it there."""
+    on = default if asked is None else asked
+    if on and (args.background is not None or args.method != "felzenszwalb"):
+        if asked:
+            from vidcap.errors import UsageError
+
+            raise UsageError(f"{flag} needs the estimated plate (not --background, not "
+                             "--method median)")
+        return False
+    return on
