@@ -33,6 +33,8 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from vidcap.video.maskbox import padded_box
+
 __all__ = ["ghost_blobs", "plate_from_empty"]
 
 #: A blob is a ghost when the frame's excess gradient along its outline is below this
@@ -59,16 +61,6 @@ def _gradient(grey: np.ndarray) -> np.ndarray:
     gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3)
     return cv2.magnitude(gx, gy)
-
-
-def _blob_box(mask: np.ndarray):
-    """``x0, y0, x1, y1`` of the non-zero pixels of ``mask`` (H, W) uint8 and 3 pixels
-    round them, clipped to the frame; None when it is empty."""
-    x, y, bw, bh = cv2.boundingRect(mask)
-    if bw == 0 or bh == 0:
-        return None
-    h, w = mask.shape
-    return max(0, x - 3), max(0, y - 3), min(w, x + bw + 3), min(h, y + bh + 3)
 
 
 def ghost_blobs(frame: np.ndarray, plate: np.ndarray, mask: np.ndarray, *,
@@ -101,16 +93,15 @@ def ghost_blobs(frame: np.ndarray, plate: np.ndarray, mask: np.ndarray, *,
     # Everything below happens within the blobs' bounding box and 3 pixels round it
     # (the outline band reaches 1 pixel out, its 3x3 gradients 2): the same values as
     # over the whole frame, in the area a person takes (most of the time at 1000x1000).
-    box = _blob_box(m)
+    box = padded_box(m, 3)
     if box is None:
         return out
-    x0, y0, x1, y1 = box
-    m = m[y0:y1, x0:x1]
+    m = m[box]
     n, lab, st, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
     if n < 2:
         return out
-    gf = _gradient(cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY))
-    gp = _gradient(cv2.cvtColor(plate[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY))
+    gf = _gradient(cv2.cvtColor(frame[box], cv2.COLOR_BGR2GRAY))
+    gp = _gradient(cv2.cvtColor(plate[box], cv2.COLOR_BGR2GRAY))
     k = np.ones((3, 3), np.uint8)
     outline = cv2.subtract(cv2.dilate(m, k), cv2.erode(m, k)) > 0
     # Per blob: the outline pixels nearest it (the band straddles the edge).
@@ -125,7 +116,7 @@ def ghost_blobs(frame: np.ndarray, plate: np.ndarray, mask: np.ndarray, *,
     ghost = (st[:, cv2.CC_STAT_AREA] >= min_area) & (sf < ratio * sp)
     ghost[0] = False
     if ghost.any():
-        out[y0:y1, x0:x1] = ghost[lab]
+        out[box] = ghost[lab]
     return out
 
 
@@ -214,12 +205,10 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
         order = list(order)
         masks = _person_masks(model, frames[order], gains[order])
         for t, m in zip(order, masks, strict=True):
-            box = _blob_box(m)
+            box = padded_box(m, 3)
             if box is None:
                 continue
-            x0, y0, x1, y1 = box
-            scaled[t, y0:y1, x0:x1] = np.clip(frames[t, y0:y1, x0:x1] / gains[t], 0,
-                                              255).astype(np.uint8)
+            scaled[t][box] = np.clip(frames[t][box] / gains[t], 0, 255).astype(np.uint8)
             ghosts[t] = ghost_blobs(scaled[t], model.plate, m, ratio=ratio)
         if model.self_lit is not None:
             ghosts[order] &= ~model.self_lit

@@ -34,6 +34,8 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from vidcap.video.maskbox import padded_box
+
 __all__ = ["absorbed_person", "detect_people", "find_absorbed"]
 
 #: Detections scoring below this (the SVM margin) are dropped.
@@ -352,10 +354,9 @@ def _uncovered_plate(model, frames, gains, cuts):
     # All that follows happens in the cuts' bounding box and r pixels round it (the
     # dilation reaches no further, and nothing is re-taken outside it): the same
     # values as over the whole frame, a fraction of the work on a large frame.
-    x, y, bw, bh = cv2.boundingRect(cuts.any(axis=0).view(np.uint8))
-    if bw == 0 or bh == 0:
+    box = padded_box(cuts.any(axis=0).view(np.uint8), r)
+    if box is None:
         return plate, seen
-    box = (slice(max(0, y - r), min(h, y + bh + r)), slice(max(0, x - r), min(w, x + bw + r)))
     covered = np.stack([cv2.dilate(c[box].view(np.uint8), kernel) for c in cuts]) > 0
     outside = ~covered
     need = max(2, int(np.ceil(MIN_UNCOVERED * k)))

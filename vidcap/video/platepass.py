@@ -29,6 +29,8 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from vidcap.video.maskbox import padded_box
+
 __all__ = ["refine_plate"]
 
 #: Samples (share, at least 3) outside the person a pixel needs to be re-taken.
@@ -180,13 +182,9 @@ def dilate_in_box(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     numpy.ndarray, shape (H, W), uint8
     """
     out = np.zeros_like(mask)
-    x, y, bw, bh = cv2.boundingRect(mask)
-    if bw == 0 or bh == 0:
-        return out
-    h, w = mask.shape
-    ry, rx = kernel.shape[0] // 2, kernel.shape[1] // 2
-    box = (slice(max(0, y - ry), min(h, y + bh + ry)), slice(max(0, x - rx), min(w, x + bw + rx)))
-    out[box] = cv2.dilate(mask[box], kernel)
+    box = padded_box(mask, kernel.shape[0] // 2, kernel.shape[1] // 2)
+    if box is not None:
+        out[box] = cv2.dilate(mask[box], kernel)
     return out
 
 
