@@ -134,10 +134,10 @@ def _head_half(bbox):
     return x0, y0, x1, (y0 + y1) // 2
 
 
-def test_silhouette_cache_is_keyed_by_regions_only(walk_copy):
+def test_silhouette_cache_is_keyed_by_regions_only(walk_copy, tmp_path):
     from vidcap.video.pipeline import silhouettes_only
 
-    cache = walk_copy.parent / "cache"
+    cache = tmp_path / "cache"  # its own: the entries counted are this test's only
     entries = lambda: sorted(p.name for p in cache.glob("silhouettes-*.npz"))  # noqa: E731
     a = Annotations()
     plain = silhouettes_only(walk_copy, a, cache_dir=cache)
@@ -165,14 +165,18 @@ def test_silhouette_cache_is_keyed_by_regions_only(walk_copy):
     assert not changed_frames(cut.masks, again.masks).any()
 
 
-def test_convert_honours_the_region_and_reuses_its_silhouettes(walk_copy):
-    """The whole pipeline (as ``vidcap convert``) with the same region as above: the
-    silhouettes come from the cache entry made for it, and hold none of its pixels."""
+def test_convert_honours_the_region_and_reuses_its_silhouettes(walk_copy, tmp_path):
+    """The whole pipeline (as ``vidcap convert``) with a region over the person's upper
+    body: the silhouettes come from the cache entry made for that region (drawn on another
+    frame: the same pixels, the same entry), and hold none of its pixels."""
     from vidcap.video import pipeline
 
-    cache = walk_copy.parent / "cache"
-    before = sorted(cache.glob("silhouettes-*.npz"))
+    cache = tmp_path / "cache"  # its own, filled here: no other test's entries needed
     plain = pipeline.silhouettes_only(walk_copy, Annotations(), cache_dir=cache)
+    drawn = Annotations()
+    drawn.add_scene_region(1, box=_head_half(plain.bbox[1]))
+    pipeline.silhouettes_only(walk_copy, drawn, cache_dir=cache)
+    before = sorted(cache.glob("silhouettes-*.npz"))
     a = Annotations()
     a.add_scene_region(0, box=_head_half(plain.bbox[1]))
     a.add_orientation(0, "right")
