@@ -124,9 +124,10 @@ def test_track_below_threshold_keeps_a_track_a_fresh_fit_lost():
     the track is kept when it fits better than the fresh fit it is given: from the true
     pose of the last frame (the figure bent 45 degrees, a hand raised), the tracked
     joints land within 3 px of the truth, and a poorer fit (the rest pose) loses to it;
-    a fit as good as the track's is kept (None)."""
+    a fit as good as the track's is kept (None). Given the warm start fit_frame made for
+    its fresh fit, it tracks the same."""
     from vidcap.video.fit.engine import _MaskEngine
-    from vidcap.video.fit.frame import track_below_threshold
+    from vidcap.video.fit.frame import track_below_threshold, warm_start
     from vidcap.video.fit.normalise import normalise_mask
     from vidcap.video.fit.options import FitOptions
     from vidcap.video.fit.result import FramePose
@@ -146,3 +147,5 @@ def test_track_below_threshold_keeps_a_track_a_fresh_fit_lost():
     err = np.linalg.norm(norm.to_original(eng.joints(tracked)) - j, axis=1)
     assert err.max() < 3.0
     assert track_below_threshold(eng, tracked, last, options) is None
+    given = track_below_threshold(eng, rest, last, options, start=warm_start(eng, last, options))
+    np.testing.assert_array_equal(eng.joints(given), eng.joints(tracked))

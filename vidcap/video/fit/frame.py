@@ -65,8 +65,12 @@ _LEAVES = [S["head"]] + [S[f"{s}_lower_{p}"] for p in ("arm", "leg") for s in "l
 
 
 def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
-                   options: FitOptions) -> tuple[FitState, bool, bool]:
+                   options: FitOptions, start: FitState | None = None,
+                   ) -> tuple[FitState, bool, bool]:
     """Fit the model to the engine's silhouette; see :func:`fit_pose`.
+
+    ``start``: :func:`warm_start` of ``previous``, when the caller made it already (made
+    here otherwise); not used without ``previous``.
 
     Returns
     -------
@@ -78,13 +82,11 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
         The fit started from ``previous``.
     """
     searched = options.spread and options.spread_value is None  # search the spread?
-    fixed = 0.5 if options.spread_value is None else float(options.spread_value)
-    st = place_torso(eng, FitState.rest(spread=fixed))
-    warm = False
-    if previous is not None:
-        st = _warm_start(eng, st, previous, options)
-        warm = eng.similarity(st) >= options.warm_threshold
-        if warm:
+    if previous is None:
+        st = _placed(eng, options)
+    else:
+        st = warm_start(eng, previous, options) if start is None else start
+        if eng.similarity(st) >= options.warm_threshold:
             return _fit_warm(eng, st, options, searched), False, True
     # a fresh fit from the rest pose (where a warm start was tried: at its root and spread)
     st = st.replace(angles=np.deg2rad(REST_DEG), fore=np.ones(10),
@@ -98,13 +100,20 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     return st, crossed, False
 
 
-def _warm_start(eng: _MaskEngine, placed: FitState, previous: FramePose,
-                options: FitOptions) -> FitState:
-    """The previous frame's pose (angles, foreshortening, spread) at ``placed``'s pelvis
-    (from the silhouette's top; a silhouette taller than the body: searched up and
-    down). A warm fit starts from it, a fresh fit from its pelvis and spread; below the
-    warm threshold :func:`track_below_threshold` tracks from the previous frame's
-    pelvis (:func:`_nearer_start`) as well."""
+def _placed(eng: _MaskEngine, options: FitOptions) -> FitState:
+    """The rest pose at the spread the options fix (0.5 when searched), its pelvis
+    placed from the silhouette (:func:`~vidcap.video.fit.torso.place_torso`)."""
+    fixed = 0.5 if options.spread_value is None else float(options.spread_value)
+    return place_torso(eng, FitState.rest(spread=fixed))
+
+
+def warm_start(eng: _MaskEngine, previous: FramePose, options: FitOptions) -> FitState:
+    """The previous frame's pose (angles, foreshortening, spread) at the pelvis placed
+    from this silhouette (:func:`_placed`; a silhouette taller than the body: searched
+    up and down). A warm fit starts from it, a fresh fit from its pelvis and spread; below
+    the warm threshold :func:`track_below_threshold` tracks from the previous frame's
+    pelvis (:func:`_nearer_start`) as well. :func:`fit_frame` makes it once for both."""
+    placed = _placed(eng, options)
     searched = options.spread and options.spread_value is None
     st = placed.replace(
         angles=np.array(previous.angles, dtype=float),
@@ -119,10 +128,12 @@ def _warm_start(eng: _MaskEngine, placed: FitState, previous: FramePose,
 
 
 def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
-                          options: FitOptions) -> FitState | None:
+                          options: FitOptions, *, start: FitState | None = None,
+                          ) -> FitState | None:
     """The previous frame's pose tracked onto this silhouette although its start covers
     it below the warm threshold, when that fits better than ``st`` (the fresh fit
-    :func:`fit_normalised` made instead); None otherwise.
+    :func:`fit_normalised` made instead); None otherwise. ``start``: the
+    :func:`warm_start` :func:`fit_normalised` was given (made here when None).
 
     Where a body leans into a balance pose, bends or raises a hand above its head, S
     drops for every pose the model can take, and the start from the last frame's pose
@@ -135,9 +146,9 @@ def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
     on side views and the walk_three_quarter sample's 2D error rose 3.5 -> 4.0 %;
     RESULTS.md). Costs a warm fit only where the start is below the threshold.
     """
-    fixed = 0.5 if options.spread_value is None else float(options.spread_value)
-    placed = place_torso(eng, FitState.rest(spread=fixed))
-    start = _nearer_start(eng, _warm_start(eng, placed, previous, options), previous, options)
+    if start is None:
+        start = warm_start(eng, previous, options)
+    start = _nearer_start(eng, start, previous, options)
     tracked = _fit_warm(eng, start, options, options.spread and options.spread_value is None)
     return tracked if eng.similarity(tracked) > eng.similarity(st) else None
 
@@ -253,10 +264,11 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     frame's cues as well (:func:`vidcap.video.fit.cues.apply_cues`); None: outline only.
     """
     eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
-    st, crossed, warm = fit_normalised(eng, previous=previous, options=options)
+    start = None if previous is None else warm_start(eng, previous, options)
+    st, crossed, warm = fit_normalised(eng, previous=previous, options=options, start=start)
     compared = False  # the track already beat this frame's fresh fit
     if previous is not None and not warm:
-        tracked = track_below_threshold(eng, st, previous, options)
+        tracked = track_below_threshold(eng, st, previous, options, start=start)
         if tracked is not None:
             st, crossed, warm, compared = tracked, False, True, True
     slipping = warm and (challenge or eng.similarity(st) < options.fallback * previous.similarity
@@ -410,4 +422,4 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
 
 
 __all__ = ["CROSSING_SPREAD", "LABEL_TIE", "SIDE_SPREAD", "fit_frame", "fit_normalised",
-           "fit_pose", "recross", "track_below_threshold"]
+           "fit_pose", "recross", "track_below_threshold", "warm_start"]
