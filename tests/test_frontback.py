@@ -82,8 +82,13 @@ def test_orientation_proposal_takes_front_or_back_from_the_cue():
     plain = propose_orientation(j2, scale=scale, fps=30.0, body=body)
     assert not any(lab.startswith("back") for lab in plain)  # silhouettes cannot tell
     near = near_side(arm_visibility(frames, j2))
-    cued = propose_orientation(j2, scale=scale, fps=30.0, body=body, near_side=near)
+    read = {}
+    cued = propose_orientation(j2, scale=scale, fps=30.0, body=body, near_side=near, out=read)
     assert all(lab.startswith("back") or lab in ("left", "right") for lab in cued)
+    # the front/back it read, handed out with the facing it was read with
+    assert (read["right"] == np.char.endswith(cued, "right")).all()
+    np.testing.assert_array_equal(read["front"], propose_front(near, read["right"], fps=30.0))
+    assert (read["front"] == -1).all()
 
 
 def test_a_walk_planted_front_for_back_is_turned_round_by_the_cue():

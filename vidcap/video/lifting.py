@@ -380,13 +380,18 @@ def _propose_view(j2, geometry, fps, body, *, image_sides, track, window_s, view
     front/back (:func:`vidcap.video.proposals.propose_front`, (F,) int8, or None without
     ``near_side`` or with body-side names)."""
     near = near_side if image_sides else None
+    read = {}
     labels = propose_orientation(j2, scale=geometry, fps=fps, body=body,
                                  sides_known=not image_sides, track=track, window_s=window_s,
-                                 turn_window_s=window_s, near_side=near)
+                                 turn_window_s=window_s, near_side=near, out=read)
     labels = constrain_orientation(labels, view)
     if near is None:
         return labels, None
-    return labels, propose_front(near, np.char.endswith(labels, "right"), fps=fps)
+    right = np.char.endswith(labels, "right")
+    if np.array_equal(right, read["right"]):
+        return labels, read["front"]  # the facing as proposed: read already
+    # a view naming the facing (e.g. --view front_left) turned some frames
+    return labels, propose_front(near, right, fps=fps)
 
 
 def lift_pose(

@@ -462,13 +462,18 @@ def propose_front(near_side, right, *, fps: float, min_front: float = NEAR_SIDE_
     known = (e > min_front) | (e < -min_back)
     if not known.any():
         return np.zeros(F, np.int8)
+    return np.where(e[_nearest_known(known)] > 0, 1, -1).astype(np.int8)
+
+
+def _nearest_known(known: np.ndarray) -> np.ndarray:
+    """Each frame's nearest frame (F,) int where ``known`` (F,) bool holds, the later of
+    two as near; ``known`` must hold somewhere."""
     idx = np.flatnonzero(known)
-    pos = np.clip(np.searchsorted(idx, np.arange(F)), 0, len(idx) - 1)
+    t = np.arange(len(known))
+    pos = np.searchsorted(idx, t)
+    after = idx[np.clip(pos, 0, len(idx) - 1)]
     before = idx[np.clip(pos - 1, 0, len(idx) - 1)]
-    after = idx[pos]
-    t = np.arange(F)
-    use = np.where(np.abs(before - t) < np.abs(after - t), before, after)
-    return np.where(e[use] > 0, 1, -1).astype(np.int8)
+    return np.where(np.abs(before - t) < np.abs(after - t), before, after)
 
 
 def propose_orientation(
@@ -484,6 +489,7 @@ def propose_orientation(
     window_s: float = 0.5,
     turn_window_s: float | None = 0.2,
     near_side=None,
+    out: dict | None = None,
 ) -> np.ndarray:
     """Propose one of the six orientation labels per frame (seed 004 section 3.1.5).
 
@@ -534,6 +540,10 @@ def propose_orientation(
     near_side : array_like, shape (F,), optional
         :func:`vidcap.video.frontback.near_side` (image-side names only), read by
         :func:`propose_front` with its default thresholds.
+    out : dict, optional
+        Where ``near_side`` was read, set to ``{"front": propose_front(...), "right":
+        right}`` ((F,) int8 and the (F,) bool facing it was read with), so that a caller
+        who needs the front/back itself need not read it again.
 
     Returns
     -------
@@ -567,13 +577,7 @@ def propose_orientation(
     score = np.where(bent, np.sign(cue), np.where(moving, np.sign(vel), 0.0))
     known = score != 0
     if known.any():
-        idx = np.flatnonzero(known)
-        pos = np.searchsorted(idx, np.arange(F))
-        after = idx[np.clip(pos, 0, len(idx) - 1)]
-        before = idx[np.clip(pos - 1, 0, len(idx) - 1)]
-        t = np.arange(F)
-        use = np.where(np.abs(before - t) < np.abs(after - t), before, after)
-        right = score[use] > 0
+        right = score[_nearest_known(known)] > 0
     else:
         right = np.full(F, cue.sum() >= 0)
     twin = win if turn_window_s is None else max(1, int(round(turn_window_s * fps)) | 1)
@@ -583,7 +587,10 @@ def propose_orientation(
              + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])
         front = median_filter(d, size=win, mode="nearest") >= 0
     elif near_side is not None:
-        front = propose_front(near_side, right, fps=fps) >= 0
+        facing = propose_front(near_side, right, fps=fps)
+        front = facing >= 0
+        if out is not None:
+            out.update(front=facing, right=right)
     else:
         front = np.ones(F, bool)
     side = np.where(right, "right", "left")
