@@ -174,3 +174,26 @@ def test_masked_median_equals_a_partition_for_every_sample_count():
                     s = np.sort(x[keep, yy, xx], axis=0)
                     # the included samples' middle rank (the lower one for an even count)
                     assert (got[yy, xx] == s[(keep.sum() - 1) // 2]).all(), (k, yy, xx)
+
+
+def test_a_video_file_is_probed_once_and_its_rate_times_the_empty_scene(tmp_path, monkeypatch):
+    """The samples' positions and the empty-scene pass's times come from one probe of the
+    file; the times are the sample indices at the file's own frame rate."""
+    import vidcap.io.video as video
+    import vidcap.video.emptyscene as emptyscene
+
+    frames, _ = clip(30, 96, 128, rng=np.random.default_rng(4), walk=True)
+    path = tmp_path / "walk.mp4"
+    video.write_video(path, list(frames), 12.0)
+    probes, seen = [], {}
+    probe, plate_from_empty = video.probe, emptyscene.plate_from_empty
+    monkeypatch.setattr(video, "probe", lambda *a, **k: probes.append(1) or probe(*a, **k))
+
+    def spy(model, smp, gains, *, times, **kw):
+        seen["times"] = times
+        return plate_from_empty(model, smp, gains, times=times, **kw)
+
+    monkeypatch.setattr(emptyscene, "plate_from_empty", spy)
+    bg = estimate_background(path, n_samples=10, empty_scene=True)
+    assert len(probes) == 1
+    np.testing.assert_allclose(seen["times"], bg.sample_indices / 12.0)

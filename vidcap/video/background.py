@@ -189,7 +189,7 @@ def load_plate(path: str | os.PathLike) -> BackgroundModel:
 
 # --------------------------------------------------------------------------- sampling
 def sample_frames(
-    source, *, n_samples: int = 32, rng: np.random.Generator | None = None,
+    source, *, n_samples: int = 32, rng: np.random.Generator | None = None, info=None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Pick ``n_samples`` frames spread evenly over a video.
 
@@ -201,6 +201,9 @@ def sample_frames(
         How many frames at most.
     rng : numpy.random.Generator, optional
         Jitters the sample positions inside their stride; ``None`` = evenly spaced.
+    info : vidcap.io.video.VideoInfo, optional
+        The video file's :func:`~vidcap.io.video.probe`, when the caller made it (probed
+        here otherwise).
 
     Returns
     -------
@@ -213,7 +216,7 @@ def sample_frames(
         return np.ascontiguousarray(source[idx]), idx
     from vidcap.io.video import iter_frames, probe
 
-    info = probe(source)
+    info = probe(source) if info is None else info
     idx = _sample_indices(info.n_frames, n_samples, rng)
     got, got_idx, start = [], [], 0
     if len(idx) > 1 and np.all(np.diff(idx) == idx[1] - idx[0]):
@@ -342,7 +345,12 @@ def estimate_background(
             raise ValueError(f"frames must be (F, H, W, 3) uint8, got {source.shape}")
         if len(source) == 0:
             raise BackgroundError("the video has no frames")
-    frames, idx = sample_frames(source, n_samples=n_samples, rng=rng)
+    info = None
+    if name is not None:
+        from vidcap.io.video import probe
+
+        info = probe(source)  # once: the samples' positions and the empty scene's times
+    frames, idx = sample_frames(source, n_samples=n_samples, rng=rng, info=info)
     from vidcap.video.inputchecks import check_samples
 
     check_samples(frames, name)
@@ -365,7 +373,7 @@ def estimate_background(
     if EMPTY_SCENE if empty_scene is None else empty_scene:
         from vidcap.video.emptyscene import plate_from_empty
 
-        model = plate_from_empty(model, frames, gains, times=idx / _fps(source))
+        model = plate_from_empty(model, frames, gains, times=idx / _fps(info))
     if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 
@@ -373,16 +381,13 @@ def estimate_background(
     return model
 
 
-def _fps(source) -> float:
-    """The video's frame rate; :data:`vidcap.video.emptyscene.ASSUMED_FPS` for frames
-    given as an array."""
+def _fps(info) -> float:
+    """The frame rate of the video ``info`` (:func:`vidcap.io.video.probe`) describes;
+    :data:`vidcap.video.emptyscene.ASSUMED_FPS` for frames given as an array (None) or
+    a rate the container does not give."""
     from vidcap.video.emptyscene import ASSUMED_FPS
 
-    if isinstance(source, np.ndarray):
-        return ASSUMED_FPS
-    from vidcap.io.video import probe
-
-    fps = probe(source).fps
+    fps = None if info is None else info.fps
     return float(fps) if fps and np.isfinite(fps) and fps > 0 else ASSUMED_FPS
 
 
