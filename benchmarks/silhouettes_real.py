@@ -45,6 +45,11 @@ Clips:
   conversion the pose prior was fitted on; the silhouettes never saw them). 131_01 0-3 s
   side and 14_19 10-13 s 3/4 are tuning since that helper diagnosed them, 02_06 since the
   graph cut's scene colour prior came from its frames (wt-cut).
+* Validation renders added by the issue-26 silval helper (chose nothing; run once to
+  report): CMU subject 5 (dance; no silhouette or 2D benchmark had used it) in place,
+  05_02 front / PETS, 05_09 three-quarter / Weizmann, 05_18 side / room, 05_12
+  three-quarter from behind / PETS ($VIDCAP_DATA/mocap/cmu_iclone_humanik/, converted as
+  the 02_0x files by benchmarks/get_data.sh).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -129,11 +134,20 @@ RENDERS = [
     # tuning rows.)
     ("02_06 4-7 s 3/4 / room plate", ("02_06", 241, 421), 45, "room", "tuning"),
     ("02_09 1-4 s 150 deg / Weizmann plate", ("02_09", 61, 241), 150, "ido", "validation"),
+    # Validation renders added by the issue-26 silval helper (nothing tuned on them; run
+    # once to report): CMU subject 5 (dance: expressive arms, turns, arabesques), in-place
+    # stretches of trials no benchmark had used (the pose prior was fitted on them, which
+    # the silhouettes do not use), over all three plates and four yaws.
+    ("05_02 1-4 s front / PETS plate", ("05_02", 61, 241), 0, "vtest", "validation"),
+    ("05_09 2-5 s 3/4 / Weizmann plate", ("05_09", 121, 301), 45, "ido", "validation"),
+    ("05_18 2-5 s side / room plate", ("05_18", 121, 301), 90, "room", "validation"),
+    ("05_12 0-3 s 3/4 back / PETS plate", ("05_12", 1, 181), 225, "vtest", "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
 EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_humanik"
-                      / f"0{t}_humanik.bvh" for t in ("02_05", "02_06", "02_09")})
+                      / f"0{t}_humanik.bvh"
+                      for t in ("02_05", "02_06", "02_09", "05_02", "05_09", "05_18", "05_12")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
