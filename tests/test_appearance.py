@@ -137,3 +137,37 @@ def test_between_moved_has_moved_parts_on_both_sides():
     out = between_moved(m)
     assert out[3, 1:6].all() and not out[3, 0] and not out[3, 6]
     assert out[0, 6] and not out[0, 5] and not out[1, 6]
+
+
+def test_a_still_part_unlike_the_scene_around_stays_person_when_colours_are_unsure(
+        monkeypatch):
+    """Inside the first plate's never-seen area, a sample's pixel the colour models
+    call scene only by a little (a head whose skin is rare in the person's model and
+    common in a brick wall far away) stays person when no seen plate pixel nearby has
+    its colour; one that continues the scene around it does not."""
+    from types import SimpleNamespace
+
+    import vidcap.video.appearance as appearance
+
+    monkeypatch.setattr(appearance, "NEVER_KEEP", 2.0)
+    h, w, k = 40, 60, 3
+    plate = np.zeros((h, w, 3), np.float32)
+    plate[:, :30] = (120, 120, 120)
+    plate[:, 30:] = (60, 140, 60)
+    never = np.zeros((h, w), bool)
+    never[10:30, 20:42] = True
+    small = np.repeat(plate[None], k, axis=0)
+    small[:, 10:30, 20:28] = SKIN              # like nothing around: person
+    small[:, 10:30, 34:42] = (60, 140, 60)     # the green scene continued: scene
+    llr = np.full((k, h, w), -1.0, np.float32)
+    llr[:, 10:20, 20:28] = -3.0                # clearly scene by colour: scene
+    llr[:, :, :5] = 1.0                        # outside: llr > 0 alone decides
+    wk = SimpleNamespace(small=small, plate=plate, never=never,
+                         lit=np.zeros((h, w), bool), ring_r=8, thr=12.0, h=h, w=w)
+    person = appearance._keep_unlike(wk, llr)
+    assert person[:, 20:30, 20:28].all()
+    assert not person[:, 10:20, 20:28].any()
+    assert not person[:, 10:30, 34:42].any()
+    assert person[:, :, :5].all() and not person[:, :, 5:20].any()
+    monkeypatch.setattr(appearance, "NEVER_KEEP", 0.0)
+    assert not appearance._keep_unlike(wk, llr)[:, 10:30, 20:42].any()
