@@ -80,12 +80,12 @@ MIN_BETWEEN = 0.15
 #: no seen plate pixel within the ring's width (L1 at most UNLIKE thresholds): a head
 #: that never moves, whose skin is rare in the person's model and common in a brick
 #: wall far off, is not the scene around it (:func:`_keep_unlike`). Chosen on the
-#: tuning renders (benchmarks/silhouettes_real.py --quick --pck): arms 3/4 median IoU
-#: 0.909 -> 0.938 and PCK of the 2D fit 61.9 -> 88.7 % (true masks 84.4), arms front
-#: 0.923 -> 0.961 / 82.0 -> 94.1 % (95.0), jacks 3/4 0.923 -> 0.930 / 83.6 -> 91.3 %
-#: (99.9), 02_06 0.913 -> 0.911 / 34.5 -> 31.7 % (43.6); without the colour test
-#: (NEVER_KEEP alone) 02_06 lost 0.045 (the floor beside the feet kept); UNLIKE 5:
-#: arms 3/4 80.7 %, arms front 86.0 %; NEVER_KEEP 1: arms front 89.8 %, 02_06 0.887.
+#: tuning renders (benchmarks/silhouettes_real.py --quick --pck, median IoU and PCK of
+#: the 2D fit, true masks in brackets): arms 3/4 0.909 -> 0.938, 61.9 -> 82.0 % (84.4),
+#: arms front 0.923 -> 0.961, 82.0 -> 94.2 % (95.0), jacks 3/4 0.923 -> 0.930, 83.6 ->
+#: 90.7 % (99.9), 02_06 0.913 -> 0.911, 34.5 -> 31.3 % (43.6). NEVER_KEEP alone (no
+#: colour test) cost 02_06 0.045 (the floor beside the feet kept); UNLIKE 5: arms 3/4
+#: 80.7 %, arms front 0.925; NEVER_KEEP 1: arms front 89.8 %, 02_06 0.887.
 NEVER_KEEP, UNLIKE = 2.0, 3.0
 
 
