@@ -326,8 +326,8 @@ def pck_pair(masks, truth_masks, joints2d):
 
 
 #: The silhouette stage's graph cut (vidcap/video/graphcut.py): as `vidcap convert` runs it
-#: by default (vidcap.video.pipeline.DEFAULT_GRAPH_CUT, off), or as --graph-cut /
-#: --no-graph-cut say.
+#: by default (vidcap.video.pipeline.DEFAULT_GRAPH_CUT, on), or as --graph-cut /
+#: --no-graph-cut say (main() sets it).
 GRAPH_CUT = False
 
 
