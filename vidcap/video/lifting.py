@@ -236,17 +236,8 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
     joints2d : numpy.ndarray, shape (F, 15, 2)
         Named by the body's true sides, with the user's joints in place.
     """
-    orientation = np.where(user_orientation != "", user_orientation,
-                           proposed_orientation).astype(str)
-    yaw = yaw_from_orientation(orientation, spread)
-    swap = None
-    if facing is not None:
-        f = np.asarray(facing, dtype=float)
-        tilt = ((orientation == "left") | (orientation == "right")) & (f != 0)
-        tilt &= np.asarray(user_orientation) == ""  # the user's side view stays one
-        tilt &= np.asarray(spread, float) > SIDE_FACING_SPREAD
-        yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
-        swap = np.where(tilt, f > 0, faces_camera(yaw))
+    orientation, yaw, swap = view_names(proposed_orientation, spread, user_orientation,
+                                        facing)
     if names_swapped is not None:
         joints2d = exchange_distal(joints2d, names_swapped)
     j2 = assign_sides(joints2d, yaw, swap=swap) if image_sides else joints2d
@@ -254,6 +245,23 @@ def apply_user_view(joints2d, proposed_orientation, spread, user_orientation, us
         j2 = swap_pairs(j2, user_sides)
     j2 = np.where(np.isfinite(user_joints), user_joints, j2)
     return orientation, yaw, j2
+
+
+def view_names(proposed_orientation, spread, user_orientation, facing=None):
+    """The orientation (F,) str, the yaw (F,) rad and the frames whose image-side names
+    :func:`vidcap.video.lift.assign_sides` swaps (F,) bool, from the proposed and the
+    user's orientation and the colour frame's ``facing`` (:func:`apply_user_view`)."""
+    orientation = np.where(np.asarray(user_orientation) != "", user_orientation,
+                           proposed_orientation).astype(str)
+    yaw = yaw_from_orientation(orientation, spread)
+    if facing is None:
+        return orientation, yaw, faces_camera(yaw)
+    f = np.asarray(facing, dtype=float)
+    tilt = ((orientation == "left") | (orientation == "right")) & (f != 0)
+    tilt &= np.asarray(user_orientation) == ""  # the user's side view stays one
+    tilt &= np.asarray(spread, float) > SIDE_FACING_SPREAD
+    yaw = np.where(tilt, np.sign(yaw) * (0.5 * np.pi - SIDE_TILT * f), yaw)
+    return orientation, yaw, np.where(tilt, f > 0, faces_camera(yaw))
 
 
 def swap_pairs(joints2d, swapped) -> np.ndarray:
@@ -304,6 +312,40 @@ def consistent_names(j2, rho, unit) -> np.ndarray:
     samples' walk_side 160 -> 205 mm without this hold; the samples were tuning for it)."""
     held = np.repeat((np.asarray(rho, float) <= SIDE_FACING_SPREAD)[:, None], 2, axis=1)
     return consistent_labels(j2, unit, held=held)
+
+
+#: Which frames the colour frame's leg order names (:func:`side_leg_swaps`): ``edge``
+#: the edge-on side views only (a side label, the torso's spread at most
+#: :data:`SIDE_FACING_SPREAD`), ``side`` every side label, ``all`` every frame.
+LEG_FRAMES = "all"
+
+
+def side_leg_swaps(j2, leg_order, proposed_orientation, user_orientation, rho, unit,
+                   names=None, facing=None, *, frames: str | None = None) -> np.ndarray | None:
+    """``names`` (F, 2) bool (:func:`consistent_names`, or None: none exchanged) with the
+    legs' column set, in the runs of frames :data:`LEG_FRAMES` names (not the user's
+    orientation), so that the leg the colour frame shows nearer the camera
+    (``leg_order``, :func:`vidcap.video.legorder.near_leg`) is the side the body turns
+    to it (:func:`vidcap.video.legorder.side_leg_names`); ``unit`` pixels per 1 % of the
+    height. None when ``names`` is None and no run is named."""
+    from vidcap.video.legorder import side_leg_names
+
+    frames = LEG_FRAMES if frames is None else frames
+    orient, yaw, swap = view_names(proposed_orientation, rho, user_orientation, facing)
+    edge = np.asarray(user_orientation) == ""
+    if frames != "all":
+        edge &= (orient == "left") | (orient == "right")
+    if frames == "edge":
+        edge &= np.asarray(rho, float) <= SIDE_FACING_SPREAD
+    if not edge.any():
+        return names
+    link = consistent_labels(j2, unit)[:, 1]
+    legs = side_leg_names(leg_order, edge, yaw > 0, link, swap)
+    if names is None and not legs.any():
+        return None
+    out = np.zeros((len(j2), 2), bool) if names is None else np.array(names, bool)
+    out[:, 1] = np.where(edge, legs, out[:, 1])
+    return out
 
 
 #: Knot spacing (seconds) of the per-frame scale (:func:`vidcap.video.lift.estimate_scales`).
@@ -411,6 +453,7 @@ def lift_pose(
     view: str = "auto",
     method: str = "solve",
     near_side=None,
+    leg_order=None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -446,6 +489,10 @@ def lift_pose(
         orientation (:func:`constrain_orientation`); orientation events override it.
     near_side : array_like, shape (F,), optional
         :func:`vidcap.video.frontback.near_side` (image-side names): front or back.
+    leg_order : array_like, shape (F,), optional
+        :func:`vidcap.video.legorder.near_leg` (image-side names): which leg the colour
+        frame shows nearer the camera, naming the legs in edge-on side views
+        (:func:`side_leg_swaps`).
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
@@ -490,6 +537,9 @@ def lift_pose(
     _, user_orient, user_joints = annotations.resolve(F)
     names = consistent_names(j2, rho, 0.01 * body.height * np.asarray(geometry)) \
         if method == "solve" and CONSISTENT_NAMES else None  # the fit's names, repaired
+    if leg_order is not None and image_sides:
+        names = side_leg_swaps(j2, leg_order, proposed_orient, user_orient, rho,
+                               0.01 * body.height * np.asarray(geometry), names, facing)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
                                       facing=facing, names_swapped=names)
@@ -516,7 +566,8 @@ def lift_pose(
         facing=facing, names_swapped=names)
 
 
-__all__ = ["CONSISTENT_NAMES", "NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult",
-           "apply_user_view", "check_view", "consistent_names", "constrain_orientation",
+__all__ = ["CONSISTENT_NAMES", "LEG_FRAMES", "NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult",
+           "apply_user_view", "check_view", "consistent_names",
+           "side_leg_swaps", "view_names", "constrain_orientation",
            "fill_gaps", "frame_scales", "lift_pose", "model_scales", "plane_passages",
            "swap_pairs"]
