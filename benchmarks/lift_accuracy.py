@@ -483,7 +483,7 @@ SOLVE_RENDERS = (("131_01 2-4s", "131_01", 60, 60.0), ("131_01 5-7s", "131_01", 
 def _render_clips(body, frames):
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
-    from vidcap.video.frontback import arm_visibility, near_side
+    from vidcap.video.pipeline import colour_cues
 
     full = {"131_01": make_motion(DATA / "131_01.bvh", body=body, fps=30.0),
             "07_07": make_motion(DATA / "07.asf", amc=DATA / "07_07.amc", body=body, fps=30.0)}
@@ -495,9 +495,10 @@ def _render_clips(body, frames):
         images, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                     rng=np.random.default_rng(0))
         pose = fit_sequence(truth["masks"])
+        near, legs = colour_cues(images, pose.joints2d, pose.model_height, body, front=True,
+                                 legs=True)
         fit = {"joints2d": pose.joints2d, "spread": pose.spread,
-               "model_height": pose.model_height,
-               "near_side": near_side(arm_visibility(images, pose.joints2d))}
+               "model_height": pose.model_height, "near_side": near, "leg_order": legs}
         out.append((f"{name} yaw {yaw:.0f} (held out)", fit, truth,
                     truth_in_camera_frame(truth), (640, 480)))
     return out
@@ -505,7 +506,8 @@ def _render_clips(body, frames):
 
 def _sample_clips(body):
     """The samples through the pipeline (tuning for the front/back cue's constants)."""
-    from vidcap.video.pipeline import front_cue, run
+    from vidcap.io.video import iter_frames
+    from vidcap.video.pipeline import colour_cues, run
 
     out = []
     cache = ROOT / ".vidcap-cache"  # the 2D stage's cache (not in git)
@@ -516,9 +518,12 @@ def _sample_clips(body):
         t = dict(np.load(truth_path))
         res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
                   cache_dir=cache, lift="segment", proportions="seed")  # seed renders
+        near, legs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
+                                 res.image_joints2d, res.model_height, body, front=True,
+                                 legs=True)
         fit = {"joints2d": res.image_joints2d, "spread": res.spread,
                "model_height": res.model_height, "track": res.track,
-               "near_side": front_cue(video, res.image_joints2d)}
+               "near_side": near, "leg_order": legs}
         out.append((f"{video.stem} (sample)", fit, t, truth_in_camera_frame(t),
                     (res.masks.shape[2], res.masks.shape[1])))
     return out

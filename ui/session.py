@@ -86,6 +86,10 @@ class ClipData:
         The colour frames' front/back cue (:func:`vidcap.video.frontback.near_side`), as
         ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.front_cue`); kept as
         loaded when silhouettes are recomputed.
+    leg_order : numpy.ndarray, shape (F,), optional
+        The colour frames' leg order (:func:`vidcap.video.legorder.near_leg`), as
+        ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.colour_cues`); kept as
+        loaded when silhouettes are recomputed.
     """
 
     video: Path
@@ -104,6 +108,7 @@ class ClipData:
     pose: dict | None = None
     fit_kw: dict = field(default_factory=dict)
     near_side: np.ndarray | None = None
+    leg_order: np.ndarray | None = None
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -245,7 +250,7 @@ class AnnotateSession(RegionEditing):
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
                          image_sides=c.image_sides, spread=c.spread, track=c.track,
                          frame_size=c.size, model_height=c.model_height, method=self.lift,
-                         near_side=c.near_side)
+                         near_side=c.near_side, leg_order=c.leg_order)
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.video.lifting.LiftResult`)."""
@@ -609,8 +614,6 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     regions = _file_regions(annotations, video)
     res = pipeline.run(video, annotations=regions, height=height, cache_dir=cache_dir,
                        progress=progress, log=log)
-    from vidcap.video.frontback import arm_visibility, near_side
-
     joints2d, spread = res.image_joints2d, res.spread
     jpegs = []
     size = (0, 0)
@@ -627,10 +630,7 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
             ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
             jpegs.append(buf)
 
-    decoded = frames()
-    near = near_side(arm_visibility(decoded, joints2d)) if pipeline.FRONT_CUE else None
-    for _ in decoded:  # the rest (all of them without the cue)
-        pass
+    near, legs = pipeline.colour_cues(frames(), joints2d, res.model_height, res.body)
     n = min(len(jpegs), res.n_frames)
 
     def read_frame(i: int) -> np.ndarray:
@@ -651,7 +651,8 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     pose={"joints2d": joints2d[:n], "scores": res.scores[:n],
                           "similarity": res.similarity[:n], "spread": spread[:n],
                           "model_height": res.model_height[:n]},
-                    near_side=None if near is None else near[:n])
+                    near_side=None if near is None else near[:n],
+                    leg_order=None if legs is None else legs[:n])
 
 
 def _fit_keywords(proportions) -> dict:

@@ -1,0 +1,131 @@
+"""Which leg is nearer the camera, from the colour frame (vidcap.video.legorder).
+
+Known answers: two shaded bars, one drawn over the other, are told apart by which one's
+borders cross the other; a rendered side-view walk whose 2D names are the wrong way
+round (as the 2D fit often has them) is named right through the 3D stage.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+from vidcap.body import JOINT_INDEX, BodyModel
+from vidcap.video.legorder import (
+    frame_leg_edges,
+    leg_edges,
+    leg_radii,
+    near_leg,
+    side_leg_names,
+)
+
+R = 10.0  # the bars' radius, px
+
+
+def _bar(img, zbuf, a, b, depth, colour):
+    """Draw a shaded band of radius R about a -> b into ``img`` (H, W, 3) where it is
+    nearer than ``zbuf``: a cylinder's shading, brighter toward its middle."""
+    H, W = zbuf.shape
+    y, x = np.mgrid[0:H, 0:W].astype(float)
+    d = np.subtract(b, a, dtype=float)
+    L = np.hypot(*d)
+    u = d / L
+    along = (x - a[0]) * u[0] + (y - a[1]) * u[1]
+    across = (x - a[0]) * u[1] - (y - a[1]) * u[0]
+    on = (np.abs(across) < R) & (along >= 0) & (along <= L) & (depth > zbuf)
+    shade = np.sqrt(np.clip(1 - (across / R) ** 2, 0, 1))
+    img[on] = (np.asarray(colour)[None] * (0.35 + 0.65 * shade[on, None])).astype(np.uint8)
+    zbuf[on] = depth
+
+
+def _crossed_legs(l_in_front: bool):
+    """A frame with two crossing legs of the same colour and the 2D joints naming the
+    vertical one ``l_`` and the slanted one ``r_``."""
+    H, W = 240, 200
+    img = np.full((H, W, 3), 200, np.uint8)
+    zbuf = np.full((H, W), -np.inf)
+    j = np.full((15, 2), np.nan)
+    legs = {"l": ((100, 20), (100, 120), (100, 220)), "r": ((50, 20), (100, 120), (150, 220))}
+    for side, (hip, knee, ankle) in legs.items():
+        j[JOINT_INDEX[f"{side}_hip"]] = hip
+        j[JOINT_INDEX[f"{side}_knee"]] = knee
+        j[JOINT_INDEX[f"{side}_ankle"]] = ankle
+    depth = {"l": 1.0 if l_in_front else 0.0, "r": 0.0 if l_in_front else 1.0}
+    for side in sorted(legs, key=lambda s: depth[s]):  # the farther first
+        hip, _, ankle = legs[side]
+        _bar(img, zbuf, hip, ankle, depth[side], (90, 50, 30))
+    return img, j
+
+
+@pytest.mark.parametrize("l_in_front", [True, False])
+def test_the_leg_whose_borders_cross_the_other_is_the_near_one(l_in_front):
+    img, j = _crossed_legs(l_in_front)
+    strength, count = frame_leg_edges(img, j, np.array([R, R]))
+    assert (count > 0).all()
+    order = near_leg(strength[None], count[None])[0]
+    assert order > 0.5 if l_in_front else order < -0.5
+
+
+def test_legs_apart_give_no_score():
+    img = np.full((240, 200, 3), 200, np.uint8)
+    j = np.zeros((15, 2))
+    for side, x in (("l", 40.0), ("r", 160.0)):
+        for k, name in enumerate(("hip", "knee", "ankle")):
+            j[JOINT_INDEX[f"{side}_{name}"]] = [x, 20.0 + 100 * k]
+    s, n = leg_edges([img, None], np.stack([j, j]), np.full((2, 2), R))
+    assert np.isnan(near_leg(s, n)).all()
+
+
+def test_side_leg_names_name_the_near_track_the_side_the_body_turns_to_the_camera():
+    F = 10
+    order = np.full(F, 0.5)  # the fit's l leg nearer throughout
+    edge = np.ones(F, bool)
+    link = np.zeros(F, bool)
+    # facing image right, the right leg is the near one: the fit's l is the right leg
+    assert side_leg_names(order, edge, np.ones(F, bool), link).all()
+    assert not side_leg_names(order, edge, np.zeros(F, bool), link).any()
+    # the fit's names jump for frames 4-6 (linked back): the cue there reads the other
+    # leg's, and the run is still named as one
+    jumped = order.copy()
+    jumped[4:7] *= -1
+    link[4:7] = True
+    out = side_leg_names(jumped, edge, np.ones(F, bool), link)
+    assert out[:4].all() and not out[4:7].any() and out[7:].all()
+    # too little evidence: the fit's names stay
+    sparse = np.full(F, np.nan)
+    sparse[:3] = 0.5
+    assert not side_leg_names(sparse, edge, np.ones(F, bool), np.zeros(F, bool)).any()
+    # frames outside the runs are left alone
+    assert not side_leg_names(order, np.zeros(F, bool), np.ones(F, bool), link).any()
+
+
+@functools.cache
+def _side_walk():
+    from vidcap.synth import make_motion, render_clip
+
+    m = make_motion("walk", body=BodyModel(), fps=30.0, n_frames=40,
+                    rng=np.random.default_rng(0))
+    return render_clip(m, yaw_deg=90.0, size=(320, 240), noise=0.0,
+                       rng=np.random.default_rng(0))
+
+
+def test_a_side_view_walk_named_the_wrong_way_round_is_named_right():
+    from vidcap.video.lift import swap_sides
+    from vidcap.video.lifting import lift_pose
+
+    frames, truth = _side_walk()
+    body = BodyModel()
+    true2 = truth["joints2d"]
+    wrong = swap_sides(true2)  # every limb named the wrong way round
+    height = np.full(len(wrong), float(np.linalg.norm(truth["camera"][0, :3])) * body.height)
+    order = near_leg(*leg_edges(frames, wrong, leg_radii(height, body)))
+    assert np.isfinite(order).sum() >= 10
+    args = dict(fps=30.0, body=body, image_sides=True, frame_size=(320, 240),
+                model_height=height, method="segment")
+    legs = [JOINT_INDEX[n] for n in ("l_knee", "l_ankle", "r_knee", "r_ankle")]
+    as_fit = lift_pose(wrong, **args)
+    named = lift_pose(wrong, leg_order=order, **args)
+    assert np.allclose(as_fit.joints2d[:, legs], wrong[:, legs])  # a side view keeps names
+    assert np.allclose(named.joints2d[:, legs], true2[:, legs])
