@@ -495,10 +495,10 @@ def _render_clips(body, frames):
         images, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                     rng=np.random.default_rng(0))
         pose = fit_sequence(truth["masks"])
-        near, legs = colour_cues(images, pose.joints2d, pose.model_height, body, front=True,
-                                 legs=True)
+        near, limbs = colour_cues(images, pose.joints2d, pose.model_height, body, front=True,
+                                 limbs=True)
         fit = {"joints2d": pose.joints2d, "spread": pose.spread,
-               "model_height": pose.model_height, "near_side": near, "leg_order": legs}
+               "model_height": pose.model_height, "near_side": near, "limb_order": limbs}
         out.append((f"{name} yaw {yaw:.0f} (held out)", fit, truth,
                     truth_in_camera_frame(truth), (640, 480)))
     return out
@@ -518,12 +518,12 @@ def _sample_clips(body):
         t = dict(np.load(truth_path))
         res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
                   cache_dir=cache, lift="segment", proportions="seed")  # seed renders
-        near, legs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
+        near, limbs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
                                  res.image_joints2d, res.model_height, body, front=True,
-                                 legs=True)
+                                 limbs=True)
         fit = {"joints2d": res.image_joints2d, "spread": res.spread,
                "model_height": res.model_height, "track": res.track,
-               "near_side": near, "leg_order": legs}
+               "near_side": near, "limb_order": limbs}
         out.append((f"{video.stem} (sample)", fit, t, truth_in_camera_frame(t),
                     (res.masks.shape[2], res.masks.shape[1])))
     return out

@@ -151,7 +151,7 @@ def end_to_end_rows(clips, body):
                            spread=fit["spread"], track=fit.get("track"), frame_size=size,
                            model_height=fit["model_height"], method=method.split()[0],
                            near_side=fit.get("near_side") if method in (FRONT, LEGS) else None,
-                           leg_order=fit.get("leg_order") if method == LEGS else None)
+                           limb_order=fit.get("limb_order") if method == LEGS else None)
             secs = time.perf_counter() - t0
             e2 = np.linalg.norm(lr.joints2d - truth["joints2d"], axis=-1).mean()
             h_px = np.mean(lr.scale) * body.height
@@ -163,9 +163,9 @@ def end_to_end_rows(clips, body):
 #: The lifts of the end-to-end and real tables: the per-segment lift, the solve without
 #: and with the colour frame's front/back cue (:mod:`vidcap.video.frontback`; the
 #: pipeline's default since issue 33's front/back work), and with the leg order too
-#: (:mod:`vidcap.video.legorder`), same 2D, same run.
+#: (:mod:`vidcap.video.legorder`: arms and legs), same 2D, same run.
 FRONT = "solve + front cue"
-LEGS = "solve + front + leg cues"
+LEGS = "solve + front + limb cues"
 LIFTS = ("segment", "solve", FRONT, LEGS)
 
 
@@ -220,15 +220,15 @@ def real_rows(video, reference, body, frames=None, label=None):
         ok &= np.asarray(frames, bool)[:n]
     label = label or Path(video).name
     rows = []
-    near, legs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
+    near, limbs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
                              res.image_joints2d, res.model_height, res.body, front=True,
-                             legs=True)
+                             limbs=True)
     for method in LIFTS:
         lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
                        spread=res.spread, track=res.track, frame_size=size,
                        model_height=res.model_height, method=method.split()[0],
                        near_side=near if method in (FRONT, LEGS) else None,
-                       leg_order=legs if method == LEGS else None)
+                       limb_order=limbs if method == LEGS else None)
         rows.append((label, int(ok.sum()), method,
                      pa_mpjpe_mm(lr.joints3d[:n][ok], ref[:n][ok])))
     rows.append((label, int(ok.sum()), "standing pose", standing_baseline_mm(ref[:n][ok], body)))

@@ -198,13 +198,13 @@ def near_sides(clips, body):
             for name, c in clips}
 
 
-def leg_orders(clips, body):
-    """{clip name: the leg-order cue (F,)} from each clip's colour frames
+def limb_orders(clips, body):
+    """{clip name: the limb-order cue (F, 2)} from each clip's colour frames
     (:mod:`vidcap.video.legorder`)."""
-    from vidcap.video.legorder import leg_edges, leg_radii, near_leg
+    from vidcap.video.legorder import limb_edges, limb_radii, near_limb
 
-    return {name: near_leg(*leg_edges(clip_frames(name.split(" (")[0], body), c["joints2d"],
-                                      leg_radii(c["model_height"], body)))
+    return {name: near_limb(*limb_edges(clip_frames(name.split(" (")[0], body),
+                                        c["joints2d"], limb_radii(c["model_height"], body)))
             for name, c in clips}
 
 
@@ -222,7 +222,7 @@ def evaluate(clips, body, method="solve", near=None, legs=None):
                        frame_size=tuple(int(v) for v in c["size"]),
                        model_height=c["model_height"], method=method,
                        near_side=None if near is None else near[name],
-                       leg_order=None if legs is None else legs[name])
+                       limb_order=None if legs is None else legs[name])
         secs = time.process_time() - t0
         yaw = lr.yaw if lr.solve_params is None else lr.solve_params[:, YAW]
         e2 = np.linalg.norm(lr.joints2d - c["true2"], axis=-1).mean()
@@ -269,7 +269,7 @@ def main(argv=None):
                     help="repair the 2D fit's limb names where they jump "
                          "(vidcap.video.lifting.CONSISTENT_NAMES, off by default)")
     ap.add_argument("--legs", action="store_true",
-                    help="the colour frame's leg-order cue names the legs in side views "
+                    help="the colour frame's limb-order cue names the arms and legs "
                          "(vidcap.video.legorder)")
     ap.add_argument("--attribute", action="store_true",
                     help="oracle substitutions: where the error comes from")
@@ -289,7 +289,7 @@ def main(argv=None):
     if args.attribute:
         return attribute(clips, body)
     near = near_sides(clips, body) if args.front else None
-    legs = leg_orders(clips, body) if args.legs else None
+    legs = limb_orders(clips, body) if args.legs else None
     rows = evaluate(clips, body, args.method, near, legs)
     print("clip | frames | PA-MPJPE mm | PA-MPJPE, front/back free mm | MPJPE mm | "
           "2D error % of height (body sides) | CPU s | front/back right")

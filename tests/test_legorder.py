@@ -14,18 +14,19 @@ import pytest
 
 from vidcap.body import JOINT_INDEX, BodyModel
 from vidcap.video.legorder import (
+    frame_arm_edges,
     frame_leg_edges,
-    leg_edges,
-    leg_radii,
-    near_leg,
-    side_leg_names,
+    limb_edges,
+    limb_radii,
+    near_limb,
+    side_limb_names,
 )
 
 R = 10.0  # the bars' radius, px
 
 
-def _bar(img, zbuf, a, b, depth, colour):
-    """Draw a shaded band of radius R about a -> b into ``img`` (H, W, 3) where it is
+def _bar(img, zbuf, a, b, depth, colour, R=R):
+    """Draw a shaded band of radius ``R`` about a -> b into ``img`` (H, W, 3) where it is
     nearer than ``zbuf``: a cylinder's shading, brighter toward its middle."""
     H, W = zbuf.shape
     y, x = np.mgrid[0:H, 0:W].astype(float)
@@ -64,8 +65,26 @@ def test_the_leg_whose_borders_cross_the_other_is_the_near_one(l_in_front):
     img, j = _crossed_legs(l_in_front)
     strength, count = frame_leg_edges(img, j, np.array([R, R]))
     assert (count > 0).all()
-    order = near_leg(strength[None], count[None])[0]
+    order = near_limb(strength, count)
     assert order > 0.5 if l_in_front else order < -0.5
+
+
+def test_an_arm_in_front_of_the_torso_shows_its_borders_across_it():
+    img = np.full((240, 200, 3), 200, np.uint8)
+    zbuf = np.full((240, 200), -np.inf)
+    j = np.full((15, 2), np.nan)
+    j[JOINT_INDEX["pelvis"]], j[JOINT_INDEX["neck"]] = (100, 200), (100, 40)
+    # the l arm hangs in front of the torso, the r arm behind it (the fit puts both there)
+    for side, dx in (("l", -1.0), ("r", 1.0)):
+        for k, name in enumerate(("shoulder", "elbow", "wrist")):
+            j[JOINT_INDEX[f"{side}_{name}"]] = (100 + dx * (6 + 8 * k), 50 + 60 * k)
+    arm = j[[JOINT_INDEX[f"{s}_{n}"] for s in "lr" for n in ("shoulder", "wrist")]]
+    shirt = (40, 45, 190)
+    _bar(img, zbuf, arm[2], arm[3], 0.0, shirt, R=0.5 * R)
+    _bar(img, zbuf, (100, 40), (100, 200), 0.5, shirt, R=3 * R)  # the torso
+    _bar(img, zbuf, arm[0], arm[1], 1.0, shirt, R=0.5 * R)
+    strength, count = frame_arm_edges(img, j, np.array([0.5, 0.5]) * R, 3 * R)
+    assert near_limb(strength, count, min_count=1) > 0.5
 
 
 def test_legs_apart_give_no_score():
@@ -74,31 +93,31 @@ def test_legs_apart_give_no_score():
     for side, x in (("l", 40.0), ("r", 160.0)):
         for k, name in enumerate(("hip", "knee", "ankle")):
             j[JOINT_INDEX[f"{side}_{name}"]] = [x, 20.0 + 100 * k]
-    s, n = leg_edges([img, None], np.stack([j, j]), np.full((2, 2), R))
-    assert np.isnan(near_leg(s, n)).all()
+    s, n = limb_edges([img, None], np.stack([j, j]), np.full((2, 5), R))
+    assert np.isnan(near_limb(s, n)).all()
 
 
-def test_side_leg_names_name_the_near_track_the_side_the_body_turns_to_the_camera():
+def test_side_limb_names_name_the_near_track_the_side_the_body_turns_to_the_camera():
     F = 10
     order = np.full(F, 0.5)  # the fit's l leg nearer throughout
     edge = np.ones(F, bool)
     link = np.zeros(F, bool)
     # facing image right, the right leg is the near one: the fit's l is the right leg
-    assert side_leg_names(order, edge, np.ones(F, bool), link).all()
-    assert not side_leg_names(order, edge, np.zeros(F, bool), link).any()
+    assert side_limb_names(order, edge, np.ones(F, bool), link).all()
+    assert not side_limb_names(order, edge, np.zeros(F, bool), link).any()
     # the fit's names jump for frames 4-6 (linked back): the cue there reads the other
     # leg's, and the run is still named as one
     jumped = order.copy()
     jumped[4:7] *= -1
     link[4:7] = True
-    out = side_leg_names(jumped, edge, np.ones(F, bool), link)
+    out = side_limb_names(jumped, edge, np.ones(F, bool), link)
     assert out[:4].all() and not out[4:7].any() and out[7:].all()
     # too little evidence: the fit's names stay
     sparse = np.full(F, np.nan)
     sparse[:3] = 0.5
-    assert not side_leg_names(sparse, edge, np.ones(F, bool), np.zeros(F, bool)).any()
+    assert not side_limb_names(sparse, edge, np.ones(F, bool), np.zeros(F, bool)).any()
     # frames outside the runs are left alone
-    assert not side_leg_names(order, np.zeros(F, bool), np.ones(F, bool), link).any()
+    assert not side_limb_names(order, np.zeros(F, bool), np.ones(F, bool), link).any()
 
 
 @functools.cache
@@ -120,12 +139,12 @@ def test_a_side_view_walk_named_the_wrong_way_round_is_named_right():
     true2 = truth["joints2d"]
     wrong = swap_sides(true2)  # every limb named the wrong way round
     height = np.full(len(wrong), float(np.linalg.norm(truth["camera"][0, :3])) * body.height)
-    order = near_leg(*leg_edges(frames, wrong, leg_radii(height, body)))
-    assert np.isfinite(order).sum() >= 10
+    order = near_limb(*limb_edges(frames, wrong, limb_radii(height, body)))
+    assert (np.isfinite(order).sum(0) >= 10).all()
     args = dict(fps=30.0, body=body, image_sides=True, frame_size=(320, 240),
                 model_height=height, method="segment")
-    legs = [JOINT_INDEX[n] for n in ("l_knee", "l_ankle", "r_knee", "r_ankle")]
+    limbs = [JOINT_INDEX[f"{s}_{n}"] for s in "lr" for n in ("knee", "ankle", "elbow", "wrist")]
     as_fit = lift_pose(wrong, **args)
-    named = lift_pose(wrong, leg_order=order, **args)
-    assert np.allclose(as_fit.joints2d[:, legs], wrong[:, legs])  # a side view keeps names
-    assert np.allclose(named.joints2d[:, legs], true2[:, legs])
+    named = lift_pose(wrong, limb_order=order, **args)
+    assert np.allclose(as_fit.joints2d[:, limbs], wrong[:, limbs])  # a side view keeps names
+    assert np.allclose(named.joints2d[:, limbs], true2[:, limbs])

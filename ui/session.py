@@ -86,8 +86,8 @@ class ClipData:
         The colour frames' front/back cue (:func:`vidcap.video.frontback.near_side`), as
         ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.front_cue`); kept as
         loaded when silhouettes are recomputed.
-    leg_order : numpy.ndarray, shape (F,), optional
-        The colour frames' leg order (:func:`vidcap.video.legorder.near_leg`), as
+    limb_order : numpy.ndarray, shape (F, 2), optional
+        The colour frames' limb order (:func:`vidcap.video.legorder.near_limb`), as
         ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.colour_cues`); kept as
         loaded when silhouettes are recomputed.
     """
@@ -108,7 +108,7 @@ class ClipData:
     pose: dict | None = None
     fit_kw: dict = field(default_factory=dict)
     near_side: np.ndarray | None = None
-    leg_order: np.ndarray | None = None
+    limb_order: np.ndarray | None = None
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -250,7 +250,7 @@ class AnnotateSession(RegionEditing):
         return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
                          image_sides=c.image_sides, spread=c.spread, track=c.track,
                          frame_size=c.size, model_height=c.model_height, method=self.lift,
-                         near_side=c.near_side, leg_order=c.leg_order)
+                         near_side=c.near_side, limb_order=c.limb_order)
 
     def _take(self, res) -> None:
         """Adopt a full 3D-stage result (:class:`vidcap.video.lifting.LiftResult`)."""
@@ -630,7 +630,7 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
             ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
             jpegs.append(buf)
 
-    near, legs = pipeline.colour_cues(frames(), joints2d, res.model_height, res.body)
+    near, limbs = pipeline.colour_cues(frames(), joints2d, res.model_height, res.body)
     n = min(len(jpegs), res.n_frames)
 
     def read_frame(i: int) -> np.ndarray:
@@ -652,7 +652,7 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                           "similarity": res.similarity[:n], "spread": spread[:n],
                           "model_height": res.model_height[:n]},
                     near_side=None if near is None else near[:n],
-                    leg_order=None if legs is None else legs[:n])
+                    limb_order=None if limbs is None else limbs[:n])
 
 
 def _fit_keywords(proportions) -> dict:

@@ -314,38 +314,45 @@ def consistent_names(j2, rho, unit) -> np.ndarray:
     return consistent_labels(j2, unit, held=held)
 
 
-#: Which frames the colour frame's leg order names (:func:`side_leg_swaps`): ``edge``
+#: Which frames the colour frame's limb order names (:func:`near_limb_names`): ``edge``
 #: the edge-on side views only (a side label, the torso's spread at most
 #: :data:`SIDE_FACING_SPREAD`), ``side`` every side label, ``all`` every frame.
-LEG_FRAMES = "all"
+LIMB_ORDER_FRAMES = "all"
+#: The limb pairs (:data:`vidcap.video.annotations.PAIRS` columns) it names.
+LIMB_ORDER_PAIRS = (True, True)
 
 
-def side_leg_swaps(j2, leg_order, proposed_orientation, user_orientation, rho, unit,
-                   names=None, facing=None, *, frames: str | None = None) -> np.ndarray | None:
-    """``names`` (F, 2) bool (:func:`consistent_names`, or None: none exchanged) with the
-    legs' column set, in the runs of frames :data:`LEG_FRAMES` names (not the user's
-    orientation), so that the leg the colour frame shows nearer the camera
-    (``leg_order``, :func:`vidcap.video.legorder.near_leg`) is the side the body turns
-    to it (:func:`vidcap.video.legorder.side_leg_names`); ``unit`` pixels per 1 % of the
-    height. None when ``names`` is None and no run is named."""
-    from vidcap.video.legorder import side_leg_names
+def near_limb_names(j2, limb_order, proposed_orientation, user_orientation, rho, unit,
+                    names=None, facing=None, *, frames: str | None = None,
+                    pairs=None) -> np.ndarray | None:
+    """``names`` (F, 2) bool (:func:`consistent_names`, or None: none exchanged) with
+    the arms' and legs' columns set, in the runs of frames :data:`LIMB_ORDER_FRAMES`
+    names (not the user's orientation), so that the arm and the leg the colour frame
+    shows nearer the camera (``limb_order`` (F, 2), :func:`vidcap.video.legorder.near_limb`)
+    are of the side the body turns to it (:func:`vidcap.video.legorder.side_limb_names`:
+    a body facing image right turns its right side to the camera, whether it faces the
+    camera or away); ``unit`` pixels per 1 % of the height. None when ``names`` is None
+    and nothing is exchanged."""
+    from vidcap.video.legorder import side_limb_names
 
-    frames = LEG_FRAMES if frames is None else frames
+    frames = LIMB_ORDER_FRAMES if frames is None else frames
+    pairs = LIMB_ORDER_PAIRS if pairs is None else pairs
     orient, yaw, swap = view_names(proposed_orientation, rho, user_orientation, facing)
     edge = np.asarray(user_orientation) == ""
     if frames != "all":
         edge &= (orient == "left") | (orient == "right")
     if frames == "edge":
         edge &= np.asarray(rho, float) <= SIDE_FACING_SPREAD
-    if not edge.any():
+    if not edge.any() or not any(pairs):
         return names
-    link = consistent_labels(j2, unit)[:, 1]
-    legs = side_leg_names(leg_order, edge, yaw > 0, link, swap)
-    if names is None and not legs.any():
-        return None
+    link = consistent_labels(j2, unit)
+    order = np.asarray(limb_order, float)
     out = np.zeros((len(j2), 2), bool) if names is None else np.array(names, bool)
-    out[:, 1] = np.where(edge, legs, out[:, 1])
-    return out
+    for c in range(2):
+        if pairs[c]:
+            named = side_limb_names(order[:, c], edge, yaw > 0, link[:, c], swap)
+            out[:, c] = np.where(edge, named, out[:, c])
+    return None if names is None and not out.any() else out
 
 
 #: Knot spacing (seconds) of the per-frame scale (:func:`vidcap.video.lift.estimate_scales`).
@@ -453,7 +460,7 @@ def lift_pose(
     view: str = "auto",
     method: str = "solve",
     near_side=None,
-    leg_order=None,
+    limb_order=None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -489,10 +496,10 @@ def lift_pose(
         orientation (:func:`constrain_orientation`); orientation events override it.
     near_side : array_like, shape (F,), optional
         :func:`vidcap.video.frontback.near_side` (image-side names): front or back.
-    leg_order : array_like, shape (F,), optional
-        :func:`vidcap.video.legorder.near_leg` (image-side names): which leg the colour
-        frame shows nearer the camera, naming the legs in edge-on side views
-        (:func:`side_leg_swaps`).
+    limb_order : array_like, shape (F, 2), optional
+        :func:`vidcap.video.legorder.near_limb` (image-side names): which arm (column 0)
+        and leg (1) the colour frame shows nearer the camera, naming them
+        (:func:`near_limb_names`).
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
@@ -537,9 +544,9 @@ def lift_pose(
     _, user_orient, user_joints = annotations.resolve(F)
     names = consistent_names(j2, rho, 0.01 * body.height * np.asarray(geometry)) \
         if method == "solve" and CONSISTENT_NAMES else None  # the fit's names, repaired
-    if leg_order is not None and image_sides:
-        names = side_leg_swaps(j2, leg_order, proposed_orient, user_orient, rho,
-                               0.01 * body.height * np.asarray(geometry), names, facing)
+    if limb_order is not None and image_sides:
+        names = near_limb_names(j2, limb_order, proposed_orient, user_orient, rho,
+                                0.01 * body.height * np.asarray(geometry), names, facing)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
                                       facing=facing, names_swapped=names)
@@ -566,8 +573,8 @@ def lift_pose(
         facing=facing, names_swapped=names)
 
 
-__all__ = ["CONSISTENT_NAMES", "LEG_FRAMES", "NEAR_PLANE", "SCALE_WINDOW_S", "VIEWS", "LiftResult",
-           "apply_user_view", "check_view", "consistent_names",
-           "side_leg_swaps", "view_names", "constrain_orientation",
+__all__ = ["CONSISTENT_NAMES", "LIMB_ORDER_FRAMES", "LIMB_ORDER_PAIRS", "NEAR_PLANE",
+           "SCALE_WINDOW_S", "VIEWS", "LiftResult", "apply_user_view", "check_view",
+           "consistent_names", "near_limb_names", "view_names", "constrain_orientation",
            "fill_gaps", "frame_scales", "lift_pose", "model_scales", "plane_passages",
            "swap_pairs"]

@@ -740,36 +740,37 @@ def _image_joints(pose: dict, masks: MaskStack):
 FRONT_CUE = True
 
 
-#: Whether the 3D stage names the legs by which one the colour frame shows nearer the
-#: camera (:mod:`vidcap.video.legorder`: the nearer leg's borders cross the farther one).
-LEG_CUE = True
+#: Whether the 3D stage names the arms and legs by which one the colour frame shows
+#: nearer the camera (:mod:`vidcap.video.legorder`: the nearer leg's borders cross the
+#: farther one, the nearer arm's the torso).
+LIMB_CUE = True
 
 
 def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool | None = None,
-                legs: bool | None = None):
+                limbs: bool | None = None):
     """The colour frames' cues in one pass over ``frames`` (an iterable of (H, W, 3) BGR
     frames, consumed to its end) for the image-side named 2D joints (F, 15, 2): the
     front/back cue (:func:`vidcap.video.frontback.near_side`, with ``front``, default
-    :data:`FRONT_CUE`) and the leg order (:func:`vidcap.video.legorder.near_leg`, with
-    ``legs``, default :data:`LEG_CUE`, and the fit's ``model_height`` (F,) px), each (F,)
-    or None."""
+    :data:`FRONT_CUE`), (F,) or None, and the limb order
+    (:func:`vidcap.video.legorder.near_limb`, with ``limbs``, default :data:`LIMB_CUE`,
+    and the fit's ``model_height`` (F,) px), (F, 2) or None."""
     from vidcap.video.frontback import arm_visibility, near_side
-    from vidcap.video.legorder import leg_radii, near_leg, tap_leg_edges
+    from vidcap.video.legorder import limb_radii, near_limb, tap_limb_edges
 
     front = FRONT_CUE if front is None else front
-    legs = LEG_CUE if legs is None else legs
+    limbs = LIMB_CUE if limbs is None else limbs
     F = len(joints2d)
-    strength, count = np.full((F, 2), np.nan), np.zeros((F, 2))
-    if legs and model_height is not None:
-        frames = tap_leg_edges(frames, joints2d, leg_radii(model_height, body), strength,
-                               count)
+    strength, count = np.full((F, 2, 2), np.nan), np.zeros((F, 2, 2))
+    if limbs and model_height is not None:
+        frames = tap_limb_edges(frames, joints2d, limb_radii(model_height, body), strength,
+                                count)
     else:
-        legs = False
+        limbs = False
     frames = iter(frames)
     near = near_side(arm_visibility(frames, joints2d)) if front else None
     for _ in frames:  # the rest (all of them without the front cue)
         pass
-    return near, near_leg(strength, count) if legs else None
+    return near, near_limb(strength, count) if limbs else None
 
 
 def front_cue(video, joints2d) -> np.ndarray:
@@ -787,7 +788,7 @@ def front_cue(video, joints2d) -> np.ndarray:
     from vidcap.io.video import iter_frames
 
     return colour_cues(iter_frames(video, stop=len(joints2d)), joints2d, front=True,
-                       legs=False)[0]
+                       limbs=False)[0]
 
 
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
@@ -797,20 +798,20 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
-    front/back cue and the leg order (:func:`colour_cues`)."""
+    front/back cue and the limb order (:func:`colour_cues`)."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
-    near = legs = None
-    if video is not None and (FRONT_CUE or LEG_CUE):
+    near = limbs = None
+    if video is not None and (FRONT_CUE or LIMB_CUE):
         from vidcap.io.video import iter_frames
 
-        near, legs = colour_cues(iter_frames(video, stop=len(joints2d)), joints2d,
-                                 model_height, body)
+        near, limbs = colour_cues(iter_frames(video, stop=len(joints2d)), joints2d,
+                                  model_height, body)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=model_height, view=view,
-                       method=lift_method, near_side=near, leg_order=legs)
+                       method=lift_method, near_side=near, limb_order=limbs)
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(pose["similarity"], min_score=keyframe_score)
