@@ -14,8 +14,7 @@ import pytest
 
 from vidcap.body import JOINT_INDEX, BodyModel
 from vidcap.video.legorder import (
-    frame_arm_edges,
-    frame_leg_edges,
+    frame_limb_edges,
     limb_edges,
     limb_radii,
     near_limb,
@@ -63,9 +62,10 @@ def _crossed_legs(l_in_front: bool):
 @pytest.mark.parametrize("l_in_front", [True, False])
 def test_the_leg_whose_borders_cross_the_other_is_the_near_one(l_in_front):
     img, j = _crossed_legs(l_in_front)
-    strength, count = frame_leg_edges(img, j, np.array([R, R]))
-    assert (count > 0).all()
-    order = near_limb(strength, count)
+    strength, count = frame_limb_edges(img, j, np.full(5, R))
+    assert (count[1] > 0).all()
+    assert (count[0] == 0).all()  # no torso, no arms
+    order = near_limb(strength, count)[1]
     assert order > 0.5 if l_in_front else order < -0.5
 
 
@@ -83,8 +83,8 @@ def test_an_arm_in_front_of_the_torso_shows_its_borders_across_it():
     _bar(img, zbuf, arm[2], arm[3], 0.0, shirt, R=0.5 * R)
     _bar(img, zbuf, (100, 40), (100, 200), 0.5, shirt, R=3 * R)  # the torso
     _bar(img, zbuf, arm[0], arm[1], 1.0, shirt, R=0.5 * R)
-    strength, count = frame_arm_edges(img, j, np.array([0.5, 0.5]) * R, 3 * R)
-    assert near_limb(strength, count, min_count=1) > 0.5
+    strength, count = frame_limb_edges(img, j, np.array([0.5, 0.5, 3, 1, 1]) * R)
+    assert near_limb(strength, count, min_count=1)[0] > 0.5
 
 
 def test_legs_apart_give_no_score():

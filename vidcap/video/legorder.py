@@ -36,6 +36,15 @@ _ALONG = np.linspace(0.1, 0.9, 17)
 #: tuning renders and walk_side (197 frames with a cue; ``benchmarks/solve_fitted.py
 #: --legs``): 79 % of frames right; the plain gradient 58 % (71 % with a search of 0.7-1.3).
 _ACROSS = np.array([0.55, 0.7, 0.85, 1.0, 1.15, 1.3, 1.45])
+#: The samples along each search line: two more at each end than the search, for the
+#: derivative and its ridge.
+_LINE = np.r_[_ACROSS[0] - 2 * (_ACROSS[1] - _ACROSS[0]), _ACROSS[0] - (_ACROSS[1] - _ACROSS[0]),
+              _ACROSS, _ACROSS[-1] + (_ACROSS[1] - _ACROSS[0]),
+              _ACROSS[-1] + 2 * (_ACROSS[1] - _ACROSS[0])]
+#: Each search line's colours are averaged over lines this many pixels along the
+#: border on either side, weighted 1-2-1 (as a Sobel operator smooths).
+_ALONG_SMOOTH = np.array([-2.0, 0.0, 2.0])
+_SMOOTH_W = np.array([0.25, 0.5, 0.25], np.float32)
 #: The search's smallest spacing (pixels): a ridge needs its neighbours a pixel or more
 #: away (a thin arm's 0.15 radii is less).
 MIN_SPACING = 1.5
@@ -43,127 +52,102 @@ MIN_SPACING = 1.5
 #: this many of the other leg's radii from that leg's axis, or less: well inside, so the
 #: other leg's own borders are outside the search.
 INSIDE = 0.6
-#: The gradient's step (pixels): central differences over 2 * STEP, smoothed across
-#: over the same span (a Sobel operator on a grid of STEP pixels).
-STEP = 2
-_LEG = {"l": ("l_hip", "l_knee", "l_ankle"), "r": ("r_hip", "r_knee", "r_ankle")}
-_LUMA = np.array([0.114, 0.587, 0.299])  # BGR
+#: The four limbs' joints (proximal, middle, distal): arms l, r; legs l, r (the rows of
+#: :func:`frame_limb_edges`' (2 pairs, 2 sides) outputs, flattened).
+_LIMBS = np.array([[JOINT_INDEX[f"{side}_{j}"] for j in joints] for joints in
+                   (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")) for side in "lr"])
+_TORSO = np.array([JOINT_INDEX["pelvis"], JOINT_INDEX["neck"]])
 
 
-def _segments(j2):
-    """(2 legs, 2 segments, 2 ends, 2) px of one frame's thighs and shins (l, r)."""
-    out = np.empty((2, 2, 2, 2))
-    for c, side in enumerate("lr"):
-        hip, knee, ankle = (j2[JOINT_INDEX[n]] for n in _LEG[side])
-        out[c, 0] = hip, knee
-        out[c, 1] = knee, ankle
-    return out
-
-
-def _gradients(frame, pts):
-    """Image gradient (n, 3 channels, 2) of ``frame`` (H, W, 3) at the pixels nearest
-    ``pts`` (n, 2): a Sobel operator on a grid of :data:`STEP` pixels; NaN off the frame."""
+def _samples(frame, pts):
+    """Colours (..., 3) float32 of ``frame`` (H, W, 3) at the pixels nearest ``pts``
+    (..., 2); NaN off the frame."""
     H, W = frame.shape[:2]
-    s = STEP
-    xy = np.round(pts).astype(np.int64)
-    ok = (xy[:, 0] >= s) & (xy[:, 0] < W - s) & (xy[:, 1] >= s) & (xy[:, 1] < H - s)
-    xy = np.where(ok[:, None], xy, s)
-    off = np.array([-s, 0, s])
-    # (n, 3 rows dy, 3 cols dx, 3 channels)
-    patch = frame[xy[:, 1, None, None] + off[None, :, None],
-                  xy[:, 0, None, None] + off[None, None, :]].astype(np.float32)
-    w = np.array([1.0, 2.0, 1.0], np.float32)
-    gx = ((patch[:, :, 2] - patch[:, :, 0]) * w[None, :, None]).sum(1) / (8.0 * s)
-    gy = ((patch[:, 2, :] - patch[:, 0, :]) * w[None, :, None]).sum(1) / (8.0 * s)
-    g = np.stack([gx, gy], -1)
-    g[~ok] = np.nan
-    return g
+    xy = np.rint(pts).astype(np.intp)
+    ok = (xy[..., 0] >= 0) & (xy[..., 0] < W) & (xy[..., 1] >= 0) & (xy[..., 1] < H)
+    flat = np.where(ok, xy[..., 1] * W + xy[..., 0], 0)
+    px = np.ascontiguousarray(frame).reshape(-1, frame.shape[2])[flat].astype(np.float32)
+    px[~ok] = np.nan
+    return px
 
 
-def border_edges(frame, segs, radius, cover, cover_radius) -> tuple[float, float]:
-    """Mean edge strength across the borders of one limb's segments where they lie over
-    ``cover`` (another limb or the torso), and how many border samples that was.
-
-    Parameters
-    ----------
-    frame : numpy.ndarray, shape (H, W, 3) uint8
-    segs : numpy.ndarray, shape (S, 2 ends, 2)
-        The limb's segments, pixels.
-    radius : numpy.ndarray, shape (S,)
-        Their radii, pixels.
-    cover : numpy.ndarray, shape (M, 2 ends, 2)
-        The segments the borders may lie over, pixels.
-    cover_radius : numpy.ndarray, shape (M,)
-
-    Returns
-    -------
-    strength : float
-        Grey levels per pixel (a ridge of the gradient across the border); NaN where no
-        border sample lies :data:`INSIDE` the cover.
-    count : float
-    """
-    r = np.asarray(radius, float)
-    a, b = segs[:, 0], segs[:, 1]
-    d = b - a
+def _plan(j2, radii):
+    """The search lines of frames (n,) with joints ``j2`` (n, 15, 2) and ``radii`` (n,
+    5), vectorised over the frames (no pixels are read): per frame and limb (arms l, r;
+    legs l, r) and border sample (P), where the line starts (n, 4, P, 2 px), its outward
+    normal (n, 4, P, 2), its segment's radius (n, 4, P px) and whether the sample lies
+    over the torso (arms) or the other leg (legs) (n, 4, P bool)."""
+    j2 = np.asarray(j2, float)
+    r5 = np.asarray(radii, float)
+    n = len(j2)
+    pts = j2[:, _LIMBS]  # (n, 4, 3, 2)
+    a, d = pts[:, :, :2], pts[:, :, 1:] - pts[:, :, :2]  # (n, 4 limbs, 2 segs, 2)
+    rad = np.stack([r5[:, :2], r5[:, :2], r5[:, 3:], r5[:, 3:]], 1)  # (n, 4, 2)
+    torso = np.broadcast_to(j2[:, None, _TORSO], (n, 2, 2, 2))  # twice, as two segments
+    cover = np.stack([torso, torso, pts[:, 3, [[0, 1], [1, 2]]], pts[:, 2, [[0, 1], [1, 2]]]],
+                     1)  # (n, 4, M=2, 2 ends, 2)
+    cover_r = np.stack([r5[:, [2, 2]], r5[:, [2, 2]], r5[:, 3:], r5[:, 3:]], 1)  # (n, 4, M)
     u = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-9)
-    nrm = np.stack([-u[:, 1], u[:, 0]], -1)
-    S, T = len(segs), len(_ALONG)
-    centre = a[:, None] + _ALONG[None, :, None] * d[:, None]  # (S, T, 2)
-    out_dir = np.array([-1.0, 1.0])[None, None, :, None] * nrm[:, None, None, :]  # (S,1,2,2)
-    base = np.broadcast_to(centre[:, :, None], (S, T, 2, 2)).reshape(-1, 2)
-    odir = np.broadcast_to(out_dir, (S, T, 2, 2)).reshape(-1, 2)
-    seg_of = np.repeat(np.arange(S), T * 2)
-    nominal = base + r[seg_of][:, None] * odir
-    inside = _inside(nominal, cover, cover_radius)
-    if not inside.any():
-        return np.nan, 0.0
-    odir = odir[inside]
-    ri = r[seg_of[inside]][:, None]
-    unit = np.maximum(ri, MIN_SPACING / (_ACROSS[1] - _ACROSS[0]))
-    offset = ri + (_ACROSS[None] - 1.0) * unit  # (k, offsets) px from the axis
-    search = base[inside][:, None] + offset[..., None] * odir[:, None]
-    g = _gradients(frame, search.reshape(-1, 2)).reshape(len(odir), len(_ACROSS), 3, 2)
-    across = np.sqrt(((g * odir[:, None, None]).sum(-1) ** 2).sum(-1))  # (k, offsets)
-    across = across[:, 1:-1] - 0.5 * (across[:, :-2] + across[:, 2:])
-    best = np.max(np.where(np.isfinite(across), across, -np.inf), axis=1)
-    ok = np.isfinite(best)
-    if not ok.any():
-        return np.nan, 0.0
-    return float(np.maximum(best[ok], 0.0).mean()), float(ok.sum())
+    nrm = np.stack([-u[..., 1], u[..., 0]], -1)
+    T = len(_ALONG)
+    shape = (n, 4, 2, T, 2, 2)  # frames, limbs, segments, along, sides, xy
+    base = np.broadcast_to((a[:, :, :, None] + _ALONG[:, None] * d[:, :, :, None])[
+        :, :, :, :, None], shape).reshape(n, 4, -1, 2)
+    odir = np.broadcast_to(np.array([-1.0, 1.0])[:, None] * nrm[:, :, :, None, None],
+                           shape).reshape(n, 4, -1, 2)
+    r = np.broadcast_to(rad[:, :, :, None, None], shape[:-1]).reshape(n, 4, -1)
+    nominal = base + r[..., None] * odir  # (n, 4, P, 2)
+    ca, cd = cover[..., 0, :], cover[..., 1, :] - cover[..., 0, :]  # (n, 4, M, 2)
+    rel = nominal[:, :, :, None] - ca[:, :, None]  # (n, 4, P, M, 2)
+    t = np.clip((rel * cd[:, :, None]).sum(-1)
+                / np.maximum((cd * cd).sum(-1), 1e-9)[:, :, None], 0.0, 1.0)
+    dist = np.linalg.norm(rel - t[..., None] * cd[:, :, None], axis=-1)
+    with np.errstate(invalid="ignore"):
+        inside = (dist <= INSIDE * cover_r[:, :, None]).any(-1)
+    return base, odir, r, inside
 
 
-def _inside(pts, cover, cover_radius):
-    """(n,) bool: points (n, 2) within :data:`INSIDE` radii of a cover segment's axis."""
-    a, b = cover[:, 0], cover[:, 1]
-    d = b - a
-    L2 = np.maximum((d * d).sum(-1), 1e-9)
-    t = np.clip(((pts[:, None] - a[None]) * d[None]).sum(-1) / L2[None], 0.0, 1.0)
-    near = a[None] + t[..., None] * d[None]
-    dist = np.sqrt(((pts[:, None] - near) ** 2).sum(-1))
-    return (dist <= INSIDE * np.asarray(cover_radius, float)[None]).any(-1)
+def _measure(frame, base, odir, r, inside):
+    """One frame's (2 pairs, 2 sides) strengths and counts from its :func:`_plan`
+    (base (4, P, 2), odir (4, P, 2), r (4, P), inside (4, P))."""
+    strength, count = np.full(4, np.nan), np.zeros(4)
+    limb, k = np.nonzero(inside)
+    if len(k):
+        ri, od = r[limb, k][:, None], odir[limb, k]
+        unit = np.maximum(ri, MIN_SPACING / (_ACROSS[1] - _ACROSS[0]))
+        offset = ri + (_LINE[None] - 1.0) * unit  # (k, line) px from the axis
+        line = base[limb, k][:, None] + offset[..., None] * od[:, None]  # (k, line, 2)
+        along = np.stack([od[:, 1], -od[:, 0]], -1)[:, None, None] * _ALONG_SMOOTH[:, None]
+        colours = (_samples(frame, line[:, :, None] + along) * _SMOOTH_W[:, None]).sum(2)
+        # the colour's rate of change across the border at each search offset, then its
+        # ridge (the step of a border, not a cylinder's smooth shading)
+        step = (colours[:, 2:] - colours[:, :-2]) / (2.0 * unit[..., None])
+        across = np.sqrt((step * step).sum(-1))  # (k, len(_ACROSS) + 2)
+        across = across[:, 1:-1] - 0.5 * (across[:, :-2] + across[:, 2:])
+        best = np.max(np.where(np.isfinite(across), across, -np.inf), axis=1)
+        ok = np.isfinite(best)
+        count = np.bincount(limb[ok], minlength=4).astype(float)
+        total = np.bincount(limb[ok], weights=np.maximum(best[ok], 0.0), minlength=4)
+        strength = np.where(count > 0, total / np.maximum(count, 1.0), np.nan)
+    return strength.reshape(2, 2), count.reshape(2, 2)
 
 
-def frame_leg_edges(frame, j2, radius) -> tuple[np.ndarray, np.ndarray]:
-    """The legs of :func:`limb_edges` in one frame: (2,) mean edge strength across the borders of
-    the fit's l and r legs where they lie over the other leg (:func:`border_edges`), and
-    (2,) how many border samples that was; NaN strength where none.
+def frame_limb_edges(frame, j2, radii) -> tuple[np.ndarray, np.ndarray]:
+    """One frame of :func:`limb_edges`: (2 pairs: arms, legs; 2 sides: l, r) mean edge
+    strengths across the borders of the fit's arms where they lie over the torso and of
+    its legs where they lie over the other leg, and (2, 2) how many border samples each
+    is over; NaN strength where none.
 
     Parameters
     ----------
     frame : numpy.ndarray, shape (H, W, 3) uint8
     j2 : numpy.ndarray, shape (15, 2)
         The frame's fitted joints, pixels.
-    radius : numpy.ndarray, shape (2,)
-        The thigh's and the shin's radius, pixels.
+    radii : array_like, shape (5,)
+        :data:`RADII`, pixels.
     """
-    segs = _segments(np.asarray(j2, float))
-    strength, count = np.full(2, np.nan), np.zeros(2)
-    if not np.isfinite(segs).all():
-        return strength, count
-    r = np.asarray(radius, float)
-    for c in range(2):
-        strength[c], count[c] = border_edges(frame, segs[c], r, segs[1 - c], r)
-    return strength, count
+    plan = _plan(np.asarray(j2, float)[None], np.asarray(radii, float)[None])
+    return _measure(np.asarray(frame), *(p[0] for p in plan))
 
 
 #: The columns of :func:`limb_radii`.
@@ -177,15 +161,6 @@ def limb_radii(model_height, body: BodyModel | None = None) -> np.ndarray:
     px = np.asarray(model_height, float).reshape(-1, 1) / body.height
     names = ("l_upper_arm", "l_lower_arm", "torso", "l_upper_leg", "l_lower_leg")
     return px * np.array([body.radius(n) for n in names])[None]
-
-
-def frame_limb_edges(frame, j2, radii) -> tuple[np.ndarray, np.ndarray]:
-    """(2 pairs: arms, legs; 2 sides: l, r) mean edge strengths and counts of one frame:
-    :func:`frame_arm_edges` and :func:`frame_leg_edges`, ``radii`` (5,) :data:`RADII`."""
-    r = np.asarray(radii, float)
-    arms = frame_arm_edges(frame, j2, r[:2], r[2])
-    legs = frame_leg_edges(frame, j2, r[3:])
-    return np.stack([arms[0], legs[0]]), np.stack([arms[1], legs[1]])
 
 
 def limb_edges(frames, joints2d, radii) -> tuple[np.ndarray, np.ndarray]:
@@ -224,10 +199,17 @@ def tap_limb_edges(frames, joints2d, radii, strength, count):
     this cue and the front/back one (:func:`vidcap.video.frontback.arm_visibility`)."""
     j2 = np.asarray(joints2d, float)
     rad = np.asarray(radii, float)
+    plan = None
     for k, frame in enumerate(frames):
+        if k % _CHUNK == 0 and k < len(j2):  # the geometry of the next frames at once
+            plan = _plan(j2[k:k + _CHUNK], rad[k:k + _CHUNK])
         if k < len(j2) and frame is not None and np.isfinite(rad[k]).all():
-            strength[k], count[k] = frame_limb_edges(np.asarray(frame), j2[k], rad[k])
+            strength[k], count[k] = _measure(np.asarray(frame), *(p[k % _CHUNK] for p in plan))
         yield frame
+
+
+#: Frames whose search lines are planned at once (:func:`tap_limb_edges`).
+_CHUNK = 128
 
 
 def near_limb(strength, count, *, min_count: int = 4) -> np.ndarray:
@@ -260,8 +242,8 @@ MIN_MEAN = 0.1
 
 
 def side_limb_names(order, edge_on, facing_right, link, swapped=None, *,
-                   min_frames: int = MIN_FRAMES,
-                   min_mean: float = MIN_MEAN) -> np.ndarray:
+                   min_frames: int | None = None,
+                   min_mean: float | None = None) -> np.ndarray:
     """Where a limb pair's distal joints (knee and ankle; elbow and wrist) are to be
     exchanged so that, in each run of ``edge_on`` frames, the limb the colour frame shows
     nearer the camera is of the body side that faces it.
@@ -296,6 +278,8 @@ def side_limb_names(order, edge_on, facing_right, link, swapped=None, *,
     numpy.ndarray of bool, shape (F,)
         Limbs exchanged against the fit's names; False outside the named runs.
     """
+    min_frames = MIN_FRAMES if min_frames is None else min_frames
+    min_mean = MIN_MEAN if min_mean is None else min_mean
     d = np.asarray(order, float)
     link = np.asarray(link, bool)
     right = np.asarray(facing_right, bool)
@@ -314,21 +298,3 @@ def side_limb_names(order, edge_on, facing_right, link, swapped=None, *,
         # the linked 'l' track is near: it is the body's right one facing right
         out[lo:hi] = s ^ ((m > 0) == right[lo:hi]) ^ flip[lo:hi]
     return out
-
-
-def frame_arm_edges(frame, j2, radius, torso_radius) -> tuple[np.ndarray, np.ndarray]:
-    """The arms' counterpart of :func:`frame_leg_edges`: (2,) mean edge strength across
-    the borders of the fit's l and r arms (upper arm and forearm, ``radius`` (2,) px)
-    where they lie over the torso (pelvis to neck, ``torso_radius`` px), and (2,) how
-    many border samples that was. The nearer arm covers the torso, the farther one is
-    hidden behind it."""
-    j = np.asarray(j2, float)
-    torso = j[[JOINT_INDEX["pelvis"], JOINT_INDEX["neck"]]][None]
-    strength, count = np.full(2, np.nan), np.zeros(2)
-    for c, side in enumerate("lr"):
-        pts = j[[JOINT_INDEX[f"{side}_{n}"] for n in ("shoulder", "elbow", "wrist")]]
-        segs = np.stack([pts[:2], pts[1:]])
-        if np.isfinite(segs).all() and np.isfinite(torso).all():
-            strength[c], count[c] = border_edges(frame, segs, np.asarray(radius, float),
-                                                 torso, np.array([float(torso_radius)]))
-    return strength, count
