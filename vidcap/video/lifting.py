@@ -316,9 +316,17 @@ def consistent_names(j2, rho, unit) -> np.ndarray:
 
 #: Which frames the colour frame's limb order names (:func:`near_limb_names`): ``edge``
 #: the edge-on side views only (a side label, the torso's spread at most
-#: :data:`SIDE_FACING_SPREAD`), ``side`` every side label, ``all`` every frame.
-LIMB_ORDER_FRAMES = "all"
-#: The limb pairs (:data:`vidcap.video.annotations.PAIRS` columns) it names.
+#: :data:`SIDE_FACING_SPREAD`), ``side`` every side label (the body turned 60 degrees or
+#: more from the camera: its near hip and shoulder then 17 cm or more nearer, more than a
+#: limb's swing moves it), ``all`` every frame. ``benchmarks/solve_fitted.py --front
+#: --legs``, tuning renders / samples / held-out renders, mm: edge 84.9 / 81.6 / 127.2,
+#: side 69.2 / 81.6 / 127.2, all 62.6 / 78.9 / 120.8; real footage against MediaPipe
+#: (sum over 11 rows, 1560 mm without the cue; looked at to choose, see
+#: benchmarks/RESULTS.md): edge 1554, side 1544, all 1617 (frontal clips lose: a limb's
+#: own swing outweighs the side's depth there).
+LIMB_ORDER_FRAMES = "side"
+#: The limb pairs (arms, legs: :data:`vidcap.video.annotations.PAIRS` columns) it names
+#: (legs only: tuning renders 68.5 mm with ``all``; real sum 1556 with ``side``).
 LIMB_ORDER_PAIRS = (True, True)
 
 
