@@ -129,7 +129,7 @@ def _run(name, c, body, used, near_fn):
         lr = lift_pose(j2, fps=float(c["fps"]), body=body, image_sides=True,
                        spread=c["spread"], track=c.get("track"),
                        frame_size=tuple(int(v) for v in c["size"]), model_height=mh,
-                       near_side=near_fn(name, j2))
+                       **near_fn(name, j2))
     return st.pa_mpjpe_mm(lr.joints3d, c["true3"])
 
 
@@ -164,13 +164,14 @@ def print_attribution(rows):
 
 def joint_errors(clip, body, near) -> list[tuple[str, float, float]]:
     """Per joint (name, 2D error as the stage names it, with the truth's names), % of the
-    height, of the stage's body-side named joints."""
+    height, of the stage's body-side named joints; ``near``: the colour cues' keywords
+    of ``lift_pose`` (``near_side``, ``limb_order``)."""
     from vidcap.video.lifting import lift_pose, swap_pairs
 
     lr = lift_pose(clip["joints2d"], fps=float(clip["fps"]), body=body, image_sides=True,
                    spread=clip["spread"], track=clip.get("track"),
                    frame_size=tuple(int(v) for v in clip["size"]),
-                   model_height=clip["model_height"], near_side=near)
+                   model_height=clip["model_height"], **near)
     h = np.mean(lr.scale) * body.height
     e = np.linalg.norm(lr.joints2d - clip["true2"], axis=-1) / h * 100
     renamed = swap_pairs(lr.joints2d, nearest_labeling(lr.joints2d, clip["true2"]))

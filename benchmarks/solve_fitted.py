@@ -14,14 +14,18 @@ kept in ``$VIDCAP_DATA/cache/frontback/``) and hands the 3D stage the near-side 
 extra column "front/back right" is the share of frames (not within 15 degrees of a side
 view) whose solved torso faces the camera as the truth does.
 
-``--attribute`` prints where the error comes from instead (front/back cue on): each clip
+``--attribute`` prints where the error comes from instead (front/back cue on; with
+``--legs`` the limb-order cue too, :mod:`vidcap.video.legorder`): each clip
 solved again with the truth in place of one thing the 3D stage reads (the 2D joints, the
 limbs' names, the depth signs, front/back, the yaw), alone and all but one
 (:mod:`solve_attribution`), and the per-joint 2D error of walk_side as named and with the
 truth's names.
 
 Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment] [--front]
-                                        [--labels] [--attribute] [--consistent-names]
+                                        [--legs] [--labels] [--attribute] [--consistent-names]
+
+``--legs``: the colour frame's limb order (:mod:`vidcap.video.legorder`) names the arms
+and legs (tuning: the renders and the samples, as for ``--front``).
 """
 
 from __future__ import annotations
@@ -235,16 +239,21 @@ def evaluate(clips, body, method="solve", near=None, legs=None):
     return rows
 
 
-def attribute(clips, body):
-    """Print the oracle attribution table (:mod:`solve_attribution`)."""
+def attribute(clips, body, limbs=False):
+    """Print the oracle attribution table (:mod:`solve_attribution`); with ``limbs`` the
+    limb-order cue on too."""
     import solve_attribution as sa
 
-    from vidcap.video.frontback import arm_visibility, near_side
+    from vidcap.video.pipeline import colour_cues
 
     def near_fn(name, joints2d):
-        return near_side(arm_visibility(clip_frames(name.split(" (")[0], body), joints2d))
+        c = dict(clips)[name]
+        near, order = colour_cues(clip_frames(name.split(" (")[0], body), joints2d,
+                                  c["model_height"], body, front=True, limbs=limbs)
+        return {"near_side": near, "limb_order": order}
 
-    print("PA-MPJPE mm, the 3D stage (front/back cue on) with the truth in place of ...")
+    cues = "front/back and limb-order cues" if limbs else "front/back cue"
+    print(f"PA-MPJPE mm, the 3D stage ({cues} on) with the truth in place of ...")
     sa.print_attribution(sa.attribution_rows(clips, body, near_fn))
     for name, c in clips:
         if name.startswith("walk_side"):
@@ -287,7 +296,7 @@ def main(argv=None):
 
         lifting.CONSISTENT_NAMES = True
     if args.attribute:
-        return attribute(clips, body)
+        return attribute(clips, body, limbs=args.legs)
     near = near_sides(clips, body) if args.front else None
     legs = limb_orders(clips, body) if args.legs else None
     rows = evaluate(clips, body, args.method, near, legs)
