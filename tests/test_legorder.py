@@ -148,3 +148,27 @@ def test_a_side_view_walk_named_the_wrong_way_round_is_named_right():
     named = lift_pose(wrong, limb_order=order, **args)
     assert np.allclose(as_fit.joints2d[:, limbs], wrong[:, limbs])  # a side view keeps names
     assert np.allclose(named.joints2d[:, limbs], true2[:, limbs])
+
+
+def test_colour_cues_read_both_cues_in_one_pass_over_the_frames():
+    from vidcap.video.pipeline import colour_cues
+
+    frames, truth = _side_walk()
+    body = BodyModel()
+    j2 = truth["joints2d"]
+    height = np.full(len(j2), float(np.linalg.norm(truth["camera"][0, :3])) * body.height)
+    seen = []
+
+    def decoded():
+        for f in list(frames) + [frames[0]]:  # one frame more than there are joints
+            seen.append(1)
+            yield f
+
+    near, order = colour_cues(decoded(), j2, height, body, front=True, limbs=True)
+    assert len(seen) == len(j2) + 1  # consumed to the end
+    assert near.shape == (len(j2),) and order.shape == (len(j2), 2)
+    alone = near_limb(*limb_edges(frames, j2, limb_radii(height, body)))
+    assert np.array_equal(np.isnan(order), np.isnan(alone))
+    assert np.allclose(order[np.isfinite(order)], alone[np.isfinite(alone)])
+    assert colour_cues(iter(frames), j2, height, body, front=False, limbs=False) == (None, None)
+    assert colour_cues(iter(frames), j2, None, body, front=True, limbs=True)[1] is None
