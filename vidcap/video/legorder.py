@@ -59,18 +59,6 @@ _LIMBS = np.array([[JOINT_INDEX[f"{side}_{j}"] for j in joints] for joints in
 _TORSO = np.array([JOINT_INDEX["pelvis"], JOINT_INDEX["neck"]])
 
 
-def _samples(frame, pts):
-    """Colours (..., 3) float32 of ``frame`` (H, W, 3) at the pixels nearest ``pts``
-    (..., 2); NaN off the frame."""
-    H, W = frame.shape[:2]
-    xy = np.rint(pts).astype(np.intp)
-    ok = (xy[..., 0] >= 0) & (xy[..., 0] < W) & (xy[..., 1] >= 0) & (xy[..., 1] < H)
-    flat = np.where(ok, xy[..., 1] * W + xy[..., 0], 0)
-    px = np.ascontiguousarray(frame).reshape(-1, frame.shape[2])[flat].astype(np.float32)
-    px[~ok] = np.nan
-    return px
-
-
 def _plan(j2, radii):
     """The search lines of frames (n,) with joints ``j2`` (n, 15, 2) and ``radii`` (n,
     5), vectorised over the frames (no pixels are read): per frame and limb (arms l, r;
@@ -101,35 +89,65 @@ def _plan(j2, radii):
     rel = nominal[:, :, :, None] - ca[:, :, None]  # (n, 4, P, M, 2)
     t = np.clip((rel * cd[:, :, None]).sum(-1)
                 / np.maximum((cd * cd).sum(-1), 1e-9)[:, :, None], 0.0, 1.0)
-    dist = np.linalg.norm(rel - t[..., None] * cd[:, :, None], axis=-1)
+    off = rel - t[..., None] * cd[:, :, None]
+    dist2 = off[..., 0] ** 2 + off[..., 1] ** 2
     with np.errstate(invalid="ignore"):
-        inside = (dist <= INSIDE * cover_r[:, :, None]).any(-1)
+        inside = (dist2 <= (INSIDE * cover_r[:, :, None]) ** 2).any(-1)
     return base, odir, r, inside
 
 
-def _measure(frame, base, odir, r, inside):
-    """One frame's (2 pairs, 2 sides) strengths and counts from its :func:`_plan`
-    (base (4, P, 2), odir (4, P, 2), r (4, P), inside (4, P))."""
-    strength, count = np.full(4, np.nan), np.zeros(4)
-    limb, k = np.nonzero(inside)
-    if len(k):
-        ri, od = r[limb, k][:, None], odir[limb, k]
-        unit = np.maximum(ri, MIN_SPACING / (_ACROSS[1] - _ACROSS[0]))
-        offset = ri + (_LINE[None] - 1.0) * unit  # (k, line) px from the axis
-        line = base[limb, k][:, None] + offset[..., None] * od[:, None]  # (k, line, 2)
+class _Chunk:
+    """The search lines of up to :data:`_CHUNK` frames as pixel indices (planned at once,
+    from the joints alone), the colours read there as each frame passes, and the edges
+    measured from them at once when the chunk is done (:meth:`finish`)."""
+
+    def __init__(self, j2, radii, shape):
+        H, W = shape[:2]
+        base, odir, r, inside = _plan(j2, radii)
+        self.n = len(j2)
+        f, limb, k = np.nonzero(inside)
+        ri, od = r[f, limb, k][:, None], odir[f, limb, k]
+        self.unit = np.maximum(ri, MIN_SPACING / (_ACROSS[1] - _ACROSS[0]))  # (K, 1)
+        offset = ri + (_LINE[None] - 1.0) * self.unit  # (K, line) px from the axis
+        line = base[f, limb, k][:, None] + offset[..., None] * od[:, None]  # (K, line, 2)
         along = np.stack([od[:, 1], -od[:, 0]], -1)[:, None, None] * _ALONG_SMOOTH[:, None]
-        colours = (_samples(frame, line[:, :, None] + along) * _SMOOTH_W[:, None]).sum(2)
+        # nearest pixel (+0.5 and truncation: a point less than half a pixel off the
+        # frame's top or left edge reads the edge pixel)
+        xy = (line[:, :, None] + (along + 0.5)).astype(np.int32)  # (K, line, 3, 2)
+        self.ok = (xy[..., 0] >= 0) & (xy[..., 0] < W) & (xy[..., 1] >= 0) & (xy[..., 1] < H)
+        self.flat = np.where(self.ok, xy[..., 1] * W + xy[..., 0], 0)
+        self.row = f * 4 + limb  # (K,) frame and limb of each sample
+        self.start = np.searchsorted(f, np.arange(self.n + 1))
+        self.colours = np.zeros(self.flat.shape + (3,), np.uint8)
+        self.seen = np.zeros(self.n, bool)
+        self.shape = (H, W)
+
+    def read(self, i, frame):
+        """Read the colours of chunk frame ``i`` (H, W, 3) uint8."""
+        if frame.shape[:2] != self.shape:
+            return
+        a, b = self.start[i], self.start[i + 1]
+        self.colours[a:b] = np.ascontiguousarray(frame).reshape(-1, 3)[self.flat[a:b]]
+        self.seen[i] = True
+
+    def finish(self):
+        """(n, 2, 2) strengths and counts of the chunk's frames (NaN, 0 where unseen)."""
+        c = self.colours.astype(np.float32)
+        c[~self.ok] = np.nan
+        w = _SMOOTH_W
+        c = w[0] * c[:, :, 0] + w[1] * c[:, :, 1] + w[2] * c[:, :, 2]  # (K, line, 3 channels)
         # the colour's rate of change across the border at each search offset, then its
         # ridge (the step of a border, not a cylinder's smooth shading)
-        step = (colours[:, 2:] - colours[:, :-2]) / (2.0 * unit[..., None])
-        across = np.sqrt((step * step).sum(-1))  # (k, len(_ACROSS) + 2)
+        step = (c[:, 2:] - c[:, :-2]) / (2.0 * self.unit[..., None])
+        across = np.sqrt((step * step).sum(-1))
         across = across[:, 1:-1] - 0.5 * (across[:, :-2] + across[:, 2:])
         best = np.max(np.where(np.isfinite(across), across, -np.inf), axis=1)
-        ok = np.isfinite(best)
-        count = np.bincount(limb[ok], minlength=4).astype(float)
-        total = np.bincount(limb[ok], weights=np.maximum(best[ok], 0.0), minlength=4)
+        use = np.isfinite(best) & self.seen[self.row // 4]
+        count = np.bincount(self.row[use], minlength=4 * self.n).astype(float)
+        total = np.bincount(self.row[use], weights=np.maximum(best[use], 0.0),
+                            minlength=4 * self.n)
         strength = np.where(count > 0, total / np.maximum(count, 1.0), np.nan)
-    return strength.reshape(2, 2), count.reshape(2, 2)
+        return strength.reshape(-1, 2, 2), count.reshape(-1, 2, 2)
 
 
 def frame_limb_edges(frame, j2, radii) -> tuple[np.ndarray, np.ndarray]:
@@ -146,8 +164,11 @@ def frame_limb_edges(frame, j2, radii) -> tuple[np.ndarray, np.ndarray]:
     radii : array_like, shape (5,)
         :data:`RADII`, pixels.
     """
-    plan = _plan(np.asarray(j2, float)[None], np.asarray(radii, float)[None])
-    return _measure(np.asarray(frame), *(p[0] for p in plan))
+    frame = np.asarray(frame)
+    chunk = _Chunk(np.asarray(j2, float)[None], np.asarray(radii, float)[None], frame.shape)
+    chunk.read(0, frame)
+    strength, count = chunk.finish()
+    return strength[0], count[0]
 
 
 #: The columns of :func:`limb_radii`.
@@ -195,17 +216,28 @@ def limb_edges(frames, joints2d, radii) -> tuple[np.ndarray, np.ndarray]:
 
 def tap_limb_edges(frames, joints2d, radii, strength, count):
     """Yield ``frames`` unchanged, filling ``strength`` and ``count`` (F, 2, 2) (as
-    :func:`limb_edges` returns them) as each frame passes: one decode of the clip serves
-    this cue and the front/back one (:func:`vidcap.video.frontback.arm_visibility`)."""
+    :func:`limb_edges` returns them) as they pass, :data:`_CHUNK` frames at a time (all
+    of them once ``frames`` is consumed to its end): one decode of the clip serves this
+    cue and the front/back one (:func:`vidcap.video.frontback.arm_visibility`). Each
+    frame costs one gather of the pixels its search lines cross."""
     j2 = np.asarray(joints2d, float)
     rad = np.asarray(radii, float)
-    plan = None
+    chunk, first = None, 0
+
+    def finish():
+        if chunk is not None:
+            strength[first:first + chunk.n], count[first:first + chunk.n] = chunk.finish()
+
     for k, frame in enumerate(frames):
-        if k % _CHUNK == 0 and k < len(j2):  # the geometry of the next frames at once
-            plan = _plan(j2[k:k + _CHUNK], rad[k:k + _CHUNK])
-        if k < len(j2) and frame is not None and np.isfinite(rad[k]).all():
-            strength[k], count[k] = _measure(np.asarray(frame), *(p[k % _CHUNK] for p in plan))
+        if k < len(j2) and frame is not None:
+            if chunk is None or k >= first + chunk.n:  # the next frames' lines at once
+                finish()
+                first = k - k % _CHUNK
+                chunk = _Chunk(j2[first:first + _CHUNK], rad[first:first + _CHUNK],
+                               np.shape(frame))
+            chunk.read(k - first, np.asarray(frame))
         yield frame
+    finish()
 
 
 #: Frames whose search lines are planned at once (:func:`tap_limb_edges`).
