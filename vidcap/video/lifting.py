@@ -432,6 +432,22 @@ def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
     return median_filter(rho, size=window, mode="nearest")
 
 
+def _fit_names(j2, rho, body, geometry, method, limb_order, proposed, facing, annotations):
+    """The frames whose arms' and legs' distal joints the 3D stage exchanges against the
+    2D fit's names (F, 2) bool, or None: the fit's jumps repaired
+    (:func:`consistent_names`, with the solve and :data:`CONSISTENT_NAMES`), then the
+    colour frame's limb order (:func:`near_limb_names`, given ``limb_order``); and the
+    user's orientation (F,) and joints (F, 15, 2) (``annotations.resolve``)."""
+    _, user_orient, user_joints = annotations.resolve(len(j2))
+    unit = 0.01 * body.height * np.asarray(geometry)  # px per 1 % of the height
+    names = consistent_names(j2, rho, unit) if method == "solve" and CONSISTENT_NAMES \
+        else None
+    if limb_order is not None:
+        names = near_limb_names(j2, limb_order, proposed, user_orient, rho, unit, names,
+                                facing)
+    return names, user_orient, user_joints
+
+
 def _propose_view(j2, geometry, fps, body, *, image_sides, track, window_s, view, near_side):
     """The proposed orientation labels (F,) within ``view``, and the colour frame's
     front/back (:func:`vidcap.video.proposals.propose_front`, (F,) int8, or None without
@@ -467,8 +483,7 @@ def lift_pose(
     model_height=None,
     view: str = "auto",
     method: str = "solve",
-    near_side=None,
-    limb_order=None,
+    near_side=None, limb_order=None,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -502,12 +517,9 @@ def lift_pose(
     view : str
         The user's view of the whole clip (:data:`VIEWS`), applied to the proposed
         orientation (:func:`constrain_orientation`); orientation events override it.
-    near_side : array_like, shape (F,), optional
-        :func:`vidcap.video.frontback.near_side` (image-side names): front or back.
-    limb_order : array_like, shape (F, 2), optional
-        :func:`vidcap.video.legorder.near_limb` (image-side names): which arm (column 0)
-        and leg (1) the colour frame shows nearer the camera, naming them
-        (:func:`near_limb_names`).
+    near_side, limb_order : array_like, shapes (F,) and (F, 2), optional
+        The colour frame's cues, image-side names: front or back
+        (:func:`vidcap.video.frontback.near_side`), the nearer arm, leg (:func:`near_limb_names`).
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
@@ -549,12 +561,9 @@ def lift_pose(
     proposed_orient, facing = _propose_view(j2, geometry, fps, body, image_sides=image_sides,
                                             track=track, window_s=yaw_window_s, view=view,
                                             near_side=near_side)
-    _, user_orient, user_joints = annotations.resolve(F)
-    names = consistent_names(j2, rho, 0.01 * body.height * np.asarray(geometry)) \
-        if method == "solve" and CONSISTENT_NAMES else None  # the fit's names, repaired
-    if limb_order is not None and image_sides:
-        names = near_limb_names(j2, limb_order, proposed_orient, user_orient, rho,
-                                0.01 * body.height * np.asarray(geometry), names, facing)
+    names, user_orient, user_joints = _fit_names(j2, rho, body, geometry, method, limb_order
+                                                 if image_sides else None, proposed_orient,
+                                                 facing, annotations)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
                                       facing=facing, names_swapped=names)
