@@ -432,17 +432,19 @@ def _torso_spread(j2, spread, geometry, body, window: int) -> np.ndarray:
     return median_filter(rho, size=window, mode="nearest")
 
 
-def _fit_names(j2, rho, body, geometry, method, limb_order, proposed, facing, annotations):
+def _fit_names(j2, rho, body, geometry, method, limb_order, image_sides, proposed, facing,
+               annotations):
     """The frames whose arms' and legs' distal joints the 3D stage exchanges against the
     2D fit's names (F, 2) bool, or None: the fit's jumps repaired
     (:func:`consistent_names`, with the solve and :data:`CONSISTENT_NAMES`), then the
-    colour frame's limb order (:func:`near_limb_names`, given ``limb_order``); and the
+    colour frame's limb order (:func:`near_limb_names`, given ``limb_order`` and
+    ``image_sides``); and the
     user's orientation (F,) and joints (F, 15, 2) (``annotations.resolve``)."""
     _, user_orient, user_joints = annotations.resolve(len(j2))
     unit = 0.01 * body.height * np.asarray(geometry)  # px per 1 % of the height
     names = consistent_names(j2, rho, unit) if method == "solve" and CONSISTENT_NAMES \
         else None
-    if limb_order is not None:
+    if limb_order is not None and image_sides:
         names = near_limb_names(j2, limb_order, proposed, user_orient, rho, unit, names,
                                 facing)
     return names, user_orient, user_joints
@@ -561,9 +563,8 @@ def lift_pose(
     proposed_orient, facing = _propose_view(j2, geometry, fps, body, image_sides=image_sides,
                                             track=track, window_s=yaw_window_s, view=view,
                                             near_side=near_side)
-    names, user_orient, user_joints = _fit_names(j2, rho, body, geometry, method, limb_order
-                                                 if image_sides else None, proposed_orient,
-                                                 facing, annotations)
+    names, user_orient, user_joints = _fit_names(j2, rho, body, geometry, method, limb_order,
+                                                 image_sides, proposed_orient, facing, annotations)
     orient, yaw, j2 = apply_user_view(j2, proposed_orient, rho, user_orient, user_joints,
                                       image_sides=image_sides, user_sides=annotations.sides(F),
                                       facing=facing, names_swapped=names)
