@@ -25,16 +25,17 @@ import numpy as np
 
 from vidcap.body import JOINT_INDEX, BodyModel
 
-#: Where along each leg segment the border samples lie (0 its proximal joint, 1 the
+#: Where along each limb segment the border samples lie (0 its proximal joint, 1 the
 #: distal one); the ends are left out (the rounded joints are not bands).
 _ALONG = np.linspace(0.1, 0.9, 17)
 #: Offsets of the border search, in units of the segment's radius from its axis: the
 #: fitted border is a few pixels off (the 2D fit is 1-2 % of the height off). At each
-#: offset but the outermost two, the edge is the gradient across the border less the
-#: mean of its neighbours' (a ridge: a shading step, not the smooth shading of a
-#: cylinder, which is steep near its own outline). Per frame on the fitted 2D of the
-#: tuning renders and walk_side (197 frames with a cue; ``benchmarks/solve_fitted.py
-#: --legs``): 79 % of frames right; the plain gradient 58 % (71 % with a search of 0.7-1.3).
+#: offset, the edge is the colour's rate of change across the border less the mean of
+#: its neighbours' (a ridge: a shading step, not the smooth shading of a cylinder, which
+#: is steep near its own outline). The legs per frame on the fitted 2D of the tuning
+#: renders and walk_side (197 frames with a cue; ``benchmarks/solve_fitted.py --legs``):
+#: 78 % of frames right; a Sobel gradient with its ridge 79 %, without 58 % (71 % with a
+#: search of 0.7-1.3 radii).
 _ACROSS = np.array([0.55, 0.7, 0.85, 1.0, 1.15, 1.3, 1.45])
 #: The samples along each search line: two more at each end than the search, for the
 #: derivative and its ridge.
