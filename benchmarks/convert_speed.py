@@ -11,7 +11,7 @@ runs it by default, its estimated plate (with the colour models) already in the 
 cache: the cut runs, the plate's time is left out. Wall-clock times. Target: >= 100
 fps excluding plate estimation.
 
-Run:  python benchmarks/convert_speed.py [--frames 300]
+Run:  python benchmarks/convert_speed.py [--frames 300] [--cues outline|all]
 """
 
 from __future__ import annotations
@@ -39,7 +39,10 @@ def main(argv=None):
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--jobs", type=int, default=None,
                     help="fitting processes (default: vidcap's default, the usable CPUs)")
+    ap.add_argument("--cues", default=None, choices=("outline", "all"),
+                    help="the 2D fit's cues (default: vidcap convert's)")
     args = ap.parse_args(argv)
+    cue_kw = {} if args.cues is None else {"cues": args.cues}
     import cv2
 
     from vidcap.synth import make_motion
@@ -59,13 +62,13 @@ def main(argv=None):
         cv2.imwrite(str(d / "plate.png"), plate.plate)
         t0 = time.perf_counter()
         res = convert(video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
-                      progress=False, jobs=args.jobs, proportions="seed")
+                      progress=False, jobs=args.jobs, proportions="seed", **cue_kw)
         t_conv = time.perf_counter() - t0
         t0 = time.perf_counter()
         serial = convert(video, d / "walk1.bvh", background=d / "plate.png", cache_dir=None,
-                         progress=False, jobs=1, proportions="seed")
+                         progress=False, jobs=1, proportions="seed", **cue_kw)
         t_serial = time.perf_counter() - t0
-        t_cut, cut, cut_on = _convert_cached_plate(video, d, args.jobs)
+        t_cut, cut, cut_on = _convert_cached_plate(video, d, args.jobs, cue_kw)
     jobs = default_jobs() if args.jobs is None else args.jobs
     rows = [("decode only", t_decode), ("plate estimation", t_plate),
             (f"convert given the plate ({jobs} fitting processes)", t_conv)]
@@ -89,7 +92,7 @@ def main(argv=None):
           f"{np.median(d3) * 1000:.1f} mm")
 
 
-def _convert_cached_plate(video: Path, d: Path, jobs):
+def _convert_cached_plate(video: Path, d: Path, jobs, cue_kw):
     """``convert`` with default options but the stage cache holding the estimated plate
     only (as after a first ``vidcap convert`` that stopped after the plate): seconds,
     result and whether the cut ran."""
@@ -104,7 +107,7 @@ def _convert_cached_plate(video: Path, d: Path, jobs):
                           log=lambda m: None, colour_models=graph_cut, still_person=still)
     t0 = time.perf_counter()
     res = convert(video, d / "walk2.bvh", cache_dir=cache_dir, progress=False, jobs=jobs,
-                  proportions="seed")
+                  proportions="seed", **cue_kw)
     return time.perf_counter() - t0, res, graph_cut
 
 

@@ -32,8 +32,10 @@ diagnosed their pipeline losses on them and chose the appearance pass's scene-be
 gate and the lean fit's head row on cam4); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
-[--only NAME] [--human] [--graph-cut | --no-graph-cut]`` (``--only``: just the clips whose
-name contains NAME; ``--human``: the first table with ``proportions='human'``;
+[--only NAME] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]`` (``--only``: just
+the clips whose name contains NAME; ``--rows``: the pipeline table's row kinds, of outline,
+all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six); ``--human``:
+the first table with ``proportions='human'``;
 ``--graph-cut``: the pipeline rows' silhouettes with or without the graph cut, default
 ``vidcap.video.pipeline.DEFAULT_GRAPH_CUT``; ``benchmarks/cut_fit.py`` compares the two).
 """
@@ -137,9 +139,10 @@ def main(argv=None) -> int:
     from pose2d_real_pipeline import pipeline_tables
 
     rows = ("outline", "mp-masks", "human", "mp-human")
-    pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS,
-                    cues=rows if "--no-all" in argv else rows[:1] + ("all",) + rows[1:],
-                    only=only)
+    rows = rows if "--no-all" in argv else rows[:1] + ("all",) + rows[1:] + ("all-human",)
+    if "--rows" in argv:
+        rows = tuple(argv[argv.index("--rows") + 1].split(","))
+    pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS, cues=rows, only=only)
     return 0
 
 

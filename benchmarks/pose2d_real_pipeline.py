@@ -9,7 +9,8 @@ stature), the share of (frame, joint) pairs more than 10 % apart, and the worst 
 that share; ``mp-masks``: the same fit to MediaPipe's masks instead of vidcap's own
 silhouettes (which part of the error is the silhouettes'); ``human`` and ``mp-human``: the
 same two with ``proportions='human'`` (an anthropometric table's body, the ankles above
-the soles). Then per joint (each row kind): median / share > 10 %.
+the soles); ``all-human``: ``--cues all`` with the human body (``vidcap convert``'s
+default body). Then per joint (each row kind): median / share > 10 %.
 """
 
 from __future__ import annotations
@@ -75,8 +76,9 @@ def _joints(clip: RealClip, row: str):
     """The 2D joints of one row kind (see the module's docstring)."""
     if row.startswith("mp-"):
         return _fit_reference_masks(clip, "human" if row == "mp-human" else "seed")
-    if row == "human":
-        return pipeline_result(clip.video, "outline", proportions="human").image_joints2d
+    if row in ("human", "all-human"):
+        cues = "all" if row == "all-human" else "outline"
+        return pipeline_result(clip.video, cues, proportions="human").image_joints2d
     return pipeline_result(clip.video, row).image_joints2d
 
 
