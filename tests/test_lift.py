@@ -121,6 +121,26 @@ def test_orientation_from_knees_and_from_walking_direction():
     assert set(propose_orientation(j2, scale=s, fps=fps, track=track[::-1])) == {"left"}
 
 
+def test_a_walker_faces_where_it_goes_unless_its_knees_clearly_say_otherwise():
+    """A side view facing image left (yaw -90) moving right: a fold weaker than
+    FOLD_OVER_TRAVEL (the limbs' bends shrunk) yields to the direction of travel; the
+    clip's own clear fold overrules it."""
+    j2, _, _, fps = posed_clip(-90.0, 60)
+    s = estimate_scale(j2)
+    track = np.linspace(100, 400, 60)  # moving right, 1.5 body heights a second
+    assert set(propose_orientation(j2, scale=s, fps=fps, track=track)) == {"left"}
+    weak = j2.copy()
+    for a, b, c in (("l_hip", "l_knee", "l_ankle"), ("r_hip", "r_knee", "r_ankle"),
+                    ("l_shoulder", "l_elbow", "l_wrist"), ("r_shoulder", "r_elbow", "r_wrist")):
+        mid = 0.5 * (j2[:, JOINT_INDEX[a]] + j2[:, JOINT_INDEX[c]])
+        weak[:, JOINT_INDEX[b]] = mid + 0.1 * (j2[:, JOINT_INDEX[b]] - mid)  # fold ~0.2
+    labels = propose_orientation(weak, scale=s, fps=fps, track=track)
+    assert set(labels) == {"right"}
+    # without the travel the weak fold still decides where it passes its threshold
+    still = propose_orientation(weak, scale=s, fps=fps, track=np.full(60, 250.0))
+    assert set(still) == {"left"}
+
+
 def test_minimal_rotation():
     rng = np.random.default_rng(1)
     a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))

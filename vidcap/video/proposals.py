@@ -476,6 +476,28 @@ def _nearest_known(known: np.ndarray) -> np.ndarray:
     return np.where(np.abs(before - t) < np.abs(after - t), before, after)
 
 
+#: The fold cue (:func:`propose_orientation`) that overrules the direction a moving
+#: subject travels: three times the cue's own threshold (a clear fold of both knees).
+FOLD_OVER_TRAVEL = 0.3
+
+
+def _faces_image_right(cue, vel, moving, bent) -> np.ndarray:
+    """Whether the body faces image right, (F,) bool, from the fold cue ``cue``, the
+    horizontal velocity ``vel`` and where it moves and is bent (all (F,)); see
+    :func:`propose_orientation`."""
+    # A body that travels across the picture faces where it goes, unless its limbs'
+    # fold says otherwise clearly: the travel reads from the whole silhouette's track,
+    # the fold from four fitted limbs, and one arm fitted bent the wrong way tips a weak
+    # fold (ido_walk frames 20-27: fold -0.1 to -0.2 while walking right).
+    walking = moving & (np.abs(cue) < FOLD_OVER_TRAVEL)
+    score = np.where(walking, np.sign(vel),
+                     np.where(bent, np.sign(cue), np.where(moving, np.sign(vel), 0.0)))
+    known = score != 0
+    if known.any():
+        return score[_nearest_known(known)] > 0
+    return np.full(len(score), cue.sum() >= 0)
+
+
 def propose_orientation(
     joints2d,
     *,
@@ -500,10 +522,11 @@ def propose_orientation(
       kicking, sitting) and an elbow the other way; that sense is the sign of the
       image cross product of the upper and lower segments, ``sin`` of the image
       angle between them times their foreshortening ratios, summed (knees minus
-      elbows) and averaged over ``window_s``. Where it exceeds ``min_fold``
-      it decides; elsewhere the direction the
-      subject moves (``track``, e.g. the silhouette's centre) where it moves faster
-      than ``min_speed`` body heights per second; elsewhere the nearest such frame's;
+      elbows) and averaged over ``window_s``. A subject that moves faster than
+      ``min_speed`` body heights per second faces the direction it moves (``track``,
+      e.g. the silhouette's centre) unless the cue exceeds :data:`FOLD_OVER_TRAVEL`;
+      elsewhere the cue decides where it exceeds ``min_fold``; elsewhere the nearest
+      such frame's;
     * side view vs front/back: the torso's horizontal foreshortening (< 0.5 = within
       30 degrees of a side view);
     * front vs back: with body-side named joints (``sides_known``), whether the
@@ -574,14 +597,9 @@ def propose_orientation(
     vel = np.gradient(xs) * fps if F > 1 else np.zeros(F)
     moving = np.abs(vel) > min_speed * body.height * scale
     bent = np.abs(cue) > min_fold
-    score = np.where(bent, np.sign(cue), np.where(moving, np.sign(vel), 0.0))
-    known = score != 0
-    if known.any():
-        right = score[_nearest_known(known)] > 0
-    else:
-        right = np.full(F, cue.sum() >= 0)
     twin = win if turn_window_s is None else max(1, int(round(turn_window_s * fps)) | 1)
     rho = median_filter(torso_width_ratio(j2, scale, body), size=twin, mode="nearest")
+    right = _faces_image_right(cue, vel, moving, bent)
     if sides_known:
         d = (j2[:, ji["l_shoulder"], 0] - j2[:, ji["r_shoulder"], 0]
              + j2[:, ji["l_hip"], 0] - j2[:, ji["r_hip"], 0])
