@@ -120,6 +120,43 @@ def test_side_limb_names_name_the_near_track_the_side_the_body_turns_to_the_came
     assert not side_limb_names(order, np.zeros(F, bool), np.ones(F, bool), link).any()
 
 
+def _crossing_arms(F=20):
+    """(F, 15, 2) joints whose two forearms pass through each other at frame 10 at a
+    constant velocity (no acceleration as named), the rest still."""
+    j = np.zeros((F, 15, 2))
+    j[:, :, 0] = 100.0 + np.arange(15) * 3.0
+    j[:, :, 1] = 50.0
+    t = np.arange(F) - 10.0
+    for side, sign in (("l", 1.0), ("r", -1.0)):
+        for k, name in enumerate(("elbow", "wrist")):
+            j[:, JOINT_INDEX[f"{side}_{name}"]] = np.stack(
+                [100.0 + sign * 4.0 * t, np.full(F, 80.0 + 20.0 * k)], -1)
+    return j
+
+
+def test_arms_named_frame_by_frame_where_the_cue_outweighs_a_smooth_crossing():
+    from vidcap.video.lifting import cued_links
+
+    F = 20
+    j2 = _crossing_arms(F)
+    order = np.full((F, 2), np.nan)  # the legs: no cue
+    order[:10, 0], order[10:, 0] = -0.5, 0.5  # the fit's r arm near, then its l arm
+    edge, right, swap = np.ones(F, bool), np.ones(F, bool), np.zeros(F, bool)
+    # facing right the near arm is the right one: the fit's names hold to frame 9, from
+    # frame 10 its l arm is the right one (a bounce in 2D, outweighed by 10 cued frames)
+    out = cued_links(j2, 1.0, order, edge, right, swap)
+    assert not out[:10, 0].any() and out[10:, 0].all()
+    assert not out[:, 1].any()
+    # a weak cue does not outweigh the crossing's smoothness: the names stay (but at
+    # frame 10, where both namings are the same points)
+    weak = cued_links(j2, 1.0, 0.05 * np.sign(order), edge, right, swap)
+    assert not np.delete(weak[:, 0], 10).any()
+    # facing left, or outside the edge frames, the cue reads the other way / not at all
+    left = cued_links(j2, 1.0, order, edge, ~right, swap)
+    assert left[:10, 0].all() and not left[10:, 0].any()
+    assert not cued_links(j2, 1.0, order, ~edge, right, swap).any()
+
+
 @functools.cache
 def _side_walk():
     from vidcap.synth import make_motion, render_clip
@@ -147,7 +184,9 @@ def test_a_side_view_walk_named_the_wrong_way_round_is_named_right():
     as_fit = lift_pose(wrong, **args)
     named = lift_pose(wrong, limb_order=order, **args)
     assert np.allclose(as_fit.joints2d[:, limbs], wrong[:, limbs])  # a side view keeps names
-    assert np.allclose(named.joints2d[:, limbs], true2[:, limbs])
+    # named as the truth, but where the arms pass each other (frame 12: 1 px apart, a
+    # weak cue there), where either naming is the same points
+    assert np.abs(named.joints2d[:, limbs] - true2[:, limbs]).max() < 2.0
 
 
 def test_colour_cues_read_both_cues_in_one_pass_over_the_frames():

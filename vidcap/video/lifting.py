@@ -330,6 +330,41 @@ LIMB_ORDER_FRAMES = "side"
 LIMB_ORDER_PAIRS = (True, True)
 
 
+#: How each limb pair's (arms, legs) side-view names follow the limb order: ``runs``
+#: each linked run named as a whole (:func:`vidcap.video.legorder.side_limb_names`),
+#: ``frames`` the linking and each frame's cue in one min-sum (:func:`cued_links`). The
+#: arms per frame: in a side view the fit's arm names jump where the arms pass each
+#: other, and the linking (no 2D jump there) does not see it, while the cue does (walk_side
+#: arms scored right in 88 % of frames, linked into runs 69 %). ``benchmarks/solve_fitted.py
+#: --front --legs``, tuning renders / samples / held-out renders, mm: runs 69.2 / 81.6 /
+#: 127.2, arms per frame 69.2 / **75.7** / **121.7** (walk_side 48 -> 31, 07_07 end 53
+#: -> 30; arms named right 0.69 -> 0.90, 0.63 -> 0.90); legs per frame too 69.2 / 77.9
+#: (walk_side 37). Real footage sum over 11 rows (validation, same run): 1624 -> 1623.
+LIMB_ORDER_LINK = ("frames", "runs")
+#: :func:`cued_links`: cost of a frame's naming against its limb-order score, per unit
+#: of |score| (a frame's jump in the linking costs up to 200). Tuning renders and samples,
+#: mm: 3 / 30 / 50 as runs (walk_side 48), 70 / 100 / 300 walk_side 31, 1000 tuning 69.2
+#: -> 78.0 (arms yaw 120 95 -> 133: weak scores then outweigh the linking).
+LIMB_ORDER_WEIGHT = 150.0
+
+
+def cued_links(j2, unit, order, edge, facing_right, swap, *,
+               weight: float | None = None) -> np.ndarray:
+    """(F, 2) bool: the exchanges of each pair's distal joints that make the named joints
+    move smoothly (:func:`vidcap.video.solve.labels.consistent_labels`) and, in the
+    ``edge`` frames, name the limb the colour frame shows nearer (``order`` (F, 2),
+    :func:`vidcap.video.legorder.near_limb`) as the side facing the camera: each
+    frame's score is a cost of ``weight`` x |score| for the naming it contradicts,
+    in place of the linking's bias for the fit's names (a side view's names are a coin
+    toss)."""
+    w = LIMB_ORDER_WEIGHT if weight is None else weight
+    d = np.asarray(order, float)
+    want = ((d > 0) == np.asarray(facing_right, bool)[:, None]) ^ np.asarray(swap, bool)[:, None]
+    prior = np.where(want, -1.0, 1.0) * w * np.abs(d)
+    prior = np.where(np.asarray(edge, bool)[:, None] & np.isfinite(d), prior, np.nan)
+    return consistent_labels(j2, unit, prior=prior)
+
+
 def near_limb_names(j2, limb_order, proposed_orientation, user_orientation, rho, unit,
                     names=None, facing=None, *, frames: str | None = None,
                     pairs=None) -> np.ndarray | None:
@@ -353,13 +388,19 @@ def near_limb_names(j2, limb_order, proposed_orientation, user_orientation, rho,
         edge &= np.asarray(rho, float) <= SIDE_FACING_SPREAD
     if not edge.any() or not any(pairs):
         return names
-    link = consistent_labels(j2, unit)
     order = np.asarray(limb_order, float)
     out = np.zeros((len(j2), 2), bool) if names is None else np.array(names, bool)
+    link = consistent_labels(j2, unit) if "runs" in LIMB_ORDER_LINK else None
+    per_frame = cued_links(j2, unit, order, edge, yaw > 0, swap) \
+        if "frames" in LIMB_ORDER_LINK else None
     for c in range(2):
-        if pairs[c]:
+        if not pairs[c]:
+            continue
+        if LIMB_ORDER_LINK[c] == "frames":
+            named = per_frame[:, c]
+        else:
             named = side_limb_names(order[:, c], edge, yaw > 0, link[:, c], swap)
-            out[:, c] = np.where(edge, named, out[:, c])
+        out[:, c] = np.where(edge, named, out[:, c])
     return None if names is None and not out.any() else out
 
 

@@ -138,7 +138,8 @@ def second_order_labels(unary, x, weight: float, cap: float = np.inf) -> np.ndar
 
 
 def consistent_labels(joints2d, unit, *, held=None, weight: float = NAME_ACC_WEIGHT,
-                      cap: float = NAME_ACC_CAP, bias: float = NAME_BIAS) -> np.ndarray:
+                      cap: float = NAME_ACC_CAP, bias: float = NAME_BIAS,
+                      prior=None) -> np.ndarray:
     """Where each limb pair's distal 2D joints are best exchanged so that every named
     joint moves smoothly through the clip.
 
@@ -157,6 +158,9 @@ def consistent_labels(joints2d, unit, *, held=None, weight: float = NAME_ACC_WEI
         (Frame, pair: arms, legs) kept as named.
     weight, cap, bias : float
         :data:`NAME_ACC_WEIGHT`, :data:`NAME_ACC_CAP`, :data:`NAME_BIAS`.
+    prior : array_like, shape (F, 2), optional
+        (Frame, pair) extra cost of exchanging (negative: of keeping the names), replacing
+        ``bias`` where finite (NaN: ``bias``): another cue's evidence for the names.
 
     Returns
     -------
@@ -172,6 +176,11 @@ def consistent_labels(joints2d, unit, *, held=None, weight: float = NAME_ACC_WEI
         left, right, _, _ = _distal(pair)
         x.append(np.stack([j[:, left + right], j[:, right + left]], 1) / u)
         unary[c, :, 1] = bias
+        if prior is not None:
+            pc = np.asarray(prior, float)[:, c]
+            has = np.isfinite(pc)
+            unary[c, has, 1] = np.maximum(pc[has], 0.0)
+            unary[c, has, 0] = np.maximum(-pc[has], 0.0)
         if held is not None:
             unary[c, np.asarray(held, bool)[:, c], 1] = _NONE
     return second_order_labels(unary, np.stack(x), weight, cap).T.astype(bool)
