@@ -175,10 +175,12 @@ def run(args) -> int:
                   f"{CLAMP_NOTICE:.0%} longer in the image than the model (depth clamped to 0)")
         side = np.isin(lr.orientation, ("left", "right"))
         if side.mean() >= 0.5:
-            # no silhouette tells the near leg from the far one: which is the left one is
-            # the 2D stage's guess, and one event fixes a wrong guess
+            # no silhouette tells the near leg from the far one: the colour frame's
+            # occlusion edges (legorder) read it where the limbs overlap, which can fail
+            # (plain clothing, a poor 2D fit), and one event fixes a wrong reading
             print(f"  side view in {int(side.sum())} of {len(side)} frames: which leg (and arm) "
-                  "is the left one is a guess here.\n  If `vidcap review` shows the legs on "
+                  "is the left one is read from where one covers the other, and can be "
+                  "wrong.\n  If `vidcap review` shows the legs on "
                   f"the wrong hips, add this event to the \"events\" of "
                   f"{default_path(args.video).name}\n"
                   '    {"frame": 0, "type": "sides", "pair": "legs", "value": "swapped"}\n'
