@@ -81,7 +81,7 @@ def fit_normalised(eng: _MaskEngine, *, previous: FramePose | None = None,
     warm : bool
         The fit started from ``previous``.
     """
-    searched = options.spread and options.spread_value is None  # search the spread?
+    searched = options.spread_searched
     if previous is None:
         st = _placed(eng, options)
     else:
@@ -114,7 +114,7 @@ def warm_start(eng: _MaskEngine, previous: FramePose, options: FitOptions) -> Fi
     the warm threshold :func:`track_below_threshold` tracks from the previous frame's
     pelvis (:func:`_nearer_start`) as well. :func:`fit_frame` makes it once for both."""
     placed = _placed(eng, options)
-    searched = options.spread and options.spread_value is None
+    searched = options.spread_searched
     st = placed.replace(
         angles=np.array(previous.angles, dtype=float),
         fore=np.array(previous.foreshortening, dtype=float),
@@ -149,7 +149,7 @@ def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
     if start is None:
         start = warm_start(eng, previous, options)
     start = _nearer_start(eng, start, previous, options)
-    tracked = _fit_warm(eng, start, options, options.spread and options.spread_value is None)
+    tracked = _fit_warm(eng, start, options, options.spread_searched)
     return tracked if eng.similarity(tracked) > eng.similarity(st) else None
 
 

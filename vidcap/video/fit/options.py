@@ -86,6 +86,12 @@ class FitOptions:
         if self.body is not None and not isinstance(self.body, BodyModel):
             raise ValueError(f"body must be a BodyModel, got {type(self.body).__name__}")
 
+    @property
+    def spread_searched(self) -> bool:
+        """Whether the fit searches the torso's spread (``spread`` on, no
+        ``spread_value`` fixing it)."""
+        return bool(self.spread) and self.spread_value is None
+
     @classmethod
     def from_keywords(cls, kw: dict, *, caller: str = "fit_sequence") -> FitOptions:
         """Options from keywords such as ``fit_sequence``'s ``**kw``; unknown names
