@@ -84,7 +84,7 @@ class ClipData:
         (default: the seed's body).
     near_side : numpy.ndarray, shape (F,), optional
         The colour frames' front/back cue (:func:`vidcap.video.frontback.near_side`), as
-        ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.front_cue`); kept as
+        ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.colour_cues`); kept as
         loaded when silhouettes are recomputed.
     limb_order : numpy.ndarray, shape (F, 2), optional
         The colour frames' limb order (:func:`vidcap.video.legorder.near_limb`), as

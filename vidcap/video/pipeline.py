@@ -775,7 +775,8 @@ def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool |
 
 def front_cue(video, joints2d) -> np.ndarray:
     """The near-side cue (F,) of ``video``'s frames (decoded again, one at a time) for
-    the image-side named 2D joints (F, 15, 2): :func:`vidcap.video.frontback.near_side`.
+    the image-side named 2D joints (F, 15, 2): :func:`vidcap.video.frontback.near_side`
+    alone (``vidcap convert`` reads it with the limb order, :func:`colour_cues`).
 
     Decoded again rather than kept from the silhouette stage's decode: the cue reads
     pixels along the fitted forearms, known only once the 2D fit is done, so that stage
