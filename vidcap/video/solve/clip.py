@@ -113,6 +113,18 @@ PRIOR_POWER = 0.5
 #: fit: floor 0, 1, 2, 4, 6, 8, 12 % gave PA-MPJPE 129, 126, 124, 118, 116, 116, 117 mm.
 #: ``solve_clip`` itself uses no floor (true 2D plus noise: the measure is right there).
 FITTED_NOISE_FLOOR = 0.06
+#: The noise (fraction of the height) the contact weight assumes at least for joints from
+#: vidcap's 2D fit (``contact_floor`` of :func:`make_problem`, passed where
+#: ``FITTED_NOISE_FLOOR`` is): the fit's ankles wander for runs of frames, which the
+#: second-difference measure reads as 0-0.3 % of the height, and at the weight that
+#: reading gives (100 / m) a planted foot followed them (the side-view sample walk slid
+#: 5.1 mm/frame, the arms sample 6.9). Chosen on the tuning renders and the samples
+#: (benchmarks/solve_fitted.py's set, front/back and limb-order cues on): floor 0 / 1 / 2 /
+#: 3 % gave a mean PA-MPJPE of 69.6 / 69.4 / 69.3 / 70.2 mm and foot sliding of
+#: walk_side 5.1 / 3.9 / 2.8 / 2.2, walk_three_quarter 2.7 / 2.2 / 1.8 / 1.4 mm/frame
+#: (arms 72.9 -> 74.1 mm at 2 %: its true ankles move 2.8 mm/frame, the rendered body
+#: is floored per frame).
+FITTED_CONTACT_FLOOR = 0.02
 #: Weight of the proposed depth signs (``Problem.sign_weight``, default 5) for joints
 #: from vidcap's 2D fit (passed by the 3D stage and the annotate app's re-solves): the
 #: proposals are the per-segment lift's reading of the same fitted joints, wrong where
@@ -126,7 +138,8 @@ FITTED_SIGN_WEIGHT = 1.0
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,
                  prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                  segment_scale=None, principal_point=None, contact="auto",
-                 noise_floor: float = 0.0, **weights) -> Problem:
+                 noise_floor: float = 0.0, contact_floor: float = 0.0,
+                 **weights) -> Problem:
     """The :class:`Problem` of a clip of 2D joints (F, 15, 2), body-side named.
 
     ``yaw`` (F,) radians and ``yaw_sigma`` (one or (F,), radians) the torso's yaw
@@ -135,7 +148,8 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
     an (F, 2) bool array; ``weights`` override :class:`Problem`'s weights (the in-plane
     prior's, the contact's and the pose prior's defaults grow with the 2D joints' measured
     noise: :data:`PLANE_WEIGHT`, :data:`CONTACT_WEIGHT`, :data:`PRIOR_WEIGHT`, the last
-    with the noise taken as at least ``noise_floor``: :data:`FITTED_NOISE_FLOOR`).
+    with the noise taken as at least ``noise_floor``: :data:`FITTED_NOISE_FLOOR`; the
+    contact's with it taken as at least ``contact_floor``: :data:`FITTED_CONTACT_FLOOR`).
     """
     body = body or BodyModel()
     j = np.asarray(joints2d, dtype=float)
@@ -156,7 +170,8 @@ def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, 
         weights.setdefault("prior_weight", PRIOR_WEIGHT * float(
             (max(noise, noise_floor) / 0.01) ** PRIOR_POWER))
         # a planted foot holds against the noisy 2D's pull, which grows with the noise
-        weights.setdefault("contact_weight", CONTACT_WEIGHT * (1.0 + noise / 0.01))
+        weights.setdefault("contact_weight",
+                           CONTACT_WEIGHT * (1.0 + max(noise, contact_floor) / 0.01))
     return Problem(
         offsets=body.rest_offsets(), lengths=body.segment_lengths(),
         target=image_targets(j, scale, segment_scale, principal_point),
@@ -185,7 +200,8 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                prior_signs=None, hard_signs=None, confidence=None, yaw_sigma=0.5,
                segment_scale=None, principal_point=None, contact="auto", sweeps: int = 2,
                max_iter: int = 30, robust: float | None = None, noise_floor: float = 0.0,
-               labels: bool = False, held_labels=None, **weights) -> ClipSolve:
+               contact_floor: float = 0.0, labels: bool = False, held_labels=None,
+               **weights) -> ClipSolve:
     """Fit the skeleton to a clip's 2D joints (see the module docstring).
 
     Parameters
@@ -220,6 +236,9 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
     noise_floor : float
         The 2D noise (fraction of the height) the pose prior assumes at least
         (:data:`FITTED_NOISE_FLOOR` for joints from the 2D fit).
+    contact_floor : float
+        The 2D noise the contact weight assumes at least (:data:`FITTED_CONTACT_FLOOR`
+        for joints from the 2D fit).
     labels : bool
         Choose which 2D arm and leg is the left one per frame
         (:func:`vidcap.video.solve.labels.choose_labels`).
@@ -237,7 +256,8 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
     pb = make_problem(j2, scale=scale, fps=fps, body=body, yaw=yaw, prior_signs=prior_signs,
                       hard_signs=hard_signs, confidence=confidence, yaw_sigma=yaw_sigma,
                       segment_scale=segment_scale, principal_point=principal_point,
-                      contact=contact, noise_floor=noise_floor, **weights)
+                      contact=contact, noise_floor=noise_floor,
+                      contact_floor=contact_floor, **weights)
     p0 = warm_start(pb, j2, scale=scale, body=body, segment_scale=segment_scale,
                     principal_point=principal_point)
     kept = None if confidence is None else np.asarray(confidence, float) > 1.0

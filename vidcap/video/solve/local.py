@@ -15,6 +15,7 @@ import numpy as np
 
 from vidcap.body import BodyModel
 from vidcap.video.solve.clip import (
+    FITTED_CONTACT_FLOOR,
     FITTED_NOISE_FLOOR,
     FITTED_SIGN_WEIGHT,
     make_problem,
@@ -75,6 +76,7 @@ def resolve_window(params, joints3d, window, joints2d, *, scale, fps: float, bod
                       prior_signs=cut(prior_signs), hard_signs=cut(hard_signs),
                       yaw_sigma=cut(yaw_sigma), segment_scale=cut(segment_scale),
                       confidence=cut(confidence), noise_floor=FITTED_NOISE_FLOOR,
+                      contact_floor=FITTED_CONTACT_FLOOR,
                       sign_weight=FITTED_SIGN_WEIGHT,
                       principal_point=principal_point,
                       contact="off" if contact is None else cut(contact))

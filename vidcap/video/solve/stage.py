@@ -15,6 +15,7 @@ import numpy as np
 from vidcap.body import BodyModel
 from vidcap.video.proposals import SignProposal
 from vidcap.video.solve.clip import (
+    FITTED_CONTACT_FLOOR,
     FITTED_NOISE_FLOOR,
     FITTED_SIGN_WEIGHT,
     ClipSolve,
@@ -111,6 +112,7 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
     sol = solve_clip(joints2d, scale=scale, fps=fps, body=body, yaw=yaw,
                      prior_signs=proposal.signs, hard_signs=user_signs, yaw_sigma=sigma,
                      confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
+                     contact_floor=FITTED_CONTACT_FLOOR,
                      robust=ROBUST_FITTED, sign_weight=FITTED_SIGN_WEIGHT,
                      segment_scale=segment_scale, principal_point=principal_point,
                      labels=LABELS if labels is None else labels,
