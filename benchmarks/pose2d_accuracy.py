@@ -40,7 +40,9 @@ limb pair matched once per clip ("clip") as well as per frame, and label flips, 
 the fit as it comes and relabelled by the solve over time
 (``fit_sequence(relabel=True)``). ``--views`` keeps only some views' clips, ``--save``
 writes every clip's truth and fitted joints for diagnostics, ``--predict`` fits with
-``fit_sequence(predict=True)``.
+``fit_sequence(predict=True)``. ``--hidden solve`` adds both fits with the joints the image
+cannot show (the shoulders, arms inside the torso's outline) taken from the 3D clip solve
+(:mod:`vidcap.video.hidden`, ``vidcap pose2d --hidden solve``).
 
 ``--torso`` (issue 27 item 4) fits the ``--held-out`` clips once each, tracked, outline
 only (that table's "cues outline" column) and prints each clip's torso angle error
@@ -60,7 +62,8 @@ processes; ``--proportion-bodies A,seed`` only some bodies.
 
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
-[--proportions] [--torso] [--views side,three-quarter,front] [--save OUT.npz] [--predict]``
+[--proportions] [--torso] [--views side,three-quarter,front] [--save OUT.npz] [--predict]
+[--hidden fit|solve]``
 """
 
 from __future__ import annotations
@@ -272,7 +275,7 @@ def clip_matched_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS,
-             save: str | None = None, predict: bool = False) -> int:
+             save: str | None = None, predict: bool = False, hidden: str = "fit") -> int:
     """The ``--held-out`` table: tracked PCK@0.05 per clip and the mean, with the
     frame's cues (``cues``) and with the outline only (same run), and the means and
     median errors per view, so a change to the search is judged on clips it was not
@@ -284,9 +287,12 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
     (``fit_sequence(relabel=True)``), whose only effect is on names. ``views``: only
     clips of these views; ``save``: an ``.npz`` of every clip's truth and fitted joints
     (for per-joint and per-pose diagnostics); ``predict``: ``fit_sequence(predict=True)``
-    (legs started where they were heading) in every fit."""
+    (legs started where they were heading) in every fit; ``hidden='solve'``: two more
+    columns, both fits with the joints the image cannot show taken from the 3D clip
+    solve (:func:`vidcap.video.hidden.solve_hidden`, ``--hidden solve``), same run."""
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.hidden import solve_hidden
 
     variants = ((f"cues {cues}", {"cues": cues, "predict": predict}),
                 ("cues outline", {"cues": "outline", "predict": predict}))
@@ -295,7 +301,9 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
           "per clip ('clip'), as fitted and relabelled by the solve over time; label "
           "flips, as fitted and relabelled; median error / height")
     print(f"{'clip':16} {'yaw':>4} {'view':5} " + " ".join(f"{v:>13}" for v, _ in variants)
-          + f" {'clip':>6} {'clip relab':>10} {'flips':>5} {'relabelled':>10} {'median':>7}")
+          + f" {'clip':>6} {'clip relab':>10} {'flips':>5} {'relabelled':>10} {'median':>7}"
+          + ("".join(f" {v[5:] + ' +solve':>13}" for v, _ in variants)
+             if hidden == "solve" else ""))
     table, flips, seen, medians, saved = [], [], [], [], {}
     for name, motion, yaws in held_out_motions(frames):
         for yaw in yaws:
@@ -305,18 +313,25 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
                                        rng=np.random.default_rng(0))
             tj = truth["joints2d"]
             hpx = body_height_px(tj)[:, None]
-            row, fitted = [], []
+            row, fitted, solved = [], [], []
             for _, kw in variants:
-                joints = fit_sequence(truth["masks"], frames=video, **kw).joints2d
+                pose = fit_sequence(truth["masks"], frames=video, **kw)
+                joints = pose.joints2d
                 err, _ = side_agnostic_errors(joints, tj)
                 row.append(summarise(err / hpx)["pck05"])
                 fitted.append(joints)
+                if hidden == "solve":
+                    solved.append(solve_hidden(joints, fps=30.0, spread=pose.spread,
+                                               model_height=pose.model_height,
+                                               frame_size=(640, 480)))
             relab = fit_sequence(truth["masks"], frames=video, relabel=True,
                                  **variants[0][1]).joints2d
             fitted.append(relab)
             median = summarise(side_agnostic_errors(fitted[0], tj)[0] / hpx)["median"]
             for j in (fitted[0], relab):
                 row.append(summarise(clip_matched_errors(j, tj) / hpx)["pck05"])
+            for j in solved:  # row[4:]: the hidden joints from the solve
+                row.append(summarise(side_agnostic_errors(j, tj)[0] / hpx)["pck05"])
             flip = [label_flips(fitted[0], tj, hpx), label_flips(relab, tj, hpx)]
             seen.append(view_of(yaw))
             table.append(row)
@@ -328,20 +343,21 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
                 saved[f"{key}|{label}"] = j
             print(f"{name:16} {yaw:>4g} {seen[-1][:5]:5} "
                   + " ".join(f"{v:13.1%}" for v in row[:2])
-                  + f" {row[2]:6.1%} {row[3]:10.1%} {flip[0]:5d} {flip[1]:10d} {median:7.4f}",
-                  flush=True)
+                  + f" {row[2]:6.1%} {row[3]:10.1%} {flip[0]:5d} {flip[1]:10d} {median:7.4f}"
+                  + "".join(f" {v:13.1%}" for v in row[4:]), flush=True)
     table, seen, medians = np.asarray(table), np.asarray(seen), np.asarray(medians)
     total = np.sum(flips, axis=0)
     print(f"{'mean / total':16} {'':>4} {'':5} " + " ".join(f"{v:13.2%}" for v in table.mean(0)[:2])
           + f" {table.mean(0)[2]:6.2%} {table.mean(0)[3]:10.2%} {total[0]:5d} {total[1]:10d}"
-          + f" {np.median(medians):7.4f}   ({len(table)} clips)")
+          + f" {np.median(medians):7.4f}" + "".join(f" {v:13.2%}" for v in table.mean(0)[4:])
+          + f"   ({len(table)} clips)")
     for view in VIEWS:
         here = seen == view
         if here.any():
             m = table[here].mean(0)
             print(f"{'mean ' + view:27} " + " ".join(f"{v:13.2%}" for v in m[:2])
                   + f" {m[2]:6.2%} {m[3]:10.2%} {'':5} {'':10} {np.median(medians[here]):7.4f}"
-                  + f"   ({here.sum()} clips)")
+                  + "".join(f" {v:13.2%}" for v in m[4:]) + f"   ({here.sum()} clips)")
     print(f"median error / height over clips (cues {cues}): {np.median(medians):.4f}")
     if save:
         np.savez_compressed(save, **saved)
@@ -600,6 +616,10 @@ def main(argv=None) -> int:
     ap.add_argument("--predict", action="store_true",
                     help="--held-out: tracked legs start where they were heading "
                          "(fit_sequence(predict=True))")
+    ap.add_argument("--hidden", choices=("fit", "solve"), default="fit",
+                    help="--held-out: with 'solve', also each fit with the joints the image "
+                         "cannot show taken from the 3D clip solve (vidcap pose2d --hidden "
+                         "solve), same run")
     ap.add_argument("--save", default=None,
                     help="--held-out: write every clip's truth and fitted joints to this .npz")
     ap.add_argument("--proportions", action="store_true",
@@ -628,7 +648,7 @@ def main(argv=None) -> int:
         return unusual_poses()
     if args.held_out:
         return held_out(args.frames, args.cues, tuple(args.views.split(",")), args.save,
-                        args.predict)
+                        args.predict, args.hidden)
 
     from vidcap.synth import render_clip
 

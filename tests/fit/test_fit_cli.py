@@ -126,3 +126,18 @@ def test_pose2d_cli_human_proportions(tmp_path, cli):
     assert legs + lengths[SEGMENT_INDEX["torso"]] + lengths[SEGMENT_INDEX["head"]] \
         == pytest.approx(0.961, abs=1e-3)
     assert np.isfinite(Pose2D.load(out).joints2d).all()
+
+
+def test_pose2d_cli_hidden_solve_changes_only_arms_and_shoulders(tmp_path, cli):
+    from vidcap.body import JOINT_INDEX as J
+
+    video, masks, _ = _clip(tmp_path)
+    fit, solved = tmp_path / "fit.npz", tmp_path / "solved.npz"
+    assert cli("pose2d", video, "--masks", masks, "-o", fit).returncode == 0
+    r = cli("pose2d", video, "--masks", masks, "-o", solved, "--hidden", "solve")
+    assert r.returncode == 0, r.stderr
+    a, b = Pose2D.load(fit).joints2d, Pose2D.load(solved).joints2d
+    arms = [J[f"{s}_{p}"] for s in "lr" for p in ("shoulder", "elbow", "wrist")]
+    rest = [k for k in range(15) if k not in arms]
+    np.testing.assert_array_equal(a[:, rest], b[:, rest])
+    assert np.isfinite(b).all() and not np.array_equal(a[:, arms], b[:, arms])

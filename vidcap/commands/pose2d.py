@@ -7,7 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from vidcap.commands.convert import DEFAULT_CUES, add_cues_argument, add_proportions_argument
+from vidcap.commands.convert import (
+    DEFAULT_CUES,
+    add_cues_argument,
+    add_hidden_argument,
+    add_proportions_argument,
+)
 from vidcap.errors import InputFileError, UsageError
 
 NAME = "pose2d"
@@ -40,6 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "and the clip fitted again with them (all but seed written as "
                              "body_lengths/body_widths, fractions of the standing height)")
     add_cues_argument(parser)
+    add_hidden_argument(parser, "joints2d (the solve runs after the fit: about 4 ms a frame)")
 
 
 def load_masks(path):
@@ -126,6 +132,15 @@ def run(args) -> int:
         progress=lambda it, total: progress(it, total=total, desc="pose2d", unit="frame"),
         frames=frames, cues=cues, **fit_kw,
     )
+    if args.hidden == "solve":
+        from dataclasses import replace
+
+        from vidcap.video.hidden import solve_hidden
+
+        joints = solve_hidden(pose.joints2d, fps=info.fps, body=None if estimate is None
+                              else estimate.body(), spread=pose.spread,
+                              model_height=pose.model_height, frame_size=(info.width, info.height))
+        pose = replace(pose, joints2d=joints)
     from vidcap.fileio import savez_atomic
 
     savez_atomic(args.output, **pose.arrays(), **extra)

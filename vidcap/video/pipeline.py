@@ -32,6 +32,7 @@ import numpy as np
 from vidcap.body import BodyModel
 from vidcap.errors import AnnotationError
 from vidcap.video.annotations import Annotations, default_path
+from vidcap.video.hidden import DEFAULT_HIDDEN, check_hidden, fill_hidden
 from vidcap.video.lifting import (
     NEAR_PLANE,
     SCALE_WINDOW_S,
@@ -108,16 +109,12 @@ def run(
     *,
     annotations: str | os.PathLike | Annotations | None = None,
     background: str | os.PathLike | None = None,
-    height: float = 1.75,
-    smooth_sigma: float = 1.0,
-    keyframe_score: float | None = None,
-    cache_dir: str | os.PathLike | None = None,
-    progress: bool | None = None,
-    log=None,
-    jobs: int | None = None,
-    view: str = "auto",
+    height: float = 1.75, smooth_sigma: float = 1.0, keyframe_score: float | None = None,
+    cache_dir: str | os.PathLike | None = None, progress: bool | None = None, log=None,
+    jobs: int | None = None, view: str = "auto",
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS, cues: str = DEFAULT_CUES,
     graph_cut: bool | None = None, still_person: bool | None = None,
+    hidden: str = DEFAULT_HIDDEN,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -162,6 +159,9 @@ def run(
     graph_cut, still_person : bool, optional
         The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) and the plate's
         still-person passes: see :func:`_graph_cut_option`, :func:`_still_person_option`.
+    hidden : {'fit', 'solve'}
+        The 2D joints returned as fitted, or with the shoulders and the arms the torso
+        hides from the 3D (:func:`vidcap.video.hidden.fill_hidden`; ``lift='solve'``).
 
     Returns
     -------
@@ -172,7 +172,7 @@ def run(
     from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    _check_options(view, lift, proportions, cues)  # before any work
+    _check_options(view, lift, proportions, cues, hidden)  # before any work
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -214,7 +214,7 @@ def run(
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
                                body=body, annotations=ann, ann_source=ann_source, view=view,
                                smooth_sigma=smooth_sigma, keyframe_score=keyframe_score,
-                               log=log, lift_method=lift, video=video)
+                               log=log, lift_method=lift, video=video, hidden=hidden)
     return ConvertResult(
         video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
         scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
@@ -275,7 +275,8 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
     return pose, estimate.body(body.height), estimate
 
 
-def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
+def _check_options(view: str, lift: str, proportions: str, cues: str,
+                   hidden: str = DEFAULT_HIDDEN) -> None:
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
     from vidcap.video.fit.cues import CUE_MODES
@@ -283,6 +284,7 @@ def _check_options(view: str, lift: str, proportions: str, cues: str) -> None:
 
     _check_choice("proportions", proportions, PROPORTION_CHOICES)
     _check_choice("cues", cues, tuple(CUE_MODES))
+    check_hidden(hidden)
 
 
 def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,
@@ -795,11 +797,12 @@ def front_cue(video, joints2d) -> np.ndarray:
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
                      annotations: Annotations, ann_source, view: str, smooth_sigma: float,
                      keyframe_score: float | None, log, lift_method: str = "solve",
-                     video=None) -> _Lifted:
+                     video=None, hidden: str = DEFAULT_HIDDEN) -> _Lifted:
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
-    front/back cue and the limb order (:func:`colour_cues`)."""
+    front/back cue and the limb order (:func:`colour_cues`). ``hidden='solve'``: the 2D
+    joints with the ones the torso hides from the 3D (:func:`_with_hidden`)."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
@@ -825,7 +828,20 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     else:
         motion = build_motion(lifted.joints3d, fps, body=body, smooth_sigma=smooth_sigma,
                               keys=keys)
-    return _Lifted(lifted, motion, joints2d, model_height, outside, track)
+    out = _Lifted(lifted, motion, joints2d, model_height, outside, track)
+    return _with_hidden(out) if hidden == "solve" else out
+
+
+def _with_hidden(out: _Lifted) -> _Lifted:
+    """``out`` with its 2D joints (the fit's image-side ones and the lift's body-side
+    ones) taking the shoulders and the arms inside the torso's outline from the 3D
+    (:func:`vidcap.video.hidden.fill_hidden`)."""
+    import dataclasses
+
+    lifted = dataclasses.replace(out.lifted,
+                                 joints2d=fill_hidden(out.lifted.joints2d, out.lifted.joints3d))
+    return dataclasses.replace(out, lifted=lifted,
+                               joints2d=fill_hidden(out.joints2d, out.lifted.joints3d))
 
 
 # --------------------------------------------------------------------------- convert

@@ -1,0 +1,126 @@
+"""Joints the image cannot show, from the 3D clip solve (:mod:`vidcap.video.hidden`)."""
+
+import numpy as np
+import pytest
+
+from vidcap.body import JOINT_INDEX as J
+from vidcap.video.hidden import (
+    HIDDEN_CHOICES,
+    check_hidden,
+    fill_hidden,
+    hidden_arms,
+    reproject,
+    solve_hidden,
+)
+
+ARM = {s: [J[f"{s}_shoulder"], J[f"{s}_elbow"], J[f"{s}_wrist"]] for s in "lr"}
+LEGS = [J[f"{s}_{p}"] for s in "lr" for p in ("hip", "knee", "ankle")]
+
+
+def _walk(n=30, yaw_deg=90.0):
+    """A side view of the built-in walk: joints3d (F, 15, 3) in the camera's frame (X
+    right, Y up) and their scaled orthographic image (F, 15, 2), 200 px/m."""
+    from vidcap.synth import make_motion
+
+    j = make_motion("walk", n_frames=n).positions()
+    a = np.deg2rad(yaw_deg)  # turn the walk (along -Z) to cross the picture
+    rot = np.array([[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]])
+    j3 = j @ rot.T
+    uv = np.stack([320.0 + 200.0 * j3[..., 0], 420.0 - 200.0 * j3[..., 1]], axis=-1)
+    return j3, uv
+
+
+def test_reproject_draws_the_3d_joints_where_the_camera_sees_them():
+    j3, uv = _walk(8)
+    # any scale and offset of the 3D (metres, another origin): the axis joints say which
+    got = reproject(0.5 * j3 + np.array([3.0, -1.0, 7.0]), uv)
+    np.testing.assert_allclose(got, uv, atol=1e-9)
+
+
+def test_hidden_arms_are_the_arms_drawn_inside_the_torso():
+    _, uv = _walk(1)
+    pose = uv[0].copy()
+    shoulder = pose[J["l_shoulder"]]
+    pose[J["l_elbow"]] = shoulder + [0.0, 40.0]  # hanging along the torso
+    pose[J["l_wrist"]] = shoulder + [0.0, 90.0]
+    pose[J["r_elbow"]] = pose[J["r_shoulder"]] + [60.0, -20.0]  # raised out to the side
+    pose[J["r_wrist"]] = pose[J["r_shoulder"]] + [120.0, -40.0]
+    assert hidden_arms(pose[None]).tolist() == [[True, False]]
+    assert not hidden_arms(np.full((1, 15, 2), np.nan)).any()
+
+
+def _front_pose(n=5):
+    """A front view of the model's T-pose with its left forearm folded across the
+    torso (elbow forward and in): joints3d (F, 15, 3) and their image (F, 15, 2)."""
+    from vidcap.body import BodyModel
+
+    j = BodyModel().rest_positions()
+    j[J["l_elbow"]] = j[J["l_shoulder"]] + [0.08, -0.2, -0.12]
+    j[J["l_wrist"]] = j[J["l_elbow"]] + [0.22, 0.05, -0.2]
+    j3 = np.repeat(j[None], n, axis=0) + np.linspace(0.0, 0.2, n)[:, None, None] * [1, 0, 0]
+    uv = np.stack([320.0 + 200.0 * j3[..., 0], 420.0 - 200.0 * j3[..., 1]], axis=-1)
+    return j3, uv
+
+
+def test_fill_hidden_takes_hidden_arms_and_shoulders_from_the_3d_and_keeps_the_rest():
+    j3, uv = _front_pose()
+    fit = uv.copy()
+    # the 2D fit's left arm hung down along the torso (the frame shows nothing of the
+    # forearm across it); its right arm, out to the side, is what the image shows
+    fit[:, J["l_elbow"]] = fit[:, J["l_shoulder"]] + [15.0, 45.0]
+    fit[:, J["l_wrist"]] = fit[:, J["l_shoulder"]] + [25.0, 110.0]
+    fit[:, J["l_shoulder"]] += [4.0, 2.0]
+    fit[:, J["r_wrist"]] += [0.0, 6.0]  # a visible arm fitted a little off: kept
+    fit[:, LEGS] += 3.0  # legs fitted a little off: kept
+    assert hidden_arms(fit).tolist() == [[True, False]] * len(fit)
+    # the solve names arms by the body's sides: exchanged, they are matched back
+    named = j3[:, [0, 1, 2, 6, 7, 8, 3, 4, 5, 9, 10, 11, 12, 13, 14]]
+    out = fill_hidden(fit, named)
+    np.testing.assert_allclose(out[:, ARM["l"]], uv[:, ARM["l"]], atol=1e-6)
+    np.testing.assert_allclose(out[:, J["r_shoulder"]], uv[:, J["r_shoulder"]], atol=1e-6)
+    np.testing.assert_array_equal(out[:, ARM["r"][1:]], fit[:, ARM["r"][1:]])
+    np.testing.assert_array_equal(out[:, LEGS], fit[:, LEGS])
+    np.testing.assert_array_equal(out[:, :3], fit[:, :3])
+
+
+def test_fill_hidden_leaves_frames_without_a_fit_empty():
+    j3, uv = _front_pose(3)
+    fit = uv.copy()
+    fit[1] = np.nan
+    out = fill_hidden(fit, j3)
+    assert np.isnan(out[1]).all() and np.isfinite(out[[0, 2]]).all()
+
+
+def test_solve_hidden_keeps_a_consistent_pose_and_the_legs():
+    """The walk's exact 2D is a pose the solve can take: the arms it puts back stay
+    within 2 % of the height of where they were, and the legs are the fit's."""
+    _, uv = _walk(30)
+    out = solve_hidden(uv, fps=30.0, frame_size=(640, 480))
+    height = 200.0 * 1.75
+    arms = ARM["l"] + ARM["r"]
+    assert np.median(np.linalg.norm(out[:, arms] - uv[:, arms], axis=-1)) < 0.02 * height
+    np.testing.assert_array_equal(out[:, LEGS], uv[:, LEGS])
+
+
+def test_hidden_choices_are_checked_and_spelled_alike_in_the_commands():
+    from vidcap.commands import convert as convert_cmd
+    from vidcap.errors import UsageError
+    from vidcap.video import hidden
+
+    assert convert_cmd.HIDDEN_CHOICES == HIDDEN_CHOICES
+    assert convert_cmd.DEFAULT_HIDDEN == hidden.DEFAULT_HIDDEN
+    for ok in HIDDEN_CHOICES:
+        check_hidden(ok)
+    with pytest.raises(UsageError, match="--hidden 'guess'"):
+        check_hidden("guess")
+
+
+def test_convert_and_pose2d_refuse_an_unknown_hidden_before_any_work(tmp_path, cli):
+    from vidcap.errors import UsageError
+    from vidcap.video import pipeline
+
+    with pytest.raises(UsageError, match="--hidden"):
+        pipeline.run(tmp_path / "nothing.mp4", hidden="guess")
+    for command in (("pose2d", "-o", tmp_path / "p.npz"), ("convert", "-o", tmp_path / "o.bvh")):
+        r = cli(command[0], tmp_path / "nothing.mp4", *command[1:], "--hidden", "guess")
+        assert r.returncode == 2 and "--hidden" in r.stderr
