@@ -10,7 +10,9 @@ that share; ``mp-masks``: the same fit to MediaPipe's masks instead of vidcap's 
 silhouettes (which part of the error is the silhouettes'); ``human`` and ``mp-human``: the
 same two with ``proportions='human'`` (an anthropometric table's body, the ankles above
 the soles); ``all-human``: ``--cues all`` with the human body (``vidcap convert``'s
-default body). Then per joint (each row kind): median / share > 10 %.
+default body); any of them with ``+solve``: the joints the image cannot show (shoulders, arms
+inside the torso's outline) from the 3D clip solve (``vidcap pose2d --hidden solve``).
+Then per joint (each row kind): median / share > 10 %.
 """
 
 from __future__ import annotations
@@ -59,27 +61,43 @@ def _has_masks(path: Path) -> bool:
         return "masks" in d.files
 
 
-def _fit_reference_masks(clip: RealClip, proportions: str = "seed") -> np.ndarray:
-    """The tracked fit (outline) to MediaPipe's masks over ``clip``'s range: what the fit
-    does with silhouettes better than vidcap's own (cues column ``mp-masks``;
-    ``mp-human``: with ``proportions='human'``)."""
+def _fit_reference_masks(clip: RealClip, proportions: str = "seed"):
+    """The tracked fit (outline) to MediaPipe's masks over ``clip``'s range, a
+    :class:`vidcap.video.fit.result.Pose2D`: what the fit does with silhouettes better
+    than vidcap's own (cues column ``mp-masks``; ``mp-human``: with
+    ``proportions='human'``)."""
     from vidcap.video.fit.proportions import fit_keywords, human_proportions
     from vidcap.video.fit.tracking import fit_sequence
 
     with np.load(clip.reference) as d:
         masks = stretch(d["masks"], clip).astype(bool)
     kw = fit_keywords(human_proportions().factors) if proportions == "human" else {}
-    return fit_sequence(masks, cues="outline", **kw).joints2d
+    return fit_sequence(masks, cues="outline", **kw)
 
 
 def _joints(clip: RealClip, row: str):
-    """The 2D joints of one row kind (see the module's docstring)."""
-    if row.startswith("mp-"):
-        return _fit_reference_masks(clip, "human" if row == "mp-human" else "seed")
-    if row in ("human", "all-human"):
-        cues = "all" if row == "all-human" else "outline"
-        return pipeline_result(clip.video, cues, proportions="human").image_joints2d
-    return pipeline_result(clip.video, row).image_joints2d
+    """The 2D joints of one row kind (see the module's docstring); a row ending in
+    ``+solve``: that row's with the joints the image cannot show taken from the 3D clip
+    solve (:func:`vidcap.video.hidden.solve_hidden`, ``--hidden solve``)."""
+    from vidcap.io.video import probe
+    from vidcap.video.fit.proportions import human_proportions
+    from vidcap.video.hidden import solve_hidden
+
+    base = row.removesuffix("+solve")
+    human = base in ("human", "all-human", "mp-human")
+    if base.startswith("mp-"):
+        pose = _fit_reference_masks(clip, "human" if human else "seed")
+        joints, spread, model_height = pose.joints2d, pose.spread, pose.model_height
+    else:
+        cues = "all" if base in ("all", "all-human") else "outline"
+        res = pipeline_result(clip.video, cues, proportions="human" if human else "seed")
+        joints, spread, model_height = res.image_joints2d, res.spread, res.model_height
+    if base == row:
+        return joints
+    info = probe(clip.video)
+    return solve_hidden(joints, fps=info.fps, body=human_proportions().body() if human else None,
+                        spread=spread, model_height=model_height,
+                        frame_size=(info.width, info.height))
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,
