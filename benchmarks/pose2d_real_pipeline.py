@@ -11,7 +11,9 @@ silhouettes (which part of the error is the silhouettes'); ``human`` and ``mp-hu
 same two with ``proportions='human'`` (an anthropometric table's body, the ankles above
 the soles); ``all-human``: ``--cues all`` with the human body (``vidcap convert``'s
 default body); any of them with ``+solve``: the joints the image cannot show (shoulders, arms
-inside the torso's outline) from the 3D clip solve (``vidcap pose2d --hidden solve``).
+inside the torso's outline) from the 3D clip solve (``--hidden solve``: the pipeline rows
+through ``vidcap convert``'s own path with the clip solve, the ``mp-`` rows as ``vidcap pose2d``
+does it).
 Then per joint (each row kind): median / share > 10 %.
 """
 
@@ -78,26 +80,28 @@ def _fit_reference_masks(clip: RealClip, proportions: str = "seed"):
 def _joints(clip: RealClip, row: str):
     """The 2D joints of one row kind (see the module's docstring); a row ending in
     ``+solve``: that row's with the joints the image cannot show taken from the 3D clip
-    solve (:func:`vidcap.video.hidden.solve_hidden`, ``--hidden solve``)."""
+    solve (pipeline rows: ``vidcap convert --hidden solve``'s own path,
+    :func:`vidcap.video.pipeline.run` with ``lift='solve', hidden='solve'``; the
+    ``mp-`` rows: :func:`vidcap.video.hidden.solve_hidden`, ``vidcap pose2d --hidden
+    solve``)."""
     from vidcap.io.video import probe
     from vidcap.video.fit.proportions import human_proportions
     from vidcap.video.hidden import solve_hidden
 
     base = row.removesuffix("+solve")
+    hidden = "fit" if base == row else "solve"
     human = base in ("human", "all-human", "mp-human")
-    if base.startswith("mp-"):
-        pose = _fit_reference_masks(clip, "human" if human else "seed")
-        joints, spread, model_height = pose.joints2d, pose.spread, pose.model_height
-    else:
+    if not base.startswith("mp-"):
         cues = "all" if base in ("all", "all-human") else "outline"
-        res = pipeline_result(clip.video, cues, proportions="human" if human else "seed")
-        joints, spread, model_height = res.image_joints2d, res.spread, res.model_height
-    if base == row:
-        return joints
+        return pipeline_result(clip.video, cues, proportions="human" if human else "seed",
+                               hidden=hidden).image_joints2d
+    pose = _fit_reference_masks(clip, "human" if human else "seed")
+    if hidden == "fit":
+        return pose.joints2d
     info = probe(clip.video)
-    return solve_hidden(joints, fps=info.fps, body=human_proportions().body() if human else None,
-                        spread=spread, model_height=model_height,
-                        frame_size=(info.width, info.height))
+    return solve_hidden(pose.joints2d, fps=info.fps,
+                        body=human_proportions().body() if human else None, spread=pose.spread,
+                        model_height=pose.model_height, frame_size=(info.width, info.height))
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,

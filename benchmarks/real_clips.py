@@ -131,14 +131,17 @@ def load_truth(clip: MaskedClip) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75,
-                    proportions: str = "seed"):
+                    proportions: str = "seed", hidden: str = "fit"):
     """vidcap's :func:`vidcap.video.pipeline.run` on the whole ``video`` (default options but
     ``cues`` and ``proportions``; no smoothing, the per-segment lift: the 3D is re-run per
-    stretch), cached by stage in :data:`CACHE`."""
+    stretch), cached by stage in :data:`CACHE`. ``hidden='solve'``: ``vidcap convert
+    --hidden solve``, the clip solve as the lift and the joints the image cannot show
+    taken from it (:mod:`vidcap.video.hidden`)."""
     from vidcap.video.pipeline import run
 
     return run(video, height=height, smooth_sigma=0.0, progress=False, cache_dir=CACHE,
-               lift="segment", cues=cues, proportions=proportions)
+               lift="solve" if hidden == "solve" else "segment", cues=cues,
+               proportions=proportions, hidden=hidden)
 
 
 def stretch(arr, clip: RealClip):
