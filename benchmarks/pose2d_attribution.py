@@ -24,8 +24,12 @@ Nothing here is validation: these clips chose the fit's constants (the held-out 
 ``pose2d_accuracy.py --held-out``). The 70 and 100 degree rows of 131_01 and 07_07 were added
 as tuning clips by wt-side (issue 27): same motions and stretch as the ``--frames 60`` clips.
 
-Usage: ``PYTHONPATH=. python benchmarks/pose2d_attribution.py [--clips "131_01 110,walk 45"]``
-(≈ 4 min).
+``--hidden solve``: the cue fit's joints the image cannot show (shoulders, arms inside the
+torso's outline) taken from the 3D clip solve first (:func:`vidcap.video.hidden.solve_hidden`,
+``vidcap pose2d --hidden solve``), so the table says where the misses are after it.
+
+Usage: ``PYTHONPATH=. python benchmarks/pose2d_attribution.py [--clips "131_01 110,walk 45"]
+[--hidden fit|solve]`` (≈ 4 min).
 """
 
 from __future__ import annotations
@@ -154,9 +158,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--clips", default=None,
                     help='only these clips, e.g. "131_01 110,walk 45" (default: all)')
+    ap.add_argument("--hidden", choices=("fit", "solve"), default="fit",
+                    help="solve: the cue fit's hidden joints from the 3D clip solve first")
     args = ap.parse_args(argv)
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.hidden import solve_hidden
 
     keep = None if args.clips is None else set(args.clips.split(","))
     rows = {}
@@ -170,7 +177,11 @@ def main(argv=None) -> int:
                 continue
             video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                        rng=np.random.default_rng(0))
-            cues = fit_sequence(truth["masks"], frames=video, cues="all").joints2d
+            pose = fit_sequence(truth["masks"], frames=video, cues="all")
+            cues = pose.joints2d
+            if args.hidden == "solve":
+                cues = solve_hidden(cues, fps=30.0, spread=pose.spread,
+                                    model_height=pose.model_height, frame_size=(640, 480))
             outline = fit_sequence(truth["masks"], frames=video, cues="outline").joints2d
             h = body_height_px(truth["joints2d"])
             rows[(name, yaw)] = attribute(cues, outline, truth)
