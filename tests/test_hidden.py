@@ -108,7 +108,8 @@ def test_hidden_choices_are_checked_and_spelled_alike_in_the_commands():
     from vidcap.video import hidden
 
     assert convert_cmd.HIDDEN_CHOICES == HIDDEN_CHOICES
-    assert convert_cmd.DEFAULT_HIDDEN == hidden.DEFAULT_HIDDEN
+    assert convert_cmd.POSE2D_HIDDEN == hidden.DEFAULT_HIDDEN == "fit"
+    assert convert_cmd.CONVERT_HIDDEN == hidden.CONVERT_HIDDEN == "solve"
     for ok in HIDDEN_CHOICES:
         check_hidden(ok)
     with pytest.raises(UsageError, match="--hidden 'guess'"):
@@ -124,3 +125,26 @@ def test_convert_and_pose2d_refuse_an_unknown_hidden_before_any_work(tmp_path, c
     for command in (("pose2d", "-o", tmp_path / "p.npz"), ("convert", "-o", tmp_path / "o.bvh")):
         r = cli(command[0], tmp_path / "nothing.mp4", *command[1:], "--hidden", "guess")
         assert r.returncode == 2 and "--hidden" in r.stderr
+
+
+def test_run_with_hidden_solve_changes_only_the_arms_and_shoulders_of_its_2d(tmp_path):
+    """``pipeline.run(hidden='solve')`` (``vidcap convert``'s default): the same fit, the
+    same 3D, and in both 2D outputs only the shoulders and arms may differ; with the
+    per-segment lift nothing changes."""
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.pipeline import run
+
+    video = tmp_path / "walk.mp4"
+    synth_clip(video, tmp_path / "t.npz", make_motion("walk", n_frames=12), size=(160, 120),
+               rng=np.random.default_rng(0))
+    kw = {"progress": False, "jobs": 1, "cache_dir": tmp_path / "cache", "proportions": "seed"}
+    fit, solved = run(video, hidden="fit", **kw), run(video, hidden="solve", **kw)
+    np.testing.assert_array_equal(fit.lifted.joints3d, solved.lifted.joints3d)
+    arms = ARM["l"] + ARM["r"]
+    rest = [k for k in range(15) if k not in arms]
+    for a, b in ((fit.image_joints2d, solved.image_joints2d),
+                 (fit.lifted.joints2d, solved.lifted.joints2d)):
+        np.testing.assert_array_equal(a[:, rest], b[:, rest])
+        assert not np.array_equal(a[:, arms], b[:, arms])
+    seg = [run(video, hidden=h, lift="segment", **kw).image_joints2d for h in HIDDEN_CHOICES]
+    np.testing.assert_array_equal(*seg)

@@ -36,10 +36,12 @@ DEFAULT_CUES = "outline"
 #: ``--proportions`` default (:data:`vidcap.video.pipeline.DEFAULT_PROPORTIONS`, spelled
 #: here for a light ``--help``; a test checks they agree).
 DEFAULT_PROPORTIONS = "human"
-#: ``--hidden`` values and default (:data:`vidcap.video.hidden.HIDDEN_CHOICES` and
-#: ``DEFAULT_HIDDEN``, spelled here for a light ``--help``; a test checks they agree).
+#: ``--hidden`` values and the defaults of ``vidcap convert`` and ``vidcap pose2d``
+#: (:data:`vidcap.video.hidden.HIDDEN_CHOICES`, ``CONVERT_HIDDEN``, ``DEFAULT_HIDDEN``,
+#: spelled here for a light ``--help``; a test checks they agree).
 HIDDEN_CHOICES = ("fit", "solve")
-DEFAULT_HIDDEN = "fit"
+CONVERT_HIDDEN = "solve"
+POSE2D_HIDDEN = "fit"
 #: ``--proportions`` values of the commands that fit the body model.
 PROPORTION_CHOICES = ("human", "seed", "auto")
 #: ``--graph-cut`` default (:data:`vidcap.video.pipeline.DEFAULT_GRAPH_CUT`, spelled here
@@ -77,15 +79,15 @@ def add_cues_argument(parser: argparse.ArgumentParser) -> None:
                         "seed's method; 2.7x faster). Default: " + DEFAULT_CUES)
 
 
-def add_hidden_argument(parser: argparse.ArgumentParser, where: str) -> None:
+def add_hidden_argument(parser: argparse.ArgumentParser, where: str, default: str) -> None:
     """``--hidden``, shared by ``vidcap convert`` and ``vidcap pose2d``; ``where``: what
     the 2D joints it changes are, in the command's words."""
-    parser.add_argument("--hidden", default=DEFAULT_HIDDEN, choices=HIDDEN_CHOICES,
+    parser.add_argument("--hidden", default=default, choices=HIDDEN_CHOICES,
                         help="joints the frame cannot show (an arm behind or in front of the "
                         "torso, the shoulders): 'fit' = as the 2D fit left them, 'solve' = "
                         "from the 3D clip solve drawn back into the image (bones, joint "
                         "limits and the motion-capture pose prior place them from the rest "
-                        f"of the body); changes {where}. Default: {DEFAULT_HIDDEN}")
+                        f"of the body); changes {where}. Default: {default}")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -124,7 +126,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "2D fit done again with them); the 2D fit, the lift and the skeleton "
                              "use them (--height stays the standing height)")
     add_cues_argument(parser)
-    add_hidden_argument(parser, "the 2D joints of --save (with --lift solve)")
+    add_hidden_argument(parser, "the 2D joints of --save (with --lift solve; the solve runs "
+                        "anyway)", CONVERT_HIDDEN)
     parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                         help="re-decide a band round the person (and the parts of the scene "
                         "never seen uncovered) by a graph cut on the clip's person and scene "

@@ -9,6 +9,7 @@ import numpy as np
 
 from vidcap.commands.convert import (
     DEFAULT_CUES,
+    POSE2D_HIDDEN,
     add_cues_argument,
     add_hidden_argument,
     add_proportions_argument,
@@ -45,7 +46,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "and the clip fitted again with them (all but seed written as "
                              "body_lengths/body_widths, fractions of the standing height)")
     add_cues_argument(parser)
-    add_hidden_argument(parser, "joints2d (the solve runs after the fit: about 4 ms a frame)")
+    add_hidden_argument(parser, "joints2d (the solve runs after the fit: about 2.6 ms a "
+                        "frame)", POSE2D_HIDDEN)
 
 
 def load_masks(path):

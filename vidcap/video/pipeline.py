@@ -801,8 +801,8 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
-    front/back cue and the limb order (:func:`colour_cues`). ``hidden='solve'``: the 2D
-    joints with the ones the torso hides from the 3D (:func:`_with_hidden`)."""
+    front/back cue and the limb order (:func:`colour_cues`). ``hidden='solve'`` with the
+    clip solve: the 2D joints with the ones the torso hides from it (:func:`_with_hidden`)."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
@@ -829,7 +829,7 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
         motion = build_motion(lifted.joints3d, fps, body=body, smooth_sigma=smooth_sigma,
                               keys=keys)
     out = _Lifted(lifted, motion, joints2d, model_height, outside, track)
-    return _with_hidden(out) if hidden == "solve" else out
+    return _with_hidden(out) if hidden == "solve" and lift_method == "solve" else out
 
 
 def _with_hidden(out: _Lifted) -> _Lifted:
