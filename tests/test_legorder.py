@@ -157,6 +157,38 @@ def test_arms_named_frame_by_frame_where_the_cue_outweighs_a_smooth_crossing():
     assert not cued_links(j2, 1.0, order, ~edge, right, swap).any()
 
 
+
+def test_turned_frames_names_three_quarter_frames_as_side_ones():
+    from vidcap.video.lifting import near_limb_names
+
+    F = 12
+    j2 = np.zeros((F, 15, 2))
+    j2[:, :, 0] = 100.0 + np.arange(15) * 3.0  # still joints: the linking keeps the names
+    j2[:, :, 1] = 50.0 + np.arange(15) * 7.0
+    order = np.full((F, 2), np.nan)
+    order[:, 1] = 0.5  # the fit's l leg nearer throughout
+    # a body facing front-right, turned 53 degrees (spread 0.6), then nearly frontal
+    # (spread 0.95)
+    orient = np.full(F, "front_right")
+    rho = np.r_[np.full(6, 0.6), np.full(6, 0.95)]
+    user = np.full(F, "")
+
+    def named(frames):
+        out = near_limb_names(j2, order, orient, user, rho, 1.0, frames=frames)
+        return np.zeros((F, 2), bool) if out is None else out
+
+    # 'side' names only side labels: none here
+    assert not named("side").any()
+    # 'turned' names the turned frames: facing image right its right leg is the near one,
+    # and facing the camera the image-side names swap (the fit's l is the body's right
+    # already), so the fit's names stay there: no exchange; the frontal frames are left
+    # alone either way
+    assert not named("turned").any()
+    flipped = order.copy()
+    flipped[:, 1] = -0.5  # the fit's r leg nearer: named the other way in turned frames
+    out = near_limb_names(j2, flipped, orient, user, rho, 1.0, frames="turned")
+    assert out is not None and out[:6, 1].all() and not out[6:].any()
+
 @functools.cache
 def _side_walk():
     from vidcap.synth import make_motion, render_clip

@@ -323,8 +323,16 @@ def consistent_names(j2, rho, unit) -> np.ndarray:
 #: side 69.2 / 81.6 / 127.2, all 62.6 / 78.9 / 120.8; real footage against MediaPipe
 #: (sum over 11 rows, 1560 mm without the cue; looked at to choose, see
 #: benchmarks/RESULTS.md): edge 1554, side 1544, all 1617 (frontal clips lose: a limb's
-#: own swing outweighs the side's depth there).
+#: own swing outweighs the side's depth there). ``turned``: the side labels and the
+#: three-quarter frames whose spread is at most :data:`LIMB_ORDER_TURNED_RHO` (session 20,
+#: same cached 2D, legs-coupled pose prior): tuning renders 67.7 -> 53.7 mm (walk yaw 60
+#: 80 -> 50, yaw 120 60 -> 47, arms yaw 120 92 -> 77), but the validation renders gain
+#: nothing (samples 68.2 both, held out 106.0 -> 106.7) and real footage loses (sum 1617
+#: -> 1631, sports2d_walk_turn 108 -> 118; 1625 at a spread of 0.6), so ``side`` stays.
 LIMB_ORDER_FRAMES = "side"
+#: ``turned`` (:data:`LIMB_ORDER_FRAMES`): the torso's spread (cos of the yaw, about) at
+#: or below which a three-quarter frame is named too.
+LIMB_ORDER_TURNED_RHO = 0.75
 #: The limb pairs (arms, legs: :data:`vidcap.video.annotations.PAIRS` columns) it names
 #: (legs only: tuning renders 68.5 mm with ``all``; real sum 1556 with ``side``).
 LIMB_ORDER_PAIRS = (True, True)
@@ -382,7 +390,10 @@ def near_limb_names(j2, limb_order, proposed_orientation, user_orientation, rho,
     pairs = LIMB_ORDER_PAIRS if pairs is None else pairs
     orient, yaw, swap = view_names(proposed_orientation, rho, user_orientation, facing)
     edge = np.asarray(user_orientation) == ""
-    if frames != "all":
+    if frames == "turned":  # a side label, or turned at least LIMB_ORDER_TURNED_RHO
+        edge &= (orient == "left") | (orient == "right") \
+            | (np.asarray(rho, float) <= LIMB_ORDER_TURNED_RHO)
+    elif frames != "all":
         edge &= (orient == "left") | (orient == "right")
     if frames == "edge":
         edge &= np.asarray(rho, float) <= SIDE_FACING_SPREAD
