@@ -90,24 +90,3 @@ def test_shipped_table_names_its_training_trials():
     with np.load(TABLE) as t:
         trials = [str(s) for s in t["trials"]]
     assert trials and not any(s[:3] in ("007", "013", "016", "131") for s in trials)
-
-
-def test_the_legs_are_one_chain_so_a_walk_keeps_one_thigh_back():
-    # training poses of a walk: the thighs' forward components in anti-phase. Each leg
-    # alone takes every forward component, so only a prior coupling the two legs
-    # scores both thighs forward worse than one forward and one back.
-    from vidcap.video.solve.prior import CHAINS
-
-    assert (15, 27) in CHAINS  # l_upper_leg 15:18 ... r_lower_leg 24:27
-    rng = np.random.default_rng(3)
-    x = rng.normal(0.0, 0.05, (4000, N_FEATURES))
-    swing = rng.uniform(-0.5, 0.5, 4000)
-    x[:, 17] = swing  # the l thigh's z (forward or back in the torso frame)
-    x[:, 23] = -swing + rng.normal(0.0, 0.05, 4000)  # the r thigh's, opposite
-    table = fit_prior(x, k=1, floor=0.0)
-    apart = np.zeros((1, N_FEATURES))
-    apart[0, 17], apart[0, 23] = 0.4, -0.4
-    both = apart.copy()
-    both[0, 23] = 0.4
-    cost = [float(np.sum(prior_residuals(p, *table)[:, 15:27] ** 2)) for p in (apart, both)]
-    assert cost[0] < 0.1 * cost[1]

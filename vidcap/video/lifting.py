@@ -325,10 +325,11 @@ def consistent_names(j2, rho, unit) -> np.ndarray:
 #: benchmarks/RESULTS.md): edge 1554, side 1544, all 1617 (frontal clips lose: a limb's
 #: own swing outweighs the side's depth there). ``turned``: the side labels and the
 #: three-quarter frames whose spread is at most :data:`LIMB_ORDER_TURNED_RHO` (session 20,
-#: same cached 2D, legs-coupled pose prior): tuning renders 67.7 -> 53.7 mm (walk yaw 60
-#: 80 -> 50, yaw 120 60 -> 47, arms yaw 120 92 -> 77), but the validation renders gain
-#: nothing (samples 68.2 both, held out 106.0 -> 106.7) and real footage loses (sum 1617
-#: -> 1631, sports2d_walk_turn 108 -> 118; 1625 at a spread of 0.6), so ``side`` stays.
+#: same cached 2D, with a legs-coupled pose prior that was not kept either): tuning
+#: renders 67.7 -> 53.7 mm (walk yaw 60 80 -> 50, yaw 120 60 -> 47, arms yaw 120 92 -> 77),
+#: but the validation renders gain nothing (samples 68.2 both, held out 106.0 -> 106.7)
+#: and real footage loses (sum 1617 -> 1631, sports2d_walk_turn 108 -> 118; 1625 at a
+#: spread of 0.6), so ``side`` stays.
 LIMB_ORDER_FRAMES = "side"
 #: ``turned`` (:data:`LIMB_ORDER_FRAMES`): the torso's spread (cos of the yaw, about) at
 #: or below which a three-quarter frame is named too.

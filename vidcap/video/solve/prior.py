@@ -6,7 +6,7 @@ free within the joint limits; this prior pulls it toward poses people take. The
 features of a pose are the unit directions of the nine non-torso segments (head,
 upper and lower arms and legs) in the torso's frame (:func:`features`, 27 numbers,
 independent of where the body faces); the prior is a Gaussian on them per chain
-(head; each arm; the two legs together: 3, 6 and 12 numbers), its residual ``W (f - mean)`` with
+(head; each arm; each leg: 3 and 6 numbers), its residual ``W (f - mean)`` with
 ``W^T W`` the chain's precision, so it adds 27 rows to each frame's residuals
 (:mod:`vidcap.video.solve.residuals`) with a Jacobian read from the kinematic one.
 
@@ -28,15 +28,7 @@ from vidcap.body import SEGMENT_JOINTS
 #: The segments whose direction is a feature (all but the torso), and the chains the
 #: prior couples: (start, stop) columns of the 27 features.
 PRIOR_SEGMENTS = np.arange(1, 10)
-#: The legs are one chain: how one leg swings says how the other does (in a walk one
-#: thigh is forward while the other is back), which matters where each leg's two
-#: reflections fit the image alike (a three-quarter view: the knee forward or out to
-#: the side). ``benchmarks/solve_fitted.py --front --legs``, legs apart / together,
-#: mean PA-MPJPE mm: tuning renders 68.3 / 67.7 (walk_three_quarter, a sample, also
-#: tuning: 111 / 107); validation: held-out renders 107.3 / 106.0, samples 70.2 / 68.2.
-#: The arms coupled as well were worse (tuning renders 74.1; every limb in one chain
-#: 80.4), as were mixtures of 4 / 8 / 10 components (69.2 / 71.9 / 68.7).
-CHAINS = ((0, 3), (3, 9), (9, 15), (15, 27))
+CHAINS = ((0, 3), (3, 9), (9, 15), (15, 21), (21, 27))
 N_FEATURES = 27
 TABLE = Path(__file__).resolve().parents[2] / "data" / "pose_prior.npz"
 
@@ -78,7 +70,7 @@ def feature_jacobian(jac_joints, root, lengths) -> np.ndarray:
 def load_prior() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The shipped prior, a mixture of K Gaussians per chain: means (K, 27), factors
     (K, 27, 27) (block diagonal by :data:`CHAINS`, ``W^T W`` the precision) and
-    constants (K, 4) (``-2 log weight + log det cov`` of each chain's component, less
+    constants (K, 5) (``-2 log weight + log det cov`` of each chain's component, less
     the chain's smallest)."""
     with np.load(TABLE) as t:
         return t["means"].copy(), t["factors"].copy(), t["consts"].copy()
@@ -108,10 +100,10 @@ def _robust(z, tau2):
 
 
 def prior_residuals(feats, means, factors, consts, *, jacobian=None):
-    """Residuals (..., 31) of features (..., 27) under the mixture: per chain the
+    """Residuals (..., 32) of features (..., 27) under the mixture: per chain the
     component nearest in cost (``|W (f - mean)|^2 + const``), its whitened misfit and
     sqrt(const). With ``jacobian`` (F, 27, 24) d(features)/d(params), also returns
-    the residuals' Jacobian (F, 31, 24) (the component held)."""
+    the residuals' Jacobian (F, 32, 24) (the component held)."""
     out = np.empty(feats.shape[:-1] + (N_ROWS,))
     jac = None if jacobian is None else np.zeros((jacobian.shape[0], N_ROWS, jacobian.shape[-1]))
     for c, (a, b) in enumerate(CHAINS):
@@ -161,7 +153,7 @@ def _chain_gmm(x, k, rng, iters=60, reg=1e-6):
 
 
 def fit_prior(feats, *, k: int = 1, floor: float = 0.05, seed: int = 0, restarts: int = 1):
-    """Means (k, 27), factors (k, 27, 27), constants (k, 4) of a k-component Gaussian
+    """Means (k, 27), factors (k, 27, 27), constants (k, 5) of a k-component Gaussian
     mixture of features (N, 27) per chain (EM; k = 1 a single Gaussian).
 
     ``floor`` (unit-vector components) bounds every standard deviation from below, so

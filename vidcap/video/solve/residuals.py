@@ -157,8 +157,8 @@ N_UNARY = 15 * 2 + len(LIMITS) + 10 + 10 + 2 + 10 + N_ROWS
 
 
 def pose_prior(problem: Problem, joints, root) -> np.ndarray:
-    """The pose prior's residuals (..., :data:`vidcap.video.solve.prior.N_ROWS`)
-    (:func:`vidcap.video.solve.prior.prior_residuals`) times ``prior_weight``."""
+    """The pose prior's residuals (..., 32) (:func:`vidcap.video.solve.prior.prior_residuals`)
+    times ``prior_weight``."""
     if not problem.prior_weight:
         return np.zeros(joints.shape[:-2] + (N_ROWS,))
     f = features(joints, root, problem.lengths)
