@@ -2,6 +2,7 @@
 
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
         [--only NAME] [--quick] [--pck] [--graph-cut] [--[no-]empty-scene] [--[no-]person-box]
+        [--[no-]clip-ends]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -30,7 +31,7 @@ Clips:
   (arm raises, bending forward, stepping in place; subject 14, not 13 or 16) at three
   time windows, side / three-quarter / front, over the three real plates
   ($VIDCAP_DATA/mocap/cmu/14_19_humanik.bvh, made by benchmarks/get_data.sh).
-* Real clips WITH true person masks (validation, chose nothing): every clip of
+* Real clips WITH true person masks (validation but ``real_clips.MASKED_TUNING``): every clip of
   ``real_clips.masked_clips`` ($VIDCAP_DATA/masks, from benchmarks/get_data.sh: CDnet
   2014 baseline/office, a man walks into an empty office and stands reading, cut into
   frames 500-1099 and 1100-1399, and baseline/pedestrians 711-1099, one woman walks across
@@ -392,8 +393,15 @@ def main(argv=None) -> int:
     ap.add_argument("--person-box", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap's plate: a still person found by the HOG detector and "
                          "grabCut (vidcap.video.personbox; default: background.PERSON_BOX)")
+    ap.add_argument("--clip-ends", action=argparse.BooleanOptionalAction, default=None,
+                    help="the empty scene's stretch measured from the clip's first / last "
+                         "frame (default: vidcap.video.emptyscene.FROM_CLIP_ENDS)")
     args = ap.parse_args(argv)
     import vidcap.video.background as background
+    import vidcap.video.emptyscene as emptyscene
+
+    if args.clip_ends is not None:
+        emptyscene.FROM_CLIP_ENDS = args.clip_ends
 
     if args.empty_scene is not None:
         background.EMPTY_SCENE = args.empty_scene

@@ -65,3 +65,19 @@ def test_empty_stretch_runs_from_an_end_of_the_clip():
     assert empty_stretch(shown, t, 2.0).tolist() == [True, True, False, False, True]
     assert empty_stretch(shown, t, 1.0).tolist() == [True, True, True, False, True]
     assert not empty_stretch(shown[:1], t[:1], 0.0).any()
+
+
+def test_empty_stretch_counts_from_the_clip_start_not_the_first_sample():
+    # Three samples 0.45 s apart show the scene, the first 0.5 s into the clip: 0.9 s
+    # between samples (under a second), 1.4 s from the clip's first frame. The same
+    # at the end: the last sample 0.5 s before the clip's last frame.
+    t = np.array([0.5, 0.95, 1.4, 1.85, 2.3, 2.75, 3.2])
+    start = np.array([1, 1, 1, 0, 0, 0, 0], bool)[:, None]
+    end = start[::-1]
+    for shown in (start, end):
+        assert not empty_stretch(shown, t, 1.0).any()
+        assert empty_stretch(shown, t, 1.0, ends=(0.0, 3.7)).all()
+        assert not empty_stretch(shown, t, 1.5, ends=(0.0, 3.7)).any()
+    # Nothing shown at an end: no stretch, whatever the clip's length.
+    mid = np.array([0, 1, 1, 1, 1, 0, 0], bool)[:, None]
+    assert not empty_stretch(mid, t, 0.5, ends=(0.0, 3.7)).any()

@@ -373,7 +373,10 @@ def estimate_background(
     if EMPTY_SCENE if empty_scene is None else empty_scene:
         from vidcap.video.emptyscene import plate_from_empty
 
-        model = plate_from_empty(model, frames, gains, times=idx / _fps(info))
+        fps = _fps(info)
+        n = len(source) if info is None else info.n_frames
+        model = plate_from_empty(model, frames, gains, times=idx / fps,
+                                 ends=(0.0, max(n - 1, int(idx[-1])) / fps))
     if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 

@@ -120,7 +120,18 @@ def ghost_blobs(frame: np.ndarray, plate: np.ndarray, mask: np.ndarray, *,
     return out
 
 
-def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float) -> np.ndarray:
+#: Measure an empty stretch from the clip's own first (last) frame, not from its first
+#: (last) sample: the scene was empty from the moment the clip starts. The samples are
+#: spread evenly, so the first lies up to a stride after the start; on sbi_candela
+#: (tuning since) the sofa the man later sits on is empty in the first three samples
+#: (0.5-1.4 s, a man walking in) and the last three (10.3-11.2 s of 11.7 s): 0.9 s
+#: between samples, under :data:`MIN_EMPTY_S`, 1.4 s from the clip's ends. On the
+#: pose2sim tuning clips (1.7 s, 24 samples) the ends move by 0.04 s.
+FROM_CLIP_ENDS = True
+
+
+def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float,
+                  ends: tuple[float, float] | None = None) -> np.ndarray:
     """Pixels whose empty-scene samples form a stretch at the clip's start or end.
 
     Parameters
@@ -132,6 +143,9 @@ def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float) -> np.n
     min_span : float
         Shortest stretch, seconds, from the first (last) sample to the last (first)
         sample of the stretch that shows the scene.
+    ends : (float, float), optional
+        The clip's first and last frame times, seconds: the stretch is measured from
+        there instead of from the first (last) sample (:data:`FROM_CLIP_ENDS`).
 
     Returns
     -------
@@ -144,14 +158,15 @@ def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float) -> np.n
     out = np.zeros(shown.shape[1], bool)
     if k < 2:
         return out
-    for s, t in ((shown, times), (shown[::-1], times[::-1])):
+    t0 = (times[0], times[-1]) if ends is None else ends
+    for s, t, origin in ((shown, times, t0[0]), (shown[::-1], times[::-1], t0[1])):
         fill = s.copy()
         fill[1:-1] |= s[:-2] & s[2:]
         run = np.logical_and.accumulate(fill, axis=0) & s
         # The last sample of the stretch that shows the scene (run is False from the
         # first gap on, and True at 0 only where the end sample shows it).
         last = k - 1 - np.argmax(run[::-1], axis=0)
-        out |= run[0] & (np.abs(t[last] - t[0]) >= min_span)
+        out |= run[0] & (np.abs(t[last] - origin) >= min_span)
     return out
 
 
@@ -168,7 +183,8 @@ def _nanmedian0(vals: np.ndarray) -> np.ndarray:
 
 
 def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
-                     ratio: float = GHOST_RATIO, times: np.ndarray | None = None):
+                     ratio: float = GHOST_RATIO, times: np.ndarray | None = None,
+                     ends: tuple[float, float] | None = None):
     """Re-take the plate where samples show the empty scene (see the module docstring).
 
     Parameters
@@ -183,6 +199,9 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
     times : numpy.ndarray, shape (K,), optional
         The samples' times, seconds (default: ``model.sample_indices`` at
         :data:`ASSUMED_FPS`).
+    ends : (float, float), optional
+        The clip's first and last frame times, seconds; with :data:`FROM_CLIP_ENDS`,
+        an empty stretch is measured from them (default: the first and last sample's).
 
     Returns
     -------
@@ -218,13 +237,15 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
         idx = model.sample_indices if len(model.sample_indices) == k else np.arange(k)
         times = np.asarray(idx, np.float64) / ASSUMED_FPS
     times = np.asarray(times, np.float64)
+    if not FROM_CLIP_ENDS:
+        ends = None
     count = ghosts.sum(axis=0, dtype=np.int16)
     redo = count >= MIN_AGREE
     if redo.any():
         # A first cut (the stretch of the ghosts holds wherever that of the agreeing
         # ones below does): the median is only taken where it may be needed.
         idx = np.flatnonzero(redo.ravel())
-        redo.ravel()[idx[~empty_stretch(ghosts[:, redo], times, MIN_EMPTY_S)]] = False
+        redo.ravel()[idx[~empty_stretch(ghosts[:, redo], times, MIN_EMPTY_S, ends)]] = False
     if not redo.any():
         return model
     # Median over the samples that show the scene there (NaN elsewhere).
@@ -236,7 +257,7 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
     # sample, in another pose in the next, does not).
     tmap = np.maximum(model.threshold, 3.0 * model.noise_map)[redo]
     near = np.abs(vals - med).sum(axis=-1) <= tmap  # (NaN compares False)
-    ok = (near.sum(axis=0) >= MIN_AGREE) & empty_stretch(near, times, MIN_EMPTY_S)
+    ok = (near.sum(axis=0) >= MIN_AGREE) & empty_stretch(near, times, MIN_EMPTY_S, ends)
     idx = np.flatnonzero(redo.ravel())
     redo.ravel()[idx[~ok]] = False
     if not redo.any():
