@@ -81,3 +81,19 @@ def test_empty_stretch_counts_from_the_clip_start_not_the_first_sample():
     # Nothing shown at an end: no stretch, whatever the clip's length.
     mid = np.array([0, 1, 1, 1, 1, 0, 0], bool)[:, None]
     assert not empty_stretch(mid, t, 0.5, ends=(0.0, 3.7)).any()
+
+
+def test_the_plate_is_retaken_when_the_clip_starts_empty_before_the_first_sample():
+    # Three empty samples 0.45 s apart, the first 0.5 s into the clip, then the block
+    # stands still: 0.9 s between the empty samples, 1.4 s from the clip's first frame.
+    rng = np.random.default_rng(2)
+    wall = _wall(rng)
+    model = BackgroundModel.from_plate(_block(wall()), noise_sigma=2.0)
+    frames = np.stack([wall() for _ in range(3)] + [_block(wall()) for _ in range(9)])
+    times = 0.5 + 0.45 * np.arange(12)
+    assert plate_from_empty(model, frames, np.ones((12, 3)), times=times) is model
+    got = plate_from_empty(model, frames, np.ones((12, 3)), times=times,
+                           ends=(0.0, times[-1] + 0.5))
+    clean = wall().astype(np.int16)[35:75, 53:67]
+    assert np.abs(got.plate[35:75, 53:67].astype(np.int16) - clean).sum(axis=-1).mean() < 15
+    assert not got.never_seen.any()
