@@ -207,7 +207,7 @@ fi
 ICL="$DATA/../mocap/cmu_iclone"
 if [ -f "$ICL/002_05.bvh" ]; then
     mkdir -p "$DATA/../mocap/cmu_iclone_humanik"
-    for t in 002_05 002_06 002_09 005_02 005_09 005_12 005_18; do
+    for t in 002_05 002_06 002_09 005_02 005_09 005_12 005_18 006_10 006_11 006_12; do
         python - "$ICL/$t.bvh" "$DATA/../mocap/cmu_iclone_humanik/${t}_humanik.bvh" <<'PY'
 import re
 import sys

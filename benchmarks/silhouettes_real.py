@@ -51,6 +51,11 @@ Clips:
   05_02 front / PETS, 05_09 three-quarter / Weizmann, 05_18 side / room, 05_12
   three-quarter from behind / PETS ($VIDCAP_DATA/mocap/cmu_iclone_humanik/, converted as
   the 02_0x files by benchmarks/get_data.sh).
+* Validation renders added by the issue-26 realsil helper (chose nothing; run once to
+  report): CMU subject 6 (basketball moves, in place), 06_10 2-5 s three-quarter /
+  PETS, 06_12 4-7 s at 150 degrees / room, 06_11 2-5 s front / Weizmann, 06_10 4-7 s
+  side / room ($VIDCAP_DATA/mocap/cmu_iclone_humanik/, as the 02_0x files). They were
+  added when sbi_candela, sbi_cavignal, 131_01 4-7 s and 05_09 became tuning.
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -114,7 +119,10 @@ RENDERS = [
     # helper, and the plate's retake of absorbed pixels and the blob join chosen on
     # them: tuning since.)
     ("131_01 0-3 s side / room plate", ("131_01.bvh", 0, 360), 90, "room", "tuning"),
-    ("131_01 4-7 s 3/4 / room plate", ("131_01.bvh", 480, 840), 60, "room", "validation"),
+    # (131_01 4-7 s is tuning since the issue-26 realsil helper looked at its plate to
+    # choose vidcap.video.emptyscene.ENTERING, and 05_09 since GHOST_APART was added when
+    # it lost to FROM_CLIP_ENDS.)
+    ("131_01 4-7 s 3/4 / room plate", ("131_01.bvh", 480, 840), 60, "room", "tuning"),
     ("131_01 2-5 s 120 deg / Weizmann plate", ("131_01.bvh", 240, 600), 120, "ido",
      "validation"),
     ("arms 150 deg / room plate", "arms", 150, "room", "validation"),
@@ -140,15 +148,24 @@ RENDERS = [
     # stretches of trials no benchmark had used (the pose prior was fitted on them, which
     # the silhouettes do not use), over all three plates and four yaws.
     ("05_02 1-4 s front / PETS plate", ("05_02", 61, 241), 0, "vtest", "validation"),
-    ("05_09 2-5 s 3/4 / Weizmann plate", ("05_09", 121, 301), 45, "ido", "validation"),
+    ("05_09 2-5 s 3/4 / Weizmann plate", ("05_09", 121, 301), 45, "ido", "tuning"),
     ("05_18 2-5 s side / room plate", ("05_18", 121, 301), 90, "room", "validation"),
     ("05_12 0-3 s 3/4 back / PETS plate", ("05_12", 1, 181), 225, "vtest", "validation"),
+    # Validation renders added by the issue-26 realsil helper (nothing tuned on them; run
+    # once to report; added when sbi_candela, sbi_cavignal, 131_01 4-7 s and 05_09 became
+    # tuning): CMU subject 6
+    # (basketball moves, in place), stretches where the hips move under 0.2 m.
+    ("06_10 2-5 s 3/4 / PETS plate", ("06_10", 121, 301), 60, "vtest", "validation"),
+    ("06_12 4-7 s 150 deg / room plate", ("06_12", 241, 421), 150, "room", "validation"),
+    ("06_11 2-5 s front / Weizmann plate", ("06_11", 121, 301), 0, "ido", "validation"),
+    ("06_10 4-7 s side / room plate", ("06_10", 241, 421), 90, "room", "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
 EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_humanik"
                       / f"0{t}_humanik.bvh"
-                      for t in ("02_05", "02_06", "02_09", "05_02", "05_09", "05_18", "05_12")})
+                      for t in ("02_05", "02_06", "02_09", "05_02", "05_09", "05_18", "05_12",
+                                "06_10", "06_11", "06_12")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from vidcap.video import emptyscene
 from vidcap.video.background import BackgroundModel
 from vidcap.video.emptyscene import empty_stretch, ghost_blobs, plate_from_empty
 
@@ -83,9 +84,11 @@ def test_empty_stretch_counts_from_the_clip_start_not_the_first_sample():
     assert not empty_stretch(mid, t, 0.5, ends=(0.0, 3.7)).any()
 
 
-def test_the_plate_is_retaken_when_the_clip_starts_empty_before_the_first_sample():
+def test_the_plate_is_retaken_when_the_clip_starts_empty_before_the_first_sample(
+        monkeypatch):
     # Three empty samples 0.45 s apart, the first 0.5 s into the clip, then the block
     # stands still: 0.9 s between the empty samples, 1.4 s from the clip's first frame.
+    monkeypatch.setattr(emptyscene, "FROM_CLIP_ENDS", True)
     rng = np.random.default_rng(2)
     wall = _wall(rng)
     model = BackgroundModel.from_plate(_block(wall()), noise_sigma=2.0)
@@ -97,3 +100,29 @@ def test_the_plate_is_retaken_when_the_clip_starts_empty_before_the_first_sample
     clean = wall().astype(np.int16)[35:75, 53:67]
     assert np.abs(got.plate[35:75, 53:67].astype(np.int16) - clean).sum(axis=-1).mean() < 15
     assert not got.never_seen.any()
+
+    # Off (the default), the stretch counts from the first sample: 0.9 s, too short.
+    monkeypatch.setattr(emptyscene, "FROM_CLIP_ENDS", False)
+    assert plate_from_empty(model, frames, np.ones((12, 3)), times=times,
+                            ends=(0.0, times[-1] + 0.5)) is model
+
+
+def test_a_ghost_stretches_to_the_clip_ends_only_with_the_person_away_or_coming_in():
+    h, w = 100, 200
+    ghost = np.zeros((h, w), bool)
+    ghost[40:60, 20:40] = True
+    mask = ghost.astype(np.uint8)
+    # Nobody else in the sample: the ghost stands.
+    assert (emptyscene._apart(ghost, mask, 0.05) == ghost).all()
+    # The person coming in across the right border, far off: it stands.
+    entering = mask.copy()
+    entering[30:90, 170:200] = 1
+    assert (emptyscene._apart(ghost, entering, 0.05) == ghost).all()
+    # ... but not within 5 % of the long side (10 px) of it.
+    close = mask.copy()
+    close[30:90, 45:200] = 1
+    assert not emptyscene._apart(ghost, close, 0.05).any()
+    # A person wholly in view, however far: no ghost may stretch to the ends.
+    inside = mask.copy()
+    inside[30:90, 150:180] = 1
+    assert not emptyscene._apart(ghost, inside, 0.05).any()
