@@ -248,7 +248,8 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
         :data:`ASSUMED_FPS`).
     ends : (float, float), optional
         The clip's first and last frame times, seconds; with :data:`FROM_CLIP_ENDS`,
-        an empty stretch is measured from them (default: the first and last sample's).
+        an empty stretch of ghosts apart from the person (:func:`_apart`) may also be
+        measured from them (default: only from the first and last sample).
 
     Returns
     -------
