@@ -17,6 +17,7 @@ import numpy as np
 from vidcap.video.fit.crossing import choose_crossing
 from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
+from vidcap.video.fit.fold import crouching, fold_thighs
 from vidcap.video.fit.foreshortening import fit_foreshortening
 from vidcap.video.fit.grids import search_arm_grid, search_leg_grid
 from vidcap.video.fit.labels import keep_labels
@@ -195,6 +196,8 @@ def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool)
     if options.leg_grid:
         for s in ("l", "r"):
             st = search_leg_grid(eng, st, s)
+    if options.fold_legs and crouching(eng):
+        st = fold_thighs(eng, st, tie=options.tie)
     # no untangle_thighs here: a tracked leg stays on the hip it was found on. Thighs
     # crossing in the image are no error in a three-quarter view (the forward knee
     # passes the other across the narrow hips every step), and undoing them within
@@ -227,6 +230,8 @@ def _fit_fresh(eng: _MaskEngine, st: FitState, options: FitOptions,
         st = verify_crossing(eng, st, legs, spread=spread, tie=options.tie)
     if options.refine:
         st = _refine(eng, st, options, spread)
+    if options.fold_legs and crouching(eng):
+        st = fold_thighs(eng, st, tie=options.tie)
     return fit_foreshortening(eng, st, warm=options.refine), crossed
 
 
