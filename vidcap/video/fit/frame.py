@@ -18,7 +18,7 @@ from vidcap.video.fit.crossing import choose_crossing
 from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.fold import crouching, fold_thighs
-from vidcap.video.fit.foreshortening import fit_foreshortening
+from vidcap.video.fit.foreshortening import fit_foreshortening, search_fore
 from vidcap.video.fit.grids import search_arm_grid, search_leg_grid
 from vidcap.video.fit.labels import keep_labels
 from vidcap.video.fit.legs import (
@@ -198,6 +198,9 @@ def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool)
             st = search_leg_grid(eng, st, s)
     if options.fold_legs and crouching(eng):
         st = fold_thighs(eng, st, tie=options.tie)
+        # a crouching torso bends toward the camera too (a fresh fit's Algorithm 6 looks
+        # at it; a tracked frame's does not, elsewhere)
+        st, _ = search_fore(eng, st, S["torso"], start=st.fore[S["torso"]], interval=0.3)
     # no untangle_thighs here: a tracked leg stays on the hip it was found on. Thighs
     # crossing in the image are no error in a three-quarter view (the forward knee
     # passes the other across the narrow hips every step), and undoing them within
