@@ -60,7 +60,7 @@ class FitOptions:
     warm_step_deg: float = 2.0
     arm_grid: bool = True
     leg_grid: bool = True
-    fold_legs: bool = True
+    fold_legs: bool = False
     spread_value: float | None = None
     body_height: float | None = None
     tie: float = 0.01

@@ -78,13 +78,13 @@ Beyond the seed:
   (:func:`vidcap.video.fit.grids.search_leg_grid`) and the best kept when it fits better than the
   tracked leg by more than 3 pixels' worth of S, so a leg that swung beyond the
   track's +-8 degrees (a knee raised across the other leg) is found again.
-* ``fold_legs`` (default on): in a frame whose silhouette is under 0.92 of the
-  model's height (a crouch, a squat), each thigh is searched again at 45 % of its
-  length, its shin re-hung from the new knee, and kept when S rises by more than the
-  tie (:func:`vidcap.video.fit.fold.fold_thighs`): a thigh pointing at the camera is
-  short in the image, and Algorithm 1 at full length turns it elsewhere before
-  Algorithm 6 can shorten it. A tracked crouching frame also searches the torso's
-  foreshortening (+-0.3).
+* ``fold_legs`` (default off: a real squat facing the camera lost): in a frame whose
+  silhouette is under 0.92 of the model's height (a crouch, a squat), each thigh is
+  searched again at 45 % of its length, its shin re-hung from the new knee, and kept
+  when S rises by more than the tie (:func:`vidcap.video.fit.fold.fold_thighs`): a
+  thigh pointing at the camera is short in the image, and Algorithm 1 at full length
+  turns it elsewhere before Algorithm 6 can shorten it. A tracked crouching frame also
+  searches the torso's foreshortening (+-0.3).
 * Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
   still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
   search from that pose with narrow intervals, skips the contour analysis, and
