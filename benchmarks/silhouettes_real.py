@@ -46,16 +46,22 @@ Clips:
   conversion the pose prior was fitted on; the silhouettes never saw them). 131_01 0-3 s
   side and 14_19 10-13 s 3/4 are tuning since that helper diagnosed them, 02_06 since the
   graph cut's scene colour prior came from its frames (wt-cut).
-* Validation renders added by the issue-26 silval helper (chose nothing; run once to
-  report): CMU subject 5 (dance; no silhouette or 2D benchmark had used it) in place,
-  05_02 front / PETS, 05_09 three-quarter / Weizmann, 05_18 side / room, 05_12
-  three-quarter from behind / PETS ($VIDCAP_DATA/mocap/cmu_iclone_humanik/, converted as
-  the 02_0x files by benchmarks/get_data.sh).
+* Renders added by the issue-26 silval helper as validation, tuning since the dance
+  helper diagnosed them: CMU subject 5 (dance) in place, 05_02 front / PETS, 05_09
+  three-quarter / Weizmann, 05_18 side / room, 05_12 three-quarter from behind / PETS
+  ($VIDCAP_DATA/mocap/cmu_iclone_humanik/, converted as the 02_0x files by
+  benchmarks/get_data.sh).
 * Validation renders added by the issue-26 realsil helper (chose nothing; run once to
   report): CMU subject 6 (basketball moves, in place), 06_10 2-5 s three-quarter /
   PETS, 06_12 4-7 s at 150 degrees / room, 06_11 2-5 s front / Weizmann, 06_10 4-7 s
   side / room ($VIDCAP_DATA/mocap/cmu_iclone_humanik/, as the 02_0x files). They were
   added when sbi_candela, sbi_cavignal, 131_01 4-7 s and 05_09 became tuning.
+* Validation renders added by the issue-26 dance helper (chose nothing; figures recorded
+  before that helper changed anything): in-place stretches of CMU trials no benchmark had
+  used when chosen (the realsil helper's subject-6 rows, added at the same time, show
+  overlapping windows of 06_10-06_12 at other yaws), 02_07 (swordplay) side / Weizmann, 02_10 (washing a window) front / room, 06_10
+  three-quarter / PETS, 06_12 side from the left / room, 06_11 three-quarter from behind /
+  Weizmann (same folder, same conversion).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -143,14 +149,15 @@ RENDERS = [
     # tuning rows.)
     ("02_06 4-7 s 3/4 / room plate", ("02_06", 241, 421), 45, "room", "tuning"),
     ("02_09 1-4 s 150 deg / Weizmann plate", ("02_09", 61, 241), 150, "ido", "validation"),
-    # Validation renders added by the issue-26 silval helper (nothing tuned on them; run
-    # once to report): CMU subject 5 (dance: expressive arms, turns, arabesques), in-place
-    # stretches of trials no benchmark had used (the pose prior was fitted on them, which
-    # the silhouettes do not use), over all three plates and four yaws.
-    ("05_02 1-4 s front / PETS plate", ("05_02", 61, 241), 0, "vtest", "validation"),
+    # Renders added by the issue-26 silval helper as validation: CMU subject 5 (dance:
+    # expressive arms, turns, arabesques), in-place stretches of trials no benchmark had
+    # used (the pose prior was fitted on them, which the silhouettes do not use), over all
+    # three plates and four yaws. Tuning since the issue-26 dance helper diagnosed them
+    # (frames, plates and masks looked at; its constants chosen on them).
+    ("05_02 1-4 s front / PETS plate", ("05_02", 61, 241), 0, "vtest", "tuning"),
     ("05_09 2-5 s 3/4 / Weizmann plate", ("05_09", 121, 301), 45, "ido", "tuning"),
-    ("05_18 2-5 s side / room plate", ("05_18", 121, 301), 90, "room", "validation"),
-    ("05_12 0-3 s 3/4 back / PETS plate", ("05_12", 1, 181), 225, "vtest", "validation"),
+    ("05_18 2-5 s side / room plate", ("05_18", 121, 301), 90, "room", "tuning"),
+    ("05_12 0-3 s 3/4 back / PETS plate", ("05_12", 1, 181), 225, "vtest", "tuning"),
     # Validation renders added by the issue-26 realsil helper (nothing tuned on them; run
     # once to report; added when sbi_candela, sbi_cavignal, 131_01 4-7 s and 05_09 became
     # tuning): CMU subject 6
@@ -159,13 +166,25 @@ RENDERS = [
     ("06_12 4-7 s 150 deg / room plate", ("06_12", 241, 421), 150, "room", "validation"),
     ("06_11 2-5 s front / Weizmann plate", ("06_11", 121, 301), 0, "ido", "validation"),
     ("06_10 4-7 s side / room plate", ("06_10", 241, 421), 90, "room", "validation"),
+    # Validation renders added by the issue-26 dance helper (nothing tuned on them; their
+    # figures recorded before any change of that session), when the four subject-5 rows
+    # above became its tuning data: in-place stretches (the hips move at most 0.02-0.18
+    # m) of CMU trials no benchmark had used: 02_07 (swordplay) and 02_10 (washing a
+    # window) of subject 2, 06_10, 06_11 and 06_12 of subject 6 (standing, arms and
+    # trunk busy), over the three plates, at five yaws.
+    ("02_07 4-7 s side / Weizmann plate", ("02_07", 241, 421), 90, "ido", "validation"),
+    ("02_10 17-20 s front / room plate", ("02_10", 1021, 1201), 0, "room", "validation"),
+    ("06_10 5-8 s 3/4 / PETS plate", ("06_10", 301, 481), 60, "vtest", "validation"),
+    ("06_12 4-7 s side left / room plate", ("06_12", 241, 421), 270, "room", "validation"),
+    ("06_11 3-6 s 3/4 back / Weizmann plate", ("06_11", 181, 361), 200, "ido",
+     "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
 EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_humanik"
                       / f"0{t}_humanik.bvh"
                       for t in ("02_05", "02_06", "02_09", "05_02", "05_09", "05_18", "05_12",
-                                "06_10", "06_11", "06_12")})
+                                "02_07", "02_10", "06_10", "06_11", "06_12")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
