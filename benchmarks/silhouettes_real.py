@@ -3,6 +3,7 @@
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
         [--only NAME] [--quick] [--pck] [--graph-cut] [--[no-]empty-scene] [--[no-]person-box]
         [--[no-]clip-ends]
+        [--[no-]flag-unseen]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -59,9 +60,10 @@ Clips:
 * Validation renders added by the issue-26 dance helper (chose nothing; figures recorded
   before that helper changed anything): in-place stretches of CMU trials no benchmark had
   used when chosen (the realsil helper's subject-6 rows, added at the same time, show
-  overlapping windows of 06_10-06_12 at other yaws), 02_07 (swordplay) side / Weizmann, 02_10 (washing a window) front / room, 06_10
-  three-quarter / PETS, 06_12 side from the left / room, 06_11 three-quarter from behind /
-  Weizmann (same folder, same conversion).
+  overlapping windows of 06_10-06_12 at other yaws), 02_07 (swordplay) side / Weizmann
+  and front / PETS, 02_10 (washing a window) front / room and three-quarter from behind /
+  Weizmann, 06_10 three-quarter / PETS, 06_12 side from the left / room, 06_11
+  three-quarter from behind / Weizmann (same folder, same conversion).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -177,6 +179,11 @@ RENDERS = [
     ("06_10 5-8 s 3/4 / PETS plate", ("06_10", 301, 481), 60, "vtest", "validation"),
     ("06_12 4-7 s side left / room plate", ("06_12", 241, 421), 270, "room", "validation"),
     ("06_11 3-6 s 3/4 back / Weizmann plate", ("06_11", 181, 361), 200, "ido",
+     "validation"),
+    # (two more, added when the session had changed the plate already: their "before" is
+    # the same code with the change switched off, --no-flag-unseen)
+    ("02_07 11-14 s front / PETS plate", ("02_07", 661, 841), 0, "vtest", "validation"),
+    ("02_10 11-14 s 3/4 back / Weizmann plate", ("02_10", 661, 841), 135, "ido",
      "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
@@ -432,12 +439,20 @@ def main(argv=None) -> int:
     ap.add_argument("--clip-ends", action=argparse.BooleanOptionalAction, default=None,
                     help="the empty scene's stretch measured from the clip's first / last "
                          "frame (default: vidcap.video.emptyscene.FROM_CLIP_ENDS)")
+    ap.add_argument("--flag-unseen", action=argparse.BooleanOptionalAction, default=None,
+                    help="vidcap's plate: person-coloured footprint pixels no sample shows "
+                         "as scene flagged never seen (vidcap.video.absorbed; default: "
+                         "absorbed.FLAG_UNSEEN)")
     args = ap.parse_args(argv)
+    import vidcap.video.absorbed as absorbed
     import vidcap.video.background as background
     import vidcap.video.emptyscene as emptyscene
 
     if args.clip_ends is not None:
         emptyscene.FROM_CLIP_ENDS = args.clip_ends
+
+    if args.flag_unseen is not None:
+        absorbed.FLAG_UNSEEN = args.flag_unseen
 
     if args.empty_scene is not None:
         background.EMPTY_SCENE = args.empty_scene

@@ -45,6 +45,13 @@ MARGIN = 0.25
 NEVER_SHARE = 1 / 3
 #: The footprint is grown by this share of the working frame's long side.
 REACH = 0.02
+#: Candidates (the plate's colour the person's, in the footprint) that no sample shows
+#: in a scene colour are never seen: flagged so, their plate inpainted from round them
+#: (:func:`_flag_unseen`). A dancer's back or a standing leg covers the same pixels in
+#: every sample while the limbs make the footprint round them; the vote keeps the
+#: person's colour there and, the pixel being in the footprint, nobody flagged it.
+#: The plate's colour must be FLAG_MARGIN more likely under the person's model.
+FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE = True, 0.25, 3.0
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
@@ -118,6 +125,12 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     seen = (llr < -MARGIN) & cand[None]
     count = seen.sum(axis=0)
     ok = cand & (count >= np.where(wk.never, max(1, int(np.ceil(NEVER_SHARE * k))), 1))
+    if FLAG_UNSEEN:
+        # (the person's model without its uniform share: a colour seen on the person,
+        # not merely one the scene round it lacks)
+        strict = cv2.blur(log_ratio(wk.plate, colour_model(px), scene), (3, 3))
+        unseen = cand & ~wk.never & (count == 0) & (strict > FLAG_MARGIN)
+        model = _flag_unseen(model, wk, unseen & _unlike_scene(wk, unseen, ~foot))
     if not ok.any():
         return model
     seen &= ok[None]
@@ -152,3 +165,44 @@ def _seen_without_person(wk) -> np.ndarray:
     near = cv2.dilate(cols, np.ones((1, 2 * r + 1), np.uint8)) > 0
     count = ((wk.d < wk.thr) & ~near[:, None, :]).sum(axis=0)
     return count >= max(2, int(np.ceil(CONFIRMED_SHARE * wk.k)))
+
+
+def _flag_unseen(model, wk, unseen: np.ndarray):
+    """``model`` with ``unseen`` (work resolution, (h, w) bool) flagged never seen, its
+    plate inpainted from a ring round it (the plate's person colour there is no guess of
+    what stands behind), confidence 0."""
+    if not unseen.any():
+        return model
+    full = wk.up(unseen) > 0
+    if model.self_lit is not None:
+        full &= ~model.self_lit
+    r = int(np.ceil(wk.full[0] / wk.h)) + 1
+    ring = cv2.dilate(full.view(np.uint8), np.ones((2 * r + 1, 2 * r + 1), np.uint8))
+    plate = cv2.inpaint(model.plate, ring, 5, cv2.INPAINT_TELEA)
+    conf = np.where(full, 0.0, model.confidence).astype(np.float32)
+    return replace(model, plate=plate, never_seen=model.never_seen | full, confidence=conf)
+
+
+def _unlike_scene(wk, pixels: np.ndarray, scene: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the ``pixels`` whose plate colour no ``scene`` pixel within the ring's
+    width shows (L1 over the channels above :data:`FLAG_UNLIKE` thresholds): not the
+    continuation of a scene object that reaches out of the footprint (a table's chrome
+    foot the legs step round)."""
+    ys, xs = np.nonzero(pixels)
+    out = np.zeros(pixels.shape, bool)
+    if not len(ys):
+        return out
+    colour = wk.plate[ys, xs]
+    scene = scene & ~wk.lit
+    r, step = wk.ring_r, 2
+    best = np.full(len(ys), np.inf, np.float32)
+    for dy in range(-r, r + 1, step):
+        for dx in range(-r, r + 1, step):
+            if dx * dx + dy * dy > r * r:
+                continue
+            y = np.clip(ys + dy, 0, wk.h - 1)
+            x = np.clip(xs + dx, 0, wk.w - 1)
+            d = np.abs(colour - wk.plate[y, x]).sum(axis=-1)
+            np.minimum(best, np.where(scene[y, x], d, np.inf), out=best)
+    out[ys, xs] = best > FLAG_UNLIKE * wk.thr
+    return out
