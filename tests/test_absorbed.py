@@ -123,3 +123,64 @@ def test_a_post_the_person_passes_stays_the_scene_colour():
     model = BackgroundModel.from_plate(scene, noise_sigma=2.0)
     again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
     assert (again.plate[30:110, 78:82] == WHITE).all()
+
+
+def _dancer(n=24, seed=2, bar=False):
+    """A red torso at x 60-90, y 30-80 in every sample, its shade turning (0.75-1.25 of
+    its colour, as a body that turns on the spot, never the plate's), a blue arm
+    swinging round its right side; the plate is the vote's: the torso (mid shade) where
+    it always stands, never flagged. With ``bar``, a red bar of the scene (the torso's
+    colour) at x 104-110 from y 0 to y 119, which the arm passes at y 40-56. Returns
+    frames, the scene and that plate."""
+    rng = np.random.default_rng(seed)
+    scene = _scene()
+    if bar:
+        scene[:, 104:110] = RED
+    frames = []
+    for t in range(n):
+        f = scene.copy()
+        shade = (0.75, 0.85, 1.15, 1.25)[t % 4]
+        f[30:80, 60:90] = np.clip(np.array(RED) * shade, 0, 255)
+        y = 40 + int(round(8 * (0.5 + 0.5 * np.sin(2 * np.pi * t / 9))))
+        f[y:y + 8, 90:118] = BLUE
+        frames.append(np.clip(f + rng.normal(0, 2, f.shape), 0, 255).astype(np.uint8))
+    plate = scene.copy()
+    plate[30:80, 60:90] = RED
+    return np.array(frames), scene, plate
+
+
+def test_a_torso_no_sample_shows_uncovered_is_flagged_never_seen_and_inpainted():
+    """The vote kept the torso's red where it always stands, and the torso's turning
+    shade puts it in the motion footprint, so nobody flagged it: no sample shows a
+    scene colour there, so it is never seen, its plate a guess from the scene round it
+    (not the person's red: the silhouettes then see the torso)."""
+    frames, scene, plate = _dancer()
+    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    core = (slice(36, 74), slice(66, 84))
+    assert again.never_seen[core].mean() > 0.9
+    left = np.abs(again.plate[core].astype(int) - np.array(RED)).sum(-1)
+    assert np.median(left) > 100  # no longer the torso's red
+    assert not again.never_seen[:, :50].any()  # the scene beside stays seen
+
+
+def test_without_the_switch_the_torso_stays_unflagged(monkeypatch):
+    import vidcap.video.absorbed as absorbed
+
+    monkeypatch.setattr(absorbed, "FLAG_UNSEEN", False)
+    frames, _, plate = _dancer()
+    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    assert not again.never_seen.any()
+
+
+def test_a_scene_bar_of_the_persons_colour_reaching_out_of_the_footprint_stays_seen():
+    """A bar of the scene in the torso's red, which the arm sweeps over at y 40-56 (so
+    it lies in the motion footprint there, and every sample shows it red or the arm's
+    blue, both the person's colours), continues above and below the footprint in the
+    same colour: a scene object, not a body part; it stays seen, its plate untouched."""
+    frames, scene, plate = _dancer(bar=True)
+    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    assert not again.never_seen[:, 100:114].any()
+    assert (again.plate[:, 104:110] == RED).all()

@@ -51,7 +51,7 @@ REACH = 0.02
 #: every sample while the limbs make the footprint round them; the vote keeps the
 #: person's colour there and, the pixel being in the footprint, nobody flagged it.
 #: The plate's colour must be FLAG_MARGIN more likely under the person's model.
-FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE = True, 0.25, 3.0
+FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 0.25, 3.0, 2.0
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
@@ -194,7 +194,8 @@ def _unlike_scene(wk, pixels: np.ndarray, scene: np.ndarray) -> np.ndarray:
         return out
     colour = wk.plate[ys, xs]
     scene = scene & ~wk.lit
-    r, step = wk.ring_r, 2
+    r = int(round(FLAG_RADIUS * wk.ring_r))
+    step = max(2, r // 6)
     best = np.full(len(ys), np.inf, np.float32)
     for dy in range(-r, r + 1, step):
         for dx in range(-r, r + 1, step):
