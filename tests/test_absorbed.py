@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vidcap.video.absorbed import retake_absorbed
+from vidcap.video.absorbed import flag_unseen, retake_absorbed
 from vidcap.video.background import BackgroundModel
 
 RED, BLUE = (40, 45, 190), (150, 60, 30)
@@ -156,22 +156,12 @@ def test_a_torso_no_sample_shows_uncovered_is_flagged_never_seen_and_inpainted()
     (not the person's red: the silhouettes then see the torso)."""
     frames, scene, plate = _dancer()
     model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
-    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    again = flag_unseen(model, frames, np.ones((len(frames), 3), np.float32))
     core = (slice(36, 74), slice(66, 84))
     assert again.never_seen[core].mean() > 0.9
     left = np.abs(again.plate[core].astype(int) - np.array(RED)).sum(-1)
     assert np.median(left) > 100  # no longer the torso's red
     assert not again.never_seen[:, :50].any()  # the scene beside stays seen
-
-
-def test_without_the_switch_the_torso_stays_unflagged(monkeypatch):
-    import vidcap.video.absorbed as absorbed
-
-    monkeypatch.setattr(absorbed, "FLAG_UNSEEN", False)
-    frames, _, plate = _dancer()
-    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
-    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
-    assert not again.never_seen.any()
 
 
 def test_a_scene_bar_of_the_persons_colour_reaching_out_of_the_footprint_stays_seen():
@@ -181,6 +171,6 @@ def test_a_scene_bar_of_the_persons_colour_reaching_out_of_the_footprint_stays_s
     same colour: a scene object, not a body part; it stays seen, its plate untouched."""
     frames, scene, plate = _dancer(bar=True)
     model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
-    again = retake_absorbed(model, frames, np.ones((len(frames), 3), np.float32))
+    again = flag_unseen(model, frames, np.ones((len(frames), 3), np.float32))
     assert not again.never_seen[:, 100:114].any()
     assert (again.plate[:, 104:110] == RED).all()

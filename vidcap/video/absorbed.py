@@ -25,7 +25,7 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-__all__ = ["retake_absorbed"]
+__all__ = ["flag_unseen", "retake_absorbed"]
 
 #: The plate's colour must be this much more likely under the person's model (log
 #: ratio, after a 3x3 mean) to be re-taken; a sample this much more likely under the
@@ -47,11 +47,22 @@ NEVER_SHARE = 1 / 3
 REACH = 0.02
 #: Candidates (the plate's colour the person's, in the footprint) that no sample shows
 #: in a scene colour are never seen: flagged so, their plate inpainted from round them
-#: (:func:`_flag_unseen`). A dancer's back or a standing leg covers the same pixels in
-#: every sample while the limbs make the footprint round them; the vote keeps the
-#: person's colour there and, the pixel being in the footprint, nobody flagged it.
-#: The plate's colour must be FLAG_MARGIN more likely under the person's model.
-FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 0.25, 3.0, 2.0
+#: (:func:`flag_unseen`, run by :func:`vidcap.video.background.estimate_background` after
+#: the empty-scene and person-box passes, whose ghost and steady tests need the plate's
+#: own edges: run before them it cost cdnet_office_enter 0.901 -> 0.407). A dancer's back
+#: or a standing leg covers the same pixels in every sample while the limbs make the
+#: footprint round them; the vote keeps the person's colour there and, the pixel being
+#: in the footprint, nobody flagged it. The plate's colour must be FLAG_MARGIN more likely
+#: under the person's model (without its uniform share) than the scene's, and no seen
+#: scene pixel within FLAG_RADIUS ring widths may have it (within FLAG_UNLIKE
+#: thresholds, L1). Chosen on the tuning rows (benchmarks/silhouettes_real.py --quick,
+#: median IoU): off -> on, 05_18 side 0.788 -> 0.952, 05_12 3/4 back 0.854 -> 0.975,
+#: 05_09 3/4 0.913 -> 0.972; FLAG_MARGIN 0.25 / 1 / 2: pose2sim cam3 (vs MediaPipe's
+#: masks; off 0.805) 0.731 / 0.753 / 0.803, cam4 (off 0.786) 0.748 / 0.768 / 0.786,
+#: 05_18 0.935 / 0.947 / 0.952; FLAG_RADIUS 1 / 2 / 3: 14_19 10-13 s 3/4 0.948 / 0.962
+#: / 0.945; without the unlike test a chrome table foot the legs step round was flagged
+#: (14_19 3/4 0.948 -> 0.920).
+FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
@@ -86,51 +97,16 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
         With ``plate`` (and ``confidence``) re-taken where absorbed; unchanged when
         the clip's colour models cannot be learnt or nothing is absorbed.
     """
-    from vidcap.video.appearance import (
-        PRIOR_UNSEEN,
-        _person_colours,
-        _scene_model,
-        _Work,
-        colour_model,
-        log_ratio,
-    )
     from vidcap.video.platemedian import robust_plate
 
     k = len(frames)
-    if k < 4:
+    ev = _evidence(model, frames, gains, work_size)
+    if ev is None:
         return model
-    wk = _Work(model, frames, gains, work_size)
-    if wk.med_area < 16:
-        return model
-    px = _person_colours(wk)
-    if px is None:
-        # (a person who never leaves the never-seen area: what the samples show there,
-        # as person_scene_models does)
-        core = cv2.erode(wk.never.view(np.uint8), wk.disk) > 0
-        if core.sum() >= 50:
-            px = wk.small[:, core].reshape(-1, 3)
-    scene = _scene_model(wk, wk.foot | wk.never)
-    if px is None or scene is None:
-        return model
-    person = colour_model(px, uniform=PRIOR_UNSEEN)
-    reach = max(1, round(REACH * max(wk.h, wk.w)))
-    foot = cv2.dilate(wk.foot.view(np.uint8),
-                      np.ones((2 * reach + 1,) * 2, np.uint8)) > 0
-    llr_plate = cv2.blur(log_ratio(wk.plate, person, scene), (3, 3))
-    # (never-seen pixels whatever their plate: it is an inpainted guess)
-    cand = ((foot & (llr_plate > MARGIN) & ~_seen_without_person(wk)) | wk.never) & ~wk.lit
-    if not cand.any():
-        return model
-    llr = np.stack([cv2.blur(x, (3, 3)) for x in log_ratio(wk.small, person, scene)])
+    wk, cand, llr = ev["wk"], ev["cand"], ev["llr"]
     seen = (llr < -MARGIN) & cand[None]
     count = seen.sum(axis=0)
     ok = cand & (count >= np.where(wk.never, max(1, int(np.ceil(NEVER_SHARE * k))), 1))
-    if FLAG_UNSEEN:
-        # (the person's model without its uniform share: a colour seen on the person,
-        # not merely one the scene round it lacks)
-        strict = cv2.blur(log_ratio(wk.plate, colour_model(px), scene), (3, 3))
-        unseen = cand & ~wk.never & (count == 0) & (strict > FLAG_MARGIN)
-        model = _flag_unseen(model, wk, unseen & _unlike_scene(wk, unseen, ~foot))
     if not ok.any():
         return model
     seen &= ok[None]
@@ -151,6 +127,95 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     cnt = cv2.resize(count.astype(np.float32), (ww, hh), interpolation=cv2.INTER_NEAREST)
     conf = np.where(take, cnt / k, model.confidence).astype(np.float32)
     return replace(model, plate=plate, confidence=conf, never_seen=model.never_seen & ~take)
+
+
+def _evidence(model, frames, gains, work_size):
+    """What :func:`retake_absorbed` and :func:`flag_unseen` decide on, as a dict: the
+    samples at the working resolution (``wk``), the person's colours (``px``), the
+    scene's model (``scene``), the footprint grown by :data:`REACH` (``foot``), the
+    candidates (``cand``: in it, the plate's colour the person's, or never seen) and
+    the per-sample log ratio person / scene (``llr``, (k, h, w)); None when the clip's
+    colour models cannot be learnt or nothing is a candidate."""
+    from vidcap.video.appearance import (
+        PRIOR_UNSEEN,
+        _person_colours,
+        _scene_model,
+        _Work,
+        colour_model,
+        log_ratio,
+    )
+
+    if len(frames) < 4:
+        return None
+    wk = _Work(model, frames, gains, work_size)
+    if wk.med_area < 16:
+        return None
+    px = _person_colours(wk)
+    if px is None:
+        # (a person who never leaves the never-seen area: what the samples show there,
+        # as person_scene_models does)
+        core = cv2.erode(wk.never.view(np.uint8), wk.disk) > 0
+        if core.sum() >= 50:
+            px = wk.small[:, core].reshape(-1, 3)
+    scene = _scene_model(wk, wk.foot | wk.never)
+    if px is None or scene is None:
+        return None
+    person = colour_model(px, uniform=PRIOR_UNSEEN)
+    reach = max(1, round(REACH * max(wk.h, wk.w)))
+    foot = cv2.dilate(wk.foot.view(np.uint8),
+                      np.ones((2 * reach + 1,) * 2, np.uint8)) > 0
+    llr_plate = cv2.blur(log_ratio(wk.plate, person, scene), (3, 3))
+    # (never-seen pixels whatever their plate: it is an inpainted guess)
+    cand = ((foot & (llr_plate > MARGIN) & ~_seen_without_person(wk)) | wk.never) & ~wk.lit
+    if not cand.any():
+        return None
+    llr = np.stack([cv2.blur(x, (3, 3)) for x in log_ratio(wk.small, person, scene)])
+    return {"wk": wk, "px": px, "scene": scene, "foot": foot, "cand": cand, "llr": llr}
+
+
+def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
+                work_size: int = 320) -> object:
+    """Flag never seen the plate pixels that show the person and that no sample shows
+    uncovered (see :data:`FLAG_UNSEEN`).
+
+    Candidates as :func:`retake_absorbed`'s (in the motion footprint, the plate's colour
+    the person's) that no sample shows in a colour of the scene, whose plate colour is
+    one seen on the person (the person's model without its uniform share, by
+    :data:`FLAG_MARGIN`) and unlike the seen scene round them (:func:`_unlike_scene`):
+    a dancer's back or a standing leg that covers the same pixels in every sample while
+    the limbs make the footprint round it. Run after the passes that use the samples'
+    evidence of the empty scene (:mod:`vidcap.video.emptyscene`,
+    :mod:`vidcap.video.personbox`), which need the plate's edges there.
+
+    Parameters
+    ----------
+    model : vidcap.video.background.BackgroundModel
+        The plate so far.
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+        The samples it was estimated from.
+    gains : numpy.ndarray, shape (K, 3)
+        Their per-channel gains relative to the plate.
+    work_size : int
+        Long side, pixels, of the working resolution of the colour decisions.
+
+    Returns
+    -------
+    vidcap.video.background.BackgroundModel
+        With those pixels flagged ``never_seen``, their plate inpainted from round them
+        and their confidence 0; unchanged when there are none.
+    """
+    from vidcap.video.appearance import colour_model, log_ratio
+
+    ev = _evidence(model, frames, gains, work_size)
+    if ev is None:
+        return model
+    wk, cand = ev["wk"], ev["cand"]
+    # (the person's model without its uniform share: a colour seen on the person, not
+    # merely one the scene round it lacks)
+    strict = cv2.blur(log_ratio(wk.plate, colour_model(ev["px"]), ev["scene"]), (3, 3))
+    unseen = (cand & ~wk.never & ~(ev["llr"] < -MARGIN).any(axis=0)
+              & (strict > FLAG_MARGIN))
+    return _flag_unseen(model, wk, unseen & _unlike_scene(wk, unseen, ~ev["foot"]))
 
 
 def _seen_without_person(wk) -> np.ndarray:
