@@ -16,6 +16,11 @@ background there; the plate is re-taken from them. Only inside the motion footpr
 the scene in most samples. Pixels flagged never seen are re-taken, and un-flagged, when
 a third of the samples show the scene there (the flag spread from a static torso into
 the arms' sweep).
+
+The other way round (:func:`flag_unseen`): a candidate that no sample shows in a colour of
+the scene was never seen uncovered (a dancer's back, a leg held in place while the limbs
+sweep round it): it is flagged never seen and its plate inpainted, so that the silhouettes
+see the person there.
 """
 
 from __future__ import annotations
