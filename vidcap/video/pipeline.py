@@ -76,8 +76,9 @@ DEFAULT_PROPORTIONS = "human"
 #: graph cut keeps the plain person's pieces and blobs, ``graphcut.keep_pieces``,
 #: ``silhouette._person_parts``), so caches written by older versions are redone.
 _SILHOUETTE_VERSION = 5
-#: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts).
-_PLATE_VERSION = 2
+#: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts; 3:
+#: absorbed parts no sample uncovers flagged never seen, ``absorbed.flag_unseen``).
+_PLATE_VERSION = 3
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
