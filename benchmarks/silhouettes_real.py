@@ -60,10 +60,10 @@ Clips:
 * Validation renders added by the issue-26 dance helper (chose nothing; figures recorded
   before that helper changed anything): in-place stretches of CMU trials no benchmark had
   used when chosen (the realsil helper's subject-6 rows, added at the same time, show
-  overlapping windows of 06_10-06_12 at other yaws), 02_07 (swordplay) side / Weizmann
-  and front / PETS, 02_10 (washing a window) front / room and three-quarter from behind /
-  Weizmann, 06_10 three-quarter / PETS, 06_12 side from the left / room, 06_11
-  three-quarter from behind / Weizmann (same folder, same conversion).
+  overlapping windows of 06_10-06_12 at other yaws), 02_07 (swordplay) side / Weizmann,
+  front / PETS and side from the left / room, 02_10 (washing a window) front / room and
+  three-quarter from behind / Weizmann, 06_10 three-quarter / PETS, 06_12 side from the
+  left / room, 06_11 three-quarter from behind / Weizmann (same folder, same conversion).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -185,6 +185,7 @@ RENDERS = [
     ("02_07 11-14 s front / PETS plate", ("02_07", 661, 841), 0, "vtest", "validation"),
     ("02_10 11-14 s 3/4 back / Weizmann plate", ("02_10", 661, 841), 135, "ido",
      "validation"),
+    ("02_07 1-4 s side left / room plate", ("02_07", 61, 241), 270, "room", "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
