@@ -552,3 +552,40 @@ def test_small_blob_at_a_much_larger_body_height_is_fitted_not_crashed():
         pose = fit_pose(mask, body_height=float(rng.uniform(150, 300)))
         assert np.isfinite(pose.joints).all()
         assert 0.0 <= pose.similarity <= 1.0
+
+
+@pytest.mark.parametrize("forearm_fore", [1.0, 0.4])
+def test_arm_track_finds_a_forearm_swung_beyond_the_track(forearm_fore):
+    # front view: in the previous frame the image-right arm points out and down with
+    # its forearm on from it (the track may have shrunk that forearm, 0.4); in this
+    # one the forearm is raised 90 degrees, beyond the track's +-16 degree search.
+    # The warm fit (the fresh-fit fallback off) leaves the forearm behind and
+    # shortens it unless the whole arm is searched at full length.
+    before = [90, 90, 250, 270, 300, 300, 266, 274, 274, 266]
+    now = [90, 90, 250, 270, 300, 30, 266, 274, 274, 266]
+    stand, stand_j = _figure(before, spread=1.0)
+    raised, truth = _figure(now, spread=1.0)
+    from dataclasses import replace
+    fore = np.ones(10)
+    fore[SEGMENT_INDEX["r_lower_arm"]] = forearm_fore
+    previous = replace(fit_pose(stand), angles=np.mod(np.deg2rad(before), 2 * np.pi),
+                       foreshortening=fore, spread=1.0, joints=stand_j)
+    wrist = JOINT_INDEX["r_wrist"]
+    found = fit_pose(raised, previous=previous, fallback=0.0)
+    assert found.warm
+    assert np.linalg.norm(found.joints[wrist] - truth[wrist]) / H < 0.03
+    missed = fit_pose(raised, previous=previous, fallback=0.0, arm_track=False)
+    assert np.linalg.norm(missed.joints[wrist] - truth[wrist]) / H > 0.1
+
+
+def test_arm_track_keeps_an_arm_that_fits():
+    # the arm in place already fits: the grid's near-ties go to it, so it stays
+    # within a few pixels (the track is not re-placed on the torso's edge)
+    angles = [90, 90, 250, 270, 300, 330, 266, 274, 274, 266]
+    mask, truth = _figure(angles, spread=1.0)
+    from dataclasses import replace
+    previous = replace(fit_pose(mask), angles=np.mod(np.deg2rad(angles), 2 * np.pi),
+                       foreshortening=np.ones(10), spread=1.0, joints=truth)
+    fp = fit_pose(mask, previous=previous, fallback=0.0)
+    for name in ("l_elbow", "l_wrist", "r_elbow", "r_wrist"):
+        assert np.linalg.norm(fp.joints[JOINT_INDEX[name]] - truth[JOINT_INDEX[name]]) / H < 0.02

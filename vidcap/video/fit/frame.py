@@ -19,7 +19,7 @@ from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.fold import crouching, fold_thighs
 from vidcap.video.fit.foreshortening import fit_foreshortening, search_fore
-from vidcap.video.fit.grids import search_arm_grid, search_leg_grid
+from vidcap.video.fit.grids import search_arm_grid, search_arm_track, search_leg_grid
 from vidcap.video.fit.labels import keep_labels
 from vidcap.video.fit.legs import (
     fit_upper_legs,
@@ -201,6 +201,9 @@ def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool)
         # a crouching torso bends toward the camera too (a fresh fit's Algorithm 6 looks
         # at it; a tracked frame's does not, elsewhere)
         st, _ = search_fore(eng, st, S["torso"], start=st.fore[S["torso"]], interval=0.3)
+    if options.arm_track:
+        for s in ("l", "r"):
+            st = search_arm_track(eng, st, s)
     # no untangle_thighs here: a tracked leg stays on the hip it was found on. Thighs
     # crossing in the image are no error in a three-quarter view (the forward knee
     # passes the other across the narrow hips every step), and undoing them within
@@ -347,7 +350,7 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
              verify_crossing: bool = True, caps: bool = False, warm_threshold: float = 0.55,
              fallback: float = FALLBACK, warm_step_deg: float = 2.0,
              challenge: bool = False, arm_grid: bool = True, leg_grid: bool = True,
-             spread_value: float | None = None,
+             arm_track: bool = True, spread_value: float | None = None,
              body_height: float | None = None) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 
@@ -396,6 +399,11 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
         In warm-started (tracked) fits, search each whole leg over every (thigh,
         shin) angle pair and keep the best if it fits clearly better than the
         tracked leg (:func:`vidcap.video.fit.grids.search_leg_grid`).
+    arm_track : bool
+        In warm-started fits, search each whole arm over every angle pair at full
+        length and keep the best if it fits clearly better than the tracked arm (a
+        forearm swinging faster than the track's search reaches;
+        :func:`vidcap.video.fit.grids.search_arm_track`).
     body_height : float, optional
         The body's standing height in original pixels, when known apart from the
         silhouette's (a crouch, raised arms).
@@ -423,7 +431,7 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
                          verify_crossing=verify_crossing, caps=caps,
                          warm_threshold=warm_threshold, fallback=fallback,
                          warm_step_deg=warm_step_deg, arm_grid=arm_grid, leg_grid=leg_grid,
-                         spread_value=spread_value, body_height=body_height)
+                         arm_track=arm_track, spread_value=spread_value, body_height=body_height)
     norm = (mask if isinstance(mask, NormalisedMask)
             else normalise_mask(mask, height=height, body_height=body_height))
     return fit_frame(norm, previous=previous, challenge=challenge, options=options)

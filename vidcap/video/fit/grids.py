@@ -75,6 +75,41 @@ def search_arm_grid(eng: _MaskEngine, st: FitState, s: str, *, prior=None, step_
                              tie_px=tie_px, fine_deg=fine_deg, keep_px=tie_px)
 
 
+#: The (upper, lower arm) foreshortening ratios :func:`search_arm_track` scores its
+#: candidates at: full length, and the upper arm foreshortened (an arm raised toward
+#: the camera), so neither a forearm the track had shrunk nor a short upper arm is
+#: missed.
+ARM_PROBE_FORE = ((1.0, 1.0),)
+
+
+def search_arm_track(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, tie_px=3.0,
+                     fine_deg=10.0) -> FitState:
+    """A tracked frame's whole arm over every (upper, lower) angle pair (beyond the seed).
+
+    A tracked frame searches each arm segment within +-16 degrees of the previous
+    frame's, so a forearm that swings faster (a raise or a wave at 20 degrees a frame)
+    is left behind, and the track then shrinks it (Algorithm 6) rather than turn it.
+    Here the arm is scored at every angle pair ``step_deg`` apart at full length (its
+    foreshortening reset to 1, so a forearm the track had shrunk can be found again
+    at its length), the winner refined by Algorithm 1 (+-``fine_deg``) and
+    Algorithm 6, and kept only when it fits better than the arm in place by more than
+    ``tie_px`` pixels' worth of S; near-ties go to the candidate nearest the arm in
+    place, so an arm inside the torso's outline (the same pixels at any angle) stays
+    where the track carried it. Writes the arm's ``angles``, ``fore``, ``scores``,
+    ``margins``.
+
+    Parameters
+    ----------
+    s : {'l', 'r'}
+        Which arm (its label: image side, or the track's).
+    """
+    up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
+    return _search_pair_grid(eng, st, up, lo, J[f"{s}_shoulder"], pair_grid(float(step_deg)),
+                             (st.angles[up], st.angles[lo]), tie_px=tie_px, fine_deg=fine_deg,
+                             keep_px=-tie_px, lengths=True, skip_within=np.deg2rad(step_deg),
+                             probe_fore=ARM_PROBE_FORE, bend_limit=True)
+
+
 def search_leg_grid(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, tie_px=3.0,
                     fine_deg=10.0) -> FitState:
     """Search one whole leg over every (thigh, shin) angle pair at once (beyond the seed).
@@ -149,7 +184,8 @@ def _pair_scores_compiled(kernels, eng, st, up, lo, root, grid):
 
 
 def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, keep_px,
-                      upper_range=(0.0, TWO_PI), lengths=False, skip_within=0.0) -> FitState:
+                      upper_range=(0.0, TWO_PI), lengths=False, skip_within=0.0,
+                      probe_fore=None, bend_limit=False) -> FitState:
     """The whole-limb grid of :func:`search_arm_grid` and :func:`search_leg_grid`.
 
     ``up``, ``lo``: the limb's segments; ``base``: the joint it hangs from;
@@ -161,12 +197,24 @@ def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, k
     ``prior``. ``upper_range``: the upper segment's refinement limits;
     ``lengths``: also refine both segments' foreshortening (Algorithm 6).
     ``skip_within``: radians (upper + lower); a winner this close to ``prior``
-    is left unrefined and the limb in place kept.
+    is left unrefined and the limb in place kept. ``probe_fore``: ((upper, lower), ...)
+    foreshortening ratios the candidates are scored at (the best of them per
+    candidate) and refined from, instead of the limb's own; ``bend_limit``: the
+    lower segment's refinement stays within the flexion limit's bend of the upper.
     """
     prior = np.asarray(prior, dtype=float)
     st = st.drawing([up, lo])
     ua, la = grid[0], grid[1]
-    score = _pair_scores(eng, st, up, lo, eng.joints(st)[base], grid)
+    root = eng.joints(st)[base]
+    if probe_fore is None:
+        probes = [st]
+        score = _pair_scores(eng, st, up, lo, root, grid)
+        which = np.zeros(len(ua), dtype=int)
+    else:
+        probes = [st.with_entries(fore=([up, lo], list(f))) for f in probe_fore]
+        scores = np.stack([_pair_scores(eng, p, up, lo, root, grid) for p in probes])
+        which = np.argmax(scores, axis=0)
+        score = scores[which, np.arange(len(ua))]
     n_sil = max(int(eng.sil_rows[-1]), 1)
     per_px = 2.0 * float(score.max()) / n_sil  # S worth one pixel, about
 
@@ -181,12 +229,19 @@ def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, k
     fine = np.deg2rad(fine_deg)
 
     def refine(cur: FitState) -> FitState:
+        if probe_fore is not None:
+            cur = probes[which[k]]
         cur = cur.with_entries(angles=([up, lo], [ua[k], la[k]]))
         cur, _ = search_angle(eng, cur, up, with_segments=(lo,), start=ua[k],
                               interval=2 * fine, lo=upper_range[0], hi=upper_range[1],
                               prefer=ua[k])
         if lengths:
-            cur, _ = search_angle(eng, cur, lo, start=la[k], interval=2 * fine, prefer=la[k])
+            bounds = {}
+            if bend_limit:  # the lower segment within the flexion limit of the upper
+                u = float(cur.angles[up])
+                bounds = {"lo": u - MAX_BEND, "hi": u + MAX_BEND}
+            cur, _ = search_angle(eng, cur, lo, start=la[k], interval=2 * fine, prefer=la[k],
+                                  **bounds)
             cur, _ = search_fore(eng, cur, up)
             cur, _ = search_fore(eng, cur, lo)
         else:
@@ -202,4 +257,4 @@ def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, k
                           prefer_kept=farther)
 
 
-__all__ = ["pair_grid", "search_arm_grid", "search_leg_grid"]
+__all__ = ["pair_grid", "search_arm_grid", "search_arm_track", "search_leg_grid"]

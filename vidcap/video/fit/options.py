@@ -27,6 +27,11 @@ class FitOptions:
         Height in pixels the silhouette is normalised to before fitting.
     refine, spread, verify_crossing, caps, arm_grid, leg_grid : bool
         As :func:`~vidcap.video.fit.pose2d.fit_pose` describes them.
+    arm_track : bool
+        In tracked frames, search each whole arm over every angle pair at full length
+        and keep it when it fits clearly better than the tracked arm
+        (:func:`vidcap.video.fit.grids.search_arm_track`: a forearm swinging faster
+        than the track's +-16 degrees a frame).
     warm_threshold : float
         Similarity of the previous pose needed to warm-start, in [0, 1].
     fallback : float
@@ -61,6 +66,7 @@ class FitOptions:
     arm_grid: bool = True
     leg_grid: bool = True
     fold_legs: bool = False
+    arm_track: bool = True
     spread_value: float | None = None
     body_height: float | None = None
     tie: float = 0.01
