@@ -589,3 +589,31 @@ def test_arm_track_keeps_an_arm_that_fits():
     fp = fit_pose(mask, previous=previous, fallback=0.0)
     for name in ("l_elbow", "l_wrist", "r_elbow", "r_wrist"):
         assert np.linalg.norm(fp.joints[JOINT_INDEX[name]] - truth[JOINT_INDEX[name]]) / H < 0.02
+
+
+def test_body_height_refit_backward_carries_the_scale_into_a_raised_arm_run():
+    # two frames of a hand raised straight above the head (the silhouette 1.2 times the
+    # body's height). Frame 0 holds a fit stretched to the silhouette (the neck high),
+    # frame 1 one at the body's height: the backward refit fits frame 0 again warm
+    # from frame 1, at the body's height, and keeps it (higher S, the neck in place).
+    from vidcap.video.fit.frame import fit_frame
+    from vidcap.video.fit.options import FitOptions
+    from vidcap.video.fit.tracking import _Frames, _normalise_frame, _refit_body_backward
+
+    angles = [90, 90, 250, 270, 90, 90, 266, 274, 274, 266]
+    mask, truth = _figure(angles, spread=1.0, shape=(360, 240), top=90.0)
+    masks = np.array([mask, mask])
+    options = FitOptions()
+    out = _Frames(2)
+    stretched = fit_pose(mask)  # the model as tall as the silhouette
+    at_body = fit_frame(_normalise_frame(masks, 1, body_height=H), options=options)
+    out.put(0, stretched)
+    out.put(1, at_body)
+    neck = JOINT_INDEX["neck"]
+    assert np.linalg.norm(at_body.joints[neck] - truth[neck]) / H < 0.02
+    assert np.linalg.norm(stretched.joints[neck] - truth[neck]) / H > 0.04  # the fault
+    used = np.array([np.nan, H])
+    _refit_body_backward(masks, np.array([H, H]), np.array([True, True]), used, options, out)
+    assert used[0] == H
+    assert out.sim[0] > stretched.similarity
+    assert np.linalg.norm(out.joints[0, neck] - truth[neck]) / H < 0.02

@@ -65,7 +65,13 @@ def test_legs_passing_in_a_three_quarter_view_keep_their_hips(yaw):
     motion = make_motion("walk", n_frames=36)
     _, truth = render_clip(motion, size=(320, 240), yaw_deg=yaw, noise=0.0,
                            rng=np.random.default_rng(0))
-    with_prediction = fit_sequence(truth["masks"], predict=True, crossing=False).joints2d
-    without = fit_sequence(truth["masks"], predict=False, crossing=False).joints2d
+    # the whole-arm track off in both: it moves the legs' crossing choice by the arms'
+    # pixels (at yaw 45 it alone keeps the hips, 22 -> 2 frames off, without
+    # prediction; at yaw 135 with prediction it loses them, 0 -> 24), which would
+    # hide what prediction does
+    with_prediction = fit_sequence(truth["masks"], predict=True, crossing=False,
+                                   arm_track=False).joints2d
+    without = fit_sequence(truth["masks"], predict=False, crossing=False,
+                           arm_track=False).joints2d
     assert _hip_misses(with_prediction, truth["joints2d"]) <= 2
     assert _hip_misses(without, truth["joints2d"]) >= 10

@@ -82,14 +82,20 @@ def search_arm_grid(eng: _MaskEngine, st: FitState, s: str, *, prior=None, step_
 ARM_PROBE_FORE = ((1.0, 1.0),)
 
 
-def search_arm_track(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, tie_px=3.0,
-                     fine_deg=10.0) -> FitState:
+def upper_deg_rad(deg: float) -> float:
+    """``deg`` in radians, a hair over (grid angles are whole degrees in floats)."""
+    return float(np.deg2rad(deg)) + 1e-9
+
+
+def search_arm_track(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, tie_px=10.0,
+                     fine_deg=10.0, upper_deg=30.0) -> FitState:
     """A tracked frame's whole arm over every (upper, lower) angle pair (beyond the seed).
 
     A tracked frame searches each arm segment within +-16 degrees of the previous
     frame's, so a forearm that swings faster (a raise or a wave at 20 degrees a frame)
     is left behind, and the track then shrinks it (Algorithm 6) rather than turn it.
-    Here the arm is scored at every angle pair ``step_deg`` apart at full length (its
+    Here the arm is scored at every angle pair ``step_deg`` apart, the upper arm
+    within ``upper_deg`` of the track's, at full length (its
     foreshortening reset to 1, so a forearm the track had shrunk can be found again
     at its length), the winner refined by Algorithm 1 (+-``fine_deg``) and
     Algorithm 6, and kept only when it fits better than the arm in place by more than
@@ -104,7 +110,13 @@ def search_arm_track(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, t
         Which arm (its label: image side, or the track's).
     """
     up, lo = S[f"{s}_upper_arm"], S[f"{s}_lower_arm"]
-    return _search_pair_grid(eng, st, up, lo, J[f"{s}_shoulder"], pair_grid(float(step_deg)),
+    grid = pair_grid(float(step_deg))
+    # the upper arm near the track's (it turns slowly about the shoulder, and an upper
+    # arm swung across the torso's outline, the forearm hanging beyond it, can fit a
+    # walk's silhouette a little better than the arm it is), the forearm anywhere
+    near = np.abs(np.angle(np.exp(1j * (grid[0] - st.angles[up])))) <= upper_deg_rad(upper_deg)
+    grid = tuple(g[near] for g in grid)
+    return _search_pair_grid(eng, st, up, lo, J[f"{s}_shoulder"], grid,
                              (st.angles[up], st.angles[lo]), tie_px=tie_px, fine_deg=fine_deg,
                              keep_px=-tie_px, lengths=True, skip_within=np.deg2rad(step_deg),
                              probe_fore=ARM_PROBE_FORE, bend_limit=True)
@@ -211,7 +223,9 @@ def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, k
         score = _pair_scores(eng, st, up, lo, root, grid)
         which = np.zeros(len(ua), dtype=int)
     else:
-        probes = [st.with_entries(fore=([up, lo], list(f))) for f in probe_fore]
+        probes = [st.with_entries(fore=([up, lo], [st.fore[up] if a is None else a,
+                                                   st.fore[lo] if b is None else b]))
+                  for a, b in probe_fore]
         scores = np.stack([_pair_scores(eng, p, up, lo, root, grid) for p in probes])
         which = np.argmax(scores, axis=0)
         score = scores[which, np.arange(len(ua))]

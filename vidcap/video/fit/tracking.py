@@ -85,7 +85,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  progress=None, reinit_every: int = 10, spread_window: int = 31,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
-                 body_tolerance: float = 0.05, relabel: bool = False, frames=None,
+                 body_tolerance: float = 0.05, body_backward: bool = True,
+                 relabel: bool = False, frames=None,
                  cues: str = "all", arm_solve: bool = True, predict: bool = False,
                  crossing: bool = True, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
@@ -135,6 +136,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
         if its similarity is higher. 0 window: off.
+    body_backward : bool
+        Then the same refit backward, warm from the frame after where that one was
+        fitted at the body's height (a run of raised-arm frames entered forward from a
+        model stretched to the hand is corrected from the run's far end).
     relabel : bool
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
         solve over time (:func:`vidcap.video.fit.temporal.label_path`), so a fresh fit
@@ -191,7 +196,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
         body = _refit_body_height(masks, body_window, body_tolerance, options,
-                                  out.height.copy(), out, normalised.cues)
+                                  out.height.copy(), out, normalised.cues,
+                                  backward=body_backward)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
                        normalised.cues)
@@ -456,7 +462,7 @@ def _frame_has_pixels(masks, k: int) -> bool:
 
 
 def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames,
-                       cues_of=None):
+                       cues_of=None, backward: bool = True):
     """Refit frames whose silhouette is not as tall as the body (in place); returns
     the body height (px) each refitted frame was fitted at, NaN elsewhere."""
     body = body_heights(height, out.sim, window)
@@ -479,7 +485,30 @@ def _refit_body_height(masks, window, tolerance, options: FitOptions, height, ou
                 prev = fp
                 continue
         prev = out.get(k, height_px=height[k])
+    if backward:
+        _refit_body_backward(masks, body, off, used, options, out, cues_of)
     return used
+
+
+def _refit_body_backward(masks, body, off, used, options: FitOptions, out: _Frames,
+                         cues_of=None) -> None:
+    """The body-height refit again, backward (in place): each frame off the body's
+    height, warm from the frame after it where that one was fitted at the body's
+    height, kept if its S is higher. A run of frames whose silhouette is taller than
+    the body (a hand raised above the head) is entered forward from a frame fitted at
+    the silhouette's height, the model stretched to the hand (neck and shoulders
+    high), and the warm refit from there can stay below that stretched fit; the run's
+    far end, left at the body's height, carries the right scale back into it."""
+    for k in range(len(off) - 2, -1, -1):
+        if not (off[k] and np.isfinite(used[k + 1])):
+            continue
+        norm = _normalise_frame(masks, k, height=options.height, body_height=float(body[k]))
+        fp = fit_frame(norm, previous=out.get(k + 1, height_px=float(out.height[k + 1])),
+                       options=options, cues=None if cues_of is None else cues_of(k, norm))
+        if fp.similarity > out.sim[k]:
+            out.put(k, fp)
+            out.linked[k] = fp.warm
+            used[k] = body[k]
 
 
 def _window_median(values: np.ndarray, window: int) -> np.ndarray:
