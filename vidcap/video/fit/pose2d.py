@@ -71,7 +71,13 @@ Beyond the seed:
   inside the torso's silhouette covers the same pixels at any angle) go to the
   arm hanging along the torso. Run on fresh fits only: in tracked frames it
   measured worse (it re-places carried arms on slivers along the torso's edges),
-  so warm frames carry their arms from the previous frame. ``refine=False``
+  so warm frames carry their arms from the previous frame, and ``arm_track``
+  (default on) searches them in a narrower grid: each whole arm at full length, the
+  upper arm within 30 degrees of the track's, the forearm anywhere within the
+  150-degree bend, kept only when it fits better than the carried arm by more than
+  10 pixels' worth of S (:func:`vidcap.video.fit.grids.search_arm_track`; a forearm
+  raised faster than the track's +-16 degrees a frame was left behind and shrunk by
+  Algorithm 6). ``refine=False``
   (``--no-refine``) runs the seed's order only.
 * ``leg_grid`` (default on): in tracked frames each whole leg is scored at every
   (thigh, shin) angle pair 15 degrees apart in one batch
