@@ -428,9 +428,14 @@ def test_challenge_comes_reinit_every_frames_after_the_last_fresh_fit(monkeypatc
     fresh = [k for k, (c, w) in enumerate(calls) if not w]
     # frame 0 starts cold; the jump at frame 6 (and back at 7) is refitted from scratch,
     # which counts as a challenge: the next ones come 10 frames after the last of those
+    # (a slipping track refitted from scratch later on counts as well)
     assert 6 in fresh and challenged[0] == 0
-    last = max(k for k in fresh if k < 10)
-    assert challenged[1:] == list(range(last + 10, 30, 10))
+    cold = sorted(set(fresh) | set(challenged))
+    assert len(challenged) > 1
+    for k in challenged[1:]:
+        assert k - max(j for j in cold if j < k) == 10
+    # and no stretch of 10 frames after a cold fit goes unchallenged
+    assert all(b - a <= 10 for a, b in zip(cold, cold[1:] + [30], strict=True))
 
 
 def test_leg_grid_finds_a_leg_raised_beyond_the_track():
