@@ -86,9 +86,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, body_backward: bool = True,
-                 relabel: bool = False, frames=None,
-                 cues: str = "all", arm_solve: bool = True, predict: bool = False,
-                 crossing: bool = True, **kw) -> Pose2D:
+                 relabel: bool = False, frames=None, cues: str = "all", arm_solve: bool = True,
+                 predict: bool = False, crossing: bool = True, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -135,11 +134,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         the window's median) within ``body_window`` frames; a frame whose
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
-        if its similarity is higher. 0 window: off.
-    body_backward : bool
-        Then the same refit backward, warm from the frame after where that one was
-        fitted at the body's height (a run of raised-arm frames entered forward from a
-        model stretched to the hand is corrected from the run's far end).
+        if its similarity is higher; with ``body_backward`` then backward, warm from
+        the frame after (:func:`_refit_body_backward`). 0 window: off.
     relabel : bool
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
         solve over time (:func:`vidcap.video.fit.temporal.label_path`), so a fresh fit
@@ -156,7 +152,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         the outline (:mod:`vidcap.video.fit.cues`: skin colour learned from this
         clip's head, image edges along the limbs' borders).
     cues : {'all', 'outline'}
-        ``'outline'``: the seed's silhouette-only score even when ``frames`` are given.
+        ``'outline'``: the seed's silhouette-only score even with ``frames``.
     arm_solve : bool
         Tracked mode with cues: after the priors, each arm's placement per frame among
         the cue search's candidates by the solve over time (:func:`_choose_arms`), so a
@@ -164,9 +160,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     predict, crossing : bool
         Legs carried on by warm starts (:func:`predicted_start`); passing legs (:mod:`.crossing`).
     **kw
-        The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...),
-        checked once here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelled
-        one raises TypeError before any frame is fitted.
+        The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...), checked once
+        here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelling raises TypeError.
 
     Returns
     -------
@@ -190,14 +185,13 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     out = _Frames(n)
     it = range(n) if progress is None else progress(range(n), total=n)
     normalised = _Normalised(masks, options, frames if cues == "all" else None)
-    _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every,
-           back_tie=back_tie, options=options, predict=predict, crossing=crossing)
+    _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every, back_tie=back_tie,
+           options=options, predict=predict, crossing=crossing)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
-        body = _refit_body_height(masks, body_window, body_tolerance, options,
-                                  out.height.copy(), out, normalised.cues,
-                                  backward=body_backward)
+        body = _refit_body_height(masks, body_window, body_tolerance, options, out.height.copy(),
+                                  out, normalised.cues, backward=body_backward)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
                        normalised.cues)
