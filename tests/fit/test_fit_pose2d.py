@@ -576,7 +576,7 @@ def test_arm_track_finds_a_forearm_swung_beyond_the_track(forearm_fore):
     previous = replace(fit_pose(stand), angles=np.mod(np.deg2rad(before), 2 * np.pi),
                        foreshortening=fore, spread=1.0, joints=stand_j)
     wrist = JOINT_INDEX["r_wrist"]
-    found = fit_pose(raised, previous=previous, fallback=0.0)
+    found = fit_pose(raised, previous=previous, fallback=0.0, arm_track=True)
     assert found.warm
     assert np.linalg.norm(found.joints[wrist] - truth[wrist]) / H < 0.03
     missed = fit_pose(raised, previous=previous, fallback=0.0, arm_track=False)
@@ -591,7 +591,7 @@ def test_arm_track_keeps_an_arm_that_fits():
     from dataclasses import replace
     previous = replace(fit_pose(mask), angles=np.mod(np.deg2rad(angles), 2 * np.pi),
                        foreshortening=np.ones(10), spread=1.0, joints=truth)
-    fp = fit_pose(mask, previous=previous, fallback=0.0)
+    fp = fit_pose(mask, previous=previous, fallback=0.0, arm_track=True)
     for name in ("l_elbow", "l_wrist", "r_elbow", "r_wrist"):
         assert np.linalg.norm(fp.joints[JOINT_INDEX[name]] - truth[JOINT_INDEX[name]]) / H < 0.02
 

@@ -350,7 +350,7 @@ def fit_pose(mask: np.ndarray | NormalisedMask, *, previous: FramePose | None = 
              verify_crossing: bool = True, caps: bool = False, warm_threshold: float = 0.55,
              fallback: float = FALLBACK, warm_step_deg: float = 2.0,
              challenge: bool = False, arm_grid: bool = True, leg_grid: bool = True,
-             arm_track: bool = True, spread_value: float | None = None,
+             arm_track: bool = False, spread_value: float | None = None,
              body_height: float | None = None) -> FramePose:
     """Fit the 2D cylinder model to one silhouette (seed 004 section 3.1.4).
 

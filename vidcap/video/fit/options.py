@@ -66,7 +66,7 @@ class FitOptions:
     arm_grid: bool = True
     leg_grid: bool = True
     fold_legs: bool = False
-    arm_track: bool = True
+    arm_track: bool = False
     spread_value: float | None = None
     body_height: float | None = None
     tie: float = 0.01

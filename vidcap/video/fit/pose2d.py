@@ -64,21 +64,21 @@ Beyond the seed:
   150 degrees of their parent, thighs over 180-360 degrees rather than Table 3.3's
   240-300 so high steps fit), the torso once more with every limb drawn, and the
   final Algorithm 6 pass starts from the current ratios.
-* ``arm_grid`` (default on, with ``refine``): after the limb refinement each whole
-  arm is scored at every (upper, lower) angle pair 15 degrees apart in one batch
-  (:func:`vidcap.video.fit.grids.search_arm_grid`), so a forearm poking out far from the contour
-  estimate (raised beside the head, bent forward) is found; near-ties (an arm
-  inside the torso's silhouette covers the same pixels at any angle) go to the
-  arm hanging along the torso. Run on fresh fits only: in tracked frames it
-  measured worse (it re-places carried arms on slivers along the torso's edges),
-  so warm frames carry their arms from the previous frame, and ``arm_track``
-  (default on) searches them in a narrower grid: each whole arm at full length, the
-  upper arm within 30 degrees of the track's, the forearm anywhere within the
-  150-degree bend, kept only when it fits better than the carried arm by more than
-  10 pixels' worth of S (:func:`vidcap.video.fit.grids.search_arm_track`; a forearm
-  raised faster than the track's +-16 degrees a frame was left behind and shrunk by
-  Algorithm 6). ``refine=False``
-  (``--no-refine``) runs the seed's order only.
+* ``arm_grid`` (default on, with ``refine``): after the limb refinement each whole arm
+  is scored at every (upper, lower) angle pair 15 degrees apart in one batch
+  (:func:`vidcap.video.fit.grids.search_arm_grid`), so a forearm poking out far from the
+  contour estimate (raised beside the head, bent forward) is found; near-ties (an arm
+  inside the torso's silhouette covers the same pixels at any angle) go to the arm
+  hanging along the torso. Run on fresh fits only: in tracked frames it measured worse
+  (it re-places carried arms on slivers along the torso's edges), so warm frames carry
+  their arms from the previous frame, and ``arm_track`` (default off: on real clips it
+  lost, tfjs_dance 5.5 -> 7.9 % of height) searches them in a narrower grid: each whole
+  arm at full length, the upper arm within 30 degrees of the track's, the forearm
+  anywhere within the 150-degree bend, kept only when it fits better than the carried
+  arm by more than 10 pixels' worth of S
+  (:func:`vidcap.video.fit.grids.search_arm_track`; a forearm raised faster than the
+  track's +-16 degrees a frame was left behind and shrunk by Algorithm 6).
+  ``refine=False`` (``--no-refine``) runs the seed's order only.
 * ``leg_grid`` (default on): in tracked frames each whole leg is scored at every
   (thigh, shin) angle pair 15 degrees apart in one batch
   (:func:`vidcap.video.fit.grids.search_leg_grid`) and the best kept when it fits better than the
