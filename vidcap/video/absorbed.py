@@ -264,16 +264,9 @@ def _unlike_scene(wk, pixels: np.ndarray, scene: np.ndarray) -> np.ndarray:
         return out
     colour = wk.plate[ys, xs]
     scene = scene & ~wk.lit
+    from vidcap.video.appearance import nearest_scene_distance
+
     r = int(round(FLAG_RADIUS * wk.ring_r))
-    step = max(2, r // 6)
-    best = np.full(len(ys), np.inf, np.float32)
-    for dy in range(-r, r + 1, step):
-        for dx in range(-r, r + 1, step):
-            if dx * dx + dy * dy > r * r:
-                continue
-            y = np.clip(ys + dy, 0, wk.h - 1)
-            x = np.clip(xs + dx, 0, wk.w - 1)
-            d = np.abs(colour - wk.plate[y, x]).sum(axis=-1)
-            np.minimum(best, np.where(scene[y, x], d, np.inf), out=best)
+    best = nearest_scene_distance(colour, ys, xs, wk.plate, scene, r, max(2, r // 6))
     out[ys, xs] = best > FLAG_UNLIKE * wk.thr
     return out

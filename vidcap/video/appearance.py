@@ -50,6 +50,7 @@ import cv2
 import numpy as np
 
 __all__ = ["appearance_plate", "between_moved", "colour_model", "log_ratio",
+           "nearest_scene_distance",
            "person_scene_models"]
 
 #: Quantisation levels per colour channel of the colour models.
@@ -443,6 +444,41 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     return _retake(model, frames, gains, wk, uncertain, seen)
 
 
+def nearest_scene_distance(colour, ys, xs, plate, scene, radius: int, step: int) -> np.ndarray:
+    """Colour distance from each pixel's colour to the nearest seen scene pixel round it.
+
+    Parameters
+    ----------
+    colour : numpy.ndarray, shape (N, 3)
+        The colours to compare, in the plate's units.
+    ys, xs : numpy.ndarray, shape (N,), int
+        Where they are (working-resolution rows and columns).
+    plate : numpy.ndarray, shape (H, W, 3)
+        The scene's colours.
+    scene : numpy.ndarray, shape (H, W), bool
+        Where ``plate`` is the seen scene (only those pixels count).
+    radius, step : int
+        The disc searched round each pixel and the spacing of its offsets, pixels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,), float32
+        The smallest L1 distance over the disc's scene pixels; inf where it has none.
+    """
+    h, w = scene.shape
+    best = np.full(len(ys), np.inf, np.float32)
+    # a loop over the disc's offsets (tens), each vectorised over all N pixels
+    for dy in range(-radius, radius + 1, step):
+        for dx in range(-radius, radius + 1, step):
+            if dx * dx + dy * dy > radius * radius:
+                continue
+            y = np.clip(ys + dy, 0, h - 1)
+            x = np.clip(xs + dx, 0, w - 1)
+            d = np.abs(colour - plate[y, x]).sum(axis=-1)
+            np.minimum(best, np.where(scene[y, x], d, np.inf), out=best)
+    return best
+
+
 def _keep_unlike(wk: _Work, llr: np.ndarray) -> np.ndarray:
     """Person per sample, (k, h, w) bool: ``llr > 0``; and, in the first plate's
     never-seen area, ``llr > -NEVER_KEEP`` where the sample's colour matches no seen
@@ -462,17 +498,7 @@ def _keep_unlike(wk: _Work, llr: np.ndarray) -> np.ndarray:
     _, first, inv = np.unique(key, return_index=True, return_inverse=True)
     colour = wk.small[ts[first], ys[first], xs[first]]  # (U, 3)
     uy, ux = ys[first], xs[first]
-    seen = ~(wk.never | wk.lit)
-    r, step = wk.ring_r, 2
-    best = np.full(len(uy), np.inf, np.float32)
-    for dy in range(-r, r + 1, step):
-        for dx in range(-r, r + 1, step):
-            if dx * dx + dy * dy > r * r:
-                continue
-            y = np.clip(uy + dy, 0, wk.h - 1)
-            x = np.clip(ux + dx, 0, wk.w - 1)
-            d = np.abs(colour - wk.plate[y, x]).sum(axis=-1)
-            np.minimum(best, np.where(seen[y, x], d, np.inf), out=best)
+    best = nearest_scene_distance(colour, uy, ux, wk.plate, ~(wk.never | wk.lit), wk.ring_r, 2)
     unlike = (best > UNLIKE * wk.thr)[inv.ravel()]
     person[ts[unlike], ys[unlike], xs[unlike]] = True
     return person
