@@ -258,14 +258,14 @@ def _unlike_scene(wk, pixels: np.ndarray, scene: np.ndarray) -> np.ndarray:
     width shows (L1 over the channels above :data:`FLAG_UNLIKE` thresholds): not the
     continuation of a scene object that reaches out of the footprint (a table's chrome
     foot the legs step round)."""
+    from vidcap.video.appearance import nearest_scene_distance
+
     ys, xs = np.nonzero(pixels)
     out = np.zeros(pixels.shape, bool)
     if not len(ys):
         return out
     colour = wk.plate[ys, xs]
     scene = scene & ~wk.lit
-    from vidcap.video.appearance import nearest_scene_distance
-
     r = int(round(FLAG_RADIUS * wk.ring_r))
     best = nearest_scene_distance(colour, ys, xs, wk.plate, scene, r, max(2, r // 6))
     out[ys, xs] = best > FLAG_UNLIKE * wk.thr

@@ -75,16 +75,10 @@ def search_arm_grid(eng: _MaskEngine, st: FitState, s: str, *, prior=None, step_
                              tie_px=tie_px, fine_deg=fine_deg, keep_px=tie_px)
 
 
-#: The (upper, lower arm) foreshortening ratios :func:`search_arm_track` scores its
-#: candidates at: full length, and the upper arm foreshortened (an arm raised toward
-#: the camera), so neither a forearm the track had shrunk nor a short upper arm is
-#: missed.
-ARM_PROBE_FORE = ((1.0, 1.0),)
-
-
-def upper_deg_rad(deg: float) -> float:
-    """``deg`` in radians, a hair over (grid angles are whole degrees in floats)."""
-    return float(np.deg2rad(deg)) + 1e-9
+#: The (upper, lower arm) foreshortening :func:`search_arm_track` scores its candidates
+#: at: full length, so a forearm the track had shrunk is found again at its length
+#: (scoring the upper arm foreshortened too folded forearms into the torso: RESULTS.md).
+ARM_TRACK_FORE = (1.0, 1.0)
 
 
 def search_arm_track(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, tie_px=10.0,
@@ -114,12 +108,14 @@ def search_arm_track(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, t
     # the upper arm near the track's (it turns slowly about the shoulder, and an upper
     # arm swung across the torso's outline, the forearm hanging beyond it, can fit a
     # walk's silhouette a little better than the arm it is), the forearm anywhere
-    near = np.abs(np.angle(np.exp(1j * (grid[0] - st.angles[up])))) <= upper_deg_rad(upper_deg)
+    # (a hair over: the grid's angles are whole degrees in floats)
+    reach = float(np.deg2rad(upper_deg)) + 1e-9
+    near = np.abs(np.angle(np.exp(1j * (grid[0] - st.angles[up])))) <= reach
     grid = tuple(g[near] for g in grid)
     return _search_pair_grid(eng, st, up, lo, J[f"{s}_shoulder"], grid,
                              (st.angles[up], st.angles[lo]), tie_px=tie_px, fine_deg=fine_deg,
                              keep_px=-tie_px, lengths=True, skip_within=np.deg2rad(step_deg),
-                             probe_fore=ARM_PROBE_FORE, bend_limit=True)
+                             at_fore=ARM_TRACK_FORE, bend_limit=True)
 
 
 def search_leg_grid(eng: _MaskEngine, st: FitState, s: str, *, step_deg=15.0, tie_px=3.0,
@@ -197,7 +193,7 @@ def _pair_scores_compiled(kernels, eng, st, up, lo, root, grid):
 
 def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, keep_px,
                       upper_range=(0.0, TWO_PI), lengths=False, skip_within=0.0,
-                      probe_fore=None, bend_limit=False) -> FitState:
+                      at_fore=None, bend_limit=False) -> FitState:
     """The whole-limb grid of :func:`search_arm_grid` and :func:`search_leg_grid`.
 
     ``up``, ``lo``: the limb's segments; ``base``: the joint it hangs from;
@@ -209,26 +205,17 @@ def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, k
     ``prior``. ``upper_range``: the upper segment's refinement limits;
     ``lengths``: also refine both segments' foreshortening (Algorithm 6).
     ``skip_within``: radians (upper + lower); a winner this close to ``prior``
-    is left unrefined and the limb in place kept. ``probe_fore``: ((upper, lower), ...)
-    foreshortening ratios the candidates are scored at (the best of them per
-    candidate) and refined from, instead of the limb's own; ``bend_limit``: the
+    is left unrefined and the limb in place kept. ``at_fore``: the (upper, lower)
+    foreshortening the candidates are scored at and refined from, instead of the
+    limb's own; ``bend_limit``: the
     lower segment's refinement stays within the flexion limit's bend of the upper.
     """
     prior = np.asarray(prior, dtype=float)
     st = st.drawing([up, lo])
     ua, la = grid[0], grid[1]
     root = eng.joints(st)[base]
-    if probe_fore is None:
-        probes = [st]
-        score = _pair_scores(eng, st, up, lo, root, grid)
-        which = np.zeros(len(ua), dtype=int)
-    else:
-        probes = [st.with_entries(fore=([up, lo], [st.fore[up] if a is None else a,
-                                                   st.fore[lo] if b is None else b]))
-                  for a, b in probe_fore]
-        scores = np.stack([_pair_scores(eng, p, up, lo, root, grid) for p in probes])
-        which = np.argmax(scores, axis=0)
-        score = scores[which, np.arange(len(ua))]
+    probe = st if at_fore is None else st.with_entries(fore=([up, lo], list(at_fore)))
+    score = _pair_scores(eng, probe, up, lo, root, grid)
     n_sil = max(int(eng.sil_rows[-1]), 1)
     per_px = 2.0 * float(score.max()) / n_sil  # S worth one pixel, about
 
@@ -243,8 +230,8 @@ def _search_pair_grid(eng, st, up, lo, base, grid, prior, *, tie_px, fine_deg, k
     fine = np.deg2rad(fine_deg)
 
     def refine(cur: FitState) -> FitState:
-        if probe_fore is not None:
-            cur = probes[which[k]]
+        if at_fore is not None:
+            cur = probe
         cur = cur.with_entries(angles=([up, lo], [ua[k], la[k]]))
         cur, _ = search_angle(eng, cur, up, with_segments=(lo,), start=ua[k],
                               interval=2 * fine, lo=upper_range[0], hi=upper_range[1],
