@@ -391,11 +391,11 @@ def near_limb_names(j2, limb_order, proposed_orientation, user_orientation, rho,
     pairs = LIMB_ORDER_PAIRS if pairs is None else pairs
     orient, yaw, swap = view_names(proposed_orientation, rho, user_orientation, facing)
     edge = np.asarray(user_orientation) == ""
+    side = (orient == "left") | (orient == "right")
     if frames == "turned":  # a side label, or turned at least LIMB_ORDER_TURNED_RHO
-        edge &= (orient == "left") | (orient == "right") \
-            | (np.asarray(rho, float) <= LIMB_ORDER_TURNED_RHO)
+        edge &= side | (np.asarray(rho, float) <= LIMB_ORDER_TURNED_RHO)
     elif frames != "all":
-        edge &= (orient == "left") | (orient == "right")
+        edge &= side
     if frames == "edge":
         edge &= np.asarray(rho, float) <= SIDE_FACING_SPREAD
     if not edge.any() or not any(pairs):
