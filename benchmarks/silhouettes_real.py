@@ -186,13 +186,32 @@ RENDERS = [
     ("02_10 11-14 s 3/4 back / Weizmann plate", ("02_10", 661, 841), 135, "ido",
      "validation"),
     ("02_07 1-4 s side left / room plate", ("02_07", 61, 241), 270, "room", "validation"),
+    # Validation renders added by the issue-26 still2 helper (nothing tuned on them; their
+    # figures recorded on main before that helper changed anything), when the four
+    # barely-moving validation rows it studied (06_10 4-7 s side, 02_07 1-4 s and 11-14 s,
+    # 02_10 17-20 s) became tuning: the most in-place 3 s (the hips move 0.03-0.54 m) of
+    # CMU trials no benchmark had used (01_08 playground, 02_04 jump and balance, 02_08
+    # swordplay, 05_04 / 05_05 / 05_10 / 05_13 / 05_20 dance, 06_15 basketball) and one
+    # more stretch of 02_05 (validation, never diagnosed), over the three plates.
+    ("01_08 12-15 s side / PETS plate", ("01_08", 721, 901), 90, "vtest", "validation"),
+    ("02_04 0-3 s 3/4 / room plate", ("02_04", 1, 181), 60, "room", "validation"),
+    ("02_08 6-9 s side left / Weizmann plate", ("02_08", 391, 571), 270, "ido",
+     "validation"),
+    ("05_04 0-3 s front / Weizmann plate", ("05_04", 1, 181), 0, "ido", "validation"),
+    ("05_05 0-3 s side / room plate", ("05_05", 1, 181), 90, "room", "validation"),
+    ("05_10 2-5 s 3/4 / PETS plate", ("05_10", 121, 301), 45, "vtest", "validation"),
+    ("05_13 0-3 s 3/4 back / room plate", ("05_13", 1, 181), 135, "room", "validation"),
+    ("05_20 1-4 s front / PETS plate", ("05_20", 61, 241), 0, "vtest", "validation"),
+    ("06_15 1-4 s side / Weizmann plate", ("06_15", 91, 271), 90, "ido", "validation"),
+    ("02_05 11-14 s 3/4 / PETS plate", ("02_05", 661, 841), 60, "vtest", "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
 EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_humanik"
                       / f"0{t}_humanik.bvh"
                       for t in ("02_05", "02_06", "02_09", "05_02", "05_09", "05_18", "05_12",
-                                "02_07", "02_10", "06_10", "06_11", "06_12")})
+                                "02_07", "02_10", "06_10", "06_11", "06_12", "01_08", "02_04",
+                                "02_08", "05_04", "05_05", "05_10", "05_13", "05_20", "06_15")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
