@@ -3,7 +3,7 @@
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
         [--only NAME] [--quick] [--pck] [--graph-cut] [--[no-]empty-scene] [--[no-]person-box]
         [--[no-]clip-ends]
-        [--[no-]flag-unseen]
+        [--[no-]flag-unseen] [--[no-]flag-still]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
 + ``extract_silhouettes``), the same silhouette stage on the plain temporal-median
@@ -463,6 +463,10 @@ def main(argv=None) -> int:
                     help="vidcap's plate: person-coloured footprint pixels no sample shows "
                          "as scene flagged never seen (vidcap.video.absorbed; default: "
                          "absorbed.FLAG_UNSEEN)")
+    ap.add_argument("--flag-still", action=argparse.BooleanOptionalAction, default=None,
+                    help="vidcap's plate: footprint pixels whose plate and every sample "
+                         "are unlike the seen scene round them flagged never seen "
+                         "(vidcap.video.absorbed; default: absorbed.FLAG_STILL)")
     args = ap.parse_args(argv)
     import vidcap.video.absorbed as absorbed
     import vidcap.video.background as background
@@ -473,6 +477,8 @@ def main(argv=None) -> int:
 
     if args.flag_unseen is not None:
         absorbed.FLAG_UNSEEN = args.flag_unseen
+    if args.flag_still is not None:
+        absorbed.FLAG_STILL = args.flag_still
 
     if args.empty_scene is not None:
         background.EMPTY_SCENE = args.empty_scene

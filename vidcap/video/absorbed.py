@@ -68,6 +68,15 @@ REACH = 0.02
 #: / 0.945; without the unlike test a chrome table foot the legs step round was flagged
 #: (14_19 3/4 0.948 -> 0.920).
 FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
+#: Also flag never seen the footprint pixels whose plate colour and every sample's colour
+#: are unlike the seen scene round them (FLAG_UNLIKE thresholds within FLAG_RADIUS ring
+#: widths; :func:`_still_unlike`), without asking the person's colour model: a person who
+#: barely moves shows the differences from the plate mostly where the plate holds the
+#: person and the sample the scene (the person's colour model learns the scene's
+#: colours), and a torso that never left its pixels is rarely among the sure person
+#: pixels, so its colour is unlikely under that model although no sample shows the
+#: scene there.
+FLAG_STILL = True
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
@@ -220,7 +229,60 @@ def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
     strict = cv2.blur(log_ratio(wk.plate, colour_model(ev["px"]), ev["scene"]), (3, 3))
     unseen = (cand & ~wk.never & ~(ev["llr"] < -MARGIN).any(axis=0)
               & (strict > FLAG_MARGIN))
-    return _flag_unseen(model, wk, unseen & _unlike_scene(wk, unseen, ~ev["foot"]))
+    unseen &= _unlike_scene(wk, unseen, ~ev["foot"])
+    if FLAG_STILL:
+        unseen |= _still_unlike(wk, ev["foot"])
+    return _flag_unseen(model, wk, unseen)
+
+
+def _still_unlike(wk, foot: np.ndarray) -> np.ndarray:
+    """(h, w) bool: footprint pixels (``foot``) whose plate colour and every sample's
+    colour are unlike the seen scene round them (:data:`FLAG_STILL`): a body part that
+    never left its pixels, whatever the person's colour model says of it.
+
+    The plate's colour is tested first (one colour a pixel); only what passes has its
+    samples tested."""
+    from vidcap.video.appearance import nearest_scene_distance
+
+    pool = foot & ~wk.never & ~wk.lit & ~_seen_without_person(wk)
+    out = np.zeros(pool.shape, bool)
+    ys, xs = np.nonzero(pool)
+    if not len(ys):
+        return out
+    scene = ~foot & ~wk.never & ~wk.lit
+    r = int(round(FLAG_RADIUS * wk.ring_r))
+    far = FLAG_UNLIKE * wk.thr
+
+    # A pixel deeper in the footprint than r from the seen scene is compared three times
+    # as far; none in that reach says nothing (the wall behind a body that bends and
+    # rises: it is left as it is).
+    reach = np.full(len(ys), r)
+    d = nearest_scene_distance(wk.plate[ys, xs], ys, xs, wk.plate, scene, r, max(2, r // 6))
+    deep = ~np.isfinite(d)
+    reach[deep] = 3 * r
+    d[deep] = nearest_scene_distance(wk.plate[ys[deep], xs[deep]], ys[deep], xs[deep],
+                                     wk.plate, scene, 3 * r, max(2, r // 2))
+    unlike = np.isfinite(d) & (d > far)
+    ys, xs, reach = ys[unlike], xs[unlike], reach[unlike]
+    if not len(ys):
+        return out
+    # Each sample's colour against the same sample's scene round the pixel (not the
+    # plate's: a white wall the exposure drives into saturation differs from the plate
+    # in every bright sample, and from its own surroundings in none).
+    seen = np.zeros(len(ys), bool)
+    for t in range(wk.k):
+        for rr in np.unique(reach):
+            left = ~seen & (reach == rr)
+            if left.any():
+                seen[left] = nearest_scene_distance(
+                    wk.small[t, ys[left], xs[left]], ys[left], xs[left], wk.small[t],
+                    scene & ~wk.fg[t], int(rr), max(2, int(rr) // 6)) <= far
+    out[ys[~seen], xs[~seen]] = True
+    # (a body part is an area the ring's width across: specks and slivers along the
+    # footprint's edge, where the plate was inpainted, are not)
+    n, lab, st, _ = cv2.connectedComponentsWithStats(out.view(np.uint8), connectivity=8)
+    keep = np.concatenate([[False], st[1:, cv2.CC_STAT_AREA] >= wk.ring_r ** 2])
+    return keep[lab]
 
 
 def _seen_without_person(wk) -> np.ndarray:
