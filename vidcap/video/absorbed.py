@@ -75,8 +75,14 @@ FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: person and the sample the scene (the person's colour model learns the scene's
 #: colours), and a torso that never left its pixels is rarely among the sure person
 #: pixels, so its colour is unlikely under that model although no sample shows the
-#: scene there.
-FLAG_STILL = True
+#: scene there. The seen scene is looked for within STILL_RADIUS ring widths (three
+#: times as far for a pixel with none so near). Chosen on the studied rows
+#: (silhouettes_real.py --quick, median IoU, off -> on): 06_10 4-7 s side 0.837 ->
+#: 0.955 (STILL_RADIUS 2: 0.902), 02_07 11-14 s front 0.543 -> 0.628 (0.629), 02_07 1-4
+#: s side left 0.812 -> 0.808 (0.812), 02_06 0.911 and 05_02 0.887 unchanged; without
+#: dropping flagged areas under a ring width squared, 02_06 0.911 -> 0.865 (specks
+#: where the plate was inpainted).
+FLAG_STILL, STILL_RADIUS = True, 1.0
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
@@ -250,7 +256,7 @@ def _still_unlike(wk, foot: np.ndarray) -> np.ndarray:
     if not len(ys):
         return out
     scene = ~foot & ~wk.never & ~wk.lit
-    r = int(round(FLAG_RADIUS * wk.ring_r))
+    r = int(round(STILL_RADIUS * wk.ring_r))
     far = FLAG_UNLIKE * wk.thr
 
     # A pixel deeper in the footprint than r from the seen scene is compared three times
