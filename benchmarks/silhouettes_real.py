@@ -64,6 +64,12 @@ Clips:
   front / PETS and side from the left / room, 02_10 (washing a window) front / room and
   three-quarter from behind / Weizmann, 06_10 three-quarter / PETS, 06_12 side from the
   left / room, 06_11 three-quarter from behind / Weizmann (same folder, same conversion).
+* Validation renders added by the issue-26 still2 helper (chose nothing; figures recorded
+  on main before that helper changed anything), when the four barely-moving rows it
+  studied (06_10 4-7 s side, 02_10 17-20 s front, 02_07 11-14 s front and 1-4 s side
+  left) became tuning: the most in-place 3 s of CMU 01_08, 02_04, 02_08, 05_04, 05_05,
+  05_10, 05_13, 05_20, 06_15 (trials no benchmark had used) and 02_05 11-14 s, over the
+  three plates at side, three-quarter and front views (same folder, same conversion).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -167,7 +173,7 @@ RENDERS = [
     ("06_10 2-5 s 3/4 / PETS plate", ("06_10", 121, 301), 60, "vtest", "validation"),
     ("06_12 4-7 s 150 deg / room plate", ("06_12", 241, 421), 150, "room", "validation"),
     ("06_11 2-5 s front / Weizmann plate", ("06_11", 121, 301), 0, "ido", "validation"),
-    ("06_10 4-7 s side / room plate", ("06_10", 241, 421), 90, "room", "validation"),
+    ("06_10 4-7 s side / room plate", ("06_10", 241, 421), 90, "room", "tuning"),
     # Validation renders added by the issue-26 dance helper (nothing tuned on them; their
     # figures recorded before any change of that session), when the four subject-5 rows
     # above became its tuning data: in-place stretches (the hips move at most 0.02-0.18
@@ -175,17 +181,20 @@ RENDERS = [
     # window) of subject 2, 06_10, 06_11 and 06_12 of subject 6 (standing, arms and
     # trunk busy), over the three plates, at five yaws.
     ("02_07 4-7 s side / Weizmann plate", ("02_07", 241, 421), 90, "ido", "validation"),
-    ("02_10 17-20 s front / room plate", ("02_10", 1021, 1201), 0, "room", "validation"),
+    ("02_10 17-20 s front / room plate", ("02_10", 1021, 1201), 0, "room", "tuning"),
     ("06_10 5-8 s 3/4 / PETS plate", ("06_10", 301, 481), 60, "vtest", "validation"),
     ("06_12 4-7 s side left / room plate", ("06_12", 241, 421), 270, "room", "validation"),
     ("06_11 3-6 s 3/4 back / Weizmann plate", ("06_11", 181, 361), 200, "ido",
      "validation"),
     # (two more, added when the session had changed the plate already: their "before" is
     # the same code with the change switched off, --no-flag-unseen)
-    ("02_07 11-14 s front / PETS plate", ("02_07", 661, 841), 0, "vtest", "validation"),
+    ("02_07 11-14 s front / PETS plate", ("02_07", 661, 841), 0, "vtest", "tuning"),
     ("02_10 11-14 s 3/4 back / Weizmann plate", ("02_10", 661, 841), 135, "ido",
      "validation"),
-    ("02_07 1-4 s side left / room plate", ("02_07", 61, 241), 270, "room", "validation"),
+    ("02_07 1-4 s side left / room plate", ("02_07", 61, 241), 270, "room", "tuning"),
+    # (06_10 4-7 s side, 02_10 17-20 s front, 02_07 11-14 s front and 02_07 1-4 s side
+    # left are tuning since the issue-26 still2 helper diagnosed them: frames, plates and
+    # masks looked at, vidcap.video.absorbed.FLAG_STILL chosen on them.)
     # Validation renders added by the issue-26 still2 helper (nothing tuned on them; their
     # figures recorded on main before that helper changed anything), when the four
     # barely-moving validation rows it studied (06_10 4-7 s side, 02_07 1-4 s and 11-14 s,
