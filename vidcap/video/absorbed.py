@@ -69,20 +69,24 @@ REACH = 0.02
 #: (14_19 3/4 0.948 -> 0.920).
 FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: Also flag never seen the footprint pixels whose plate colour and every sample's colour
-#: are unlike the seen scene round them (FLAG_UNLIKE thresholds within FLAG_RADIUS ring
-#: widths; :func:`_still_unlike`), without asking the person's colour model: a person who
-#: barely moves shows the differences from the plate mostly where the plate holds the
-#: person and the sample the scene (the person's colour model learns the scene's
-#: colours), and a torso that never left its pixels is rarely among the sure person
-#: pixels, so its colour is unlikely under that model although no sample shows the
-#: scene there. The seen scene is looked for within STILL_RADIUS ring widths (three
-#: times as far for a pixel with none so near). Chosen on the studied rows
-#: (silhouettes_real.py --quick, median IoU, off -> on): 06_10 4-7 s side 0.837 ->
-#: 0.955 (STILL_RADIUS 2: 0.902), 02_07 11-14 s front 0.543 -> 0.628 (0.629), 02_07 1-4
-#: s side left 0.812 -> 0.808 (0.812), 02_06 0.911 and 05_02 0.887 unchanged; without
-#: dropping flagged areas under a ring width squared, 02_06 0.911 -> 0.865 (specks
-#: where the plate was inpainted).
-FLAG_STILL, STILL_RADIUS = True, 1.0
+#: are unlike the seen scene round them (FLAG_UNLIKE thresholds within STILL_RADIUS ring
+#: widths, three times as far for a pixel with none so near; :func:`_still_unlike`),
+#: without asking the person's colour model: a person who barely moves shows the
+#: differences from the plate mostly where the plate holds the person and the sample the
+#: scene, and a torso that never left its pixels is rarely among the sure person pixels,
+#: so its colour is unlikely under that model although no sample shows the scene there.
+#: OFF: it does not generalise. silhouettes_real.py --quick --pck, off -> on, one run: the
+#: studied rows 06_10 4-7 s side 0.837 -> 0.955, 02_07 11-14 s front 0.543 -> 0.628
+#: (02_10 17-20 s front 0.431, 02_07 1-4 s side left 0.812 -> 0.808); validation 05_13
+#: 0.905 -> 0.956, 06_12 150 deg 0.923 -> 0.947, but 02_04 0.967 -> 0.893, 05_05 0.874 ->
+#: 0.797, 05_10 0.956 -> 0.894, 06_12 side left 0.972 -> 0.912, 06_10 5-8 s 0.932 ->
+#: 0.892 and real tuning clips cdnet_office_enter 0.901 -> 0.788, sbi_candela 0.889 ->
+#: 0.809, pose2sim cam4 0.786 -> 0.579: scene objects of their own colour inside the
+#: footprint (a table foot, a door) pass the same test. STILL_RADIUS 2: 06_10 0.902;
+#: dropping flagged areas under a ring width squared: 02_06 0.865 -> 0.911; keeping only
+#: areas that touch what is flagged already: 14_19 3/4 and 05_12 lose as much, 02_07
+#: front gains nothing.
+FLAG_STILL, STILL_RADIUS = False, 1.0
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
