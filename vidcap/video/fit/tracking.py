@@ -346,13 +346,15 @@ def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, fram
         fb = fit_frame(nb, previous=back, options=no_fallback, cues=cb)
         if not fb.warm or fb.similarity <= out.sim[b] + back_tie:
             break
-        # fit_frame's fallback, only where its outcome matters: a fresh fit that
-        # beats the slipping warm one ends the backward track
-        if (fb.similarity < options.fallback * back.similarity
-                and fit_frame(nb, options=options, cues=cb).similarity > fb.similarity):
-            break
+        # fit_frame's fallback, only where its outcome matters: the frame fitted again
+        # with it (a fresh fit that beats the slipping warm one takes its place, with
+        # the track's names in a side view), kept where it beats the stored fit too
+        if fb.similarity < options.fallback * back.similarity:
+            fb = fit_frame(nb, previous=back, options=options, cues=cb)
+            if fb.similarity <= out.sim[b] + back_tie:
+                break
         out.put(b, fb)
-        out.linked[b + 1], out.linked[b] = True, False  # b's labels came from b + 1's
+        out.linked[b + 1], out.linked[b] = fb.warm, False  # b's labels came from b + 1's
         back = fb
 
 
