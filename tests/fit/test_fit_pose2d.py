@@ -622,3 +622,50 @@ def test_body_height_refit_backward_carries_the_scale_into_a_raised_arm_run():
     assert used[0] == H
     assert out.sim[0] > stretched.similarity
     assert np.linalg.norm(out.joints[0, neck] - truth[neck]) / H < 0.02
+
+
+def _scripted_pose(similarity, warm):
+    from vidcap.video.fit.result import FramePose
+
+    return FramePose(joints=np.zeros((15, 2)), angles=np.zeros(10), foreshortening=np.ones(10),
+                     scores=np.zeros(10), margins=np.zeros(10), spread=0.5, crossed=False,
+                     similarity=similarity, warm=warm, height_px=100.0)
+
+
+def test_backward_retrack_keeps_a_fresh_fit_that_beats_the_slipping_track(monkeypatch):
+    # frames 0-3 were tracked in a wrong pose (S 0.5); a fresh fit at frame 4 (S 0.9)
+    # replaced the track. Carried back to frame 3 the new pose slips (S 0.7 < 0.97 *
+    # 0.9), and a fresh fit of frame 3 scores 0.85: that fit replaces frame 3's stored
+    # one and the sweep goes on from it (it used to end there, leaving frames 0-3 wrong)
+    import vidcap.video.fit.tracking as tracking
+    from vidcap.video.fit.options import FitOptions
+
+    class Norms:
+        def __call__(self, k):
+            return k
+
+        def cues(self, k, norm):
+            return None
+
+    calls = []
+
+    def scripted(k, *, previous=None, options=None, cues=None, **kw):
+        calls.append((k, previous.similarity if previous is not None else None,
+                      options.fallback))
+        if previous is None:
+            return _scripted_pose(0.85, warm=False)
+        if options.fallback == 0.0:  # the warm re-track: slips below the new fit's S
+            return _scripted_pose(0.7 if k == 3 else 0.8, warm=True)
+        return _scripted_pose(0.85 if k == 3 else 0.8, warm=k != 3)  # with the fallback
+
+    monkeypatch.setattr(tracking, "fit_frame", scripted)
+    out = tracking._Frames(5)
+    for k in range(4):
+        out.put(k, _scripted_pose(0.5, warm=True))
+    fresh = _scripted_pose(0.9, warm=False)
+    out.put(4, fresh)
+    tracking._retrack_backward(Norms(), out, fresh, range(3, -1, -1), 0.002, FitOptions())
+    assert out.sim[3] == pytest.approx(0.85) and not out.warm[3]
+    # ... and frame 2 was carried back from frame 3's fresh fit, and so on to frame 0
+    assert (2, 0.85, 0.0) in calls
+    assert out.sim[:3] == pytest.approx([0.8, 0.8, 0.8])
