@@ -110,8 +110,10 @@ Beyond the seed:
 * Temporal priors in tracked mode (:func:`fit_sequence`): when a fresh fit replaces
   the track, the frames before it are re-tracked backward from it while that fits
   them better (a track that began in a wrong pose is corrected from where the right
-  one was found); and a frame whose ``spread`` jumps away from its neighbours'
-  running median is refitted with the spread fixed at that median.
+  one was found; where the carried pose slips, a fresh fit of the frame that beats it
+  and the stored fit is kept and carried on instead); and a frame whose ``spread``
+  jumps away from its neighbours' running median is refitted with the spread fixed at
+  that median.
 * Warm starts take part in their own search's first batch, so a search never ends
   below where it started.
 

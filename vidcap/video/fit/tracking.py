@@ -337,7 +337,15 @@ def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, fram
                       back_tie: float, options: FitOptions) -> None:
     """A fresh fit ``fp`` replaced the track: the frames before it were probably tracked
     in a wrong pose too. Carry the new pose backward over ``frames`` while it fits
-    them better by more than ``back_tie`` (beyond the seed; in place into ``out``)."""
+    them better by more than ``back_tie`` (beyond the seed; in place into ``out``).
+
+    Where the carried pose slips (below the fallback share of the S of the frame after
+    it), the frame is fitted as the forward pass would (a fresh fit that beats the
+    slipping one takes its place) and kept, and carried on, where that beats the
+    stored fit: the frames before a second fresh fit are as wrong as those before
+    the first (walk_three_quarter with the plate's never-seen flags: frames 3-13 kept
+    crossed legs at S 0.81 where the fresh fit of frame 13 scored 0.93; RESULTS.md).
+    """
     back = fp
     no_fallback = dataclasses.replace(options, fallback=0.0)
     for b in frames:
