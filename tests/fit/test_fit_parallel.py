@@ -72,6 +72,21 @@ def test_reconcile_finds_a_leg_swap_and_swap_labels_undoes_it():
     assert reconcile_labels(prev, cur2) == swaps
 
 
+def test_the_settled_tail_names_the_chunk_where_the_overlap_would_not():
+    """The later chunk's overlap frames are unsettled (here: its legs the other way round
+    on most of them); the frames both chunks fitted past the earlier one's end agree
+    when named as fitted, and decide."""
+    rng = np.random.default_rng(1)
+    prev = _arrays(rng, n=12)
+    cur = {k: np.array(v, copy=True) for k, v in prev.items()}
+    cur["joints2d"] += rng.normal(scale=0.1, size=cur["joints2d"].shape)
+    head = swap_labels({k: v[:10] for k, v in cur.items()}, {"arms": False, "legs": True})
+    cur["joints2d"][:10] = head["joints2d"]
+    cur["joints2d"][:10] += rng.normal(scale=20.0, size=(10, 15, 2))  # unsettled
+    assert reconcile_labels(prev, cur)["legs"]  # the overlap alone: the wrong way round
+    assert reconcile_labels(prev, cur, tail=2) == {"arms": False, "legs": False}
+
+
 def test_per_frame_chunks_equal_one_serial_pass(walk_masks):
     seen = []
 
@@ -106,10 +121,10 @@ def test_tracked_chunks_agree_with_serial_and_keep_labels(walk_masks, monkeypatc
         np.testing.assert_array_equal(again.arrays()[key], value, err_msg=key)
 
 
-def _swapped_chunk(masks, frames, skip, tracked, kw):
+def _swapped_chunk(masks, frames, skip, tracked, kw, stop=None):
     from vidcap.video.fit import parallel
 
-    out = _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw)
+    out = _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw, stop)
     return parallel.swap_labels(out, {"arms": True, "legs": True}) if skip else out
 
 
@@ -153,9 +168,9 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
     sent = []
     submit = StreamedFit._submit
 
-    def spy(self, chunk, frames, colour):
-        sent.append((chunk, len(frames)))
-        submit(self, chunk, frames, colour)
+    def spy(self, chunk, masks, frames, bounds):
+        sent.append((chunk, len(masks)))
+        submit(self, chunk, masks, frames, bounds)
 
     monkeypatch.setattr(StreamedFit, "_submit", spy)
     with FitPool(2) as pool:
@@ -165,8 +180,9 @@ def test_a_streamed_fit_equals_the_chunked_fit_of_all_frames(walk_masks, monkeyp
         for k in range(0, len(walk_masks), 7):  # frames arrive 7 at a time
             so_far.extend(walk_masks[k:k + 7])
             stream.feed(so_far)
-        # the first chunk left as soon as its frames were there, the last one waits
-        first_end = stream.bounds[0][2]
+        # the first chunk left as soon as its frames (and the tail it fits past its end
+        # to name the next chunk's limbs by) were there, the last one waits
+        first_end = stream.bounds[0][2] + parallel.TAIL
         assert sent == [(stream.bounds[0], 7 * -(-first_end // 7))]
         got = stream.finish(walk_masks)
         for key, value in want.arrays().items():

@@ -12,6 +12,8 @@ import math
 import numba
 import numpy as np
 
+from vidcap.video.fit._kernels import arm_pair_terms
+
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _bilinear(stack, x, y, c):
@@ -120,6 +122,29 @@ def arm_cue_grid(stack, shoulder, du, dl, lens, r_u, r_l, t_skin, t_axis, skin, 
 
 
 @numba.njit(cache=True, nogil=True)
+def arm_j_grid(ua, la, du, dl, shoulder, lens, radii, cum, y0, y1, caps, a, m0, i0, stack,
+               r_u, r_l, t_skin, t_axis, prior, held, weights, x, q, skin, edge, j):
+    """J of whole-arm candidates at several drawn lengths into ``j`` (F, N), in one
+    call: S (:func:`vidcap.video.fit._kernels.arm_pair_terms`, exp(-p - n) (1 - p))
+    and the cue terms (:func:`arm_cue_terms`) of each candidate at each length
+    ``lens[f]`` (F, 2), and the pull of the prior: J = S + w_skin skin + w_edge edge -
+    w_prior (held[0] gap(ua, prior[0]) + held[1] gap(la, prior[1])), ``weights`` =
+    (w_skin, w_edge, w_prior), added in the numpy path's order (its floats);
+    ``x``, ``q``, ``skin``, ``edge`` (F, N) are scratch. See
+    :func:`vidcap.video.fit.cues.search_arm_cues`."""
+    for f in range(lens.shape[0]):
+        arm_pair_terms(du, dl, shoulder, lens[f, 0], lens[f, 1], radii, cum, y0, y1, caps,
+                       a, m0, i0, x[f], q[f])
+        arm_cue_terms(stack, shoulder, du, dl, lens[f, 0], lens[f, 1], r_u, r_l, t_skin,
+                      t_axis, skin[f], edge[f])
+    for b in range(ua.shape[0]):
+        gap = held[0] * _gap(ua[b], prior[0]) + held[1] * _gap(la[b], prior[1])
+        for f in range(lens.shape[0]):
+            sim = math.exp(x[f, b]) * q[f, b]
+            j[f, b] = sim + weights[0] * skin[f, b] + weights[1] * edge[f, b] - weights[2] * gap
+
+
+@numba.njit(cache=True, nogil=True)
 def scale_tensor(stack, s):
     """``stack[..., 1:] *= s`` (float32), in place: the edge channels of
     :func:`cue_stack`'s output scaled (numpy's strided multiply is slow here)."""
@@ -200,8 +225,8 @@ def greedy_apart(ua, la, jj, u0, l0, apart, keep):
     return m
 
 
-__all__ = ["arm_cue_grid", "arm_cue_terms", "cue_stack", "fine_grid", "greedy_apart", "masked_copy",
-           "scale_tensor"]
+__all__ = ["arm_cue_grid", "arm_cue_terms", "arm_j_grid", "cue_stack", "fine_grid",
+           "greedy_apart", "masked_copy", "scale_tensor"]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -8,8 +8,9 @@ limb's borders as image edges. This module gives the fit
 - :func:`cue_image`: the colour frame resampled onto the normalised silhouette's grid
   (:class:`~vidcap.video.fit.normalise.NormalisedMask`), so cues and mask share pixels;
 - :class:`ColourModel`: a skin-versus-clothing colour model learned from *this clip*
-  (chromaticity histograms of the fitted head and of the torso's core, accumulated
-  over the frames fitted so far; no fixed colour threshold);
+  (chromaticity histograms of the fitted head and of the torso's core, learned once
+  before the fit from a few of the clip's frames, :mod:`vidcap.video.fit.cuecolours`;
+  no fixed colour threshold);
 - :class:`CueMaps`: per frame, a skin likelihood image and an edge structure tensor
   (Sobel over the three colour channels), both zero outside the silhouette;
 - :func:`search_arms_cues`: each arm scored over (upper, lower) angle pairs by
@@ -220,10 +221,12 @@ def _cue_maps_numpy(img, gx, gy, sil, inside, model):
     return CueMaps(stack, bins)
 
 
-def learn_colours(model: ColourModel, maps: CueMaps, eng, st: FitState) -> None:
+def learn_colours(model: ColourModel, bins: np.ndarray, eng, st: FitState) -> None:
     """Add one fitted frame's head core (skin) and torso core (clothing) to ``model``:
     the head and torso drawn at 0.7 and 0.6 of their radii, within the silhouette,
-    the torso's less every arm segment (a forearm across it is not clothing)."""
+    the torso's less every arm segment (a forearm across it is not clothing).
+    ``bins``: the frame's chromaticity bins on ``eng``'s grid (:func:`chroma_bins` of
+    its :func:`cue_image`)."""
     joints = eng.joints(st)
     shape = eng.sil.shape
     head_j = joints.copy()
@@ -237,7 +240,7 @@ def learn_colours(model: ColourModel, maps: CueMaps, eng, st: FitState) -> None:
     torso = draw_pose(joints, r, shape, segments=[S["torso"]], caps=False) & eng.sil
     arms = [S[f"{s}_{p}_arm"] for s in "lr" for p in ("upper", "lower")]
     torso &= ~draw_pose(joints, eng.R * 1.5, shape, segments=arms, caps=True)
-    model.learn(maps.bins, head, torso)
+    model.learn(bins, head, torso)
 
 
 def _sample(stack: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -453,23 +456,31 @@ def _pair_scorer(eng, st: FitState, up: int, lo: int, root: np.ndarray):
             return np.stack([_pair_scores(eng, st.with_entries(fore=([up, lo], list(f))), up,
                                           lo, root, grid) for f in fores])
         return numpy_score
-    (r0, r1), cum, a, m_base, i_base = still_tables(eng, st, None, np.array([up, lo]), None)
-    radii = _carray(eng.R[[up, lo]], np.float64)
-    root = _carray(root, np.float64)
-    m0, i0, caps = int(m_base[0]), int(i_base[0]), bool(eng.caps)
+    tables = _still_args(eng, st, up, lo, root)
+    radii, cum, r0, r1, caps, a, m0, i0 = tables[1:]
     len_u, len_l = eng.L[up], eng.L[lo]
 
     def score(grid, fores):
         _, _, du, dl = grid
         out, q = np.empty((len(fores), len(du))), np.empty((len(fores), len(du)))
         for f, (fu, fl) in enumerate(fores):
-            kernels.arm_pair_terms(du, dl, root, float(len_u * fu), float(len_l * fl), radii,
-                                   cum, r0, r1, caps, a, m0, i0, out[f], q[f])
+            kernels.arm_pair_terms(du, dl, tables[0], float(len_u * fu), float(len_l * fl),
+                                   radii, cum, r0, r1, caps, a, m0, i0, out[f], q[f])
         np.exp(out, out=out)  # S = exp(-p - n) (1 - p), as grids._pair_scores
         out *= q
         return out
 
+    score.tables = tables
     return score
+
+
+def _still_args(eng, st: FitState, up: int, lo: int, root: np.ndarray):
+    """The arm pair kernel's arguments but the candidates and lengths: the shoulder,
+    the arm's radii, the still segments' table (:func:`still_tables`), its rows, caps,
+    the silhouette's pixels there and the still model's counts."""
+    (r0, r1), cum, a, m_base, i_base = still_tables(eng, st, None, np.array([up, lo]), None)
+    return (_carray(root, np.float64), _carray(eng.R[[up, lo]], np.float64), cum, r0, r1,
+            bool(eng.caps), a, int(m_base[0]), int(i_base[0]))
 
 
 #: A tracked frame's cue search: pairs within this many degrees of the arm in place
@@ -526,10 +537,21 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
 
     pair_s = _pair_scorer(eng, st, up, lo, shoulder)
     lengths = np.array([eng.L[up], eng.L[lo]])
+    kernels = cue_kernels()
+    if kernels is not None:  # the whole of J in one compiled call per grid
+        j_args = (*pair_s.tables[1:], own.stack, r_u, r_l, _T_SKIN, _T_AXIS,
+                  np.array([prior[0], prior[1]], np.float64), np.array(fore0, np.float64),
+                  np.array([w["skin"], w["edge"], w["prior"]], np.float64))
 
     def score(grid, fores):
         """J of every candidate of ``grid`` at each of ``fores``, (len(fores), N)."""
         ua, la, du, dl = grid
+        if kernels is not None:
+            shape = (len(fores), len(du))
+            x, q, skin, edge, j = (np.empty(shape) for _ in range(5))
+            kernels.arm_j_grid(ua, la, du, dl, pair_s.tables[0], lengths * np.array(fores),
+                               *j_args, x, q, skin, edge, j)
+            return j
         sim = pair_s(grid, fores)
         skin, edge = arm_cue_grid_terms(own, shoulder, du, dl, lengths * np.array(fores),
                                         r_u, r_l)
@@ -664,14 +686,10 @@ __all__ = ["CUE_MODES", "SKIN_MIN", "ColourModel", "CueMaps", "WEIGHTS", "apply_
 
 def apply_cues(eng, st: FitState, image: np.ndarray, model: ColourModel, *,
                weights=None, local: bool = False, out: dict | None = None) -> FitState:
-    """The cue step of one frame's fit: learn this frame's colours into the clip's
-    ``model`` from ``st`` (its head and torso), build the frame's :class:`CueMaps` from
-    ``image`` (:func:`cue_image`) and place both arms by them
+    """The cue step of one frame's fit: the frame's :class:`CueMaps` from ``image``
+    (:func:`cue_image`) and the clip's ``model`` (learned before the fit, the same for
+    every frame: :mod:`vidcap.video.fit.cuecolours`), and both arms placed by them
     (:func:`refine_arms_with_cues`; ``local``: near the arms in place, a tracked
     frame)."""
     maps = cue_maps(image, eng.sil, model)
-    learned = model.learned
-    learn_colours(model, maps, eng, st)
-    if not learned:  # the clip's first frame: its own colours are all there is
-        maps = cue_maps(image, eng.sil, model)
     return refine_arms_with_cues(eng, st, maps, weights=weights, local=local, out=out)

@@ -17,8 +17,12 @@ In tracked mode ``l_*``/``r_*`` label limbs from the frame where a track began
 (:mod:`vidcap.video.fit.pose2d`), so two chunks may label the same leg differently (the
 legs of a side view cross every step). Each chunk's arm pair and leg pair are
 relabelled (:func:`reconcile_labels`) to whichever labelling agrees better with the
-chunk before it over the overlap frames, so labels follow limbs across the whole
-clip as in one serial pass.
+chunk before it, so labels follow limbs across the whole clip as in one serial pass.
+The overlap frames are where the later chunk's track has not settled yet (its first
+challenge is at its first output frame): judged by them alone, a chunk whose track
+settled into the serial pass's at that frame was as often named the other way round.
+So each tracked chunk but the last fits :data:`TAIL` frames past its end, and where
+those frames (both chunks settled) tell one labelling clearly, they decide.
 
 Workers are processes. Where ``os.fork`` is (Linux, macOS), one process loads the
 compiled kernels (numba's start-up, ~1 s of CPU) and forks the workers, which inherit
@@ -45,11 +49,16 @@ import numpy as np
 from vidcap.video.fit.cueframes import FrameCrops, as_frame_crops
 from vidcap.video.fit.labels import LIMB_PAIRS
 from vidcap.video.fit.result import Pose2D
-from vidcap.video.fit.tracking import fit_sequence
+from vidcap.video.fit.tracking import fit_sequence, sequence_colours
 from vidcap.video.masks import MaskStack, mask_frames
 
 #: Most worker processes :func:`default_jobs` picks.
 MAX_JOBS = 8
+#: Frames each tracked chunk but the last fits past its end, to name the next chunk's
+#: limbs by (:func:`reconcile_labels`).
+TAIL = 2
+#: The tail decides when one labelling's distance is below this share of the other's.
+_TAIL_CLEAR = 0.5
 
 _PER_SEGMENT = ("angles", "foreshortening", "scores", "margins")
 _PER_FRAME = ("joints2d", "angles", "foreshortening", "scores", "margins", "spread",
@@ -105,7 +114,7 @@ def chunk_bounds(n_frames: int, jobs: int, *, overlap: int = 10, align: int = 10
     return [(max(0, b - overlap), b, e) for b, e in zip(begins, ends, strict=True)]
 
 
-def reconcile_labels(prev: dict, cur: dict) -> dict:
+def reconcile_labels(prev: dict, cur: dict, *, tail: int = 0) -> dict:
     """Relabel ``cur``'s limb pairs to agree with ``prev`` over the frames both fitted.
 
     Parameters
@@ -114,21 +123,30 @@ def reconcile_labels(prev: dict, cur: dict) -> dict:
         Per-frame arrays (the keys of :meth:`Pose2D.arrays`; ``joints2d`` (F, 15, 2)
         and the per-segment arrays (F, 10)) of the same overlap frames, from the
         chunk before and from this chunk.
+    tail : int
+        The last ``tail`` of those frames are where both chunks' tracks have settled
+        (the chunk before fitted them past its end, :data:`TAIL`): a labelling whose
+        distance there is below half the other's is chosen by them alone.
 
     Returns
     -------
     dict
         ``{"arms": bool, "legs": bool}``: whether this chunk's image-left and
         image-right arms (legs) should swap labels, i.e. whether the swapped
-        labelling's joints are closer to ``prev``'s, summed over the overlap frames.
+        labelling's joints are closer to ``prev``'s, summed over the frames (the tail's,
+        where it is clear, else all of them).
     """
     out = {}
     a, b = np.asarray(prev["joints2d"], float), np.asarray(cur["joints2d"], float)
     for name, ((jl, _), (jr, _)) in LIMB_PAIRS.items():
         both = jl + jr
-        keep = np.nansum(np.linalg.norm(a[:, both] - b[:, both], axis=-1))
-        swap = np.nansum(np.linalg.norm(a[:, both] - b[:, jr + jl], axis=-1))
-        out[name] = bool(swap < keep)
+        keep = np.nansum(np.linalg.norm(a[:, both] - b[:, both], axis=-1), axis=1)
+        swap = np.nansum(np.linalg.norm(a[:, both] - b[:, jr + jl], axis=-1), axis=1)
+        k_t, s_t = keep[len(keep) - tail:].sum(), swap[len(swap) - tail:].sum()
+        if tail > 0 and min(k_t, s_t) < _TAIL_CLEAR * max(k_t, s_t):
+            out[name] = bool(s_t < k_t)
+        else:
+            out[name] = bool(swap.sum() < keep.sum())
     return out
 
 
@@ -430,14 +448,15 @@ class FitPool:
         self.executor.shutdown(wait=False, cancel_futures=True)
 
 
-def _fit_chunk(masks: MaskStack, frames, skip: int, tracked: bool, kw: dict) -> dict:
+def _fit_chunk(masks: MaskStack, frames, skip: int, tracked: bool, kw: dict,
+               stop: int | None = None) -> dict:
     """Fit one chunk in a worker (``frames``: its :class:`FrameCrops`, or None);
-    reports each frame from ``skip`` on to the queue."""
+    reports each frame from ``skip`` on (to ``stop``, the tail left out) to the queue."""
 
     def report(it, total):
         for k in it:
             yield k
-            if k >= skip and _QUEUE is not None:
+            if skip <= k < (total if stop is None else stop) and _QUEUE is not None:
                 _QUEUE.put(1)
 
     pose = fit_sequence(masks, tracked=tracked, progress=report, frames=frames, **kw)
@@ -550,13 +569,26 @@ class StreamedFit:
                               per_job, kw)
         self.futures = {}  # (start, begin, end) -> Future
 
-    def _submit(self, chunk, masks, frames) -> None:
-        s, b, e = chunk
+    def _colours(self, masks, frames, n: int | None) -> bool:
+        """The clip's colour model for the cues into ``self.kw`` (learned once, from the
+        clip's first frames: every chunk reads the same, as one serial fit does); False
+        while the frames it is learned from are not all in (``n``: the frames so far,
+        None: all)."""
+        if frames is None or self.kw.get("colours") is not None:
+            return True
+        colours = sequence_colours(masks, frames, n=n, **self.kw)
+        if colours is not None:
+            self.kw = {**self.kw, "colours": colours}
+        return colours is not None or self.kw.get("cues", "all") != "all"
+
+    def _submit(self, chunk, masks, frames, bounds) -> None:
+        s, b, end = chunk
+        e = _fit_end(bounds, chunk, self.tracked)
         # sent as bit-packed crops, whatever the frames came as
         sil = masks[s:e] if isinstance(masks, MaskStack) else MaskStack.from_masks(masks[s:e])
         self.futures[chunk] = self.pool.executor.submit(
             _fit_chunk, sil, None if frames is None else frames[s:e], b - s, self.tracked,
-            self.kw)
+            self.kw, end - s)
 
     def feed(self, masks, frames: FrameCrops | None = None) -> None:
         """Send every planned chunk but the last whose frames are all in ``masks`` (the
@@ -564,9 +596,11 @@ class StreamedFit:
         and in ``frames`` (their colour crops for the cues, or None: the outline
         only)."""
         n = len(masks) if frames is None else min(len(masks), len(frames))
+        if not self._colours(masks, frames, n):
+            return
         for chunk in self.bounds[:-1]:
-            if chunk not in self.futures and chunk[2] <= n:
-                self._submit(chunk, masks, frames)
+            if chunk not in self.futures and _fit_end(self.bounds, chunk, self.tracked) <= n:
+                self._submit(chunk, masks, frames, self.bounds)
 
     def finish(self, masks, *, frames=None, progress=None) -> Pose2D:
         """Fit what is left of all ``masks`` (F, H, W) (``frames``: their colour frames
@@ -580,9 +614,10 @@ class StreamedFit:
         if len(bounds) < 2:
             return fit_sequence(masks, tracked=self.tracked, progress=progress,
                                 frames=frames, **self.kw)
+        self._colours(masks, frames, None)
         for chunk in bounds:
             if chunk not in self.futures:
-                self._submit(chunk, masks, frames)
+                self._submit(chunk, masks, frames, bounds)
         futures = [self.futures[c] for c in bounds]
         q = self.pool.queue
 
@@ -607,17 +642,28 @@ class StreamedFit:
         return _join(bounds, parts, n, self.tracked)
 
 
+def _fit_end(bounds, chunk, tracked: bool) -> int:
+    """The frame after the last one ``chunk`` (one of ``bounds``) fits: its end, and
+    :data:`TAIL` frames more for a tracked chunk but the last (within the clip)."""
+    if not tracked or chunk == bounds[-1]:
+        return chunk[2]
+    return min(chunk[2] + TAIL, bounds[-1][2])
+
+
 def _join(bounds, parts, n, tracked) -> Pose2D:
-    """The chunks' fits as one :class:`Pose2D` (labels reconciled over the overlaps)."""
+    """The chunks' fits as one :class:`Pose2D` (labels reconciled over the overlaps and
+    the tails)."""
     out = {k: np.empty((n, *np.shape(v)[1:]), dtype=np.asarray(v).dtype)
            for k, v in parts[0].items() if k in _PER_FRAME}
+    tail = {k: out[k][:0] for k in out}  # the chunk before's frames past its end
     for (s, b, e), part in zip(bounds, parts, strict=True):
         if tracked and b > s:
-            prev = {k: out[k][s:b] for k in out}
-            cur = {k: part[k][: b - s] for k in out}
-            part = swap_labels(part, reconcile_labels(prev, cur))
+            prev = {k: np.concatenate([out[k][s:b], tail[k]]) for k in out}
+            cur = {k: part[k][: b - s + len(tail["joints2d"])] for k in out}
+            part = swap_labels(part, reconcile_labels(prev, cur, tail=len(tail["joints2d"])))
         for k in out:
-            out[k][b:e] = part[k][b - s:]
+            out[k][b:e] = part[k][b - s:e - s]
+        tail = {k: np.asarray(part[k][e - s:]) for k in out}
     return Pose2D(tuple(str(x) for x in parts[0]["joint_names"]), out["joints2d"],
                   out["angles"], out["foreshortening"], out["scores"], out["margins"],
                   out["spread"], out["similarity"], out["warm"], bool(tracked),

@@ -11,12 +11,14 @@ raised arms) and the spread (:func:`_smooth_spread`, the body's yaw).
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from collections.abc import Sequence
 
 import numpy as np
 
 from vidcap.body import JOINT_INDEX, JOINT_NAMES, SEGMENT_INDEX
 from vidcap.video.fit.crossing import exchange_nearer, legs_heading
+from vidcap.video.fit.cuecolours import learn_clip_colours
 from vidcap.video.fit.cueframes import as_frame_crops
 from vidcap.video.fit.cues import CUE_MODES, ColourModel
 from vidcap.video.fit.frame import fit_frame, recross
@@ -87,7 +89,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, body_backward: bool = True,
                  relabel: bool = False, frames=None, cues: str = "all", arm_solve: bool = True,
-                 predict: bool = False, crossing: bool = True, **kw) -> Pose2D:
+                 predict: bool = False, crossing: bool = True, colours: ColourModel | None = None,
+                 **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -159,6 +162,11 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         one-frame misplacement is outvoted by its neighbours.
     predict, crossing : bool
         Legs carried on by warm starts (:func:`predicted_start`); passing legs (:mod:`.crossing`).
+    colours : ColourModel, optional
+        With cues: the clip's skin and clothing colours
+        (:func:`vidcap.video.fit.cuecolours.learn_clip_colours`; a chunked fit learns them
+        once for the whole clip and hands them to every chunk). Default: learned here
+        from ``masks`` and ``frames``, before the first frame is fitted.
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...), checked once
         here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelling raises TypeError.
@@ -184,7 +192,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         raise ValueError(f"{len(frames)} frames for {n} silhouettes")
     out = _Frames(n)
     it = range(n) if progress is None else progress(range(n), total=n)
-    normalised = _Normalised(masks, options, frames if cues == "all" else None)
+    normalised = _Normalised(masks, options, frames if cues == "all" else None, colours)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every, back_tie=back_tie,
            options=options, predict=predict, crossing=crossing)
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
@@ -201,6 +209,29 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         _relabel(out)
     return Pose2D(JOINT_NAMES, out.joints, out.angles, out.fore, out.scores, out.margins,
                   out.spread, out.sim, out.warm, bool(tracked), model_height=out.height)
+
+
+def sequence_colours(masks, frames, *, n: int | None = None, **kw) -> ColourModel | None:
+    """The clip's colour model as :func:`fit_sequence` (``masks``, ``frames=frames``, the
+    options ``kw``) learns it (``kw['colours']`` if given; None without cues): what a
+    chunked fit learns once and hands to every chunk.
+
+    ``n``: the frames so far of a clip still coming in (a streamed fit; ``masks`` and
+    ``frames`` hold at least ``n``): None until the frames the model is learned from
+    are all in (:func:`vidcap.video.fit.cuecolours.colour_frames`)."""
+    if kw.get("colours") is not None:
+        return kw["colours"]
+    if frames is None or kw.get("cues", "all") != "all":
+        return None
+    from vidcap.video.fit.cuecolours import colour_frames, frames_with_pixels
+
+    own = set(inspect.signature(fit_sequence).parameters) - {"kw"}
+    options = FitOptions.from_keywords({k: v for k, v in kw.items() if k not in own})
+    samples = colour_frames(frames_with_pixels(masks, n), final=n is None)
+    if samples is None:
+        return None
+    return learn_clip_colours(masks, as_frame_crops(frames, masks, height=options.height),
+                              options, frames=samples)
 
 
 def _relabel(out: _Frames) -> None:
@@ -246,14 +277,16 @@ class _Normalised:
     """Frames' normalised silhouettes, the last ``_NORMS_KEPT`` kept for backward
     re-tracking (bounded memory)."""
 
-    def __init__(self, masks, options: FitOptions, frames=None):
+    def __init__(self, masks, options: FitOptions, frames=None, colours=None):
         self.masks = masks
         self.size = dict(height=options.height, body_height=options.body_height)
         self.norms: dict[int, NormalisedMask] = {}
         # cut to the silhouettes' boxes, as the pipeline sends them to chunked fits
         self.frames = (None if frames is None
                        else as_frame_crops(frames, masks, height=options.height))
-        self.colours = ColourModel()  # learned over the clip as frames are fitted
+        if self.frames is not None and colours is None:
+            colours = learn_clip_colours(masks, self.frames, options)
+        self.colours = colours  # the clip's, the same for every frame
 
     def cues(self, k: int, norm: NormalisedMask):
         """``fit_frame``'s ``cues`` for frame ``k`` normalised as ``norm`` (None: no
@@ -564,4 +597,5 @@ def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Fr
             refitted = k
 
 
-__all__ = ["PREDICTED_SEGMENTS", "body_heights", "fit_sequence", "predicted_start"]
+__all__ = ["PREDICTED_SEGMENTS", "body_heights", "fit_sequence", "predicted_start",
+           "sequence_colours"]

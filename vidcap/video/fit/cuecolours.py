@@ -1,0 +1,126 @@
+"""The clip's skin and clothing colours for the cues, learned once before the fit.
+
+The cues' skin likelihood (:class:`vidcap.video.fit.cues.ColourModel`) is learned from
+the person's head (skin) and torso core (clothing). Learned frame by frame as the fit
+went (the model of frame k holding frames 0..k), every frame of a chunked fit
+(:mod:`vidcap.video.fit.parallel`) read another model than in one serial pass (a chunk
+knew only its own frames), and the fits differed on half of the frames. Here the model
+is one for the whole clip, learned before any frame is fitted from a few frames of the
+clip's start (:func:`colour_frames`: frames with a silhouette, the first
+:data:`COLOUR_SPAN` of them, :data:`COLOUR_SAMPLES` evenly spread), each fitted from
+scratch (a fit that depends on that frame and the frames sampled before it only), and
+handed to every chunk. The start of the clip, so a streamed fit (the pipeline's, chunks sent while
+later frames are still being extracted) has it as soon as its first chunk is ready
+(chunks hold at least 60 frames).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video.fit.cues import (
+    ColourModel,
+    chroma_bins,
+    cue_maps,
+    learn_colours,
+    refine_arms_with_cues,
+)
+from vidcap.video.fit.engine import _MaskEngine
+from vidcap.video.fit.frame import fit_normalised
+from vidcap.video.fit.normalise import normalise_mask
+from vidcap.video.fit.options import FitOptions
+
+#: The model is learned from the clip's first this many frames with a silhouette.
+COLOUR_SPAN = 60
+#: ... at this many of them, evenly spread (each costs a fit from scratch and a cue
+#: search over every arm angle, ~8 ms).
+COLOUR_SAMPLES = 10
+
+
+def frames_with_pixels(masks, n: int | None = None) -> np.ndarray:
+    """(n,) bool: which of the first ``n`` (default all) frames of ``masks`` (F, H, W)
+    bool, a sequence of (H, W) masks or a :class:`vidcap.video.masks.MaskStack` have a
+    silhouette."""
+    n = len(masks) if n is None else min(int(n), len(masks))
+    per_frame = getattr(masks, "any_per_frame", None)
+    if per_frame is not None:
+        return np.asarray(per_frame()[:n], bool)
+    return np.array([bool(np.asarray(masks[k]).any()) for k in range(n)], bool)
+
+
+def colour_frames(has_pixels: np.ndarray, *, final: bool = True) -> np.ndarray | None:
+    """The frames the clip's colour model is learned from.
+
+    Parameters
+    ----------
+    has_pixels : numpy.ndarray, shape (N,), bool
+        Which of the clip's frames so far have a silhouette (:func:`frames_with_pixels`).
+    final : bool
+        ``has_pixels`` covers the whole clip. Otherwise (a streamed fit, frames still to
+        come) None is returned until :data:`COLOUR_SPAN` frames with a silhouette are in.
+
+    Returns
+    -------
+    numpy.ndarray of int or None
+        Up to :data:`COLOUR_SAMPLES` frame indices, ascending, evenly spread over the
+        first :data:`COLOUR_SPAN` frames with a silhouette (empty: none has one).
+    """
+    idx = np.flatnonzero(np.asarray(has_pixels, bool))[:COLOUR_SPAN]
+    if len(idx) < COLOUR_SPAN and not final:
+        return None
+    if not len(idx):
+        return idx
+    pick = np.unique(np.round(np.linspace(0, len(idx) - 1, min(COLOUR_SAMPLES, len(idx)))))
+    return idx[pick.astype(np.int64)]
+
+
+def learn_clip_colours(masks, crops, options: FitOptions, frames=None) -> ColourModel:
+    """The clip's :class:`~vidcap.video.fit.cues.ColourModel`.
+
+    Parameters
+    ----------
+    masks : numpy.ndarray, shape (F, H, W), bool, or MaskStack
+        The clip's silhouettes (or its first frames, at least up to the last of
+        ``frames``).
+    crops : FrameCrops
+        Their colour crops (:class:`vidcap.video.fit.cueframes.FrameCrops`).
+    options : FitOptions
+        The fit's (normalised height, body).
+    frames : sequence of int, optional
+        The frames to learn from (default :func:`colour_frames` of the whole clip).
+
+    Returns
+    -------
+    ColourModel
+        Learned from each frame's fit from scratch, its arms placed by the cues with
+        the model of the frames before it: its head's and torso's cores, the arms left
+        out (:func:`vidcap.video.fit.cues.learn_colours`). Not learned (no skin cue)
+        if no frame has a silhouette.
+    """
+    if frames is None:
+        frames = colour_frames(frames_with_pixels(masks))
+    model = ColourModel()
+    for k in frames:  # in clip order, each placed by the model of those before it
+        # a MaskStack frame from its crop, as the fit normalises it
+        mask, origin = (masks.crop(int(k)) if hasattr(masks, "crop")
+                        else (np.asarray(masks[k]), (0, 0)))
+        norm = normalise_mask(np.asarray(mask, bool), height=options.height,
+                              body_height=options.body_height, origin=origin)
+        eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
+        st, _, _ = fit_normalised(eng, options=options)
+        image = crops.cue_image(int(k), norm)
+        bins = chroma_bins(image)
+        # the arms placed by the cues first: an arm across the torso, which the outline
+        # does not show, is then left out of the clothing (the first frame: by a model of
+        # its own colours alone)
+        placed_by = model
+        if not model.learned:
+            placed_by = ColourModel()
+            learn_colours(placed_by, bins, eng, st)
+        st = refine_arms_with_cues(eng, st, cue_maps(image, eng.sil, placed_by))
+        learn_colours(model, bins, eng, st)
+    return model
+
+
+__all__ = ["COLOUR_SAMPLES", "COLOUR_SPAN", "colour_frames", "frames_with_pixels",
+           "learn_clip_colours"]
