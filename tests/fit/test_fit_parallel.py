@@ -217,18 +217,18 @@ def test_masks_as_a_stack_of_crops_fit_exactly_as_full_frames(walk_masks):
             np.testing.assert_array_equal(cropped[key], v, err_msg=key)
 
 
-def _failing_chunk(masks, frames, skip, tracked, kw):
+def _failing_chunk(masks, frames, skip, tracked, kw, stop=None):
     if skip:  # the second chunk
         raise ValueError("a bad chunk")
-    return _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw)
+    return _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw, stop)
 
 
-def _dying_chunk(masks, frames, skip, tracked, kw):
+def _dying_chunk(masks, frames, skip, tracked, kw, stop=None):
     import os
 
     if skip:
         os._exit(3)  # a worker killed mid-chunk (out of memory, a signal)
-    return _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw)
+    return _REAL_FIT_CHUNK(masks, frames, skip, tracked, kw, stop)
 
 
 def test_a_failing_or_dying_worker_is_an_error_not_a_hang(walk_masks, monkeypatch):
