@@ -5,9 +5,10 @@ once (a temporary folder). Then ``convert`` given that plate (no cache, the seed
 as ``convert_speed.py``) runs in a child process for each of ``--cues outline`` and
 ``--cues all``, on vidcap's default processes (2 here) and on one (``jobs=1``), for this
 checkout and, with ``--ref TREE``, for another checkout in the same run (interleaved,
-``--repeat`` times; the median is printed). CPU time is the child's and its workers'
-(``RUSAGE_CHILDREN``), including the interpreter's start and the kernels' load (the
-same in every row), so it holds on a shared machine where wall time does not. Printed:
+``--repeat`` times; the least is printed, so a first run's kernel compilation is left
+out). CPU time is the child's and its workers' (``RUSAGE_CHILDREN``), including the
+interpreter's start and the kernels' load (the same in every row), so it holds on a
+shared machine where wall time does not. Printed:
 CPU seconds, the ratio all / outline per tree and jobs, and how many frames' 2D joints
 the chunked fit (2 processes) and the serial one (``jobs=1``) give differently.
 
@@ -89,14 +90,15 @@ def main(argv=None) -> int:
                 gap = np.nan_to_num(gap, nan=np.inf)
                 differ[name, cues] = float(np.mean(gap.max(axis=(1, 2)) > 1e-6))
     print(f"vidcap convert, {args.frames} frames 640x480 given the plate: CPU seconds "
-          f"(median of {args.repeat}, child process and its workers)")
+          f"(least of {args.repeat}, child process and its workers)")
+    print("every run:", {k: [round(x, 2) for x in v] for k, v in cpu.items()})
     print("tree | jobs | outline | all | all / outline | chunked vs serial frames differ "
           "(outline / all)")
     print("--- | --- | --- | --- | --- | ---")
     for name, tree in trees:
         for jobs in (2, 1):
-            o = float(np.median(cpu[f"{name}_outline_{jobs}"]))
-            a = float(np.median(cpu[f"{name}_all_{jobs}"]))
+            o = float(np.min(cpu[f"{name}_outline_{jobs}"]))
+            a = float(np.min(cpu[f"{name}_all_{jobs}"]))
             dif = (f"{differ[name, 'outline']:.0%} / {differ[name, 'all']:.0%}"
                    if jobs == 2 else "")
             print(f"{name} ({tree}) | {jobs} | {o:.2f} | {a:.2f} | {a / o:.2f} | {dif}")

@@ -483,6 +483,38 @@ def _still_args(eng, st: FitState, up: int, lo: int, root: np.ndarray):
             bool(eng.caps), a, int(m_base[0]), int(i_base[0]))
 
 
+def _j_scorer(eng, st: FitState, up: int, lo: int, shoulder, own: CueMaps, prior, fore0, w):
+    """``score(grid, fores)``: J of :func:`search_arm_cues` for every candidate of
+    ``grid`` at each of ``fores``, (len(fores), N): S, the cues of ``own`` and the pull
+    of ``prior`` (each segment's weighed by its foreshortening in ``fore0``)."""
+    pair_s = _pair_scorer(eng, st, up, lo, shoulder)
+    lengths = np.array([eng.L[up], eng.L[lo]])
+    r_u, r_l = float(eng.R[up]), float(eng.R[lo])
+    kernels = cue_kernels()
+    if kernels is not None:  # the whole of J in one compiled call per grid
+        j_args = (*pair_s.tables[1:], own.stack, r_u, r_l, _T_SKIN, _T_AXIS,
+                  np.array([prior[0], prior[1]], np.float64), np.array(fore0, np.float64),
+                  np.array([w["skin"], w["edge"], w["prior"]], np.float64))
+
+    def score(grid, fores):
+        ua, la, du, dl = grid
+        if kernels is not None:
+            shape = (len(fores), len(du))
+            x, q, skin, edge, j = (np.empty(shape) for _ in range(5))
+            kernels.arm_j_grid(ua, la, du, dl, pair_s.tables[0], lengths * np.array(fores),
+                               *j_args, x, q, skin, edge, j)
+            return j
+        sim = pair_s(grid, fores)
+        skin, edge = arm_cue_grid_terms(own, shoulder, du, dl, lengths * np.array(fores),
+                                        r_u, r_l)
+        # a segment the outline drew short is one it hardly sees: its angle is held
+        # by the prior that much less
+        gap = fore0[0] * _angle_gap(ua, prior[0]) + fore0[1] * _angle_gap(la, prior[1])
+        return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
+
+    return score
+
+
 #: A tracked frame's cue search: pairs within this many degrees of the arm in place
 #: (each segment), 10 degrees apart, then 2.5 degrees apart about the best.
 LOCAL_HALF_DEG = 30.0
@@ -535,30 +567,8 @@ def search_arm_cues(eng, st: FitState, s: str, maps: CueMaps, *, prior=None,
     oth |= draw_pose(joints, eng.R * 1.25, eng.sil.shape, segments=[S["head"]], caps=True)
     own = CueMaps(_masked(maps.stack, oth), maps.bins)
 
-    pair_s = _pair_scorer(eng, st, up, lo, shoulder)
     lengths = np.array([eng.L[up], eng.L[lo]])
-    kernels = cue_kernels()
-    if kernels is not None:  # the whole of J in one compiled call per grid
-        j_args = (*pair_s.tables[1:], own.stack, r_u, r_l, _T_SKIN, _T_AXIS,
-                  np.array([prior[0], prior[1]], np.float64), np.array(fore0, np.float64),
-                  np.array([w["skin"], w["edge"], w["prior"]], np.float64))
-
-    def score(grid, fores):
-        """J of every candidate of ``grid`` at each of ``fores``, (len(fores), N)."""
-        ua, la, du, dl = grid
-        if kernels is not None:
-            shape = (len(fores), len(du))
-            x, q, skin, edge, j = (np.empty(shape) for _ in range(5))
-            kernels.arm_j_grid(ua, la, du, dl, pair_s.tables[0], lengths * np.array(fores),
-                               *j_args, x, q, skin, edge, j)
-            return j
-        sim = pair_s(grid, fores)
-        skin, edge = arm_cue_grid_terms(own, shoulder, du, dl, lengths * np.array(fores),
-                                        r_u, r_l)
-        # a segment the outline drew short is one it hardly sees: its angle is held
-        # by the prior that much less
-        gap = fore0[0] * _angle_gap(ua, prior[0]) + fore0[1] * _angle_gap(la, prior[1])
-        return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
+    score = _j_scorer(eng, st, up, lo, shoulder, own, prior, fore0, w)
 
     # the arm in place (even beyond the bend limit, where the outline fit left it)
     # is scored with the coarse grid (one batch, its last), at its own foreshortening

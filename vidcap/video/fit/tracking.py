@@ -147,13 +147,10 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         relabelled chunk by chunk, and held-out PCK with each pair's names matched once
         per clip measured lower with it (RESULTS.md).
     frames : numpy.ndarray, shape (F, H, W, 3), uint8, or FrameCrops, optional
-        The colour frames the silhouettes were cut from (BGR, or a sequence of
-        frames), or their crops around the silhouettes
-        (:class:`~vidcap.video.fit.cueframes.FrameCrops`, what the pipeline and chunked
-        fits pass; whole frames are cut the same way). With them (and
-        ``cues="all"``) each frame's arms are also placed by the frame's cues inside
-        the outline (:mod:`vidcap.video.fit.cues`: skin colour learned from this
-        clip's head, image edges along the limbs' borders).
+        The colour frames (BGR) or their crops round the silhouettes (:class:`~vidcap.video.
+        fit.cueframes.FrameCrops`): with ``cues="all"`` each frame's arms are also placed by
+        the frame's cues inside the outline (:mod:`vidcap.video.fit.cues`: skin colour
+        learned from this clip's heads, image edges along the limbs' borders).
     cues : {'all', 'outline'}
         ``'outline'``: the seed's silhouette-only score even with ``frames``.
     arm_solve : bool
@@ -163,10 +160,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     predict, crossing : bool
         Legs carried on by warm starts (:func:`predicted_start`); passing legs (:mod:`.crossing`).
     colours : ColourModel, optional
-        With cues: the clip's skin and clothing colours
-        (:func:`vidcap.video.fit.cuecolours.learn_clip_colours`; a chunked fit learns them
-        once for the whole clip and hands them to every chunk). Default: learned here
-        from ``masks`` and ``frames``, before the first frame is fitted.
+        The clip's colours for the cues (default: learned first, :func:`sequence_colours`).
     **kw
         The options of :func:`fit_pose` (``height``, ``refine``, ``spread``, ...), checked once
         here (:class:`~vidcap.video.fit.options.FitOptions`): a misspelling raises TypeError.
