@@ -110,11 +110,14 @@ fi
 # one, and the left-behind object of IGNORE_STATIC below; 50, hard shadow, and 0 are
 # background; frames (F,) int: the dataset's frame numbers).
 MASKS="$DATA/../masks"
-masked() {  # masked OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST [STATIC_FROM STATIC_TO]
+masked() {  # masked OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST [STATIC_FROM STATIC_TO [main]]
     # FIRST..LAST: the dataset's frame numbers (the digits ending the file names), inclusive.
     # STATIC_FROM..STATIC_TO: frames where an object the person put down lies alone; the
     # truth pixels common to all of them (the object, not a person), dilated by 5 px, are
     # ignored in every frame (the dataset marks it as foreground; it is not the person).
+    # "main" (STATIC_FROM..STATIC_TO may be empty strings): the person is the largest blob of
+    # each frame's truth; every other truth blob (a far-off passer-by), dilated by 5 px, is
+    # ignored in that frame, so no method gains or loses by it.
     local git_dir="$MIRROR/$1/repo"
     if [ ! -d "$git_dir" ]; then
         echo "skip $4: $git_dir missing (fetch github:${1/+//} first)" >&2
@@ -126,7 +129,7 @@ masked() {  # masked OWNER+NAME COMMIT SEQ_PATH CLIP FIRST LAST [STATIC_FROM STA
     tmp=$(mktemp -d)
     git --git-dir="$git_dir" archive "$2" "$3" | tar -x -C "$tmp"
     PYTHONPATH="${PYTHONPATH:-$(cd "$(dirname "$0")/.." && pwd)}" python - "$tmp/$3" \
-        "$MASKS/$4" "$5" "$6" "${7:-}" "${8:-}" <<'PY'
+        "$MASKS/$4" "$5" "$6" "${7:-}" "${8:-}" "${9:-}" <<'PY'
 import re
 import sys
 from pathlib import Path
@@ -157,6 +160,14 @@ if sys.argv[5]:
     a, b = int(sys.argv[5]), int(sys.argv[6])
     still = np.all(gt[(numbers >= a) & (numbers <= b)] == 255, axis=0).astype(np.uint8)
     ignore |= cv2.dilate(still, np.ones((11, 11), np.uint8)).astype(bool)[None]
+if sys.argv[7] == "main":
+    for k in range(len(gt)):
+        n_blobs, labels, stats, _ = cv2.connectedComponentsWithStats((gt[k] == 255).astype(np.uint8))
+        if n_blobs > 2:
+            main = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+            others = ((labels > 0) & (labels != main)).astype(np.uint8)
+            gt[k][others.astype(bool)] = 0
+            ignore[k] |= cv2.dilate(others, np.ones((11, 11), np.uint8)).astype(bool)
 n = write_video(out + ".mp4", frames, 30.0, crf=18)
 np.savez_compressed(out + ".truth.npz", masks=gt == 255, ignore=ignore, frames=numbers)
 print(out + ".mp4", n, "frames;", int((gt == 255).any((1, 2)).sum()), "with the person")
@@ -184,6 +195,15 @@ masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians 
 FGS=7aa31e2eba2bbe29f4725c040288e0090c453316
 masked lim-anggun+FgSegNet $FGS SBI2015_dataset/CaVignal sbi_cavignal 0 257
 masked lim-anggun+FgSegNet $FGS SBI2015_dataset/Candela_m1.10 sbi_candela 0 349 293 349
+# Validation clips added by the issue-26 realsil helper (session 21), measured on main before
+# any change. CAVIAR1 0-284 (384x256, a shopping-centre corridor, fixed camera, high view): a
+# man walks in from the bottom right, crosses to a shop window on the left and stands there,
+# nearly still, from about frame 220; far off at the top a passer-by (<= 250 px) is ignored
+# ("main"); a second person walks in from the bottom at 285 (not used). CDnet pedestrians
+# 596-832: a man in a dark coat walks across the sunlit path right to left (596-703, alone:
+# the walkers before him have left), then the empty path (704-832).
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/CAVIAR1 sbi_caviar1 0 284 "" "" main
+masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians_coat 596 832
 
 # A multi-view 3D reference for the Pose2Sim balance trial (issue 33): the four views and the
 # Qualisys calibration in $VIDCAP_DATA/lift/pose2sim/; MediaPipe's 2D landmarks of each view
@@ -279,7 +299,8 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
         [ -f "$DATA/$v.mp4" ] && [ ! -f "$DATA/$v.mediapipe.npz" ] && \
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
     done
-    for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians sbi_cavignal sbi_candela; do
+    for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians sbi_cavignal sbi_candela \
+             sbi_caviar1 cdnet_pedestrians_coat; do
         if [ -f "$MASKS/$v.mp4" ] && [ ! -f "$MASKS/$v.mediapipe.npz" ]; then
             "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
         fi
