@@ -204,6 +204,10 @@ masked lim-anggun+FgSegNet $FGS SBI2015_dataset/Candela_m1.10 sbi_candela 0 349 
 # the walkers before him have left), then the empty path (704-832).
 masked lim-anggun+FgSegNet $FGS SBI2015_dataset/CAVIAR1 sbi_caviar1 0 284 "" "" main
 masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians_coat 596 832
+# HallAndMonitor 243-295 (352x240, the MPEG "hall monitor" corridor, fixed camera): the
+# second man, alone once the first has left, walks towards the camera carrying a monitor
+# (the truth marks the monitor too) and turns into a doorway on the right; 53 frames.
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/HallAndMonitor sbi_hallmonitor 243 295
 
 # A multi-view 3D reference for the Pose2Sim balance trial (issue 33): the four views and the
 # Qualisys calibration in $VIDCAP_DATA/lift/pose2sim/; MediaPipe's 2D landmarks of each view
@@ -300,7 +304,7 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
     done
     for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians sbi_cavignal sbi_candela \
-             sbi_caviar1 cdnet_pedestrians_coat; do
+             sbi_caviar1 cdnet_pedestrians_coat sbi_hallmonitor; do
         if [ -f "$MASKS/$v.mp4" ] && [ ! -f "$MASKS/$v.mediapipe.npz" ]; then
             "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
         fi
