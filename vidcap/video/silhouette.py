@@ -252,6 +252,31 @@ def _follow(contours, areas, order, prev_box, p: _Params) -> int:
     return best
 
 
+#: Per frame, the threshold rule of the plate (median + K_SIGMA MADs of the L1
+#: difference, :func:`vidcap.video.background._threshold_from_sigma`) is applied to the
+#: frame's own difference on the gain grid; when it exceeds the plate's threshold by
+#: FRAME_RAISE, it is the frame's floor: a stretch of heavier compression or sensor
+#: noise than the plate's samples saw (sbi_cavignal's last 80 frames: the median
+#: difference of the scene 0 -> 6 grey levels, 12-19 % of it beyond the threshold) would
+#: otherwise fill the frame with specks that join the person. None: off.
+FRAME_RAISE: float | None = 1.25
+
+
+def _frame_tmap(l1: np.ndarray, p: _Params) -> tuple[np.ndarray, int]:
+    """The frame's threshold map and its floor (0: the plate's map as it is)."""
+    if FRAME_RAISE is None:
+        return p.tmap, 0
+    from vidcap.video.background import K_SIGMA
+
+    sub = l1[:: p.step, :: p.step].astype(np.float32).ravel()
+    m = float(np.median(sub))
+    t = m + K_SIGMA * 1.4826 * float(np.median(np.abs(sub - m)))
+    if t <= FRAME_RAISE * p.threshold:
+        return p.tmap, 0
+    floor = int(min(255, np.ceil(t)))
+    return np.maximum(p.tmap, np.uint8(floor)), floor
+
+
 def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
                      ) -> tuple[FrameSilhouette, np.ndarray]:
     """One frame (internal; use :func:`extract_silhouettes`). ``prev_box``: the
@@ -272,10 +297,11 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
     diff = cv2.absdiff(frame, ref)
     b, g_, r = cv2.split(diff)
     l1 = cv2.add(cv2.add(b, g_), r)  # saturating uint8 sum over channels
-    fg = cv2.compare(l1, p.tmap, cv2.CMP_GT)
+    tmap, floor = _frame_tmap(l1, p)
+    fg = cv2.compare(l1, tmap, cv2.CMP_GT)
     if p.still is not None:  # parts of the person that never move, still there
         ys, xs = p.still
-        near = np.abs(frame[ys, xs] - p.still_colour * g).sum(axis=-1) <= p.tmap[ys, xs]
+        near = np.abs(frame[ys, xs] - p.still_colour * g).sum(axis=-1) <= tmap[ys, xs]
         fg[ys[near], xs[near]] = 255
     if keep is not None:  # the user's regions: never the person, nor chosen as them
         fg = cv2.bitwise_and(fg, keep[0])
@@ -310,7 +336,7 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
         from vidcap.video.graphcut import cut_frame
 
         plain = fg if keep is None else cv2.bitwise_and(fg, keep[0])
-        fg = cut_frame(frame, l1, p.tmap, fg, g, p.cut)
+        fg = cut_frame(frame, l1, tmap, fg, g, p.cut)
         if keep is not None:
             fg = cv2.bitwise_and(fg, keep[0])
     contours, _ = cv2.findContours(fg, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
@@ -329,9 +355,9 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             for i in parts:
                 _open_large_holes(mask, contours[i], fg, p)
             if p.edge_band > 0:
-                _edge_by_contrast(mask, full_frame, g, p)
+                _edge_by_contrast(mask, full_frame, g, p, floor)
             elif p.work_size is not None:
-                _refine_edges(mask, full_frame, g, p)
+                _refine_edges(mask, full_frame, g, p, floor)
             if keep is not None:  # (the edge refinement may reach into a region)
                 mask &= keep[1]
             x, y, w, h = cv2.boundingRect(mask)
@@ -470,7 +496,8 @@ def _open_large_holes(mask: np.ndarray, contour: np.ndarray, fg: np.ndarray,
     mask[Y0:Y1, X0:X1][full > 0] = 0
 
 
-def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params) -> None:
+def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params,
+                      floor: int = 0) -> None:
     """Re-decide the pixels near the outline by the person's own contrast.
 
     Antialiasing, optics and the codec (4:2:0 colour at half resolution, the
@@ -505,13 +532,14 @@ def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Pa
     # 255 * the interior's share of the box.
     num = cv2.blur(cv2.bitwise_and(l1, l1, mask=inner), box).astype(np.float32)
     den = cv2.blur(inner * np.uint8(255), box)
-    fg = (l1 > p.tmap_full[y0:y1, x0:x1]) & (
+    fg = (l1 > np.maximum(p.tmap_full[y0:y1, x0:x1], floor)) & (
         l1 * den.astype(np.float32) >= (255.0 * p.edge_fraction) * num)
     fg = cv2.medianBlur(fg.view(np.uint8), 3)
     np.copyto(m, fg, where=(band > 0) & (den > 0))
 
 
-def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params) -> None:
+def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params,
+                  floor: int = 0) -> None:
     """Re-decide, at full resolution, the pixels near an outline found at work scale.
 
     The band of ``work_scale`` pixels either side of the outline takes the
@@ -534,10 +562,11 @@ def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params
         # bleeds a pixel or two into the background, brightness does not.
         d = cv2.absdiff(cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY),
                         cv2.cvtColor(ref, cv2.COLOR_BGR2GRAY))
-        fg = cv2.compare(d, p.tmap_luma[y0:y1, x0:x1], cv2.CMP_GT)
+        fg = cv2.compare(d, np.maximum(p.tmap_luma[y0:y1, x0:x1], -(-floor // 3)), cv2.CMP_GT)
     else:
         b, g_, r_ = cv2.split(cv2.absdiff(frame[y0:y1, x0:x1], ref))
-        fg = cv2.compare(cv2.add(cv2.add(b, g_), r_), p.tmap_full[y0:y1, x0:x1], cv2.CMP_GT)
+        fg = cv2.compare(cv2.add(cv2.add(b, g_), r_),
+                         np.maximum(p.tmap_full[y0:y1, x0:x1], floor), cv2.CMP_GT)
     fg = cv2.medianBlur(fg, 3)
     # m = m outside the band, the full-resolution test inside it.
     np.copyto(m, (fg > 0).view(np.uint8), where=band > 0)
