@@ -37,7 +37,11 @@ Clips:
   2014 baseline/office, a man walks into an empty office and stands reading, cut into
   frames 500-1099 and 1100-1399, and baseline/pedestrians 711-1099, one woman walks across
   a path; SBI2015 CaVignal, a man stands still for ~170 frames then walks slowly away,
-  and Candela_m1.10, a man walks into a lounge and sits on a sofa for ~230 frames). Scored
+  and Candela_m1.10, a man walks into a lounge and sits on a sofa for ~230 frames;
+  validation clips added by the issue-26 realsil helper in session 21, measured on main
+  before any change: SBI2015 CAVIAR1 0-284, a man walks down a corridor and stands at a
+  shop window, CDnet pedestrians 596-832, a man in a coat walks across the path, and
+  SBI2015 HallAndMonitor 243-295, a man carries a monitor down a corridor). Scored
   against the dataset's masks (value 255; hard shadow counts as
   background) on the frames where the truth shows the person; pixels the dataset marks
   outside its region of interest or unknown (blurred borders) count in no IoU.

@@ -268,13 +268,24 @@ def _frame_tmap(l1: np.ndarray, p: _Params) -> tuple[np.ndarray, int]:
         return p.tmap, 0
     from vidcap.video.background import K_SIGMA
 
-    sub = l1[:: p.step, :: p.step].astype(np.float32).ravel()
-    m = float(np.median(sub))
-    t = m + K_SIGMA * 1.4826 * float(np.median(np.abs(sub - m)))
+    sub = l1[:: p.step, :: p.step].ravel()
+    m = _median_u8(sub)
+    dev2 = np.abs(2 * sub.astype(np.int16) - int(2 * m))  # twice |v - m|: integers
+    t = m + K_SIGMA * 1.4826 * _median_u8(dev2) / 2
     if t <= FRAME_RAISE * p.threshold:
         return p.tmap, 0
     floor = int(min(255, np.ceil(t)))
     return np.maximum(p.tmap, np.uint8(floor)), floor
+
+
+def _median_u8(v: np.ndarray) -> float:
+    """``np.median`` of small non-negative integers (uint8, or int16 up to 510), by
+    counting (no sort)."""
+    c = np.cumsum(np.bincount(v, minlength=256))
+    n = len(v)
+    if n % 2:
+        return float(np.searchsorted(c, (n + 1) // 2))
+    return 0.5 * float(np.searchsorted(c, n // 2) + np.searchsorted(c, n // 2 + 1))
 
 
 def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
@@ -532,7 +543,8 @@ def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Pa
     # 255 * the interior's share of the box.
     num = cv2.blur(cv2.bitwise_and(l1, l1, mask=inner), box).astype(np.float32)
     den = cv2.blur(inner * np.uint8(255), box)
-    fg = (l1 > np.maximum(p.tmap_full[y0:y1, x0:x1], floor)) & (
+    tf = p.tmap_full[y0:y1, x0:x1]
+    fg = (l1 > (np.maximum(tf, np.uint8(floor)) if floor else tf)) & (
         l1 * den.astype(np.float32) >= (255.0 * p.edge_fraction) * num)
     fg = cv2.medianBlur(fg.view(np.uint8), 3)
     np.copyto(m, fg, where=(band > 0) & (den > 0))
@@ -562,11 +574,14 @@ def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params
         # bleeds a pixel or two into the background, brightness does not.
         d = cv2.absdiff(cv2.cvtColor(frame[y0:y1, x0:x1], cv2.COLOR_BGR2GRAY),
                         cv2.cvtColor(ref, cv2.COLOR_BGR2GRAY))
-        fg = cv2.compare(d, np.maximum(p.tmap_luma[y0:y1, x0:x1], -(-floor // 3)), cv2.CMP_GT)
+        tl = p.tmap_luma[y0:y1, x0:x1]
+        fg = cv2.compare(d, np.maximum(tl, np.uint8(-(-floor // 3))) if floor else tl,
+                         cv2.CMP_GT)
     else:
         b, g_, r_ = cv2.split(cv2.absdiff(frame[y0:y1, x0:x1], ref))
+        tf = p.tmap_full[y0:y1, x0:x1]
         fg = cv2.compare(cv2.add(cv2.add(b, g_), r_),
-                         np.maximum(p.tmap_full[y0:y1, x0:x1], floor), cv2.CMP_GT)
+                         np.maximum(tf, np.uint8(floor)) if floor else tf, cv2.CMP_GT)
     fg = cv2.medianBlur(fg, 3)
     # m = m outside the band, the full-resolution test inside it.
     np.copyto(m, (fg > 0).view(np.uint8), where=band > 0)
