@@ -24,17 +24,23 @@ Nothing here is validation: these clips chose the fit's constants (the held-out 
 ``pose2d_accuracy.py --held-out``). The 70 and 100 degree rows of 131_01 and 07_07 were added
 as tuning clips by wt-side (issue 27): same motions and stretch as the ``--frames 60`` clips.
 
+``--extra``: also four side-view tuning renders of CMU 14_19 (a subject no other 2D
+benchmark uses; ``$VIDCAP_DATA/mocap/cmu/14_19_humanik.bvh``, benchmarks/get_data.sh) added
+by wt-sideview (issue 27): 6-8 s at yaws 90 and 270, 13-15 s at 80, 20-22 s at 100 (hands
+above the head throughout). Stretches the silhouette benchmarks do not render.
+
 ``--hidden solve``: the cue fit's joints the image cannot show (shoulders, arms inside the
 torso's outline) taken from the 3D clip solve first (:func:`vidcap.video.hidden.solve_hidden`,
 ``vidcap pose2d --hidden solve``), so the table says where the misses are after it.
 
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_attribution.py [--clips "131_01 110,walk 45"]
-[--hidden fit|solve]`` (≈ 4 min).
+[--hidden fit|solve] [--extra]`` (≈ 4 min).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -58,6 +64,8 @@ from vidcap.body import JOINT_INDEX as JI  # noqa: E402
 #: The side and three-quarter tuning renders: (motion, yaws).
 TUNING = (("131_01", (90, 110, 70, 100, 45, 135)), ("07_07", (90, 110, 70, 100, 45, 135)),
           ("walk", (100, 45, 140)))
+#: ``--extra``: CMU 14_19 side-view stretches (first, last frame at 30 fps, yaw).
+EXTRA = ((180, 240, 90), (390, 450, 80), (600, 660, 100), (180, 240, 270))
 _EW = {s: [JI[f"{s}_elbow"], JI[f"{s}_wrist"]] for s in "lr"}
 GROUPS = {"shoulders": [JI["l_shoulder"], JI["r_shoulder"]],
           "legs": [JI[f"{s}_{p}"] for s in "lr" for p in ("hip", "knee", "ankle")],
@@ -154,12 +162,31 @@ COLUMNS = ("PCK", "far in", "near in", "arm out", "shoulders", "legs", "axis", "
            "interp fit")
 
 
+def _clips(extra: bool):
+    """(name, motion, yaw) of every tuning render (:data:`TUNING`, with ``extra``
+    :data:`EXTRA` too)."""
+    for name, yaws in TUNING:
+        motion = load_motion(name, 60)
+        motion = motion.frames(0, min(60, len(motion.root_positions)))
+        for yaw in yaws:
+            yield name, motion, yaw
+    if extra:
+        from vidcap.synth import make_motion
+
+        path = Path(os.environ.get("VIDCAP_DATA", "/nonexistent")) / "mocap" / "cmu"
+        full = make_motion(path / "14_19_humanik.bvh", fps=30.0)
+        for first, last, yaw in EXTRA:
+            yield f"14_19 {first}-{last}", full.frames(first, last), yaw
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--clips", default=None,
                     help='only these clips, e.g. "131_01 110,walk 45" (default: all)')
     ap.add_argument("--hidden", choices=("fit", "solve"), default="fit",
                     help="solve: the cue fit's hidden joints from the 3D clip solve first")
+    ap.add_argument("--extra", action="store_true",
+                    help="also the CMU 14_19 side tuning renders ($VIDCAP_DATA)")
     args = ap.parse_args(argv)
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
@@ -169,24 +196,21 @@ def main(argv=None) -> int:
     rows = {}
     print("Tuning renders (60 frames, 640x480, 30 fps), tracked, true silhouettes: PCK@0.05, "
           "cues / outline only")
-    for name, yaws in TUNING:
-        motion = load_motion(name, 60)
-        motion = motion.frames(0, min(60, len(motion.root_positions)))
-        for yaw in yaws:
-            if keep is not None and f"{name} {yaw}" not in keep:
-                continue
-            video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
-                                       rng=np.random.default_rng(0))
-            pose = fit_sequence(truth["masks"], frames=video, cues="all")
-            cues = pose.joints2d
-            if args.hidden == "solve":
-                cues = solve_hidden(cues, fps=30.0, spread=pose.spread,
-                                    model_height=pose.model_height, frame_size=(640, 480))
-            outline = fit_sequence(truth["masks"], frames=video, cues="outline").joints2d
-            h = body_height_px(truth["joints2d"])
-            rows[(name, yaw)] = attribute(cues, outline, truth)
-            print(f"{name:7} {yaw:>4} {view_of(yaw):13} {pck(cues, truth['joints2d'], h):7.1%}"
-                  f" {pck(outline, truth['joints2d'], h):7.1%}", flush=True)
+    for name, motion, yaw in _clips(args.extra):
+        if keep is not None and f"{name} {yaw}" not in keep:
+            continue
+        video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                   rng=np.random.default_rng(0))
+        pose = fit_sequence(truth["masks"], frames=video, cues="all")
+        cues = pose.joints2d
+        if args.hidden == "solve":
+            cues = solve_hidden(cues, fps=30.0, spread=pose.spread,
+                                model_height=pose.model_height, frame_size=(640, 480))
+        outline = fit_sequence(truth["masks"], frames=video, cues="outline").joints2d
+        h = body_height_px(truth["joints2d"])
+        rows[(name, yaw)] = attribute(cues, outline, truth)
+        print(f"{name:13} {yaw:>4} {view_of(yaw):13} {pck(cues, truth['joints2d'], h):7.1%}"
+              f" {pck(outline, truth['joints2d'], h):7.1%}", flush=True)
     print("\nAttribution of the cue fit's misses, PCK points (class: share of joint-frames "
           "missed; O: oracle gain with that class set to the truth; exchange: elbows and "
           "wrists exchanged between the shoulders where better; interp: arms inside the "

@@ -103,6 +103,43 @@ def test_body_heights_leave_out_poorly_fitted_frames():
     assert body_heights(heights, sim, 31)[50] == pytest.approx(150.0)
 
 
+def test_sequence_finds_the_body_height_when_the_hands_stay_above_the_head():
+    # arms raised into a V overhead in the fifth frame and kept there: 16 of 20
+    # silhouettes are a sixth taller than the body, so their median alone would take
+    # the raised height for the body's; the fitted head top to the floor does not
+    frames, truths = [], []
+    for t in range(20):
+        a = 270 - min(t, 4) / 4 * 150.0
+        m, j = _figure([90, 90, a, a, 540 - a, 540 - a, 268, 270, 272, 270], spread=1.0,
+                       shape=(400, 260), top=100.0)
+        frames.append(m)
+        truths.append(j)
+    masks, truths = np.stack(frames), np.stack(truths)
+    sil = np.array([np.ptp(np.flatnonzero(r)) + 1 for r in masks.any(axis=2)])
+    assert np.all(sil[4:] > 1.15 * H)
+    pose = fit_sequence(masks)
+    np.testing.assert_allclose(pose.model_height, H, rtol=0.02)
+    err = np.linalg.norm(pose.joints2d - truths, axis=-1) / H
+    assert np.median(err[4:]) < 0.01
+
+
+def test_standing_heights_read_raised_hands_only_on_tall_silhouettes():
+    from vidcap.video.fit.tracking import standing_heights
+
+    n = 6
+    joints = np.zeros((n, 15, 2))
+    joints[:, JOINT_INDEX["head_top"], 1] = 100.0
+    joints[:, [JOINT_INDEX["l_wrist"], JOINT_INDEX["r_wrist"]], 1] = 250.0  # hanging
+    bottom = np.full(n, 340.0)  # the head top 240 px above the floor
+    height = np.array([240.0, 240.0, 280.0, 280.0, 200.0, np.nan])
+    joints[2, JOINT_INDEX["l_wrist"], 1] = 60.0  # a hand above the head, tall silhouette
+    joints[4, JOINT_INDEX["r_wrist"], 1] = 90.0  # a hand at the face of a crouch
+    bottom[4] = 300.0
+    out = standing_heights(height, joints, bottom)
+    np.testing.assert_allclose(out[:5], [240.0, 240.0, 240.0, 280.0, 200.0])
+    assert np.isnan(out[5])
+
+
 def test_sequence_refits_frames_taller_than_the_body():
     # arms raised sideways (front view) until the hands are above the head: from
     # frame 10 the silhouette is taller than the body, and the seed's rule (the

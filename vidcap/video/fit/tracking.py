@@ -134,7 +134,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         body; a crouch makes the silhouette shorter and raised arms make it
         taller. After the pass, the body's height is estimated per frame as the
         median silhouette height of the well-fitted frames (similarity at least
-        the window's median) within ``body_window`` frames; a frame whose
+        the window's median) within ``body_window`` frames, a tall silhouette whose
+        fitted hand is above the fitted head counted from the head top down
+        (:func:`standing_heights`: hands above the head in every frame); a frame whose
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
         if its similarity is higher; with ``body_backward`` then backward, warm from
@@ -192,7 +194,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
-        body = _refit_body_height(masks, body_window, body_tolerance, options, out.height.copy(),
+        body = _refit_body_height(masks, body_window, body_tolerance, options,
+                                  standing_heights(out.height, out.joints, out.bottom),
                                   out, normalised.cues, backward=body_backward)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
@@ -317,6 +320,7 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
         # a fresh fit that took over (a slipping track) challenged the track as well
         challenge = bool(reinit_every) and k - last_fresh >= reinit_every
         norm = normalised(k)
+        out.bottom[k] = norm.bottom / norm.scale_xy[1] + norm.offset[1]
         start_pose = predicted_start(prev, before) if predict else prev
         # the heading of two tracked frames (a fresh fit's legs may have jumped)
         heading = (legs_heading(prev.joints, before.joints)
@@ -406,6 +410,7 @@ class _Frames:
         self.sim = np.zeros(n)
         self.warm = np.zeros(n, dtype=bool)
         self.height = np.full(n, np.nan)  # the body height the model was drawn at, px
+        self.bottom = np.full(n, np.nan)  # the silhouette's lowest row, original px
         self.linked = np.zeros(n, dtype=bool)  # labels carried from the frame before
         self.candidates: list = [None] * n  # the cue search's arm candidates
 
@@ -492,11 +497,54 @@ def _frame_has_pixels(masks, k: int) -> bool:
     return bool(np.asarray(masks[k]).any())
 
 
+def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+    """How tall each frame says the body stands, px: the height the model was drawn at
+    (the silhouette's), but from the fitted head top down to the silhouette's lowest row
+    where a fitted wrist is above the head top (hands raised: the silhouette's top is
+    a hand, not the head).
+
+    A clip whose hands stay above the head (a side view of someone reaching up, arms
+    crossed overhead) has no frame whose silhouette is as tall as the body, so the
+    median of :func:`body_heights` alone takes the raised silhouettes' height and the
+    model is drawn a tenth too tall in every frame (pelvis and neck 5-10 % of the
+    height off; CMU 14_19 20-22 s seen from the side, a tuning render, RESULTS.md).
+    The fit still lines its head up with the silhouette's head, and the head top to
+    the floor is the standing height, whatever the arms do. Only silhouettes at least
+    as tall as the clip's median are read so: a crouch's hands at its face leave its
+    short silhouette as it is.
+
+    Parameters
+    ----------
+    height : numpy.ndarray, shape (F,)
+        Pixels, NaN without a silhouette.
+    joints : numpy.ndarray, shape (F, 15, 2)
+        The fitted joints, original pixels.
+    bottom : numpy.ndarray, shape (F,)
+        The silhouette's lowest row, original pixels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,)
+        ``height``, or ``bottom - head top`` where that is shorter in a raised frame.
+    """
+    top = joints[:, JOINT_INDEX["head_top"], 1]
+    wrist = np.fmin(joints[:, JOINT_INDEX["l_wrist"], 1], joints[:, JOINT_INDEX["r_wrist"], 1])
+    if not np.isfinite(height).any():
+        return height
+    with np.errstate(invalid="ignore"):
+        # a hand raised above the head makes the silhouette taller, never shorter: a
+        # crouch's hands at its face (the silhouette short already) are left alone
+        raised = (wrist < top) & (height >= np.nanmedian(height))
+    return np.where(raised, np.fmin(height, bottom - top), height)
+
+
 def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames,
                        cues_of=None, backward: bool = True):
     """Refit frames whose silhouette is not as tall as the body (in place); returns
-    the body height (px) each refitted frame was fitted at, NaN elsewhere."""
+    the body height (px) each refitted frame was fitted at, NaN elsewhere. ``height``
+    (F,): each frame's :func:`standing_heights`."""
     body = body_heights(height, out.sim, window)
+    height = out.height.copy()  # the silhouettes' heights, which the refit compares
     off = np.isfinite(height) & np.isfinite(body) & (np.abs(height / body - 1) > tolerance)
     used = np.full(len(height), np.nan)
     prev = None
@@ -592,4 +640,4 @@ def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Fr
 
 
 __all__ = ["PREDICTED_SEGMENTS", "body_heights", "fit_sequence", "predicted_start",
-           "sequence_colours"]
+           "sequence_colours", "standing_heights"]
