@@ -135,9 +135,13 @@ def test_standing_heights_read_raised_hands_only_on_tall_silhouettes():
     joints[2, JOINT_INDEX["l_wrist"], 1] = 60.0  # a hand above the head, tall silhouette
     joints[4, JOINT_INDEX["r_wrist"], 1] = 90.0  # a hand at the face of a crouch
     bottom[4] = 300.0
-    out = standing_heights(height, joints, bottom)
-    np.testing.assert_allclose(out[:5], [240.0, 240.0, 240.0, 280.0, 200.0])
-    assert np.isnan(out[5])
+    np.testing.assert_allclose(standing_heights(height, joints, bottom, 1)[:5],
+                               [240.0, 240.0, 240.0, 280.0, 200.0])
+    assert np.isnan(standing_heights(height, joints, bottom, 1)[5])
+    # one raised frame in a window of 3 or 5 is left to the median
+    for window in (3, 5):
+        np.testing.assert_allclose(standing_heights(height, joints, bottom, window)[:5],
+                                   height[:5])
 
 
 def test_sequence_refits_frames_taller_than_the_body():

@@ -195,7 +195,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
         body = _refit_body_height(masks, body_window, body_tolerance, options,
-                                  standing_heights(out.height, out.joints, out.bottom),
+                                  standing_heights(out.height, out.joints, out.bottom,
+                                                   body_window),
                                   out, normalised.cues, backward=body_backward)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
@@ -497,7 +498,8 @@ def _frame_has_pixels(masks, k: int) -> bool:
     return bool(np.asarray(masks[k]).any())
 
 
-def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray,
+                     window: int) -> np.ndarray:
     """How tall each frame says the body stands, px: the height the model was drawn at
     (the silhouette's), but from the fitted head top down to the silhouette's lowest row
     where a fitted wrist is above the head top (hands raised: the silhouette's top is
@@ -510,8 +512,8 @@ def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray)
     height off; CMU 14_19 20-22 s seen from the side, a tuning render, RESULTS.md).
     The fit still lines its head up with the silhouette's head, and the head top to
     the floor is the standing height, whatever the arms do. Only silhouettes at least
-    as tall as the clip's median are read so: a crouch's hands at its face leave its
-    short silhouette as it is.
+    as tall as the clip's median are read so (a crouch's hands at its face leave its
+    short silhouette as it is), and only where they are most of the window.
 
     Parameters
     ----------
@@ -521,6 +523,10 @@ def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray)
         The fitted joints, original pixels.
     bottom : numpy.ndarray, shape (F,)
         The silhouette's lowest row, original pixels.
+    window : int
+        :func:`body_heights`' window, frames: a raised frame is read so only where
+        frames with a hand above the head are at least half of those with a
+        silhouette within it (fewer, the median leaves them out already).
 
     Returns
     -------
@@ -532,10 +538,19 @@ def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray)
     if not np.isfinite(height).any():
         return height
     with np.errstate(invalid="ignore"):
+        above = wrist < top
         # a hand raised above the head makes the silhouette taller, never shorter: a
         # crouch's hands at its face (the silhouette short already) are left alone
-        raised = (wrist < top) & (height >= np.nanmedian(height))
-    return np.where(raised, np.fmin(height, bottom - top), height)
+        raised = above & (height >= np.nanmedian(height))
+    # where hands are above the head in fewer than half the window's frames, the
+    # median leaves those frames out anyway: only a window mostly raised is read so
+    half = max(1, int(window)) // 2
+    idx = np.arange(len(height))
+    lo, hi = np.clip(idx - half, 0, len(height)), np.clip(idx + half + 1, 0, len(height))
+    c_above = np.concatenate([[0], np.cumsum(above)])
+    c_seen = np.concatenate([[0], np.cumsum(np.isfinite(height))])
+    share = (c_above[hi] - c_above[lo]) / np.maximum(c_seen[hi] - c_seen[lo], 1)
+    return np.where(raised & (share >= 0.5), np.fmin(height, bottom - top), height)
 
 
 def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames,
