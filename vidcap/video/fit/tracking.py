@@ -134,9 +134,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         body; a crouch makes the silhouette shorter and raised arms make it
         taller. After the pass, the body's height is estimated per frame as the
         median silhouette height of the well-fitted frames (similarity at least
-        the window's median) within ``body_window`` frames, a tall silhouette whose
-        fitted hand is above the fitted head counted from the head top down
-        (:func:`standing_heights`: hands above the head in every frame); a frame whose
+        the window's median; :func:`standing_heights`) within ``body_window`` frames; a frame whose
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
         if its similarity is higher; with ``body_backward`` then backward, warm from
@@ -194,9 +192,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
     if tracked and body_window > 1 and n > 2:
         # the heights the main pass scaled the model to (the silhouettes', unless given)
-        body = _refit_body_height(masks, body_window, body_tolerance, options,
-                                  standing_heights(out.height, out.joints, out.bottom,
-                                                   body_window),
+        body = _refit_body_height(masks, body_window, body_tolerance, options, out.height.copy(),
                                   out, normalised.cues, backward=body_backward)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
@@ -556,10 +552,10 @@ def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray,
 def _refit_body_height(masks, window, tolerance, options: FitOptions, height, out: _Frames,
                        cues_of=None, backward: bool = True):
     """Refit frames whose silhouette is not as tall as the body (in place); returns
-    the body height (px) each refitted frame was fitted at, NaN elsewhere. ``height``
-    (F,): each frame's :func:`standing_heights`."""
-    body = body_heights(height, out.sim, window)
-    height = out.height.copy()  # the silhouettes' heights, which the refit compares
+    the body height (px) each refitted frame was fitted at, NaN elsewhere. The body's
+    height from each frame's :func:`standing_heights`."""
+    body = body_heights(standing_heights(height, out.joints, out.bottom, window), out.sim,
+                        window)
     off = np.isfinite(height) & np.isfinite(body) & (np.abs(height / body - 1) > tolerance)
     used = np.full(len(height), np.nan)
     prev = None
