@@ -710,3 +710,38 @@ def test_backward_retrack_keeps_a_fresh_fit_that_beats_the_slipping_track(monkey
     # ... and frame 2 was carried back from frame 3's fresh fit, and so on to frame 0
     assert (2, 0.85, 0.0) in calls
     assert out.sim[:3] == pytest.approx([0.8, 0.8, 0.8])
+
+def test_body_height_refit_of_a_taller_silhouette_wins_near_ties():
+    # the raised-arm frames of the test above, where the fit stretched to the hand scores
+    # a hair better than the refit at the body's height (a few boundary pixels of a real
+    # mask do that): a taller silhouette keeps the refit within TALLER_TIE of S, a
+    # shorter one (a crouch) only when it scores higher
+    from vidcap.video.fit.frame import fit_frame
+    from vidcap.video.fit.options import FitOptions
+    from vidcap.video.fit.tracking import (
+        TALLER_TIE,
+        _Frames,
+        _normalise_frame,
+        _refit_body_backward,
+    )
+
+    angles = [90, 90, 250, 270, 90, 90, 266, 274, 274, 266]
+    mask, _ = _figure(angles, spread=1.0, shape=(360, 240), top=90.0)
+    masks = np.array([mask, mask])
+    options = FitOptions()
+    at_body = fit_frame(_normalise_frame(masks, 1, body_height=H), options=options)
+
+    def refit(sil_height, lead):
+        out = _Frames(2)
+        out.put(0, fit_pose(mask))
+        out.put(1, at_body)
+        out.sim[0] = lead  # the stretched fit's S, as read on a real mask
+        used = np.array([np.nan, H])
+        _refit_body_backward(masks, np.array([H, H]), np.array([True, True]), used, options,
+                             out, height=np.array([sil_height, H]))
+        return used[0], out.sim[0]
+
+    _, s_refit = refit(1.2 * H, 0.0)  # any fit beats S 0: the refit's own S
+    assert refit(1.2 * H, s_refit + 0.5 * TALLER_TIE)[0] == H
+    assert np.isnan(refit(1.2 * H, s_refit + 1.5 * TALLER_TIE)[0])
+    assert np.isnan(refit(0.9 * H, s_refit + 0.5 * TALLER_TIE)[0])

@@ -41,6 +41,16 @@ _NORMS_KEPT = 64
 #: passes (``fit_sequence(predict=True)``). Arms measured no better (RESULTS.md).
 PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
                            for p in ("upper", "lower"))
+#: S a frame's refit at the body's height (:func:`_refit_body_height`) may lose to its fit
+#: at the silhouette's height and still be kept, where the silhouette is the taller (a
+#: hand above the head). The model stretched to the hand covers the raised arm about as
+#: well as the model at the body's height does, so S tells the two apart by a few
+#: boundary pixels: a mask one pixel wider, a gap closed, flips the choice (14_19 3/4,
+#: a raise: 0.765 -> 0.700 for PCK 27 -> 80 %). On the tuning renders, true and vidcap's
+#: masks, the refit of a taller frame that lost on S (all by under 0.1) was the better
+#: by PCK on 64 of 77 frames, the worse on 8 (RESULTS.md). A shorter silhouette (a
+#: crouch) keeps the plain comparison: there the refit was the worse more often.
+TALLER_TIE = 0.1
 
 
 def predicted_start(prev: FramePose, before: FramePose | None,
@@ -568,7 +578,7 @@ def _refit_body_height(masks, window, tolerance, options: FitOptions, height, ou
                                     body_height=float(body[k]))
             fp = fit_frame(norm, previous=prev, options=options,
                            cues=None if cues_of is None else cues_of(k, norm))
-            if fp.similarity > out.sim[k]:
+            if fp.similarity > out.sim[k] - _height_tie(height[k], body[k]):
                 out.put(k, fp)
                 out.linked[k] = fp.warm
                 used[k] = body[k]
@@ -576,12 +586,12 @@ def _refit_body_height(masks, window, tolerance, options: FitOptions, height, ou
                 continue
         prev = out.get(k, height_px=height[k])
     if backward:
-        _refit_body_backward(masks, body, off, used, options, out, cues_of)
+        _refit_body_backward(masks, body, off, used, options, out, cues_of, height=height)
     return used
 
 
 def _refit_body_backward(masks, body, off, used, options: FitOptions, out: _Frames,
-                         cues_of=None) -> None:
+                         cues_of=None, height=None) -> None:
     """The body-height refit again, backward (in place): each frame off the body's
     height, warm from the frame after it where that one was fitted at the body's
     height, kept if its S is higher. A run of frames whose silhouette is taller than
@@ -595,10 +605,18 @@ def _refit_body_backward(masks, body, off, used, options: FitOptions, out: _Fram
         norm = _normalise_frame(masks, k, height=options.height, body_height=float(body[k]))
         fp = fit_frame(norm, previous=out.get(k + 1, height_px=float(out.height[k + 1])),
                        options=options, cues=None if cues_of is None else cues_of(k, norm))
-        if fp.similarity > out.sim[k]:
+        # a frame the forward pass refitted already: the plain comparison
+        tie = 0.0 if np.isfinite(used[k]) or height is None else _height_tie(height[k], body[k])
+        if fp.similarity > out.sim[k] - tie:
             out.put(k, fp)
             out.linked[k] = fp.warm
             used[k] = body[k]
+
+
+def _height_tie(silhouette: float, body: float) -> float:
+    """S the refit at the body's height may lose by and be kept: :data:`TALLER_TIE` where
+    the silhouette (px) is the taller, else 0."""
+    return TALLER_TIE if silhouette > body else 0.0
 
 
 def _window_median(values: np.ndarray, window: int) -> np.ndarray:
