@@ -147,7 +147,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         the window's median; :func:`standing_heights`) within ``body_window`` frames; a frame whose
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
-        if its similarity is higher; with ``body_backward`` then backward, warm from
+        if its similarity is higher (within :data:`TALLER_TIE` where the silhouette is
+        the taller); with ``body_backward`` then backward, warm from
         the frame after (:func:`_refit_body_backward`). 0 window: off.
     relabel : bool
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
@@ -594,7 +595,9 @@ def _refit_body_backward(masks, body, off, used, options: FitOptions, out: _Fram
                          cues_of=None, height=None) -> None:
     """The body-height refit again, backward (in place): each frame off the body's
     height, warm from the frame after it where that one was fitted at the body's
-    height, kept if its S is higher. A run of frames whose silhouette is taller than
+    height, kept if its S is higher (within :data:`TALLER_TIE` where ``height``, the
+    silhouettes' heights (px), shows the silhouette the taller and the forward pass left
+    the frame at it). A run of frames whose silhouette is taller than
     the body (a hand raised above the head) is entered forward from a frame fitted at
     the silhouette's height, the model stretched to the hand (neck and shoulders
     high), and the warm refit from there can stay below that stretched fit; the run's
