@@ -147,9 +147,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         the window's median; :func:`standing_heights`) within ``body_window`` frames; a frame whose
         silhouette height is more than ``body_tolerance`` (a fraction) from it is
         refitted at that height, warm from the frame before, and the refit kept
-        if its similarity is higher (within :data:`TALLER_TIE` where the silhouette is
-        the taller); with ``body_backward`` then backward, warm from
-        the frame after (:func:`_refit_body_backward`). 0 window: off.
+        if its similarity is higher (taller silhouettes: within :data:`TALLER_TIE`);
+        ``body_backward``: then backward (:func:`_refit_body_backward`). 0 window: off.
     relabel : bool
         Tracked mode: after the priors, relabel the limb pairs over the clip by the
         solve over time (:func:`vidcap.video.fit.temporal.label_path`), so a fresh fit
