@@ -212,7 +212,7 @@ RENDERS = [
     ("02_04 0-3 s 3/4 / room plate", ("02_04", 1, 181), 60, "room", "validation"),
     ("02_08 6-9 s side left / Weizmann plate", ("02_08", 391, 571), 270, "ido",
      "validation"),
-    ("05_04 0-3 s front / Weizmann plate", ("05_04", 1, 181), 0, "ido", "validation"),
+    ("05_04 0-3 s front / Weizmann plate", ("05_04", 1, 181), 0, "ido", "tuning"),  # wt-0504
     ("05_05 0-3 s side / room plate", ("05_05", 1, 181), 90, "room", "validation"),
     ("05_10 2-5 s 3/4 / PETS plate", ("05_10", 121, 301), 45, "vtest", "validation"),
     ("05_13 0-3 s 3/4 back / room plate", ("05_13", 1, 181), 135, "room", "validation"),

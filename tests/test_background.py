@@ -197,3 +197,30 @@ def test_a_video_file_is_probed_once_and_its_rate_times_the_empty_scene(tmp_path
     bg = estimate_background(path, n_samples=10, empty_scene=True)
     assert len(probes) == 1
     np.testing.assert_allclose(seen["times"], bg.sample_indices / 12.0)
+
+
+def test_the_colours_are_learned_again_once_an_absorbed_person_is_found(monkeypatch):
+    from dataclasses import replace
+
+    import vidcap.video.graphcut as graphcut
+    import vidcap.video.personbox as personbox
+
+    frames, _ = clip(12, 60, 80, rng=np.random.default_rng(5), walk=True)
+    learned = []
+
+    def colours(model, *_):
+        learned.append(model.still_person is not None)
+        return np.full((2, 4), len(learned), np.float32)
+
+    def found(model, *_, **__):
+        return replace(model, still_person=np.ones(model.plate.shape[:2], bool))
+
+    monkeypatch.setattr(graphcut, "clip_colours", colours)
+    monkeypatch.setattr(personbox, "absorbed_person", found)
+    bg = estimate_background(frames, n_samples=8, colour_models=True, person_box=True)
+    # learned on the plate stage's model, then again on the model with the person
+    assert learned == [False, True] and bg.colours[0, 0] == 2
+    monkeypatch.setattr(personbox, "absorbed_person", lambda model, *_, **__: model)
+    learned.clear()
+    estimate_background(frames, n_samples=8, colour_models=True, person_box=True)
+    assert learned == [False]  # nobody absorbed: no second look

@@ -127,3 +127,34 @@ def test_a_find_not_seen_again_is_given_up(monkeypatch):
     out, reason = find_absorbed(model, frames, np.ones((8, 3)))
     assert reason == NOT_AGAIN and out is model
     assert len(looked) == GIVE_UP + 1 and cuts == [boxes[0]]
+
+
+def test_the_enclosing_box_is_the_whole_person_not_a_part():
+    from vidcap.video.personbox import enclosing_box
+
+    whole, legs, other = (40, 10, 100, 90), (55, 50, 85, 90), (0, 0, 120, 40)
+    boxes = np.array([whole, legs, other])
+    # The legs score best; the whole body holds them; the larger box elsewhere
+    # (holding a third of the legs' box) is not the person.
+    assert tuple(enclosing_box(boxes, np.array([0.8, 1.2, 0.9]))) == whole
+    assert tuple(enclosing_box(boxes[1:], np.array([1.2, 0.9]))) == legs
+    assert tuple(enclosing_box(boxes[:1], np.array([0.6]))) == whole
+
+
+def test_a_still_person_whose_best_box_swaps_for_a_part_is_absorbed(monkeypatch):
+    import vidcap.video.personbox as pb
+    from vidcap.video.personbox import ABSORBED, find_absorbed
+
+    # The detector finds the whole person and the legs alone in every sample, the
+    # legs scoring best in every other one (05_04 front): the person never moved.
+    whole, legs = (40, 10, 100, 90), (55, 50, 85, 90)
+    frames, model, cuts = _absorbed_scene(monkeypatch, [whole] * 8)
+
+    def detect(frame, **_):
+        i = next(k for k in range(8) if frames[k].ctypes.data == frame.ctypes.data)
+        return np.array([whole, legs]), np.array([1.0, 1.5 if i % 2 else 0.5])
+
+    monkeypatch.setattr(pb, "detect_people", detect)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == ABSORBED and set(cuts) == {whole}
+    assert out.still_person[15:85, 62:78].all()

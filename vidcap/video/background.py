@@ -49,7 +49,7 @@ the spot) still takes its background from the frames where it is uncovered:
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -383,7 +383,15 @@ def estimate_background(
     if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 
-        model = absorbed_person(model, frames, gains)
+        found = absorbed_person(model, frames, gains)
+        if found is not model and model.colours is not None:
+            # The person's colours were learned while the plate held the still person
+            # (05_04 front: the trousers were scene to them, and the cut took the legs
+            # out): learn them again now that the person differs from the plate.
+            from vidcap.video.graphcut import clip_colours
+
+            found = replace(found, colours=clip_colours(found, frames, gains))
+        model = found
     from vidcap.video import absorbed
 
     if absorbed.FLAG_UNSEEN:
