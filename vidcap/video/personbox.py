@@ -6,7 +6,9 @@ vote keeps them, and the difference from the plate shows only what moves (a hand
 page of a book). OpenCV's built-in HOG people detector (Dalal and Triggs 2005, no
 model file to download) still sees them in the frames. Only when the plate left part
 of the frame never seen (a guess), the detector runs on up to :data:`N_DETECT` of the
-plate's samples and the person is cut out of its best box by appearance
+plate's samples and the person is cut out of its best box (the largest detection
+holding the best-scoring one, :func:`enclosing_box`: the detector also fires on the
+legs alone) by appearance
 (``cv2.grabCut`` initialised from the box: outside is scene, the box's central column
 probably person). The first detection decides: when the first-pass silhouette covers
 :data:`MAX_COVER` or more of the cut, the person is visible and nothing is done
