@@ -38,7 +38,8 @@ the spot) still takes its background from the frames where it is uncovered:
    its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; and,
    when the plate left part of the frame never seen, a person the plate absorbed is
    looked for with OpenCV's HOG people detector and cut out by ``cv2.grabCut``
-   (:mod:`vidcap.video.personbox`). Last (:data:`vidcap.video.absorbed.FLAG_UNSEEN`,
+   (:mod:`vidcap.video.personbox`; the graph cut's colour models are then learned
+   again, the person no longer in the plate). Last (:data:`vidcap.video.absorbed.FLAG_UNSEEN`,
    on), plate pixels in the motion footprint that hold the person's colour and that no
    sample shows in a scene colour (a dancer's back, a standing leg) are flagged never
    seen and inpainted (:func:`vidcap.video.absorbed.flag_unseen`).
