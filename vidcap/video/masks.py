@@ -251,9 +251,12 @@ def touches_border(masks) -> np.ndarray:
 
 
 def frames_with_pixels(masks) -> np.ndarray:
-    """(F,) bool: which frames of a stack or an (F, H, W) array have any pixel set."""
+    """(F,) bool: which frames of a stack, an (F, H, W) array or a sequence of (H, W)
+    masks have any pixel set (a sequence frame by frame: not stacked into one array)."""
     if isinstance(masks, MaskStack):
         return masks.any_per_frame()
+    if not isinstance(masks, np.ndarray):
+        return np.array([bool(np.asarray(m).any()) for m in masks], bool)
     return np.asarray(masks, dtype=bool).reshape(len(masks), -1).any(axis=1)
 
 

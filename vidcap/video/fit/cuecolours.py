@@ -29,6 +29,7 @@ from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.frame import fit_normalised
 from vidcap.video.fit.normalise import normalise_mask
 from vidcap.video.fit.options import FitOptions
+from vidcap.video.masks import frames_with_pixels
 
 #: The model is learned from the clip's first this many frames with a silhouette.
 COLOUR_SPAN = 60
@@ -37,24 +38,14 @@ COLOUR_SPAN = 60
 COLOUR_SAMPLES = 10
 
 
-def frames_with_pixels(masks, n: int | None = None) -> np.ndarray:
-    """(n,) bool: which of the first ``n`` (default all) frames of ``masks`` (F, H, W)
-    bool, a sequence of (H, W) masks or a :class:`vidcap.video.masks.MaskStack` have a
-    silhouette."""
-    n = len(masks) if n is None else min(int(n), len(masks))
-    per_frame = getattr(masks, "any_per_frame", None)
-    if per_frame is not None:
-        return np.asarray(per_frame()[:n], bool)
-    return np.array([bool(np.asarray(masks[k]).any()) for k in range(n)], bool)
-
-
 def colour_frames(has_pixels: np.ndarray, *, final: bool = True) -> np.ndarray | None:
     """The frames the clip's colour model is learned from.
 
     Parameters
     ----------
     has_pixels : numpy.ndarray, shape (N,), bool
-        Which of the clip's frames so far have a silhouette (:func:`frames_with_pixels`).
+        Which of the clip's frames so far have a silhouette
+        (:func:`vidcap.video.masks.frames_with_pixels`).
     final : bool
         ``has_pixels`` covers the whole clip. Otherwise (a streamed fit, frames still to
         come) None is returned until :data:`COLOUR_SPAN` frames with a silhouette are in.
@@ -122,5 +113,4 @@ def learn_clip_colours(masks, crops, options: FitOptions, frames=None) -> Colour
     return model
 
 
-__all__ = ["COLOUR_SAMPLES", "COLOUR_SPAN", "colour_frames", "frames_with_pixels",
-           "learn_clip_colours"]
+__all__ = ["COLOUR_SAMPLES", "COLOUR_SPAN", "colour_frames", "learn_clip_colours"]

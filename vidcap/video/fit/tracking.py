@@ -28,7 +28,7 @@ from vidcap.video.fit.raster import image_angle
 from vidcap.video.fit.result import FramePose, Pose2D
 from vidcap.video.fit.temporal import arm_path, elbow_bend_signs, label_path
 from vidcap.video.fit.temporal import relabel as temporal_relabel
-from vidcap.video.masks import MaskStack
+from vidcap.video.masks import MaskStack, frames_with_pixels
 
 #: Normalised silhouettes :func:`fit_sequence` keeps for backward re-tracking (frames)
 _NORMS_KEPT = 64
@@ -227,11 +227,12 @@ def sequence_colours(masks, frames, *, n: int | None = None, **kw) -> ColourMode
         return kw["colours"]
     if frames is None or kw.get("cues", "all") != "all":
         return None
-    from vidcap.video.fit.cuecolours import colour_frames, frames_with_pixels
+    from vidcap.video.fit.cuecolours import colour_frames
 
     own = set(inspect.signature(fit_sequence).parameters) - {"kw"}
     options = FitOptions.from_keywords({k: v for k, v in kw.items() if k not in own})
-    samples = colour_frames(frames_with_pixels(masks, n), final=n is None)
+    samples = colour_frames(frames_with_pixels(masks if n is None else masks[:n]),
+                            final=n is None)
     if samples is None:
         return None
     return learn_clip_colours(masks, as_frame_crops(frames, masks, height=options.height),
@@ -490,12 +491,6 @@ def _normalise_frame(masks, k: int, *, height: int = 80,
         return normalise_mask(crop, height=height, body_height=body_height, origin=origin)
     return normalise_mask(np.asarray(masks[k], dtype=bool), height=height,
                           body_height=body_height)
-
-
-def _frame_has_pixels(masks, k: int) -> bool:
-    if isinstance(masks, MaskStack):
-        return bool(masks.bits[k].any())
-    return bool(np.asarray(masks[k]).any())
 
 
 def _frame_has_pixels(masks, k: int) -> bool:
