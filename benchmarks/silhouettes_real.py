@@ -232,7 +232,7 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
 #: reference, not the truth. All are validation but these: cam1 is tuning since the
 #: appearance pass's regression there was diagnosed on it (gates measured on it; see
-#: benchmarks/RESULTS.md, Silhouettes); sports2d_walk_turn is tuning since the soft-shade
+#: benchmarks/HISTORY.md, Silhouettes); sports2d_walk_turn is tuning since the soft-shade
 #: zone of the shadow test was chosen on it (vidcap.video.silhouette); cam4 and
 #: sports2d_run since the graph cut's losses there were diagnosed on them and its guard
 #: (vidcap.video.graphcut.LOST_MAX) chosen with them among the tuning rows.

@@ -85,7 +85,7 @@ FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: footprint (a table foot, a door) pass the same test. STILL_RADIUS 2: 06_10 0.902;
 #: without dropping flagged areas under a ring width squared 02_06 0.911 -> 0.865; keeping
 #: only areas that touch what is flagged already: 14_19 3/4 and 05_12 lose as much, 02_07
-#: front gains nothing (benchmarks/RESULTS.md, Silhouettes, wt-still2).
+#: front gains nothing (benchmarks/HISTORY.md, Silhouettes, wt-still2).
 FLAG_STILL, STILL_RADIUS = False, 1.0
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the

@@ -277,7 +277,7 @@ def _sample_indices(n: int, k: int, rng) -> np.ndarray:
 #: median / p10 IoU, cdnet_office_enter (tuning) 0.406 / 0.367 -> 0.901 / 0.768 (with
 #: PERSON_BOX), sbi_cavignal (validation) 0.913 -> 0.924, every other validation row
 #: unchanged (before the gate it cost 131_01 4-7 s 3/4 p10 0.900 -> 0.824 and
-#: pose2sim cam3 0.805 -> 0.427; benchmarks/RESULTS.md, Silhouettes).
+#: pose2sim cam3 0.805 -> 0.427; benchmarks/HISTORY.md, Silhouettes).
 EMPTY_SCENE = True
 #: Look for a person the plate absorbed with a person detector
 #: (:mod:`vidcap.video.personbox`; only when the plate left >= 0.5 % never seen and

@@ -12,7 +12,7 @@ and puts them in place of the 2D fit's shoulders and of the elbows and wrists of
 arm the fit drew inside the torso's outline (:func:`hidden_arms`); everything else
 stays as fitted.
 
-Measured (RESULTS.md, "Joints the image cannot show"): on the 15 side and three-quarter
+Measured (HISTORY.md, "Joints the image cannot show"): on the 15 side and three-quarter
 tuning renders PCK@0.05 93.77 -> 95.04 %, where which joints to replace was chosen (the
 arms inside and the shoulders; every arm joint or the upper body as good, every joint or
 the legs too worse); on the 40 held-out renders (``benchmarks/pose2d_accuracy.py
@@ -32,7 +32,7 @@ HIDDEN_CHOICES = ("fit", "solve")
 #: ``vidcap pose2d --hidden``'s: there the solve would cost about as much as the fit.
 DEFAULT_HIDDEN = "fit"
 #: ``vidcap convert --hidden``'s default: its 3D stage runs the solve anyway, and on real
-#: clips the default body's 12 limb joints came nearer MediaPipe's or stayed (RESULTS.md).
+#: clips the default body's 12 limb joints came nearer MediaPipe's or stayed (HISTORY.md).
 CONVERT_HIDDEN = "solve"
 
 #: The joints each frame's reprojection is aligned on (the axis the silhouette pins down).

@@ -297,7 +297,7 @@ def swap_pairs(joints2d, swapped) -> np.ndarray:
 #: loses against MediaPipe's world landmarks (sum over the 11 rows 1663 -> 1701 mm:
 #: ido_walk 118 -> 139, pose2sim cam1 196 -> 212, cam4 183 -> 192): with the real fit's
 #: noisier joints and front/back, the smoothest naming is often the mirror
-#: (benchmarks/RESULTS.md, issue 33).
+#: (benchmarks/HISTORY.md, issue 33).
 CONSISTENT_NAMES = False
 
 
@@ -322,7 +322,7 @@ def consistent_names(j2, rho, unit) -> np.ndarray:
 #: --legs``, tuning renders / samples / held-out renders, mm: edge 84.9 / 81.6 / 127.2,
 #: side 69.2 / 81.6 / 127.2, all 62.6 / 78.9 / 120.8; real footage against MediaPipe
 #: (sum over 11 rows, 1560 mm without the cue; looked at to choose, see
-#: benchmarks/RESULTS.md): edge 1554, side 1544, all 1617 (frontal clips lose: a limb's
+#: benchmarks/HISTORY.md): edge 1554, side 1544, all 1617 (frontal clips lose: a limb's
 #: own swing outweighs the side's depth there). ``turned``: the side labels and the
 #: three-quarter frames whose spread is at most :data:`LIMB_ORDER_TURNED_RHO` (session 20,
 #: same cached 2D, with a legs-coupled pose prior that was not kept either): tuning

@@ -739,7 +739,7 @@ def _image_joints(pose: dict, masks: MaskStack):
 #: Whether the 3D stage reads front and back from the colour frames
 #: (:mod:`vidcap.video.frontback`: which arm is in front of the body). On: on the tuning
 #: renders and samples the share of frames solved facing the right way rose and
-#: PA-MPJPE fell (benchmarks/RESULTS.md, issue 33, the front/back cue).
+#: PA-MPJPE fell (benchmarks/HISTORY.md, issue 33, the front/back cue).
 FRONT_CUE = True
 
 

@@ -5,7 +5,7 @@ few frames the thighs cross. The silhouette scores crossed thighs and thighs tha
 part again alike (the same pixels, give or take the thighs' overlap), and a warm
 search starting from legs side by side keeps them side by side: the track bounces
 each knee back at the crossing, and from then on the leg hangs from the wrong hip
-(RESULTS.md: 468 of 870 held-out hip misses). The clip says which is right: a knee
+(HISTORY.md: 468 of 870 held-out hip misses). The clip says which is right: a knee
 swinging forward keeps going. :func:`choose_crossing` (tracked frames) therefore
 also tries the legs exchanged between the hips, knees and ankles where they are
 (:func:`exchange_legs`), refined, and keeps the hypothesis whose knees are nearer

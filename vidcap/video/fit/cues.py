@@ -54,7 +54,7 @@ WEIGHTS = {"skin": 0.03, "edge": 0.02, "prior": 0.01}
 #: fit (or the last frame) left it. Edges alone do not move an arm: inside the torso's
 #: outline the far arm of a side view is hidden behind the torso, and the edges and
 #: stray skin it can reach there are the torso's shading, the other arm's borders or
-#: the neck's. Chosen on the tuning renders (0.1-0.4 all gained; RESULTS.md).
+#: the neck's. Chosen on the tuning renders (0.1-0.4 all gained; HISTORY.md).
 SKIN_MIN = 0.2
 
 _BINS = 32  # chromaticity histogram bins per axis

@@ -19,7 +19,7 @@ from vidcap.video.fit.moves import search_angle
 from vidcap.video.fit.state import FitState
 
 #: Thigh lengths tried (shares of the full length): a thigh turned 55-65 degrees
-#: toward the camera. Chosen on the ``--poses`` crouch clips (tuning), RESULTS.md.
+#: toward the camera. Chosen on the ``--poses`` crouch clips (tuning), HISTORY.md.
 FOLD_RATIOS = (0.45,)
 #: A silhouette at most this share of the model's height (head top to soles) is a
 #: crouch, where :func:`fold_thighs` runs; upright frames skip it (and its cost).

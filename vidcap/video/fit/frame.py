@@ -50,7 +50,7 @@ LABEL_TIE = 0.002  # S a fresh fit may lose to keep a track's limb names
 #: Spread from which a tracked frame also tries its legs exchanged between the hips
 #: (:func:`~vidcap.video.fit.crossing.choose_crossing`): with the hips apart in the
 #: image a leg hung from the wrong one misses its hip; nearer a side view the
-#: exchange only renames the legs (chosen on the tuning clips, RESULTS.md).
+#: exchange only renames the legs (chosen on the tuning clips, HISTORY.md).
 CROSSING_SPREAD = 0.4
 #: A fresh fit below this S is fitted again with the torso found by
 #: :func:`~vidcap.video.fit.torso.fit_torso_lean` (a body bent forward, crouched, in a
@@ -145,7 +145,7 @@ def track_below_threshold(eng: _MaskEngine, st: FitState, previous: FramePose,
     tracked from it, and the fresh fit starts from the pelvis placed from the top
     (started from the last pelvis too, the fresh fits lost 0.74 points of held-out PCK
     on side views and the walk_three_quarter sample's 2D error rose 3.5 -> 4.0 %;
-    RESULTS.md). Costs a warm fit only where the start is below the threshold.
+    HISTORY.md). Costs a warm fit only where the start is below the threshold.
     """
     if start is None:
         start = warm_start(eng, previous, options)
@@ -168,7 +168,7 @@ def _nearer_start(eng: _MaskEngine, st: FitState, previous: FramePose,
     fitted to MediaPipe's masks: frames 34-53 were fitted fresh, upright, 25 % of
     height off). Tried only where the start from the top is below the warm threshold:
     tried everywhere, a track kept its pelvis through frames a fresh fit had read
-    better (tfjs_dance, sports2d_walk_turn lost 0.3-0.9 % of height; RESULTS.md).
+    better (tfjs_dance, sports2d_walk_turn lost 0.3-0.9 % of height; HISTORY.md).
     """
     if eng.similarity(st) >= options.warm_threshold:
         return st

@@ -77,7 +77,7 @@ def search_arm_grid(eng: _MaskEngine, st: FitState, s: str, *, prior=None, step_
 
 #: The (upper, lower arm) foreshortening :func:`search_arm_track` scores its candidates
 #: at: full length, so a forearm the track had shrunk is found again at its length
-#: (scoring the upper arm foreshortened too folded forearms into the torso: RESULTS.md).
+#: (scoring the upper arm foreshortened too folded forearms into the torso: HISTORY.md).
 ARM_TRACK_FORE = (1.0, 1.0)
 
 

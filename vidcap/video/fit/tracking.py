@@ -38,7 +38,7 @@ _NORMS_KEPT = 64
 #: other and one that bounces back alike, and a search starting where the leg was
 #: ends wherever the tie falls (half the time on the other knee: the leg then hangs
 #: from the wrong hip for the rest of the step); started where the leg is heading, it
-#: passes (``fit_sequence(predict=True)``). Arms measured no better (RESULTS.md).
+#: passes (``fit_sequence(predict=True)``). Arms measured no better (HISTORY.md).
 PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
                            for p in ("upper", "lower"))
 #: S a frame's refit at the body's height (:func:`_refit_body_height`) may lose to its fit
@@ -48,7 +48,7 @@ PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
 #: boundary pixels: a mask one pixel wider, a gap closed, flips the choice (14_19 3/4,
 #: a raise: 0.765 -> 0.700 for PCK 27 -> 80 %). On the tuning renders, true and vidcap's
 #: masks, the refit of a taller frame that lost on S (all by under 0.1) was the better
-#: by PCK on 59 of 71 frames, the worse on 8 (RESULTS.md). A shorter silhouette (a
+#: by PCK on 59 of 71 frames, the worse on 8 (HISTORY.md). A shorter silhouette (a
 #: crouch) keeps the plain comparison: there the refit was the worse more often.
 TALLER_TIE = 0.1
 
@@ -383,7 +383,7 @@ def _retrack_backward(normalised: _Normalised, out: _Frames, fp: FramePose, fram
     slipping one takes its place) and kept, and carried on, where that beats the
     stored fit: the frames before a second fresh fit are as wrong as those before
     the first (walk_three_quarter with the plate's never-seen flags: frames 3-13 kept
-    crossed legs at S 0.81 where the fresh fit of frame 13 scored 0.93; RESULTS.md).
+    crossed legs at S 0.81 where the fresh fit of frame 13 scored 0.93; HISTORY.md).
     """
     back = fp
     no_fallback = dataclasses.replace(options, fallback=0.0)
@@ -510,7 +510,7 @@ def standing_heights(height: np.ndarray, joints: np.ndarray, bottom: np.ndarray,
     crossed overhead) has no frame whose silhouette is as tall as the body, so the
     median of :func:`body_heights` alone takes the raised silhouettes' height and the
     model is drawn a tenth too tall in every frame (pelvis and neck 5-10 % of the
-    height off; CMU 14_19 20-22 s seen from the side, a tuning render, RESULTS.md).
+    height off; CMU 14_19 20-22 s seen from the side, a tuning render, HISTORY.md).
     The fit still lines its head up with the silhouette's head, and the head top to
     the floor is the standing height, whatever the arms do. Only silhouettes at least
     as tall as the clip's median are read so (a crouch's hands at its face leave its

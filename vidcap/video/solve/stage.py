@@ -48,7 +48,7 @@ ROBUST_FITTED = 1.5
 #: or a depth sign; ``LiftResult.joints2d`` then carries its names). Off: on the tuning
 #: renders it made the body consistent with its hips but, where the proposed orientation
 #: has front and back the wrong way round, consistently mirrored (106.8 -> 119.9 mm;
-#: benchmarks/RESULTS.md, "The front/back cue and the fitted-2D settings"). Re-measured
+#: benchmarks/HISTORY.md, "The front/back cue and the fitted-2D settings"). Re-measured
 #: with the front/back cue on: tuning renders 86.9 -> 81.5 mm, but the samples
 #: 118.8 -> 123.6 and the held-out renders 127.4 -> 136.7, and 154-162 frames per
 #: CPU-second (< 200); on top of the names' consistency from the 2D alone
