@@ -140,17 +140,127 @@ def fill_hidden(joints2d, joints3d) -> np.ndarray:
     return out
 
 
+#: Spread (the fit's, per frame) from which :func:`rehang_arms` may hang a frame's
+#: forearms from the other shoulders: below it the shoulders nearly coincide in the
+#: image, and the exchange would only rename the arms.
+REHANG_SPREAD = 0.25
+#: Frames over which :func:`rehang_arms` averages the two hypotheses' residuals (a
+#: hanging is changed where it is the better over a few frames, not one).
+REHANG_WINDOW = 5
+_FOREARMS = [*_ARMS["l"][1:], *_ARMS["r"][1:]]
+_FOREARMS_EXCHANGED = [*_ARMS["r"][1:], *_ARMS["l"][1:]]
+
+
+def exchange_forearms(joints2d, frames) -> np.ndarray:
+    """``joints2d`` (F, 15, 2) with the elbows and wrists exchanged between the
+    shoulders in the frames ``frames`` ((F,) bool) names: each forearm hung from the
+    other shoulder, where it is in the image."""
+    out = np.array(joints2d, dtype=float)
+    f = np.asarray(frames, dtype=bool)
+    out[np.ix_(f, _FOREARMS)] = np.asarray(joints2d, dtype=float)[np.ix_(f, _FOREARMS_EXCHANGED)]
+    return out
+
+
+def arm_residual(joints3d, joints2d) -> np.ndarray:
+    """(F,) how far the 3D solve's arms, drawn in the image (:func:`reproject`, each
+    frame's arms matched to the nearer 2D ones), lie from the 2D arms: the sum over the
+    shoulders, elbows and wrists, in body heights (pelvis to head top, Table 3.1)."""
+    j2 = np.asarray(joints2d, dtype=float)
+    rep = _matched(reproject(joints3d, j2), j2)
+    arms = [*_ARMS["l"], *_ARMS["r"]]
+    height = np.linalg.norm(j2[:, JOINT_INDEX["head_top"]] - j2[:, JOINT_INDEX["pelvis"]],
+                            axis=-1) / _AXIS_SHARE
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.linalg.norm(rep[:, arms] - j2[:, arms], axis=-1).sum(1) / height
+
+
+def rehang_arms(joints2d, joints3d, solve, spread) -> tuple[np.ndarray, np.ndarray]:
+    """The arms hung from the shoulders the clip solve fits the better (side views).
+
+    A side view's track names its arms by the limbs it followed, and where the arms
+    pass each other inside the torso's outline the cue step can hand the forearm the
+    frame shows to the model arm that was following the hidden one (07_07 at 110
+    degrees: the arms hung from the wrong shoulders in 27 of 60 frames; RESULTS.md).
+    With the torso turned a little (spread at least :data:`REHANG_SPREAD`) the two
+    shoulders lie apart in the image, and a forearm hung from the wrong one asks the
+    solve's rigid arm for a reach it cannot make: the solve is run again on every
+    forearm hung from the other shoulder (:func:`exchange_forearms`), and where that
+    one's arms lie nearer the 2D arms (:func:`arm_residual`, averaged over
+    :data:`REHANG_WINDOW` frames) the frame's forearms are exchanged and the clip
+    solved once more.
+
+    Parameters
+    ----------
+    joints2d : numpy.ndarray, shape (F, 15, 2)
+        The 2D fit's joints, pixels.
+    joints3d : numpy.ndarray, shape (F, 15, 3)
+        ``solve(joints2d)``.
+    solve : callable
+        ``solve(joints2d) -> joints3d``: the clip solve.
+    spread : numpy.ndarray, shape (F,)
+        The fit's spread per frame.
+
+    Returns
+    -------
+    joints2d, joints3d : numpy.ndarray
+        The inputs where no frame is exchanged, else the exchanged 2D joints and
+        their solve.
+    """
+    from scipy.ndimage import uniform_filter1d
+
+    sp = np.asarray(spread, dtype=float)
+    with np.errstate(invalid="ignore"):
+        turned = sp >= REHANG_SPREAD
+    if not turned.any():
+        return joints2d, joints3d
+    exchanged = exchange_forearms(joints2d, np.ones(len(sp), dtype=bool))
+    gain = arm_residual(solve(exchanged), exchanged) - arm_residual(joints3d, joints2d)
+    gain = uniform_filter1d(np.nan_to_num(gain, nan=0.0), REHANG_WINDOW, mode="nearest")
+    pick = turned & (gain < 0.0)
+    if not pick.any():
+        return joints2d, joints3d
+    mixed = exchange_forearms(joints2d, pick)
+    return mixed, solve(mixed)
+
+
+def leg_order(frames, joints2d, model_height, body=None) -> np.ndarray:
+    """(F, 2) the colour frame's limb order (:func:`vidcap.video.legorder.near_limb`: which
+    of the fit's legs the frame shows nearer, column 1) with the arms' column NaN: the
+    solve then names a side view's legs by it (as ``vidcap convert`` does), the arms by
+    the fit. On the side-view tuning renders the legs' order alone gained where the arms'
+    as well did not (RESULTS.md)."""
+    from vidcap.video.legorder import limb_edges, limb_radii, near_limb
+
+    strength, count = limb_edges(frames, joints2d, limb_radii(model_height, body))
+    order = near_limb(strength, count)
+    order[:, 0] = np.nan
+    return order
+
+
 def solve_hidden(joints2d, *, fps: float, body=None, spread=None, model_height=None,
-                 frame_size=None) -> np.ndarray:
+                 frame_size=None, frames=None) -> np.ndarray:
     """:func:`fill_hidden` with the clip solve run here (``vidcap pose2d --hidden solve``):
     :func:`vidcap.video.lifting.lift_pose` on the fit's joints (image-side names), its
-    ``spread``, ``model_height`` and the frame's size, with ``body``'s proportions."""
+    ``spread``, ``model_height`` and the frame's size, with ``body``'s proportions; the
+    forearms hung from the shoulders the solve fits the better (:func:`rehang_arms`,
+    given ``spread``); with the colour ``frames`` (an iterable of (H, W, 3) BGR frames
+    and ``model_height``) a side view's legs named by the limb order (:func:`leg_order`)."""
     from vidcap.video.lifting import lift_pose
 
-    lifted = lift_pose(joints2d, fps=fps, body=body, image_sides=True, spread=spread,
-                       model_height=model_height, frame_size=frame_size)
-    return fill_hidden(joints2d, lifted.joints3d)
+    order = None if frames is None or model_height is None else \
+        leg_order(frames, joints2d, model_height, body)
+
+    def solve(j2):
+        return lift_pose(j2, fps=fps, body=body, image_sides=True, spread=spread,
+                         model_height=model_height, frame_size=frame_size,
+                         limb_order=order).joints3d
+
+    j2, j3 = np.asarray(joints2d, dtype=float), solve(joints2d)
+    if spread is not None:
+        j2, j3 = rehang_arms(j2, j3, solve, spread)
+    return fill_hidden(j2, j3)
 
 
-__all__ = ["AXIS", "CONVERT_HIDDEN", "DEFAULT_HIDDEN", "HIDDEN_CHOICES", "check_hidden",
-           "fill_hidden", "hidden_arms", "reproject", "solve_hidden"]
+__all__ = ["AXIS", "CONVERT_HIDDEN", "DEFAULT_HIDDEN", "HIDDEN_CHOICES", "REHANG_SPREAD",
+           "REHANG_WINDOW", "arm_residual", "check_hidden", "exchange_forearms", "fill_hidden",
+           "hidden_arms", "leg_order", "rehang_arms", "reproject", "solve_hidden"]
