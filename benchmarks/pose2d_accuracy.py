@@ -323,7 +323,7 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
                 if hidden == "solve":
                     solved.append(solve_hidden(joints, fps=30.0, spread=pose.spread,
                                                model_height=pose.model_height,
-                                               frame_size=(640, 480)))
+                                               frame_size=(640, 480), frames=video))
             relab = fit_sequence(truth["masks"], frames=video, relabel=True,
                                  **variants[0][1]).joints2d
             fitted.append(relab)

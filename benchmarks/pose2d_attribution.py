@@ -205,7 +205,8 @@ def main(argv=None) -> int:
         cues = pose.joints2d
         if args.hidden == "solve":
             cues = solve_hidden(cues, fps=30.0, spread=pose.spread,
-                                model_height=pose.model_height, frame_size=(640, 480))
+                                model_height=pose.model_height, frame_size=(640, 480),
+                                frames=video)
         outline = fit_sequence(truth["masks"], frames=video, cues="outline").joints2d
         h = body_height_px(truth["joints2d"])
         rows[(name, yaw)] = attribute(cues, outline, truth)

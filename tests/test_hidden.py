@@ -6,9 +6,13 @@ import pytest
 from vidcap.body import JOINT_INDEX as J
 from vidcap.video.hidden import (
     HIDDEN_CHOICES,
+    REHANG_SPREAD,
+    arm_residual,
     check_hidden,
+    exchange_forearms,
     fill_hidden,
     hidden_arms,
+    rehang_arms,
     reproject,
     solve_hidden,
 )
@@ -100,6 +104,65 @@ def test_solve_hidden_keeps_a_consistent_pose_and_the_legs():
     arms = ARM["l"] + ARM["r"]
     assert np.median(np.linalg.norm(out[:, arms] - uv[:, arms], axis=-1)) < 0.02 * height
     np.testing.assert_array_equal(out[:, LEGS], uv[:, LEGS])
+
+
+FOREARMS = {s: [J[f"{s}_elbow"], J[f"{s}_wrist"]] for s in "lr"}
+
+
+def test_exchange_forearms_hangs_each_forearm_from_the_other_shoulder_in_those_frames():
+    _, uv = _walk(4)
+    out = exchange_forearms(uv, np.array([False, True, False, True]))
+    np.testing.assert_array_equal(out[[0, 2]], uv[[0, 2]])
+    np.testing.assert_array_equal(out[[1, 3]][:, FOREARMS["l"]], uv[[1, 3]][:, FOREARMS["r"]])
+    np.testing.assert_array_equal(out[[1, 3]][:, FOREARMS["r"]], uv[[1, 3]][:, FOREARMS["l"]])
+    np.testing.assert_array_equal(out[:, ARM["l"][0]], uv[:, ARM["l"][0]])  # shoulders stay
+
+
+def test_arm_residual_is_zero_for_the_solves_own_pose_and_grows_with_a_wrong_hanging():
+    j3, uv = _walk(6, yaw_deg=115.0)  # the shoulders apart in the image
+    assert np.abs(arm_residual(j3, uv)).max() < 1e-9
+    wrong = exchange_forearms(uv, np.ones(6, bool))
+    assert (arm_residual(j3, wrong) > 0.05).all()  # body heights
+
+
+def test_rehang_arms_hangs_a_planted_run_of_exchanged_forearms_back():
+    """A turned walk (spread 0.4) whose forearms hang from the wrong shoulders in frames
+    10-19 (the arms' identities swapped inside the torso): a solve that knows the body
+    (here the true 3D, whatever it is given) fits the other hanging better there, and
+    only there."""
+    j3, uv = _walk(30, yaw_deg=115.0)
+    planted = np.zeros(30, bool)
+    planted[10:20] = True
+    fit = exchange_forearms(uv, planted)
+    calls = []
+
+    def solve(j2):
+        calls.append(j2)
+        return j3
+
+    out2, out3 = rehang_arms(fit, j3, solve, np.full(30, 0.4))
+    np.testing.assert_allclose(out2, uv, atol=1e-9)
+    assert out3 is j3 and len(calls) == 2  # the exchanged clip, then the mixed one
+    # nearly edge-on (spread below REHANG_SPREAD) the shoulders coincide: left alone
+    same2, same3 = rehang_arms(fit, j3, solve, np.full(30, REHANG_SPREAD - 0.1))
+    assert same2 is fit and same3 is j3 and len(calls) == 2
+
+
+def test_solve_hidden_hangs_the_forearms_back_with_the_real_solve():
+    """The same planted run through the clip solve itself: the frames' elbows and wrists
+    come back within 3 % of the height of their own shoulders' arms."""
+    _, uv = _walk(30, yaw_deg=115.0)
+    planted = np.zeros(30, bool)
+    planted[10:20] = True
+    fit = exchange_forearms(uv, planted)
+    height = 200.0 * 1.75
+    plain = solve_hidden(fit, fps=30.0, frame_size=(640, 480))  # no spread: as fitted
+    out = solve_hidden(fit, fps=30.0, frame_size=(640, 480), spread=np.full(30, 0.4))
+    ends = FOREARMS["l"] + FOREARMS["r"]
+    err = np.linalg.norm(out[planted][:, ends] - uv[planted][:, ends], axis=-1)
+    assert np.median(err) < 0.03 * height
+    assert np.median(np.linalg.norm(plain[planted][:, ends] - uv[planted][:, ends],
+                                    axis=-1)) > 0.05 * height
 
 
 def test_hidden_choices_are_checked_and_spelled_alike_in_the_commands():
