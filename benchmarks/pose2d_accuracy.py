@@ -275,7 +275,8 @@ def clip_matched_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 
 def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS,
-             save: str | None = None, predict: bool = False, hidden: str = "fit") -> int:
+             save: str | None = None, predict: bool = False, hidden: str = "fit",
+             rehang: bool = False) -> int:
     """The ``--held-out`` table: tracked PCK@0.05 per clip and the mean, with the
     frame's cues (``cues``) and with the outline only (same run), and the means and
     median errors per view, so a change to the search is judged on clips it was not
@@ -289,7 +290,9 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
     (for per-joint and per-pose diagnostics); ``predict``: ``fit_sequence(predict=True)``
     (legs started where they were heading) in every fit; ``hidden='solve'``: two more
     columns, both fits with the joints the image cannot show taken from the 3D clip
-    solve (:func:`vidcap.video.hidden.solve_hidden`, ``--hidden solve``), same run."""
+    solve (:func:`vidcap.video.hidden.solve_hidden`, ``--hidden solve``), same run;
+    ``rehang``: that solve with ``rehang=True`` (forearms re-hung, legs named by the
+    render's limb order)."""
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
     from vidcap.video.hidden import solve_hidden
@@ -323,7 +326,8 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
                 if hidden == "solve":
                     solved.append(solve_hidden(joints, fps=30.0, spread=pose.spread,
                                                model_height=pose.model_height,
-                                               frame_size=(640, 480), frames=video))
+                                               frame_size=(640, 480), frames=video,
+                                               rehang=rehang))
             relab = fit_sequence(truth["masks"], frames=video, relabel=True,
                                  **variants[0][1]).joints2d
             fitted.append(relab)
@@ -620,6 +624,10 @@ def main(argv=None) -> int:
                     help="--held-out: with 'solve', also each fit with the joints the image "
                          "cannot show taken from the 3D clip solve (vidcap pose2d --hidden "
                          "solve), same run")
+    ap.add_argument("--rehang", action="store_true",
+                    help="--hidden solve: solve_hidden(rehang=True), the forearms hung from "
+                         "the shoulders the solve fits the better and a side view's legs "
+                         "named by the frame's limb order (not the default)")
     ap.add_argument("--save", default=None,
                     help="--held-out: write every clip's truth and fitted joints to this .npz")
     ap.add_argument("--proportions", action="store_true",
@@ -648,7 +656,7 @@ def main(argv=None) -> int:
         return unusual_poses()
     if args.held_out:
         return held_out(args.frames, args.cues, tuple(args.views.split(",")), args.save,
-                        args.predict, args.hidden)
+                        args.predict, args.hidden, args.rehang)
 
     from vidcap.synth import render_clip
 

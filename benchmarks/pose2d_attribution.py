@@ -33,8 +33,12 @@ above the head throughout). Stretches the silhouette benchmarks do not render.
 torso's outline) taken from the 3D clip solve first (:func:`vidcap.video.hidden.solve_hidden`,
 ``vidcap pose2d --hidden solve``), so the table says where the misses are after it.
 
+``--rehang`` (with ``--hidden solve``): :func:`~vidcap.video.hidden.solve_hidden` with
+``rehang=True`` (forearms hung from the shoulders the solve fits the better, a side view's
+legs named by the render's limb order; not the default, wt-sidearms, issue 27).
+
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_attribution.py [--clips "131_01 110,walk 45"]
-[--hidden fit|solve] [--extra]`` (≈ 4 min).
+[--hidden fit|solve] [--rehang] [--extra]`` (≈ 4 min).
 """
 
 from __future__ import annotations
@@ -185,6 +189,9 @@ def main(argv=None) -> int:
                     help='only these clips, e.g. "131_01 110,walk 45" (default: all)')
     ap.add_argument("--hidden", choices=("fit", "solve"), default="fit",
                     help="solve: the cue fit's hidden joints from the 3D clip solve first")
+    ap.add_argument("--rehang", action="store_true",
+                    help="--hidden solve: solve_hidden(rehang=True) (forearms re-hung, legs "
+                         "named by the limb order; not the default)")
     ap.add_argument("--extra", action="store_true",
                     help="also the CMU 14_19 side tuning renders ($VIDCAP_DATA)")
     args = ap.parse_args(argv)
@@ -206,7 +213,7 @@ def main(argv=None) -> int:
         if args.hidden == "solve":
             cues = solve_hidden(cues, fps=30.0, spread=pose.spread,
                                 model_height=pose.model_height, frame_size=(640, 480),
-                                frames=video)
+                                frames=video, rehang=args.rehang)
         outline = fit_sequence(truth["masks"], frames=video, cues="outline").joints2d
         h = body_height_px(truth["joints2d"])
         rows[(name, yaw)] = attribute(cues, outline, truth)

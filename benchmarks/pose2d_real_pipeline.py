@@ -84,7 +84,7 @@ def _joints(clip: RealClip, row: str):
     :func:`vidcap.video.pipeline.run` with ``lift='solve', hidden='solve'``; the
     ``mp-`` rows: :func:`vidcap.video.hidden.solve_hidden`, ``vidcap pose2d --hidden
     solve``)."""
-    from vidcap.io.video import iter_frames, probe
+    from vidcap.io.video import probe
     from vidcap.video.fit.proportions import human_proportions
     from vidcap.video.hidden import solve_hidden
 
@@ -101,8 +101,7 @@ def _joints(clip: RealClip, row: str):
     info = probe(clip.video)
     return solve_hidden(pose.joints2d, fps=info.fps,
                         body=human_proportions().body() if human else None, spread=pose.spread,
-                        model_height=pose.model_height, frame_size=(info.width, info.height),
-                        frames=iter_frames(clip.video, stop=len(pose.joints2d)))
+                        model_height=pose.model_height, frame_size=(info.width, info.height))
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,

@@ -110,10 +110,9 @@ def main(argv=None) -> int:
 
     pose = fit_sequence(masks, tracked=True, height=args.height)
     hidden_kw = {"fps": 30.0, "spread": pose.spread, "model_height": pose.model_height,
-                 "frame_size": (640, 480), "frames": frames}
+                 "frame_size": (640, 480)}
     solve_hidden(pose.joints2d[:10], **hidden_kw | {"spread": pose.spread[:10],
-                                                   "model_height": pose.model_height[:10],
-                                                   "frames": frames[:10]})
+                                                   "model_height": pose.model_height[:10]})
     t_hidden = cpu(lambda: solve_hidden(pose.joints2d, **hidden_kw), r) / n
     prev = fit_pose(masks[0], height=args.height)
     t_warm = cpu(lambda: fit_pose(masks[1], previous=prev, height=args.height), 5 * r)

@@ -137,15 +137,11 @@ def run(args) -> int:
     if args.hidden == "solve":
         from dataclasses import replace
 
-        from vidcap.io.video import iter_frames
         from vidcap.video.hidden import solve_hidden
 
-        # the colour frames decoded again, one at a time (the fit kept crops round the
-        # silhouettes only): the leg order reads pixels along the fitted legs
         joints = solve_hidden(pose.joints2d, fps=info.fps, body=None if estimate is None
                               else estimate.body(), spread=pose.spread,
-                              model_height=pose.model_height, frame_size=(info.width, info.height),
-                              frames=iter_frames(args.video, stop=len(pose.joints2d)))
+                              model_height=pose.model_height, frame_size=(info.width, info.height))
         pose = replace(pose, joints2d=joints)
     from vidcap.fileio import savez_atomic
 
