@@ -69,6 +69,14 @@ take tensorflow+tfjs-models $TFJS pose-detection/test_data/pose_squats.mp4 tfjs_
 cut tfjs_squats_full.mp4 tfjs_squats.mp4 0 65 0.75
 take tensorflow+tfjs-models $TFJS pose-detection/test_data/pose_1.mp4 tfjs_dance.mp4
 
+# Validation clips added by the issue-27 realpose helper (nobody tuned on them): the two
+# single-person demo clips of OpenMMLab's mmskeleton (Apache 2.0; 340x256, 300 frames at
+# 29.97 fps, letterboxed, taken as is): a man doing tai chi before a glass wall, a
+# weightlifter's clean and jerk on a competition stage. Fixed cameras.
+MMSK=b4c076baa9e02e69b5876c49fa7c509866d902c7
+take open-mmlab+mmskeleton $MMSK resource/data_example/ta_chi.mp4 mmskeleton_taichi.mp4
+take open-mmlab+mmskeleton $MMSK resource/data_example/clean_and_jerk.mp4 mmskeleton_clean_jerk.mp4
+
 # CMU motion capture 14_19 (mocap.cs.cmu.edu, free for all uses; subject 14: arm raises,
 # bending forward, stepping in place), the CMU site's own BVH as kept by lawrennd/mocap.
 # silhouettes_real.py renders it (validation). Its joints are named the Poser way (hip,
@@ -299,7 +307,8 @@ MP_PY=/root/.cache/vidcap-mediapipe-reference/bin/python
 REF=/work/shared/tools/mediapipe-reference/reference.py
 if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
     for v in onebyone_room pose2sim_balance_cam3 pose2sim_balance_cam4 pose2sim_balance_cam1 \
-             sports2d_walk_turn sports2d_run tfjs_squats tfjs_dance; do
+             sports2d_walk_turn sports2d_run tfjs_squats tfjs_dance mmskeleton_taichi \
+             mmskeleton_clean_jerk; do
         [ -f "$DATA/$v.mp4" ] && [ ! -f "$DATA/$v.mediapipe.npz" ] && \
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
     done

@@ -18,7 +18,8 @@ exists. No clip here chose a threshold of the fit (validation).
 
 Then every clip of ``real_clips.py`` (``$VIDCAP_DATA/video``: onebyone_room's two
 one-person stretches, the three pose2sim_balance cameras, the Sports2D walk and run,
-the TensorFlow.js squats and dance) and ido_walk again, this time
+the TensorFlow.js squats and dance, mmskeleton's tai chi and clean and jerk) and ido_walk
+again, this time
 through vidcap's own pipeline (silhouettes from the video, the tracked fit, the seed's body:
 ``proportions='seed'``), with ``--cues outline`` (the default) and ``--cues all``: one row
 per clip, the median of the 12 joints' medians, the share of frames more than 10 % apart over all 12
