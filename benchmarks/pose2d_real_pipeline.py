@@ -14,7 +14,10 @@ default body); any of them with ``+solve``: the joints the image cannot show (sh
 inside the torso's outline) from the 3D clip solve (``--hidden solve``: the pipeline rows
 through ``vidcap convert``'s own path with the clip solve, the ``mp-`` rows as ``vidcap pose2d``
 does it).
-Then per joint (each row kind): median / share > 10 %.
+Then per joint (each row kind): median / share > 10 %; and where vidcap's joint sits against
+MediaPipe's, the median signed offset down / right (:func:`signed_offsets`: a high camera's
+perspective reads as shoulders and hips up and ankles down, a silhouette reaching below the
+soles as every joint down).
 """
 
 from __future__ import annotations
@@ -40,10 +43,10 @@ TUNING = ("onebyone_room 233-445", "pose2sim_balance_cam1", "pose2sim_balance_ca
           "pose2sim_balance_cam4")
 
 
-def _score(clip: RealClip, joints, compare) -> tuple[dict, float]:
+def _score(clip: RealClip, joints, compare, limb_joints) -> tuple[dict, float, np.ndarray]:
     """compare.py's joint scores of ``joints`` (F, 15, 2) px, the whole video's or the
-    range's, over ``clip``'s range, and the share of the reference's frames where vidcap
-    gave joints."""
+    range's, over ``clip``'s range, the share of the reference's frames where vidcap
+    gave joints, and :func:`signed_offsets` of ``limb_joints``."""
     with np.load(clip.reference) as d:
         landmarks = stretch(d["landmarks"], clip)
         names = d["names_vidcap_map"]
@@ -51,11 +54,61 @@ def _score(clip: RealClip, joints, compare) -> tuple[dict, float]:
         joints = stretch(joints, clip)
     seen = np.isfinite(landmarks).all(axis=(1, 2))
     covered = float(np.isfinite(joints[seen]).all(axis=(1, 2)).mean()) if seen.any() else 0.0
+    signed = signed_offsets(landmarks, [str(n) for n in names], joints, limb_joints)
     with tempfile.TemporaryDirectory() as tmp:
         ref, pred = Path(tmp) / "ref.npz", Path(tmp) / "pred.npz"
         np.savez(ref, landmarks=landmarks, names_vidcap_map=names)
         np.savez(pred, joints2d=joints, joint_names=np.array(JOINT_NAMES))
-        return compare(ref, pred), covered
+        return compare(ref, pred), covered, signed
+
+
+def signed_offsets(landmarks, names, joints, limb_joints) -> np.ndarray:
+    """Where vidcap's joints sit against MediaPipe's: the median over frames of
+    ``joints`` less the reference's, per joint of ``limb_joints``, as a fraction of the
+    height (compare.py's: the larger side of the box around the reference's landmarks).
+
+    Parameters
+    ----------
+    landmarks : numpy.ndarray, shape (F, K, 2)
+        The reference's landmarks, px (NaN: no person found).
+    names : list of str
+        vidcap's name of each landmark (the reference's ``names_vidcap_map``; other
+        landmarks named otherwise).
+    joints : numpy.ndarray, shape (F, 15, 2)
+        vidcap's joints, px, in :data:`vidcap.body.JOINT_NAMES` order.
+    limb_joints : sequence of str
+        ``l_``/``r_`` joints of the arms (shoulder, elbow, wrist) and legs (hip, knee,
+        ankle) to report.
+
+    Returns
+    -------
+    numpy.ndarray, shape (J, 2)
+        Median (x, y) offset per joint: +x vidcap's joint to the right, +y below
+        MediaPipe's (a high camera's perspective shows as shoulders and hips above,
+        negative, ankles below; a silhouette reaching below the soles as every joint
+        below). Each frame's arms and legs are matched either way round where that
+        is nearer, as compare.py's "swap" does (vidcap's labels are image sides).
+    """
+    ref = np.asarray(landmarks, float)
+    height = np.maximum(*(ref.max(1) - ref.min(1)).T)  # NaN where it found nobody
+    pred = np.asarray(joints, float)[:, [JOINT_NAMES.index(n) for n in limb_joints]].copy()
+    ref = ref[:, [names.index(n) for n in limb_joints]]
+    for parts in (("shoulder", "elbow", "wrist"), ("hip", "knee", "ankle")):
+        left = [i for i, n in enumerate(limb_joints) if n[2:] in parts and n[0] == "l"]
+        right = [limb_joints.index("r_" + limb_joints[i][2:]) for i in left]
+        if not left:
+            continue
+        keep = np.linalg.norm(pred[:, left + right] - ref[:, left + right], axis=2).mean(1)
+        swap = np.linalg.norm(pred[:, right + left] - ref[:, left + right], axis=2).mean(1)
+        use = swap < keep  # NaN compares False: kept as given
+        pred[np.ix_(use, left + right)] = pred[np.ix_(use, right + left)]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rel = (pred - ref) / height[:, None, None]
+    rel[~np.isfinite(rel).all(axis=2)] = np.nan
+    out = np.full((len(limb_joints), 2), np.nan)
+    has = np.isfinite(rel[..., 0]).any(axis=0)
+    out[has] = np.nanmedian(rel[:, has], axis=0)
+    return out
 
 
 def _has_masks(path: Path) -> bool:
@@ -135,7 +188,7 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
             if c.startswith("mp-") and not _has_masks(clip.reference):
                 continue
             joints = _joints(clip, c)
-            res, covered = _score(clip, joints, compare)
+            res, covered, signed = _score(clip, joints, compare, limb_joints)
             shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]
             medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
             worst = int(np.nanargmax(shares))
@@ -144,10 +197,19 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
                   f"{covered:6.1%} "
                   f"{np.median(medians):7.1%} {np.nanmean(shares):6.0%}  "
                   f"{limb_joints[worst]} ({shares[worst]:.0%})")
-            per_joint.append((clip.name, c, medians, shares))
+            per_joint.append((clip.name, c, medians, shares, signed))
     print("\nPer joint: median % of height / share of frames > 10 % apart")
     print(f"{'clip':26} {'row':8} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
                                                for j in limb_joints))
-    for name, c, medians, shares in sorted(per_joint, key=lambda r: cues.index(r[1])):
+    rows = sorted(per_joint, key=lambda r: cues.index(r[1]))
+    for name, c, medians, shares, _ in rows:
         print(f"{name:26} {c:8} " + " ".join(f"{m * 100:5.1f}/{s * 100:3.0f}"
                                              for m, s in zip(medians, shares, strict=True)))
+    print("\nPer joint, where vidcap's joint sits: median offset from MediaPipe's, % of height, "
+          "down / right (+: vidcap's lower / to the right; a high camera shows as shoulders "
+          "and hips up, ankles down)")
+    print(f"{'clip':26} {'row':8} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
+                                               for j in limb_joints))
+    for name, c, _, _, signed in rows:
+        print(f"{name:26} {c:8} " + " ".join(f"{dy * 100:5.1f}/{dx * 100:3.0f}"
+                                             for dx, dy in signed))
