@@ -14,6 +14,8 @@ import dataclasses
 
 import numpy as np
 
+from vidcap.video.fit import armpairs as _AP
+from vidcap.video.fit.armpairs import search_arm_pairs
 from vidcap.video.fit.crossing import choose_crossing
 from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
@@ -251,6 +253,8 @@ def _refine(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -
     if options.arm_grid:
         for s in ("l", "r"):
             st = search_arm_grid(eng, st, s)
+    if options.arm_pairs:
+        st = search_arm_pairs(eng, st, prior_px=_AP.PRIOR_PX)
     st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]],
                                     interval=np.deg2rad(16))
     st = untangle_thighs(eng, st, tie=options.tie)

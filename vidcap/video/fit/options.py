@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from dataclasses import dataclass
 
 from vidcap.body import BodyModel
@@ -64,6 +65,7 @@ class FitOptions:
     fallback: float = FALLBACK
     warm_step_deg: float = 2.0
     arm_grid: bool = True
+    arm_pairs: bool = os.environ.get("VIDCAP_ARMPAIRS", "1") == "1"  # XXX experiment
     leg_grid: bool = True
     fold_legs: bool = False
     arm_track: bool = False

@@ -1,0 +1,174 @@
+"""Both arms searched together (beyond the seed; issue 27, three-quarter views).
+
+:func:`~vidcap.video.fit.grids.search_arm_grid` searches one arm at a time with the other
+fixed. Where a bit of the silhouette lies at the torso's edge (the near arm's elbow
+bulging at the front of the chest in a three-quarter view), both arms compete for it:
+the far arm, its shoulder hidden inside the torso, can fold across the chest to cover
+it for free (every pixel it draws inside the torso is already the model's), and once it
+has, the near arm gains nothing by reaching for it; S alone prefers the fold as soon
+as the near arm, hung from its fitted shoulder, covers the bulge a few pixels worse.
+:func:`search_arm_pairs` scores pairs of arm hypotheses together, so the near arm
+taking the bulge (the far arm hanging, inside the torso) is compared with the far arm
+taking it; among pairs within a tie of the best, the pair nearer the prior (both arms
+hanging) wins, which is the near arm's.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from vidcap.video.fit.candidates import scorer
+from vidcap.video.fit.engine import _MaskEngine
+from vidcap.video.fit.grids import _pair_scores, pair_grid
+from vidcap.video.fit.limits import TWO_PI, J, S
+from vidcap.video.fit.moves import search_angle
+from vidcap.video.fit.raster import direction
+from vidcap.video.fit.state import FitState, hang
+
+PAIR_BEND = np.deg2rad(float(os.environ.get("VIDCAP_PAIRBEND", "150")))  # XXX
+PRIOR_PX = float(os.environ.get("VIDCAP_PRIORPX", "15"))  # XXX
+_ARMS = {s: (S[f"{s}_upper_arm"], S[f"{s}_lower_arm"], J[f"{s}_shoulder"]) for s in "lr"}
+
+
+def _gap(a, b):
+    """Absolute angle difference, radians, elementwise."""
+    return np.abs(np.angle(np.exp(1j * (np.asarray(a) - np.asarray(b)))))
+
+
+def _arm_candidates(eng: _MaskEngine, st: FitState, s: str, top: int, step: float,
+                    prior: np.ndarray) -> np.ndarray:
+    """(K, 2) (upper, lower) angles: arm ``s``'s ``top`` best grid pairs scored with
+    the other arm left out of the model (each at least two grid steps from the ones
+    before it), the arm in place and ``prior``."""
+    up, lo, base = _ARMS[s]
+    ou, ol, _ = _ARMS["r" if s == "l" else "l"]
+    probe = st.with_entries(drawn=([ou, ol], False)).drawing([up, lo])
+    grid = pair_grid(float(step), max_bend=PAIR_BEND)
+    score = _pair_scores(eng, probe, up, lo, eng.joints(st)[base], grid)
+    picks: list[int] = []
+    gap = 2 * np.deg2rad(step) - 1e-9
+    for k in np.argsort(-score, kind="stable"):
+        if all(max(_gap(grid[0][k], grid[0][p]), _gap(grid[1][k], grid[1][p])) > gap
+               for p in picks):
+            picks.append(int(k))
+            if len(picks) == top:
+                break
+    out = [(grid[0][k], grid[1][k]) for k in picks]
+    out += [(st.angles[up], st.angles[lo]), tuple(prior)]
+    return np.array(out, dtype=float)
+
+
+def _pair_ends(eng: _MaskEngine, st: FitState, cl: np.ndarray, cr: np.ndarray):
+    """``ends(values)`` of every (left, right) candidate pair, ``values`` their flat
+    indices into ``len(cl) x len(cr)``: the four arm segments' ends, each (B, 4, 2)."""
+    j = eng.joints(st)
+    ls, rs = j[_ARMS["l"][2]], j[_ARMS["r"][2]]
+    lens = {s: (eng.L[_ARMS[s][0]] * st.fore[_ARMS[s][0]],
+                eng.L[_ARMS[s][1]] * st.fore[_ARMS[s][1]]) for s in "lr"}
+    n_r = len(cr)
+
+    def arm(c, shoulder, s):
+        elbow = shoulder + direction(c[:, 0]) * lens[s][0]
+        wrist = elbow + direction(c[:, 1]) * lens[s][1]
+        return elbow, wrist
+
+    def ends(values):
+        k = np.asarray(values).astype(int)
+        el, wl = arm(cl[k // n_r], ls, "l")
+        er, wr = arm(cr[k % n_r], rs, "r")
+        b = len(k)
+        p0 = np.stack([np.broadcast_to(ls, (b, 2)), el, np.broadcast_to(rs, (b, 2)), er], 1)
+        p1 = np.stack([el, wl, er, wr], 1)
+        return np.ascontiguousarray(p0), np.ascontiguousarray(p1)
+
+    return ends
+
+
+def _arm_points(eng: _MaskEngine, st: FitState, s: str, c: np.ndarray):
+    """Elbows and wrists, each (K, 2), of arm ``s`` at the (K, 2) angle pairs ``c``
+    (the state's shoulder and foreshortening)."""
+    up, lo, base = _ARMS[s]
+    shoulder = eng.joints(st)[base]
+    elbow = shoulder + direction(c[:, 0]) * (eng.L[up] * st.fore[up])
+    return elbow, elbow + direction(c[:, 1]) * (eng.L[lo] * st.fore[lo])
+
+
+_ALONG = np.array([0.25, 0.5, 0.75, 1.0])  # where a segment is tested for the torso
+
+
+def _inside(eng: _MaskEngine, st: FitState, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Share of each segment ``p0`` -> ``p1`` (K, 2) inside the torso's rectangle, (K,)."""
+    j = eng.joints(st)
+    pel, neck = j[J["pelvis"]], j[J["neck"]]
+    ab = neck - pel
+    pts = p0[:, None] + _ALONG[None, :, None] * (p1 - p0)[:, None]  # (K, 4, 2)
+    q = pts - pel
+    t = np.clip((q @ ab) / max(float(ab @ ab), 1e-9), 0.0, 1.0)
+    d = np.linalg.norm(q - t[..., None] * ab, axis=-1)
+    return (d < eng.R[S["torso"]]).mean(axis=1)
+
+
+def _hidden_cost(eng: _MaskEngine, st: FitState, s: str, c: np.ndarray, h: float) -> np.ndarray:
+    """(K,): radians arm ``s`` at the angle pairs ``c`` turns away from hanging (``h``)
+    where the silhouette cannot see it, each segment's turn weighted by its share
+    inside the torso's rectangle."""
+    shoulder = eng.joints(st)[_ARMS[s][2]]
+    elbow, wrist = _arm_points(eng, st, s, c)
+    up = _inside(eng, st, np.broadcast_to(shoulder, elbow.shape), elbow)
+    low = _inside(eng, st, elbow, wrist)
+    return _gap(c[:, 0], h) * up + _gap(c[:, 1], h) * low
+
+
+def search_arm_pairs(eng: _MaskEngine, st: FitState, *, step_deg: float = 15.0, top: int = 6,
+                     prior_px: float = 15.0, fine_deg: float = 10.0) -> FitState:
+    """Both arms over pairs of their best hypotheses, scored together.
+
+    Each arm's ``top`` best (upper, lower) angle pairs of the whole-arm grid
+    (:func:`~vidcap.video.fit.grids.pair_grid`, ``step_deg`` apart), each scored with the
+    other arm left out, plus the arm in place and the arm hanging, are paired with the
+    other arm's and every pair scored with both arms drawn, less a prior: ``prior_px``
+    pixels' worth of S per radian an arm segment turns away from hanging, weighted by
+    the share of the segment inside the torso's rectangle (where the silhouette
+    cannot see it). The best pair is refined by Algorithm 1 (+-``fine_deg``, each
+    arm's upper segment with its forearm, then the forearm) and kept where it scores
+    above the arms in place by the same measure. Writes the arms' ``angles``,
+    ``scores`` and ``margins``.
+    """
+    h = hang(st)
+    prior = np.array([h, h])
+    cl = _arm_candidates(eng, st, "l", top, step_deg, prior)
+    cr = _arm_candidates(eng, st, "r", top, step_deg, prior)
+    segs = [_ARMS["l"][0], _ARMS["l"][1], _ARMS["r"][0], _ARMS["r"][1]]
+    st = st.drawing(segs)
+    score = scorer(eng, st, _pair_ends(eng, st, cl, cr), segs)(
+        np.arange(len(cl) * len(cr), dtype=float))
+    n_sil = max(int(eng.sil_rows[-1]), 1)
+    weight = prior_px * 2.0 * float(score.max()) / n_sil  # S per radian hidden
+    cost = (_hidden_cost(eng, st, "l", cl, h)[:, None]
+            + _hidden_cost(eng, st, "r", cr, h)[None, :]).ravel()
+    k = int(np.argmax(score - weight * cost))
+    n_r = len(cr)
+    chosen = np.concatenate([cl[k // n_r], cr[k % n_r]])
+    if np.all(_gap(chosen, st.angles[segs]) < 1e-9):
+        return st
+    fine = np.deg2rad(fine_deg)
+
+    def measure(cur: FitState) -> float:
+        a = cur.angles[segs]
+        return eng.similarity(cur) - weight * float(
+            _hidden_cost(eng, cur, "l", a[None, :2], h)[0]
+            + _hidden_cost(eng, cur, "r", a[None, 2:], h)[0])
+
+    cur = st.with_entries(angles=(segs, chosen))
+    for s in "lr":
+        up, lo, _ = _ARMS[s]
+        cur, _ = search_angle(eng, cur, up, with_segments=(lo,), start=cur.angles[up],
+                              interval=2 * fine, lo=0.0, hi=TWO_PI, prefer=cur.angles[up])
+        cur, _ = search_angle(eng, cur, lo, start=cur.angles[lo], interval=2 * fine,
+                              lo=0.0, hi=TWO_PI, prefer=cur.angles[lo])
+    return cur if measure(cur) > measure(st) else st
+
+
+__all__ = ["search_arm_pairs"]
