@@ -14,7 +14,6 @@ import dataclasses
 
 import numpy as np
 
-from vidcap.video.fit import armpairs as _AP
 from vidcap.video.fit.armpairs import search_arm_pairs
 from vidcap.video.fit.crossing import choose_crossing
 from vidcap.video.fit.cues import apply_cues
@@ -245,16 +244,16 @@ def _fit_fresh(eng: _MaskEngine, st: FitState, options: FitOptions,
 
 def _refine(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -> FitState:
     """Beyond the seed: the model centred, every limb again (whole arms first), the
-    arm grids, the torso once more with every limb drawn (the arms no longer pull
-    it), crossed thighs untangled, the spread again."""
+    arm grids (each arm, then both together), the torso once more with every limb
+    drawn (the arms no longer pull it), crossed thighs untangled, the spread again."""
     st = st.drawing(slice(None))
     st, _ = search_root(eng, st, 0, 0.05 * eng.H)
     st = refine_limbs(eng, st, whole_arms=True)
     if options.arm_grid:
         for s in ("l", "r"):
             st = search_arm_grid(eng, st, s)
-    if options.arm_pairs:
-        st = search_arm_pairs(eng, st, prior_px=_AP.PRIOR_PX)
+        if options.arm_pairs:
+            st = search_arm_pairs(eng, st)
     st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]],
                                     interval=np.deg2rad(16))
     st = untangle_thighs(eng, st, tie=options.tie)

@@ -25,7 +25,7 @@ from vidcap.video.fit.state import FitState, hang, keep_if_better
 
 
 @functools.lru_cache(maxsize=8)
-def pair_grid(step_deg: float, legs: bool = False, max_bend: float = MAX_BEND):
+def pair_grid(step_deg: float, legs: bool = False):
     """Every (upper, lower) angle pair ``step_deg`` apart whose elbow (knee) bend is
     within the flexion limit: the candidates of :func:`search_arm_grid` (any
     direction) or, with ``legs``, of :func:`search_leg_grid` (thigh within
@@ -42,7 +42,7 @@ def pair_grid(step_deg: float, legs: bool = False, max_bend: float = MAX_BEND):
         up = low = np.deg2rad(np.arange(0.0, 360.0, step_deg))
     ua, la = (g.ravel() for g in np.meshgrid(up, low, indexing="ij"))
     bend = np.abs(np.angle(np.exp(1j * (la - ua))))
-    keep = bend <= max_bend + 1e-9
+    keep = bend <= MAX_BEND + 1e-9
     ua, la = ua[keep], la[keep]
     du, dl = direction(ua), direction(la)
     for x in (ua, la, du, dl):

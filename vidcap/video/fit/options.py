@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 from dataclasses import dataclass
 
 from vidcap.body import BodyModel
@@ -28,6 +27,10 @@ class FitOptions:
         Height in pixels the silhouette is normalised to before fitting.
     refine, spread, verify_crossing, caps, arm_grid, leg_grid : bool
         As :func:`~vidcap.video.fit.pose2d.fit_pose` describes them.
+    arm_pairs : bool
+        With ``refine`` and ``arm_grid``, fresh fits also search both arms together
+        (:func:`vidcap.video.fit.armpairs.search_arm_pairs`: a three-quarter view's far
+        arm no longer folds across the chest to cover the near arm's elbow).
     arm_track : bool
         In tracked frames, search each whole arm over every angle pair at full length
         and keep it when it fits clearly better than the tracked arm
@@ -65,7 +68,7 @@ class FitOptions:
     fallback: float = FALLBACK
     warm_step_deg: float = 2.0
     arm_grid: bool = True
-    arm_pairs: bool = os.environ.get("VIDCAP_ARMPAIRS", "1") == "1"  # XXX experiment
+    arm_pairs: bool = True
     leg_grid: bool = True
     fold_legs: bool = False
     arm_track: bool = False
