@@ -54,15 +54,17 @@ def _arm_candidates(eng: _MaskEngine, st: FitState, s: str, top: int, step: floa
     probe = st.with_entries(drawn=([ou, ol], False)).drawing([up, lo])
     grid = pair_grid(float(step))
     score = _pair_scores(eng, probe, up, lo, eng.joints(st)[base], grid)
-    picks: list[int] = []
+    order = np.argsort(-score, kind="stable")
+    ua, la = grid[0][order], grid[1][order]
     gap = 2 * np.deg2rad(step) - 1e-9
-    for k in np.argsort(-score, kind="stable"):
-        if all(max(_gap(grid[0][k], grid[0][p]), _gap(grid[1][k], grid[1][p])) > gap
-               for p in picks):
-            picks.append(int(k))
-            if len(picks) == top:
-                break
-    out = [(grid[0][k], grid[1][k]) for k in picks]
+    picks: list[int] = []
+    alive = np.ones(len(order), dtype=bool)
+    while len(picks) < top and alive.any():
+        # the best left, then everything within two steps of it out of the running
+        i = int(np.argmax(alive))
+        picks.append(i)
+        alive &= np.maximum(_gap(ua, ua[i]), _gap(la, la[i])) > gap
+    out = [(ua[i], la[i]) for i in picks]
     out += [(st.angles[up], st.angles[lo]), tuple(prior)]
     return np.array(out, dtype=float)
 
@@ -93,41 +95,28 @@ def _pair_ends(eng: _MaskEngine, st: FitState, cl: np.ndarray, cr: np.ndarray):
     return ends
 
 
-def _arm_points(eng: _MaskEngine, st: FitState, s: str, c: np.ndarray):
-    """Elbows and wrists, each (K, 2), of arm ``s`` at the (K, 2) angle pairs ``c``
-    (the state's shoulder and foreshortening)."""
-    up, lo, base = _ARMS[s]
-    shoulder = eng.joints(st)[base]
-    elbow = shoulder + direction(c[:, 0]) * (eng.L[up] * st.fore[up])
-    return elbow, elbow + direction(c[:, 1]) * (eng.L[lo] * st.fore[lo])
-
-
 _ALONG = np.array([0.25, 0.5, 0.75, 1.0])  # where a segment is tested for the torso
 
 
-def _inside(eng: _MaskEngine, st: FitState, p0: np.ndarray, p1: np.ndarray,
-            seg: int) -> np.ndarray:
-    """Share of each segment ``p0`` -> ``p1`` (K, 2) hidden by the torso's rectangle, (K,):
-    of points along it, those whose whole width (segment ``seg``'s radius) is inside."""
-    j = eng.joints(st)
-    pel, neck = j[J["pelvis"]], j[J["neck"]]
-    ab = neck - pel
-    pts = p0[:, None] + _ALONG[None, :, None] * (p1 - p0)[:, None]  # (K, 4, 2)
-    q = pts - pel
-    t = np.clip((q @ ab) / max(float(ab @ ab), 1e-9), 0.0, 1.0)
-    d = np.linalg.norm(q - t[..., None] * ab, axis=-1)
-    return (d < eng.R[S["torso"]] - eng.R[seg]).mean(axis=1)
-
-
 def _hidden_cost(eng: _MaskEngine, st: FitState, s: str, c: np.ndarray, h: float) -> np.ndarray:
-    """(K,): radians arm ``s`` at the angle pairs ``c`` turns away from hanging (``h``)
-    where the silhouette cannot see it, each segment's turn weighted by its share
-    inside the torso's rectangle."""
-    shoulder = eng.joints(st)[_ARMS[s][2]]
-    elbow, wrist = _arm_points(eng, st, s, c)
-    up = _inside(eng, st, np.broadcast_to(shoulder, elbow.shape), elbow, _ARMS[s][0])
-    low = _inside(eng, st, elbow, wrist, _ARMS[s][1])
-    return _gap(c[:, 0], h) * up + _gap(c[:, 1], h) * low
+    """(K,): radians arm ``s`` at the (upper, lower) angle pairs ``c`` (K, 2) turns away
+    from hanging (``h``) where the silhouette cannot see it: each segment's turn weighted
+    by its share hidden by the torso's rectangle (of points along it, those whose whole
+    width is inside); the state's shoulder and foreshortening."""
+    up, lo, base = _ARMS[s]
+    j = eng.joints(st)
+    shoulder, pel = j[base], j[J["pelvis"]]
+    ab = j[J["neck"]] - pel
+    elbow = shoulder + direction(c[:, 0]) * (eng.L[up] * st.fore[up])
+    wrist = elbow + direction(c[:, 1]) * (eng.L[lo] * st.fore[lo])
+    p0 = np.stack([np.broadcast_to(shoulder, elbow.shape), elbow], 1)  # (K, 2, 2)
+    p1 = np.stack([elbow, wrist], 1)
+    q = p0[:, :, None] + _ALONG[:, None] * (p1 - p0)[:, :, None] - pel  # (K, 2, 4, 2)
+    t = np.clip((q @ ab) / max(float(ab @ ab), 1e-9), 0.0, 1.0)
+    r = q - t[..., None] * ab
+    d = np.sqrt((r * r).sum(-1))
+    share = (d < (eng.R[S["torso"]] - eng.R[[up, lo]])[:, None]).mean(-1)  # (K, 2)
+    return _gap(c[:, 0], h) * share[:, 0] + _gap(c[:, 1], h) * share[:, 1]
 
 
 def search_arm_pairs(eng: _MaskEngine, st: FitState, *, step_deg: float = 15.0, top: int = 6,
