@@ -79,6 +79,14 @@ Beyond the seed:
   (:func:`vidcap.video.fit.grids.search_arm_track`; a forearm raised faster than the
   track's +-16 degrees a frame was left behind and shrunk by Algorithm 6).
   ``refine=False`` (``--no-refine``) runs the seed's order only.
+* ``arm_pairs`` (default on, with ``arm_grid``): after the two arm grids both arms are
+  searched together (:func:`vidcap.video.fit.armpairs.search_arm_pairs`): each arm's six
+  best grid pairs (the other arm left out), the arm in place and the arm hanging, paired
+  and scored with both arms drawn, less a prior of 12 pixels' worth of S per radian an
+  arm segment hidden whole by the torso turns away from hanging. Arm by arm, a
+  three-quarter view's far arm folded across the chest to cover the near elbow's bulge
+  (free inside the torso) and the near arm, scored with the fold in place, never took
+  it back (walk_three_quarter's far wrist 17-44 % of the height off in frames 41-54).
 * ``leg_grid`` (default on): in tracked frames each whole leg is scored at every
   (thigh, shin) angle pair 15 degrees apart in one batch
   (:func:`vidcap.video.fit.grids.search_leg_grid`) and the best kept when it fits better than the
