@@ -128,11 +128,11 @@ def search_arm_pairs(eng: _MaskEngine, st: FitState, *, step_deg: float = 15.0, 
     other arm left out, plus the arm in place and the arm hanging, are paired with the
     other arm's and every pair scored with both arms drawn, less a prior: ``prior_px``
     pixels' worth of S per radian an arm segment turns away from hanging, weighted by
-    the share of the segment inside the torso's rectangle (where the silhouette
-    cannot see it). The best pair is refined by Algorithm 1 (+-``fine_deg``, each
-    arm's upper segment with its forearm, then the forearm) and kept where it scores
-    above the arms in place by the same measure. Writes the arms' ``angles``,
-    ``scores`` and ``margins``.
+    the share of the segment the torso's rectangle hides (points along it whose whole
+    width is inside: there the silhouette cannot see it). The best pair is refined by
+    Algorithm 1 (+-``fine_deg``, each arm's upper segment with its forearm, then the
+    forearm) and kept where it scores above the arms in place by the same measure.
+    Writes the arms' ``angles``, ``scores`` and ``margins``.
     """
     h = hang(st)
     prior = np.array([h, h])
