@@ -216,6 +216,18 @@ masked zhaochenqiu+UBgS_ADNNet $ADN data/baseline/pedestrians cdnet_pedestrians_
 # second man, alone once the first has left, walks towards the camera carrying a monitor
 # (the truth marks the monitor too) and turns into a doorway on the right; 53 frames.
 masked lim-anggun+FgSegNet $FGS SBI2015_dataset/HallAndMonitor sbi_hallmonitor 243 295
+# Validation clips added by the issue-26 realsil3 helper (session 22), measured on main
+# (c2afe73) before any change. HallAndMonitor 0-74: the first man, alone, walks in from the
+# left and away down the corridor carrying a briefcase (the second man appears at 75).
+# IBMtest2 (320x240, a lobby seen from above, checkered carpet): 0-33, a man in a checked
+# shirt walks towards the camera, alone (the woman enters at 34); 59-89, the woman in a
+# white T-shirt walks towards the camera, alone (the man has left at the bottom).
+# CAVIAR2 255-459 (384x256, a shop front seen from across a gallery, jpg): one shopper,
+# alone, walks out of the shop and along the gallery (the others have left at 254).
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/HallAndMonitor sbi_hallmonitor_away 0 74
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/IBMtest2 sbi_ibmtest2_man 0 33
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/IBMtest2 sbi_ibmtest2_woman 59 89
+masked lim-anggun+FgSegNet $FGS SBI2015_dataset/CAVIAR2 sbi_caviar2 255 459
 
 # A multi-view 3D reference for the Pose2Sim balance trial (issue 33): the four views and the
 # Qualisys calibration in $VIDCAP_DATA/lift/pose2sim/; MediaPipe's 2D landmarks of each view
@@ -313,7 +325,8 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
             "$MP_PY" "$REF" "$DATA/$v.mp4" "$DATA/$v.mediapipe.npz" --masks
     done
     for v in cdnet_office_enter cdnet_office_stand cdnet_pedestrians sbi_cavignal sbi_candela \
-             sbi_caviar1 cdnet_pedestrians_coat sbi_hallmonitor; do
+             sbi_caviar1 cdnet_pedestrians_coat sbi_hallmonitor sbi_hallmonitor_away \
+             sbi_ibmtest2_man sbi_ibmtest2_woman sbi_caviar2; do
         if [ -f "$MASKS/$v.mp4" ] && [ ! -f "$MASKS/$v.mediapipe.npz" ]; then
             "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
         fi

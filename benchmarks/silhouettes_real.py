@@ -41,7 +41,11 @@ Clips:
   validation clips added by the issue-26 realsil helper in session 21, measured on main
   before any change: SBI2015 CAVIAR1 0-284, a man walks down a corridor and stands at a
   shop window, CDnet pedestrians 596-832, a man in a coat walks across the path, and
-  SBI2015 HallAndMonitor 243-295, a man carries a monitor down a corridor). Scored
+  SBI2015 HallAndMonitor 243-295, a man carries a monitor down a corridor; validation
+  clips added by the issue-26 realsil3 helper in session 22, measured on main before any
+  change: HallAndMonitor 0-74, the first man walks away down the corridor, IBMtest2 0-33
+  and 59-89, a man and then a woman walk towards the camera across a lobby, CAVIAR2
+  255-459, a small shopper walks out of a shop and along a gallery). Scored
   against the dataset's masks (value 255; hard shadow counts as
   background) on the frames where the truth shows the person; pixels the dataset marks
   outside its region of interest or unknown (blurred borders) count in no IoU.
