@@ -486,14 +486,21 @@ def main(argv=None) -> int:
                     help="vidcap's plate: footprint pixels whose plate and every sample "
                          "are unlike the seen scene round them flagged never seen "
                          "(vidcap.video.absorbed; default: absorbed.FLAG_STILL)")
+    ap.add_argument("--reflections", action=argparse.BooleanOptionalAction, default=None,
+                    help="vidcap's silhouettes: the person's mirror image in a glossy "
+                         "floor or desk cut (vidcap.video.reflection; default: "
+                         "reflection.CUT_REFLECTIONS)")
     args = ap.parse_args(argv)
     import vidcap.video.absorbed as absorbed
     import vidcap.video.background as background
     import vidcap.video.emptyscene as emptyscene
+    import vidcap.video.reflection as reflection
 
     if args.clip_ends is not None:
         emptyscene.FROM_CLIP_ENDS = args.clip_ends
 
+    if args.reflections is not None:
+        reflection.CUT_REFLECTIONS = args.reflections
     if args.flag_unseen is not None:
         absorbed.FLAG_UNSEEN = args.flag_unseen
     if args.flag_still is not None:

@@ -12,7 +12,8 @@ chromaticity (shadows) are dropped, a 3x3 median removes specks, a closing joins
 fragments, and the largest connected blob - holes filled - is the person (from the
 second frame on, a blob of similar size that overlaps the person's previous box is
 followed instead: two people do not trade places). Other person-sized blobs are
-reported, not silently dropped.
+reported, not silently dropped. The person's mirror image in a glossy floor or desk
+below them is cut (:mod:`vidcap.video.reflection`).
 
 All image operations are OpenCV on uint8, so a 640x480 frame takes ~1-2 ms.
 """
@@ -28,6 +29,7 @@ import numpy as np
 from vidcap.errors import VidcapError
 from vidcap.video.background import BackgroundModel, _threshold_from_sigma
 from vidcap.video.masks import MaskStack
+from vidcap.video.reflection import drop_reflection
 
 __all__ = [
     "NoPersonError",
@@ -173,6 +175,9 @@ class _Params:
         self.edge_band = int(edge_band)
         self.edge_fraction = float(edge_fraction)
         self.shadows = shadows
+        from vidcap.video import reflection
+
+        self.reflections = reflection.CUT_REFLECTIONS
         # A shadow darkens every channel by the same factor (alpha) and keeps the
         # colour: its chromatic distortion is at noise level, a share of the
         # threshold. Dark clothes on a grey background also look like that, so only
@@ -374,6 +379,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
                 _edge_by_contrast(mask, full_frame, g, p, floor)
             elif p.work_size is not None:
                 _refine_edges(mask, full_frame, g, p, floor)
+            if p.reflections:
+                drop_reflection(mask, full_frame, p.plate_full, g if scaled else None)
             if keep is not None:  # (the edge refinement may reach into a region)
                 mask &= keep[1]
             x, y, w, h = cv2.boundingRect(mask)

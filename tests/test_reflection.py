@@ -1,0 +1,81 @@
+"""The person's mirror image in a glossy floor, cut from the silhouette."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vidcap.video import reflection
+from vidcap.video.background import BackgroundModel
+from vidcap.video.reflection import drop_reflection
+from vidcap.video.silhouette import extract_silhouettes
+
+H, W = 120, 80
+TOP, FEET, LEFT, RIGHT = 20, 80, 30, 50  # the person: rows 20-79, columns 30-49
+
+
+def _scene(rng, rho=0.35, legs=None):
+    """A grey floor, a brown-suited person standing on it, and below the feet their
+    mirror image: the floor's difference is ``rho`` times the mirrored body's."""
+    plate = np.clip(rng.normal((150, 155, 170), 1.5, (H, W, 3)), 0, 255)
+    frame = plate.copy()
+    body = np.array((60.0, 70.0, 90.0))
+    frame[TOP:FEET, LEFT:RIGHT] = body
+    if legs is not None:  # lighter legs (rows 55-79), same hue as the body
+        frame[55:FEET, LEFT:RIGHT] = legs
+    n = 30  # rows of reflection below the feet
+    for d in range(1, n + 1):
+        src = frame[FEET - d, LEFT:RIGHT] - plate[FEET - d, LEFT:RIGHT]
+        frame[FEET - 1 + d, LEFT:RIGHT] = plate[FEET - 1 + d, LEFT:RIGHT] + rho * src
+    frame += rng.normal(0, 1.0, frame.shape)
+    return plate.astype(np.uint8), np.clip(frame, 0, 255).astype(np.uint8)
+
+
+def test_the_reflection_below_the_feet_is_cut_the_body_kept():
+    plate, frame = _scene(np.random.default_rng(1))
+    mask = np.zeros((H, W), np.uint8)
+    mask[TOP:FEET + 30, LEFT:RIGHT] = 1  # the silhouette stage kept the reflection
+    cut = drop_reflection(mask, frame, plate)
+    assert cut > 0.9 * 30 * (RIGHT - LEFT)
+    assert mask[TOP:FEET, LEFT:RIGHT].all()          # the body is whole
+    assert mask[FEET + 1:FEET + 30].sum() < 0.05 * 30 * (RIGHT - LEFT)
+
+
+def test_a_body_without_reflection_and_lighter_legs_are_kept():
+    rng = np.random.default_rng(2)
+    plate, frame = _scene(rng, rho=0.0)
+    mask = np.zeros((H, W), np.uint8)
+    mask[TOP:FEET, LEFT:RIGHT] = 1
+    assert drop_reflection(mask, frame, plate) == 0
+    # Legs a little lighter than the jacket (3/4 of its difference): not weak enough.
+    plate, frame = _scene(rng, rho=0.0, legs=np.array((83.0, 91.0, 110.0)))
+    mask[:] = 0
+    mask[TOP:FEET, LEFT:RIGHT] = 1
+    assert drop_reflection(mask, frame, plate) == 0
+
+
+def test_legs_of_another_colour_under_a_strong_shirt_are_kept():
+    """Jeans (blue-grey) under a red shirt: weaker against the wall than the shirt,
+    but not the shirt's mirror image (another hue): kept (CDnet office)."""
+    rng = np.random.default_rng(3)
+    plate = np.clip(rng.normal((120, 135, 125), 1.5, (H, W, 3)), 0, 255)
+    frame = plate.copy()
+    frame[TOP:50, LEFT:RIGHT] = (40, 40, 200)        # red shirt (BGR)
+    frame[50:FEET, LEFT:RIGHT] = (110, 85, 70)       # jeans
+    frame = np.clip(frame + rng.normal(0, 1.0, frame.shape), 0, 255).astype(np.uint8)
+    mask = np.zeros((H, W), np.uint8)
+    mask[TOP:FEET, LEFT:RIGHT] = 1
+    assert drop_reflection(mask, frame, plate.astype(np.uint8)) == 0
+    assert mask[TOP:FEET, LEFT:RIGHT].all()
+
+
+def test_extract_silhouettes_cuts_it_and_the_switch_keeps_it(monkeypatch):
+    plate, frame = _scene(np.random.default_rng(4))
+    truth = np.zeros((H, W), bool)
+    truth[TOP:FEET, LEFT:RIGHT] = True
+    bg = BackgroundModel.from_plate(plate, noise_sigma=1.5)
+    got = extract_silhouettes(frame[None], bg).masks[0]
+    iou = (got & truth).sum() / (got | truth).sum()
+    assert iou > 0.95
+    monkeypatch.setattr(reflection, "CUT_REFLECTIONS", False)
+    kept = extract_silhouettes(frame[None], bg).masks[0]
+    assert (kept & truth).sum() / (kept | truth).sum() < 0.8
