@@ -25,6 +25,7 @@ are weak against the shirt only far below the waist, under rows of legs that are
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 __all__ = ["CUT_REFLECTIONS", "drop_reflection"]
@@ -52,12 +53,22 @@ SAME_HUE = 0.5
 #: rows must hold.
 MIN_ROWS = 3
 MIN_SHARE = 0.15
+#: Rows are summed in bins so that the mask spans at most this many, which keeps the
+#: pairwise tables small.
+MAX_BINS = 256
 #: Masks smaller than this (pixels) are left alone.
 MIN_PIXELS = 50
 
 
+def _cosines(u: np.ndarray) -> np.ndarray:
+    """(n, n) dot products of the rows of ``u`` (n, 3): three outer products (faster
+    than a matrix product or a broadcast sum at this size)."""
+    return (np.multiply.outer(u[:, 0], u[:, 0]) + np.multiply.outer(u[:, 1], u[:, 1])
+            + np.multiply.outer(u[:, 2], u[:, 2]))
+
+
 def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
-                    gain=None) -> int:
+                    gain=None, row_step: int = 1) -> int:
     """Cut the person's mirror image below them from ``mask``, in place.
 
     Parameters
@@ -70,65 +81,96 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
         The background plate.
     gain : array-like, shape (3,), optional
         The frame's per-channel exposure relative to the plate (B, G, R; default 1).
+    row_step : int
+        Rows summed per bin (the silhouette stage passes its work scale: a 640x480
+        frame is thresholded at half size); more when the mask spans over
+        :data:`MAX_BINS` bins.
 
     Returns
     -------
     int
         Pixels cut (0 when no reflection was found).
     """
-    rows_any = np.flatnonzero(mask.any(axis=1))
-    if len(rows_any) == 0:
+    m8 = mask.view(np.uint8) if mask.dtype == bool else mask
+    x0, top, w, height = cv2.boundingRect(m8)
+    if w == 0 or height < 2 * MIN_ROWS + 2:
         return 0
-    top, bot = int(rows_any[0]), int(rows_any[-1])
-    cols_any = np.flatnonzero(mask[top:bot + 1].any(axis=0))
-    x0, x1 = int(cols_any[0]), int(cols_any[-1]) + 1
-    m = mask[top:bot + 1, x0:x1].astype(bool)
-    n = m.sum(axis=1).astype(np.float32)
-    total = float(n.sum())
-    height = bot - top + 1
-    if total < MIN_PIXELS or height < 2 * MIN_ROWS + 2:
-        return 0
-    ref = plate[top:bot + 1, x0:x1].astype(np.float32)
+    m = m8[top:top + height, x0:x0 + w]
+    box = frame[top:top + height, x0:x0 + w]
+    ref = plate[top:top + height, x0:x0 + w]
     if gain is not None:
-        ref *= np.asarray(gain, np.float32)[:3]
-    diff = frame[top:bot + 1, x0:x1].astype(np.float32) - ref
-    diff *= m[..., None]
-    mag = np.abs(diff).sum(axis=-1)  # per-pixel L1 difference (0 outside the mask)
-    per_row = np.maximum(n, 1.0)
-    level = mag.sum(axis=1) / per_row  # (height,) mean L1 difference of the row
-    vec = diff.sum(axis=1) / per_row[:, None]  # (height, 3) mean difference vector
+        g = np.asarray(gain, np.float64)
+        ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+    # Per-row sums (OpenCV reductions), binned so the tables stay small.
+    n_row = cv2.reduce(m, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32F)[:, 0]
+    total = float(n_row.sum())
+    if total < MIN_PIXELS:
+        return 0
+    step = max(int(row_step), -(-height // MAX_BINS))
+    nb = -(-height // step)
+
+    def binned(v):
+        pad = nb * step - height
+        v = np.concatenate([v, np.zeros((pad,) + v.shape[1:], v.dtype)]) if pad else v
+        return v.reshape((nb, step) + v.shape[1:]).sum(axis=1)
+
+    ad = cv2.absdiff(box, ref)
+    n = binned(n_row)
+    per_bin = np.maximum(n, 1.0)
+    level = binned(cv2.reduce(cv2.bitwise_and(ad, ad, mask=m), 1, cv2.REDUCE_SUM,
+                              dtype=cv2.CV_32F)[:, 0].sum(axis=1)) / per_bin
+    seen = n > 0
+    # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most frames
+    # stop here (no run of bins weaker than their mirror bins).
+    weak_pair = (level[:, None] < WEAK * level[None, :]) & seen[:, None] & seen[None, :]
+    min_bins = max(1, -(-MIN_ROWS // step))
+    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total)
+    if found is None:
+        return 0
+    signed = (cv2.reduce(cv2.bitwise_and(box, box, mask=m), 1, cv2.REDUCE_SUM,
+                         dtype=cv2.CV_32F)
+              - cv2.reduce(cv2.bitwise_and(ref, ref, mask=m), 1, cv2.REDUCE_SUM,
+                           dtype=cv2.CV_32F))[:, 0]  # (height, 3)
+    vec = binned(signed) / per_bin[:, None]  # (nb, 3) mean difference vector
     length = np.linalg.norm(vec, axis=1)
-    unit = vec / np.maximum(length, 1e-6)[:, None]
     hue = vec - vec.mean(axis=1, keepdims=True)
     hue_len = np.linalg.norm(hue, axis=1)
-    hue_unit = hue / np.maximum(hue_len, 1e-6)[:, None]
+    weak_pair &= _cosines(vec / np.maximum(length, 1e-6)[:, None]) > SAME_DIRECTION
     coloured = hue_len >= COLOURED * length
-
-    # Every candidate line y0 (rows of the box) against every distance d below it.
-    lines = np.arange(height - 1 - MIN_ROWS, height // 2, -1)
-    if len(lines) == 0:
+    weak_pair &= ~coloured[None, :] | (
+        _cosines(hue / np.maximum(hue_len, 1e-6)[:, None]) > SAME_HUE)
+    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total)
+    if found is None:
         return 0
-    d = np.arange(1, height)
+    y0, length_run = found
+    r0, r1 = (y0 + 1) * step, min(height, (y0 + 1 + length_run) * step)
+    mirror = 2 * y0 - np.arange(r0, r1) // step  # each row's mirror bin
+    mag = ad[r0:r1].astype(np.int16).sum(axis=-1)  # the rows' per-pixel L1 difference
+    cut = (m[r0:r1] > 0) & (mag < WEAK * level[mirror][:, None])
+    m[r0:r1][cut] = 0
+    return int(cut.sum())
+
+
+def _best_run(weak_pair: np.ndarray, n: np.ndarray, min_bins: int, min_pixels: float):
+    """The line (bin) whose run of bins weak against their mirror bins, starting right
+    under it, holds the most mask pixels: ``(line, run length)``, or None when no run
+    spans ``min_bins`` and ``min_pixels``. Lines in the lower half of the mask only."""
+    nb = len(n)
+    lines = np.arange(nb - 1 - min_bins, nb // 2, -1)
+    if len(lines) == 0:
+        return None
+    d = np.arange(1, nb - lines[-1])
     below = lines[:, None] + d[None, :]
     above = lines[:, None] - d[None, :]
-    valid = (below < height) & (above >= 0)
+    valid = (below < nb) & (above >= 0)
     b, a = np.where(valid, below, 0), np.where(valid, above, 0)
-    weak = valid & (level[b] < WEAK * level[a]) & (n[b] > 0) & (n[a] > 0)
-    weak &= np.einsum("ijk,ijk->ij", unit[b], unit[a]) > SAME_DIRECTION
-    weak &= ~coloured[a] | (np.einsum("ijk,ijk->ij", hue_unit[b], hue_unit[a]) > SAME_HUE)
-    # The run of weak rows starting right under each line.
+    weak = valid & weak_pair[b, a]
     run = np.where(weak.all(axis=1), weak.shape[1], np.argmin(weak, axis=1))
     counts = np.concatenate([np.zeros((len(lines), 1), np.float32),
                              np.cumsum(n[b] * valid, axis=1)], axis=1)
     pixels = counts[np.arange(len(lines)), run]
-    pixels[run < MIN_ROWS] = 0
+    pixels[run < min_bins] = 0
     best = int(np.argmax(pixels))
-    if pixels[best] < MIN_SHARE * total:
-        return 0
-    y0, length_run = int(lines[best]), int(run[best])
-    rb = np.arange(y0 + 1, y0 + 1 + length_run)
-    ra = 2 * y0 - rb
-    cut = m[rb] & (mag[rb] < WEAK * level[ra][:, None])
-    sub = mask[top:top + 1 + y0 + length_run, x0:x1][y0 + 1:]
-    sub[cut] = 0
-    return int(cut.sum())
+    if pixels[best] < min_pixels:
+        return None
+    return int(lines[best]), int(run[best])

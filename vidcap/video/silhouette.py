@@ -380,7 +380,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             elif p.work_size is not None:
                 _refine_edges(mask, full_frame, g, p, floor)
             if p.reflections:
-                drop_reflection(mask, full_frame, p.plate_full, g if scaled else None)
+                drop_reflection(mask, full_frame, p.plate_full, g if scaled else None,
+                                max(1, round(p.fy)))
             if keep is not None:  # (the edge refinement may reach into a region)
                 mask &= keep[1]
             x, y, w, h = cv2.boundingRect(mask)
