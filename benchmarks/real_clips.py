@@ -85,9 +85,10 @@ def real_clips(log=print) -> list[RealClip]:
 #: issue-26 realsil helper diagnosed them frame by frame (vidcap.video.emptyscene.
 #: FROM_CLIP_ENDS was chosen on candela).
 #: sbi_caviar1 since the issue-26 realsil3 helper (session 22) chose
-#: vidcap.video.reflection.WEAK on it (its floor reflection).
+#: vidcap.video.reflection.WEAK on it (its floor reflection), sbi_hallmonitor since that
+#: helper diagnosed it frame by frame (nothing was chosen on it).
 MASKED_TUNING: set[str] = {"cdnet_office_enter", "cdnet_office_stand", "sbi_candela",
-                           "sbi_cavignal", "sbi_caviar1"}
+                           "sbi_cavignal", "sbi_caviar1", "sbi_hallmonitor"}
 
 
 @dataclass

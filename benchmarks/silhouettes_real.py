@@ -45,7 +45,8 @@ Clips:
   clips added by the issue-26 realsil3 helper in session 22, measured on main before any
   change: HallAndMonitor 0-74, the first man walks away down the corridor, IBMtest2 0-33
   and 59-89, a man and then a woman walk towards the camera across a lobby, CAVIAR2
-  255-459, a small shopper walks out of a shop and along a gallery). Scored
+  255-459, a small shopper walks out of a shop and along a gallery; CAVIAR1 and
+  HallAndMonitor 243-295 are tuning since that helper diagnosed them). Scored
   against the dataset's masks (value 255; hard shadow counts as
   background) on the frames where the truth shows the person; pixels the dataset marks
   outside its region of interest or unknown (blurred borders) count in no IoU.
