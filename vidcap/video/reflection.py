@@ -68,7 +68,7 @@ def _cosines(u: np.ndarray) -> np.ndarray:
 
 
 def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
-                    gain=None, row_step: int = 1) -> int:
+                    gain=None, row_step: int = 1, rect=None) -> int:
     """Cut the person's mirror image below them from ``mask``, in place.
 
     Parameters
@@ -85,6 +85,8 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
         Rows summed per bin (the silhouette stage passes its work scale: a 640x480
         frame is thresholded at half size); more when the mask spans over
         :data:`MAX_BINS` bins.
+    rect : (int, int, int, int), optional
+        The mask's bounding rectangle ``(x, y, w, h)`` when the caller has it.
 
     Returns
     -------
@@ -92,7 +94,7 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
         Pixels cut (0 when no reflection was found).
     """
     m8 = mask.view(np.uint8) if mask.dtype == bool else mask
-    x0, top, w, height = cv2.boundingRect(m8)
+    x0, top, w, height = cv2.boundingRect(m8) if rect is None else rect
     if w == 0 or height < 2 * MIN_ROWS + 2:
         return 0
     m = m8[top:top + height, x0:x0 + w]
@@ -110,6 +112,8 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     nb = -(-height // step)
 
     def binned(v):
+        if step == 1:
+            return v
         pad = nb * step - height
         v = np.concatenate([v, np.zeros((pad,) + v.shape[1:], v.dtype)]) if pad else v
         return v.reshape((nb, step) + v.shape[1:]).sum(axis=1)
@@ -117,20 +121,27 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     ad = cv2.absdiff(box, ref)
     n = binned(n_row)
     per_bin = np.maximum(n, 1.0)
-    level = binned(cv2.reduce(cv2.bitwise_and(ad, ad, mask=m), 1, cv2.REDUCE_SUM,
-                              dtype=cv2.CV_32F)[:, 0].sum(axis=1)) / per_bin
-    seen = n > 0
-    # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most frames
-    # stop here (no run of bins weaker than their mirror bins).
-    weak_pair = (level[:, None] < WEAK * level[None, :]) & seen[:, None] & seen[None, :]
+    # (a 3-channel row reduction is slow in OpenCV: the channels are summed as columns)
+    adm = cv2.bitwise_and(ad, ad, mask=m)
+    level = binned(cv2.reduce(adm.reshape(height, -1), 1, cv2.REDUCE_SUM,
+                              dtype=cv2.CV_32F)[:, 0]) / per_bin
     min_bins = max(1, -(-MIN_ROWS // step))
+    # A run starts with the bin right under a line weaker than the bin right above it:
+    # no such line in the lower half, no reflection (most frames stop here).
+    mid = nb // 2
+    if nb - 1 - min_bins <= mid or not np.any(
+            level[mid + 2:nb - min_bins + 1] < WEAK * level[mid:nb - min_bins - 1]):
+        return 0
+    seen = n > 0
+    # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most of the
+    # remaining frames stop here (no run of bins weaker than their mirror bins).
+    weak_pair = (level[:, None] < WEAK * level[None, :]) & seen[:, None] & seen[None, :]
     found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total)
     if found is None:
         return 0
-    signed = (cv2.reduce(cv2.bitwise_and(box, box, mask=m), 1, cv2.REDUCE_SUM,
-                         dtype=cv2.CV_32F)
-              - cv2.reduce(cv2.bitwise_and(ref, ref, mask=m), 1, cv2.REDUCE_SUM,
-                           dtype=cv2.CV_32F))[:, 0]  # (height, 3)
+    signed = (cv2.bitwise_and(box, box, mask=m).sum(axis=1, dtype=np.int32)
+              - cv2.bitwise_and(ref, ref, mask=m).sum(axis=1, dtype=np.int32)
+              ).astype(np.float32)  # (height, 3)
     vec = binned(signed) / per_bin[:, None]  # (nb, 3) mean difference vector
     length = np.linalg.norm(vec, axis=1)
     hue = vec - vec.mean(axis=1, keepdims=True)

@@ -379,12 +379,14 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
                 _edge_by_contrast(mask, full_frame, g, p, floor)
             elif p.work_size is not None:
                 _refine_edges(mask, full_frame, g, p, floor)
-            if p.reflections:
-                drop_reflection(mask, full_frame, p.plate_full, g if scaled else None,
-                                max(1, round(p.fy)))
+            x, y, w, h = cv2.boundingRect(mask)
+            if p.reflections and drop_reflection(
+                    mask, full_frame, p.plate_full, g if scaled else None,
+                    max(1, round(p.fy)), (x, y, w, h)):
+                x, y, w, h = cv2.boundingRect(mask)
             if keep is not None:  # (the edge refinement may reach into a region)
                 mask &= keep[1]
-            x, y, w, h = cv2.boundingRect(mask)
+                x, y, w, h = cv2.boundingRect(mask)
             bbox = np.array([x, y, x + w, y + h], np.int64)
             area = int(cv2.countNonZero(mask))
             keep = [i for i in order if i not in parts
