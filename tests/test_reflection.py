@@ -79,3 +79,23 @@ def test_extract_silhouettes_cuts_it_and_the_switch_keeps_it(monkeypatch):
     monkeypatch.setattr(reflection, "CUT_REFLECTIONS", False)
     kept = extract_silhouettes(frame[None], bg).masks[0]
     assert (kept & truth).sum() / (kept | truth).sum() < 0.8
+
+
+def test_dark_legs_against_a_darker_floor_are_kept(monkeypatch):
+    """Black trousers: against a white wall above the floor line, against a dark floor
+    below it. Below the line the difference is weak and of the same direction, as a
+    reflection's would be, but the colour is the trousers' own: kept
+    (sports2d_walk_turn)."""
+    rng = np.random.default_rng(5)
+    plate = np.empty((H, W, 3))
+    plate[:70] = (225, 228, 230)   # white wall
+    plate[70:] = (55, 55, 60)      # dark floor
+    plate = np.clip(plate + rng.normal(0, 1.5, plate.shape), 0, 255)
+    frame = plate.copy()
+    frame[TOP:FEET + 20, LEFT:RIGHT] = (20, 20, 22)   # black clothes down to the feet
+    frame = np.clip(frame + rng.normal(0, 1.0, frame.shape), 0, 255).astype(np.uint8)
+    mask = np.zeros((H, W), np.uint8)
+    mask[TOP:FEET + 20, LEFT:RIGHT] = 1
+    assert drop_reflection(mask, frame, plate.astype(np.uint8)) == 0
+    monkeypatch.setattr(reflection, "OTHER_COLOUR", 0.0)  # without the colour test
+    assert drop_reflection(mask.copy(), frame, plate.astype(np.uint8)) > 0

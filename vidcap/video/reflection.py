@@ -49,6 +49,9 @@ SAME_DIRECTION = 0.9
 #: the two coloured parts' cosine must then exceed :data:`SAME_HUE`.
 COLOURED = 0.25
 SAME_HUE = 0.5
+#: A reflected bin's mean colour differs from its mirror bin's by more than this share
+#: of its own difference from the plate.
+OTHER_COLOUR = 0.75
 #: Rows (at least) a reflection must span, and the share of the mask's pixels its
 #: rows must hold.
 MIN_ROWS = 3
@@ -139,10 +142,15 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total)
     if found is None:
         return 0
-    signed = (cv2.bitwise_and(box, box, mask=m).sum(axis=1, dtype=np.int32)
-              - cv2.bitwise_and(ref, ref, mask=m).sum(axis=1, dtype=np.int32)
-              ).astype(np.float32)  # (height, 3)
-    vec = binned(signed) / per_bin[:, None]  # (nb, 3) mean difference vector
+    colour = binned(cv2.bitwise_and(box, box, mask=m).sum(axis=1, dtype=np.int32)
+                    ).astype(np.float32) / per_bin[:, None]  # (nb, 3) mean frame colour
+    vec = colour - binned(cv2.bitwise_and(ref, ref, mask=m).sum(axis=1, dtype=np.int32)
+                          ).astype(np.float32) / per_bin[:, None]  # mean difference
+    # Not the same clothes carried on: a reflection's colour is the surface's, tinted;
+    # legs against a darker floor are weaker than the shirt against a white wall but of
+    # the shirt's colour (sports2d_walk_turn: black trousers).
+    far = np.abs(colour[:, None, :] - colour[None, :, :]).sum(axis=-1)
+    weak_pair &= far > OTHER_COLOUR * level[:, None]
     length = np.linalg.norm(vec, axis=1)
     hue = vec - vec.mean(axis=1, keepdims=True)
     hue_len = np.linalg.norm(hue, axis=1)
