@@ -16,8 +16,9 @@ with their mirror rows above it, and the reflection is the longest run of rows
 starting right under ``y0`` in which every row is *weak* against its mirror row:
 its mean difference under :data:`WEAK` times the mirror row's, in the same direction
 (the mean difference vectors' cosine above :data:`SAME_DIRECTION`), and of the same
-hue where the mirror row's change is coloured (the difference minus its grey part),
-and of another colour than the mirror row (:data:`OTHER_COLOUR`). Only pixels of those
+hue where the mirror row's change is coloured (the difference minus its grey part);
+most of the run's pixels must also be of another colour than their mirror rows
+(:data:`OTHER_COLOUR`, :data:`OTHER_SHARE`). Only pixels of those
 rows that are themselves weak against their mirror row are cut (rows are summed in
 bins of the silhouette stage's work scale).
 
@@ -25,10 +26,10 @@ What looks the same and is kept: a run must start at the line, so legs weaker th
 the shirt only far below the waist, under rows of legs that are not (CDnet office, the
 jeans under the red T-shirt), stay; black trousers against a dark floor below the wall
 line (Sports2D) differ weakly from the plate, in the same direction as above the line,
-but keep the trousers' colour. Legs of the jacket's colour, only lighter, on a plain
-floor would still be cut (none among the benchmark's clips). Cost: a one-line test
-on the row profile stops most frames; +0-9 % CPU on the silhouettes of a 640x480
-walker.
+but keep the trousers' colour (6 of its 300 frames still lose them). Legs of the
+jacket's colour, only lighter, on a plain floor would still be cut (none among the
+benchmark's clips). Cost: a one-line test on the row profile stops most frames; +0-9 %
+CPU on the silhouettes of a 640x480 walker.
 """
 
 from __future__ import annotations
@@ -57,13 +58,18 @@ SAME_DIRECTION = 0.9
 #: the two coloured parts' cosine must then exceed :data:`SAME_HUE`.
 COLOURED = 0.25
 SAME_HUE = 0.5
-#: A reflected bin's mean colour differs from its mirror bin's by more than this share
-#: of its own difference from the plate (L1). Chosen on the tuning clips: without it
-#: sports2d_walk_turn's lower legs go (0.845 / 0.807 -> 0.712 / 0.664 against
-#: MediaPipe); 0.3 / 0.5 / 0.75 / 1.0 leave it 0.842 / 0.687, 0.845 / 0.803,
-#: 0.845 / 0.807, 0.845 / 0.807 and sbi_caviar1 0.961 / 0.787, 0.939 / 0.787,
-#: 0.939 / 0.785, 0.939 / 0.771 (0.984 / 0.833 without the test).
-OTHER_COLOUR = 0.75
+#: A run is a reflection when at least :data:`OTHER_SHARE` of its pixels lie in bins
+#: whose mean colour differs from their mirror bin's by more than :data:`OTHER_COLOUR`
+#: times their own difference from the plate (L1): a reflection takes the surface's
+#: colour, tinted; trousers carried on below a floor line keep theirs. Chosen on the
+#: tuning clips: without it sports2d_walk_turn's lower legs go (0.845 / 0.807 ->
+#: 0.712 / 0.664 against MediaPipe); with 0.5 and 1.0 it stays 0.845 / 0.807 (6 of 300
+#: frames lose ~0.14), sbi_caviar1 0.984 / 0.806, cdnet_office_enter 0.906 / 0.794;
+#: 0.5 and 0.75: sports2d p10 0.798; 0.7 and 0.75: sbi_caviar1 0.949 / 0.681; the
+#: test on every bin of the run (0.75): sbi_caviar1 0.939 / 0.785, cdnet_office_enter
+#: 0.901 / 0.776.
+OTHER_COLOUR = 1.0
+OTHER_SHARE = 0.5
 #: Rows (at least) a reflection must span, and the share of the mask's pixels its
 #: rows must hold.
 MIN_ROWS = 3
@@ -162,7 +168,7 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     # legs against a darker floor are weaker than the shirt against a white wall but of
     # the shirt's colour (sports2d_walk_turn: black trousers).
     far = np.abs(colour[:, None, :] - colour[None, :, :]).sum(axis=-1)
-    weak_pair &= far > OTHER_COLOUR * level[:, None]
+    other = far > OTHER_COLOUR * level[:, None]
     length = np.linalg.norm(vec, axis=1)
     hue = vec - vec.mean(axis=1, keepdims=True)
     hue_len = np.linalg.norm(hue, axis=1)
@@ -170,7 +176,7 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     coloured = hue_len >= COLOURED * length
     weak_pair &= ~coloured[None, :] | (
         _cosines(hue / np.maximum(hue_len, 1e-6)[:, None]) > SAME_HUE)
-    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total)
+    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total, other)
     if found is None:
         return 0
     y0, length_run = found
@@ -182,7 +188,8 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     return int(cut.sum())
 
 
-def _best_run(weak_pair: np.ndarray, n: np.ndarray, min_bins: int, min_pixels: float):
+def _best_run(weak_pair: np.ndarray, n: np.ndarray, min_bins: int, min_pixels: float,
+              other=None):
     """The line (bin) whose run of bins weak against their mirror bins, starting right
     under it, holds the most mask pixels: ``(line, run length)``, or None when no run
     spans ``min_bins`` and ``min_pixels``. Lines in the lower half of the mask only."""
@@ -201,6 +208,10 @@ def _best_run(weak_pair: np.ndarray, n: np.ndarray, min_bins: int, min_pixels: f
                              np.cumsum(n[b] * valid, axis=1)], axis=1)
     pixels = counts[np.arange(len(lines)), run]
     pixels[run < min_bins] = 0
+    if other is not None:  # most of the run's pixels of another colour than their mirror
+        col = np.concatenate([np.zeros((len(lines), 1), np.float32),
+                              np.cumsum(n[b] * (valid & other[b, a]), axis=1)], axis=1)
+        pixels[col[np.arange(len(lines)), run] < OTHER_SHARE * pixels] = 0
     best = int(np.argmax(pixels))
     if pixels[best] < min_pixels:
         return None
