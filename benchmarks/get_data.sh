@@ -253,7 +253,7 @@ if [ -f "$ICL/002_05.bvh" ]; then
     mkdir -p "$DATA/../mocap/cmu_iclone_humanik"
     for t in 002_05 002_06 002_07 002_09 002_10 005_02 005_09 005_12 005_18 \
              006_10 006_11 006_12 001_08 002_04 002_08 005_04 005_05 005_10 005_13 \
-             005_20 006_15; do
+             005_20 006_15 001_01 001_14 005_07 005_11 005_17 005_19 006_14; do
         python - "$ICL/$t.bvh" "$DATA/../mocap/cmu_iclone_humanik/${t}_humanik.bvh" <<'PY'
 import re
 import sys

@@ -79,6 +79,12 @@ Clips:
   left) became tuning: the most in-place 3 s of CMU 01_08, 02_04, 02_08, 05_04, 05_05,
   05_10, 05_13, 05_20, 06_15 (trials no benchmark had used) and 02_05 11-14 s, over the
   three plates at side, three-quarter and front views (same folder, same conversion).
+  05_05 side, 05_13 3/4 back and 05_20 front are tuning since the silval2 helper
+  diagnosed them.
+* Validation renders added by the issue-26 silval2 helper (chose nothing; figures recorded
+  on main before that helper changed anything): the most in-place 3 s of CMU 01_01,
+  01_14 (playground), 05_07, 05_11, 05_17, 05_19 (dance) and 06_14 (basketball), trials
+  no benchmark had used, over the three plates (same folder, same conversion).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -218,12 +224,29 @@ RENDERS = [
     ("02_08 6-9 s side left / Weizmann plate", ("02_08", 391, 571), 270, "ido",
      "validation"),
     ("05_04 0-3 s front / Weizmann plate", ("05_04", 1, 181), 0, "ido", "tuning"),  # wt-0504
-    ("05_05 0-3 s side / room plate", ("05_05", 1, 181), 90, "room", "validation"),
+    ("05_05 0-3 s side / room plate", ("05_05", 1, 181), 90, "room", "tuning"),  # wt-silval
     ("05_10 2-5 s 3/4 / PETS plate", ("05_10", 121, 301), 45, "vtest", "validation"),
-    ("05_13 0-3 s 3/4 back / room plate", ("05_13", 1, 181), 135, "room", "validation"),
-    ("05_20 1-4 s front / PETS plate", ("05_20", 61, 241), 0, "vtest", "validation"),
+    ("05_13 0-3 s 3/4 back / room plate", ("05_13", 1, 181), 135, "room",
+     "tuning"),  # wt-silval
+    ("05_20 1-4 s front / PETS plate", ("05_20", 61, 241), 0, "vtest", "tuning"),  # wt-silval
     ("06_15 1-4 s side / Weizmann plate", ("06_15", 91, 271), 90, "ido", "validation"),
     ("02_05 11-14 s 3/4 / PETS plate", ("02_05", 661, 841), 60, "vtest", "validation"),
+    # (05_05 side, 05_13 3/4 back and 05_20 front are tuning since the issue-26 silval2
+    # helper diagnosed them: frames, plates and masks looked at.)
+    # Validation renders added by the issue-26 silval2 helper (nothing tuned on them; their
+    # figures recorded on main before that helper changed anything), when 05_05 side,
+    # 05_13 3/4 back and 05_20 front became tuning: the most in-place 3 s (the hips move
+    # 0.15-0.58 m from their mean) of CMU trials no benchmark had used (01_01 and 01_14
+    # playground, 05_07 / 05_11 / 05_17 / 05_19 dance, 06_14 basketball), over the three
+    # plates at views not all used before.
+    ("01_01 7-10 s front / Weizmann plate", ("01_01", 421, 601), 0, "ido", "validation"),
+    ("01_14 4-7 s side / PETS plate", ("01_14", 241, 421), 90, "vtest", "validation"),
+    ("05_07 0-3 s 3/4 / room plate", ("05_07", 1, 181), 45, "room", "validation"),
+    ("05_11 1-4 s 3/4 left / PETS plate", ("05_11", 61, 241), 300, "vtest", "validation"),
+    ("05_17 0-3 s side left / Weizmann plate", ("05_17", 1, 181), 270, "ido",
+     "validation"),
+    ("05_19 0-3 s 3/4 back / PETS plate", ("05_19", 1, 181), 135, "vtest", "validation"),
+    ("06_14 0-3 s front / room plate", ("06_14", 1, 181), 0, "room", "validation"),
 ]
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
@@ -231,7 +254,9 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
                       / f"0{t}_humanik.bvh"
                       for t in ("02_05", "02_06", "02_09", "05_02", "05_09", "05_18", "05_12",
                                 "02_07", "02_10", "06_10", "06_11", "06_12", "01_08", "02_04",
-                                "02_08", "05_04", "05_05", "05_10", "05_13", "05_20", "06_15")})
+                                "02_08", "05_04", "05_05", "05_10", "05_13", "05_20", "06_15",
+                                "01_01", "01_14", "05_07", "05_11", "05_17", "05_19",
+                                "06_14")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
