@@ -75,18 +75,34 @@ FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: differences from the plate mostly where the plate holds the person and the sample the
 #: scene, and a torso that never left its pixels is rarely among the sure person pixels,
 #: so its colour is unlikely under that model although no sample shows the scene there.
-#: OFF: it does not generalise. silhouettes_real.py --quick --pck, off -> on, one run: the
-#: studied rows 06_10 4-7 s side 0.837 -> 0.955, 02_07 11-14 s front 0.543 -> 0.628
-#: (02_10 17-20 s front 0.431, 02_07 1-4 s side left 0.812 -> 0.808); validation 05_13
-#: 0.905 -> 0.956, 06_12 150 deg 0.923 -> 0.947, but 02_04 0.967 -> 0.893, 05_05 0.874 ->
-#: 0.797, 05_10 0.956 -> 0.894, 06_12 side left 0.972 -> 0.912, 06_10 5-8 s 0.932 ->
-#: 0.892 and real tuning clips cdnet_office_enter 0.901 -> 0.788, sbi_candela 0.889 ->
-#: 0.809, pose2sim cam4 0.786 -> 0.579: scene objects of their own colour inside the
-#: footprint (a table foot, a door) pass the same test. STILL_RADIUS 2: 06_10 0.902;
-#: without dropping flagged areas under a ring width squared 02_06 0.911 -> 0.865; keeping
-#: only areas that touch what is flagged already: 14_19 3/4 and 05_12 lose as much, 02_07
-#: front gains nothing (benchmarks/HISTORY.md, Silhouettes, wt-still2).
-FLAG_STILL, STILL_RADIUS = False, 1.0
+#: Off on its own it did not generalise (wt-still2; silhouettes_real.py --quick --pck;
+#: benchmarks/HISTORY.md, Silhouettes):
+#: 06_10 4-7 s side 0.837 -> 0.955, 05_13 0.905 -> 0.956, but 02_04 0.967 -> 0.893, 05_05
+#: 0.874 -> 0.797, 05_10 0.956 -> 0.894, cdnet_office_enter 0.901 -> 0.788, sbi_candela
+#: 0.889 -> 0.809, pose2sim cam4 0.786 -> 0.579: scene objects of their own colour inside
+#: the footprint (a table foot, a door, a lamp post) pass the same colour tests. On since
+#: two gates (wt-silval), chosen on the tuning rows:
+#:
+#: * STILL_BETWEEN: a flagged pixel lies between the person's pixels (left and right in
+#:   its row, or above and below in its column; :func:`vidcap.video.appearance.
+#:   between_moved`) in at least this share of the samples: a torso between the arms,
+#:   head and legs, not a table foot beside the legs' sweep. Flagged pixels whose truth
+#:   covers >= half / < a tenth of the samples, without -> with the gate at 0.7: 05_05
+#:   side 1327 / 72 -> 1241 / 0 (the chrome table foot), 05_12 1551 / 73 -> 1055 / 0,
+#:   02_07 11-14 s front 2604 / 271 -> 333 / 0, 14_19 3/4 66 / 123 -> 0 / 0, arms front
+#:   13 / 269 -> 0 / 0, jacks 3/4 129 / 325 -> 0 / 0 (05_13, 06_10: all good, kept);
+#:   0.5 kept 40 bad pixels of jacks 3/4 and 4 of arms front.
+#: * STILL_TRAVEL: only when the person stays in one place over the whole clip (the
+#:   centroid of each sample's foreground within this share of the frame's width): the
+#:   rows it helps travel 0.04-0.06 (05_05, 05_13, 06_10 4-7 s), those it cost 0.116
+#:   (05_12 0.975 -> 0.967), 0.156 (pose2sim cam4 vs MediaPipe's masks 0.786 -> 0.762),
+#:   0.20 and 0.51 (cdnet_office_enter 0.901 -> 0.858, sbi_candela 0.889 -> 0.834: a man
+#:   who walks in and stands or sits).
+#:
+#: The flagged pixels' plate is guessed from beyond the motion footprint
+#: (:func:`_guess_beyond`): 05_05 0.874 -> 0.903 (0.874 from their own edge, which
+#: carries in the unflagged rest of the torso), 06_10 0.955 -> 0.965, 05_13 0.956 -> 0.963.
+FLAG_STILL, STILL_RADIUS, STILL_BETWEEN, STILL_TRAVEL = True, 1.0, 0.7, 0.1
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
 #: plate) keeps at least :data:`AWAY` of the working frame's long side from its column:
@@ -153,13 +169,13 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     return replace(model, plate=plate, confidence=conf, never_seen=model.never_seen & ~take)
 
 
-def _evidence(model, frames, gains, work_size):
+def _evidence(model, frames, gains, work_size, need_cand=True):
     """What :func:`retake_absorbed` and :func:`flag_unseen` decide on, as a dict: the
     samples at the working resolution (``wk``), the person's colours (``px``), the
     scene's model (``scene``), the footprint grown by :data:`REACH` (``foot``), the
     candidates (``cand``: in it, the plate's colour the person's, or never seen) and
     the per-sample log ratio person / scene (``llr``, (k, h, w)); None when the clip's
-    colour models cannot be learnt or nothing is a candidate."""
+    colour models cannot be learnt or (``need_cand``) nothing is a candidate."""
     from vidcap.video.appearance import (
         PRIOR_UNSEEN,
         _person_colours,
@@ -191,7 +207,7 @@ def _evidence(model, frames, gains, work_size):
     llr_plate = cv2.blur(log_ratio(wk.plate, person, scene), (3, 3))
     # (never-seen pixels whatever their plate: it is an inpainted guess)
     cand = ((foot & (llr_plate > MARGIN) & ~_seen_without_person(wk)) | wk.never) & ~wk.lit
-    if not cand.any():
+    if need_cand and not cand.any():
         return None
     llr = np.stack([cv2.blur(x, (3, 3)) for x in log_ratio(wk.small, person, scene)])
     return {"wk": wk, "px": px, "scene": scene, "foot": foot, "cand": cand, "llr": llr}
@@ -230,7 +246,8 @@ def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
     """
     from vidcap.video.appearance import colour_model, log_ratio
 
-    ev = _evidence(model, frames, gains, work_size)
+    # (the still test needs no candidate of the colour models)
+    ev = _evidence(model, frames, gains, work_size, need_cand=not FLAG_STILL)
     if ev is None:
         return model
     wk, cand = ev["wk"], ev["cand"]
@@ -240,21 +257,32 @@ def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
     unseen = (cand & ~wk.never & ~(ev["llr"] < -MARGIN).any(axis=0)
               & (strict > FLAG_MARGIN))
     unseen &= _unlike_scene(wk, unseen, ~ev["foot"])
-    if FLAG_STILL:
-        unseen |= _still_unlike(wk, ev["foot"])
-    return _flag_unseen(model, wk, unseen)
+    still = _still_unlike(wk, ev["foot"]) if FLAG_STILL and _stays(wk.fg) else None
+    if still is not None:
+        unseen = unseen | still
+    model = _flag_unseen(model, wk, unseen)
+    if still is not None and still.any():
+        model = replace(model, plate=_guess_beyond(model.plate, wk, still, ev["foot"]))
+    return model
 
 
 def _still_unlike(wk, foot: np.ndarray) -> np.ndarray:
     """(h, w) bool: footprint pixels (``foot``) whose plate colour and every sample's
     colour are unlike the seen scene round them (:data:`FLAG_STILL`): a body part that
-    never left its pixels, whatever the person's colour model says of it.
+    never left its pixels, whatever the person's colour model says of it; only pixels
+    between the person's in :data:`STILL_BETWEEN` of the samples (not scene beside
+    what moved).
 
     The plate's colour is tested first (one colour a pixel); only what passes has its
     samples tested."""
-    from vidcap.video.appearance import nearest_scene_distance
+    from vidcap.video.appearance import between_moved, nearest_scene_distance
 
     pool = foot & ~wk.never & ~wk.lit & ~_seen_without_person(wk)
+    if STILL_BETWEEN > 0:
+        inside = np.zeros(pool.shape, np.float32)
+        for f in wk.fg:
+            inside += between_moved(f)
+        pool &= inside >= STILL_BETWEEN * wk.k
     out = np.zeros(pool.shape, bool)
     ys, xs = np.nonzero(pool)
     if not len(ys):
@@ -295,6 +323,19 @@ def _still_unlike(wk, foot: np.ndarray) -> np.ndarray:
     return keep[lab]
 
 
+def _stays(fg: np.ndarray) -> bool:
+    """Whether the person stays in one place over the whole clip: the centroid of every
+    sample's foreground ``fg`` (k, h, w) within :data:`STILL_TRAVEL` of the frame's width
+    (samples with under 16 foreground pixels left out)."""
+    k, h, w = fg.shape
+    n = fg.reshape(k, -1).sum(axis=1)
+    ok = n >= 16
+    if ok.sum() < 2:
+        return False
+    cx = (fg.sum(axis=1) * np.arange(w)).sum(axis=1)[ok] / n[ok]
+    return bool(np.ptp(cx) <= STILL_TRAVEL * w)
+
+
 def _seen_without_person(wk) -> np.ndarray:
     """(h, w) bool: pixels whose plate colour :data:`CONFIRMED_SHARE` of the samples show
     while their person (``wk.fg``) is :data:`AWAY` from them: the scene, confirmed.
@@ -318,11 +359,35 @@ def _flag_unseen(model, wk, unseen: np.ndarray):
     full = wk.up(unseen) > 0
     if model.self_lit is not None:
         full &= ~model.self_lit
-    r = int(np.ceil(wk.full[0] / wk.h)) + 1
-    ring = cv2.dilate(full.view(np.uint8), np.ones((2 * r + 1, 2 * r + 1), np.uint8))
+    ring = cv2.dilate(full.view(np.uint8), _ring_box(wk))
     plate = cv2.inpaint(model.plate, ring, 5, cv2.INPAINT_TELEA)
     conf = np.where(full, 0.0, model.confidence).astype(np.float32)
     return replace(model, plate=plate, never_seen=model.never_seen | full, confidence=conf)
+
+
+def _ring_box(wk) -> np.ndarray:
+    r = int(np.ceil(wk.full[0] / wk.h)) + 1
+    return np.ones((2 * r + 1, 2 * r + 1), np.uint8)
+
+
+def _guess_beyond(plate: np.ndarray, wk, parts: np.ndarray, foot: np.ndarray) -> np.ndarray:
+    """``plate`` with ``parts`` (work resolution, (h, w) bool) and a ring round them
+    inpainted from beyond the footprint ``foot`` (work resolution) rather than from
+    their own edge: next to a body part that never left its pixels, the plate often
+    holds more of it (a torso's far side, unflagged), whose colour an inpaint from the
+    edge would carry in."""
+    ring = cv2.dilate((wk.up(parts) > 0).view(np.uint8), _ring_box(wk))
+    wide = ring | wk.up(foot)
+    x, y, w, h = cv2.boundingRect(wide)
+    pad = 8
+    y0, x0 = max(0, y - pad), max(0, x - pad)
+    y1, x1 = min(wide.shape[0], y + h + pad), min(wide.shape[1], x + w + pad)
+    guess = cv2.inpaint(np.ascontiguousarray(plate[y0:y1, x0:x1]),
+                        np.ascontiguousarray(wide[y0:y1, x0:x1]), 5, cv2.INPAINT_TELEA)
+    out = plate.copy()
+    sub = ring[y0:y1, x0:x1] > 0
+    out[y0:y1, x0:x1][sub] = guess[sub]
+    return out
 
 
 def _unlike_scene(wk, pixels: np.ndarray, scene: np.ndarray) -> np.ndarray:
