@@ -246,3 +246,24 @@ def test_a_still_scene_block_beside_the_arms_sweep_is_not_flagged(monkeypatch):
     monkeypatch.setattr(absorbed, "STILL_BETWEEN", 0.0)  # without the test: flagged
     assert flag_unseen(model, frames, np.ones((len(frames), 3), np.float32)
                        ).never_seen[60:80, 96:106].mean() > 0.5
+
+
+def test_the_still_test_waits_for_a_person_who_stays_in_one_place():
+    """The foreground's centroid kept within STILL_TRAVEL of the frame's width over the
+    whole clip: a dancer swaying on the spot stays; a man who walks in and then stands
+    (a fifth of the width between the first and the last sample) does not, and neither
+    does a clip with too little foreground to tell."""
+    from vidcap.video.absorbed import STILL_TRAVEL, _stays
+
+    k, h, w = 12, 40, 100
+    sway = np.zeros((k, h, w), bool)
+    for t in range(k):
+        x = 45 + int(round(3 * np.sin(t)))
+        sway[t, 10:30, x:x + 8] = True
+    assert _stays(sway)
+    walk_in = np.zeros((k, h, w), bool)
+    for t in range(k):
+        x = 70 - min(t, 4) * 5  # 70 -> 50, then stands
+        walk_in[t, 10:30, x:x + 8] = True
+    assert 20 > STILL_TRAVEL * w and not _stays(walk_in)
+    assert not _stays(np.zeros((k, h, w), bool))
