@@ -169,13 +169,14 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     return replace(model, plate=plate, confidence=conf, never_seen=model.never_seen & ~take)
 
 
-def _evidence(model, frames, gains, work_size, need_cand=True):
+def _evidence(model, frames, gains, work_size, still=False):
     """What :func:`retake_absorbed` and :func:`flag_unseen` decide on, as a dict: the
     samples at the working resolution (``wk``), the person's colours (``px``), the
     scene's model (``scene``), the footprint grown by :data:`REACH` (``foot``), the
     candidates (``cand``: in it, the plate's colour the person's, or never seen) and
     the per-sample log ratio person / scene (``llr``, (k, h, w)); None when the clip's
-    colour models cannot be learnt or (``need_cand``) nothing is a candidate."""
+    colour models cannot be learnt or nothing is a candidate (with ``still``, unless the
+    still test will run: :data:`FLAG_STILL`, a person who stays in one place)."""
     from vidcap.video.appearance import (
         PRIOR_UNSEEN,
         _person_colours,
@@ -207,7 +208,7 @@ def _evidence(model, frames, gains, work_size, need_cand=True):
     llr_plate = cv2.blur(log_ratio(wk.plate, person, scene), (3, 3))
     # (never-seen pixels whatever their plate: it is an inpainted guess)
     cand = ((foot & (llr_plate > MARGIN) & ~_seen_without_person(wk)) | wk.never) & ~wk.lit
-    if need_cand and not cand.any():
+    if not cand.any() and not (still and FLAG_STILL and _stays(wk.fg)):
         return None
     llr = np.stack([cv2.blur(x, (3, 3)) for x in log_ratio(wk.small, person, scene)])
     return {"wk": wk, "px": px, "scene": scene, "foot": foot, "cand": cand, "llr": llr}
@@ -247,7 +248,7 @@ def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
     from vidcap.video.appearance import colour_model, log_ratio
 
     # (the still test needs no candidate of the colour models)
-    ev = _evidence(model, frames, gains, work_size, need_cand=not FLAG_STILL)
+    ev = _evidence(model, frames, gains, work_size, still=True)
     if ev is None:
         return model
     wk, cand = ev["wk"], ev["cand"]
