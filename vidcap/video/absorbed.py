@@ -102,6 +102,11 @@ FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: The flagged pixels' plate is guessed from beyond the motion footprint
 #: (:func:`_guess_beyond`): 05_05 0.874 -> 0.903 (0.874 from their own edge, which
 #: carries in the unflagged rest of the torso), 06_10 0.955 -> 0.965, 05_13 0.956 -> 0.963.
+#: Full table, off -> on (one run each, silhouettes_real.py --quick --pck --no-mediapipe):
+#: tuning 06_10 4-7 s 0.837 -> 0.965, 05_13 0.905 -> 0.963, 05_05 0.874 -> 0.903;
+#: validation 05_07 0.902 -> 0.976, 06_12 150 deg 0.922 -> 0.964, 06_10 2-5 s 0.923 ->
+#: 0.937, 06_10 5-8 s 0.932 -> 0.943, but 05_10 0.956 -> 0.931, 06_14 0.944 -> 0.923,
+#: mmskeleton_clean_jerk (vs MediaPipe's masks) 0.333 -> 0.322; the rest within 0.006.
 FLAG_STILL, STILL_RADIUS, STILL_BETWEEN, STILL_TRAVEL = True, 1.0, 0.7, 0.1
 #: A plate pixel is the scene, not the person, when at least this share of the samples
 #: shows it in the plate's colour while the sample's person (what differs from the
