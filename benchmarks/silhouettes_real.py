@@ -510,8 +510,9 @@ def main(argv=None) -> int:
                          "absorbed.FLAG_UNSEEN)")
     ap.add_argument("--flag-still", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap's plate: footprint pixels whose plate and every sample "
-                         "are unlike the seen scene round them flagged never seen "
-                         "(vidcap.video.absorbed; default: absorbed.FLAG_STILL)")
+                         "are unlike the seen scene round them, between the person's, "
+                         "flagged never seen when the person stays in one place "
+                         "(vidcap.video.absorbed; default: absorbed.FLAG_STILL, on)")
     ap.add_argument("--reflections", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap's silhouettes: the person's mirror image in a glossy "
                          "floor or desk cut (vidcap.video.reflection; default: "
