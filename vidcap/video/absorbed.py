@@ -20,7 +20,10 @@ the arms' sweep).
 The other way round (:func:`flag_unseen`): a candidate that no sample shows in a colour of
 the scene was never seen uncovered (a dancer's back, a leg held in place while the limbs
 sweep round it): it is flagged never seen and its plate inpainted, so that the silhouettes
-see the person there.
+see the person there. Without asking the colour models (:data:`FLAG_STILL`): for a person
+who stays in one place, footprint pixels between the person's whose plate and every sample
+are unlike the seen scene round them (a still torso the colour of a floor elsewhere in the
+frame), their plate guessed from beyond the footprint.
 """
 
 from __future__ import annotations

@@ -42,7 +42,10 @@ the spot) still takes its background from the frames where it is uncovered:
    again, the person no longer in the plate). Last (:data:`vidcap.video.absorbed.FLAG_UNSEEN`,
    on), plate pixels in the motion footprint that hold the person's colour and that no
    sample shows in a scene colour (a dancer's back, a standing leg) are flagged never
-   seen and inpainted (:func:`vidcap.video.absorbed.flag_unseen`).
+   seen and inpainted (:func:`vidcap.video.absorbed.flag_unseen`); for a person who stays in
+   one place, so are footprint pixels between the person's whose plate and every sample
+   are unlike the scene round them, whatever the colour models say (a still torso of the
+   floor's colour; :data:`vidcap.video.absorbed.FLAG_STILL`).
 
 ``method='median'`` gives the plain per-pixel temporal median as a baseline.
 """
