@@ -224,11 +224,11 @@ RENDERS = [
     ("02_08 6-9 s side left / Weizmann plate", ("02_08", 391, 571), 270, "ido",
      "validation"),
     ("05_04 0-3 s front / Weizmann plate", ("05_04", 1, 181), 0, "ido", "tuning"),  # wt-0504
-    ("05_05 0-3 s side / room plate", ("05_05", 1, 181), 90, "room", "tuning"),  # wt-silval
+    ("05_05 0-3 s side / room plate", ("05_05", 1, 181), 90, "room", "tuning"),  # silval2
     ("05_10 2-5 s 3/4 / PETS plate", ("05_10", 121, 301), 45, "vtest", "validation"),
     ("05_13 0-3 s 3/4 back / room plate", ("05_13", 1, 181), 135, "room",
-     "tuning"),  # wt-silval
-    ("05_20 1-4 s front / PETS plate", ("05_20", 61, 241), 0, "vtest", "tuning"),  # wt-silval
+     "tuning"),  # silval2
+    ("05_20 1-4 s front / PETS plate", ("05_20", 61, 241), 0, "vtest", "tuning"),  # silval2
     ("06_15 1-4 s side / Weizmann plate", ("06_15", 91, 271), 90, "ido", "validation"),
     ("02_05 11-14 s 3/4 / PETS plate", ("02_05", 661, 841), 60, "vtest", "validation"),
     # (05_05 side, 05_13 3/4 back and 05_20 front are tuning since the issue-26 silval2

@@ -84,7 +84,7 @@ FLAG_UNSEEN, FLAG_MARGIN, FLAG_UNLIKE, FLAG_RADIUS = True, 2.0, 3.0, 2.0
 #: 0.874 -> 0.797, 05_10 0.956 -> 0.894, cdnet_office_enter 0.901 -> 0.788, sbi_candela
 #: 0.889 -> 0.809, pose2sim cam4 0.786 -> 0.579: scene objects of their own colour inside
 #: the footprint (a table foot, a door, a lamp post) pass the same colour tests. On since
-#: two gates (wt-silval), chosen on the tuning rows:
+#: two gates (issue-26 silval2 helper), chosen on the tuning rows:
 #:
 #: * STILL_BETWEEN: a flagged pixel lies between the person's pixels (left and right in
 #:   its row, or above and below in its column; :func:`vidcap.video.appearance.
