@@ -33,6 +33,8 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from vidcap.video.masks import centroid_columns
+
 __all__ = ["flag_unseen", "retake_absorbed"]
 
 #: The plate's colour must be this much more likely under the person's model (log
@@ -336,13 +338,10 @@ def _stays(fg: np.ndarray) -> bool:
     """Whether the person stays in one place over the whole clip: the centroid of every
     sample's foreground ``fg`` (k, h, w) within :data:`STILL_TRAVEL` of the frame's width
     (samples with under 16 foreground pixels left out)."""
-    k, h, w = fg.shape
-    n = fg.reshape(k, -1).sum(axis=1)
-    ok = n >= 16
-    if ok.sum() < 2:
+    cx = centroid_columns(fg)
+    if len(cx) < 2:
         return False
-    cx = (fg.sum(axis=1) * np.arange(w)).sum(axis=1)[ok] / n[ok]
-    return bool(np.ptp(cx) <= STILL_TRAVEL * w)
+    return bool(np.ptp(cx) <= STILL_TRAVEL * fg.shape[2])
 
 
 def _seen_without_person(wk) -> np.ndarray:

@@ -49,6 +49,8 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from vidcap.video.masks import centroid_columns
+
 __all__ = ["appearance_plate", "between_moved", "colour_model", "log_ratio",
            "nearest_scene_distance",
            "person_scene_models"]
@@ -162,14 +164,11 @@ def _in_place(fg: np.ndarray) -> bool:
     the frame's width (a walker's crosses the frame: 0.15-0.21 on the walks
     measured, in-place clips <= 0.005). The middle half, not the whole range: a few
     samples where a lamp's edge or a flicker pulls the centroid do not count."""
-    k, h, w = fg.shape
-    n = fg.reshape(k, -1).sum(axis=1)
-    ok = n >= 16
-    if ok.sum() < 2:
+    cx = centroid_columns(fg)
+    if len(cx) < 2:
         return False
-    cx = (fg.sum(axis=1) * np.arange(w)).sum(axis=1)[ok] / n[ok]
     q25, q75 = np.percentile(cx, [25, 75])
-    return bool(q75 - q25 <= MAX_TRAVEL * w)
+    return bool(q75 - q25 <= MAX_TRAVEL * fg.shape[2])
 
 
 def _hull(mask: np.ndarray) -> np.ndarray:

@@ -260,5 +260,26 @@ def frames_with_pixels(masks) -> np.ndarray:
     return np.asarray(masks, dtype=bool).reshape(len(masks), -1).any(axis=1)
 
 
-__all__ = ["MaskStack", "frames_with_pixels", "mask_frames", "pixel_counts",
-           "read_npz_masks", "touches_border"]
+def centroid_columns(fg: np.ndarray, min_pixels: int = 16) -> np.ndarray:
+    """Column of each sample's foreground centroid, pixels.
+
+    Parameters
+    ----------
+    fg : (K, H, W) bool
+        Foreground of K samples.
+    min_pixels : int
+        Samples with fewer foreground pixels are left out (their centroid is noise).
+
+    Returns
+    -------
+    (M,) float
+        The centroid's column of the M <= K samples kept, in sample order.
+    """
+    k, _, w = fg.shape
+    n = fg.reshape(k, -1).sum(axis=1)
+    ok = n >= min_pixels
+    return (fg.sum(axis=1) * np.arange(w)).sum(axis=1)[ok] / n[ok]
+
+
+__all__ = ["MaskStack", "centroid_columns", "frames_with_pixels", "mask_frames",
+           "pixel_counts", "read_npz_masks", "touches_border"]
