@@ -27,9 +27,9 @@ import cv2
 import numpy as np
 
 from vidcap.errors import VidcapError
+from vidcap.video import reflection
 from vidcap.video.background import BackgroundModel, _threshold_from_sigma
 from vidcap.video.masks import MaskStack
-from vidcap.video.reflection import drop_reflection
 
 __all__ = [
     "NoPersonError",
@@ -175,9 +175,7 @@ class _Params:
         self.edge_band = int(edge_band)
         self.edge_fraction = float(edge_fraction)
         self.shadows = shadows
-        from vidcap.video import reflection
-
-        self.reflections = reflection.CUT_REFLECTIONS
+        self.reflections = reflection.CUT_REFLECTIONS  # read per run: a switch
         # A shadow darkens every channel by the same factor (alpha) and keeps the
         # colour: its chromatic distortion is at noise level, a share of the
         # threshold. Dark clothes on a grey background also look like that, so only
@@ -380,7 +378,7 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             elif p.work_size is not None:
                 _refine_edges(mask, full_frame, g, p, floor)
             x, y, w, h = cv2.boundingRect(mask)
-            if p.reflections and drop_reflection(
+            if p.reflections and reflection.drop_reflection(
                     mask, full_frame, p.plate_full, g if scaled else None,
                     max(1, round(p.fy)), (x, y, w, h)):
                 x, y, w, h = cv2.boundingRect(mask)
