@@ -66,3 +66,34 @@ def test_pairs_keep_a_visible_arm(prior_px):
     out = search_arm_pairs(eng, st, prior_px=prior_px)
     moved = eng.joints(out)[JOINT_INDEX["l_wrist"]] - eng.joints(st)[JOINT_INDEX["l_wrist"]]
     assert np.linalg.norm(moved) <= 0.03 * 80
+
+
+def test_angle_gap_wraps_to_half_a_turn():
+    from vidcap.video.fit.limits import angle_gap
+
+    a = np.array([0.1, 3.0, -3.0, 2 * np.pi + 0.5])
+    b = np.array([2 * np.pi - 0.1, -3.0, 3.0, 0.25])
+    want = np.abs(np.angle(np.exp(1j * (a - b))))
+    np.testing.assert_allclose(angle_gap(a, b), want, atol=1e-12)
+    np.testing.assert_allclose(angle_gap(a, b), [0.2, 2 * np.pi - 6.0, 2 * np.pi - 6.0, 0.25],
+                               atol=1e-12)
+
+
+def test_apart_on_the_orders_prefix_picks_what_the_whole_grid_picks():
+    # the pair search reads only the first top * 25 + 1 of a grid's order: each pick
+    # puts at most its 5 x 5 neighbours out of the running, so the picks are the same
+    from vidcap.video.fit.armpairs import _apart
+    from vidcap.video.fit.grids import pair_grid
+
+    ua, la = pair_grid(15.0)[:2]
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        order = rng.permutation(len(ua))
+        full = _apart(ua[order], la[order], 6, 15.0)
+        head = _apart(ua[order[:151]], la[order[:151]], 6, 15.0)
+        assert head == full and len(full) == 6
+    # clustered orders (the best pairs next to each other, as real scores are) too
+    centre = np.argmin(np.abs(ua - np.pi) + np.abs(la - np.pi))
+    near = np.argsort(np.abs(np.angle(np.exp(1j * (ua - ua[centre]))))
+                      + np.abs(np.angle(np.exp(1j * (la - la[centre])))), kind="stable")
+    assert _apart(ua[near[:151]], la[near[:151]], 6, 15.0) == _apart(ua[near], la[near], 6, 15.0)

@@ -195,7 +195,7 @@ def fine_grid(u0, l0, du, dl, max_bend, here, ua, la, dirs_u, dirs_l):
 
 @numba.njit(cache=True, nogil=True)
 def _gap(a, b):
-    """|a - b| wrapped to [0, pi] (:func:`vidcap.video.fit.cues._angle_gap`)."""
+    """|a - b| wrapped to [0, pi] (:func:`vidcap.video.fit.limits.angle_gap`)."""
     return abs(np.mod(a - b + np.pi, 2 * np.pi) - np.pi)
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from vidcap.video.fit.candidates import scorer
 from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.grids import _pair_scores, pair_grid
-from vidcap.video.fit.limits import TWO_PI, J, S
+from vidcap.video.fit.limits import TWO_PI, J, S, angle_gap
 from vidcap.video.fit.moves import search_angle
 from vidcap.video.fit.raster import direction
 from vidcap.video.fit.state import FitState, hang
@@ -39,9 +39,19 @@ PRIOR_PX = 12.0
 _ARMS = {s: (S[f"{s}_upper_arm"], S[f"{s}_lower_arm"], J[f"{s}_shoulder"]) for s in "lr"}
 
 
-def _gap(a, b):
-    """Absolute angle difference, radians, elementwise."""
-    return np.abs(np.angle(np.exp(1j * (np.asarray(a) - np.asarray(b)))))
+def _apart(ua: np.ndarray, la: np.ndarray, top: int, step: float) -> list[int]:
+    """Indices of up to ``top`` of the (upper, lower) angle pairs ``ua``, ``la`` (each
+    (N,), radians, best first), each more than two grid steps (``step`` degrees) from
+    every one picked before it in one of its angles: the best left, then everything
+    within two steps of it out of the running."""
+    gap = 2 * np.deg2rad(step) - 1e-9
+    picks: list[int] = []
+    alive = np.ones(len(ua), dtype=bool)
+    while len(picks) < top and alive.any():
+        i = int(np.argmax(alive))
+        picks.append(i)
+        alive &= np.maximum(angle_gap(ua, ua[i]), angle_gap(la, la[i])) > gap
+    return picks
 
 
 def _arm_candidates(eng: _MaskEngine, st: FitState, s: str, top: int, step: float,
@@ -55,15 +65,14 @@ def _arm_candidates(eng: _MaskEngine, st: FitState, s: str, top: int, step: floa
     grid = pair_grid(float(step))
     score = _pair_scores(eng, probe, up, lo, eng.joints(st)[base], grid)
     order = np.argsort(-score, kind="stable")
+    # Each pick puts at most the 5 x 5 grid pairs within two steps of it out of the
+    # running, so the first top * 25 + 1 of the order hold the same picks as the whole
+    # grid (the greedy choice reads only what lies before it); the rest is read only
+    # when the prefix runs out.
+    picks = _apart(grid[0][order[:top * 25 + 1]], grid[1][order[:top * 25 + 1]], top, step)
+    if len(picks) < top:
+        picks = _apart(grid[0][order], grid[1][order], top, step)
     ua, la = grid[0][order], grid[1][order]
-    gap = 2 * np.deg2rad(step) - 1e-9
-    picks: list[int] = []
-    alive = np.ones(len(order), dtype=bool)
-    while len(picks) < top and alive.any():
-        # the best left, then everything within two steps of it out of the running
-        i = int(np.argmax(alive))
-        picks.append(i)
-        alive &= np.maximum(_gap(ua, ua[i]), _gap(la, la[i])) > gap
     out = [(ua[i], la[i]) for i in picks]
     out += [(st.angles[up], st.angles[lo]), tuple(prior)]
     return np.array(out, dtype=float)
@@ -116,7 +125,7 @@ def _hidden_cost(eng: _MaskEngine, st: FitState, s: str, c: np.ndarray, h: float
     r = q - t[..., None] * ab
     d = np.sqrt((r * r).sum(-1))
     share = (d < (eng.R[S["torso"]] - eng.R[[up, lo]])[:, None]).mean(-1)  # (K, 2)
-    return _gap(c[:, 0], h) * share[:, 0] + _gap(c[:, 1], h) * share[:, 1]
+    return angle_gap(c[:, 0], h) * share[:, 0] + angle_gap(c[:, 1], h) * share[:, 1]
 
 
 def search_arm_pairs(eng: _MaskEngine, st: FitState, *, step_deg: float = 15.0, top: int = 6,
@@ -149,7 +158,7 @@ def search_arm_pairs(eng: _MaskEngine, st: FitState, *, step_deg: float = 15.0, 
     k = int(np.argmax(score - weight * cost))
     n_r = len(cr)
     chosen = np.concatenate([cl[k // n_r], cr[k % n_r]])
-    if np.all(_gap(chosen, st.angles[segs]) < 1e-9):
+    if np.all(angle_gap(chosen, st.angles[segs]) < 1e-9):
         return st
     fine = np.deg2rad(fine_deg)
 

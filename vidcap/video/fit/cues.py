@@ -35,7 +35,7 @@ import numpy as np
 from vidcap.video.fit.candidates import still_tables
 from vidcap.video.fit.engine import fit_kernels
 from vidcap.video.fit.grids import _pair_scores, pair_grid
-from vidcap.video.fit.limits import MAX_BEND, J, S
+from vidcap.video.fit.limits import MAX_BEND, J, S, angle_gap
 from vidcap.video.fit.normalise import NormalisedMask
 from vidcap.video.fit.raster import _carray, _kernels, direction, draw_pose
 from vidcap.video.fit.state import FitState, hang
@@ -362,11 +362,6 @@ def _arm_cue_terms_numpy(maps, shoulder, du, dl, len_u, len_l, r_u, r_l):
     return skin, edge / (4 * len(_T_AXIS))
 
 
-def _angle_gap(a, b):
-    """|a - b| wrapped to [0, pi], radians (elementwise)."""
-    return np.abs(np.mod(np.asarray(a) - b + np.pi, 2 * np.pi) - np.pi)
-
-
 @functools.lru_cache(maxsize=8)
 def _offsets(half_deg: float, step_deg: float):
     """The (upper, lower) offset pairs of :func:`_fine_grid`, radians, each (N,)."""
@@ -390,7 +385,7 @@ def _fine_grid(u0: float, l0: float, half_deg: float, step_deg: float, *, here: 
                               d_u, d_l)
         return ua[:k], la[:k], d_u[:k], d_l[:k]
     ua, la = u0 + du, l0 + dl
-    keep = _angle_gap(la, ua) <= MAX_BEND + 1e-9
+    keep = angle_gap(la, ua) <= MAX_BEND + 1e-9
     ua, la = ua[keep], la[keep]
     if here:
         ua, la = np.append(ua, u0), np.append(la, l0)
@@ -509,7 +504,7 @@ def _j_scorer(eng, st: FitState, up: int, lo: int, shoulder, own: CueMaps, prior
                                         r_u, r_l)
         # a segment the outline drew short is one it hardly sees: its angle is held
         # by the prior that much less
-        gap = fore0[0] * _angle_gap(ua, prior[0]) + fore0[1] * _angle_gap(la, prior[1])
+        gap = fore0[0] * angle_gap(ua, prior[0]) + fore0[1] * angle_gap(la, prior[1])
         return sim + w["skin"] * skin + w["edge"] * edge - w["prior"] * gap
 
     return score
@@ -666,7 +661,7 @@ def _greedy_apart(ua, la, jj, u0, l0):
     alive = np.ones(len(jj), bool)
     u, low, keep = u0, l0, []
     while len(keep) < N_CANDIDATES - 1:
-        alive &= _angle_gap(ua[order], u) + _angle_gap(la[order], low) >= _APART
+        alive &= angle_gap(ua[order], u) + angle_gap(la[order], low) >= _APART
         if not alive.any():
             break
         k = order[int(np.argmax(alive))]
