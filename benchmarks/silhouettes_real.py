@@ -120,6 +120,7 @@ sys.path.insert(0, str(ROOT))
 
 from vidcap import synth  # noqa: E402
 from vidcap.io.video import read_frames, write_video  # noqa: E402
+from vidcap.video.background import PLATE_SEED as VIDCAP_PLATE_SEED  # noqa: E402
 from vidcap.video.background import estimate_background  # noqa: E402
 from vidcap.video.silhouette import extract_silhouettes  # noqa: E402
 
@@ -438,10 +439,15 @@ def pck_pair(masks, truth_masks, joints2d):
 #: by default (vidcap.video.pipeline.DEFAULT_GRAPH_CUT, on), or as --graph-cut /
 #: --no-graph-cut say (main() sets it).
 GRAPH_CUT = False
+#: The seed of the plate's frame sampler: vidcap's own (PLATE_SEED, what every command
+#: uses), or another draw (--seed N) to see how much the choice of frames moves a row.
+PLATE_SEED = VIDCAP_PLATE_SEED
 
 
 def run_vidcap(video, method):
-    bg = estimate_background(video, method=method, colour_models=GRAPH_CUT)
+    # the frames `vidcap convert` samples (PLATE_SEED), or another draw (--seed)
+    bg = estimate_background(video, method=method, colour_models=GRAPH_CUT,
+                             rng=np.random.default_rng(PLATE_SEED))
     sil = extract_silhouettes(video, bg, require_person=False, progress=False,
                               graph_cut=GRAPH_CUT and bg.colours is not None)
     return np.asarray(sil.masks), bg
@@ -489,6 +495,9 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=90, help="frames per render")
     ap.add_argument("--no-mediapipe", action="store_true")
     ap.add_argument("--only", help="only clips whose name contains this")
+    ap.add_argument("--seed", type=int, default=None,
+                    help="seed of the frames the plate is estimated from (default: "
+                         "vidcap's own, vidcap.video.background.PLATE_SEED)")
     ap.add_argument("--quick", action="store_true", help="vidcap only (no baselines)")
     ap.add_argument("--pck", action="store_true",
                     help="renders: PCK@0.05 of the 2D fit on vidcap's and the true masks")
@@ -537,8 +546,11 @@ def main(argv=None) -> int:
         background.EMPTY_SCENE = args.empty_scene
     if args.person_box is not None:
         background.PERSON_BOX = args.person_box
-    global GRAPH_CUT
+    global GRAPH_CUT, PLATE_SEED
     from vidcap.video.pipeline import DEFAULT_GRAPH_CUT
+
+    if args.seed is not None:
+        PLATE_SEED = args.seed
 
     GRAPH_CUT = DEFAULT_GRAPH_CUT if args.graph_cut is None else args.graph_cut
     data = os.environ.get("VIDCAP_DATA")

@@ -160,3 +160,29 @@ def test_cli_still_person_finds_a_block_that_stood_still_after_an_empty_stretch(
     r = cli("silhouettes", video, "-o", tmp_path / "x.npz", "--still-person",
             "--background", plate)
     assert r.returncode == 2 and "--still-person" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_cli_silhouettes_pose2d_and_convert_use_the_same_plate(cli, tmp_path):
+    # The plate's sampled frames move a still person's silhouette a great deal, so
+    # every command samples the same ones (background.plate_rng): what `vidcap
+    # silhouettes` shows is what `vidcap convert` and `vidcap pose2d` fit.
+    from vidcap.commands.pose2d import compute_masks
+    from vidcap.video.annotations import Annotations
+    from vidcap.video.pipeline import silhouettes_only
+
+    frames, _ = clip(60, 96, 128, rng=np.random.default_rng(5), walk=True, noise=1.0)
+    video = tmp_path / "walk.mkv"
+    write_video(video, frames, 25, crf=12)
+    out = tmp_path / "m.npz"
+    r = cli("silhouettes", video, "-o", out)
+    assert r.returncode == 0, r.stderr
+    with np.load(out) as z:
+        shown = z["masks"]
+    used = np.asarray(silhouettes_only(video, Annotations()).masks)
+    assert shown.any() and np.array_equal(shown, used)
+    assert np.array_equal(np.asarray(compute_masks(video)), used)
+    # evenly spaced samples (estimate_background without rng) are another plate
+    other = estimate_background(video)
+    assert not np.array_equal(other.sample_indices,
+                              estimate_background(video, rng=np.random.default_rng(0)
+                                                  ).sample_indices)
