@@ -12,6 +12,7 @@ from vidcap.video.hidden import (
     exchange_forearms,
     fill_hidden,
     hidden_arms,
+    hidden_joints,
     rehang_arms,
     reproject,
     solve_hidden,
@@ -85,6 +86,38 @@ def test_fill_hidden_takes_hidden_arms_and_shoulders_from_the_3d_and_keeps_the_r
     np.testing.assert_array_equal(out[:, ARM["r"][1:]], fit[:, ARM["r"][1:]])
     np.testing.assert_array_equal(out[:, LEGS], fit[:, LEGS])
     np.testing.assert_array_equal(out[:, :3], fit[:, :3])
+
+
+def test_hidden_joints_name_each_elbow_and_wrist_inside_the_torso():
+    _, uv = _walk(1)
+    pose = uv[0].copy()
+    sh = pose[J["l_shoulder"]]
+    pose[J["l_elbow"]] = sh + [0.0, 40.0]  # elbow inside, the forearm out in front
+    pose[J["l_wrist"]] = sh + [90.0, 40.0]
+    pose[J["r_elbow"]] = pose[J["r_shoulder"]] + [60.0, -20.0]  # raised out in the open
+    pose[J["r_wrist"]] = pose[J["r_shoulder"]] + [120.0, -40.0]
+    assert hidden_joints(pose[None]).tolist() == [[[True, False], [False, False]]]
+    assert hidden_arms(pose[None]).tolist() == [[True, False]]
+
+
+def test_fill_hidden_keeps_a_wrist_the_image_shows_and_takes_what_the_torso_hides():
+    """An arm whose elbow is inside the torso's outline but whose wrist stands out in
+    front of it: the wrist stays where the fit put it (the image shows it), the
+    elbow comes from the solve; a wrist inside the outline takes its elbow along."""
+    j3, uv = _front_pose()
+    fit = uv.copy()
+    sh = fit[:, J["l_shoulder"]]
+    fit[:, J["l_elbow"]] = sh + [15.0, 45.0]  # inside the torso's outline
+    fit[:, J["l_wrist"]] = sh + [-90.0, 60.0]  # out beside the torso
+    fit[:, J["r_elbow"]] = fit[:, J["r_shoulder"]] + [50.0, 10.0]  # out beside the torso
+    fit[:, J["r_wrist"]] = fit[:, J["r_shoulder"]] + [-40.0, 60.0]  # inside it
+    hid = hidden_joints(fit)
+    assert hid[:, 0].tolist() == [[True, False]] * len(fit)
+    assert hid[:, 1].tolist() == [[False, True]] * len(fit)
+    out = fill_hidden(fit, j3)
+    np.testing.assert_allclose(out[:, J["l_elbow"]], uv[:, J["l_elbow"]], atol=1e-6)
+    np.testing.assert_array_equal(out[:, J["l_wrist"]], fit[:, J["l_wrist"]])
+    np.testing.assert_allclose(out[:, ARM["r"][1:]], uv[:, ARM["r"][1:]], atol=1e-6)
 
 
 def test_fill_hidden_leaves_frames_without_a_fit_empty():

@@ -8,9 +8,10 @@ rigid bones, joint limits, the pose prior learned from motion capture (how peopl
 an arm, in the torso's frame, whichever way they face) and smoothness over the clip.
 :func:`fill_hidden` reprojects the solve's 3D joints into the image (scaled
 orthographic, each frame aligned on the pelvis, neck and head top the 2D fit found)
-and puts them in place of the 2D fit's shoulders and of the elbows and wrists of every
-arm the fit drew inside the torso's outline (:func:`hidden_arms`); everything else
-stays as fitted.
+and puts them in place of the 2D fit's shoulders, of every wrist the fit drew inside
+the torso's outline and of every elbow drawn there or hanging such a wrist
+(:func:`hidden_joints`); everything else, a wrist out in the open included, stays as
+fitted.
 
 Measured (HISTORY.md, "Joints the image cannot show"): on the 15 side and three-quarter
 tuning renders PCK@0.05 93.77 -> 95.04 %, where which joints to replace was chosen (the
@@ -78,24 +79,31 @@ def reproject(joints3d, joints2d) -> np.ndarray:
         j2[:, AXIS].mean(axis=1, keepdims=True)
 
 
-def hidden_arms(joints2d) -> np.ndarray:
-    """(F, 2) bool: the image-left (column 0) and right arm whose elbow or wrist lies
-    inside the torso's outline (within the torso cylinder's radius of the pelvis-neck
-    segment; the body height read off pelvis to head top, Table 3.1)."""
+def hidden_joints(joints2d) -> np.ndarray:
+    """(F, 2, 2) bool: the image-left (``[:, 0]``) and right arm's elbow (``[..., 0]``)
+    and wrist (``[..., 1]``) that lie inside the torso's outline (within the torso
+    cylinder's radius of the pelvis-neck segment; the body height read off pelvis to
+    head top, Table 3.1)."""
     j = np.asarray(joints2d, dtype=float)
     pel, neck = j[:, JOINT_INDEX["pelvis"]], j[:, JOINT_INDEX["neck"]]
     height = np.linalg.norm(j[:, JOINT_INDEX["head_top"]] - pel, axis=-1) / _AXIS_SHARE
     radius = 0.5 * SEGMENTS[SEGMENT_INDEX["torso"]].width_ratio * height
     ab = neck - pel
     ab2 = np.maximum((ab * ab).sum(-1), 1e-9)
-    out = np.zeros((len(j), 2), dtype=bool)
+    out = np.zeros((len(j), 2, 2), dtype=bool)
     for col, s in enumerate("lr"):
-        for k in _ARMS[s][1:]:
+        for row, k in enumerate(_ARMS[s][1:]):
             q = j[:, k] - pel
             t = np.clip((q * ab).sum(-1) / ab2, 0.0, 1.0)
             with np.errstate(invalid="ignore"):
-                out[:, col] |= np.linalg.norm(q - t[:, None] * ab, axis=-1) < radius
+                out[:, col, row] = np.linalg.norm(q - t[:, None] * ab, axis=-1) < radius
     return out
+
+
+def hidden_arms(joints2d) -> np.ndarray:
+    """(F, 2) bool: the image-left (column 0) and right arm whose elbow or wrist lies
+    inside the torso's outline (:func:`hidden_joints`)."""
+    return hidden_joints(joints2d).any(axis=2)
 
 
 def _matched(rep: np.ndarray, j2: np.ndarray) -> np.ndarray:
@@ -113,8 +121,13 @@ def _matched(rep: np.ndarray, j2: np.ndarray) -> np.ndarray:
 
 
 def fill_hidden(joints2d, joints3d) -> np.ndarray:
-    """The 2D fit's joints with the shoulders, and the elbows and wrists of the arms
-    :func:`hidden_arms` names, taken from the 3D solve (:func:`reproject`).
+    """The 2D fit's joints with the shoulders, the wrists :func:`hidden_joints` names
+    and the elbows it names or that hang such a wrist taken from the 3D solve
+    (:func:`reproject`).
+
+    A wrist out beside or in front of the torso is where the image shows it, even when
+    its elbow lies inside the outline: it stays as fitted (the whole arm taken from
+    the solve, as before, lost such wrists; benchmarks/RESULTS.md, 2D pose).
 
     Parameters
     ----------
@@ -132,11 +145,15 @@ def fill_hidden(joints2d, joints3d) -> np.ndarray:
     rep = _matched(reproject(joints3d, j2), j2)
     out = j2.copy()
     ok = np.isfinite(rep).all(axis=(1, 2)) & np.isfinite(j2).all(axis=(1, 2))
-    hid = hidden_arms(j2) & ok[:, None]
+    hid = hidden_joints(j2) & ok[:, None, None]
     for col, s in enumerate("lr"):
         sh, el, wr = _ARMS[s]
         out[ok, sh] = rep[ok, sh]
-        out[np.ix_(hid[:, col], [el, wr])] = rep[np.ix_(hid[:, col], [el, wr])]
+        # a wrist the torso hides hides its elbow's place too (the fit hangs both
+        # from it); a wrist out in the open is kept where the image shows it
+        elbow, wrist = hid[:, col, 0] | hid[:, col, 1], hid[:, col, 1]
+        out[elbow, el] = rep[elbow, el]
+        out[wrist, wr] = rep[wrist, wr]
     return out
 
 
@@ -268,4 +285,4 @@ def solve_hidden(joints2d, *, fps: float, body=None, spread=None, model_height=N
 
 __all__ = ["AXIS", "CONVERT_HIDDEN", "DEFAULT_HIDDEN", "HIDDEN_CHOICES", "REHANG_SPREAD",
            "REHANG_WINDOW", "arm_residual", "check_hidden", "exchange_forearms", "fill_hidden",
-           "hidden_arms", "leg_order", "rehang_arms", "reproject", "solve_hidden"]
+           "hidden_arms", "hidden_joints", "leg_order", "rehang_arms", "reproject", "solve_hidden"]
