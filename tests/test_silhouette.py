@@ -278,3 +278,34 @@ def test_a_frame_noisier_than_the_plate_raises_its_own_threshold(monkeypatch):
     clean_off, noisy_off = ious()
     assert clean_off == pytest.approx(clean)  # a clean frame is left as it was
     assert noisy_off < noisy - 0.1
+
+
+def test_a_clipped_highlight_that_keeps_its_level_is_not_the_person(monkeypatch):
+    """The exposure drops to 0.8 but a whiteboard at the clip level (plate 255) stays
+    at 250: scaled by the frame's gain the plate says 204 there. Compared one-sided
+    (only darker counts at clipped plate channels), the board is scene and the person
+    is found; compared both ways the board, larger than the person, is taken."""
+    import vidcap.video.silhouette as sil_mod
+
+    rng = np.random.default_rng(21)
+    plate = background(120, 160, rng)
+    plate[10:60, 90:150] = 255  # the board, clipped
+    truth = np.zeros((120, 160), bool)
+    truth[50:110, 20:40] = True
+    f = plate.astype(np.float32) * 0.8 + rng.normal(0, 1.0, plate.shape)
+    f[10:60, 90:150] = 250  # the board keeps its level
+    f[truth] = (40, 60, 160)
+    frame = np.clip(f, 0, 255).astype(np.uint8)
+    board_dark = frame.copy()
+    board_dark[15:45, 100:120] = (40, 60, 160)  # something darker in front of it shows
+    frames = np.stack([frame, board_dark])
+    bg = BackgroundModel.from_plate(plate, noise_sigma=1.0)
+
+    def ious(masks):
+        return [float((m & truth).sum() / (m | truth).sum()) for m in masks]
+
+    sil = extract_silhouettes(frames, bg)
+    assert min(ious(sil.masks)) > 0.95
+    assert sil.n_other_blobs[1] == 1  # the dark patch on the board still differs
+    monkeypatch.setattr(sil_mod, "SATURATED", None)
+    assert max(ious(extract_silhouettes(frames, bg).masks)) < 0.3

@@ -147,6 +147,10 @@ class _Params:
         self.tmap = np.clip(np.ceil(tmap), 0, 255).astype(np.uint8)
         self.plate = plate
         self.plate_full = bg.plate
+        # Plate channels at the clip level (:data:`SATURATED`): only a frame darker than
+        # the scaled plate there differs from it (:func:`_one_sided`).
+        sat = plate >= SATURATED if SATURATED is not None else None
+        self.saturated = sat.view(np.uint8) if sat is not None and sat.any() else None
         still = getattr(bg, "still_person", None)
         self.still = None
         if still is not None and still.any():
@@ -270,6 +274,28 @@ FRAME_RAISE: float | None = 1.25
 FRAME_SHARE = 0.5
 
 
+#: Plate channels at or above this level are clipped: the scene there is at least
+#: as bright as the camera records, its level above that unknown. Scaled by a frame's
+#: gain below 1, the plate says the frame should be darker there, but a highlight
+#: stays at the clip level while the rest of the scene darkens (auto-exposure with
+#: highlight compression): cdnet_office_enter (tuning) drops to 0.87 of the plate's
+#: exposure in its first 3 s while its whiteboard stays at 246-253 (the plate there
+#: 255, the samples scaled by 1 / 0.87 clipped): compared two-sided, a 1,300-pixel
+#: false blob on the whiteboard in every empty frame, chosen over the man coming in
+#: (frames 82-87, IoU 0). There only a frame darker than the scaled plate differs
+#: (:func:`_one_sided`). None: off.
+SATURATED: int | None = 250
+
+
+def _one_sided(diff: np.ndarray, frame: np.ndarray, ref: np.ndarray,
+               saturated: np.ndarray) -> None:
+    """In ``diff`` (H, W, 3) uint8, in place: where ``saturated`` (H, W, 3) is
+    non-zero, ``max(ref - frame, 0)`` instead of ``|frame - ref|`` (a frame brighter
+    than the scaled plate at a clipped plate channel does not differ from it)."""
+    darker = cv2.subtract(ref, frame)  # saturates at 0
+    cv2.copyTo(darker, saturated, diff)
+
+
 def _frame_tmap(l1: np.ndarray, p: _Params) -> tuple[np.ndarray, int]:
     """The frame's threshold map and its floor (0: the plate's map as it is)."""
     if FRAME_RAISE is None:
@@ -314,6 +340,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
     else:
         ref = p.plate
     diff = cv2.absdiff(frame, ref)
+    if scaled and p.saturated is not None:
+        _one_sided(diff, frame, ref, p.saturated)
     b, g_, r = cv2.split(diff)
     l1 = cv2.add(cv2.add(b, g_), r)  # saturating uint8 sum over channels
     tmap, floor = _frame_tmap(l1, p)
