@@ -525,6 +525,10 @@ def main(argv=None) -> int:
                     help="vidcap's silhouettes: the person's mirror image in a glossy "
                          "floor or desk cut (vidcap.video.reflection; default: "
                          "reflection.CUT_REFLECTIONS)")
+    ap.add_argument("--ends-agree", action=argparse.BooleanOptionalAction, default=None,
+                    help="vidcap's plate: the empty-scene pass's ghosts found at the "
+                         "global threshold where the clip's first and last samples agree "
+                         "(vidcap.video.emptyscene; default: emptyscene.ENDS_AGREE, off)")
     args = ap.parse_args(argv)
     import vidcap.video.absorbed as absorbed
     import vidcap.video.background as background
@@ -533,6 +537,8 @@ def main(argv=None) -> int:
 
     if args.clip_ends is not None:
         emptyscene.FROM_CLIP_ENDS = args.clip_ends
+    if args.ends_agree is not None:
+        emptyscene.ENDS_AGREE = args.ends_agree
 
     if args.reflections is not None:
         reflection.CUT_REFLECTIONS = args.reflections

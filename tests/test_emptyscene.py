@@ -126,3 +126,58 @@ def test_a_ghost_stretches_to_the_clip_ends_only_with_the_person_away_or_coming_
     inside = mask.copy()
     inside[30:90, 150:180] = 1
     assert not emptyscene._apart(ghost, inside, 0.05).any()
+
+
+def test_a_low_contrast_ghost_under_an_inflated_noise_map_is_found_where_the_ends_agree(
+        monkeypatch):
+    """A person who sat still in most samples (a block 12 grey levels a channel off the
+    wall, L1 36) inflated the noise map there (3 x 20 = 60 hides the block); the clip's
+    first and last samples both show the wall. Where the ends agree the ghost is found
+    at the global threshold and the plate re-taken; without it nothing changes."""
+    from dataclasses import replace
+
+    monkeypatch.setattr(emptyscene, "ENDS_AGREE", True)  # (off by default)
+    rng = np.random.default_rng(5)
+    wall = _wall(rng)
+    near = lambda: np.clip(wall().astype(np.int16) + 12, 0, 255).astype(np.uint8)  # noqa: E731
+    block = np.zeros((96, 128), bool)
+    block[30:80, 50:70] = True
+
+    def sat(img):
+        out = img.copy()
+        out[block] = near()[block]
+        return out
+
+    model = BackgroundModel.from_plate(sat(wall()), noise_sigma=2.0)
+    assert 12 < model.threshold < 36
+    noise = model.noise_map.copy()
+    noise[block] = 20.0
+    model = replace(model, noise_map=noise)
+    frames = np.stack([wall() for _ in range(4)] + [sat(wall()) for _ in range(16)]
+                      + [wall() for _ in range(4)])
+    times = 0.5 * np.arange(24)
+    gains = np.ones((24, 3))
+    got = plate_from_empty(model, frames, gains, times=times)
+    clean = wall().astype(np.int16)
+    err = np.abs(got.plate.astype(np.int16) - clean).sum(axis=-1)[35:75, 53:67]
+    assert err.mean() < 12
+    monkeypatch.setattr(emptyscene, "ENDS_AGREE", False)
+    assert plate_from_empty(model, frames, gains, times=times) is model
+
+
+def test_the_noise_map_is_lowered_only_where_the_ends_agree():
+    rng = np.random.default_rng(6)
+    wall = _wall(rng)
+    model = BackgroundModel.from_plate(wall(), noise_sigma=2.0)
+    from dataclasses import replace
+
+    model = replace(model, noise_map=np.full((96, 128), 30.0, np.float32))
+    frames = np.stack([wall(), wall(), _block(wall())])  # the last ends with the block
+    got = emptyscene._ends_agree_model(model, frames, np.ones((3, 3)))
+    cap = np.float32(model.threshold / 3.0)
+    assert (got.noise_map[30:80, 50:70] == 30.0).all()
+    outside = np.ones((96, 128), bool)
+    outside[30:80, 50:70] = False
+    # (two noisy looks at the wall agree within the threshold nearly everywhere)
+    assert np.isclose(got.noise_map[outside], cap).mean() > 0.95
+    assert np.isin(got.noise_map, [cap, 30.0]).all()
