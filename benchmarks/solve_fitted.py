@@ -7,7 +7,9 @@ samples, the four held-out renders of ``lift_accuracy.py --solve``). The validat
 are for reporting: choose nothing on them. For the front/back cue of the colour frame
 (``--front``, :mod:`vidcap.video.frontback`) the three samples were tuning too; the
 held-out renders stay validation, but for 07_07 end (seen when choosing
-``vidcap.video.lifting.SIDE_FACING_SPREAD``).
+``vidcap.video.lifting.SIDE_FACING_SPREAD``) and 07_07 0.7-2.7 s yaw 30 (its thighs' depths
+looked at when designing the heading residual, ``vidcap.video.solve.clip.HEADING_WEIGHT``,
+whose weight was chosen on the tuning rows).
 
 ``--front`` reads the clips' colour frames (renders drawn again, the samples decoded;
 kept in ``$VIDCAP_DATA/cache/frontback/``) and hands the 3D stage the near-side cue; the

@@ -31,6 +31,7 @@ from vidcap.body import BodyModel  # noqa: E402
 from vidcap.synth import make_motion, prepare_clip, truth_arrays  # noqa: E402
 from vidcap.video.lift import estimate_scale  # noqa: E402
 from vidcap.video.solve.clip import (  # noqa: E402
+    FITTED_HEADING_WEIGHT,
     FITTED_SIGN_WEIGHT,
     make_problem,
     solve_problem,
@@ -83,11 +84,13 @@ def main(argv=None) -> int:
         print(f"the whole solve (LM, sign sweeps, re-solves, repair) | {frames} | {cpu:.2f} | "
               f"{wall:.2f} | {frames / cpu:.0f} | {pa_mpjpe_mm(whole.joints3d, true3):.0f} | "
               f"{whole.cost:.1f}")
-        for label, kw in (("the whole solve as the 3D stage runs it (robust, sign weight 1)",
+        for label, kw in (("the whole solve as the 3D stage runs it (robust, sign weight 1, "
+                           "heading)",
                            dict(robust=ROBUST_FITTED)),
                           ("the same with the limbs' names chosen (labels=True)",
                            dict(robust=ROBUST_FITTED, labels=True))):
-            stage_pb = replace(pb, sign_weight=FITTED_SIGN_WEIGHT)
+            stage_pb = replace(pb, sign_weight=FITTED_SIGN_WEIGHT,
+                               heading_weight=FITTED_HEADING_WEIGHT)
             whole, wall, cpu = _timed(lambda pb=stage_pb, p0=p0, kw=kw: solve_problem(pb, p0, **kw))
             print(f"{label} | {frames} | {cpu:.2f} | {wall:.2f} | {frames / cpu:.0f} | "
                   f"{pa_mpjpe_mm(whole.joints3d, true3):.0f} | {whole.cost:.1f}")

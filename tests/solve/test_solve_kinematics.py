@@ -67,9 +67,11 @@ def _problem(n, seed=3):
     j2 = rng.normal(320.0, 60.0, (n, 15, 2))
     contact = np.zeros((n, 2), bool)
     contact[2:7, 0] = True
-    return make_problem(j2, scale=170.0, fps=30.0, body=BODY, yaw=np.zeros(n), contact=contact,
+    yaw = np.linspace(-0.4, 0.9, n)
+    yaw[n // 2] = np.pi / 2  # a side label: no heading row there
+    return make_problem(j2, scale=170.0, fps=30.0, body=BODY, yaw=yaw, contact=contact,
                         prior_signs=rng.choice([-1, 1], (n, 10)),
-                        hard_signs=rng.choice([-1, 0, 0, 1], (n, 10)))
+                        hard_signs=rng.choice([-1, 0, 0, 1], (n, 10)), heading_weight=400.0)
 
 
 def test_residual_jacobian_and_normal_equations():

@@ -133,6 +133,26 @@ FITTED_CONTACT_FLOOR = 0.02
 #: 5 / 12 gave a mean PA-MPJPE of 106.7 / 106.8 / 108.8 / 112.6 / 117.0 mm; 1 keeps the
 #: proposals as a tie-breaker. The user's depth events stay hard (``hard_weight``).
 FITTED_SIGN_WEIGHT = 1.0
+#: Weight (1 / m) of the pelvis' frame-to-frame motion across the torso's prior facing
+#: in a clip with planted feet (``Problem.heading_weight``,
+#: :func:`vidcap.video.solve.residuals.heading_rows`) for joints from vidcap's 2D fit
+#: (passed where ``FITTED_SIGN_WEIGHT`` is; ``solve_clip`` itself uses none). In a walk
+#: seen at three quarters the solve kept both thighs toward the camera where one swings
+#: back (the image cannot tell a thigh's two reflections apart, and the joint limits and
+#: the pose prior lean forward); walking the way the body faces gives the pelvis' motion
+#: in depth, and a planted ankle held still then moves the stance thigh from front to
+#: back. Chosen on the tuning renders and walk_three_quarter
+#: (``benchmarks/solve_fitted.py --front --legs``): 0 / 200 / 400 / 800 gave a mean
+#: PA-MPJPE of 68.4 / 67.4 / 67.1 / 67.1 mm (walk_three_quarter 103 / 105 / 103 / 104);
+#: 200, not 400: at 400 the re-solve after the sign sweep takes 8 iterations, not 3
+#: (the stage solve of ``benchmarks/solve_speed.py``'s walk, 300 frames, load ~8:
+#: 192-219 frames per CPU-second without, 195-225 at 200, 172-178 at 400, under the
+#: 200 of issue 33).
+#: Not on true 2D plus noise: there the contact weight is lower (100 / m at no noise) and
+#: a prior yaw a few degrees off drags the planted feet (foot sliding on two validation
+#: clips 3.7-3.9 -> 6.8-7.8 mm/frame at no noise), though the mean PA-MPJPE at 2 % fell
+#: 46 -> 43 mm (benchmarks/HISTORY.md, "The legs' depth signs on fitted 2D").
+FITTED_HEADING_WEIGHT = 200.0
 
 
 def make_problem(joints2d, *, scale, fps: float, body: BodyModel | None = None, yaw,

@@ -15,7 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from vidcap.video.solve.blocksolve import solve_band, upper_band
-from vidcap.video.solve.residuals import Linearisation, Problem, contact_pairs, linearise, residuals
+from vidcap.video.solve.residuals import (
+    Linearisation,
+    Problem,
+    contact_pairs,
+    heading_rows,
+    linearise,
+    residuals,
+)
 from vidcap.video.solve.skeleton import N_PARAMS
 
 P = N_PARAMS
@@ -80,6 +87,17 @@ def normal_equations(problem: Problem, lin: Linearisation):
         s = lin.r[at:at + 3 * f.size].reshape(-1, 3)
         np.add.at(grad, f, pb.contact_weight * np.einsum("nci,nc->ni", a, s))
         np.add.at(grad, f - 1, -pb.contact_weight * np.einsum("nci,nc->ni", b, s))
+        at += 3 * f.size
+    hf, across = heading_rows(pb)
+    if hf.size:  # one row per frame f >= 1: across . (pelvis_f - pelvis_{f-1})
+        a = pb.heading_weight * np.einsum("nc,nci->ni", across, jp[hf, :3])
+        b = pb.heading_weight * np.einsum("nc,nci->ni", across, jp[hf - 1, :3])
+        s = lin.r[at:at + hf.size]
+        blocks[0, hf] += a[:, :, None] * a[:, None, :]
+        blocks[0, hf - 1] += b[:, :, None] * b[:, None, :]
+        blocks[1, hf - 1] -= b[:, :, None] * a[:, None, :]
+        grad[hf] += a * s[:, None]
+        grad[hf - 1] -= b * s[:, None]
     return blocks, grad
 
 

@@ -16,6 +16,7 @@ import numpy as np
 from vidcap.body import BodyModel
 from vidcap.video.solve.clip import (
     FITTED_CONTACT_FLOOR,
+    FITTED_HEADING_WEIGHT,
     FITTED_NOISE_FLOOR,
     FITTED_SIGN_WEIGHT,
     make_problem,
@@ -77,7 +78,7 @@ def resolve_window(params, joints3d, window, joints2d, *, scale, fps: float, bod
                       yaw_sigma=cut(yaw_sigma), segment_scale=cut(segment_scale),
                       confidence=cut(confidence), noise_floor=FITTED_NOISE_FLOOR,
                       contact_floor=FITTED_CONTACT_FLOOR,
-                      sign_weight=FITTED_SIGN_WEIGHT,
+                      sign_weight=FITTED_SIGN_WEIGHT, heading_weight=FITTED_HEADING_WEIGHT,
                       principal_point=principal_point,
                       contact="off" if contact is None else cut(contact))
     p0 = np.array(params[sl], dtype=float)

@@ -18,7 +18,11 @@ Per frame (the *unary* residuals, which depend on that frame's 24 parameters):
 
 Across frames, linear in the joints: the second difference of every joint over
 ``sigma_acc`` (temporal smoothness), and the planted ankle's frame-to-frame motion
-over ``sigma_contact`` (:mod:`vidcap.video.solve.contact`).
+over ``sigma_contact`` (:mod:`vidcap.video.solve.contact`); in a clip with planted feet,
+the pelvis' frame-to-frame motion across the torso's prior facing over
+``sigma_heading`` (:func:`heading_rows`; people walk the way they face: the image shows
+the pelvis' sideways motion, this gives its motion in depth, and the planted foot's
+contact then ties the stance leg's depth, which the image leaves open, to it).
 
 The Jacobian is built from 24 perturbed evaluations of the whole clip (one per
 parameter column: the unary residuals and the joints of a frame depend on its own
@@ -74,7 +78,8 @@ class Problem:
     yaw : (F,) radians; yaw_weight : (F,) 1/rad.
     contact : (F, 2) bool, planted left/right ankle.
     sign_weight, hard_weight, limit_weight, acc_weight, contact_weight, depth_weight,
-    plane_weight, prior_weight : the inverse sigmas of the module docstring.
+    plane_weight, prior_weight, heading_weight : the inverse sigmas of the module
+    docstring.
     """
 
     offsets: np.ndarray
@@ -94,6 +99,7 @@ class Problem:
     depth_weight: float = 0.01
     plane_weight: float = 0.0
     prior_weight: float = 0.0
+    heading_weight: float = 0.0
 
     @property
     def n_frames(self) -> int:
@@ -108,7 +114,7 @@ class Problem:
                        self.yaw_weight[sl], self.contact[sl], self.sign_weight,
                        self.hard_weight, self.limit_weight, self.acc_weight,
                        self.contact_weight, self.depth_weight, self.plane_weight,
-                       self.prior_weight)
+                       self.prior_weight, self.heading_weight)
 
 
 def segment_zeta(joints, lengths) -> np.ndarray:
@@ -173,12 +179,30 @@ def contact_pairs(contact) -> tuple[np.ndarray, np.ndarray]:
     return f + 1, np.array(_ANKLES)[foot]
 
 
+def heading_rows(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """Frames f (>= 1) of the heading residual and the horizontal direction across the
+    prior facing at each (n, 3) (yaw 0 faces +Z). None without a weight or without a
+    planted foot (a clip that neither walks nor stands: jumping jacks), and none in
+    frames whose prior yaw is a side label (exactly +-90 degrees: the facing known
+    only to the 60-degree side sector, where the direction across it is not known)."""
+    F = problem.n_frames
+    if not problem.heading_weight or F < 2 or not problem.contact.any():
+        return np.zeros(0, int), np.zeros((0, 3))
+    f = np.arange(1, F)
+    yaw = problem.yaw[f]
+    keep = np.abs(np.cos(yaw)) > 1e-3
+    f, yaw = f[keep], yaw[keep]
+    return f, np.stack([np.cos(yaw), np.zeros_like(yaw), -np.sin(yaw)], axis=-1)
+
+
 def temporal(problem: Problem, joints) -> np.ndarray:
-    """Smoothness and contact residuals of the clip's joints (F, 15, 3), flat."""
+    """Smoothness, contact and heading residuals of the clip's joints (F, 15, 3), flat."""
     acc = (joints[2:] - 2 * joints[1:-1] + joints[:-2]) * problem.acc_weight
     f, ank = contact_pairs(problem.contact)
     slide = (joints[f, ank] - joints[f - 1, ank]) * problem.contact_weight
-    return np.concatenate([acc.ravel(), slide.ravel()])
+    hf, across = heading_rows(problem)
+    head = np.sum((joints[hf, 0] - joints[hf - 1, 0]) * across, -1) * problem.heading_weight
+    return np.concatenate([acc.ravel(), slide.ravel(), head])
 
 
 def residuals(problem: Problem, params) -> np.ndarray:
@@ -274,6 +298,16 @@ def sparse_jacobian(problem: Problem, lin: Linearisation):
             rows.append(np.broadcast_to(row, (n, 3, N_PARAMS)).ravel())
             cols.append(np.broadcast_to(col[frames][:, None, :], (n, 3, N_PARAMS)).ravel())
             data.append((coef * pb.contact_weight * block).ravel())
+        base += 3 * n
+    hf, across = heading_rows(pb)
+    if hf.size:
+        n = hf.size
+        row = base + np.arange(n)[:, None]
+        for frames, coef in ((hf, 1.0), (hf - 1, -1.0)):
+            block = np.einsum("nc,nci->ni", across, jp[frames, :3])  # the pelvis' rows
+            rows.append(np.broadcast_to(row, (n, N_PARAMS)).ravel())
+            cols.append(col[frames].ravel())
+            data.append((coef * pb.heading_weight * block).ravel())
     return coo_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(lin.r.size, F * N_PARAMS)).tocsr()
 

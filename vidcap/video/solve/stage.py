@@ -16,6 +16,7 @@ from vidcap.body import BodyModel
 from vidcap.video.proposals import SignProposal
 from vidcap.video.solve.clip import (
     FITTED_CONTACT_FLOOR,
+    FITTED_HEADING_WEIGHT,
     FITTED_NOISE_FLOOR,
     FITTED_SIGN_WEIGHT,
     ClipSolve,
@@ -114,6 +115,7 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
                      confidence=confidence, noise_floor=FITTED_NOISE_FLOOR,
                      contact_floor=FITTED_CONTACT_FLOOR,
                      robust=ROBUST_FITTED, sign_weight=FITTED_SIGN_WEIGHT,
+                     heading_weight=FITTED_HEADING_WEIGHT,
                      segment_scale=segment_scale, principal_point=principal_point,
                      labels=LABELS if labels is None else labels,
                      held_labels=held_labels(user_signs, user_joints, user_sides_set))
