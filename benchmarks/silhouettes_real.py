@@ -120,6 +120,7 @@ sys.path.insert(0, str(ROOT))
 
 from vidcap import synth  # noqa: E402
 from vidcap.io.video import read_frames, write_video  # noqa: E402
+from vidcap.video.background import PLATE_SEED as VIDCAP_PLATE_SEED  # noqa: E402
 from vidcap.video.background import estimate_background  # noqa: E402
 from vidcap.video.silhouette import extract_silhouettes  # noqa: E402
 
@@ -438,15 +439,15 @@ def pck_pair(masks, truth_masks, joints2d):
 #: by default (vidcap.video.pipeline.DEFAULT_GRAPH_CUT, on), or as --graph-cut /
 #: --no-graph-cut say (main() sets it).
 GRAPH_CUT = False
-#: The plate's sampled frames: evenly spaced as every vidcap command samples them (None),
-#: or jittered by this seed (--seed N) to see how much the choice of frames moves a row.
-PLATE_SEED = None
+#: The seed of the plate's frame sampler: vidcap's own (PLATE_SEED, what every command
+#: uses), or another draw (--seed N) to see how much the choice of frames moves a row.
+PLATE_SEED = VIDCAP_PLATE_SEED
 
 
 def run_vidcap(video, method):
-    # evenly spaced frames as `vidcap convert` samples them, or a jittered draw (--seed)
-    rng = None if PLATE_SEED is None else np.random.default_rng(PLATE_SEED)
-    bg = estimate_background(video, method=method, colour_models=GRAPH_CUT, rng=rng)
+    # the frames `vidcap convert` samples (PLATE_SEED), or another draw (--seed)
+    bg = estimate_background(video, method=method, colour_models=GRAPH_CUT,
+                             rng=np.random.default_rng(PLATE_SEED))
     sil = extract_silhouettes(video, bg, require_person=False, progress=False,
                               graph_cut=GRAPH_CUT and bg.colours is not None)
     return np.asarray(sil.masks), bg
@@ -495,8 +496,8 @@ def main(argv=None) -> int:
     ap.add_argument("--no-mediapipe", action="store_true")
     ap.add_argument("--only", help="only clips whose name contains this")
     ap.add_argument("--seed", type=int, default=None,
-                    help="jitter the frames the plate is estimated from with this seed "
-                         "(default: evenly spaced, as vidcap samples them)")
+                    help="seed of the frames the plate is estimated from (default: "
+                         "vidcap's own, vidcap.video.background.PLATE_SEED)")
     ap.add_argument("--quick", action="store_true", help="vidcap only (no baselines)")
     ap.add_argument("--pck", action="store_true",
                     help="renders: PCK@0.05 of the 2D fit on vidcap's and the true masks")

@@ -76,17 +76,17 @@ def compute_masks(video, crops=None) -> np.ndarray:
     :class:`vidcap.video.fit.cueframes.FrameCrops` filled with the colour frames'
     crops meanwhile)."""
     try:
-        from vidcap.video.background import estimate_background
+        from vidcap.video.background import estimate_background, plate_rng
         from vidcap.video.pipeline import DEFAULT_GRAPH_CUT, default_still_person
         from vidcap.video.silhouette import extract_silhouettes
     except ImportError:
         raise UsageError("silhouette extraction is not available in this build; pass "
                          "--masks MASKS.npz") from None
     # the plate and the cut as `vidcap silhouettes` and `vidcap convert` make them by
-    # default (the same evenly spaced frames, colour models and still-person passes)
+    # default (the same sampled frames, colour models and still-person passes)
     still = default_still_person()
-    background = estimate_background(video, colour_models=DEFAULT_GRAPH_CUT, empty_scene=still,
-                                     person_box=still)
+    background = estimate_background(video, rng=plate_rng(), colour_models=DEFAULT_GRAPH_CUT,
+                                     empty_scene=still, person_box=still)
     return extract_silhouettes(video, background, crops=crops,
                                graph_cut=DEFAULT_GRAPH_CUT and background.colours is not None
                                ).masks

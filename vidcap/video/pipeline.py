@@ -430,7 +430,7 @@ def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, l
 
 def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
               colour_models: bool, still_person: bool = False):
-    from vidcap.video.background import estimate_background
+    from vidcap.video.background import estimate_background, plate_rng
 
     if plate is not None:
         return plate
@@ -439,7 +439,7 @@ def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
     if hit is not None:
         return _plate_from_cache(hit)
     log("estimating the background plate")
-    plate = estimate_background(video, progress=progress,
+    plate = estimate_background(video, rng=plate_rng(), progress=progress,
                                 colour_models=colour_models, empty_scene=still_person,
                                 person_box=still_person)
     h, w = plate.plate.shape[:2]
