@@ -444,6 +444,36 @@ GRAPH_CUT = False
 PLATE_SEED = VIDCAP_PLATE_SEED
 
 
+#: The benchmark's switches of vidcap's plate and silhouette stages, each
+#: ``--FLAG / --no-FLAG`` setting ``vidcap.video.MODULE.NAME`` (default: as it is):
+#: (flag, module, name, help).
+SWITCHES = (
+    ("empty-scene", "background", "EMPTY_SCENE",
+     "vidcap's plate re-taken from samples showing the empty scene (vidcap.video.emptyscene; "
+     "default: background.EMPTY_SCENE)"),
+    ("person-box", "background", "PERSON_BOX",
+     "vidcap's plate: a still person found by the HOG detector and grabCut "
+     "(vidcap.video.personbox; default: background.PERSON_BOX)"),
+    ("clip-ends", "emptyscene", "FROM_CLIP_ENDS",
+     "the empty scene's stretch measured from the clip's first / last frame (default: "
+     "vidcap.video.emptyscene.FROM_CLIP_ENDS)"),
+    ("flag-unseen", "absorbed", "FLAG_UNSEEN",
+     "vidcap's plate: person-coloured footprint pixels no sample shows as scene flagged never "
+     "seen (vidcap.video.absorbed; default: absorbed.FLAG_UNSEEN)"),
+    ("flag-still", "absorbed", "FLAG_STILL",
+     "vidcap's plate: footprint pixels whose plate and every sample are unlike the seen scene "
+     "round them, between the person's, flagged never seen when the person stays in one place "
+     "(vidcap.video.absorbed; default: absorbed.FLAG_STILL, on)"),
+    ("reflections", "reflection", "CUT_REFLECTIONS",
+     "vidcap's silhouettes: the person's mirror image in a glossy floor or desk cut "
+     "(vidcap.video.reflection; default: reflection.CUT_REFLECTIONS)"),
+    ("ends-agree", "emptyscene", "ENDS_AGREE",
+     "vidcap's plate: the empty-scene pass's ghosts found at the global threshold where the "
+     "clip's first and last samples agree (vidcap.video.emptyscene; default: "
+     "emptyscene.ENDS_AGREE, off)"),
+)
+
+
 def run_vidcap(video, method):
     # the frames `vidcap convert` samples (PLATE_SEED), or another draw (--seed)
     bg = estimate_background(video, method=method, colour_models=GRAPH_CUT,
@@ -504,54 +534,16 @@ def main(argv=None) -> int:
     ap.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                     help="vidcap with the graph cut over the uncertain band (default: as "
                     "vidcap convert, vidcap.video.pipeline.DEFAULT_GRAPH_CUT)")
-    ap.add_argument("--empty-scene", action=argparse.BooleanOptionalAction, default=None,
-                    help="vidcap's plate re-taken from samples showing the empty scene "
-                         "(vidcap.video.emptyscene; default: background.EMPTY_SCENE)")
-    ap.add_argument("--person-box", action=argparse.BooleanOptionalAction, default=None,
-                    help="vidcap's plate: a still person found by the HOG detector and "
-                         "grabCut (vidcap.video.personbox; default: background.PERSON_BOX)")
-    ap.add_argument("--clip-ends", action=argparse.BooleanOptionalAction, default=None,
-                    help="the empty scene's stretch measured from the clip's first / last "
-                         "frame (default: vidcap.video.emptyscene.FROM_CLIP_ENDS)")
-    ap.add_argument("--flag-unseen", action=argparse.BooleanOptionalAction, default=None,
-                    help="vidcap's plate: person-coloured footprint pixels no sample shows "
-                         "as scene flagged never seen (vidcap.video.absorbed; default: "
-                         "absorbed.FLAG_UNSEEN)")
-    ap.add_argument("--flag-still", action=argparse.BooleanOptionalAction, default=None,
-                    help="vidcap's plate: footprint pixels whose plate and every sample "
-                         "are unlike the seen scene round them, between the person's, "
-                         "flagged never seen when the person stays in one place "
-                         "(vidcap.video.absorbed; default: absorbed.FLAG_STILL, on)")
-    ap.add_argument("--reflections", action=argparse.BooleanOptionalAction, default=None,
-                    help="vidcap's silhouettes: the person's mirror image in a glossy "
-                         "floor or desk cut (vidcap.video.reflection; default: "
-                         "reflection.CUT_REFLECTIONS)")
-    ap.add_argument("--ends-agree", action=argparse.BooleanOptionalAction, default=None,
-                    help="vidcap's plate: the empty-scene pass's ghosts found at the "
-                         "global threshold where the clip's first and last samples agree "
-                         "(vidcap.video.emptyscene; default: emptyscene.ENDS_AGREE, off)")
+    for flag, _, _, text in SWITCHES:
+        ap.add_argument(f"--{flag}", action=argparse.BooleanOptionalAction, default=None,
+                        help=text)
     args = ap.parse_args(argv)
-    import vidcap.video.absorbed as absorbed
-    import vidcap.video.background as background
-    import vidcap.video.emptyscene as emptyscene
-    import vidcap.video.reflection as reflection
+    import importlib
 
-    if args.clip_ends is not None:
-        emptyscene.FROM_CLIP_ENDS = args.clip_ends
-    if args.ends_agree is not None:
-        emptyscene.ENDS_AGREE = args.ends_agree
-
-    if args.reflections is not None:
-        reflection.CUT_REFLECTIONS = args.reflections
-    if args.flag_unseen is not None:
-        absorbed.FLAG_UNSEEN = args.flag_unseen
-    if args.flag_still is not None:
-        absorbed.FLAG_STILL = args.flag_still
-
-    if args.empty_scene is not None:
-        background.EMPTY_SCENE = args.empty_scene
-    if args.person_box is not None:
-        background.PERSON_BOX = args.person_box
+    for flag, module, name, _ in SWITCHES:  # the plate's and silhouettes' switches
+        value = getattr(args, flag.replace("-", "_"))
+        if value is not None:
+            setattr(importlib.import_module(f"vidcap.video.{module}"), name, value)
     global GRAPH_CUT, PLATE_SEED
     from vidcap.video.pipeline import DEFAULT_GRAPH_CUT
 
