@@ -141,3 +141,21 @@ def test_pose2d_cli_hidden_solve_changes_only_arms_and_shoulders(tmp_path, cli):
     rest = [k for k in range(15) if k not in arms]
     np.testing.assert_array_equal(a[:, rest], b[:, rest])
     assert np.isfinite(b).all() and not np.array_equal(a[:, arms], b[:, arms])
+
+
+def test_pose2d_cli_without_masks_gives_the_plates_notice(tmp_path, cli):
+    """A person who stands still over part of the frame: ``vidcap pose2d`` (computing the
+    silhouettes itself) prints the plate's notice as ``vidcap silhouettes`` does."""
+    from tests._synthframes import clip
+    from vidcap.io.video import write_video
+
+    frames, _ = clip(40, 96, 128, rng=np.random.default_rng(7), walk=False, noise=1.0)
+    video = tmp_path / "still.mkv"
+    write_video(video, frames, 25, crf=12)
+    shown = cli("silhouettes", video, "-o", tmp_path / "m.npz")
+    fitted = cli("pose2d", video, "-o", tmp_path / "p.npz")
+    assert shown.returncode == 0 and fitted.returncode == 0, fitted.stderr
+    notice = [line for line in shown.stderr.splitlines()
+              if line.startswith("notice: the background")]
+    assert notice, shown.stderr
+    assert notice[0] in fitted.stderr.splitlines()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -71,12 +72,14 @@ def load_masks(path):
         raise InputFileError(f"cannot read masks ({exc})", path) from None
 
 
-def compute_masks(video, crops=None) -> np.ndarray:
+def compute_masks(video, crops=None, log=None) -> np.ndarray:
     """Silhouettes of ``video`` as ``vidcap silhouettes`` computes them (``crops``: a
     :class:`vidcap.video.fit.cueframes.FrameCrops` filled with the colour frames'
-    crops meanwhile)."""
+    crops meanwhile; ``log``: called with the plate's notice, as ``vidcap silhouettes``
+    prints it, when the plate is a guess over a noticeable area)."""
     try:
         from vidcap.video.background import estimate_background, plate_rng
+        from vidcap.video.inputchecks import plate_notice
         from vidcap.video.pipeline import DEFAULT_GRAPH_CUT, default_still_person
         from vidcap.video.silhouette import extract_silhouettes
     except ImportError:
@@ -87,6 +90,9 @@ def compute_masks(video, crops=None) -> np.ndarray:
     still = default_still_person()
     background = estimate_background(video, rng=plate_rng(), colour_models=DEFAULT_GRAPH_CUT,
                                      empty_scene=still, person_box=still)
+    notice = plate_notice(background)
+    if notice and log is not None:
+        log(notice)
     return extract_silhouettes(video, background, crops=crops,
                                graph_cut=DEFAULT_GRAPH_CUT and background.colours is not None
                                ).masks
@@ -109,7 +115,8 @@ def run(args) -> int:
     frames = None
     if cues == "all" and not args.masks:
         frames = FrameCrops(height=args.height)  # cut as the silhouettes are extracted
-    masks = load_masks(args.masks) if args.masks else compute_masks(args.video, frames)
+    masks = load_masks(args.masks) if args.masks else compute_masks(
+        args.video, frames, log=lambda msg: print(msg, file=sys.stderr))
     if masks.shape[1:] != (info.height, info.width):
         raise InputFileError(
             f"masks are {masks.shape[2]}x{masks.shape[1]} but the video is "
