@@ -78,7 +78,7 @@ def compute_masks(video, crops=None, log=None) -> np.ndarray:
     crops meanwhile; ``log``: called with the plate's notice, as ``vidcap silhouettes``
     prints it, when the plate is a guess over a noticeable area)."""
     try:
-        from vidcap.video.background import estimate_background, plate_rng
+        from vidcap.video.background import estimate_plate
         from vidcap.video.inputchecks import plate_notice
         from vidcap.video.pipeline import DEFAULT_GRAPH_CUT, default_still_person
         from vidcap.video.silhouette import extract_silhouettes
@@ -87,9 +87,8 @@ def compute_masks(video, crops=None, log=None) -> np.ndarray:
                          "--masks MASKS.npz") from None
     # the plate and the cut as `vidcap silhouettes` and `vidcap convert` make them by
     # default (the same sampled frames, colour models and still-person passes)
-    still = default_still_person()
-    background = estimate_background(video, rng=plate_rng(), colour_models=DEFAULT_GRAPH_CUT,
-                                     empty_scene=still, person_box=still)
+    background = estimate_plate(video, colour_models=DEFAULT_GRAPH_CUT,
+                                still_person=default_still_person())
     notice = plate_notice(background)
     if notice and log is not None:
         log(notice)

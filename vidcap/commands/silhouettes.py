@@ -53,7 +53,7 @@ def run(args) -> int:
     from vidcap.errors import UsageError
     from vidcap.fileio import atomic_path, savez_atomic
     from vidcap.io.video import probe
-    from vidcap.video.background import estimate_background, load_plate, plate_rng
+    from vidcap.video.background import estimate_plate, load_plate
     from vidcap.video.silhouette import extract_silhouettes
 
     if args.output.suffix.lower() != ".npz":
@@ -76,9 +76,8 @@ def run(args) -> int:
                 f"the background image is {bg.plate.shape[1]}x{bg.plate.shape[0]} but the "
                 f"video is {info.width}x{info.height}", args.background)
     else:
-        bg = estimate_background(args.video, method=args.method, n_samples=args.samples,
-                                 rng=plate_rng(), colour_models=graph_cut, empty_scene=still,
-                                 person_box=still)
+        bg = estimate_plate(args.video, colour_models=graph_cut, still_person=still,
+                            method=args.method, n_samples=args.samples)
     sil = extract_silhouettes(args.video, bg, threshold=args.threshold,
                               shadows=not args.no_shadows,
                               graph_cut=graph_cut and bg.colours is not None)

@@ -65,6 +65,7 @@ __all__ = [
     "BackgroundError",
     "BackgroundModel",
     "estimate_background",
+    "estimate_plate",
     "load_plate",
     "sample_frames",
 ]
@@ -307,6 +308,17 @@ def plate_rng() -> np.random.Generator:
     return np.random.default_rng(PLATE_SEED)
 
 
+def estimate_plate(source, *, colour_models: bool, still_person: bool,
+                   **options) -> BackgroundModel:
+    """:func:`estimate_background` as every command runs it (``vidcap convert``,
+    ``silhouettes``, ``pose2d``, ``annotate``): the frames of :func:`plate_rng`, the
+    colour models for the graph cut when ``colour_models``, the still-person passes
+    (``empty_scene``, ``person_box``) when ``still_person``; ``options`` as
+    :func:`estimate_background`'s (``method``, ``n_samples``, ``progress``)."""
+    return estimate_background(source, rng=plate_rng(), colour_models=colour_models,
+                               empty_scene=still_person, person_box=still_person, **options)
+
+
 def estimate_background(
     source, *, method: str = "felzenszwalb", n_samples: int = 24,
     work_size: int = 160, segment_scale: float = 60.0, min_region: int = 12,
@@ -332,7 +344,8 @@ def estimate_background(
     min_region : int
         Felzenszwalb's ``min_size``, pixels at ``work_size``.
     rng : numpy.random.Generator, optional
-        Jitters which frames are sampled (the commands pass :func:`plate_rng`);
+        Jitters which frames are sampled (the commands pass :func:`plate_rng`, through
+        :func:`estimate_plate`);
         without it the samples are evenly spaced.
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).

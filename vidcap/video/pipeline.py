@@ -430,7 +430,7 @@ def _plate_stage(cache: StageCache, key: str, video: Path, plate, *, progress, l
 
 def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
               colour_models: bool, still_person: bool = False):
-    from vidcap.video.background import estimate_background, plate_rng
+    from vidcap.video.background import estimate_plate
 
     if plate is not None:
         return plate
@@ -439,9 +439,8 @@ def _plate_of(cache: StageCache, key: str, video: Path, plate, *, progress, log,
     if hit is not None:
         return _plate_from_cache(hit)
     log("estimating the background plate")
-    plate = estimate_background(video, rng=plate_rng(), progress=progress,
-                                colour_models=colour_models, empty_scene=still_person,
-                                person_box=still_person)
+    plate = estimate_plate(video, colour_models=colour_models, still_person=still_person,
+                           progress=progress)
     h, w = plate.plate.shape[:2]
     # (no colour models: an empty array, read back as None)
     extra = ({"colours": np.zeros(0, np.float32) if plate.colours is None else plate.colours}
