@@ -526,19 +526,16 @@ def lift_pose(
     joints2d,
     *,
     fps: float,
-    body: BodyModel | None = None,
-    annotations: Annotations | None = None,
+    body: BodyModel | None = None, annotations: Annotations | None = None,
     image_sides: bool = True,
-    spread=None,
-    track=None,
+    spread=None, track=None,
     smooth_2d: float = 0.0,
     yaw_window_s: float = 1.0,
     scale_window_s: float = SCALE_WINDOW_S,
     frame_size: tuple[int, int] | None = None,
     model_height=None,
-    view: str = "auto",
-    method: str = "solve",
-    near_side=None, limb_order=None,
+    view: str = "auto", method: str = "solve",
+    near_side=None, limb_order=None, jobs: int = 1,
 ) -> LiftResult:
     """The 3D stage: orientation, sides, depth signs (proposed + user) and lifting.
 
@@ -578,6 +575,8 @@ def lift_pose(
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).
+    jobs : int
+        Processes for the clip solve (2: a long clip in halves, :mod:`~vidcap.video.solve.split`).
 
     Returns
     -------
@@ -630,10 +629,11 @@ def lift_pose(
                segment_scale=seg_scale)
     joints3d, params, contact = out.joints3d, None, None
     if method == "solve":
-        sol, final = solve_lift(j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale,
-                                yaw=yaw, proposal=final, user_signs=user_signs,
-                                user_orientation=user_orient, principal_point=centre,
-                                user_joints=user_joints, user_sides_set=annotations.sides_set(F))
+        sol, final = solve_lift(
+            j2, fps=fps, body=body, scale=scale, segment_scale=seg_scale, yaw=yaw, jobs=jobs,
+            proposal=final, user_signs=user_signs, user_orientation=user_orient,
+            principal_point=centre, user_joints=user_joints,
+            user_sides_set=annotations.sides_set(F))
         joints3d, params, contact = sol.joints3d, sol.params, sol.contact
         j2 = swap_pairs(j2, sol.swapped)
     return LiftResult(

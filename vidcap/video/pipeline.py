@@ -142,10 +142,10 @@ def run(
         Called with one-line status messages.
     jobs : int, optional
         Worker processes for the 2D fit (default: the usable CPUs, at most
-        :data:`vidcap.video.fit.parallel.MAX_JOBS`); 1 fits in this process. Clips of
-        fewer than 120 frames are fitted in this process anyway
-        (:func:`vidcap.video.fit.parallel.fit_sequence_chunked`). The workers start, and
-        load the fit's compiled kernels, while the silhouettes are extracted.
+        :data:`vidcap.video.fit.parallel.MAX_JOBS`; 1 fits in this process, as are clips
+        under 120 frames, :func:`~vidcap.video.fit.parallel.fit_sequence_chunked`), started
+        while the silhouettes are extracted; 2 or more also solve a long clip's 3D in two
+        halves at once (:mod:`vidcap.video.solve.split`).
     view : str
         How the camera sees the subject for the whole clip
         (:data:`vidcap.video.lifting.VIEWS`; default ``auto``: proposed per frame);
@@ -215,7 +215,8 @@ def run(
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
                                body=body, annotations=ann, ann_source=ann_source, view=view,
                                smooth_sigma=smooth_sigma, keyframe_score=keyframe_score,
-                               log=log, lift_method=lift, video=video, hidden=hidden)
+                               log=log, lift_method=lift, video=video, hidden=hidden,
+                               jobs=jobs)
     return ConvertResult(
         video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
         scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
@@ -797,12 +798,13 @@ def front_cue(video, joints2d) -> np.ndarray:
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
                      annotations: Annotations, ann_source, view: str, smooth_sigma: float,
                      keyframe_score: float | None, log, lift_method: str = "solve",
-                     video=None, hidden: str = DEFAULT_HIDDEN) -> _Lifted:
+                     video=None, hidden: str = DEFAULT_HIDDEN, jobs: int = 1) -> _Lifted:
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
     front/back cue and the limb order (:func:`colour_cues`). ``hidden='solve'`` with the
-    clip solve: the 2D joints with the ones the torso hides from it (:func:`_with_hidden`)."""
+    clip solve: the 2D joints with the ones the torso hides from it (:func:`_with_hidden`).
+    ``jobs`` processes solve the clip (:mod:`vidcap.video.solve.split`)."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
@@ -815,7 +817,7 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=model_height, view=view,
-                       method=lift_method, near_side=near, limb_order=limbs)
+                       method=lift_method, near_side=near, limb_order=limbs, jobs=jobs)
     keys = None
     if keyframe_score is not None:
         keys = keyframes_by_confidence(pose["similarity"], min_score=keyframe_score)

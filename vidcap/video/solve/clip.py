@@ -25,6 +25,7 @@ from vidcap.video.solve.repair import repair_outliers
 from vidcap.video.solve.residuals import Problem, segment_zeta
 from vidcap.video.solve.signs import sweep_signs
 from vidcap.video.solve.skeleton import forward_kinematics, params_from_joints
+from vidcap.video.solve.split import SPLIT_MIN_FRAMES, solve_split
 
 #: Default 2D uncertainty of a joint, as a fraction of body height.
 SIGMA_2D = 0.01
@@ -221,7 +222,7 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                segment_scale=None, principal_point=None, contact="auto", sweeps: int = 2,
                max_iter: int = 30, robust: float | None = None, noise_floor: float = 0.0,
                contact_floor: float = 0.0, labels: bool = False, held_labels=None,
-               **weights) -> ClipSolve:
+               jobs: int = 1, **weights) -> ClipSolve:
     """Fit the skeleton to a clip's 2D joints (see the module docstring).
 
     Parameters
@@ -264,6 +265,9 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
         (:func:`vidcap.video.solve.labels.choose_labels`).
     held_labels : array_like of bool, shape (F, 2), optional
         (Frame, pair: arms, legs) whose names are the user's: never exchanged.
+    jobs : int
+        Processes: 2 or more solves a long clip in two halves at once
+        (:func:`vidcap.video.solve.split.solve_split`).
     **weights
         Override :class:`vidcap.video.solve.residuals.Problem`'s weights.
 
@@ -282,27 +286,32 @@ def solve_clip(joints2d, *, scale, fps: float, body: BodyModel | None = None, ya
                     principal_point=principal_point)
     kept = None if confidence is None else np.asarray(confidence, float) > 1.0
     return solve_problem(pb, p0, sweeps=sweeps, max_iter=max_iter, robust=robust,
-                         labels=labels, held_labels=held_labels, robust_kept=kept)
+                         labels=labels, held_labels=held_labels, robust_kept=kept, jobs=jobs)
 
 
 def solve_problem(problem: Problem, params, *, sweeps: int = 2, max_iter: int = 30,
                   fixed=None, robust: float | None = None, labels: bool = False,
-                  held_labels=None, robust_kept=None) -> ClipSolve:
+                  held_labels=None, robust_kept=None, jobs: int = 1) -> ClipSolve:
     """Solve ``problem`` from ``params`` (F, 24): LM, then ``sweeps`` rounds of sign
     choice (:func:`vidcap.video.solve.signs.sweep_signs`) and LM; ``fixed`` (F,) bool
     frames are held (a local re-solve's boundary); with ``labels`` the arms' and legs'
     names are chosen after the first LM (:func:`vidcap.video.solve.labels.choose_labels`,
     never on ``held_labels`` (F, 2)); with ``robust`` the joints are re-weighted by
     their misfit after it (:func:`robust_weights`), but for ``robust_kept`` (F, 15).
+    With ``jobs`` > 1 a clip of :data:`vidcap.video.solve.split.SPLIT_MIN_FRAMES` or more
+    (and no ``fixed`` frames) is solved in two halves on two processes
+    (:func:`vidcap.video.solve.split.solve_split`).
 
     BLAS runs on one thread here: the solve's dense blocks are 48 x 48, where more
     threads only add waiting, ten-fold when other processes hold the cores."""
     from threadpoolctl import threadpool_limits
 
+    kw = dict(sweeps=sweeps, max_iter=max_iter, robust=robust, labels=labels,
+              held_labels=held_labels, robust_kept=robust_kept)
     with threadpool_limits(1):
-        return _solve_problem(problem, params, sweeps=sweeps, max_iter=max_iter, fixed=fixed,
-                              robust=robust, labels=labels, held_labels=held_labels,
-                              robust_kept=robust_kept)
+        if jobs > 1 and fixed is None and problem.n_frames >= SPLIT_MIN_FRAMES:
+            return solve_split(_solve_problem, problem, params, **kw)
+        return _solve_problem(problem, params, fixed=fixed, **kw)[0]
 
 
 def robust_weights(problem: Problem, joints, scale: float, *, kept=None) -> Problem:
@@ -322,7 +331,9 @@ def robust_weights(problem: Problem, joints, scale: float, *, kept=None) -> Prob
 
 def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixed,
                    robust: float | None = None, labels: bool = False,
-                   held_labels=None, robust_kept=None) -> ClipSolve:
+                   held_labels=None, robust_kept=None) -> tuple[ClipSolve, Problem]:
+    """:func:`solve_problem` in this process; also the problem as it was last solved
+    (robust weights and exchanged names applied)."""
     # the first solve only brings the clip near enough for the sign sweep to read it;
     # the re-solve after the sweep finishes (a full first solve: 2x the time, equal
     # accuracy on the tuning clips)
@@ -368,4 +379,4 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
     zeta = segment_zeta(joints, problem.lengths)
     signs = np.where(zeta < 0, -1, 1).astype(np.int8)
     return ClipSolve(p, joints, signs, sw.confidence, problem.contact.copy(), sol.cost, iters,
-                     swapped)
+                     swapped), problem

@@ -31,7 +31,7 @@ parameters only), so it costs about 25 forward kinematics of the clip.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -63,6 +63,10 @@ from vidcap.video.solve.skeleton import (
 _ANKLES = (JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"])
 #: Margin (fraction of the length) a hard depth sign keeps from the image plane.
 HARD_MARGIN = 0.03
+
+
+#: :class:`Problem`'s fields that hold one entry per frame (the rest are the clip's).
+PER_FRAME = ("target", "weight", "prior_signs", "hard_signs", "yaw", "yaw_weight", "contact")
 
 
 @dataclass(frozen=True)
@@ -108,13 +112,7 @@ class Problem:
 
     def frames(self, start: int, stop: int) -> Problem:
         """The same problem on frames ``start:stop``."""
-        sl = slice(start, stop)
-        return Problem(self.offsets, self.lengths, self.target[sl], self.weight[sl],
-                       self.prior_signs[sl], self.hard_signs[sl], self.yaw[sl],
-                       self.yaw_weight[sl], self.contact[sl], self.sign_weight,
-                       self.hard_weight, self.limit_weight, self.acc_weight,
-                       self.contact_weight, self.depth_weight, self.plane_weight,
-                       self.prior_weight, self.heading_weight)
+        return replace(self, **{name: getattr(self, name)[start:stop] for name in PER_FRAME})
 
 
 def segment_zeta(joints, lengths) -> np.ndarray:

@@ -68,7 +68,7 @@ def check_method(method: str) -> None:
 def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, yaw,
                proposal: SignProposal, user_signs, user_orientation, principal_point=None,
                user_joints=None, labels: bool | None = None,
-               user_sides_set=None) -> tuple[ClipSolve, SignProposal]:
+               user_sides_set=None, jobs: int = 1) -> tuple[ClipSolve, SignProposal]:
     """Solve the clip with the 3D stage's proposals and the user's events.
 
     Parameters
@@ -96,6 +96,8 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
         (:func:`held_labels`); default :data:`LABELS`.
     user_sides_set : numpy.ndarray of bool, shape (F, 2), optional
         (Frame, pair: arms, legs) a sides event of the user covers.
+    jobs : int
+        Processes for the solve (:func:`vidcap.video.solve.clip.solve_clip`).
 
     Returns
     -------
@@ -118,7 +120,8 @@ def solve_lift(joints2d, *, fps: float, body: BodyModel, scale, segment_scale, y
                      heading_weight=FITTED_HEADING_WEIGHT,
                      segment_scale=segment_scale, principal_point=principal_point,
                      labels=LABELS if labels is None else labels,
-                     held_labels=held_labels(user_signs, user_joints, user_sides_set))
+                     held_labels=held_labels(user_signs, user_joints, user_sides_set),
+                     jobs=jobs)
     margin = np.where(np.isfinite(sol.confidence), sol.confidence / COST_PER_MARGIN,
                       proposal.margin)
     margin = np.where(np.asarray(user_signs) != 0, np.inf, margin)
