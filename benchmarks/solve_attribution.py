@@ -16,6 +16,13 @@ stage has it (front/back cue on, as by default):
 
 The table gives PA-MPJPE (mm) with each oracle alone, with all of them, and with all but
 one (what is left when only that one is the stage's own).
+
+``--joints`` (:func:`joint_rows`) splits the 2D and the signs by limb instead: the true
+2D of the arms' (elbows, wrists) or the legs' (knees, ankles) joints alone, the true
+depth signs of the arms' or the legs' segments alone, and the ceiling of any per-joint
+confidence the 3D stage could be given: every 2D joint more than
+:data:`DROP_THRESHOLDS` of the height off the truth weighted :data:`DROP_WEIGHT`
+(a perfect detector of the fit's bad joints), the solve's prior and smoothness placing it.
 """
 
 from __future__ import annotations
@@ -29,6 +36,16 @@ from vidcap.body import JOINT_NAMES, LIMB_PAIR_JOINTS, SEGMENT_JOINTS
 from vidcap.video.annotations import PAIRS
 
 ORACLES = ("2D", "names", "signs", "front/back", "yaw")
+#: :func:`joint_rows`: the 2D joints each limb oracle takes from the truth, and the
+#: segments (:data:`vidcap.body.SEGMENT_NAMES`) whose true depth signs it sets.
+JOINT_GROUPS = {"arms": ("l_elbow", "l_wrist", "r_elbow", "r_wrist"),
+                "legs": ("l_knee", "l_ankle", "r_knee", "r_ankle")}
+SEGMENT_GROUPS = {"arms": ("l_upper_arm", "l_lower_arm", "r_upper_arm", "r_lower_arm"),
+                  "legs": ("l_upper_leg", "l_lower_leg", "r_upper_leg", "r_lower_leg")}
+#: :func:`joint_rows`' confidence ceiling: 2D joints this far off the truth (fraction of
+#: the fit's model height) weigh :data:`DROP_WEIGHT` (of 1) in the solve.
+DROP_THRESHOLDS = (0.05, 0.08)
+DROP_WEIGHT = 1e-3
 #: Frames within this of a side view (degrees) keep the stage's front/back (the truth's
 #: is then no better defined than the stage's).
 SIDE_MARGIN_DEG = 15.0
@@ -149,8 +166,93 @@ def attribution_rows(clips, body, near_fn):
             for name, c in clips]
 
 
-def print_attribution(rows):
-    cols = [label for label, _ in settings()]
+def with_true_joints(fitted2d, true2, joints) -> np.ndarray:
+    """The fitted 2D joints (F, 15, 2) with ``joints`` (names) taken from the truth
+    ``true2`` named as the fit names its limbs (:func:`true_2d_fit_names`)."""
+    from vidcap.body import JOINT_INDEX
+
+    out = np.array(fitted2d, dtype=float)
+    idx = [JOINT_INDEX[n] for n in joints]
+    out[:, idx] = true_2d_fit_names(fitted2d, true2)[:, idx]
+    return out
+
+
+def bad_joint_weights(joints2d, true2, height_px, threshold: float,
+                      weight: float = DROP_WEIGHT) -> np.ndarray:
+    """(F, 15) ``weight`` where a 2D joint of ``joints2d`` (F, 15, 2), in whatever names,
+    lies more than ``threshold`` x ``height_px`` (F,) from the truth's joint of the same
+    limb (each limb pair matched per frame, :func:`nearest_labeling`), else 1."""
+    from vidcap.video.lifting import swap_pairs
+
+    j = np.asarray(joints2d, dtype=float)
+    t = swap_pairs(true2, nearest_labeling(true2, j))
+    e = np.linalg.norm(j - t, axis=-1) / np.asarray(height_px, float)[:, None]
+    return np.where(e > threshold, weight, 1.0)
+
+
+@contextmanager
+def solve_inputs(clip, *, drop=None, sign_segments=()):
+    """Patch the 3D stage's solve (:func:`vidcap.video.solve.stage.solve_clip`) so that
+    it weighs the 2D joints by :func:`bad_joint_weights` at threshold ``drop`` (None:
+    as the stage does) and takes the truth's depth signs of ``sign_segments`` (names)
+    as hard signs, both read under the names the stage hands the solve."""
+    import vidcap.video.solve.stage as stage
+    from vidcap.body import SEGMENT_INDEX
+    from vidcap.video.lifting import swap_pairs
+
+    orig = stage.solve_clip
+    segs = [SEGMENT_INDEX[n] for n in sign_segments]
+
+    def solve(joints2d, **kw):
+        j = np.asarray(joints2d, dtype=float)
+        if drop is not None:
+            w = bad_joint_weights(j, clip["true2"], clip["model_height"], drop)
+            user = kw.get("confidence")
+            kw["confidence"] = w if user is None else np.where(user > 1.0, user, w)
+        if segs:
+            named = swap_pairs(clip["true3"], nearest_labeling(clip["true2"], j))
+            hard = np.zeros((len(j), 10), np.int8) if kw.get("hard_signs") is None \
+                else np.array(kw["hard_signs"])
+            hard[:, segs] = true_signs(named)[:, segs]
+            kw["hard_signs"] = hard
+        return orig(joints2d, **kw)
+
+    stage.solve_clip = solve
+    try:
+        yield
+    finally:
+        stage.solve_clip = orig
+
+
+def joint_settings():
+    """(column label, keywords of :func:`_run_joints`) of the ``--joints`` table."""
+    cols = [("stage", {})]
+    cols += [(f"+{g} 2D", {"joints": JOINT_GROUPS[g]}) for g in JOINT_GROUPS]
+    cols += [(f"+{g} signs", {"sign_segments": SEGMENT_GROUPS[g]}) for g in SEGMENT_GROUPS]
+    cols += [(f"2D > {t:.0%} dropped", {"drop": t}) for t in DROP_THRESHOLDS]
+    return cols
+
+
+def _run_joints(name, c, body, near_fn, joints=(), drop=None, sign_segments=()):
+    from vidcap.video.lifting import lift_pose
+
+    j2 = with_true_joints(c["joints2d"], c["true2"], joints) if joints else c["joints2d"]
+    with solve_inputs(c, drop=drop, sign_segments=sign_segments):
+        lr = lift_pose(j2, fps=float(c["fps"]), body=body, image_sides=True,
+                       spread=c["spread"], track=c.get("track"),
+                       frame_size=tuple(int(v) for v in c["size"]),
+                       model_height=c["model_height"], **near_fn(name, j2))
+    return st.pa_mpjpe_mm(lr.joints3d, c["true3"])
+
+
+def joint_rows(clips, body, near_fn):
+    """Rows (clip, [PA-MPJPE mm per :func:`joint_settings` column])."""
+    return [(name, [_run_joints(name, c, body, near_fn, **kw) for _, kw in joint_settings()])
+            for name, c in clips]
+
+
+def print_attribution(rows, settings_fn=None):
+    cols = [label for label, _ in (settings_fn or settings)()]
     print("clip | " + " | ".join(cols))
     print("---" + " | ---" * len(cols))
     for name, vals in rows:

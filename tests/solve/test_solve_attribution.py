@@ -59,3 +59,38 @@ def test_settings_cover_each_oracle_alone_and_all_but_one():
         assert cols[f"+{o}"] == {o}
     assert cols["all"] == set(sa.ORACLES) - {"front/back"}
     assert cols["all but names"] == {"2D", "signs", "yaw"}
+
+
+def test_with_true_joints_takes_only_the_named_joints_under_the_fits_names():
+    truth = _joints2d()
+    planted = np.zeros((6, 2), bool)
+    planted[1:3] = True  # the fit names both pairs the other way in frames 1-2
+    fitted = swap_pairs(truth, planted) + 3.0
+    out = sa.with_true_joints(fitted, truth, sa.JOINT_GROUPS["arms"])
+    arms = [JOINT_INDEX[n] for n in sa.JOINT_GROUPS["arms"]]
+    rest = [j for j in range(15) if j not in arms]
+    assert np.allclose(out[:, arms], swap_pairs(truth, planted)[:, arms])
+    assert np.allclose(out[:, rest], fitted[:, rest])
+
+
+def test_bad_joint_weights_mark_the_planted_outliers_in_any_names():
+    truth = _joints2d(frames=4)
+    fitted = truth.copy()
+    wrist, knee = JOINT_INDEX["l_wrist"], JOINT_INDEX["r_knee"]
+    fitted[1, wrist] += [0.0, 30.0]  # 30 px of a 300-px body: 10 % off
+    fitted[2, knee] += [12.0, 0.0]  # 4 %: under a 5 % threshold
+    swapped = np.zeros((4, 2), bool)
+    swapped[1, 0] = True  # the arms named the other way in that frame: still found
+    named = swap_pairs(fitted, swapped)
+    w = sa.bad_joint_weights(named, truth, np.full(4, 300.0), 0.05, weight=0.01)
+    expect = np.ones((4, 15))
+    expect[1, JOINT_INDEX["r_wrist"]] = 0.01  # where the renamed wrist now sits
+    assert np.array_equal(w, expect)
+
+
+def test_joint_settings_name_each_limb_group_and_each_threshold():
+    cols = dict(sa.joint_settings())
+    assert cols["stage"] == {}
+    assert cols["+legs 2D"] == {"joints": sa.JOINT_GROUPS["legs"]}
+    assert cols["+arms signs"] == {"sign_segments": sa.SEGMENT_GROUPS["arms"]}
+    assert [k for k in cols if "dropped" in k] == ["2D > 5% dropped", "2D > 8% dropped"]
