@@ -97,3 +97,48 @@ def test_a_daemonic_process_solves_both_halves_itself():
     assert proc.exitcode == 0
     expected = solve_clip(j2, jobs=2, **kw)
     np.testing.assert_allclose(params, expected.params, atol=1e-9)
+
+
+_SOLVE_FOREVER = """
+import sys
+sys.path.insert(0, {tests!r})
+from test_solve_split import _noisy_walk
+from vidcap.video.solve import solve_clip
+j2, kw, _ = _noisy_walk(n=900)
+print("ready", flush=True)
+while True:
+    solve_clip(j2, jobs=2, **kw)
+"""
+
+
+def test_ctrl_c_while_the_halves_are_solved_leaves_no_process(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    from vidcap.interrupt import descendants
+
+    script = _SOLVE_FOREVER.format(tests=str(Path(__file__).parent))
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert proc.stdout.readline().strip() == "ready"
+        t0 = time.monotonic()
+        kids = []
+        while not kids and time.monotonic() - t0 < 60:  # the half's child is forked
+            kids = descendants(proc.pid)
+            time.sleep(0.02)
+        assert kids, "no child process was started for the first half"
+        os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C in a terminal
+        proc.communicate(timeout=10)
+        assert proc.returncode != 0
+        time.sleep(0.2)
+        alive = [k for k in kids if os.path.exists(f"/proc/{k}")
+                 and open(f"/proc/{k}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"]
+        assert alive == []
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
