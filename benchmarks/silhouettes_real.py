@@ -464,6 +464,10 @@ SWITCHES = (
      "vidcap's plate: footprint pixels whose plate and every sample are unlike the seen scene "
      "round them, between the person's, flagged never seen when the person stays in one place "
      "(vidcap.video.absorbed; default: absorbed.FLAG_STILL, on)"),
+    ("time-cover", "timecover", "TIME_COVER",
+     "vidcap's plate: the motion footprint and its rings' cover measured over every frame "
+     "(the share of time a pixel moves), not over the sampled frames (vidcap.video.timecover; "
+     "default: timecover.TIME_COVER)"),
     ("reflections", "reflection", "CUT_REFLECTIONS",
      "vidcap's silhouettes: the person's mirror image in a glossy floor or desk cut "
      "(vidcap.video.reflection; default: reflection.CUT_REFLECTIONS)"),

@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import av
+import cv2
 import numpy as np
 import pytest
 
@@ -17,6 +18,7 @@ from vidcap.io.video import (
     iter_chunks,
     iter_frame_lists,
     iter_frames,
+    iter_thumbnails,
     probe,
     read_frames,
     variable_rate,
@@ -112,6 +114,12 @@ def test_frames_come_out_upright_as_the_display_matrix_says(tmp_path, degrees):
         assert np.abs(f.astype(int) - upright).mean() < 8  # lossy, but the same picture
     if degrees == 180:  # the same shape as stored, but not the stored picture
         assert np.abs(frames[0].astype(int) - stored).mean() > 30
+    # thumbnails (the plate's look at every frame) are upright at the asked (width, height)
+    th, tw = upright.shape[0] // 4, upright.shape[1] // 4
+    thumbs = [t for _, t, _ in iter_thumbnails(path, (tw, th))]
+    small = cv2.resize(upright, (tw, th), interpolation=cv2.INTER_AREA)
+    assert len(thumbs) == 4 and all(t.shape == (th, tw, 3) for t in thumbs)
+    assert np.abs(thumbs[0].astype(int) - small).mean() < 12
 
 
 def test_frame_times_of_even_and_uneven_videos(tmp_path):
@@ -153,6 +161,20 @@ def test_only_the_chosen_frames_are_returned(tmp_path):
     got = list(iter_frames(out, only={7, 2, 5}))
     np.testing.assert_array_equal(np.stack(got), every[[2, 5, 7]])
     assert len(list(iter_frames(out, start=3, only={1, 2, 4}))) == 1  # both apply
+
+
+def test_thumbnails_of_every_nth_frame_and_whole_chosen_frames(tmp_path):
+    out = tmp_path / "t.mp4"
+    write_video(out, _frames(n=10), fps=10)
+    every = read_frames(out)
+    got = list(iter_thumbnails(out, (8, 6), every=3, only={4, 6}))
+    assert [i for i, _, _ in got] == [0, 3, 4, 6, 9]
+    assert [t is None for _, t, _ in got] == [False, False, True, False, False]
+    assert [f is None for _, _, f in got] == [True, True, False, False, True]
+    np.testing.assert_array_equal(got[2][2], every[4])
+    assert got[0][1].shape == (6, 8, 3)
+    with pytest.raises(ValueError):
+        next(iter_thumbnails(out, (8, 6), every=0))
 
 
 def test_failed_write_leaves_no_file(tmp_path):

@@ -310,10 +310,75 @@ def iter_frames(
         On any decoding problem; frames already yielded stay valid. A file that
         yields no frame at all is an error too.
     """
-    import av
-
     if start < 0 or step < 1:
         raise ValueError("start must be >= 0 and step >= 1")
+    n = 0
+    for i, frame, turns in _decoded(path, stop):
+        if i < start or (i - start) % step or (only is not None and i not in only):
+            continue
+        n += 1
+        img = _to_bgr(frame)
+        yield np.ascontiguousarray(np.rot90(img, turns)) if turns else img
+    if n == 0 and (stop is None or stop > start):
+        raise VideoError("no decodable video frames", path)
+
+
+def iter_thumbnails(
+    path: str | os.PathLike, size: tuple[int, int], *, every: int = 1, only=(),
+) -> Iterator[tuple[int, np.ndarray | None, np.ndarray | None]]:
+    """Decode a video once for a look at every frame at low resolution and a few whole
+    frames (the plate's samples and its evidence over time, :mod:`vidcap.video.timecover`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The video.
+    size : (int, int)
+        (width, height) of the thumbnails, as shown (after the display matrix's turn).
+    every : int
+        A thumbnail of every ``every``-th frame (0, every, 2 every, ...).
+    only : collection of int
+        Frame indices also yielded whole.
+
+    Yields
+    ------
+    index : int
+    thumbnail : numpy.ndarray, shape (height, width, 3), uint8, or None
+        BGR, downscaled by area averaging (None for frames between the ``every``-th).
+    frame : numpy.ndarray, shape (H, W, 3), uint8, or None
+        The whole BGR frame for indices in ``only``, else None.
+
+    Raises
+    ------
+    VideoError
+        As :func:`iter_frames`.
+    """
+    if every < 1:
+        raise ValueError("every must be >= 1")
+    w, h = int(size[0]), int(size[1])
+    n = 0
+    for i, frame, turns in _decoded(path, None):
+        n += 1
+        thumb = img = None
+        if i % every == 0:
+            # (stored frames are turned after the scaling: a quarter turn swaps the sides)
+            tw, th = (h, w) if turns % 2 else (w, h)
+            thumb = _to_bgr(frame, width=tw, height=th, interpolation="AREA")
+            thumb = np.ascontiguousarray(np.rot90(thumb, turns)) if turns else thumb
+        if i in only:
+            img = _to_bgr(frame)
+            img = np.ascontiguousarray(np.rot90(img, turns)) if turns else img
+        if thumb is not None or img is not None:
+            yield i, thumb, img
+    if n == 0:
+        raise VideoError("no decodable video frames", path)
+
+
+def _decoded(path, stop):
+    """(index, PyAV frame, quarter turns) of each decoded frame before ``stop``; decoding
+    errors as :class:`VideoError` (frames already yielded stay valid)."""
+    import av
+
     container = _open(path)
     n = 0
     turns = None
@@ -325,26 +390,22 @@ def iter_frames(
                 turns = _quarter_turns(frame)
             if stop is not None and i >= stop:
                 break
-            if i < start or (i - start) % step or (only is not None and i not in only):
-                continue
             n += 1
-            img = _to_bgr(frame)
-            yield np.ascontiguousarray(np.rot90(img, turns)) if turns else img
+            yield i, frame, turns
     except av.error.FFmpegError as exc:
         raise VideoError(f"decoding failed after {n} frames ({_ffmpeg_reason(exc)})", path)\
             from None
     finally:
         container.close()
-    if n == 0 and (stop is None or stop > start):
-        raise VideoError("no decodable video frames", path)
 
 
 #: Whether this PyAV's ``VideoFrame.reformat`` takes ``threads`` (PyAV >= 17).
 _REFORMAT_THREADS: bool | None = None
 
 
-def _to_bgr(frame) -> np.ndarray:
-    """One decoded frame as an (H, W, 3) uint8 BGR array, converted on this thread.
+def _to_bgr(frame, **scale) -> np.ndarray:
+    """One decoded frame as an (H, W, 3) uint8 BGR array, converted on this thread
+    (``scale``: ``width``, ``height`` and ``interpolation`` of a downscaled copy).
 
     PyAV >= 17 converts on one thread per CPU by default. Each frame then waits for
     its slowest slice, and any other busy process (the 2D fit's workers) stalls
@@ -355,15 +416,15 @@ def _to_bgr(frame) -> np.ndarray:
     global _REFORMAT_THREADS
     if _REFORMAT_THREADS is None:
         try:
-            out = frame.to_ndarray(format="bgr24", threads=1)
+            out = frame.to_ndarray(format="bgr24", threads=1, **scale)
         except TypeError:  # PyAV < 17: no threads argument, and one thread anyway
             _REFORMAT_THREADS = False
         else:
             _REFORMAT_THREADS = True
             return out
     if _REFORMAT_THREADS:
-        return frame.to_ndarray(format="bgr24", threads=1)
-    return frame.to_ndarray(format="bgr24")
+        return frame.to_ndarray(format="bgr24", threads=1, **scale)
+    return frame.to_ndarray(format="bgr24", **scale)
 
 
 def iter_frame_lists(

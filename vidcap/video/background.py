@@ -389,7 +389,16 @@ def estimate_background(
         from vidcap.io.video import probe
 
         info = probe(source)  # once: the samples' positions and the empty scene's times
-    frames, idx = sample_frames(source, n_samples=n_samples, rng=rng, info=info)
+    from vidcap.video import timecover
+
+    cover = None
+    if method == "felzenszwalb" and timecover.TIME_COVER:
+        hw = source.shape[1:3] if info is None else (info.height, info.width)
+        frames, idx, thumbs = _samples_and_thumbnails(
+            source, n_samples, rng, info, _work_hw(hw, work_size))
+        cover = timecover.motion_cover(thumbs) if len(thumbs) >= 2 else None
+    else:
+        frames, idx = sample_frames(source, n_samples=n_samples, rng=rng, info=info)
     from vidcap.video.inputchecks import check_samples
 
     check_samples(frames, name)
@@ -403,7 +412,7 @@ def estimate_background(
         return model
     weights_small, holes = _region_vote(frames, gains, work_size=work_size,
                                  segment_scale=segment_scale, min_region=min_region,
-                                 progress=progress)
+                                 progress=progress, cover=cover)
     model = _finish_regions(frames, gains, weights_small, idx, name, holes)
     from vidcap.video.platepass import refine_plate
 
@@ -435,6 +444,45 @@ def estimate_background(
     return model
 
 
+def _work_hw(hw, work_size: int) -> tuple[int, int]:
+    """(h, w) of frames of size ``hw`` downscaled to ``work_size`` on the long side."""
+    hh, ww = int(hw[0]), int(hw[1])
+    s = min(1.0, work_size / max(hh, ww))
+    return max(2, round(hh * s)), max(2, round(ww * s))
+
+
+def _samples_and_thumbnails(source, n_samples, rng, info, hw):
+    """:func:`sample_frames`'s samples and indices, and every frame (every
+    :func:`vidcap.video.timecover.thumbnail_step`-th of a long clip) at ``hw`` (h, w),
+    uint8, from one decoding of the file."""
+    from vidcap.video.timecover import thumbnail_step
+
+    h, w = hw
+    if isinstance(source, np.ndarray):
+        frames, idx = sample_frames(source, n_samples=n_samples, rng=rng)
+        every = source[::thumbnail_step(len(source))]
+        return frames, idx, np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA)
+                                      for f in every])
+    from vidcap.io.video import iter_thumbnails
+
+    idx = _sample_indices(info.n_frames, n_samples, rng)
+    wanted = set(idx.tolist())
+    got, got_idx, thumbs = [], [], []
+    for i, thumb, frame in iter_thumbnails(source, (w, h), every=thumbnail_step(info.n_frames),
+                                           only=wanted):
+        if thumb is not None:
+            thumbs.append(thumb)
+        if frame is not None:
+            got.append(frame)
+            got_idx.append(i)
+    if len(got) < len(idx) or any(f.shape != got[0].shape for f in got):
+        # (a frame count the container over-states, a size that changes: as sample_frames
+        # says and does)
+        frames, idx = sample_frames(source, n_samples=n_samples, rng=rng, info=info)
+        return frames, idx, np.stack(thumbs) if thumbs else np.zeros((0, h, w, 3), np.uint8)
+    return np.stack(got), np.asarray(got_idx), np.stack(thumbs)
+
+
 def _fps(info) -> float:
     """The frame rate of the video ``info`` (:func:`vidcap.io.video.probe`) describes;
     :data:`vidcap.video.emptyscene.ASSUMED_FPS` for frames given as an array (None) or
@@ -460,15 +508,17 @@ def _gain_median(frames, gains) -> np.ndarray:
 
 
 def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progress,
-                 min_stability=0.5, min_support=0.15):
-    """Steps 2-5 at low resolution: per-sample background weights (K, h, w) in [0, 1]."""
+                 min_stability=0.5, min_support=0.15, cover=None):
+    """Steps 2-5 at low resolution: per-sample background weights (K, h, w) in [0, 1]
+    (``cover``: :func:`vidcap.video.timecover.motion_cover`, for the footprint)."""
     from skimage.segmentation import felzenszwalb
 
     from vidcap.fileio import progress as bar
 
     k, hh, ww = frames.shape[:3]
-    s = min(1.0, work_size / max(hh, ww))
-    h, w = max(2, round(hh * s)), max(2, round(ww * s))
+    h, w = _work_hw((hh, ww), work_size)
+    if cover is not None and cover.shape != (h, w):
+        cover = cv2.resize(cover, (w, h), interpolation=cv2.INTER_NEAREST)
     small = np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA) for f in frames])
     small = small.astype(np.float32) / gains[:, None, None, :]
     labels = np.empty((k, h, w), np.int32)
@@ -521,12 +571,12 @@ def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progres
     level = np.take_along_axis(scored, best[None], 0)[0]
     same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
     weights = same & (level >= min_stability)[None]
-    holes = _footprint_plate(small, means, med, tau, best, agree, weights)
+    holes = _footprint_plate(small, means, med, tau, best, agree, weights, cover=cover)
     return weights.astype(np.float32), holes
 
 
 def _footprint_plate(small, means, med, tau, best, agree, weights, *,
-                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15):
+                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15, cover=None):
     """Background inside the motion footprint, from the background around it.
 
     Updates ``weights`` (k, h, w) in place and returns the static body parts
@@ -554,6 +604,11 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
       sleeves, a shifting hem), whereas around a patch of background or a static
       object the ring's background continues the patch's colour and passers-by
       rarely wear it.
+
+    With ``cover`` ((h, w), the share of the clip's time each pixel moves:
+    :mod:`vidcap.video.timecover`) the rings' cover is measured over time (at least
+    :data:`vidcap.video.timecover.MIN_COVER`), not over the samples, so that which frames
+    were drawn does not decide whether a hole is a body part.
     """
     k, h, w = small.shape[:3]
     box = np.ones((3, 3), np.uint8)
@@ -602,7 +657,12 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     # How often each pixel differs from its temporal median: around a body part
     # that never moved, the limbs and the hop cover the ring often; around a gap
     # left between a passer-by's sampled positions they cover it once or twice.
-    cover = (dev > tau).mean(axis=0)
+    if cover is None:
+        cover = (dev > tau).mean(axis=0)
+    else:
+        from vidcap.video.timecover import MIN_COVER
+
+        min_evidence = MIN_COVER
     unseen = voted_d > far
     for i in hole_ids:
         hole = lab == i
