@@ -25,8 +25,9 @@ the spot) still takes its background from the frames where it is uncovered:
    from the temporal median in some sample. Inside it, the background around it,
    inpainted across, is a spatial guess that overturns a voted colour far from it
    when a supported sample colour is near it. Static areas enclosed by the
-   footprint whose ring the limbs cover often (a torso during jumping jacks) are
-   body parts that never moved: flagged ``never_seen``, confidence 0.
+   footprint whose ring the limbs cover often (a torso during jumping jacks; "often"
+   measured over every frame's time, not the samples: :mod:`vidcap.video.timecover`)
+   are body parts that never moved: flagged ``never_seen``, confidence 0.
 7. At full resolution, the plate is the median of (at most 9 of) the samples
    each pixel was found to be background in. Pixels never found uncovered are
    flagged (``never_seen``) and inpainted from the surrounding background
@@ -295,7 +296,9 @@ PERSON_BOX = True
 #: convert``, ``silhouettes``, ``pose2d``) and benchmark, so that they estimate the same
 #: plate of a clip. Which frames are sampled moves the plate of a person who barely moves
 #: a great deal (CMU 02_07 11-14 s front, tuning: median IoU 0.51-0.91 over four seeds,
-#: 0.54 evenly spaced), and neither sampler is better everywhere: evenly spaced frames
+#: 0.54 evenly spaced, until the footprint's ring test counted time,
+#: :data:`vidcap.video.timecover.TIME_COVER`: 0.90-0.92), and neither sampler is better
+#: everywhere: evenly spaced frames
 #: gave silhouettes_real.py 43 of 50 renders >= 0.92 against 39 of 50, but took the
 #: onebyone_room clips' 2D fit (pose2d_real.py, human body) from 9.1 / 6.3 to 18.9 / 11.4 %
 #: of height. Seed 0 is what convert's real-clip figures were measured and chosen on.
