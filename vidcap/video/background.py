@@ -392,16 +392,7 @@ def estimate_background(
         from vidcap.io.video import probe
 
         info = probe(source)  # once: the samples' positions and the empty scene's times
-    from vidcap.video import timecover
-
-    cover = None
-    if method == "felzenszwalb" and timecover.TIME_COVER:
-        hw = source.shape[1:3] if info is None else (info.height, info.width)
-        frames, idx, thumbs = _samples_and_thumbnails(
-            source, n_samples, rng, info, _work_hw(hw, work_size))
-        cover = timecover.motion_cover(thumbs) if len(thumbs) >= 2 else None
-    else:
-        frames, idx = sample_frames(source, n_samples=n_samples, rng=rng, info=info)
+    frames, idx, cover = _sampled(source, method, n_samples, rng, info, work_size)
     from vidcap.video.inputchecks import check_samples
 
     check_samples(frames, name)
@@ -445,6 +436,22 @@ def estimate_background(
     if absorbed.FLAG_UNSEEN:
         model = absorbed.flag_unseen(model, frames, gains)
     return model
+
+
+def _sampled(source, method: str, n_samples: int, rng, info, work_size: int):
+    """The plate's samples (F, H, W, 3), their frame indices (F,) and, for the region
+    method with :data:`vidcap.video.timecover.TIME_COVER`, the share of the clip's time
+    each working-size pixel moves (:func:`~vidcap.video.timecover.motion_cover`; else
+    None), from one decoding pass."""
+    from vidcap.video import timecover
+
+    if method != "felzenszwalb" or not timecover.TIME_COVER:
+        frames, idx = sample_frames(source, n_samples=n_samples, rng=rng, info=info)
+        return frames, idx, None
+    hw = source.shape[1:3] if info is None else (info.height, info.width)
+    frames, idx, thumbs = _samples_and_thumbnails(source, n_samples, rng, info,
+                                                  _work_hw(hw, work_size))
+    return frames, idx, timecover.motion_cover(thumbs) if len(thumbs) >= 2 else None
 
 
 def _work_hw(hw, work_size: int) -> tuple[int, int]:
