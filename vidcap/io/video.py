@@ -318,7 +318,7 @@ def iter_frames(
             continue
         n += 1
         img = _to_bgr(frame)
-        yield np.ascontiguousarray(np.rot90(img, turns)) if turns else img
+        yield _upright(img, turns)
     if n == 0 and (stop is None or stop > start):
         raise VideoError("no decodable video frames", path)
 
@@ -364,14 +364,18 @@ def iter_thumbnails(
             # (stored frames are turned after the scaling: a quarter turn swaps the sides)
             tw, th = (h, w) if turns % 2 else (w, h)
             thumb = _to_bgr(frame, width=tw, height=th, interpolation="AREA")
-            thumb = np.ascontiguousarray(np.rot90(thumb, turns)) if turns else thumb
+            thumb = _upright(thumb, turns)
         if i in only:
-            img = _to_bgr(frame)
-            img = np.ascontiguousarray(np.rot90(img, turns)) if turns else img
+            img = _upright(_to_bgr(frame), turns)
         if thumb is not None or img is not None:
             yield i, thumb, img
     if n == 0:
         raise VideoError("no decodable video frames", path)
+
+
+def _upright(img: np.ndarray, turns: int) -> np.ndarray:
+    """``img`` turned by ``turns`` quarter turns (the display matrix's), contiguous."""
+    return np.ascontiguousarray(np.rot90(img, turns)) if turns else img
 
 
 def _decoded(path, stop):
