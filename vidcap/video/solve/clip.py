@@ -22,7 +22,7 @@ from vidcap.video.solve.contact import foot_contacts
 from vidcap.video.solve.gauss_newton import levenberg_marquardt
 from vidcap.video.solve.labels import choose_labels, relabel
 from vidcap.video.solve.repair import repair_outliers
-from vidcap.video.solve.residuals import Problem, segment_zeta
+from vidcap.video.solve.residuals import Problem, solved_signs
 from vidcap.video.solve.signs import sweep_signs
 from vidcap.video.solve.skeleton import forward_kinematics, params_from_joints
 from vidcap.video.solve.split import SPLIT_MIN_FRAMES, solve_split
@@ -376,7 +376,5 @@ def _solve_problem(problem: Problem, params, *, sweeps: int, max_iter: int, fixe
         sw = None
     if sw is None:  # the loop's last sweep, when nothing moved since, is this one
         sw = sweep_signs(problem, joints, root, p)
-    zeta = segment_zeta(joints, problem.lengths)
-    signs = np.where(zeta < 0, -1, 1).astype(np.int8)
-    return ClipSolve(p, joints, signs, sw.confidence, problem.contact.copy(), sol.cost, iters,
-                     swapped), problem
+    return ClipSolve(p, joints, solved_signs(joints, problem.lengths), sw.confidence,
+                     problem.contact.copy(), sol.cost, iters, swapped), problem

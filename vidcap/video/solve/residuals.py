@@ -121,6 +121,12 @@ def segment_zeta(joints, lengths) -> np.ndarray:
     return dz / lengths
 
 
+def solved_signs(joints, lengths) -> np.ndarray:
+    """The depth sign of every segment, (..., 10) int8: +1 where the distal joint is
+    nearer the camera or level (:func:`segment_zeta` >= 0), else -1."""
+    return np.where(segment_zeta(joints, lengths) < 0, -1, 1).astype(np.int8)
+
+
 def sign_penalty(zeta, signs, *, margin: float = 0.0) -> np.ndarray:
     """relu(margin - sign * zeta) where a sign is given, 0 elsewhere, (..., 10)."""
     return np.where(signs != 0, np.maximum(margin - signs * zeta, 0.0), 0.0)

@@ -22,7 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from vidcap.video.solve.residuals import PER_FRAME, Problem, residuals, segment_zeta
+from vidcap.video.solve.residuals import PER_FRAME, Problem, residuals, solved_signs
 from vidcap.video.solve.skeleton import forward_kinematics
 
 #: Fewest frames a clip is split at: below, the fork and the seam cost more than half
@@ -110,12 +110,11 @@ def _join(solve, a, b, mid: int, b_start: int, kw):
     confidence[lo + _HOLD:hi - _HOLD] = seam.confidence[_HOLD:-_HOLD]
     iters += seam.iterations
     joints, _, _ = forward_kinematics(p, problem.offsets)
-    signs = np.where(segment_zeta(joints, problem.lengths) < 0, -1, 1).astype(np.int8)
     r = residuals(problem, p)
     swapped = cat(sa.swapped, sb.swapped)
-    return replace(sa, params=p, joints3d=joints, signs=signs, confidence=confidence,
-                   contact=problem.contact.copy(), cost=0.5 * float(r @ r), iterations=iters,
-                   swapped=swapped)
+    return replace(sa, params=p, joints3d=joints, signs=solved_signs(joints, problem.lengths),
+                   confidence=confidence, contact=problem.contact.copy(),
+                   cost=0.5 * float(r @ r), iterations=iters, swapped=swapped)
 
 
 def _cat_problems(pa: Problem, pb: Problem, mid: int, k: int) -> Problem:
