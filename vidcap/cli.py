@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return EXIT_INTERNAL_ERROR
     except KeyboardInterrupt:  # SIGINT, or SIGTERM (interrupt.install)
-        print("vidcap: interrupted", file=sys.stderr)
         if as_command:
-            interrupt.exit_interrupted()  # the workers stopped, no waiting on them
+            interrupt.stop_now()  # says so; the workers stopped, no waiting on them
+        print("vidcap: interrupted", file=sys.stderr)
         return interrupt.EXIT_INTERRUPTED

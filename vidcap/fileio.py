@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from vidcap import interrupt
+
 
 def check_output_file(path: str | os.PathLike, inputs=()) -> None:
     """Raise a one-line error now if ``path`` cannot be written as an output file.
@@ -74,6 +76,7 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
     )
     os.close(fd)
     tmp_path = Path(tmp)
+    interrupt.temporaries.add(tmp)  # removed even when an interrupt cannot unwind
     # mkstemp creates the file 0600; give the output the permissions any new file
     # would get (0666 less the umask), as users expect of files they asked for.
     umask = os.umask(0)
@@ -85,6 +88,7 @@ def atomic_path(path: str | os.PathLike, *, suffix: str | None = None) -> Iterat
     finally:
         if tmp_path.exists():
             tmp_path.unlink()
+        interrupt.temporaries.discard(tmp)
 
 
 def remove_atomic_leftovers(path: str | os.PathLike) -> list[Path]:

@@ -5,6 +5,12 @@ unwinds both: every ``finally`` on the way out runs (:func:`vidcap.fileio.atomic
 removes its temporary file, so no partial output is left), then :func:`stop_children`
 kills whatever worker processes this one started (the 2D fit's pool, a batch's
 executor) and the process exits with status 130 without waiting for them.
+
+An exception raised from a signal handler is lost when the signal lands inside a
+ctypes callback (numba's compiler calls back into Python from LLVM): Python prints it
+as "Exception ignored" and carries on. So the signal also arms a deadline,
+:data:`GRACE_S`; if the process has not left by then (or Python reports the interrupt
+as lost), :func:`stop_now` removes the temporary outputs still open and exits 130.
 """
 
 from __future__ import annotations
@@ -16,11 +22,53 @@ import sys
 #: The exit status of an interrupted command (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
 
+#: Seconds the ``KeyboardInterrupt`` may take to unwind before the process is stopped
+#: outright (the promise to the user is 2 s).
+GRACE_S = 1.0
+
+#: Temporary files of outputs being written (:func:`vidcap.fileio.atomic_path` adds and
+#: discards them), removed by :func:`stop_now`.
+temporaries: set[str] = set()
+
 
 def install() -> None:
-    """Make SIGTERM raise ``KeyboardInterrupt`` like SIGINT (main thread only)."""
-    signal.signal(signal.SIGTERM, signal.default_int_handler)
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    """Make SIGTERM raise ``KeyboardInterrupt`` like SIGINT, with the deadline
+    :data:`GRACE_S` behind it (main thread only)."""
+    signal.signal(signal.SIGTERM, _on_signal)
+    signal.signal(signal.SIGINT, _on_signal)
+    signal.signal(signal.SIGALRM, stop_now)
+    sys.unraisablehook = _unraisable
+
+
+def _on_signal(signum, frame) -> None:
+    if signal.getitimer(signal.ITIMER_REAL)[0] == 0.0:  # the first signal sets the deadline
+        signal.setitimer(signal.ITIMER_REAL, GRACE_S)
+    raise KeyboardInterrupt
+
+
+def _unraisable(info) -> None:
+    """Python could not raise the interrupt where the signal landed: stop in moments
+    instead (and do not print its traceback); anything else is reported as usual."""
+    if info.exc_type is not None and issubclass(info.exc_type, KeyboardInterrupt):
+        signal.setitimer(signal.ITIMER_REAL, 0.01)
+        return
+    sys.__unraisablehook__(info)
+
+
+def stop_now(signum=None, frame=None) -> None:
+    """Remove the open temporary outputs, say "interrupted", stop the children and leave
+    with :data:`EXIT_INTERRUPTED` (after the unwinding, or when it did not come in time)."""
+    signal.setitimer(signal.ITIMER_REAL, 0.0)  # said once
+    for path in list(temporaries):
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
+    try:
+        print("vidcap: interrupted", file=sys.stderr)
+    except (OSError, ValueError):
+        pass
+    exit_interrupted()
 
 
 def _children_of(pid: int) -> list[int]:

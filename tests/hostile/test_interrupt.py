@@ -92,3 +92,38 @@ def test_interrupt_stops_everything_at_once(long_clip, tmp_path, how, when):
     cache = tmp_path / ".vidcap-cache"
     if cache.exists():  # completed stages may stay; no half-written entry
         assert not [p for p in cache.iterdir() if p.name.startswith(".")]
+
+
+_LOST_IN_A_CALLBACK = """
+import ctypes, os, signal, sys, time
+from vidcap import interrupt
+from vidcap.fileio import atomic_path
+
+interrupt.install()
+def busy():  # numba's compiler calls back into Python like this, from LLVM
+    os.kill(os.getpid(), signal.SIGTERM)
+    t = time.monotonic()
+    while time.monotonic() - t < 0.3:
+        pass
+callback = ctypes.CFUNCTYPE(None)(busy)
+with atomic_path(sys.argv[1]) as tmp:
+    tmp.write_text("half")
+    callback()  # the KeyboardInterrupt raised in here is lost ("Exception ignored")
+    time.sleep(5)
+print("carried on")
+"""
+
+
+def test_an_interrupt_lost_in_a_ctypes_callback_still_stops_the_command(tmp_path):
+    out = tmp_path / "out.txt"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-c", _LOST_IN_A_CALLBACK, str(out)], env=env,
+                          capture_output=True, text=True, timeout=30)
+    took = time.monotonic() - t0
+    assert proc.returncode == 130, (proc.returncode, proc.stderr[-500:])
+    assert "carried on" not in proc.stdout
+    assert "Traceback" not in proc.stderr, proc.stderr[-500:]
+    assert proc.stderr.strip().splitlines()[-1] == "vidcap: interrupted"
+    assert took < 5.0, took
+    assert list(tmp_path.iterdir()) == []  # neither the output nor its temporary file
