@@ -33,6 +33,7 @@ from vidcap.body import BodyModel
 from vidcap.errors import AnnotationError
 from vidcap.video.annotations import Annotations, default_path
 from vidcap.video.hidden import DEFAULT_HIDDEN, check_hidden, fill_hidden
+from vidcap.video.keptframes import KeptFrames
 from vidcap.video.lifting import (
     NEAR_PLANE,
     SCALE_WINDOW_S,
@@ -488,6 +489,7 @@ class _Silhouettes:
     masks: MaskStack
     bbox: np.ndarray
     n_other: np.ndarray
+    kept: KeptFrames | None = None  # the colour round the person, when extracted here
 
 
 def _silhouette_key(video_id: dict, k_plate: str, regions: list | None = None,
@@ -504,6 +506,17 @@ def _regions(ann: Annotations, plate):
 
     regions = UserRegions(ann, plate.plate.shape[:2])
     return regions if regions else None
+
+
+class _Both:
+    """Two keepers of the extraction's colour frames (``append(frame, box)``) as one."""
+
+    def __init__(self, first, second):
+        self.first, self.second = first, second
+
+    def append(self, frame, box) -> None:
+        self.first.append(frame, box)
+        self.second.append(frame, box)
 
 
 class _MaskFeed:
@@ -532,9 +545,11 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
     (:class:`vidcap.video.userregions.UserRegions`), which ``key`` must include.
     ``crops``: a :class:`vidcap.video.fit.cueframes.FrameCrops` filled with each frame's
     colour crop (None: none; left empty when the silhouettes come from the cache).
-    ``graph_cut``: the band's graph cut, on ``plate``'s colour models (none: the clip's
-    samples showed too little of the person; the plain threshold decides, with a
-    notice through ``log``)."""
+    Extracted, the stage keeps the colour round the person for the 3D stage's cues
+    (:class:`vidcap.video.keptframes.KeptFrames`, as ``kept``). ``graph_cut``:
+    the band's graph cut, on ``plate``'s colour models (none: the clip's samples showed
+    too little of the person; the plain threshold decides, with a notice through
+    ``log``)."""
     from vidcap.video.silhouette import extract_silhouettes
 
     # entries written before the masks were stored cropped lack mask_boxes: extract again
@@ -551,9 +566,11 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
             "notice: the graph cut is skipped: the plate's samples show too little of the "
             "person to learn their colours")
         graph_cut = False
+    kept = KeptFrames() if FRONT_CUE or LIMB_CUE else None
+    keep = crops if kept is None else kept if crops is None else _Both(crops, kept)
     sil = extract_silhouettes(video, plate, progress=progress, on_masks=on_masks,
-                              regions=regions, crops=crops, graph_cut=graph_cut)
-    out = _Silhouettes(sil.masks, sil.bbox, sil.n_other_blobs)
+                              regions=regions, crops=keep, graph_cut=graph_cut)
+    out = _Silhouettes(sil.masks, sil.bbox, sil.n_other_blobs, kept)
     cache.save("silhouettes", key, bbox=out.bbox, n_other=out.n_other, **out.masks.to_arrays())
     return out
 
@@ -802,7 +819,8 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
-    front/back cue and the limb order (:func:`colour_cues`). ``hidden='solve'`` with the
+    front/back cue and the limb order (:func:`colour_cues`), unless the silhouette
+    stage kept all of them (``sil.kept``). ``hidden='solve'`` with the
     clip solve: the 2D joints with the ones the torso hides from it (:func:`_with_hidden`).
     ``jobs`` processes solve the clip (:mod:`vidcap.video.solve.split`)."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
@@ -812,8 +830,11 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     if video is not None and (FRONT_CUE or LIMB_CUE):
         from vidcap.io.video import iter_frames
 
-        near, limbs = colour_cues(iter_frames(video, stop=len(joints2d)), joints2d,
-                                  model_height, body)
+        F = len(joints2d)
+        kept = sil.kept
+        frames = kept.frames(F) if kept is not None and kept.complete(F) else \
+            iter_frames(video, stop=F)
+        near, limbs = colour_cues(frames, joints2d, model_height, body)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=model_height, view=view,

@@ -1,0 +1,78 @@
+"""The colour kept round the person for the 3D stage's cues (vidcap.video.keptframes)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from vidcap.video.keptframes import MARGIN_PX, KeptFrames
+
+SAMPLES = Path(__file__).resolve().parents[1] / "sample_videos"
+
+
+def test_frames_come_back_inside_the_box_and_its_margin_and_black_elsewhere():
+    rng = np.random.default_rng(0)
+    frames = rng.integers(0, 256, (3, 120, 160, 3), dtype=np.uint8)
+    kept = KeptFrames()
+    boxes = [(40, 80, 60, 90), (0, 0, 0, 0), (100, 120, 140, 160)]  # y0, y1, x0, x1
+    for frame, box in zip(frames, boxes, strict=True):
+        kept.append(frame, box)
+    assert kept.complete(3) and not kept.complete(4)
+    out = [f.copy() for f in kept.frames()]
+    inside = np.zeros((120, 160), bool)
+    m = MARGIN_PX  # 40 rows tall: the margin is the minimum
+    inside[40 - m:80 + m, 60 - m:90 + m] = True
+    np.testing.assert_array_equal(out[0][inside], frames[0][inside])
+    assert not out[0][~inside].any()
+    assert not out[1].any()  # no person, nothing kept (the buffer is cleared)
+    inside[:] = False
+    inside[100 - m:, 140 - m:] = True  # clipped at the frame's edges
+    np.testing.assert_array_equal(out[2][inside], frames[2][inside])
+    assert not out[2][~inside].any()
+
+
+def test_past_the_budget_everything_is_dropped():
+    frame = np.full((100, 100, 3), 7, np.uint8)
+    kept = KeptFrames(budget=3 * 100 * 100 * 3 - 1)
+    for _ in range(3):
+        kept.append(frame, (0, 100, 0, 100))
+    assert kept.dropped and len(kept) == 0 and not kept.complete(3)
+    kept.append(frame, (0, 100, 0, 100))
+    assert len(kept) == 0
+
+
+def test_convert_reads_the_cues_from_the_kept_frames_as_from_a_second_decode(monkeypatch):
+    """The 3D stage's colour cues from the silhouettes' kept frames equal those of
+    decoding the video again (which a dropped keeper falls back to), and with them no
+    second decode happens."""
+    import vidcap.io.video as video_io
+    import vidcap.video.keptframes as keptframes
+    import vidcap.video.pipeline as pipeline
+
+    cues, decodes = [], []
+    real_cues, real_iter = pipeline.colour_cues, video_io.iter_frames
+
+    def spy_cues(frames, *a, **k):
+        out = real_cues(frames, *a, **k)
+        cues.append(out)
+        return out
+
+    def spy_iter(*a, **k):
+        decodes.append(a)
+        return real_iter(*a, **k)
+
+    monkeypatch.setattr(pipeline, "colour_cues", spy_cues)
+    monkeypatch.setattr(video_io, "iter_frames", spy_iter)
+    video = SAMPLES / "arms.mp4"
+    kept = pipeline.run(video, progress=False, jobs=1)
+    n_kept = len(decodes)
+    monkeypatch.setattr(keptframes, "BUDGET_BYTES", 0)
+    monkeypatch.setattr(keptframes.KeptFrames.__init__, "__defaults__", (0,))
+    decoded = pipeline.run(video, progress=False, jobs=1)
+    assert len(decodes) == 2 * n_kept + 1  # the second run decoded once more
+    (near_a, limbs_a), (near_b, limbs_b) = cues
+    assert np.isfinite(near_a).any() and np.abs(near_a).max() > 0
+    np.testing.assert_array_equal(near_a, near_b)
+    np.testing.assert_array_equal(limbs_a, limbs_b)
+    np.testing.assert_array_equal(kept.lifted.joints3d, decoded.lifted.joints3d)

@@ -1,0 +1,88 @@
+"""The colour around the person, kept from the silhouettes' decode for the 3D stage's cues.
+
+The 3D stage's colour cues (the front/back cue, :mod:`vidcap.video.frontback`, and the
+limb order, :mod:`vidcap.video.legorder`) read pixels along the fitted limbs, known
+only once the 2D fit is done. Decoding the clip again for them cost ~0.25 s of the
+~3.5 s ``vidcap convert`` takes on 300 frames at 640x480, on one core while the other
+waits. :class:`KeptFrames` instead keeps each frame's person box (with a margin) at
+full resolution as the silhouettes are extracted, up to :data:`BUDGET_BYTES`; a longer
+clip drops what it kept and the cues decode the video again, as before.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+
+#: Bytes the kept boxes may take (a 640x480 walk: ~60 KB a frame, so ~4,000 frames).
+BUDGET_BYTES = 256 * 2**20
+#: Margin kept round the person's box: this fraction of its height, at least
+#: :data:`MARGIN_PX` pixels. The cues' search lines reach a limb's radius or two past
+#: the fitted limb, and a fitted forearm may stick out of the silhouette a little.
+MARGIN = 0.15
+MARGIN_PX = 16
+
+
+class KeptFrames:
+    """Colour frames (F, H, W, 3) BGR uint8, each kept as its person's box.
+
+    Parameters
+    ----------
+    budget : int
+        Bytes the boxes may take; past it everything is dropped (:attr:`dropped`).
+    """
+
+    def __init__(self, budget: int = BUDGET_BYTES):
+        self.budget = int(budget)
+        self.frame_shape: tuple[int, int] | None = None
+        self.boxes: list = []  # (h, w, 3) uint8 or None
+        self.origins: list = []  # (y0, x0) of each box
+        self.nbytes = 0
+        self.dropped = False
+
+    def append(self, frame: np.ndarray, box) -> None:
+        """Keep ``frame`` (H, W, 3) uint8 inside the person's box ``(y0, y1, x0, x1)``
+        px (empty, ``y0 == y1``, without a person)."""
+        if self.dropped:
+            return
+        if self.frame_shape is None:
+            self.frame_shape = tuple(frame.shape[:2])
+        y0, y1, x0, x1 = (int(v) for v in box)
+        if y1 <= y0 or x1 <= x0:
+            self.boxes.append(None)
+            self.origins.append((0, 0))
+            return
+        H, W = self.frame_shape
+        m = max(MARGIN_PX, int(np.ceil(MARGIN * (y1 - y0))))
+        y0, y1, x0, x1 = max(y0 - m, 0), min(y1 + m, H), max(x0 - m, 0), min(x1 + m, W)
+        kept = np.array(frame[y0:y1, x0:x1])
+        self.nbytes += kept.nbytes
+        if self.nbytes > self.budget:  # a long clip: the cues decode it again
+            self.boxes, self.origins, self.dropped = [], [], True
+            return
+        self.boxes.append(kept)
+        self.origins.append((y0, x0))
+
+    def __len__(self) -> int:
+        return len(self.boxes)
+
+    def complete(self, n_frames: int) -> bool:
+        """Whether every one of the clip's ``n_frames`` frames is kept."""
+        return not self.dropped and len(self.boxes) == int(n_frames)
+
+    def frames(self, stop: int | None = None) -> Iterator[np.ndarray]:
+        """The frames (H, W, 3) uint8 up to ``stop``, black outside the kept boxes (one
+        buffer, refilled: a frame is valid until the next is asked for)."""
+        if self.frame_shape is None:
+            return
+        buf = np.zeros((*self.frame_shape, 3), np.uint8)
+        last = None
+        for box, (y0, x0) in zip(self.boxes[:stop], self.origins[:stop], strict=True):
+            if last is not None:
+                buf[last] = 0
+                last = None
+            if box is not None:
+                last = (slice(y0, y0 + box.shape[0]), slice(x0, x0 + box.shape[1]))
+                buf[last] = box
+            yield buf
