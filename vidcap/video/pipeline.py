@@ -798,11 +798,9 @@ def front_cue(video, joints2d) -> np.ndarray:
     the image-side named 2D joints (F, 15, 2): :func:`vidcap.video.frontback.near_side`
     alone (``vidcap convert`` reads it with the limb order, :func:`colour_cues`).
 
-    Decoded again rather than kept from the silhouette stage's decode: the cue reads
-    pixels along the fitted forearms, known only once the 2D fit is done, so that stage
-    would have to keep every frame's colour around the person for the whole clip (as the
-    cues' crops, :class:`vidcap.video.fit.cueframes.FrameCrops`: 11-78 KB a frame on the
-    samples, renders and real clips, 0.2-1.4 GB for ten minutes at 30 fps), where this
+    Decoded again: ``vidcap convert`` reads the colour its silhouette stage kept round
+    the person instead (:class:`vidcap.video.keptframes.KeptFrames`, up to a memory
+    budget: a whole clip's colour is 0.2-1.4 GB for ten minutes at 30 fps), where this
     decode holds one frame at a time, for 0.3-0.45 s CPU per 300 frames (640x480 to
     960x540).
     """
