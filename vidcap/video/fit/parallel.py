@@ -415,6 +415,11 @@ class FitPool:
         ctx = _context()
         self.queue = ctx.Queue()
         if ctx.get_start_method() == "fork" and hasattr(os, "fork"):
+            # numba's start-up imports scipy.linalg (its BLAS check: ~0.15 s of the
+            # zygote's ~0.55 s warm-up); the pipeline's 3D solve needs it here anyway,
+            # so it is imported before the fork and the zygote inherits it
+            import scipy.linalg  # noqa: F401
+
             # one process loads the kernels and forks the workers, which inherit them
             self.executor = _ForkedPool(self.jobs, self.queue, ctx, warm=warm)
             return
