@@ -42,6 +42,21 @@ def test_past_the_budget_everything_is_dropped():
     assert len(kept) == 0
 
 
+def test_a_clip_whose_first_boxes_project_past_the_budget_is_not_kept_at_all():
+    frame = np.full((100, 100, 3), 7, np.uint8)
+    per_frame = 100 * 100 * 3
+    kept = KeptFrames(budget=100 * per_frame, n_frames=101)
+    for _ in range(9):
+        kept.append(frame, (0, 100, 0, 100))
+    assert not kept.dropped and len(kept) == 9  # too few frames to project from
+    kept.append(frame, (0, 100, 0, 100))  # 10 of 101 frames: 101 x per_frame > budget
+    assert kept.dropped and len(kept) == 0
+    fits = KeptFrames(budget=100 * per_frame, n_frames=100)
+    for _ in range(100):
+        fits.append(frame, (0, 100, 0, 100))
+    assert fits.complete(100)
+
+
 def test_convert_reads_the_cues_from_the_kept_frames_as_from_a_second_decode(monkeypatch):
     """The 3D stage's colour cues from the silhouettes' kept frames equal those of
     decoding the video again (which a dropped keeper falls back to), and with them no
@@ -67,8 +82,7 @@ def test_convert_reads_the_cues_from_the_kept_frames_as_from_a_second_decode(mon
     video = SAMPLES / "arms.mp4"
     kept = pipeline.run(video, progress=False, jobs=1)
     n_kept = len(decodes)
-    monkeypatch.setattr(keptframes, "BUDGET_BYTES", 0)
-    monkeypatch.setattr(keptframes.KeptFrames.__init__, "__defaults__", (0,))
+    monkeypatch.setattr(keptframes.KeptFrames.__init__, "__defaults__", (0, None))
     decoded = pipeline.run(video, progress=False, jobs=1)
     assert len(decodes) == 2 * n_kept + 1  # the second run decoded once more
     (near_a, limbs_a), (near_b, limbs_b) = cues

@@ -22,6 +22,8 @@ BUDGET_BYTES = 256 * 2**20
 #: the fitted limb, and a fitted forearm may stick out of the silhouette a little.
 MARGIN = 0.15
 MARGIN_PX = 16
+#: Frames after which the boxes kept so far project the whole clip's size.
+_PROJECT_AFTER = 10
 
 
 class KeptFrames:
@@ -31,10 +33,14 @@ class KeptFrames:
     ----------
     budget : int
         Bytes the boxes may take; past it everything is dropped (:attr:`dropped`).
+    n_frames : int, optional
+        Frames the clip is expected to have: when the first boxes, so many times over,
+        would pass the budget, nothing is kept from the start (no copies for nothing).
     """
 
-    def __init__(self, budget: int = BUDGET_BYTES):
+    def __init__(self, budget: int = BUDGET_BYTES, n_frames: int | None = None):
         self.budget = int(budget)
+        self.n_frames = n_frames
         self.frame_shape: tuple[int, int] | None = None
         self.boxes: list = []  # (h, w, 3) uint8 or None
         self.origins: list = []  # (y0, x0) of each box
@@ -58,7 +64,10 @@ class KeptFrames:
         y0, y1, x0, x1 = max(y0 - m, 0), min(y1 + m, H), max(x0 - m, 0), min(x1 + m, W)
         kept = np.array(frame[y0:y1, x0:x1])
         self.nbytes += kept.nbytes
-        if self.nbytes > self.budget:  # a long clip: the cues decode it again
+        seen = len(self.boxes) + 1
+        expected = self.nbytes / seen * self.n_frames if self.n_frames and \
+            seen >= _PROJECT_AFTER else 0.0
+        if self.nbytes > self.budget or expected > self.budget:  # the cues decode again
             self.boxes, self.origins, self.dropped = [], [], True
             return
         self.boxes.append(kept)

@@ -550,6 +550,7 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
     the band's graph cut, on ``plate``'s colour models (none: the clip's samples showed
     too little of the person; the plain threshold decides, with a notice through
     ``log``)."""
+    from vidcap.io.video import probe
     from vidcap.video.silhouette import extract_silhouettes
 
     # entries written before the masks were stored cropped lack mask_boxes: extract again
@@ -566,7 +567,7 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
             "notice: the graph cut is skipped: the plate's samples show too little of the "
             "person to learn their colours")
         graph_cut = False
-    kept = KeptFrames() if FRONT_CUE or LIMB_CUE else None
+    kept = KeptFrames(n_frames=probe(video).n_frames) if FRONT_CUE or LIMB_CUE else None
     keep = crops if kept is None else kept if crops is None else _Both(crops, kept)
     sil = extract_silhouettes(video, plate, progress=progress, on_masks=on_masks,
                               regions=regions, crops=keep, graph_cut=graph_cut)
