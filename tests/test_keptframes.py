@@ -42,6 +42,13 @@ def test_past_the_budget_everything_is_dropped():
     assert len(kept) == 0
 
 
+def test_a_frame_of_another_size_drops_what_was_kept():
+    kept = KeptFrames()
+    kept.append(np.zeros((100, 100, 3), np.uint8), (0, 50, 0, 50))
+    kept.append(np.zeros((120, 100, 3), np.uint8), (0, 50, 0, 50))
+    assert kept.dropped and not kept.complete(2)
+
+
 def test_a_clip_whose_first_boxes_project_past_the_budget_is_not_kept_at_all():
     frame = np.full((100, 100, 3), 7, np.uint8)
     per_frame = 100 * 100 * 3

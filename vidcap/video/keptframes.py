@@ -54,6 +54,9 @@ class KeptFrames:
             return
         if self.frame_shape is None:
             self.frame_shape = tuple(frame.shape[:2])
+        if tuple(frame.shape[:2]) != self.frame_shape:  # the cues' decode deals with it
+            self.boxes, self.origins, self.dropped = [], [], True
+            return
         y0, y1, x0, x1 = (int(v) for v in box)
         if y1 <= y0 or x1 <= x0:
             self.boxes.append(None)
