@@ -198,7 +198,7 @@ def run(
             streamed, crops = _streamed_fit(pool, info.n_frames, jobs, per_job, cues, proportions)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
                                     progress=progress, regions=_regions(ann, plate),
-                                    graph_cut=graph_cut, log=log)
+                                    graph_cut=graph_cut, log=log, n_frames=info.n_frames)
         _report_silhouettes(sil, info.n_frames, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
                                           per_job=per_job, streamed=streamed, log=log,
@@ -537,7 +537,8 @@ class _MaskFeed:
 
 def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, streamed,
                       progress, regions=None, on_masks=None, crops=None,
-                      graph_cut: bool = False, log=None) -> _Silhouettes:
+                      graph_cut: bool = False, log=None,
+                      n_frames: int | None = None) -> _Silhouettes:
     """The person's silhouettes, cached or extracted; while they are extracted, each
     chunk of frames goes to ``streamed`` (a :class:`vidcap.video.fit.parallel.StreamedFit`,
     or None) as soon as it is complete, or to ``on_masks`` (as ``on_masks(start, masks)``
@@ -546,11 +547,11 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
     ``crops``: a :class:`vidcap.video.fit.cueframes.FrameCrops` filled with each frame's
     colour crop (None: none; left empty when the silhouettes come from the cache).
     Extracted, the stage keeps the colour round the person for the 3D stage's cues
-    (:class:`vidcap.video.keptframes.KeptFrames`, as ``kept``). ``graph_cut``:
+    (:class:`vidcap.video.keptframes.KeptFrames`, as ``kept``; ``n_frames``: the
+    frames expected, if known, to tell early that they will not fit). ``graph_cut``:
     the band's graph cut, on ``plate``'s colour models (none: the clip's samples showed
     too little of the person; the plain threshold decides, with a notice through
     ``log``)."""
-    from vidcap.io.video import probe
     from vidcap.video.silhouette import extract_silhouettes
 
     # entries written before the masks were stored cropped lack mask_boxes: extract again
@@ -567,7 +568,7 @@ def _silhouette_stage(cache: StageCache, key: str, video: Path, plate, *, stream
             "notice: the graph cut is skipped: the plate's samples show too little of the "
             "person to learn their colours")
         graph_cut = False
-    kept = KeptFrames(n_frames=probe(video).n_frames) if FRONT_CUE or LIMB_CUE else None
+    kept = KeptFrames(n_frames=n_frames) if FRONT_CUE or LIMB_CUE else None
     keep = crops if kept is None else kept if crops is None else _Both(crops, kept)
     sil = extract_silhouettes(video, plate, progress=progress, on_masks=on_masks,
                               regions=regions, crops=keep, graph_cut=graph_cut)
