@@ -32,6 +32,18 @@ def test_frames_come_back_inside_the_box_and_its_margin_and_black_elsewhere():
     assert not out[2][~inside].any()
 
 
+def test_covers_tells_whether_every_pixel_read_is_kept():
+    kept = KeptFrames()
+    frame = np.zeros((120, 160, 3), np.uint8)
+    kept.append(frame, (40, 80, 60, 90))  # kept rows 24-95, columns 44-105
+    kept.append(frame, (0, 0, 0, 0))  # nothing kept
+    assert kept.covers([0, 0], [44, 105], [24, 95])
+    assert not kept.covers([0], [106], [50])
+    assert not kept.covers([1], [50], [50])  # frame 1 kept nothing
+    assert kept.covers([1, 0], [-1, 200], [-1, 50])  # outside the frame: nobody reads it
+    assert not kept.covers([2], [50], [50])  # a frame not kept at all
+
+
 def test_past_the_budget_everything_is_dropped():
     frame = np.full((100, 100, 3), 7, np.uint8)
     kept = KeptFrames(budget=3 * 100 * 100 * 3 - 1)

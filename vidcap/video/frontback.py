@@ -86,13 +86,26 @@ def sample_points(joints2d, search=SEARCH) -> dict:
             "arm_left": np.where(sel, la, ra), "arm_right": np.where(sel, ra, la)}
 
 
+def _nearest_pixels(pts: np.ndarray) -> np.ndarray:
+    """The pixels (..., 2) int64 x, y nearest ``pts`` (..., 2); -1 where not finite."""
+    ok = np.isfinite(pts).all(-1)
+    return np.where(ok[..., None], np.round(pts), -1).astype(np.int64)
+
+
+def read_pixels(joints2d, search=SEARCH) -> np.ndarray:
+    """The pixels :func:`arm_visibility` reads of each frame, (F, n, 2) int64 x, y (-1:
+    none; a pixel outside the frame is not read either)."""
+    pts = sample_points(joints2d, search)
+    return _nearest_pixels(np.concatenate([pts[k] for k in ("head", "cloth", "arm_left",
+                                                            "arm_right")], axis=1))
+
+
 def _bins_at(frame: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Chromaticity bins (n,) of ``frame`` (H, W, 3) at the pixels nearest ``pts`` (n, 2),
     -1 where a point is not finite or outside the frame."""
     H, W = frame.shape[:2]
-    ok = np.isfinite(pts).all(-1)
-    xy = np.where(ok[:, None], np.round(pts), -1).astype(np.int64)
-    ok &= (xy[:, 0] >= 0) & (xy[:, 0] < W) & (xy[:, 1] >= 0) & (xy[:, 1] < H)
+    xy = _nearest_pixels(pts)
+    ok = (xy[:, 0] >= 0) & (xy[:, 0] < W) & (xy[:, 1] >= 0) & (xy[:, 1] < H)
     out = np.full(len(pts), -1, np.int64)
     if ok.any():
         px = frame[xy[ok, 1], xy[ok, 0]].astype(np.float32)

@@ -245,6 +245,21 @@ def tap_limb_edges(frames, joints2d, radii, strength, count):
 _CHUNK = 128
 
 
+def read_pixels(joints2d, radii, shape) -> tuple[np.ndarray, np.ndarray]:
+    """The pixels :func:`tap_limb_edges` reads of frames of ``shape`` (H, W): their
+    frames (N,) and flat indices ``y W + x`` (N,), inside the frame only."""
+    j2, rad = np.asarray(joints2d, float), np.asarray(radii, float)
+    frames, flat = [], []
+    for first in range(0, len(j2), _CHUNK):
+        chunk = _Chunk(j2[first:first + _CHUNK], rad[first:first + _CHUNK], shape)
+        f = np.broadcast_to((chunk.row // 4 + first)[:, None, None], chunk.ok.shape)
+        frames.append(f[chunk.ok])
+        flat.append(chunk.flat[chunk.ok])
+    if not frames:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(frames).astype(np.int64), np.concatenate(flat).astype(np.int64)
+
+
 def near_limb(strength, count, *, min_count: int = 4) -> np.ndarray:
     """Which of the fit's arms (legs) the frame shows nearer the camera, (...): (l - r) /
     (l + r) of :func:`limb_edges`' strengths (...,  2 sides) (> 0: the fit's ``l_`` limb

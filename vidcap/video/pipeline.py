@@ -795,6 +795,28 @@ def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool |
     return near, near_limb(strength, count) if limbs else None
 
 
+def _kept_covers(kept, joints2d, model_height, body) -> bool:
+    """Whether ``kept`` (a :class:`vidcap.video.keptframes.KeptFrames`, or None) holds every
+    pixel :func:`colour_cues` reads for the 2D joints (F, 15, 2): then the cues read it
+    and give what a second decode would, to the bit."""
+    from vidcap.video.frontback import read_pixels as arm_pixels
+    from vidcap.video.legorder import limb_radii
+    from vidcap.video.legorder import read_pixels as limb_pixels
+
+    F = len(joints2d)
+    if kept is None or not kept.complete(F):
+        return False
+    if FRONT_CUE:
+        xy = arm_pixels(joints2d)
+        if not kept.covers(np.repeat(np.arange(F), xy.shape[1]), xy[..., 0], xy[..., 1]):
+            return False
+    if LIMB_CUE and model_height is not None:
+        W = kept.frame_shape[1]
+        f, flat = limb_pixels(joints2d, limb_radii(model_height, body), kept.frame_shape)
+        return kept.covers(f, flat % W, flat // W)
+    return True
+
+
 def front_cue(video, joints2d) -> np.ndarray:
     """The near-side cue (F,) of ``video``'s frames (decoded again, one at a time) for
     the image-side named 2D joints (F, 15, 2): :func:`vidcap.video.frontback.near_side`
@@ -832,7 +854,7 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
 
         F = len(joints2d)
         kept = sil.kept
-        frames = kept.frames(F) if kept is not None and kept.complete(F) else \
+        frames = kept.frames(F) if _kept_covers(kept, joints2d, model_height, body) else \
             iter_frames(video, stop=F)
         near, limbs = colour_cues(frames, joints2d, model_height, body)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
