@@ -19,7 +19,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
-#: Bytes the kept boxes may take (a 640x480 walk: ~60 KB a frame, so ~4,000 frames).
+#: Bytes the kept boxes may take (convert_speed.py's 640x480 walk: 18 KB a frame; a
+#: dancer filling a 576x576 frame: 230 KB, so ~1,100 frames).
 BUDGET_BYTES = 256 * 2**20
 #: Margin kept round the person's box: this fraction of its height, at least
 #: :data:`MARGIN_PX` pixels. The cues' search lines reach a limb's radius or two past
