@@ -11,6 +11,9 @@ import math
 import numba
 import numpy as np
 
+#: Squared colour differences under this have their link weight memoised per frame.
+MEMO = 4096
+
 
 @numba.njit(cache=True, nogil=True)
 def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours):
@@ -84,18 +87,40 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
     return band, qb[:n], plate[:n], nvb[:n], hist, n_scene, hist_in, n_in
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _d2(img, y, x, yy, xx):
+    """Squared colour distance of two pixels (an integer, exact in float64)."""
+    d2 = 0.0
+    for c in range(3):
+        d = float(img[y, x, c]) - float(img[yy, xx, c])
+        d2 += d * d
+    return d2
+
+
 @numba.njit(cache=True, nogil=True)
-def band_graph(band, fixed, img, smooth):
-    """The band's 4-neighbour links and the links to fixed pixels folded into the
-    terminal ones (:func:`vidcap.video.graphcut._band_cut`).
+def band_graph(band, fixed, img, smooth, e):
+    """The band's 4-neighbour links, the links to fixed pixels folded into the
+    terminal ones (:func:`vidcap.video.graphcut._band_cut`), and the terminal links.
+
+    Only the band's pixels are visited (a pair touching the band has a band pixel at
+    one end): the outline's few thousand pixels, not the crop's tens of thousands.
+    The links come out in the order of a row-major pass over the crop's pairs (the
+    flow's search, and so its cut among equal ones, follows that order), and each
+    pixel's folded links are summed in that order too (above, left, right, below),
+    so the weights are the same bit for bit; ``beta``'s sum is of integers (exact in
+    any order).
 
     Parameters
     ----------
-    band, fixed : (h, w) bool
-        Band pixels; outside the band, the kept label (person).
+    band : (h, w) bool
+        Band pixels.
+    fixed : (h, w) uint8
+        Outside the band, the kept label (non-zero: person).
     img : (h, w, 3) uint8
     smooth : float
         Weight of the pairwise term.
+    e : (n,) float32
+        Evidence for the person per band pixel (row order).
 
     Returns
     -------
@@ -105,64 +130,101 @@ def band_graph(band, fixed, img, smooth):
         Their weights, ``smooth * exp(-beta * |I_p - I_q|^2)``, ``beta`` from the
         mean squared difference over the pairs touching the band.
     src, snk : (n,) float64
-        Per band pixel, the summed weights of its links to fixed person / scene
-        pixels.
+        Per band pixel, the terminal links: ``max(e, 0)`` and ``max(-e, 0)`` plus the
+        summed weights of its links to fixed person / scene pixels.
     """
     h, w = band.shape
+    n = len(e)
+    ys = np.empty(n, np.int32)
+    xs = np.empty(n, np.int32)
     idx = np.full((h, w), -1, np.int32)
-    n = 0
+    k = 0
     for y in range(h):
         for x in range(w):
             if band[y, x]:
-                idx[y, x] = n
-                n += 1
+                idx[y, x] = k
+                ys[k] = y
+                xs[k] = x
+                k += 1
+    # Per band pixel, the squared differences to its neighbours above, left, right
+    # and below (-1: none, or a band pixel above / left, whose own pair it is).
+    d2 = np.full((n, 4), -1.0)
     total = 0.0
     count = 0
-    for y in range(h):
-        for x in range(w):
-            for dy, dx in ((0, 1), (1, 0)):
-                yy, xx = y + dy, x + dx
-                if yy >= h or xx >= w or not (band[y, x] or band[yy, xx]):
-                    continue
-                d2 = 0.0
-                for c in range(3):
-                    d = float(img[y, x, c]) - float(img[yy, xx, c])
-                    d2 += d * d
-                total += d2
+    for k in range(n):
+        y, x = ys[k], xs[k]
+        if y > 0 and idx[y - 1, x] < 0:
+            d2[k, 0] = _d2(img, y - 1, x, y, x)
+        if x > 0 and idx[y, x - 1] < 0:
+            d2[k, 1] = _d2(img, y, x - 1, y, x)
+        if x + 1 < w:
+            d2[k, 2] = _d2(img, y, x, y, x + 1)
+        if y + 1 < h:
+            d2[k, 3] = _d2(img, y, x, y + 1, x)
+        for j in range(4):
+            if d2[k, j] >= 0:
+                total += d2[k, j]
                 count += 1
     beta = 1.0 / max(2.0 * total / count, 1e-6) if count else 0.0
+    # The weight of each small squared difference computed once (they repeat: the
+    # differences are integers, most of them small; exp was half of this kernel).
+    memo = np.full(MEMO, -1.0)
     ia = np.empty(2 * n, np.int32)
     ib = np.empty(2 * n, np.int32)
     wt = np.empty(2 * n, np.float64)
-    src = np.zeros(n, np.float64)
-    snk = np.zeros(n, np.float64)
+    src = np.empty(n, np.float64)
+    snk = np.empty(n, np.float64)
     m = 0
+    for k in range(n):
+        y, x = ys[k], xs[k]
+        s = 0.0
+        t = 0.0
+        for j in range(4):
+            if d2[k, j] < 0:
+                continue
+            q = int(d2[k, j])
+            if q < MEMO:
+                v = memo[q]
+                if v < 0:
+                    v = memo[q] = smooth * math.exp(-beta * d2[k, j])
+            else:
+                v = smooth * math.exp(-beta * d2[k, j])
+            yy = y + (-1, 0, 0, 1)[j]
+            xx = x + (0, -1, 1, 0)[j]
+            b = idx[yy, xx]
+            if b >= 0:  # (right or below: the pair's first pixel is this one)
+                ia[m] = k
+                ib[m] = b
+                wt[m] = v
+                m += 1
+            elif fixed[yy, xx] > 0:  # cutting the pair costs v when k takes the other label
+                s += v
+            else:
+                t += v
+        src[k] = max(e[k], 0.0) + s
+        snk[k] = max(-e[k], 0.0) + t
+    return ia[:m], ib[:m], wt[:m], src, snk
+
+
+@numba.njit(cache=True, nogil=True)
+def labels_present(lab, n):
+    """(n,) bool: which of the labels 0..n-1 occur in ``lab`` (h, w) int32."""
+    out = np.zeros(n, np.bool_)
+    h, w = lab.shape
     for y in range(h):
         for x in range(w):
-            for dy, dx in ((0, 1), (1, 0)):
-                yy, xx = y + dy, x + dx
-                if yy >= h or xx >= w:
-                    continue
-                a, b = idx[y, x], idx[yy, xx]
-                if a < 0 and b < 0:
-                    continue
-                d2 = 0.0
-                for c in range(3):
-                    d = float(img[y, x, c]) - float(img[yy, xx, c])
-                    d2 += d * d
-                v = smooth * math.exp(-beta * d2)
-                if a >= 0 and b >= 0:
-                    ia[m] = a
-                    ib[m] = b
-                    wt[m] = v
-                    m += 1
-                elif a >= 0:  # cutting the pair costs v when a takes the other label
-                    if fixed[yy, xx]:
-                        src[a] += v
-                    else:
-                        snk[a] += v
-                elif fixed[y, x]:
-                    src[b] += v
-                else:
-                    snk[b] += v
-    return ia[:m], ib[:m], wt[:m], src, snk
+            out[lab[y, x]] = True
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def paint_band(out, band, person):
+    """Write the cut's labels into the crop ``out`` (h, w) uint8, in place: 255 where
+    ``person`` (n,) bool, else 0, at the ``band`` (h, w) pixels in row order."""
+    h, w = band.shape
+    k = 0
+    for y in range(h):
+        for x in range(w):
+            if band[y, x]:
+                out[y, x] = 255 if person[k] else 0
+                k += 1

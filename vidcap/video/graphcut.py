@@ -234,8 +234,12 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     # The crop takes in the whole of each never-seen part it touches (a static torso
     # beside the moving arm that is the largest blob).
     lab, boxes = cp.parts
-    sub = lab[y0:y1, x0:x1]
-    touched = np.unique(sub[sub > 0])
+    # (only parts whose box meets the crop can be in it; most frames meet none)
+    meets = ((boxes[:, 0] < x1) & (boxes[:, 2] > x0) & (boxes[:, 1] < y1)
+             & (boxes[:, 3] > y0))
+    touched = np.flatnonzero(meets)
+    if len(touched):
+        touched = touched[_kernels().labels_present(lab[y0:y1, x0:x1], len(boxes))[touched]]
     if len(touched):
         b = boxes[touched]
         x0, y0 = min(x0, int(b[:, 0].min())), min(y0, int(b[:, 1].min()))
@@ -267,18 +271,23 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     e = np.where(nv, cp.never_weight * e + cp.colour_weight * col, e + cp.seen_colour * col)
     if cp.prev is not None and cp.time_weight:
         e += np.where(cp.prev[y0:y1, x0:x1][band] > 0, cp.time_weight, -cp.time_weight)
-    person = _band_cut(band, f > 0, e, img, cp.smooth)
+    person = _band_cut(band, f, e, img, cp.smooth)
     out = fg.copy()
-    out[y0:y1, x0:x1][band] = np.where(person, 255, 0).astype(np.uint8)
+    _kernels().paint_band(out[y0:y1, x0:x1], band, person)
+    blob = biggest - np.array([x0, y0], np.int32)
+    # The plain person's blob, filled (keep_pieces and _lost_share both need it).
+    inside = np.zeros(f.shape, np.uint8)
+    cv2.drawContours(inside, [blob], 0, 255, cv2.FILLED)
     if KEEP_PIECES:
-        keep_pieces(out[y0:y1, x0:x1], f, biggest - np.array([x0, y0], np.int32), r)
-    if _lost_share(biggest, out[y0:y1, x0:x1], never, (x0, y0)) > LOST_MAX:
+        keep_pieces(out[y0:y1, x0:x1], f, blob, r, inside)
+    if _lost_share(biggest, out[y0:y1, x0:x1], never, (x0, y0), inside) > LOST_MAX:
         out = fg  # the cut broke the person up: the plain threshold's frame
     cp.prev = out
     return out
 
 
-def keep_pieces(cut: np.ndarray, plain: np.ndarray, blob: np.ndarray, r: int) -> np.ndarray:
+def keep_pieces(cut: np.ndarray, plain: np.ndarray, blob: np.ndarray, r: int,
+                inside: np.ndarray | None = None) -> np.ndarray:
     """Reattach, in place, the pieces the cut splits off the plain foreground's person.
 
     The band is the outline's few pixels either side; where a part of the person
@@ -305,15 +314,18 @@ def keep_pieces(cut: np.ndarray, plain: np.ndarray, blob: np.ndarray, r: int) ->
         coordinates).
     r : int
         The band's half-width, pixels (the steps' scale).
+    inside : numpy.ndarray, shape (h, w), uint8, optional
+        ``blob`` filled (255), when the caller has it.
 
     Returns
     -------
     numpy.ndarray
         ``cut``.
     """
-    inside = np.zeros(cut.shape, np.uint8)
-    cv2.drawContours(inside, [blob], 0, 255, cv2.FILLED)
-    held = cut & inside
+    if inside is None:
+        inside = np.zeros(cut.shape, np.uint8)
+        cv2.drawContours(inside, [blob], 0, 255, cv2.FILLED)
+    held = cv2.bitwise_and(cut, inside)
     least = PIECE_MIN * cv2.countNonZero(inside)
     # Most frames hold one blob (and specks): told by the outer contours (those inside
     # another blob's hole too; a blob's pixels are about its contour's area plus half its
@@ -347,15 +359,17 @@ def keep_pieces(cut: np.ndarray, plain: np.ndarray, blob: np.ndarray, r: int) ->
     return cut
 
 
-def _lost_share(plain, cut, never, origin) -> float:
+def _lost_share(plain, cut, never, origin, inside=None) -> float:
     """Share of the plain foreground's largest blob (contour ``plain``, frame pixels),
     where the plate was seen, that the cut's largest blob in the crop (``cut``, 0 /
-    255, at ``origin`` ``(x0, y0)``) leaves out; 0 when nothing of it was seen."""
+    255, at ``origin`` ``(x0, y0)``) leaves out; 0 when nothing of it was seen.
+    ``inside``: ``plain`` filled in the crop (non-zero), when the caller has it."""
     h, w = cut.shape
-    shift = (-origin[0], -origin[1])
-    before = np.zeros((h, w), np.uint8)
-    cv2.drawContours(before, [plain], 0, 1, cv2.FILLED, offset=shift)
-    before[never] = 0
+    if inside is None:
+        inside = np.zeros((h, w), np.uint8)
+        cv2.drawContours(inside, [plain], 0, 1, cv2.FILLED,
+                         offset=(-origin[0], -origin[1]))
+    before = np.where(never, np.uint8(0), inside)
     n = cv2.countNonZero(before)
     if not n:
         return 0.0
@@ -441,7 +455,7 @@ def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarra
     ``e``: evidence for the person per band pixel (row order); between
     4-neighbours a contrast-sensitive cost ``smooth * exp(-beta * |I_p - I_q|^2)``
     (``beta`` from the mean over the pairs touching the band, Rother et al. 2004).
-    A link to a pixel outside the band (whose label ``fixed`` is kept) is folded
+    A link to a pixel outside the band (whose label ``fixed``, non-zero: person, is kept) is folded
     into the band pixel's terminal link: the graph is the band, not its bounding
     box, and the cost grows with the outline, not with the person's area. Returns
     (N,) bool, person, for the band's pixels in row order. The links come from one
@@ -450,11 +464,12 @@ def _band_cut(band: np.ndarray, fixed: np.ndarray, e: np.ndarray, img: np.ndarra
 
     n = len(e)
     ia, ib, wt, src, snk = _compiled(_kernels().band_graph, band, fixed,
-                                     np.ascontiguousarray(img), float(smooth))
+                                     np.ascontiguousarray(img), float(smooth),
+                                     np.asarray(e, np.float32))
     g = maxflow.Graph[float](n, len(wt))
     nodes = g.add_nodes(n)
     if len(wt):
         g.add_edges(ia, ib, wt, wt)
-    g.add_grid_tedges(nodes, np.maximum(e, 0) + src, np.maximum(-e, 0) + snk)
+    g.add_grid_tedges(nodes, src, snk)
     g.maxflow()
     return ~g.get_grid_segments(nodes)  # (True = sink side = scene)

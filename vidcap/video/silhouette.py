@@ -193,6 +193,10 @@ class _Params:
         # MediaPipe's masks. The second zone reaching 40 % cut into ido_walk's dark
         # trousers (0.928 -> 0.913 against its true masks).
         self.shadow_zones = ((0.6, 0.95, 0.2), (0.7, 0.99, 0.5))  # alpha lo, hi, cd
+        # The same in float32 as the shadow test compares them (the distortion's
+        # limit a share of the threshold).
+        self.shadow_limits = np.array([(lo, hi, share * self.threshold)
+                                       for lo, hi, share in self.shadow_zones], np.float32)
         # In full-resolution pixels.
         self.min_area = (max(16, int(2e-3 * full_h * full_w)) if min_area is None
                          else int(min_area))
@@ -339,11 +343,13 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             ref[p.lit] = p.plate[p.lit]
     else:
         ref = p.plate
-    diff = cv2.absdiff(frame, ref)
+    l1 = np.empty(frame.shape[:2], np.uint8)  # saturating uint8 sum over channels
     if scaled and p.saturated is not None:
+        diff = cv2.absdiff(frame, ref)
         _one_sided(diff, frame, ref, p.saturated)
-    b, g_, r = cv2.split(diff)
-    l1 = cv2.add(cv2.add(b, g_), r)  # saturating uint8 sum over channels
+        _kernels().l1_sum(diff, l1)
+    else:
+        _kernels().l1_of(frame, ref, l1)
     tmap, floor = _frame_tmap(l1, p)
     fg = cv2.compare(l1, tmap, cv2.CMP_GT)
     if p.still is not None:  # parts of the person that never move, still there
@@ -358,25 +364,15 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
     # (the median can leave nothing: a frame without the person, noise specks only)
     x, y, w, h = cv2.boundingRect(fg) if n_fg else (0, 0, 0, 0)
     if p.shadows and w and h:
-        # Only inside the (de-specked) foreground's bounding rectangle.
-        f = cv2.split(frame[y:y + h, x:x + w].astype(np.float32))
-        b = [q[y:y + h, x:x + w] for q in p.plate_planes]
-        if scaled:
-            b = [q * float(gc) for q, gc in zip(b, g, strict=True)]
-        # Shadow: darker by a common factor in every channel (Horprasert et al.
-        # 1999 brightness / chromaticity distortion).
-        alpha = (f[0] * b[0] + f[1] * b[1] + f[2] * b[2]) / (
-            b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
-        cd = (np.abs(f[0] - alpha * b[0]) + np.abs(f[1] - alpha * b[1])
-              + np.abs(f[2] - alpha * b[2]))
-        shadow = np.zeros(alpha.shape, bool)
-        for lo, hi, share in p.shadow_zones:
-            shadow |= (alpha > lo) & (alpha < hi) & (cd < share * p.threshold)
-        fg[y:y + h, x:x + w][shadow] = 0
+        # Only inside the (de-specked) foreground's bounding rectangle. Shadow:
+        # darker by a common factor in every channel (Horprasert et al. 1999
+        # brightness / chromaticity distortion). One compiled pass; a shadow is no
+        # difference from the plate for the cut either (l1 is not used after it).
+        _kernels().drop_shadows(
+            frame[y:y + h, x:x + w], *(q[y:y + h, x:x + w] for q in p.plate_planes),
+            np.asarray(g, np.float32) if scaled else _ONES, p.shadow_limits,
+            fg[y:y + h, x:x + w], l1[y:y + h, x:x + w], p.cut is not None)
         fg = cv2.medianBlur(fg, 3)
-        if p.cut is not None:  # a shadow is no difference from the plate for the cut
-            l1 = l1.copy()
-            l1[y:y + h, x:x + w][shadow] = 0
     fg = cv2.morphologyEx(fg, cv2.MORPH_CLOSE, p.kernel)
     plain = None
     if p.cut is not None:
@@ -533,8 +529,11 @@ def _open_large_holes(mask: np.ndarray, contour: np.ndarray, fg: np.ndarray,
     blob = np.zeros((h, w), np.uint8)
     cv2.drawContours(blob, [contour - np.array([x, y], np.int32)], 0, 1, cv2.FILLED)
     holes = blob & (fg[y:y + h, x:x + w] == 0)
+    limit = MAX_HOLE_SHARE * cv2.countNonZero(blob)
+    if cv2.countNonZero(holes) <= limit:
+        return  # no hole can be large (most frames: labelling them cost ~0.2 ms)
     n, lab, st, _ = cv2.connectedComponentsWithStats(holes, connectivity=4)
-    big = np.flatnonzero(st[1:, cv2.CC_STAT_AREA] > MAX_HOLE_SHARE * blob.sum()) + 1
+    big = np.flatnonzero(st[1:, cv2.CC_STAT_AREA] > limit) + 1
     if not len(big):
         return
     hole = np.isin(lab, big).astype(np.uint8)
@@ -572,23 +571,27 @@ def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Pa
     m = mask[y0:y1, x0:x1]
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     inner = cv2.erode(m, k)
-    band = cv2.subtract(cv2.dilate(m, k), inner)
+    near = cv2.dilate(m, k)
     ref = p.plate_full[y0:y1, x0:x1]
     if np.abs(g - 1).max() > 0.01:
         ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
-    b, g_, r_ = cv2.split(cv2.absdiff(frame[y0:y1, x0:x1], ref))
-    l1 = cv2.medianBlur(cv2.add(cv2.add(b, g_), r_), 3)
+    kern = _kernels()
+    l1 = np.empty(m.shape, np.uint8)
+    kern.l1_of(frame[y0:y1, x0:x1], ref, l1)
+    l1 = cv2.medianBlur(l1, 3)
     box = (4 * r + 1, 4 * r + 1)
     # Box means on uint8 (OpenCV's fast path): the interior's mean difference is
     # num / den with num = mean of l1 over interior pixels (0 elsewhere) and den =
     # 255 * the interior's share of the box.
-    num = cv2.blur(cv2.bitwise_and(l1, l1, mask=inner), box).astype(np.float32)
-    den = cv2.blur(inner * np.uint8(255), box)
-    tf = p.tmap_full[y0:y1, x0:x1]
-    fg = (l1 > (np.maximum(tf, np.uint8(floor)) if floor else tf)) & (
-        l1 * den.astype(np.float32) >= (255.0 * p.edge_fraction) * num)
-    fg = cv2.medianBlur(fg.view(np.uint8), 3)
-    np.copyto(m, fg, where=(band > 0) & (den > 0))
+    masked, inner255 = np.empty_like(l1), np.empty_like(l1)
+    kern.interior(l1, inner, masked, inner255)
+    num = cv2.blur(masked, box)
+    den = cv2.blur(inner255, box)
+    fg = np.empty_like(l1)
+    kern.edge_keep(l1, den, num, p.tmap_full[y0:y1, x0:x1], int(floor),
+                   np.float32(255.0 * p.edge_fraction), fg)
+    fg = cv2.medianBlur(fg, 3)
+    kern.copy_in_band(m, fg, near, inner, den)  # the band, where an interior is near
 
 
 def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params,
@@ -626,6 +629,15 @@ def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params
     fg = cv2.medianBlur(fg, 3)
     # m = m outside the band, the full-resolution test inside it.
     np.copyto(m, (fg > 0).view(np.uint8), where=band > 0)
+
+
+_ONES = np.ones(3, np.float32)
+
+
+def _kernels():
+    from vidcap.video import _silhouette_kernels
+
+    return _silhouette_kernels
 
 
 def _to_full(contour: np.ndarray, p: _Params) -> np.ndarray:
