@@ -29,13 +29,7 @@ def test_l1_matches_opencvs_saturating_channel_sum(seed):
     b, g, r = cv2.split(cv2.absdiff(img, plate))
     want = cv2.add(cv2.add(b, g), r)
     assert (want == 255).any() and (want < 255).any()
-    out = np.zeros(want.shape, np.uint8)
-    K.l1_of(img[5:, 3:], plate[5:, 3:], out[5:, 3:])  # crops (views)
-    np.testing.assert_array_equal(out[5:, 3:], want[5:, 3:])
-    assert not out[:5].any() and not out[:, :3].any()
-    K.l1_of(img, plate, out)
-    np.testing.assert_array_equal(out, want)
-    out[:] = 0
+    out = np.empty(want.shape, np.uint8)
     K.l1_sum(cv2.absdiff(img, plate), out)
     np.testing.assert_array_equal(out, want)
 
@@ -91,21 +85,6 @@ def test_edge_passes_match_the_numpy_expressions():
     np.testing.assert_array_equal(m, want)
 
 
-def test_masked_row_sums_match_opencvs_reductions():
-    rng, img, plate = _images(5)
-    m = np.zeros(img.shape[:2], np.uint8)
-    m[10:40, 20:50] = 1
-    m[rng.random(m.shape) < 0.1] = 1
-    n_row, level = np.empty(len(m), np.float32), np.empty(len(m), np.float32)
-    K.masked_row_sums(m, img[:, :], plate, n_row, level)
-    ad = cv2.absdiff(img, plate)
-    adm = cv2.bitwise_and(ad, ad, mask=m)
-    np.testing.assert_array_equal(n_row, cv2.reduce(m, 1, cv2.REDUCE_SUM,
-                                                    dtype=cv2.CV_32F)[:, 0])
-    np.testing.assert_array_equal(level, cv2.reduce(adm.reshape(len(m), -1), 1,
-                                                    cv2.REDUCE_SUM, dtype=cv2.CV_32F)[:, 0])
-
-
 def _band_graph_reference(band, fixed, img, smooth, e):
     """Every 4-neighbour pair of the crop in row order (the kernel visits only the
     band's pixels)."""
@@ -150,3 +129,33 @@ def test_band_graph_gives_every_link_of_the_band_in_row_order():
     for a, b in zip(got, want, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-14, atol=0)
     assert len(got[0]) > 100 and (got[3] > np.maximum(e, 0)).any()
+
+
+def _colour_lut_numpy(gain, bins):
+    """The colour bins as the numpy path computed them (before the kernel)."""
+    v = np.arange(256, dtype=np.float32)[None, :] / np.asarray(gain, np.float32)[:, None]
+    q = (np.clip(v, 0, 255).astype(np.uint8).astype(np.int32) * bins) >> 8
+    return q * np.array([[bins * bins], [bins], [1]], np.int32)
+
+
+def test_colour_lut_and_plate_table_match_numpy():
+    rng = np.random.default_rng(7)
+    for gain in [np.ones(3), *rng.uniform(0.25, 4.0, (20, 3))]:
+        np.testing.assert_array_equal(G.colour_lut(np.asarray(gain, np.float32), 16),
+                                      _colour_lut_numpy(gain, 16))
+    a, b = np.mgrid[:256, :256]
+    want = np.clip(np.log2((a + 1.0) / (b + 1.0)), -2, 2).astype(np.float32)
+    np.testing.assert_allclose(G.plate_table(), want, rtol=1e-7, atol=0)
+
+
+def test_smooth_first_two_sums_as_einsum_does():
+    from vidcap.video.graphcut import _smoothing
+
+    g = _smoothing(16)
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        hist = np.zeros(16 ** 3, np.float32)
+        hist[rng.integers(0, hist.size, 300)] = rng.integers(1, 3000, 300)
+        hist = hist.reshape(16, 16, 16)
+        want = np.einsum("bj,ajk->abk", g, np.einsum("ai,ijk->ajk", g, hist))
+        np.testing.assert_array_equal(G.smooth_first_two(g, hist), want)

@@ -16,7 +16,36 @@ MEMO = 4096
 
 
 @numba.njit(cache=True, nogil=True)
-def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours):
+def plate_table():
+    """(256, 256) float32: ``clip(log2((a + 1) / (b + 1)), -2, 2)`` for every difference
+    ``a`` and threshold ``b`` (uint8): the plate's data term, looked up per band pixel
+    (a logarithm per pixel was a third of :func:`crop_terms`)."""
+    out = np.empty((256, 256), np.float32)
+    for a in range(256):
+        for b in range(256):
+            v = math.log2((a + 1.0) / (b + 1.0))
+            out[a, b] = min(2.0, max(-2.0, v))
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def colour_lut(gain, bins):
+    """(3, 256) int32: per channel, the bin of each level divided by ``gain`` (3,)
+    float32 (:func:`vidcap.video.appearance.colour_model`'s bins, ``floor(min(v / gain,
+    255) / 256 * bins)``, the division in float32), times the channel's place in the
+    colour's index (``bins**2``, ``bins``, 1)."""
+    out = np.empty((3, 256), np.int32)
+    for c in range(3):
+        place = bins ** (2 - c)
+        for i in range(256):
+            v = np.float32(i) / gain[c]
+            v = min(max(v, np.float32(0.0)), np.float32(255.0))
+            out[c, i] = ((np.int32(np.uint8(v)) * bins) >> 8) * place
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def crop_terms(f, inner, near, never, img, gain, bins, ptab, l1, tmap, with_never):
     """The band, its pixels' data term from the plate, and the scene's colours.
 
     Parameters
@@ -27,15 +56,16 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
         Never-seen pixels of the plate.
     img : (h, w, 3) uint8
         The frame's crop.
-    lut : (3, 256) int32
-        Per channel, the quantised colour bin of each level divided by the frame's
-        gain, already multiplied by the channel's place (``BINS**2``, ``BINS``, 1).
+    gain : (3,) float32
+        The frame's gain (colours are quantised divided by it, :func:`colour_lut`).
+    bins : int
+        Bins per channel (``BINS``; ``bins**3`` quantised colours).
+    ptab : (256, 256) float32
+        :func:`plate_table`.
     l1, tmap : (h, w) uint8
         The difference from the plate and the per-pixel threshold.
     with_never : bool
         The never-seen pixels belong to the band.
-    n_colours : int
-        Quantised colours (``BINS**3``).
 
     Returns
     -------
@@ -46,18 +76,20 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
         ``clip(log2((l1 + 1) / (tmap + 1)), -2, 2)`` at the band pixels.
     nvb : (n,) bool
         Band pixels never seen.
-    hist : (n_colours,) float32
+    hist : (bins**3,) float32
         Histogram of the quantised colours of the crop outside the dilated
         foreground and the never-seen area (the scene round the person).
     n_scene : int
         Pixels in ``hist``.
-    hist_in : (n_colours,) float32
+    hist_in : (bins**3,) float32
         Histogram of the quantised colours of the sure person: inside the eroded
         foreground, seen, above the threshold.
     n_in : int
         Pixels in ``hist_in``.
     """
     h, w = f.shape
+    lut = colour_lut(gain, bins)
+    n_colours = bins ** 3
     band = np.zeros((h, w), np.bool_)
     qb = np.empty(h * w, np.int32)
     plate = np.empty(h * w, np.float32)
@@ -74,8 +106,7 @@ def crop_terms(f, inner, near, never, img, lut, l1, tmap, with_never, n_colours)
             if (near[y, x] > 0 and inner[y, x] == 0) or (with_never and nv):
                 band[y, x] = True
                 qb[n] = q
-                v = math.log2((l1[y, x] + 1.0) / (tmap[y, x] + 1.0))
-                plate[n] = min(2.0, max(-2.0, v))
+                plate[n] = ptab[l1[y, x], tmap[y, x]]
                 nvb[n] = nv
                 n += 1
             elif near[y, x] == 0 and not nv:
@@ -228,3 +259,36 @@ def paint_band(out, band, person):
             if band[y, x]:
                 out[y, x] = 255 if person[k] else 0
                 k += 1
+
+
+@numba.njit(cache=True, nogil=True)
+def smooth_first_two(g, hist):
+    """The histogram (b, b, b) float32 smoothed along its first two axes by the (b, b)
+    matrix ``g``: ``np.einsum("bj,ajk->abk", g, np.einsum("ai,ijk->ajk", g, hist))``
+    with einsum's float32 sums (the terms added one by one in index order; a zero
+    weight adds nothing, so only ``g``'s non-zero band is visited)."""
+    b = hist.shape[0]
+    lo = np.empty(b, np.int64)
+    hi = np.empty(b, np.int64)
+    for a in range(b):  # the non-zero band of each row of g
+        lo[a] = b
+        hi[a] = -1
+        for i in range(b):
+            if g[a, i] != 0:
+                lo[a] = min(lo[a], i)
+                hi[a] = max(hi[a], i)
+    t1 = np.zeros((b, b, b), np.float32)
+    for a in range(b):
+        for i in range(lo[a], hi[a] + 1):
+            ga = g[a, i]
+            for j in range(b):
+                for k in range(b):
+                    t1[a, j, k] += ga * hist[i, j, k]
+    t2 = np.zeros((b, b, b), np.float32)
+    for a in range(b):
+        for c in range(b):
+            for j in range(lo[c], hi[c] + 1):
+                gc = g[c, j]
+                for k in range(b):
+                    t2[a, c, k] += gc * t1[a, j, k]
+    return t2

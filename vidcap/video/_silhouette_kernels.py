@@ -34,20 +34,6 @@ def l1_sum(diff, out):
 
 
 @numba.njit(cache=True, nogil=True)
-def l1_of(img, ref, out):
-    """``out = min(255, sum_c |img_c - ref_c|)``: :func:`l1_sum` of
-    ``cv2.absdiff(img, ref)`` without the (h, w, 3) difference; img and ref (h, w, 3)
-    uint8, out (h, w) uint8."""
-    h, w = out.shape
-    for y in range(h):
-        for x in range(w):
-            s = np.int32(0)
-            for c in range(3):
-                s += abs(np.int32(img[y, x, c]) - np.int32(ref[y, x, c]))
-            out[y, x] = 255 if s > 255 else s
-
-
-@numba.njit(cache=True, nogil=True)
 def interior(l1, inner, masked, inner255):
     """``masked = l1`` where ``inner`` else 0 (``cv2.bitwise_and(l1, l1, mask=inner)``)
     and ``inner255 = inner * 255`` (uint8, wrapping as numpy's product does), all
@@ -143,23 +129,3 @@ def drop_shadows(img, pb, pg, pr, gain, zones, fg, l1, with_l1):
             if with_l1:
                 l1[y, x] = 0 if s else l1[y, x]
 
-
-@numba.njit(cache=True, nogil=True)
-def masked_row_sums(m, img, ref, n_row, level):
-    """Per row of the crop: ``n_row`` the sum of ``m`` (h, w) uint8 and ``level`` the
-    summed L1 difference ``|img - ref|`` (h, w, 3) uint8 over the pixels where ``m`` is
-    non-zero, both (h,) float32 (sums of integers: exact, as OpenCV's float
-    reductions of the same are)."""
-    h, w = m.shape
-    for y in range(h):
-        cnt = 0
-        tot = 0
-        for x in range(w):
-            v = np.int32(m[y, x])
-            d = np.int32(0)
-            for c in range(3):
-                d += abs(np.int32(img[y, x, c]) - np.int32(ref[y, x, c]))
-            cnt += v
-            tot += d if v != 0 else 0
-        n_row[y] = np.float32(cnt)
-        level[y] = np.float32(tot)

@@ -251,8 +251,8 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
     never = cp.never[y0:y1, x0:x1]
     img = frame[y0:y1, x0:x1]
     band, qb, e, nv, hist, n_scene, hist_in, n_in = _compiled(
-        _kernels().crop_terms, f, inner, near, never, img, _colour_lut(gain),
-        l1[y0:y1, x0:x1], tmap[y0:y1, x0:x1], WITH_NEVER, len(cp.table))
+        _kernels().crop_terms, f, inner, near, never, img, np.asarray(gain, np.float32),
+        _bins(), _plate_table(), l1[y0:y1, x0:x1], tmap[y0:y1, x0:x1], WITH_NEVER)
     if not len(qb):
         return fg
     # Evidence for the person (positive), per band pixel (row order).
@@ -399,15 +399,20 @@ def _compiled(kernel, *args):
         raise
 
 
-def _colour_lut(gain: np.ndarray) -> np.ndarray:
-    """(3, 256) int32: per channel, the bin of each level divided by ``gain``
-    (:func:`vidcap.video.appearance.colour_model`'s bins, ``floor(min(v / gain, 255) /
-    256 * BINS)``), times the channel's place in the colour's index."""
+def _bins() -> int:
     from vidcap.video.appearance import BINS
 
-    v = np.arange(256, dtype=np.float32)[None, :] / np.asarray(gain, np.float32)[:, None]
-    bins = (np.clip(v, 0, 255).astype(np.uint8).astype(np.int32) * BINS) >> 8
-    return bins * np.array([[BINS * BINS], [BINS], [1]], np.int32)
+    return BINS
+
+
+_PLATE_TABLE: list = []
+
+
+def _plate_table() -> np.ndarray:
+    """:func:`vidcap.video._graphcut_kernels.plate_table`, made once per process."""
+    if not _PLATE_TABLE:
+        _PLATE_TABLE.append(_kernels().plate_table())
+    return _PLATE_TABLE[0]
 
 
 def _smoothing(bins: int, sigma: float = 1.0) -> np.ndarray:
@@ -436,9 +441,9 @@ def _local_llr(hist: np.ndarray, n_scene: int, colours: np.ndarray) -> np.ndarra
     g = _SMOOTH_MATRIX.get(BINS)
     if g is None:
         g = _SMOOTH_MATRIX[BINS] = _smoothing(BINS)
-    hist = hist.reshape((BINS,) * 3)
-    hist = np.einsum("ai,ijk->ajk", g, hist)
-    hist = np.einsum("bj,ajk->abk", g, hist)
+    # The first two axes compiled (einsum's sums term by term); the last, along
+    # memory, stays einsum's (its sums run in vector lanes).
+    hist = _kernels().smooth_first_two(g, hist.reshape((BINS,) * 3))
     hist = np.einsum("ck,abk->abc", g, hist).ravel()
     scene = np.log((1 - SCENE_UNIFORM) * hist / max(float(hist.sum()), 1.0)
                    + SCENE_UNIFORM / hist.size + 1e-7).astype(np.float32)

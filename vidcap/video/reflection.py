@@ -124,12 +124,8 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     if gain is not None:
         g = np.asarray(gain, np.float64)
         ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
-    # Per-row sums (one compiled pass: the mask's pixels and their L1 difference),
-    # binned so the tables stay small.
-    from vidcap.video._silhouette_kernels import masked_row_sums
-
-    n_row, row_level = np.empty(height, np.float32), np.empty(height, np.float32)
-    masked_row_sums(m, box, ref, n_row, row_level)
+    # Per-row sums (OpenCV reductions), binned so the tables stay small.
+    n_row = cv2.reduce(m, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32F)[:, 0]
     total = float(n_row.sum())
     if total < MIN_PIXELS:
         return 0
@@ -143,9 +139,13 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
         v = np.concatenate([v, np.zeros((pad,) + v.shape[1:], v.dtype)]) if pad else v
         return v.reshape((nb, step) + v.shape[1:]).sum(axis=1)
 
+    ad = cv2.absdiff(box, ref)
     n = binned(n_row)
     per_bin = np.maximum(n, 1.0)
-    level = binned(row_level) / per_bin
+    # (a 3-channel row reduction is slow in OpenCV: the channels are summed as columns)
+    adm = cv2.bitwise_and(ad, ad, mask=m)
+    level = binned(cv2.reduce(adm.reshape(height, -1), 1, cv2.REDUCE_SUM,
+                              dtype=cv2.CV_32F)[:, 0]) / per_bin
     min_bins = max(1, -(-MIN_ROWS // step))
     # A run starts with the bin right under a line weaker than the bin right above it:
     # no such line in the lower half, no reflection (most frames stop here).
@@ -182,8 +182,7 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     y0, length_run = found
     r0, r1 = (y0 + 1) * step, min(height, (y0 + 1 + length_run) * step)
     mirror = 2 * y0 - np.arange(r0, r1) // step  # each row's mirror bin
-    ad = cv2.absdiff(box[r0:r1], ref[r0:r1])
-    mag = ad.astype(np.int16).sum(axis=-1)  # the rows' per-pixel L1 difference
+    mag = ad[r0:r1].astype(np.int16).sum(axis=-1)  # the rows' per-pixel L1 difference
     cut = (m[r0:r1] > 0) & (mag < WEAK * level[mirror][:, None])
     m[r0:r1][cut] = 0
     return int(cut.sum())

@@ -343,13 +343,11 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
             ref[p.lit] = p.plate[p.lit]
     else:
         ref = p.plate
-    l1 = np.empty(frame.shape[:2], np.uint8)  # saturating uint8 sum over channels
+    diff = cv2.absdiff(frame, ref)
     if scaled and p.saturated is not None:
-        diff = cv2.absdiff(frame, ref)
         _one_sided(diff, frame, ref, p.saturated)
-        _kernels().l1_sum(diff, l1)
-    else:
-        _kernels().l1_of(frame, ref, l1)
+    l1 = np.empty(diff.shape[:2], np.uint8)
+    _kernels().l1_sum(diff, l1)  # saturating uint8 sum over channels
     tmap, floor = _frame_tmap(l1, p)
     fg = cv2.compare(l1, tmap, cv2.CMP_GT)
     if p.still is not None:  # parts of the person that never move, still there
@@ -577,7 +575,7 @@ def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Pa
         ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
     kern = _kernels()
     l1 = np.empty(m.shape, np.uint8)
-    kern.l1_of(frame[y0:y1, x0:x1], ref, l1)
+    kern.l1_sum(cv2.absdiff(frame[y0:y1, x0:x1], ref), l1)
     l1 = cv2.medianBlur(l1, 3)
     box = (4 * r + 1, 4 * r + 1)
     # Box means on uint8 (OpenCV's fast path): the interior's mean difference is
