@@ -120,12 +120,11 @@ def crop_terms(f, inner, near, never, img, gain, bins, ptab, l1, tmap, with_neve
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _d2(img, y, x, yy, xx):
-    """Squared colour distance of two pixels (an integer, exact in float64)."""
-    d2 = 0.0
-    for c in range(3):
-        d = float(img[y, x, c]) - float(img[yy, xx, c])
-        d2 += d * d
-    return d2
+    """Squared colour distance of two pixels (an integer)."""
+    a = np.int32(img[y, x, 0]) - np.int32(img[yy, xx, 0])
+    b = np.int32(img[y, x, 1]) - np.int32(img[yy, xx, 1])
+    c = np.int32(img[y, x, 2]) - np.int32(img[yy, xx, 2])
+    return a * a + b * b + c * c
 
 
 @numba.njit(cache=True, nogil=True)
@@ -179,24 +178,32 @@ def band_graph(band, fixed, img, smooth, e):
                 k += 1
     # Per band pixel, the squared differences to its neighbours above, left, right
     # and below (-1: none, or a band pixel above / left, whose own pair it is).
-    d2 = np.full((n, 4), -1.0)
-    total = 0.0
+    d2 = np.full((n, 4), -1, np.int32)
+    total = 0
     count = 0
     for k in range(n):
         y, x = ys[k], xs[k]
         if y > 0 and idx[y - 1, x] < 0:
-            d2[k, 0] = _d2(img, y - 1, x, y, x)
+            q = _d2(img, y - 1, x, y, x)
+            d2[k, 0] = q
+            total += q
+            count += 1
         if x > 0 and idx[y, x - 1] < 0:
-            d2[k, 1] = _d2(img, y, x - 1, y, x)
+            q = _d2(img, y, x - 1, y, x)
+            d2[k, 1] = q
+            total += q
+            count += 1
         if x + 1 < w:
-            d2[k, 2] = _d2(img, y, x, y, x + 1)
+            q = _d2(img, y, x, y, x + 1)
+            d2[k, 2] = q
+            total += q
+            count += 1
         if y + 1 < h:
-            d2[k, 3] = _d2(img, y, x, y + 1, x)
-        for j in range(4):
-            if d2[k, j] >= 0:
-                total += d2[k, j]
-                count += 1
-    beta = 1.0 / max(2.0 * total / count, 1e-6) if count else 0.0
+            q = _d2(img, y, x, y + 1, x)
+            d2[k, 3] = q
+            total += q
+            count += 1
+    beta = 1.0 / max(2.0 * float(total) / count, 1e-6) if count else 0.0
     # The weight of each small squared difference computed once (they repeat: the
     # differences are integers, most of them small; exp was half of this kernel).
     memo = np.full(MEMO, -1.0)
@@ -211,17 +218,24 @@ def band_graph(band, fixed, img, smooth, e):
         s = 0.0
         t = 0.0
         for j in range(4):
-            if d2[k, j] < 0:
+            q = d2[k, j]
+            if q < 0:
                 continue
-            q = int(d2[k, j])
             if q < MEMO:
                 v = memo[q]
                 if v < 0:
-                    v = memo[q] = smooth * math.exp(-beta * d2[k, j])
+                    v = smooth * math.exp(-beta * float(q))
+                    memo[q] = v
             else:
-                v = smooth * math.exp(-beta * d2[k, j])
-            yy = y + (-1, 0, 0, 1)[j]
-            xx = x + (0, -1, 1, 0)[j]
+                v = smooth * math.exp(-beta * float(q))
+            if j == 0:
+                yy, xx = y - 1, x
+            elif j == 1:
+                yy, xx = y, x - 1
+            elif j == 2:
+                yy, xx = y, x + 1
+            else:
+                yy, xx = y + 1, x
             b = idx[yy, xx]
             if b >= 0:  # (right or below: the pair's first pixel is this one)
                 ia[m] = k
