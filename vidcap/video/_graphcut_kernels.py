@@ -128,6 +128,41 @@ def _d2(img, y, x, yy, xx):
 
 
 @numba.njit(cache=True, nogil=True)
+def _neighbour_d2(idx, ys, xs, img):
+    """Per band pixel ``(ys, xs)``, the squared colour differences to its neighbours
+    above, left, right and below, (n, 4) int32 (-1: none, or a band pixel above / left,
+    whose own pair it is), their sum and their count (the pairs touching the band)."""
+    h, w = idx.shape
+    n = len(ys)
+    d2 = np.full((n, 4), -1, np.int32)
+    total = 0
+    count = 0
+    for k in range(n):
+        y, x = ys[k], xs[k]
+        if y > 0 and idx[y - 1, x] < 0:
+            q = _d2(img, y - 1, x, y, x)
+            d2[k, 0] = q
+            total += q
+            count += 1
+        if x > 0 and idx[y, x - 1] < 0:
+            q = _d2(img, y, x - 1, y, x)
+            d2[k, 1] = q
+            total += q
+            count += 1
+        if x + 1 < w:
+            q = _d2(img, y, x, y, x + 1)
+            d2[k, 2] = q
+            total += q
+            count += 1
+        if y + 1 < h:
+            q = _d2(img, y, x, y + 1, x)
+            d2[k, 3] = q
+            total += q
+            count += 1
+    return d2, total, count
+
+
+@numba.njit(cache=True, nogil=True)
 def band_graph(band, fixed, img, smooth, e):
     """The band's 4-neighbour links, the links to fixed pixels folded into the
     terminal ones (:func:`vidcap.video.graphcut._band_cut`), and the terminal links.
@@ -176,33 +211,7 @@ def band_graph(band, fixed, img, smooth, e):
                 ys[k] = y
                 xs[k] = x
                 k += 1
-    # Per band pixel, the squared differences to its neighbours above, left, right
-    # and below (-1: none, or a band pixel above / left, whose own pair it is).
-    d2 = np.full((n, 4), -1, np.int32)
-    total = 0
-    count = 0
-    for k in range(n):
-        y, x = ys[k], xs[k]
-        if y > 0 and idx[y - 1, x] < 0:
-            q = _d2(img, y - 1, x, y, x)
-            d2[k, 0] = q
-            total += q
-            count += 1
-        if x > 0 and idx[y, x - 1] < 0:
-            q = _d2(img, y, x - 1, y, x)
-            d2[k, 1] = q
-            total += q
-            count += 1
-        if x + 1 < w:
-            q = _d2(img, y, x, y, x + 1)
-            d2[k, 2] = q
-            total += q
-            count += 1
-        if y + 1 < h:
-            q = _d2(img, y, x, y + 1, x)
-            d2[k, 3] = q
-            total += q
-            count += 1
+    d2, total, count = _neighbour_d2(idx, ys, xs, img)
     beta = 1.0 / max(2.0 * float(total) / count, 1e-6) if count else 0.0
     # The weight of each small squared difference computed once (they repeat: the
     # differences are integers, most of them small; exp was half of this kernel).
