@@ -121,9 +121,17 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     m = m8[top:top + height, x0:x0 + w]
     box = frame[top:top + height, x0:x0 + w]
     ref = plate[top:top + height, x0:x0 + w]
-    if gain is not None:
-        g = np.asarray(gain, np.float64)
-        ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+    scale = None if gain is None else tuple(float(v) for v in np.asarray(gain, np.float64))
+
+    def row_level(r0):
+        """The summed L1 difference over the mask per row, rows ``r0`` on (the
+        channels summed as columns: a 3-channel row reduction is slow in OpenCV)."""
+        rows = ref[r0:] if scale is None else cv2.multiply(ref[r0:], (*scale, 0.0))
+        ad = cv2.absdiff(box[r0:], rows)
+        adm = cv2.bitwise_and(ad, ad, mask=m[r0:])
+        return cv2.reduce(adm.reshape(height - r0, -1), 1, cv2.REDUCE_SUM,
+                          dtype=cv2.CV_32F)[:, 0]
+
     # Per-row sums (OpenCV reductions), binned so the tables stay small.
     n_row = cv2.reduce(m, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32F)[:, 0]
     total = float(n_row.sum())
@@ -132,27 +140,29 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     step = max(int(row_step), -(-height // MAX_BINS))
     nb = -(-height // step)
 
-    def binned(v):
+    def binned(v, first=0):  # ``v``: the rows from bin ``first`` on
         if step == 1:
             return v
-        pad = nb * step - height
+        k = nb - first
+        pad = k * step - len(v)
         v = np.concatenate([v, np.zeros((pad,) + v.shape[1:], v.dtype)]) if pad else v
-        return v.reshape((nb, step) + v.shape[1:]).sum(axis=1)
+        return v.reshape((k, step) + v.shape[1:]).sum(axis=1)
 
-    ad = cv2.absdiff(box, ref)
     n = binned(n_row)
     per_bin = np.maximum(n, 1.0)
-    # (a 3-channel row reduction is slow in OpenCV: the channels are summed as columns)
-    adm = cv2.bitwise_and(ad, ad, mask=m)
-    level = binned(cv2.reduce(adm.reshape(height, -1), 1, cv2.REDUCE_SUM,
-                              dtype=cv2.CV_32F)[:, 0]) / per_bin
     min_bins = max(1, -(-MIN_ROWS // step))
     # A run starts with the bin right under a line weaker than the bin right above it:
-    # no such line in the lower half, no reflection (most frames stop here).
+    # no such line in the lower half, no reflection (most frames stop here; only the
+    # lower half's differences are summed for it).
     mid = nb // 2
-    if nb - 1 - min_bins <= mid or not np.any(
-            level[mid + 2:nb - min_bins + 1] < WEAK * level[mid:nb - min_bins - 1]):
+    if nb - 1 - min_bins <= mid:
         return 0
+    lower = binned(row_level(mid * step), mid) / per_bin[mid:]
+    if not np.any(lower[2:nb - min_bins + 1 - mid] < WEAK * lower[:nb - min_bins - 1 - mid]):
+        return 0
+    level = binned(row_level(0)) / per_bin
+    if scale is not None:
+        ref = cv2.multiply(ref, (*scale, 0.0))
     seen = n > 0
     # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most of the
     # remaining frames stop here (no run of bins weaker than their mirror bins).
@@ -182,7 +192,8 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     y0, length_run = found
     r0, r1 = (y0 + 1) * step, min(height, (y0 + 1 + length_run) * step)
     mirror = 2 * y0 - np.arange(r0, r1) // step  # each row's mirror bin
-    mag = ad[r0:r1].astype(np.int16).sum(axis=-1)  # the rows' per-pixel L1 difference
+    # the rows' per-pixel L1 difference
+    mag = cv2.absdiff(box[r0:r1], ref[r0:r1]).astype(np.int16).sum(axis=-1)
     cut = (m[r0:r1] > 0) & (mag < WEAK * level[mirror][:, None])
     m[r0:r1][cut] = 0
     return int(cut.sum())
