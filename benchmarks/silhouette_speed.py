@@ -8,7 +8,8 @@ decode alone (PyAV, BGR frames), the background plate from the file, and the
 silhouettes of every frame (from frames in memory, and from the file including
 decode). The clip is an .mp4 (its frame count is in the container).
 Targets (issue 5): silhouettes >= 300 fps at 640x480 once the plate exists;
-plate <= 2 s for 300 frames of 640x480.
+plate <= 2 s for 300 frames of 640x480. Beside the wall times: the least CPU time of
+the process over the runs (all its threads) and the load, for a shared machine.
 """
 
 from __future__ import annotations

@@ -15,7 +15,10 @@ followed instead: two people do not trade places). Other person-sized blobs are
 reported, not silently dropped. The person's mirror image in a glossy floor or desk
 below them is cut (:mod:`vidcap.video.reflection`).
 
-All image operations are OpenCV on uint8, so a 640x480 frame takes ~1-2 ms.
+All image operations are OpenCV on uint8 or one-pass compiled loops where a run of
+whole-array calls went over the same pixels (:mod:`vidcap.video._silhouette_kernels`:
+the channel sum, the shadow test, the edge band's steps), so a 640x480 frame takes
+~2 ms (~3 with the graph cut) on a 2-core machine.
 """
 
 from __future__ import annotations
@@ -887,7 +890,7 @@ def extract_silhouettes(
         loses on the samples). A frame
         whose colours do not tell its scene from the person keeps the plain
         threshold's foreground (:data:`vidcap.video.graphcut.SCENE_KEPT_MIN`); about
-        1.5x the silhouettes' time (benchmarks/RESULTS.md, Silhouettes).
+        1.6x the silhouettes' time (benchmarks/RESULTS.md, Silhouettes).
 
     Returns
     -------
