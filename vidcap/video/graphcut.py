@@ -242,7 +242,8 @@ def cut_frame(frame: np.ndarray, l1: np.ndarray, tmap: np.ndarray, fg: np.ndarra
              & (boxes[:, 3] > y0))
     touched = np.flatnonzero(meets)
     if len(touched):
-        touched = touched[_kernels().labels_present(lab[y0:y1, x0:x1], len(boxes))[touched]]
+        touched = touched[_compiled(_kernels().labels_present, lab[y0:y1, x0:x1],
+                                     len(boxes))[touched]]
     if len(touched):
         b = boxes[touched]
         x0, y0 = min(x0, int(b[:, 0].min())), min(y0, int(b[:, 1].min()))
@@ -414,7 +415,7 @@ _PLATE_TABLE: list = []
 def _plate_table() -> np.ndarray:
     """:func:`vidcap.video._graphcut_kernels.plate_table`, made once per process."""
     if not _PLATE_TABLE:
-        _PLATE_TABLE.append(_kernels().plate_table())
+        _PLATE_TABLE.append(_compiled(_kernels().plate_table))
     return _PLATE_TABLE[0]
 
 
@@ -446,7 +447,7 @@ def _local_llr(hist: np.ndarray, n_scene: int, colours: np.ndarray) -> np.ndarra
         g = _SMOOTH_MATRIX[BINS] = _smoothing(BINS)
     # The first two axes compiled (einsum's sums term by term); the last, along
     # memory, stays einsum's (its sums run in vector lanes).
-    hist = _kernels().smooth_first_two(g, hist.reshape((BINS,) * 3))
+    hist = _compiled(_kernels().smooth_first_two, g, hist.reshape((BINS,) * 3))
     hist = np.einsum("ck,abk->abc", g, hist).ravel()
     scene = np.log((1 - SCENE_UNIFORM) * hist / max(float(hist.sum()), 1.0)
                    + SCENE_UNIFORM / hist.size + 1e-7).astype(np.float32)
