@@ -37,11 +37,47 @@ def test_covers_tells_whether_every_pixel_read_is_kept():
     frame = np.zeros((120, 160, 3), np.uint8)
     kept.append(frame, (40, 80, 60, 90))  # kept rows 24-95, columns 44-105
     kept.append(frame, (0, 0, 0, 0))  # nothing kept
-    assert kept.covers([0, 0], [44, 105], [24, 95])
-    assert not kept.covers([0], [106], [50])
-    assert not kept.covers([1], [50], [50])  # frame 1 kept nothing
-    assert kept.covers([1, 0], [-1, 200], [-1, 50])  # outside the frame: nobody reads it
-    assert not kept.covers([2], [50], [50])  # a frame not kept at all
+    none = [np.inf, -np.inf, np.inf, -np.inf]  # a frame that reads no pixel
+    assert kept.covers([[44, 105, 24, 95], none])
+    assert not kept.covers([[44, 106, 24, 95], none])
+    assert not kept.covers([[44, 105, 23, 95], none])
+    assert not kept.covers([none, [50, 50, 50, 50]])  # frame 1 kept nothing
+    assert not kept.covers([none, none, [50, 50, 50, 50]])  # a frame not kept at all
+    assert kept.covers([none, none, none])
+
+
+def _inside(frames, bounds):
+    """``frames`` black outside each frame's ``bounds`` (x_min, x_max, y_min, y_max)."""
+    out = np.zeros_like(frames)
+    for k, (x0, x1, y0, y1) in enumerate(bounds.astype(int)):
+        out[k, y0:y1 + 1, x0:x1 + 1] = frames[k, y0:y1 + 1, x0:x1 + 1]
+    return out
+
+
+def test_the_cues_read_nothing_outside_their_read_bounds():
+    """frontback's and legorder's boxes of the pixels they read: frames black outside
+    them give the cues what the whole frames give (and black frames do not)."""
+    from vidcap.video.frontback import arm_visibility, read_bounds
+    from vidcap.video.legorder import limb_edges, limb_radii
+    from vidcap.video.legorder import read_bounds as limb_bounds
+
+    truth = np.load(SAMPLES / "walk_side_truth.npz")  # arms over the torso, legs crossing
+    joints = truth["joints2d"][:20].astype(float)
+    shape = truth["masks"].shape[1:]
+    frames = np.random.default_rng(0).integers(0, 256, (20, *shape, 3), dtype=np.uint8)
+    arm = read_bounds(joints, shape)
+    assert np.isfinite(arm).all()
+    whole = arm_visibility(frames, joints)
+    np.testing.assert_array_equal(arm_visibility(_inside(frames, arm), joints), whole)
+    assert not np.array_equal(arm_visibility(np.zeros_like(frames), joints), whole,
+                              equal_nan=True)
+    radii = limb_radii(np.full(20, float(np.ptp(joints[0, :, 1]))))
+    limbs = limb_bounds(joints, radii, shape)
+    assert (limbs[:, 0] <= limbs[:, 1]).any()
+    strength, count = limb_edges(frames, joints, radii)
+    got = limb_edges(_inside(frames, limbs), joints, radii)
+    np.testing.assert_array_equal(got[0], strength)
+    np.testing.assert_array_equal(got[1], count)
 
 
 def test_past_the_budget_everything_is_dropped():

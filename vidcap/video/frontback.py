@@ -92,12 +92,26 @@ def _nearest_pixels(pts: np.ndarray) -> np.ndarray:
     return np.where(ok[..., None], np.round(pts), -1).astype(np.int64)
 
 
-def read_pixels(joints2d, search=SEARCH) -> np.ndarray:
-    """The pixels :func:`arm_visibility` reads of each frame, (F, n, 2) int64 x, y (-1:
-    none; a pixel outside the frame is not read either)."""
+def read_bounds(joints2d, shape, search=SEARCH) -> np.ndarray:
+    """The box of the pixels :func:`arm_visibility` reads in each frame of ``shape`` (H, W),
+    (F, 4) ``x_min, x_max, y_min, y_max`` px (inclusive; ``inf, -inf`` where it reads
+    none)."""
     pts = sample_points(joints2d, search)
-    return _nearest_pixels(np.concatenate([pts[k] for k in ("head", "cloth", "arm_left",
-                                                            "arm_right")], axis=1))
+    xy = _nearest_pixels(np.concatenate([pts[k] for k in ("head", "cloth", "arm_left",
+                                                          "arm_right")], axis=1))
+    return pixel_bounds(xy[..., 0], xy[..., 1], shape)
+
+
+def pixel_bounds(x, y, shape) -> np.ndarray:
+    """(F, 4) ``x_min, x_max, y_min, y_max`` of the pixels ``x``, ``y`` (F, ...) inside a
+    frame of ``shape`` (H, W) (``inf, -inf`` where none is)."""
+    H, W = shape[:2]
+    x, y = x.reshape(len(x), -1), y.reshape(len(y), -1)
+    inside = (x >= 0) & (x < W) & (y >= 0) & (y < H)
+    return np.stack([np.where(inside, x, np.inf).min(-1, initial=np.inf),
+                     np.where(inside, x, -np.inf).max(-1, initial=-np.inf),
+                     np.where(inside, y, np.inf).min(-1, initial=np.inf),
+                     np.where(inside, y, -np.inf).max(-1, initial=-np.inf)], -1)
 
 
 def _bins_at(frame: np.ndarray, pts: np.ndarray) -> np.ndarray:

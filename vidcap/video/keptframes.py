@@ -88,23 +88,20 @@ class KeptFrames:
         """Whether every one of the clip's ``n_frames`` frames is kept."""
         return not self.dropped and len(self.boxes) == int(n_frames)
 
-    def covers(self, frame_index, x, y) -> bool:
-        """Whether every pixel (``x``, ``y``) (N,) px of frame ``frame_index`` (N,) is
-        kept (pixels outside the frame need none: nobody reads them)."""
-        f, x, y = (np.asarray(v, np.int64).ravel() for v in (frame_index, x, y))
-        if self.frame_shape is None:
-            return not f.size
-        H, W = self.frame_shape
-        read = (x >= 0) & (x < W) & (y >= 0) & (y < H)
-        f, x, y = f[read], x[read], y[read]
-        if not f.size:
-            return True
-        if f.min() < 0 or f.max() >= len(self.boxes):
-            return False
-        size = np.array([(0, 0) if b is None else b.shape[:2] for b in self.boxes])[f]
-        origin = np.asarray(self.origins, np.int64).reshape(-1, 2)[f]
-        return bool(np.all((y >= origin[:, 0]) & (y < origin[:, 0] + size[:, 0])
-                           & (x >= origin[:, 1]) & (x < origin[:, 1] + size[:, 1])))
+    def covers(self, bounds) -> bool:
+        """Whether every frame's pixels read, inside ``bounds`` (F, 4) ``x_min, x_max,
+        y_min, y_max`` px (inclusive; ``x_min > x_max`` where a frame reads none), are
+        kept."""
+        b = np.asarray(bounds, float).reshape(-1, 4)
+        reads = b[:, 0] <= b[:, 1]
+        if len(b) > len(self.boxes):
+            return not reads[len(self.boxes):].any() and self.covers(b[:len(self.boxes)])
+        size = np.array([(0, 0) if k is None else k.shape[:2] for k in self.boxes[:len(b)]],
+                        float).reshape(-1, 2)
+        y0, x0 = np.asarray(self.origins[:len(b)], float).reshape(-1, 2).T
+        inside = (b[:, 0] >= x0) & (b[:, 1] < x0 + size[:, 1]) \
+            & (b[:, 2] >= y0) & (b[:, 3] < y0 + size[:, 0])
+        return bool(np.all(inside | ~reads))
 
     def frames(self, stop: int | None = None) -> Iterator[np.ndarray]:
         """The frames (H, W, 3) uint8 up to ``stop``, black outside the kept boxes (one

@@ -245,19 +245,30 @@ def tap_limb_edges(frames, joints2d, radii, strength, count):
 _CHUNK = 128
 
 
-def read_pixels(joints2d, radii, shape) -> tuple[np.ndarray, np.ndarray]:
-    """The pixels :func:`tap_limb_edges` reads of frames of ``shape`` (H, W): their
-    frames (N,) and flat indices ``y W + x`` (N,), inside the frame only."""
+def read_bounds(joints2d, radii, shape) -> np.ndarray:
+    """The box of the pixels :func:`tap_limb_edges` reads in each frame of ``shape``
+    (H, W), (F, 4) ``x_min, x_max, y_min, y_max`` px (inclusive; ``inf, -inf`` where it
+    reads none)."""
+    from vidcap.video.frontback import pixel_bounds
+
     j2, rad = np.asarray(joints2d, float), np.asarray(radii, float)
-    frames, flat = [], []
+    W = shape[1]
+    out = np.tile([np.inf, -np.inf, np.inf, -np.inf], (len(j2), 1))
     for first in range(0, len(j2), _CHUNK):
         chunk = _Chunk(j2[first:first + _CHUNK], rad[first:first + _CHUNK], shape)
-        f = np.broadcast_to((chunk.row // 4 + first)[:, None, None], chunk.ok.shape)
-        frames.append(f[chunk.ok])
-        flat.append(chunk.flat[chunk.ok])
-    if not frames:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    return np.concatenate(frames).astype(np.int64), np.concatenate(flat).astype(np.int64)
+        if not chunk.flat.size:
+            continue
+        x = np.where(chunk.ok, chunk.flat % W, -1)
+        y = np.where(chunk.ok, chunk.flat // W, -1)
+        per_line = pixel_bounds(x, y, shape)  # (K, 4), the lines frame by frame
+        has = chunk.start[1:] > chunk.start[:-1]
+        at = chunk.start[:-1][has]
+        rows = first + np.flatnonzero(has)
+        out[rows, 0] = np.minimum.reduceat(per_line[:, 0], at)
+        out[rows, 1] = np.maximum.reduceat(per_line[:, 1], at)
+        out[rows, 2] = np.minimum.reduceat(per_line[:, 2], at)
+        out[rows, 3] = np.maximum.reduceat(per_line[:, 3], at)
+    return out
 
 
 def near_limb(strength, count, *, min_count: int = 4) -> np.ndarray:

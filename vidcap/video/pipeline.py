@@ -799,21 +799,18 @@ def _kept_covers(kept, joints2d, model_height, body) -> bool:
     """Whether ``kept`` (a :class:`vidcap.video.keptframes.KeptFrames`, or None) holds every
     pixel :func:`colour_cues` reads for the 2D joints (F, 15, 2): then the cues read it
     and give what a second decode would, to the bit."""
-    from vidcap.video.frontback import read_pixels as arm_pixels
+    from vidcap.video.frontback import read_bounds as arm_bounds
     from vidcap.video.legorder import limb_radii
-    from vidcap.video.legorder import read_pixels as limb_pixels
+    from vidcap.video.legorder import read_bounds as limb_bounds
 
     F = len(joints2d)
     if kept is None or not kept.complete(F):
         return False
-    if FRONT_CUE:
-        xy = arm_pixels(joints2d)
-        if not kept.covers(np.repeat(np.arange(F), xy.shape[1]), xy[..., 0], xy[..., 1]):
-            return False
+    if FRONT_CUE and not kept.covers(arm_bounds(joints2d, kept.frame_shape)):
+        return False
     if LIMB_CUE and model_height is not None:
-        W = kept.frame_shape[1]
-        f, flat = limb_pixels(joints2d, limb_radii(model_height, body), kept.frame_shape)
-        return kept.covers(f, flat % W, flat // W)
+        return kept.covers(limb_bounds(joints2d, limb_radii(model_height, body),
+                                       kept.frame_shape))
     return True
 
 
