@@ -473,8 +473,15 @@ SWITCHES = (
      "(vidcap.video.reflection; default: reflection.CUT_REFLECTIONS)"),
     ("ends-agree", "emptyscene", "ENDS_AGREE",
      "vidcap's plate: the empty-scene pass's ghosts found at the global threshold where the "
-     "clip's first and last samples agree (vidcap.video.emptyscene; default: "
-     "emptyscene.ENDS_AGREE, off)"),
+     "clip's first and last samples agree and the plate is neither (vidcap.video.emptyscene; "
+     "default: emptyscene.ENDS_AGREE, on)"),
+    ("both-ends", "emptyscene", "BOTH_ENDS",
+     "vidcap's plate: an empty stretch at the clip's start and one at its end counted "
+     "together (vidcap.video.emptyscene; default: emptyscene.BOTH_ENDS, on)"),
+    ("shorten-run", "reflection", "SHORTEN_RUN",
+     "vidcap's silhouettes: a reflection run that fails the colour test cut short at its "
+     "longest start that passes it (vidcap.video.reflection; default: "
+     "reflection.SHORTEN_RUN, on)"),
 )
 
 

@@ -136,7 +136,7 @@ def test_a_low_contrast_ghost_under_an_inflated_noise_map_is_found_where_the_end
     at the global threshold and the plate re-taken; without it nothing changes."""
     from dataclasses import replace
 
-    monkeypatch.setattr(emptyscene, "ENDS_AGREE", True)  # (off by default)
+    monkeypatch.setattr(emptyscene, "ENDS_AGREE", True)
     rng = np.random.default_rng(5)
     wall = _wall(rng)
     near = lambda: np.clip(wall().astype(np.int16) + 12, 0, 255).astype(np.uint8)  # noqa: E731
@@ -165,7 +165,8 @@ def test_a_low_contrast_ghost_under_an_inflated_noise_map_is_found_where_the_end
     assert plate_from_empty(model, frames, gains, times=times) is model
 
 
-def test_the_noise_map_is_lowered_only_where_the_ends_agree():
+def test_the_noise_map_is_lowered_only_where_the_ends_agree(monkeypatch):
+    monkeypatch.setattr(emptyscene, "ENDS_OFF_PLATE", False)
     rng = np.random.default_rng(6)
     wall = _wall(rng)
     model = BackgroundModel.from_plate(wall(), noise_sigma=2.0)
@@ -181,3 +182,59 @@ def test_the_noise_map_is_lowered_only_where_the_ends_agree():
     # (two noisy looks at the wall agree within the threshold nearly everywhere)
     assert np.isclose(got.noise_map[outside], cap).mean() > 0.95
     assert np.isin(got.noise_map, [cap, 30.0]).all()
+
+
+def test_the_noise_map_is_lowered_only_where_the_ends_agree_on_another_colour_than_the_plate(
+        monkeypatch):
+    """With :data:`emptyscene.ENDS_OFF_PLATE`: where both ends show the wall and the plate
+    holds the block (someone came and went) the map is lowered; where the ends show what
+    the plate holds, nothing is to be found and it stays."""
+    from dataclasses import replace
+
+    monkeypatch.setattr(emptyscene, "ENDS_OFF_PLATE", True)
+    rng = np.random.default_rng(7)
+    wall = _wall(rng)
+    model = BackgroundModel.from_plate(_block(wall()), noise_sigma=2.0)
+    model = replace(model, noise_map=np.full((96, 128), 30.0, np.float32))
+    frames = np.stack([wall(), _block(wall()), wall()])
+    got = emptyscene._ends_agree_model(model, frames, np.ones((3, 3)))
+    cap = np.float32(model.threshold / 3.0)
+    # (two noisy looks at the wall agree within the threshold nearly everywhere)
+    assert np.isclose(got.noise_map[30:80, 50:70], cap).mean() > 0.95
+    outside = np.ones((96, 128), bool)
+    outside[30:80, 50:70] = False
+    assert (got.noise_map[outside] == 30.0).mean() > 0.99
+
+
+def test_empty_stretches_at_both_ends_add_up():
+    # Scene shown in samples 0-1 (0.6 s from the first sample) and 9-10 (0.5 s to the
+    # last): neither alone spans 1 s, together they do (someone came and went).
+    t = np.array([0.0, 0.6, 1.2, 1.8, 2.4, 3.0, 3.6, 4.2, 4.8, 5.5, 6.0])
+    both = np.zeros(11, bool)
+    both[[0, 1, 9, 10]] = True
+    start = np.zeros(11, bool)
+    start[[0, 1]] = True
+    shown = np.stack([both, start, both], axis=1)
+    assert not empty_stretch(shown, t, 1.0).any()
+    assert empty_stretch(shown, t, 1.0, both=True).tolist() == [True, False, True]
+    assert not empty_stretch(shown, t, 1.2, both=True).any()
+
+
+def test_a_block_that_came_and_went_is_retaken_from_both_ends(monkeypatch):
+    """Two empty samples at each end, 0.6 s apart (0.6 s a stretch, under the second
+    :data:`emptyscene.MIN_EMPTY_S` asks for), the block standing still between: with
+    :data:`emptyscene.BOTH_ENDS` the plate gets the wall back, without it not."""
+    monkeypatch.setattr(emptyscene, "FROM_CLIP_ENDS", False)
+    rng = np.random.default_rng(8)
+    wall = _wall(rng)
+    model = BackgroundModel.from_plate(_block(wall()), noise_sigma=2.0)
+    frames = np.stack([wall() for _ in range(2)] + [_block(wall()) for _ in range(8)]
+                      + [wall() for _ in range(2)])
+    times = 0.6 * np.arange(12)
+    gains = np.ones((12, 3))
+    monkeypatch.setattr(emptyscene, "BOTH_ENDS", False)
+    assert plate_from_empty(model, frames, gains, times=times) is model
+    monkeypatch.setattr(emptyscene, "BOTH_ENDS", True)
+    got = plate_from_empty(model, frames, gains, times=times)
+    clean = wall().astype(np.int16)[35:75, 53:67]
+    assert np.abs(got.plate[35:75, 53:67].astype(np.int16) - clean).sum(axis=-1).mean() < 15

@@ -99,3 +99,33 @@ def test_dark_legs_against_a_darker_floor_are_kept(monkeypatch):
     assert drop_reflection(mask, frame, plate.astype(np.uint8)) == 0
     monkeypatch.setattr(reflection, "OTHER_COLOUR", 0.0)  # without the colour test
     assert drop_reflection(mask.copy(), frame, plate.astype(np.uint8)) > 0
+
+
+def test_a_reflection_running_onto_a_dark_band_is_cut_on_the_light_floor(monkeypatch):
+    """A glossy light floor with a grey band across it 12 rows below the feet
+    (sbi_caviar1): on the light floor the trousers' mirror image takes the floor's
+    tint, on the band it shows nearly in the trousers' own colour. The whole run fails
+    the colour test (12 of 30 rows of another colour than their mirror rows); its start
+    passes it and is cut (:data:`reflection.SHORTEN_RUN`); without that nothing is."""
+    rng = np.random.default_rng(6)
+    band = slice(FEET + 12, FEET + 30)
+    plate = np.clip(rng.normal((150, 155, 170), 1.5, (H, W, 3)), 0, 255)
+    plate[band] = np.clip(rng.normal((110, 115, 125), 1.5, plate[band].shape), 0, 255)
+    frame = plate.copy()
+    body = np.array((60.0, 70.0, 90.0))
+    frame[TOP:FEET, LEFT:RIGHT] = body
+    for d in range(1, 13):  # the light floor: 0.35 of the body's difference
+        row = FEET - 1 + d
+        frame[row, LEFT:RIGHT] = plate[row, LEFT:RIGHT] + 0.35 * (body - plate[FEET - d,
+                                                                           LEFT:RIGHT])
+    frame[band, LEFT:RIGHT] = body + (5.0, 3.0, 2.0)  # the band: the trousers' colour
+    frame = np.clip(frame + rng.normal(0, 1.0, frame.shape), 0, 255).astype(np.uint8)
+    plate = plate.astype(np.uint8)
+    mask = np.zeros((H, W), np.uint8)
+    mask[TOP:FEET + 30, LEFT:RIGHT] = 1  # the silhouette stage kept the reflection
+    monkeypatch.setattr(reflection, "SHORTEN_RUN", False)
+    assert drop_reflection(mask.copy(), frame, plate) == 0
+    monkeypatch.setattr(reflection, "SHORTEN_RUN", True)
+    assert drop_reflection(mask, frame, plate) > 0
+    assert mask[TOP:FEET, LEFT:RIGHT].all()  # the body is whole
+    assert mask[FEET:FEET + 12].sum() < 0.05 * 12 * (RIGHT - LEFT)  # the light floor's cut

@@ -178,7 +178,7 @@ def _apart(ghost: np.ndarray, mask: np.ndarray, share: float) -> np.ndarray:
 
 
 def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float,
-                  ends: tuple[float, float] | None = None) -> np.ndarray:
+                  ends: tuple[float, float] | None = None, both: bool = False) -> np.ndarray:
     """Pixels whose empty-scene samples form a stretch at the clip's start or end.
 
     Parameters
@@ -193,19 +193,24 @@ def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float,
     ends : (float, float), optional
         The clip's first and last frame times, seconds: the stretch is measured from
         there instead of from the first (last) sample (:data:`FROM_CLIP_ENDS`).
+    both : bool
+        Also take a stretch from the start and one from the end together when their
+        spans add up to ``min_span`` (:data:`BOTH_ENDS`).
 
     Returns
     -------
     numpy.ndarray, shape (N,), bool
         The stretch starts at the first sample or ends at the last one, runs over
         consecutive samples (one sample missing between two that show the scene is
-        bridged: the ghost test misses a sample now and then) and spans ``min_span``.
+        bridged: the ghost test misses a sample now and then) and spans ``min_span``
+        (with ``both``: or the stretches at both ends do together).
     """
     k = shown.shape[0]
     out = np.zeros(shown.shape[1], bool)
     if k < 2:
         return out
     t0 = (times[0], times[-1]) if ends is None else ends
+    spans = []
     for s, t, origin in ((shown, times, t0[0]), (shown[::-1], times[::-1], t0[1])):
         fill = s.copy()
         fill[1:-1] |= s[:-2] & s[2:]
@@ -213,7 +218,11 @@ def empty_stretch(shown: np.ndarray, times: np.ndarray, min_span: float,
         # The last sample of the stretch that shows the scene (run is False from the
         # first gap on, and True at 0 only where the end sample shows it).
         last = k - 1 - np.argmax(run[::-1], axis=0)
-        out |= run[0] & (np.abs(t[last] - origin) >= min_span)
+        span = np.where(run[0], np.abs(t[last] - origin), -np.inf)
+        out |= span >= min_span
+        spans.append(span)
+    if both:
+        out |= spans[0] + spans[1] >= min_span
     return out
 
 
@@ -229,32 +238,48 @@ def _nanmedian0(vals: np.ndarray) -> np.ndarray:
     return (lo + hi) / np.float32(2)
 
 
-#: Where the clip's first and last samples agree (the same scene at both ends), the
-#: samples' first-pass masks that the ghosts are found in compare at the plate's
-#: global threshold, not at 3 x the noise map (:func:`_ends_agree_model`). The noise
-#: map is measured against the first plate over the samples the vote took as scene; a
-#: person who sat there in most of them and moved a little (sbi_candela, tuning: his
-#: legs on the sofa, noise map 10-24 against a threshold of 15) inflates it, and the
-#: ghost of the sitting man at the clip's ends loses 200 of its 270 pixels: the legs
-#: stay in the plate. Both ends showing the same thing says that what came between
-#: was someone who came and went, not the sensor's noise. sbi_candela 0.889 / 0.858 ->
-#: 0.934 / 0.859, cdnet_office_enter 0.907 / 0.807 -> 0.905 / 0.804 (tuning); the
-#: global threshold everywhere in the pass: candela 0.924, office_enter 0.805 / 0.732.
-#: **Off**: mmskeleton_taichi (validation, against MediaPipe's masks) lost 0.0106
-#: median (0.262 -> 0.252), over the 0.01 a validation row may lose; 05_18 2-5 s side
-#: (tuning) p10 0.817 -> 0.803; the other 70 rows of ``silhouettes_real.py --quick``
-#: unchanged (wt-sil4; benchmarks/HISTORY.md, Silhouettes › Tried and not kept).
-ENDS_AGREE = False
+#: Where the clip's first and last samples agree (the same scene at both ends) and
+#: their common colour is not the plate's (:data:`ENDS_OFF_PLATE`), the samples'
+#: first-pass masks that the ghosts are found in compare at the plate's global
+#: threshold, not at 3 x the noise map (:func:`_ends_agree_model`). The noise map is
+#: measured against the first plate over the samples the vote took as scene; a person
+#: who sat there in most of them and moved a little (sbi_candela, tuning: his legs on
+#: the sofa, noise map 10-24 against a threshold of 15) inflates it, and the ghost of
+#: the sitting man at the clip's ends loses most of its pixels: the legs stay in the
+#: plate. Both ends showing the same thing says that what came between was someone
+#: who came and went, not the sensor's noise. On since wt-sil6, with
+#: :data:`ENDS_OFF_PLATE` and :data:`BOTH_ENDS`: sbi_candela 0.876 / 0.821 -> 0.885 /
+#: 0.830, cdnet_office_enter 0.911 / 0.781 -> 0.909 / 0.781 (benchmarks/RESULTS.md).
+#: (wt-sil4 tried it everywhere the ends agree, alone, with the even sampler: candela
+#: 0.889 -> 0.934 but mmskeleton_taichi, validation, -0.0106; with convert's sampler
+#: it finds the legs' ghost in samples 0-2 and 22-23 of 24, each end's stretch under
+#: :data:`MIN_EMPTY_S`, and changes nothing alone.)
+ENDS_AGREE = True
+#: ... and only where the ends' common colour (their mean, each scaled by its gain)
+#: differs from the plate by more than the threshold: pixels the plate took from the
+#: middle of the clip. On sbi_candela 2,986 pixels instead of 36,340 (a third of the
+#: frame, where the ends agree with the plate and nothing is to be found), with the
+#: same figures.
+ENDS_OFF_PLATE = True
+#: An empty stretch may also be the stretch from the first sample and the one from the
+#: last sample together (:func:`empty_stretch`'s ``both``): when both ends show the
+#: same ghost, the person came and went, and the two spans add up to
+#: :data:`MIN_EMPTY_S`. sbi_candela's legs: 0.63 s from the start, 0.47 s from the end
+#: (samples at frames 9-29 and 330-344 of 350, 30 fps).
+BOTH_ENDS = True
 
 
 def _ends_agree_model(model, frames: np.ndarray, gains: np.ndarray):
     """``model`` with its noise map lowered to ``threshold / 3`` (so that 3 x the map is
     the global threshold) where the first and last of ``frames``, each scaled by its
-    gain, differ by at most the threshold (L1 over the channels); ``model`` itself when
-    nothing changes."""
-    first = frames[0] / gains[0]
-    last = frames[-1] / gains[-1]
-    agree = np.abs(np.clip(first, 0, 255) - np.clip(last, 0, 255)).sum(axis=-1) <= model.threshold
+    gain, differ by at most the threshold (L1 over the channels) and, with
+    :data:`ENDS_OFF_PLATE`, their mean differs from the plate by more than it;
+    ``model`` itself when nothing changes."""
+    first = np.clip(frames[0] / gains[0], 0, 255)
+    last = np.clip(frames[-1] / gains[-1], 0, 255)
+    agree = np.abs(first - last).sum(axis=-1) <= model.threshold
+    if ENDS_OFF_PLATE:
+        agree &= np.abs((first + last) / 2 - model.plate).sum(axis=-1) > model.threshold
     cap = np.float32(model.threshold / 3.0)
     lower = agree & (model.noise_map > cap)
     if not lower.any():
@@ -330,7 +355,7 @@ def plate_from_empty(model, frames: np.ndarray, gains: np.ndarray, *,
     def stretch(shown, sel):
         # From the first / last sample as before; from the clip's own first / last
         # frame when the ghosts lie apart from the person.
-        out = empty_stretch(shown, times, MIN_EMPTY_S)
+        out = empty_stretch(shown, times, MIN_EMPTY_S, both=BOTH_ENDS)
         if use_ends:
             out |= empty_stretch(shown & apart[:, sel], times, MIN_EMPTY_S, ends)
         return out
