@@ -280,6 +280,30 @@ def test_a_frame_noisier_than_the_plate_raises_its_own_threshold(monkeypatch):
     assert noisy_off < noisy - 0.1
 
 
+def _board_scene(seed, board):
+    """A person (truth rows 50-109, columns 20-39) and a whiteboard (rows 10-59,
+    columns 90-149) whose plate is ``board`` (a level or an array); the exposure drops
+    to 0.8 but the board keeps its level: frame 0, and frame 1 with something darker in
+    front of the board. Returns frames (2, H, W, 3), the plate's model, the truth."""
+    rng = np.random.default_rng(seed)
+    plate = background(120, 160, rng)
+    plate[10:60, 90:150] = board
+    truth = np.zeros((120, 160), bool)
+    truth[50:110, 20:40] = True
+    f = plate.astype(np.float32) * 0.8 + rng.normal(0, 1.0, plate.shape)
+    f[10:60, 90:150] = np.minimum(plate[10:60, 90:150], 250) + rng.normal(0, 1.0,
+                                                                           (50, 60, 3))
+    f[truth] = (40, 60, 160)
+    frame = np.clip(f, 0, 255).astype(np.uint8)
+    board_dark = frame.copy()
+    board_dark[15:45, 100:120] = (40, 60, 160)
+    return np.stack([frame, board_dark]), BackgroundModel.from_plate(plate, noise_sigma=1.0), truth
+
+
+def _ious(masks, truth):
+    return [float((m & truth).sum() / (m | truth).sum()) for m in masks]
+
+
 def test_a_clipped_highlight_that_keeps_its_level_is_not_the_person(monkeypatch):
     """The exposure drops to 0.8 but a whiteboard at the clip level (plate 255) stays
     at 250: scaled by the frame's gain the plate says 204 there. Compared one-sided
@@ -287,25 +311,29 @@ def test_a_clipped_highlight_that_keeps_its_level_is_not_the_person(monkeypatch)
     is found; compared both ways the board, larger than the person, is taken."""
     import vidcap.video.silhouette as sil_mod
 
-    rng = np.random.default_rng(21)
-    plate = background(120, 160, rng)
-    plate[10:60, 90:150] = 255  # the board, clipped
-    truth = np.zeros((120, 160), bool)
-    truth[50:110, 20:40] = True
-    f = plate.astype(np.float32) * 0.8 + rng.normal(0, 1.0, plate.shape)
-    f[10:60, 90:150] = 250  # the board keeps its level
-    f[truth] = (40, 60, 160)
-    frame = np.clip(f, 0, 255).astype(np.uint8)
-    board_dark = frame.copy()
-    board_dark[15:45, 100:120] = (40, 60, 160)  # something darker in front of it shows
-    frames = np.stack([frame, board_dark])
-    bg = BackgroundModel.from_plate(plate, noise_sigma=1.0)
-
-    def ious(masks):
-        return [float((m & truth).sum() / (m | truth).sum()) for m in masks]
-
+    frames, bg, truth = _board_scene(21, 255)
     sil = extract_silhouettes(frames, bg)
-    assert min(ious(sil.masks)) > 0.95
+    assert min(_ious(sil.masks, truth)) > 0.95
     assert sil.n_other_blobs[1] == 1  # the dark patch on the board still differs
     monkeypatch.setattr(sil_mod, "SATURATED", None)
-    assert max(ious(extract_silhouettes(frames, bg).masks)) < 0.3
+    monkeypatch.setattr(sil_mod, "HIGHLIGHT", None)
+    assert max(_ious(extract_silhouettes(frames, bg).masks, truth)) < 0.3
+
+
+def test_a_highlight_under_the_clip_level_that_keeps_its_level_is_not_the_person(
+        monkeypatch):
+    """A whiteboard at 243-247 in the plate (highlights, not clipped): the exposure
+    drops to 0.8 and the board keeps its level, ~45 levels a channel above the scaled
+    plate. Between the plate and the scaled plate (:data:`HIGHLIGHT`) it is scene, and
+    the person is found; something darker in front of it still differs; compared
+    both ways (off) the board, larger than the person, is taken."""
+    import vidcap.video.silhouette as sil_mod
+
+    board = np.random.default_rng(0).integers(243, 248, (50, 60, 3))
+    frames, bg, truth = _board_scene(22, board)
+    assert (bg.plate[10:60, 90:150] < sil_mod.SATURATED).all()
+    sil = extract_silhouettes(frames, bg)
+    assert min(_ious(sil.masks, truth)) > 0.95
+    assert sil.n_other_blobs[1] == 1
+    monkeypatch.setattr(sil_mod, "HIGHLIGHT", None)
+    assert max(_ious(extract_silhouettes(frames, bg).masks, truth)) < 0.3

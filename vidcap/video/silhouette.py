@@ -154,6 +154,12 @@ class _Params:
         # the scaled plate there differs from it (:func:`_one_sided`).
         sat = plate >= SATURATED if SATURATED is not None else None
         self.saturated = sat.view(np.uint8) if sat is not None and sat.any() else None
+        high = None
+        if HIGHLIGHT is not None:
+            high = plate >= HIGHLIGHT
+            if sat is not None:
+                high &= ~sat
+        self.highlight = high.view(np.uint8) if high is not None and high.any() else None
         still = getattr(bg, "still_person", None)
         self.still = None
         if still is not None and still.any():
@@ -312,6 +318,30 @@ def _one_sided(diff: np.ndarray, frame: np.ndarray, ref: np.ndarray,
     cv2.copyTo(darker, saturated, diff)
 
 
+#: Plate channels at or above this level (and below :data:`SATURATED`) are highlights:
+#: the camera compresses its top range, so when the exposure drifts they keep more of
+#: their level than the frame's gain says. There a frame anywhere between the plate
+#: and the plate scaled by the gain does not differ from it; only its distance from
+#: that interval counts (:func:`_between`). cdnet_office_enter (tuning): at 0.87 of the
+#: plate's exposure the whiteboard's top-left corner (plate 239-249, under
+#: SATURATED) stays at 229-255, 20-30 grey levels a channel above the scaled plate: a
+#: 230-900-pixel false blob in the empty frames, the one chosen over the man coming in
+#: (frames 88-89, IoU 0 -> 0.49-0.54) and joined to his head later (frames 124-149,
+#: 0.64-0.75 -> 0.75-0.97); its p10 0.781 -> 0.817 (any level from 220 to 245 the
+#: same to 0.001; wt-sil6). None: off.
+HIGHLIGHT: int | None = 240
+
+
+def _between(diff: np.ndarray, frame: np.ndarray, ref: np.ndarray, plate: np.ndarray,
+             where: np.ndarray) -> None:
+    """In ``diff`` (H, W, 3) uint8, in place: where ``where`` (H, W, 3) is non-zero,
+    the distance of ``frame`` from the interval between ``plate`` and ``ref`` (the plate
+    scaled by the frame's gain), per channel: 0 inside it."""
+    lo, hi = cv2.min(ref, plate), cv2.max(ref, plate)
+    out = cv2.add(cv2.subtract(lo, frame), cv2.subtract(frame, hi))
+    cv2.copyTo(out, where, diff)
+
+
 def _frame_tmap(l1: np.ndarray, p: _Params) -> tuple[np.ndarray, int]:
     """The frame's threshold map and its floor (0: the plate's map as it is)."""
     if FRAME_RAISE is None:
@@ -358,6 +388,8 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
     diff = cv2.absdiff(frame, ref)
     if scaled and p.saturated is not None:
         _one_sided(diff, frame, ref, p.saturated)
+    if scaled and p.highlight is not None:
+        _between(diff, frame, ref, p.plate, p.highlight)
     l1 = np.empty(diff.shape[:2], np.uint8)
     _kernels().l1_sum(diff, l1)  # saturating uint8 sum over channels
     tmap, floor = _frame_tmap(l1, p)
