@@ -481,7 +481,7 @@ SWITCHES = (
     ("shorten-run", "reflection", "SHORTEN_RUN",
      "vidcap's silhouettes: a reflection run that fails the colour test cut short at its "
      "longest start that passes it (vidcap.video.reflection; default: "
-     "reflection.SHORTEN_RUN, on)"),
+     "reflection.SHORTEN_RUN, off)"),
 )
 
 

@@ -129,3 +129,33 @@ def test_a_reflection_running_onto_a_dark_band_is_cut_on_the_light_floor(monkeyp
     assert drop_reflection(mask, frame, plate) > 0
     assert mask[TOP:FEET, LEFT:RIGHT].all()  # the body is whole
     assert mask[FEET:FEET + 12].sum() < 0.05 * 12 * (RIGHT - LEFT)  # the light floor's cut
+
+
+def test_a_reflection_strong_right_under_the_feet_is_cut_from_the_feet(monkeypatch):
+    """A polished floor mirrors the feet strongly where they touch it (0.78-0.72 of the
+    body's difference in the first four rows, above :data:`reflection.WEAK`), then
+    weakly (0.35; sbi_caviar1 standing, cdnet_office_enter's desk). The run's first
+    bins may be under :data:`reflection.START_WEAK`: the whole image is cut; without
+    that the strong rows stay (a run starts only further down, if at all)."""
+    rng = np.random.default_rng(7)
+    plate = np.clip(rng.normal((150, 155, 170), 1.5, (H, W, 3)), 0, 255)
+    frame = plate.copy()
+    body = np.array((60.0, 70.0, 90.0))
+    frame[TOP:FEET, LEFT:RIGHT] = body
+    for d in range(1, 31):
+        rho = (0.78, 0.76, 0.74, 0.72)[d - 1] if d <= 4 else 0.35
+        row = FEET - 1 + d
+        frame[row, LEFT:RIGHT] = plate[row, LEFT:RIGHT] + rho * (body - plate[FEET - d,
+                                                                               LEFT:RIGHT])
+    frame = np.clip(frame + rng.normal(0, 1.0, frame.shape), 0, 255).astype(np.uint8)
+    plate = plate.astype(np.uint8)
+    mask = np.zeros((H, W), np.uint8)
+    mask[TOP:FEET + 30, LEFT:RIGHT] = 1
+    monkeypatch.setattr(reflection, "START_WEAK", None)
+    off = mask.copy()
+    drop_reflection(off, frame, plate)
+    assert off[FEET:FEET + 4, LEFT:RIGHT].all()  # the strong rows stay
+    monkeypatch.setattr(reflection, "START_WEAK", 0.8)
+    drop_reflection(mask, frame, plate)
+    assert mask[TOP:FEET, LEFT:RIGHT].all()  # the body is whole
+    assert mask[FEET:FEET + 30].sum() < 0.05 * 30 * (RIGHT - LEFT)

@@ -14,11 +14,13 @@ below the feet: CAVIAR1's man standing at a shop window, IoU 0.66 with the truth
 candidate row ``y0`` in the lower half of the mask, the rows below it are compared
 with their mirror rows above it, and the reflection is the longest run of rows
 starting right under ``y0`` in which every row is *weak* against its mirror row:
-its mean difference under :data:`WEAK` times the mirror row's, in the same direction
+its mean difference under :data:`WEAK` times the mirror row's (the first few rows,
+where the feet touch the floor, under :data:`START_WEAK`), in the same direction
 (the mean difference vectors' cosine above :data:`SAME_DIRECTION`), and of the same
 hue where the mirror row's change is coloured (the difference minus its grey part);
 most of the run's pixels must also be of another colour than their mirror rows
-(:data:`OTHER_COLOUR`, :data:`OTHER_SHARE`). Only pixels of those
+(:data:`OTHER_COLOUR`, :data:`OTHER_SHARE`; a run that fails this is cut short to its
+longest start that passes, :data:`SHORTEN_RUN`). Only pixels of those
 rows that are themselves weak against their mirror row are cut (rows are summed in
 bins of the silhouette stage's work scale).
 
@@ -79,15 +81,32 @@ MIN_SHARE = 0.15
 MAX_BINS = 256
 #: Masks smaller than this (pixels) are left alone.
 MIN_PIXELS = 50
+#: The run's first :data:`START_SHARE` of the mask's bins need only be under this share
+#: of their mirror bins' level (and their pixels are cut under it): where the feet touch
+#: a polished floor its mirror image is strongest. sbi_caviar1 (tuning) standing at the
+#: shop window: the rows right under his feet 0.72-0.78 of the legs' difference, then
+#: 0.4-0.6; under :data:`WEAK` alone no run starts at the line (frame 170: 680 false
+#: pixels). With 0.8: sbi_caviar1 0.981 / 0.793 -> 0.983 / 0.828, cdnet_office_enter
+#: 0.911 / 0.817 -> 0.915 / 0.840 (the desk's reflection of his jeans), sbi_caviar2
+#: (validation) 0.863 -> 0.868, ido_walk unchanged; with :data:`SHORTEN_RUN` on, 0.75
+#: gave caviar1 0.983 / 0.833 and office_enter 0.914 / 0.837, 0.8 0.983 / 0.837 and
+#: 0.915 / 0.840, 0.85 0.979 / 0.839 and 0.915 / 0.841 (wt-sil6). None: off
+#: (:data:`WEAK` for the whole run).
+START_WEAK: float | None = 0.8
+#: ... share of the mask's bins (at least one) from the line.
+START_SHARE = 0.06
 #: A run that fails the colour test (:data:`OTHER_SHARE`) as a whole is cut short at
 #: its longest start that passes it, instead of dropped. A glossy floor with a dark
 #: band across it (sbi_caviar1, tuning: the man standing at the shop window) mirrors
 #: his dark trousers on the light floor in the floor's tint, then on the dark band in
 #: about the trousers' own colour: the band's bins fail the test, the whole run held
 #: 0.42-0.49 of its pixels in other colours, and the reflection stayed (frame 206: 1,050
-#: false pixels, IoU 0.69 -> 0.86 cut short). sbi_caviar1 0.981 / 0.793 -> 0.981 /
-#: 0.799; the other real rows with true masks unchanged (wt-sil6).
-SHORTEN_RUN = True
+#: false pixels, IoU 0.69 -> 0.86 cut short). **Off** (wt-sil6): alone sbi_caviar1 p10
+#: 0.793 -> 0.799 but sports2d_walk_turn (tuning, against MediaPipe's masks) p10 0.806 ->
+#: 0.801; with :data:`START_WEAK` caviar1 0.983 / 0.828 -> 0.983 / 0.837 but walk_turn
+#: 0.806 -> 0.792 (frames 20, 85, 251: her black trousers under the floor line cut; rows
+#: of a low level against the dark floor pass the colour test on small colour shifts).
+SHORTEN_RUN = False
 
 
 def _cosines(u: np.ndarray) -> np.ndarray:
@@ -166,8 +185,9 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     mid = nb // 2
     if nb - 1 - min_bins <= mid:
         return 0
+    gate = WEAK if START_WEAK is None else max(WEAK, START_WEAK)
     lower = binned(row_level(mid * step), mid) / per_bin[mid:]
-    if not np.any(lower[2:nb - min_bins + 1 - mid] < WEAK * lower[:nb - min_bins - 1 - mid]):
+    if not np.any(lower[2:nb - min_bins + 1 - mid] < gate * lower[:nb - min_bins - 1 - mid]):
         return 0
     level = binned(row_level(0)) / per_bin
     if scale is not None:
@@ -176,7 +196,12 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most of the
     # remaining frames stop here (no run of bins weaker than their mirror bins).
     weak_pair = (level[:, None] < WEAK * level[None, :]) & seen[:, None] & seen[None, :]
-    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total)
+    start = None
+    if START_WEAK is not None:
+        k = max(1, round(START_SHARE * nb))
+        start = ((level[:, None] < START_WEAK * level[None, :]) & seen[:, None]
+                 & seen[None, :], k)
+    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total, start=start)
     if found is None:
         return 0
     colour = binned(cv2.bitwise_and(box, box, mask=m).sum(axis=1, dtype=np.int32)
@@ -191,25 +216,32 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     length = np.linalg.norm(vec, axis=1)
     hue = vec - vec.mean(axis=1, keepdims=True)
     hue_len = np.linalg.norm(hue, axis=1)
-    weak_pair &= _cosines(vec / np.maximum(length, 1e-6)[:, None]) > SAME_DIRECTION
+    alike = _cosines(vec / np.maximum(length, 1e-6)[:, None]) > SAME_DIRECTION
     coloured = hue_len >= COLOURED * length
-    weak_pair &= ~coloured[None, :] | (
+    alike &= ~coloured[None, :] | (
         _cosines(hue / np.maximum(hue_len, 1e-6)[:, None]) > SAME_HUE)
-    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total, other)
+    weak_pair &= alike
+    if start is not None:
+        start = (start[0] & alike, start[1])
+    found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total, other, start)
     if found is None:
         return 0
     y0, length_run = found
     r0, r1 = (y0 + 1) * step, min(height, (y0 + 1 + length_run) * step)
-    mirror = 2 * y0 - np.arange(r0, r1) // step  # each row's mirror bin
+    rows = np.arange(r0, r1) // step
+    mirror = 2 * y0 - rows  # each row's mirror bin
     # the rows' per-pixel L1 difference
     mag = cv2.absdiff(box[r0:r1], ref[r0:r1]).astype(np.int16).sum(axis=-1)
-    cut = (m[r0:r1] > 0) & (mag < WEAK * level[mirror][:, None])
+    factor = np.full(len(rows), WEAK, np.float32)
+    if start is not None:
+        factor[rows - y0 <= start[1]] = START_WEAK
+    cut = (m[r0:r1] > 0) & (mag < (factor * level[mirror])[:, None])
     m[r0:r1][cut] = 0
     return int(cut.sum())
 
 
 def _best_run(weak_pair: np.ndarray, n: np.ndarray, min_bins: int, min_pixels: float,
-              other=None):
+              other=None, start=None):
     """The line (bin) whose run of bins weak against their mirror bins, starting right
     under it, holds the most mask pixels: ``(line, run length)``, or None when no run
     spans ``min_bins`` and ``min_pixels``. Lines in the lower half of the mask only."""
@@ -223,6 +255,8 @@ def _best_run(weak_pair: np.ndarray, n: np.ndarray, min_bins: int, min_pixels: f
     valid = (below < nb) & (above >= 0)
     b, a = np.where(valid, below, 0), np.where(valid, above, 0)
     weak = valid & weak_pair[b, a]
+    if start is not None:  # (pair table, bins): the run's first bins may be less weak
+        weak |= valid & start[0][b, a] & (d[None, :] <= start[1])
     run = np.where(weak.all(axis=1), weak.shape[1], np.argmin(weak, axis=1))
     counts = np.concatenate([np.zeros((len(lines), 1), np.float32),
                              np.cumsum(n[b] * valid, axis=1)], axis=1)
