@@ -42,8 +42,12 @@ def test_a_static_self_lit_block_is_scene_not_the_person(monkeypatch):
     plain = BackgroundModel(**{**bg.__dict__, "self_lit": None})
     one_sided = extract_silhouettes(frames, plain, require_person=False)
     assert not np.asarray(one_sided.masks)[:, y0:y1, x0:x1].any()
-    # ... and without either the lamp differs from the drifting plate: a false blob.
+    # ... so does the interval test at the plate's top range (silhouette.HIGHLIGHT) ...
     monkeypatch.setattr(silhouette, "SATURATED", None)
+    between = extract_silhouettes(frames, plain, require_person=False)
+    assert not np.asarray(between.masks)[:, y0:y1, x0:x1].any()
+    # ... and without any of them the lamp differs from the drifting plate: a false blob.
+    monkeypatch.setattr(silhouette, "HIGHLIGHT", None)
     without = extract_silhouettes(frames, plain, require_person=False)
     in_lamp = np.asarray(without.masks)[:, y0:y1, x0:x1].any(axis=(1, 2)).mean()
     assert in_lamp > 0.3 or without.n_other_blobs.sum() > 0

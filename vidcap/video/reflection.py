@@ -226,8 +226,14 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total, other, start)
     if found is None:
         return 0
+    return _cut_run(found, box, ref, m, level, step, start)
+
+
+def _cut_run(found, box, ref, m, level, step: int, start) -> int:
+    """Clear the pixels of the run ``found`` = (line bin, run length) in the mask box
+    ``m`` that are weak against their mirror bins' ``level``; the pixels cut."""
     y0, length_run = found
-    r0, r1 = (y0 + 1) * step, min(height, (y0 + 1 + length_run) * step)
+    r0, r1 = (y0 + 1) * step, min(len(m), (y0 + 1 + length_run) * step)
     rows = np.arange(r0, r1) // step
     mirror = 2 * y0 - rows  # each row's mirror bin
     # the rows' per-pixel L1 difference

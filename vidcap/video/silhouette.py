@@ -32,6 +32,7 @@ import numpy as np
 from vidcap.errors import VidcapError
 from vidcap.video import reflection
 from vidcap.video.background import BackgroundModel, _threshold_from_sigma
+from vidcap.video.blobholes import open_large_holes
 from vidcap.video.masks import MaskStack
 
 __all__ = [
@@ -443,7 +444,7 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
                 cv2.drawContours(mask, [c], 0, 1, cv2.FILLED)
                 reach = _union(reach, cv2.boundingRect(c), mask.shape)
             for i in parts:
-                _open_large_holes(mask, contours[i], fg, p)
+                open_large_holes(mask, contours[i], fg, p)
             if p.edge_band > 0:
                 reach = _edge_by_contrast(mask, full_frame, g, p, floor, reach)
             elif p.work_size is not None:
@@ -581,38 +582,6 @@ def _joined(contours, areas, best: int, fg: np.ndarray, p: _Params) -> list[int]
             cv2.drawContours(union, contours, i, 1, cv2.FILLED)
         out += new
     return out
-
-
-#: A hole of the person's blob larger than this share of the blob stays open: the
-#: gap between legs apart, closed below by a plate error along the floor, is not
-#: the person (small holes are: clothes the colour of the wall behind).
-MAX_HOLE_SHARE = 0.12
-
-
-def _open_large_holes(mask: np.ndarray, contour: np.ndarray, fg: np.ndarray,
-                      p: _Params) -> None:
-    """Clear, in ``mask`` (full resolution), the large holes of the blob ``contour``
-    (work resolution, in ``fg``)."""
-    x, y, w, h = cv2.boundingRect(contour)
-    blob = np.zeros((h, w), np.uint8)
-    cv2.drawContours(blob, [contour - np.array([x, y], np.int32)], 0, 1, cv2.FILLED)
-    holes = blob & (fg[y:y + h, x:x + w] == 0)
-    limit = MAX_HOLE_SHARE * cv2.countNonZero(blob)
-    if cv2.countNonZero(holes) <= limit:
-        return  # no hole can be large (most frames: labelling them cost ~0.2 ms)
-    n, lab, st, _ = cv2.connectedComponentsWithStats(holes, connectivity=4)
-    big = np.flatnonzero(st[1:, cv2.CC_STAT_AREA] > limit) + 1
-    if not len(big):
-        return
-    hole = np.isin(lab, big).astype(np.uint8)
-    if p.work_size is None:
-        mask[y:y + h, x:x + w][hole > 0] = 0
-        return
-    X0, Y0 = int(round(x * p.fx)), int(round(y * p.fy))
-    X1 = min(mask.shape[1], int(round((x + w) * p.fx)))
-    Y1 = min(mask.shape[0], int(round((y + h) * p.fy)))
-    full = cv2.resize(hole, (X1 - X0, Y1 - Y0), interpolation=cv2.INTER_NEAREST)
-    mask[Y0:Y1, X0:X1][full > 0] = 0
 
 
 def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params,
