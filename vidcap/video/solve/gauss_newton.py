@@ -157,5 +157,5 @@ def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: f
         mu = max(mu / 3.0, 1e-9)
         if done:
             break
-        lin = linearise(problem, p)
+        lin = linearise(problem, p, r=r_new, unary_rows=lin.unary.shape[1])
     return Solution(p, c, it)

@@ -238,19 +238,25 @@ class Linearisation:
     joints: np.ndarray
 
 
-def linearise(problem: Problem, params) -> Linearisation:
+def linearise(problem: Problem, params, *, r=None, unary_rows: int | None = None
+              ) -> Linearisation:
     """Residuals and Jacobian blocks at ``params`` (F, 24): the projection, sign, yaw
     and depth rows in closed form (:func:`vidcap.video.solve.skeleton.kinematics_jacobian`),
     the limit rows by finite differences of the swings
-    (:func:`vidcap.video.solve.limits.limit_jacobian`)."""
+    (:func:`vidcap.video.solve.limits.limit_jacobian`).
+
+    ``r`` (with ``unary_rows``, the unary rows per frame): :func:`residuals` at
+    ``params`` when the caller has them (the LM's accepted step), not computed again:
+    they are the same to the bit."""
     pb = problem
     p = np.asarray(params, dtype=float)
     F = p.shape[0]
     joints, root, jk = kinematics_jacobian(p, pb.offsets)  # jk (F, 15, 3, 24)
     excess, jlim = limit_jacobian(p)
-    res = unary_from_joints(pb, joints, root, p, excess=excess)
-    r = np.concatenate([res.ravel(), temporal(pb, joints)])
-    ju = np.zeros((F, res.shape[1], N_PARAMS))
+    if r is None or unary_rows is None:
+        res = unary_from_joints(pb, joints, root, p, excess=excess)
+        r, unary_rows = np.concatenate([res.ravel(), temporal(pb, joints)]), res.shape[1]
+    ju = np.zeros((F, unary_rows, N_PARAMS))
     ju[:, :30] = (jk[:, :, :2] * pb.weight[:, :, None, None]).reshape(F, 30, N_PARAMS)
     n_lim = len(LIMITS)
     ju[:, 30:30 + n_lim] = jlim * pb.limit_weight
