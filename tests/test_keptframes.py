@@ -58,7 +58,7 @@ def test_the_cues_read_nothing_outside_their_read_bounds():
     """frontback's and legorder's boxes of the pixels they read: frames black outside
     them give the cues what the whole frames give (and black frames do not)."""
     from vidcap.video.frontback import arm_visibility, read_bounds
-    from vidcap.video.legorder import limb_edges, limb_radii
+    from vidcap.video.legorder import limb_edges, limb_radii, plan_lines
     from vidcap.video.legorder import read_bounds as limb_bounds
 
     truth = np.load(SAMPLES / "walk_side_truth.npz")  # arms over the torso, legs crossing
@@ -72,7 +72,7 @@ def test_the_cues_read_nothing_outside_their_read_bounds():
     assert not np.array_equal(arm_visibility(np.zeros_like(frames), joints), whole,
                               equal_nan=True)
     radii = limb_radii(np.full(20, float(np.ptp(joints[0, :, 1]))))
-    limbs = limb_bounds(joints, radii, shape)
+    limbs = limb_bounds(plan_lines(joints, radii, shape))
     assert (limbs[:, 0] <= limbs[:, 1]).any()
     strength, count = limb_edges(frames, joints, radii)
     got = limb_edges(_inside(frames, limbs), joints, radii)

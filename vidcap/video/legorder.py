@@ -215,12 +215,14 @@ def limb_edges(frames, joints2d, radii) -> tuple[np.ndarray, np.ndarray]:
     return strength, count
 
 
-def tap_limb_edges(frames, joints2d, radii, strength, count):
+def tap_limb_edges(frames, joints2d, radii, strength, count, lines=None):
     """Yield ``frames`` unchanged, filling ``strength`` and ``count`` (F, 2, 2) (as
     :func:`limb_edges` returns them) as they pass, :data:`_CHUNK` frames at a time (all
     of them once ``frames`` is consumed to its end): one decode of the clip serves this
     cue and the front/back one (:func:`vidcap.video.frontback.arm_visibility`). Each
-    frame costs one gather of the pixels its search lines cross."""
+    frame costs one gather of the pixels its search lines cross. ``lines``: the
+    search lines already planned (:func:`plan_lines`, for frames of this size; read
+    once)."""
     j2 = np.asarray(joints2d, float)
     rad = np.asarray(radii, float)
     chunk, first = None, 0
@@ -234,8 +236,9 @@ def tap_limb_edges(frames, joints2d, radii, strength, count):
             if chunk is None or k >= first + chunk.n:  # the next frames' lines at once
                 finish()
                 first = k - k % _CHUNK
-                chunk = _Chunk(j2[first:first + _CHUNK], rad[first:first + _CHUNK],
-                               np.shape(frame))
+                chunk = lines[first // _CHUNK] if lines is not None and \
+                    lines[first // _CHUNK].shape == np.shape(frame)[:2] else \
+                    _Chunk(j2[first:first + _CHUNK], rad[first:first + _CHUNK], np.shape(frame))
             chunk.read(k - first, np.asarray(frame))
         yield frame
     finish()
@@ -245,29 +248,37 @@ def tap_limb_edges(frames, joints2d, radii, strength, count):
 _CHUNK = 128
 
 
-def read_bounds(joints2d, radii, shape) -> np.ndarray:
-    """The box of the pixels :func:`tap_limb_edges` reads in each frame of ``shape``
-    (H, W), (F, 4) ``x_min, x_max, y_min, y_max`` px (inclusive; ``inf, -inf`` where it
-    reads none)."""
+def plan_lines(joints2d, radii, shape) -> list:
+    """The search lines of :func:`tap_limb_edges` for the 2D joints (F, 15, 2) and
+    :func:`limb_radii` (F, 5) on frames of ``shape`` (H, W), planned :data:`_CHUNK` frames
+    at a time: for :func:`read_bounds` and then, the same, for ``tap_limb_edges``."""
+    j2, rad = np.asarray(joints2d, float), np.asarray(radii, float)
+    return [_Chunk(j2[s:s + _CHUNK], rad[s:s + _CHUNK], shape)
+            for s in range(0, len(j2), _CHUNK)]
+
+
+def read_bounds(lines) -> np.ndarray:
+    """The box of the pixels :func:`tap_limb_edges` reads in each frame along ``lines``
+    (:func:`plan_lines`), (F, 4) ``x_min, x_max, y_min, y_max`` px (inclusive; ``inf,
+    -inf`` where it reads none)."""
     from vidcap.video.frontback import pixel_bounds
 
-    j2, rad = np.asarray(joints2d, float), np.asarray(radii, float)
-    W = shape[1]
-    out = np.tile([np.inf, -np.inf, np.inf, -np.inf], (len(j2), 1))
-    for first in range(0, len(j2), _CHUNK):
-        chunk = _Chunk(j2[first:first + _CHUNK], rad[first:first + _CHUNK], shape)
-        if not chunk.flat.size:
-            continue
-        x = np.where(chunk.ok, chunk.flat % W, -1)
-        y = np.where(chunk.ok, chunk.flat // W, -1)
-        per_line = pixel_bounds(x, y, shape)  # (K, 4), the lines frame by frame
-        has = chunk.start[1:] > chunk.start[:-1]
-        at = chunk.start[:-1][has]
-        rows = first + np.flatnonzero(has)
-        out[rows, 0] = np.minimum.reduceat(per_line[:, 0], at)
-        out[rows, 1] = np.maximum.reduceat(per_line[:, 1], at)
-        out[rows, 2] = np.minimum.reduceat(per_line[:, 2], at)
-        out[rows, 3] = np.maximum.reduceat(per_line[:, 3], at)
+    out = np.tile([np.inf, -np.inf, np.inf, -np.inf], (sum(c.n for c in lines), 1))
+    first = 0
+    for chunk in lines:
+        if chunk.flat.size:
+            W = chunk.shape[1]
+            x = np.where(chunk.ok, chunk.flat % W, -1)
+            y = np.where(chunk.ok, chunk.flat // W, -1)
+            per_line = pixel_bounds(x, y, chunk.shape)  # (K, 4), the lines frame by frame
+            has = chunk.start[1:] > chunk.start[:-1]
+            at = chunk.start[:-1][has]
+            rows = first + np.flatnonzero(has)
+            out[rows, 0] = np.minimum.reduceat(per_line[:, 0], at)
+            out[rows, 1] = np.maximum.reduceat(per_line[:, 1], at)
+            out[rows, 2] = np.minimum.reduceat(per_line[:, 2], at)
+            out[rows, 3] = np.maximum.reduceat(per_line[:, 3], at)
+        first += chunk.n
     return out
 
 

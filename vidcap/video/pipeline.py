@@ -769,13 +769,14 @@ LIMB_CUE = True
 
 
 def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool | None = None,
-                limbs: bool | None = None):
+                limbs: bool | None = None, lines=None):
     """The colour frames' cues in one pass over ``frames`` (an iterable of (H, W, 3) BGR
     frames, consumed to its end) for the image-side named 2D joints (F, 15, 2): the
     front/back cue (:func:`vidcap.video.frontback.near_side`, with ``front``, default
     :data:`FRONT_CUE`), (F,) or None, and the limb order
     (:func:`vidcap.video.legorder.near_limb`, with ``limbs``, default :data:`LIMB_CUE`,
-    and the fit's ``model_height`` (F,) px), (F, 2) or None."""
+    and the fit's ``model_height`` (F,) px), (F, 2) or None. ``lines``: the limb order's
+    search lines, planned already (:func:`vidcap.video.legorder.plan_lines`)."""
     from vidcap.video.frontback import arm_visibility, near_side
     from vidcap.video.legorder import limb_radii, near_limb, tap_limb_edges
 
@@ -785,7 +786,7 @@ def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool |
     strength, count = np.full((F, 2, 2), np.nan), np.zeros((F, 2, 2))
     if limbs and model_height is not None:
         frames = tap_limb_edges(frames, joints2d, limb_radii(model_height, body), strength,
-                                count)
+                                count, lines)
     else:
         limbs = False
     frames = iter(frames)
@@ -795,23 +796,24 @@ def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool |
     return near, near_limb(strength, count) if limbs else None
 
 
-def _kept_covers(kept, joints2d, model_height, body) -> bool:
+def _kept_covers(kept, joints2d, model_height, body):
     """Whether ``kept`` (a :class:`vidcap.video.keptframes.KeptFrames`, or None) holds every
     pixel :func:`colour_cues` reads for the 2D joints (F, 15, 2): then the cues read it
-    and give what a second decode would, to the bit."""
+    and give what a second decode would, to the bit. Returns (bool, the limb order's
+    search lines planned for it or None: :func:`colour_cues` reads along them)."""
     from vidcap.video.frontback import read_bounds as arm_bounds
-    from vidcap.video.legorder import limb_radii
+    from vidcap.video.legorder import limb_radii, plan_lines
     from vidcap.video.legorder import read_bounds as limb_bounds
 
     F = len(joints2d)
     if kept is None or not kept.complete(F):
-        return False
+        return False, None
     if FRONT_CUE and not kept.covers(arm_bounds(joints2d, kept.frame_shape)):
-        return False
+        return False, None
     if LIMB_CUE and model_height is not None:
-        return kept.covers(limb_bounds(joints2d, limb_radii(model_height, body),
-                                       kept.frame_shape))
-    return True
+        lines = plan_lines(joints2d, limb_radii(model_height, body), kept.frame_shape)
+        return kept.covers(limb_bounds(lines)), lines
+    return True, None
 
 
 def front_cue(video, joints2d) -> np.ndarray:
@@ -851,9 +853,9 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
 
         F = len(joints2d)
         kept = sil.kept
-        frames = kept.frames(F) if _kept_covers(kept, joints2d, model_height, body) else \
-            iter_frames(video, stop=F)
-        near, limbs = colour_cues(frames, joints2d, model_height, body)
+        covered, lines = _kept_covers(kept, joints2d, model_height, body)
+        frames = kept.frames(F) if covered else iter_frames(video, stop=F)
+        near, limbs = colour_cues(frames, joints2d, model_height, body, lines=lines)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=model_height, view=view,
