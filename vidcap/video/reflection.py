@@ -151,10 +151,14 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     ref = plate[top:top + height, x0:x0 + w]
     scale = None if gain is None else tuple(float(v) for v in np.asarray(gain, np.float64))
 
-    def row_level(r0):
-        """The summed L1 difference over the mask per row, rows ``r0`` on (the
-        channels summed as columns: a 3-channel row reduction is slow in OpenCV)."""
-        rows = ref[r0:] if scale is None else cv2.multiply(ref[r0:], (*scale, 0.0))
+    def scaled(rows):
+        """Plate rows at the frame's exposure."""
+        return rows if scale is None else cv2.multiply(rows, (*scale, 0.0))
+
+    def row_level(r0, rows):
+        """The summed L1 difference over the mask per row, rows ``r0`` on against the
+        plate rows ``rows`` (the channels summed as columns: a 3-channel row reduction
+        is slow in OpenCV)."""
         ad = cv2.absdiff(box[r0:], rows)
         adm = cv2.bitwise_and(ad, ad, mask=m[r0:])
         return cv2.reduce(adm.reshape(height - r0, -1), 1, cv2.REDUCE_SUM,
@@ -186,12 +190,11 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     if nb - 1 - min_bins <= mid:
         return 0
     gate = WEAK if START_WEAK is None else max(WEAK, START_WEAK)
-    lower = binned(row_level(mid * step), mid) / per_bin[mid:]
+    lower = binned(row_level(mid * step, scaled(ref[mid * step:])), mid) / per_bin[mid:]
     if not np.any(lower[2:nb - min_bins + 1 - mid] < gate * lower[:nb - min_bins - 1 - mid]):
         return 0
-    level = binned(row_level(0)) / per_bin
-    if scale is not None:
-        ref = cv2.multiply(ref, (*scale, 0.0))
+    ref = scaled(ref)  # once for the rest (the lower half alone above)
+    level = binned(row_level(0, ref)) / per_bin
     seen = n > 0
     # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most of the
     # remaining frames stop here (no run of bins weaker than their mirror bins).
