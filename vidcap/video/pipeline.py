@@ -356,6 +356,11 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
                                                _fixed_body_keywords(proportions)))
     if pose_path and pose_path.exists():
         return None
+    # the silhouettes need numba here anyway: loaded before the fork, the workers'
+    # zygote inherits numba's import and LLVM's start-up (~0.25 s less CPU on 2 cores)
+    from vidcap.video.silhouette import load_kernels
+
+    load_kernels()
     return FitPool(min(jobs, len(expected)))
 
 

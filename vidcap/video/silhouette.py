@@ -41,6 +41,7 @@ __all__ = [
     "extract_silhouettes",
     "is_monochrome",
     "iter_silhouettes",
+    "load_kernels",
     "silhouette_frame",
 ]
 
@@ -679,6 +680,15 @@ def _kernels():
     from vidcap.video import _silhouette_kernels
 
     return _silhouette_kernels
+
+
+def load_kernels() -> None:
+    """Load numba and the first of the stage's compiled kernels in this process now
+    (~0.3 s of CPU for numba's import, ~0.2 s for LLVM's start-up: every frame needs
+    them). Called before forking processes that compile or load kernels of their own
+    (the 2D fit's workers), so that they inherit both instead of paying them again."""
+    out = np.empty((1, 1), np.uint8)
+    _kernels().l1_sum(np.zeros((1, 1, 3), np.uint8), out)
 
 
 def _to_full(contour: np.ndarray, p: _Params) -> np.ndarray:
