@@ -36,7 +36,7 @@ TABLE = Path(__file__).resolve().parents[2] / "data" / "pose_prior.npz"
 def _directions(joints, root, lengths):
     seg = SEGMENT_JOINTS[PRIOR_SEGMENTS]
     vec = (joints[..., seg[:, 1], :] - joints[..., seg[:, 0], :]) / lengths[PRIOR_SEGMENTS, None]
-    return np.einsum("...ji,...kj->...ki", root, vec)  # R^T v, (..., 9, 3)
+    return vec @ root  # R^T v for each segment, (..., 9, 3)
 
 
 def features(joints, root, lengths) -> np.ndarray:
@@ -61,7 +61,7 @@ def feature_jacobian(jac_joints, root, lengths) -> np.ndarray:
     zero."""
     seg = SEGMENT_JOINTS[PRIOR_SEGMENTS]
     dv = (jac_joints[:, seg[:, 1]] - jac_joints[:, seg[:, 0]]) / lengths[PRIOR_SEGMENTS, None, None]
-    out = np.einsum("fji,fkjp->fkip", root, dv)  # (F, 9, 3, 24)
+    out = np.swapaxes(root, 1, 2)[:, None] @ dv  # R^T dv, (F, 9, 3, 24)
     out[..., :6] = 0.0
     return out.reshape(out.shape[0], N_FEATURES, -1)
 
@@ -106,19 +106,23 @@ def prior_residuals(feats, means, factors, consts, *, jacobian=None):
     the residuals' Jacobian (F, 32, 24) (the component held)."""
     out = np.empty(feats.shape[:-1] + (N_ROWS,))
     jac = None if jacobian is None else np.zeros((jacobian.shape[0], N_ROWS, jacobian.shape[-1]))
+    K = len(means)
     for c, (a, b) in enumerate(CHAINS):
-        d = feats[..., None, a:b] - means[:, a:b]  # (..., K, n)
-        z = np.einsum("kij,...kj->...ki", factors[:, a:b, a:b], d)
+        w = factors[:, a:b, a:b]  # (K, n, n)
+        # W (f - mean) for every component at once: one product with the stacked
+        # factors (the per-component einsum over the frames was 5x slower)
+        wm = np.einsum("kij,kj->ki", w, means[:, a:b])
+        z = (feats[..., a:b] @ w.reshape(K * (b - a), b - a).T).reshape(
+            feats.shape[:-1] + (K, b - a)) - wm  # (..., K, n)
         best = np.argmin(np.sum(z * z, -1) + consts[:, c], axis=-1)  # (...)
         zb = np.take_along_axis(z, best[..., None, None], axis=-2)[..., 0, :]
         out[..., N_FEATURES + c] = np.sqrt(consts[best, c])
-        jz = None if jac is None else np.einsum("fij,fjp->fip", factors[best][:, a:b, a:b],
-                                                jacobian[:, a:b])
+        jz = None if jac is None else w[best] @ jacobian[:, a:b]
         if ROBUST_TAU2:
             sc, g = _robust(zb, ROBUST_TAU2)
             if jz is not None:  # d(s z) = s dz + z s g 2 z^T dz
                 jz = sc[:, None, None] * (jz + 2.0 * g[:, None, None] * zb[:, :, None]
-                                          * np.einsum("fi,fip->fp", zb, jz)[:, None, :])
+                                          * (zb[:, None, :] @ jz))
             zb = zb * sc[..., None]
         out[..., a:b] = zb
         if jac is not None:
