@@ -17,6 +17,8 @@ Run:  python benchmarks/convert_speed.py [--frames 300] [--cues outline|all]
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import sys
 import tempfile
 import time
@@ -60,28 +62,30 @@ def main(argv=None):
         plate = estimate_background(video, rng=np.random.default_rng(0), progress=False)
         t_plate = time.perf_counter() - t0
         cv2.imwrite(str(d / "plate.png"), plate.plate)
-        t0 = time.perf_counter()
-        res = convert(video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
-                      progress=False, jobs=args.jobs, proportions="seed", **cue_kw)
-        t_conv = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        serial = convert(video, d / "walk1.bvh", background=d / "plate.png", cache_dir=None,
-                         progress=False, jobs=1, proportions="seed", **cue_kw)
-        t_serial = time.perf_counter() - t0
-        t_cut, cut, cut_on = _convert_cached_plate(video, d, args.jobs, cue_kw)
+        (t_conv, cpu_conv), res = _timed(
+            convert, video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
+            progress=False, jobs=args.jobs, proportions="seed", **cue_kw)
+        (t_serial, cpu_serial), serial = _timed(
+            convert, video, d / "walk1.bvh", background=d / "plate.png", cache_dir=None,
+            progress=False, jobs=1, proportions="seed", **cue_kw)
+        cache_dir, cut_on = _cache_plate(video, d)
+        (t_cut, cpu_cut), cut = _timed(convert, video, d / "walk2.bvh", cache_dir=cache_dir,
+                                       progress=False, jobs=args.jobs, proportions="seed",
+                                       **cue_kw)
     jobs = default_jobs() if args.jobs is None else args.jobs
-    rows = [("decode only", t_decode), ("plate estimation", t_plate),
-            (f"convert given the plate ({jobs} fitting processes)", t_conv)]
-    rows += [(f"  stage: {k}", v) for k, v in res.timings.items() if k != "plate"]
-    rows += [("convert given the plate (1 process, jobs=1)", t_serial)]
-    rows += [(f"  stage: {k}", v) for k, v in serial.timings.items() if k != "plate"]
-    rows += [(f"convert, estimated plate cached (graph cut: {cut_on})", t_cut)]
-    rows += [(f"  stage: {k}", v) for k, v in cut.timings.items() if k != "plate"]
-    print(f"{n} frames, 640x480")
-    print("step | seconds | fps | x decode time")
-    print("--- | --- | --- | ---")
-    for name, t in rows:
-        print(f"{name} | {t:.2f} | {n / t:.0f} | {t / t_decode:.1f}")
+    rows = [("decode only", t_decode, None), ("plate estimation", t_plate, None),
+            (f"convert given the plate ({jobs} fitting processes)", t_conv, cpu_conv)]
+    rows += [(f"  stage: {k}", v, None) for k, v in res.timings.items() if k != "plate"]
+    rows += [("convert given the plate (1 process, jobs=1)", t_serial, cpu_serial)]
+    rows += [(f"  stage: {k}", v, None) for k, v in serial.timings.items() if k != "plate"]
+    rows += [(f"convert, estimated plate cached (graph cut: {cut_on})", t_cut, cpu_cut)]
+    rows += [(f"  stage: {k}", v, None) for k, v in cut.timings.items() if k != "plate"]
+    print(f"{n} frames, 640x480; load {os.getloadavg()[0]:.1f}")
+    print("step | seconds | fps | x decode time | CPU s (all processes)")
+    print("--- | --- | --- | --- | ---")
+    for name, t, cpu in rows:
+        print(f"{name} | {t:.2f} | {n / t:.0f} | {t / t_decode:.1f} | "
+              + ("" if cpu is None else f"{cpu:.2f}"))
     print(f"\nconvert excluding plate estimation: {n / t_conv:.0f} fps with {jobs} fitting "
           f"processes, {n / t_serial:.0f} fps with one, {n / t_cut:.0f} fps on the estimated "
           f"plate (graph cut: {cut_on}; target >= 100)")
@@ -95,10 +99,23 @@ def main(argv=None):
           f"{np.median(d3) * 1000:.1f} mm, root-relative {np.median(rel) * 1000:.1f} mm")
 
 
-def _convert_cached_plate(video: Path, d: Path, jobs, cue_kw):
-    """``convert`` with default options but the stage cache holding the estimated plate
-    only (as after a first ``vidcap convert`` that stopped after the plate): seconds,
-    result and whether the cut ran."""
+def _timed(fn, *args, **kw):
+    """``((wall s, CPU s of this process and its finished children), fn(*args, **kw))``:
+    on a shared machine the wall time swings with the others' load, the CPU time less."""
+    def cpu():
+        own, kids = (resource.getrusage(w) for w in (resource.RUSAGE_SELF,
+                                                      resource.RUSAGE_CHILDREN))
+        return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+
+    c0, t0 = cpu(), time.perf_counter()
+    out = fn(*args, **kw)
+    return (time.perf_counter() - t0, cpu() - c0), out
+
+
+def _cache_plate(video: Path, d: Path):
+    """A stage cache holding the estimated plate only (as after a first ``vidcap
+    convert`` that stopped after the plate), so that ``convert`` with default options
+    runs without the plate's time: the cache folder and whether the cut runs."""
     from vidcap.video import pipeline
     from vidcap.video.annotations import Annotations
     from vidcap.video.stagecache import StageCache
@@ -108,10 +125,7 @@ def _convert_cached_plate(video: Path, d: Path, jobs, cue_kw):
                                                         lambda m: None)
     pipeline._plate_stage(StageCache(cache_dir), k_plate, video, None, progress=False,
                           log=lambda m: None, colour_models=graph_cut, still_person=still)
-    t0 = time.perf_counter()
-    res = convert(video, d / "walk2.bvh", cache_dir=cache_dir, progress=False, jobs=jobs,
-                  proportions="seed", **cue_kw)
-    return time.perf_counter() - t0, res, graph_cut
+    return cache_dir, graph_cut
 
 
 if __name__ == "__main__":
