@@ -54,22 +54,37 @@ def _nearest_wrist_error(joints, truth, side):
     return min(np.linalg.norm(joints[JOINT_INDEX[f"{s}_wrist"]] - t) for s in "lr")
 
 
-@pytest.mark.xfail(strict=False, reason="issue 27, not met reliably: with the cue search "
-                   "trying the arm's foreshortening (its own, the forearm's and the whole "
-                   "arm's full length, the upper arm 0.1-0.2 shorter) the wrist is found "
-                   "within 1-3 px from the third frame on, but the elbow 2-4 px and the "
-                   "last frame passes or fails with any change to the search")
 def test_an_arm_across_a_torso_of_another_colour_is_found_within_3_px():
-    frames, masks, truth, side = _arm_across_torso()
+    frames, masks, truth, side = _arm_across_torso(n=10)
     cued = fit_sequence(masks, frames=frames)
     outline = fit_sequence(masks, frames=frames, cues="outline")
-    err_cues = _nearest_wrist_error(cued.joints2d[-1], truth, side)
-    err_outline = _nearest_wrist_error(outline.joints2d[-1], truth, side)
-    assert err_cues <= 3.0
-    assert err_outline > 3.0  # the silhouette alone does not show the arm
     elbow = truth[JOINT_INDEX[f"{side}_elbow"]]
-    assert min(np.linalg.norm(cued.joints2d[-1, JOINT_INDEX[f"{s}_elbow"]] - elbow)
-               for s in "lr") <= 3.0
+    # the track finds the arm within three frames and keeps it, every frame after (the
+    # frame is repeated: a tracked fit that drifts loses it again)
+    for k in range(3, len(frames)):
+        assert _nearest_wrist_error(cued.joints2d[k], truth, side) <= 3.0
+        assert min(np.linalg.norm(cued.joints2d[k, JOINT_INDEX[f"{s}_elbow"]] - elbow)
+                   for s in "lr") <= 3.0
+        # the silhouette alone does not show the arm
+        assert _nearest_wrist_error(outline.joints2d[k], truth, side) > 3.0
+
+
+@pytest.mark.parametrize("cues", ["all", "outline"])
+def test_a_frame_fitted_again_from_its_own_answer_stays_put(cues):
+    # the same frame eight times: each tracked fit starts from the last one's answer, so
+    # once it has settled the body must stay (before: S fell 0.947 -> 0.895 over five
+    # repeats with the outline, the torso and head turned 5-13 degrees)
+    frames, masks, _, _ = _arm_across_torso(n=8)
+    fit = fit_sequence(masks, frames=frames, cues=cues)
+    assert fit.warm[1:].all()
+    # the cue search still moves an arm it cannot tell from its neighbours by a px or two
+    # (the arm test above bounds it); the rest of the body stays put
+    keep = [i for name, i in JOINT_INDEX.items()
+            if cues == "outline" or not name.endswith(("elbow", "wrist"))]
+    assert np.array_equal(fit.joints2d[-1, keep], fit.joints2d[-2, keep])
+    assert np.array_equal(fit.joints2d[-2, keep], fit.joints2d[-3, keep])
+    if cues == "outline":  # a warm fit never ends below the answer it started from
+        assert (np.diff(fit.similarity) >= -1e-9).all()
 
 
 def test_a_skin_model_learned_from_a_head_finds_the_hands():
@@ -166,9 +181,14 @@ def test_a_chunked_fit_with_cues_agrees_with_the_serial_fit_with_cues():
     outline = fit_sequence_chunked(masks, frames=frames, jobs=2, min_chunk=20, cues="outline")
     # the second chunk (frames 20 on, fitted by a worker) read the colour crops and the
     # clip's colour model (learned once, not from its own frames): from its first output
-    # frame on, its arms are the serial fit's with cues, not the outline's
+    # frame on, its arms are the serial fit's with cues, not the outline's. A track keeps
+    # the pose it settled in (frame.kept_or_better), and the chunk's, begun 10 frames
+    # before its output, settles a frame later than the serial one: its first challenged
+    # frame (30) is the serial fit's frame 10, 0.43 px from the serial frame 30
     late = slice(20, None)
-    np.testing.assert_allclose(chunked.joints2d[late], serial.joints2d[late], atol=1e-6)
+    np.testing.assert_allclose(chunked.joints2d[late], serial.joints2d[late], atol=1.0)
+    apart = np.abs(chunked.joints2d[late] - serial.joints2d[late]).max(axis=(1, 2)) > 1e-6
+    assert apart.sum() <= 1
     wrists = [JOINT_INDEX[f"{s}_wrist"] for s in "lr"]
     moved = np.linalg.norm(chunked.joints2d[late, wrists] - outline.joints2d[late, wrists],
                            axis=-1)
