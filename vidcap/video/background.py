@@ -392,7 +392,10 @@ def estimate_background(
         from vidcap.io.video import probe
 
         info = probe(source)  # once: the samples' positions and the empty scene's times
-    frames, idx, cover = _sampled(source, method, n_samples, rng, info, work_size)
+    frames, idx, thumbs = _sampled(source, method, n_samples, rng, info, work_size)
+    from vidcap.video import timecover
+
+    cover = timecover.motion_cover(thumbs) if thumbs is not None else None
     from vidcap.video.inputchecks import check_samples
 
     check_samples(frames, name)
@@ -419,6 +422,18 @@ def estimate_background(
         n = len(source) if info is None else info.n_frames
         model = plate_from_empty(model, frames, gains, times=idx / fps,
                                  ends=(0.0, max(n - 1, int(idx[-1])) / fps))
+    from vidcap.video import passedby
+
+    if passedby.PASSED_BY and thumbs is not None:
+        n = len(source) if info is None else info.n_frames
+        found = passedby.retake_passed_by(model, frames, gains, thumbs, fps=_fps(info),
+                                          step=timecover.thumbnail_step(n))
+        if found is not model and model.colours is not None:
+            # (the person's and the scene's colours were learned against the old plate)
+            from vidcap.video.graphcut import clip_colours
+
+            found = replace(found, colours=clip_colours(found, frames, gains))
+        model = found
     if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 
@@ -440,9 +455,9 @@ def estimate_background(
 
 def _sampled(source, method: str, n_samples: int, rng, info, work_size: int):
     """The plate's samples (F, H, W, 3), their frame indices (F,) and, for the region
-    method with :data:`vidcap.video.timecover.TIME_COVER`, the share of the clip's time
-    each working-size pixel moves (:func:`~vidcap.video.timecover.motion_cover`; else
-    None), from one decoding pass."""
+    method with :data:`vidcap.video.timecover.TIME_COVER`, every frame (every
+    :func:`~vidcap.video.timecover.thumbnail_step`-th) at the working size (N, h, w, 3)
+    uint8 (else None; None too for fewer than two), from one decoding pass."""
     from vidcap.video import timecover
 
     if method != "felzenszwalb" or not timecover.TIME_COVER:
@@ -451,7 +466,7 @@ def _sampled(source, method: str, n_samples: int, rng, info, work_size: int):
     hw = source.shape[1:3] if info is None else (info.height, info.width)
     frames, idx, thumbs = _samples_and_thumbnails(source, n_samples, rng, info,
                                                   _work_hw(hw, work_size))
-    return frames, idx, timecover.motion_cover(thumbs) if len(thumbs) >= 2 else None
+    return frames, idx, thumbs if len(thumbs) >= 2 else None
 
 
 def _work_hw(hw, work_size: int) -> tuple[int, int]:
