@@ -75,8 +75,8 @@ def test_the_moving_blob_is_the_walker_filled_not_where_they_were():
     rng = np.random.default_rng(2)
     _, noisy = _scene(rng)
     frames = np.stack([_walker(noisy(), 30 + 65 * t / (N - 1)) for t in range(N)])
-    level = plate_levels(frames, np.median(frames, axis=0).astype(np.float32))
-    blobs = moving_blobs(level, N, 12.0, [3, 6, 12], 13)
+    levels = plate_levels(frames, np.median(frames, axis=0).astype(np.uint8))
+    blobs = moving_blobs(levels, 12.0, [3, 6, 12], 13)
     t = 30
     x0 = int(round(30 + 65 * t / (N - 1)))
     person = np.zeros((H, W), bool)
@@ -97,7 +97,7 @@ def test_the_scene_is_what_the_quiet_ends_show_not_a_still_person():
     rng = np.random.default_rng(3)
     n = 60
     S, P, Q = (np.array(c, np.float32) for c in ((40, 70, 120), (230, 230, 230), (60, 60, 60)))
-    vals = np.zeros((n, 1, 2, 3), np.float32)
+    vals = np.zeros((n, 1, 2, 3), np.float32)  # (uint8 below, as plate_levels gives)
     blobs = np.zeros((n, 1, 2), bool)
     vals[:, 0, 0] = S
     vals[10:50, 0, 0] = P
@@ -106,9 +106,9 @@ def test_the_scene_is_what_the_quiet_ends_show_not_a_still_person():
     vals[:5, 0, 1] = P
     vals[55:, 0, 1] = P
     blobs[:5, 0, 1] = blobs[55:, 0, 1] = True
-    vals += rng.normal(0, 1, vals.shape).astype(np.float32)
-    plate = np.broadcast_to(P, (1, 2, 3)).copy()
-    flag, scene = passed_by(lambda t: vals[t], n, blobs, plate, 12.0, 3,
+    vals = np.clip(vals + rng.normal(0, 1, vals.shape), 0, 255).round().astype(np.uint8)
+    plate = np.broadcast_to(P, (1, 2, 3)).astype(np.uint8)
+    flag, scene = passed_by(vals, blobs, plate, 12.0, 3,
                             np.zeros((1, 2), bool))
     assert flag.tolist() == [[True, False]]
     assert np.abs(scene[0, 0] - S).max() < 3

@@ -52,37 +52,39 @@ MAX_OUTSIDE = 0.35
 #: ... and the frames outside the blob agree on another colour for at least this long,
 #: seconds (at least 3 thumbnails).
 MIN_AWAY_S = 0.1
-HULL = False
-HULL_MIN = 1e-3
 
 
-def plate_levels(thumbs: np.ndarray, plate: np.ndarray):
-    """A function ``t -> (h, w, 3) float32``: thumbnail ``t`` 3x3 blurred and brought to
-    the plate's exposure (divided by its per-channel gain against ``plate`` (h, w, 3),
-    the median ratio over a coarse grid), clipped at 255: a channel the camera clipped
-    in a darker frame is the plate's clipped 255, not more."""
+def plate_levels(thumbs: np.ndarray, plate: np.ndarray) -> np.ndarray:
+    """The thumbnails (N, h, w, 3) uint8, each 3x3 blurred and brought to the exposure of
+    ``plate`` (h, w, 3) (divided by its per-channel gain against it: the median ratio
+    over a coarse grid), rounded and clipped to uint8: a channel the camera clipped in a
+    darker frame is the plate's clipped 255, not more."""
     n, h, w = thumbs.shape[:3]
     step = max(1, int(np.sqrt(h * w / 1024)))
     ratio = (thumbs[:, ::step, ::step].astype(np.float32) + 1.0) / (
-        plate[None, ::step, ::step] + 1.0)
+        plate[None, ::step, ::step].astype(np.float32) + 1.0)
     inv = 1.0 / np.clip(np.median(ratio.reshape(n, -1, 3), axis=1), 0.25, 4.0)
+    out = np.empty_like(thumbs)
+    for t in range(n):
+        # (uint8 in, uint8 out: cv2 rounds and saturates)
+        cv2.multiply(cv2.GaussianBlur(thumbs[t], (3, 3), 0),
+                     (*(float(g) for g in inv[t]), 0.0), dst=out[t])
+    return out
 
-    def level(t):
-        b = cv2.GaussianBlur(thumbs[t], (3, 3), 0).astype(np.float32)
-        return np.minimum(cv2.multiply(b, (*(float(g) for g in inv[t]), 0.0)), 255.0)
 
-    return level
+def _maxdiff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """max over the channels of ``|a - b|``, (h, w) uint8, for two (h, w, 3) uint8."""
+    c0, c1, c2 = cv2.split(cv2.absdiff(a, b))
+    return cv2.max(cv2.max(c0, c1), c2)
 
 
-def moving_blobs(level, n: int, tau: float, lags: list[int], close: int) -> np.ndarray:
+def moving_blobs(levels: np.ndarray, tau: float, lags: list[int], close: int) -> np.ndarray:
     """Per frame, the solid shape of what moves in it.
 
     Parameters
     ----------
-    level : callable
-        ``level(t)``: frame ``t`` (h, w, 3) float32, t in [0, n).
-    n : int
-        Frames.
+    levels : numpy.ndarray, shape (n, h, w, 3), uint8
+        The frames (:func:`plate_levels`).
     tau : float
         A pixel differs between two frames when a channel does by more than ``tau``.
     lags : list of int
@@ -97,12 +99,10 @@ def moving_blobs(level, n: int, tau: float, lags: list[int], close: int) -> np.n
     numpy.ndarray, shape (n, h, w), bool
         The moving pixels closed, their holes filled, dilated by one pixel.
     """
-    frames = [level(t) for t in range(n)]
-    h, w = frames[0].shape[:2]
+    n, h, w = levels.shape[:3]
 
     def differs(a, b):
-        c0, c1, c2 = cv2.split(cv2.absdiff(frames[a], frames[b]))
-        return cv2.max(cv2.max(c0, c1), c2) > tau
+        return _maxdiff(levels[a], levels[b]) > tau
 
     ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close, close))
     one = np.ones((3, 3), np.uint8)
@@ -119,14 +119,6 @@ def moving_blobs(level, n: int, tau: float, lags: list[int], close: int) -> np.n
         if not moving.any():
             continue
         m = cv2.morphologyEx(moving.view(np.uint8), cv2.MORPH_CLOSE, ker)
-        if HULL:
-            contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-            hulls = [cv2.convexHull(c) for c in contours if cv2.contourArea(c) >= HULL_MIN * h * w]
-            m[:] = 0
-            if hulls:
-                cv2.drawContours(m, hulls, -1, 1, cv2.FILLED)
-            out[t] = cv2.dilate(m, one) > 0
-            continue
         # holes: what the border cannot reach through the blob
         outside = m.copy()
         seed[:] = 0
@@ -135,19 +127,17 @@ def moving_blobs(level, n: int, tau: float, lags: list[int], close: int) -> np.n
     return out
 
 
-def passed_by(level, n: int, blobs: np.ndarray, plate: np.ndarray, tau: float,
+def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: float,
               min_away: int, left_alone: np.ndarray):
     """Pixels whose plate colour only passed by, and the scene's colour there.
 
     Parameters
     ----------
-    level : callable
-        ``level(t)``: frame ``t`` (h, w, 3) float32.
-    n : int
-        Frames.
+    levels : numpy.ndarray, shape (n, h, w, 3), uint8
+        The frames (:func:`plate_levels`).
     blobs : numpy.ndarray, shape (n, h, w), bool
         :func:`moving_blobs`.
-    plate : numpy.ndarray, shape (h, w, 3), float32
+    plate : numpy.ndarray, shape (h, w, 3), uint8
         The plate at the frames' size and blur.
     tau : float
         Colours within ``tau`` (max over the channels) are the same.
@@ -169,28 +159,38 @@ def passed_by(level, n: int, blobs: np.ndarray, plate: np.ndarray, tau: float,
     scene : numpy.ndarray, shape (h, w, 3), float32
         That median where ``flag`` (0 elsewhere).
     """
-    h, w = plate.shape[:2]
+    n, h, w = levels.shape[:3]
     shown = np.zeros((h, w), np.int32)
     shown_out = np.zeros((h, w), np.int32)
     for t in range(n):
-        c0, c1, c2 = cv2.split(cv2.absdiff(level(t), plate))
-        on = cv2.max(cv2.max(c0, c1), c2) < tau
+        on = _maxdiff(levels[t], plate) < tau
         shown += on
         shown_out += on & ~blobs[t]
+    # The quiet ends: the frames before the blob first covers the pixel and after it
+    # last does.
     ever = blobs.any(axis=0)
     first = np.where(ever, blobs.argmax(axis=0), n)
     last = np.where(ever, n - 1 - blobs[::-1].argmax(axis=0), n)
-    quiet = first + np.where(ever, n - 1 - last, 0)  # frames at the quiet ends
+    quiet = first + np.where(ever, n - 1 - last, 0)
     cand = ((shown_out <= MAX_OUTSIDE * shown) & (shown - shown_out >= min_away)
-            & (quiet >= min_away) & ever & ~left_alone)
+            & (quiet >= min_away) & ~left_alone)
     flag = np.zeros((h, w), bool)
     scene = np.zeros((h, w, 3), np.float32)
     if not cand.any():
         return flag, scene
-    vals = np.stack([level(t)[cand] for t in range(n)])  # (n, P, 3)
+    vals = levels[:, cand].astype(np.float32)  # (n, P, 3)
     t = np.arange(n)[:, None]
-    ends = (t < first[cand][None]) | (t > last[cand][None])  # (n, P)
-    on = np.abs(vals - plate[cand][None]).max(axis=-1) < tau  # (n, P)
+    first, last = first[cand][None], last[cand][None]
+    on = np.abs(vals - plate[cand][None].astype(np.float32)).max(axis=-1) < tau  # (n, P)
+    # The plate's colour in frames next to the blob's, without a break, is the
+    # passer-by's still (a slow walker's shirt before the blob's outline took it in).
+    inside = blobs[:, cand]
+    passer = on & inside
+    for i in range(1, n):
+        passer[i] |= on[i] & passer[i - 1]
+    for i in range(n - 2, -1, -1):
+        passer[i] |= on[i] & passer[i + 1]
+    ends = ~inside & ~passer & ((t < first) | (t > last))  # (n, P)
     from vidcap.video.emptyscene import _nanmedian0
 
     med = _nanmedian0(np.where(ends[..., None], vals, np.nan))
@@ -200,12 +200,11 @@ def passed_by(level, n: int, blobs: np.ndarray, plate: np.ndarray, tau: float,
     # that show the plate's colour, the scene's hardly shows (where it does, the plate's
     # colour came and went in front of it again and again: the scene seen between a
     # limb's passes, which the double difference takes for the moving thing).
-    on_first = on.argmax(axis=0)
-    on_last = n - 1 - on[::-1].argmax(axis=0)
-    between = is_scene & (t > on_first[None]) & (t < on_last[None])
-    shown_p = on.sum(axis=0)
+    first_p = on.argmax(axis=0)
+    last_p = n - 1 - on[::-1].argmax(axis=0)
+    between = is_scene & (t > first_p[None]) & (t < last_p[None])
     ok = ((agree >= min_away) & ((on & ends).sum(axis=0) <= MAX_OUTSIDE * agree)
-          & (between.sum(axis=0) <= MAX_OUTSIDE * shown_p)
+          & (between.sum(axis=0) <= MAX_OUTSIDE * on.sum(axis=0))
           & (np.abs(med - plate[cand]).max(axis=-1) >= tau))
     flag[cand] = ok
     scene[cand] = np.where(ok[:, None], med, 0)
@@ -243,22 +242,20 @@ def retake_passed_by(model, frames: np.ndarray, gains: np.ndarray, thumbs: np.nd
     if n < 3 or len(idx) != k:
         return model
     plate_small = cv2.GaussianBlur(
-        cv2.resize(model.plate, (w, h), interpolation=cv2.INTER_AREA), (3, 3), 0
-    ).astype(np.float32)
-    level = plate_levels(thumbs, plate_small)
+        cv2.resize(model.plate, (w, h), interpolation=cv2.INTER_AREA), (3, 3), 0)
+    levels = plate_levels(thumbs, plate_small)
     # (most pixels show the plate most of the time: a robust spread of the noise)
     pick = np.unique(np.linspace(0, n - 1, min(n, 48)).round().astype(int))
-    dev = np.stack([np.abs(level(t)[::2, ::2] - plate_small[::2, ::2]).max(axis=-1)
-                    for t in pick])
+    dev = np.stack([_maxdiff(levels[t, ::2, ::2], plate_small[::2, ::2]) for t in pick])
     tau = max(8.0, 5.0 * 1.4826 * float(np.median(dev)))
     lags = sorted({max(1, round(s / dt)) for s in LAGS_S})
     close = max(3, int(round(CLOSE * max(h, w))) | 1)
-    blobs = moving_blobs(level, n, tau, lags, close)
+    blobs = moving_blobs(levels, tau, lags, close)
     left_alone = model.never_seen if model.self_lit is None else (
         model.never_seen | model.self_lit)
     left_small = cv2.resize(left_alone.view(np.uint8), (w, h),
                             interpolation=cv2.INTER_AREA) > 0
-    flag, scene = passed_by(level, n, blobs, plate_small, tau,
+    flag, scene = passed_by(levels, blobs, plate_small, tau,
                         max(3, int(np.ceil(MIN_AWAY_S / dt))), left_small)
     if not flag.any():
         return model
@@ -268,7 +265,7 @@ def retake_passed_by(model, frames: np.ndarray, gains: np.ndarray, thumbs: np.nd
     # The samples that show the scene's colour there, outside the moving blob (in the
     # nearest thumbnail).
     near = np.clip(np.round(idx / step).astype(int), 0, n - 1)
-    shows = np.stack([~blobs[i] & (np.abs(level(i) - scene).max(axis=-1) < tau) & flag
+    shows = np.stack([~blobs[i] & (np.abs(levels[i] - scene).max(axis=-1) < tau) & flag
                       for i in near])
     away = np.stack([cv2.resize(m.view(np.uint8), size, interpolation=cv2.INTER_NEAREST)[redo]
                      > 0 for m in shows])
