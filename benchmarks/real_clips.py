@@ -86,7 +86,9 @@ def real_clips(log=print) -> list[RealClip]:
 #: FROM_CLIP_ENDS was chosen on candela).
 #: sbi_caviar1 since the issue-26 realsil3 helper (session 22) chose
 #: vidcap.video.reflection.WEAK on it (its floor reflection), sbi_hallmonitor since that
-#: helper diagnosed it frame by frame (nothing was chosen on it).
+#: helper diagnosed it frame by frame; the issue-26 hall helper (session 26) built and
+#: chose vidcap.video.passedby on it (and checked it on candela and the office clips;
+#: sbi_hallmonitor_away, validation, was looked at only through its score).
 MASKED_TUNING: set[str] = {"cdnet_office_enter", "cdnet_office_stand", "sbi_candela",
                            "sbi_cavignal", "sbi_caviar1", "sbi_hallmonitor"}
 

@@ -448,6 +448,9 @@ PLATE_SEED = VIDCAP_PLATE_SEED
 #: ``--FLAG / --no-FLAG`` setting ``vidcap.video.MODULE.NAME`` (default: as it is):
 #: (flag, module, name, help).
 SWITCHES = (
+    ("passed-by", "passedby", "PASSED_BY",
+     "vidcap's plate re-taken where it holds a colour that only passed by, seen in the "
+     "moving blob (vidcap.video.passedby; default: passedby.PASSED_BY, on)"),
     ("empty-scene", "background", "EMPTY_SCENE",
      "vidcap's plate re-taken from samples showing the empty scene (vidcap.video.emptyscene; "
      "default: background.EMPTY_SCENE)"),

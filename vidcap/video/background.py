@@ -36,7 +36,10 @@ the spot) still takes its background from the frames where it is uncovered:
    appearance pass, plate -> person -> plate); then (:data:`EMPTY_SCENE`,
    :data:`PERSON_BOX`, on by default), samples that show the empty
    scene where the plate holds a person who stood still later (a *ghost*, told by
-   its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; and,
+   its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; where the
+   plate holds a colour seen only inside the moving blob of every frame (a walker along
+   the line of sight), the frames before the first passer-by and after the last give it
+   back (:mod:`vidcap.video.passedby`, :data:`vidcap.video.passedby.PASSED_BY`); and,
    when the plate left part of the frame never seen, a person the plate absorbed is
    looked for with OpenCV's HOG people detector and cut out by ``cv2.grabCut``
    (:mod:`vidcap.video.personbox`; the graph cut's colour models are then learned

@@ -12,20 +12,32 @@ not help: the chair has edges of its own where the plate holds the shirt, so its
 test never fired, and the corridor is uncovered for the last 0.3 s only.
 
 Motion tells the two apart. Every frame of the clip is looked at, at the plate's working
-size (the thumbnails :mod:`vidcap.video.timecover` decodes anyway), and in each the
-*moving blob* is found (:func:`moving_blobs`): the pixels that differ from the frames a
-short time before *and* after (a double difference: a frame difference alone marks where
-the person was as well as where they are), at a few lags (:data:`LAGS_S`), closed and
-filled into a solid shape (:data:`CLOSE`: the inside of a shirt does not change from
-frame to frame, its outline does). Where the plate's colour is seen mostly in frames in
-which the pixel lies inside the moving blob, while the frames in which it lies outside
-agree on another colour (:func:`passed_by`), the plate held something that passed by:
-it is re-taken from the sampled frames in which the pixel lies outside the blob.
+size (the thumbnails :mod:`vidcap.video.timecover` decodes anyway, brought to the plate's
+exposure: :func:`plate_levels`), and in each the *moving blob* is found
+(:func:`moving_blobs`): the pixels that differ from the frames a short time before *and*
+after (a double difference: a frame difference alone marks where the person was as well
+as where they are), at a few lags (:data:`LAGS_S`), closed and filled into a solid shape
+(:data:`CLOSE`: the inside of a shirt does not change from frame to frame, its outline
+does). Then, per pixel (:func:`passed_by`):
 
-A person who stands still is not a moving blob: the frames that show them count as the
-scene's, and where the plate holds the wall behind them it was seen in frames when
-nobody moved there (before they came, after they left), so it stays. Pixels flagged never
-seen (a guess by design) and self-lit pixels are left alone.
+* the plate's colour is seen mostly in frames in which the pixel lies inside the blob
+  (at most :data:`MAX_OUTSIDE` of them outside): it passed by;
+* the scene is what the pixel shows in its *quiet ends*, the frames before the blob
+  first covers it and after it last does (less the frames that show the plate's colour
+  without a break from the blob's: a slow walker's shirt before the blob's outline took
+  it in), when they agree on another colour for :data:`MIN_AWAY_S` and hardly show the
+  plate's. A person who came and stood still is bracketed by their own coming and going,
+  so their still frames are not the scene; the scene is what the pixel showed before the
+  first passer-by and after the last;
+* and between the first and the last frame showing the plate's colour, the scene's
+  hardly shows (the passer-by hid it while passing; where the scene keeps showing between
+  the plate colour's appearances, the plate's colour is the scene seen between a limb's
+  passes, which the double difference takes for the moving thing).
+
+There the plate is re-taken from the sampled frames that show the scene's colour outside
+the blob (their median, each divided by its gain). Pixels flagged never seen (a guess by
+design) and self-lit pixels are left alone. The pass runs after the empty-scene pass,
+whose ghosts and re-take it would otherwise move.
 """
 
 from __future__ import annotations
@@ -100,30 +112,33 @@ def moving_blobs(levels: np.ndarray, tau: float, lags: list[int], close: int) ->
         The moving pixels closed, their holes filled, dilated by one pixel.
     """
     n, h, w = levels.shape[:3]
-
-    def differs(a, b):
-        return _maxdiff(levels[a], levels[b]) > tau
-
+    moving = np.zeros((n, h, w), bool)
+    for i, lag in enumerate(lags):
+        if lag >= n:
+            break
+        # d[j]: frame j + lag differs from frame j (each pair once)
+        d = np.stack([_maxdiff(levels[j + lag], levels[j]) > tau for j in range(n - lag)])
+        moving[lag:n - lag] |= d[:n - 2 * lag] & d[lag:]
+        if i == 0:  # the ends, one-sided
+            ends = min(lag, n - lag)
+            moving[:ends] |= d[:ends]
+            moving[n - ends:] |= d[n - lag - ends:n - lag]
     ker = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close, close))
     one = np.ones((3, 3), np.uint8)
     out = np.zeros((n, h, w), bool)
-    seed = np.zeros((h + 2, w + 2), np.uint8)
+    seed = np.zeros((h + 4, w + 4), np.uint8)
+    framed = np.zeros((h + 2, w + 2), np.uint8)
     for t in range(n):
-        moving = np.zeros((h, w), bool)
-        for i, lag in enumerate(lags):
-            back, fwd = t - lag >= 0, t + lag < n
-            if back and fwd:
-                moving |= differs(t, t - lag) & differs(t, t + lag)
-            elif i == 0 and (back or fwd):
-                moving |= differs(t, t - lag if back else t + lag)
-        if not moving.any():
+        if not moving[t].any():
             continue
-        m = cv2.morphologyEx(moving.view(np.uint8), cv2.MORPH_CLOSE, ker)
-        # holes: what the border cannot reach through the blob
-        outside = m.copy()
+        m = cv2.morphologyEx(moving[t].view(np.uint8), cv2.MORPH_CLOSE, ker)
+        # holes: what the frame's border cannot reach round the blob (a one-pixel frame
+        # of background round it: the blob may touch the border)
+        framed[:] = 0
+        framed[1:-1, 1:-1] = m
         seed[:] = 0
-        cv2.floodFill(outside, seed, (0, 0), 1)
-        out[t] = cv2.dilate(m | (1 - outside), one) > 0
+        cv2.floodFill(framed, seed, (0, 0), 1)
+        out[t] = cv2.dilate(m | (1 - framed[1:-1, 1:-1]), one) > 0
     return out
 
 
@@ -150,12 +165,13 @@ def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: flo
     -------
     flag : numpy.ndarray, shape (h, w), bool
         The plate's colour is seen outside the blob in at most :data:`MAX_OUTSIDE` of
-        the frames it is seen in, and the pixel's *quiet ends* (the frames before the
-        blob first covers it and after it last does: what the pixel shows before the
-        first passer-by and after the last, where a person who came and stood still
-        is bracketed by their own coming and going) agree on another colour (their
-        median) in at least ``min_away`` frames, and show the plate's in at most
-        :data:`MAX_OUTSIDE` as many.
+        the frames it is seen in; the pixel's quiet ends (the frames outside the blob
+        before it first covers the pixel and after it last does, less those showing the
+        plate's colour without a break from the blob's) agree on another colour (their
+        median) in at least ``min_away`` frames and show the plate's in at most
+        :data:`MAX_OUTSIDE` as many; and between the first and the last frame showing
+        the plate's colour, that colour shows in at most :data:`MAX_OUTSIDE` as many
+        frames as the plate's.
     scene : numpy.ndarray, shape (h, w, 3), float32
         That median where ``flag`` (0 elsewhere).
     """
