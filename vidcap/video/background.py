@@ -425,18 +425,9 @@ def estimate_background(
         n = len(source) if info is None else info.n_frames
         model = plate_from_empty(model, frames, gains, times=idx / fps,
                                  ends=(0.0, max(n - 1, int(idx[-1])) / fps))
-    from vidcap.video import passedby
-
-    if passedby.PASSED_BY and thumbs is not None:
-        n = len(source) if info is None else info.n_frames
-        found = passedby.retake_passed_by(model, frames, gains, thumbs, fps=_fps(info),
-                                          step=timecover.thumbnail_step(n))
-        if found is not model and model.colours is not None:
-            # (the person's and the scene's colours were learned against the old plate)
-            from vidcap.video.graphcut import clip_colours
-
-            found = replace(found, colours=clip_colours(found, frames, gains))
-        model = found
+    if thumbs is not None:
+        model = _passed_by(model, frames, gains, thumbs, info,
+                           len(source) if info is None else info.n_frames)
     if PERSON_BOX if person_box is None else person_box:
         from vidcap.video.personbox import absorbed_person
 
@@ -454,6 +445,25 @@ def estimate_background(
     if absorbed.FLAG_UNSEEN:
         model = absorbed.flag_unseen(model, frames, gains)
     return model
+
+
+def _passed_by(model, frames, gains, thumbs, info, n: int):
+    """``model`` with the plate re-taken where it holds a colour that only passed by
+    (:func:`vidcap.video.passedby.retake_passed_by`, when
+    :data:`vidcap.video.passedby.PASSED_BY`), the colour models learned again when it
+    changed (they were learned against the old plate); ``n`` frames in the clip."""
+    from vidcap.video import passedby
+    from vidcap.video.timecover import thumbnail_step
+
+    if not passedby.PASSED_BY:
+        return model
+    found = passedby.retake_passed_by(model, frames, gains, thumbs, fps=_fps(info),
+                                      step=thumbnail_step(n))
+    if found is not model and model.colours is not None:
+        from vidcap.video.graphcut import clip_colours
+
+        found = replace(found, colours=clip_colours(found, frames, gains))
+    return found
 
 
 def _sampled(source, method: str, n_samples: int, rng, info, work_size: int):
