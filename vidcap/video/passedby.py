@@ -116,8 +116,11 @@ def moving_blobs(levels: np.ndarray, tau: float, lags: list[int], close: int) ->
     for i, lag in enumerate(lags):
         if lag >= n:
             break
-        # d[j]: frame j + lag differs from frame j (each pair once)
-        d = np.stack([_maxdiff(levels[j + lag], levels[j]) > tau for j in range(n - lag)])
+        # d[j]: frame j + lag differs from frame j (each pair once; the whole stack in
+        # one absdiff, the channels' max as three planes)
+        a = cv2.absdiff(levels[lag:].reshape(n - lag, -1), levels[:n - lag].reshape(n - lag, -1))
+        a = a.reshape(n - lag, h, w, 3)
+        d = np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2]) > tau
         moving[lag:n - lag] |= d[:n - 2 * lag] & d[lag:]
         if i == 0:  # the ends, one-sided
             ends = min(lag, n - lag)
@@ -184,9 +187,12 @@ def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: flo
         shown_out += on & ~blobs[t]
     # The quiet ends: the frames before the blob first covers the pixel and after it
     # last does.
-    ever = blobs.any(axis=0)
-    first = np.where(ever, blobs.argmax(axis=0), n)
-    last = np.where(ever, n - 1 - blobs[::-1].argmax(axis=0), n)
+    first = np.full((h, w), n, np.int32)
+    last = np.full((h, w), n, np.int32)
+    for t in range(n):
+        np.copyto(first, t, where=blobs[t] & (first == n))
+        np.copyto(last, t, where=blobs[t])
+    ever = first < n
     quiet = first + np.where(ever, n - 1 - last, 0)
     cand = ((shown_out <= MAX_OUTSIDE * shown) & (shown - shown_out >= min_away)
             & (quiet >= min_away) & ~left_alone)
