@@ -64,6 +64,9 @@ MAX_OUTSIDE = 0.35
 #: ... and the frames outside the blob agree on another colour for at least this long,
 #: seconds (at least 3 thumbnails).
 MIN_AWAY_S = 0.1
+#: The scene's colour is seen inside the blob in at most this share of the times it is
+#: seen outside it.
+SCENE_INSIDE = 0.35
 
 
 def plate_levels(thumbs: np.ndarray, plate: np.ndarray) -> np.ndarray:
@@ -225,7 +228,12 @@ def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: flo
     first_p = on.argmax(axis=0)
     last_p = n - 1 - on[::-1].argmax(axis=0)
     between = is_scene & (t > first_p[None]) & (t < last_p[None])
+    # ... and the scene's colour is seen mostly outside the blob (a person who stays in
+    # view shows their own colours inside it as they move: their still torso at the
+    # clip's ends, where the blob is thin, is not the scene).
+    seen_in = (is_scene & inside).sum(axis=0)
     ok = ((agree >= min_away) & ((on & ends).sum(axis=0) <= MAX_OUTSIDE * agree)
+          & (seen_in <= SCENE_INSIDE * (is_scene & ~inside).sum(axis=0))
           & (between.sum(axis=0) <= MAX_OUTSIDE * on.sum(axis=0))
           & (np.abs(med - plate[cand]).max(axis=-1) >= tau))
     flag[cand] = ok
