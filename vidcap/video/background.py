@@ -39,7 +39,8 @@ the spot) still takes its background from the frames where it is uncovered:
    its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; where the
    plate holds a colour seen only inside the moving blob of every frame (a walker along
    the line of sight), the frames before the first passer-by and after the last give it
-   back (:mod:`vidcap.video.passedby`, :data:`vidcap.video.passedby.PASSED_BY`); and,
+   back (:mod:`vidcap.video.passedby`; off by default,
+   :data:`vidcap.video.passedby.PASSED_BY`); and,
    when the plate left part of the frame never seen, a person the plate absorbed is
    looked for with OpenCV's HOG people detector and cut out by ``cv2.grabCut``
    (:mod:`vidcap.video.personbox`; the graph cut's colour models are then learned

@@ -49,10 +49,20 @@ import numpy as np
 
 __all__ = ["moving_blobs", "passed_by", "plate_levels", "retake_passed_by"]
 
-#: Re-take the plate where it holds a colour that only passed by (on; called by
+#: Re-take the plate where it holds a colour that only passed by (called by
 #: :func:`vidcap.video.background.estimate_background` when the thumbnails exist,
-#: :data:`vidcap.video.timecover.TIME_COVER`).
-PASSED_BY = True
+#: :data:`vidcap.video.timecover.TIME_COVER`). **Off**: ``silhouettes_real.py --quick
+#: --pck --no-mediapipe`` with it on (wt-hall, one sitting with its base c44cbec): real
+#: clips with true masks sbi_hallmonitor (tuning) 0.314 / 0.278 -> 0.665 / 0.444,
+#: sbi_candela (tuning) 0.885 / 0.830 -> 0.933 / 0.840, sbi_hallmonitor_away
+#: (validation) 0.819 -> 0.863, ibmtest2_woman (validation) 0.957 -> 0.962, against
+#: MediaPipe pose2sim cam1 (tuning) 0.518 -> 0.564, mmskeleton_taichi (validation)
+#: 0.225 -> 0.246; renders >= 0.92 39 of 50 either way, but the dancer 05_19 0-3 s 3/4
+#: back (validation then) 0.974 -> 0.938 (her torso and head at the clip's first
+#: frames, where the double difference is one-sided and thin, taken for the scene),
+#: 05_18 side (tuning) 0.957 -> 0.943, 05_02 front (tuning) 0.898 -> 0.889: a validation
+#: row losing more than 0.01, so not on by default (benchmarks/RESULTS.md).
+PASSED_BY = False
 #: The double difference's lags, seconds (each at least one thumbnail).
 LAGS_S = (0.1, 0.2, 0.4)
 #: The moving pixels closed into a blob with an ellipse this share of the thumbnail's
