@@ -89,7 +89,7 @@ def test_convert_cli_bad_cues_is_a_one_line_error(tmp_path, cli):
     assert r.stderr.strip().count("\n") == 0 and "--cues 'skin'" in r.stderr
 
 
-def test_cues_default_and_pose_cache_key():
+def test_cues_default_and_pose_cache_key(monkeypatch):
     from vidcap.commands import convert as convert_cmd
     from vidcap.video import pipeline
 
@@ -103,6 +103,9 @@ def test_cues_default_and_pose_cache_key():
     assert pipeline._pose_key("sil", [(0, 0, 100)], "outline", fit_keywords(HUMAN)) != seed_key
     keys = {cues: pipeline._pose_key("sil", [(0, 0, 100)], cues) for cues in ("all", "outline")}
     assert keys["all"] != keys["outline"]  # a fit with cues is not read back as one without
+    # nor is a cache written by an older fit read back as the new fit's
+    monkeypatch.setattr(pipeline, "_POSE_VERSION", pipeline._POSE_VERSION - 1)
+    assert pipeline._pose_key("sil", [(0, 0, 100)], "outline") != seed_key
     with pytest.raises(ValueError, match="cues"):
         pipeline.run("nothing.mp4", cues="skin")
 

@@ -80,6 +80,10 @@ _SILHOUETTE_VERSION = 5
 #: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts; 3:
 #: absorbed parts no sample uncovers flagged never seen, ``absorbed.flag_unseen``).
 _PLATE_VERSION = 3
+#: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
+#: previous pose, ``fit.frame.kept_or_better``), so a cache written by an older fit is
+#: redone rather than handed back as the new fit's.
+_POSE_VERSION = 1
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
@@ -648,12 +652,12 @@ def _report_silhouettes(sil: _Silhouettes, n_expected: int | None, log) -> None:
 # --------------------------------------------------------------------------- 3. 2D pose
 def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES, fit_kw: dict | None = None) -> str:
     # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
-    parts = ("pose2d", k_sil) if len(chunks) < 2 else ("pose2d", k_sil, chunks)
+    parts = ("pose2d", _POSE_VERSION, k_sil) if len(chunks) < 2 else (
+        "pose2d", _POSE_VERSION, k_sil, chunks)
     if fit_kw:  # a body other than the seed's (the seed's keeps the key it had)
         body = fit_kw["body"]
         parts += (f"body={body.segment_lengths().round(6).tolist()}"
                   f"{body.segment_radii().round(6).tolist()}", f"foot={fit_kw.get('foot', 0):.6f}")
-    # the outline-only fit keeps the key it had before the cues existed
     return stage_key(*parts) if cues == "outline" else stage_key(*parts, f"cues={cues}")
 
 
