@@ -369,8 +369,11 @@ def _iou(a: np.ndarray, b: np.ndarray) -> float:
 
 #: Share of the cut samples (and at least 2) a pixel the person covered must be seen
 #: uncovered in to be re-taken from them (a cut that misses a leg in one sample must
-#: not put the leg in the plate).
-MIN_UNCOVERED = 0.34
+#: not put the leg in the plate). cdnet_office_stand (tuning): he steps aside for the
+#: last 40 % of the clip, and only 2 of the 7 cut samples show where he stood; 0.34
+#: asked for 3 and left it all never seen (0.781 / 0.558 median / p10 IoU), 0.25 takes
+#: it from those 2 (0.797 / 0.608); every validation row the same.
+MIN_UNCOVERED = 0.25
 
 
 def _uncovered_plate(model, frames, gains, cuts):
