@@ -47,6 +47,8 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
+from vidcap.video.timecover import channel_max_diff, coarse_step, inverse_gains
+
 __all__ = ["moving_blobs", "passed_by", "plate_levels", "retake_passed_by"]
 
 #: Re-take the plate where it holds a colour that only passed by (called by
@@ -84,23 +86,14 @@ def plate_levels(thumbs: np.ndarray, plate: np.ndarray) -> np.ndarray:
     ``plate`` (h, w, 3) (divided by its per-channel gain against it: the median ratio
     over a coarse grid), rounded and clipped to uint8: a channel the camera clipped in a
     darker frame is the plate's clipped 255, not more."""
-    n, h, w = thumbs.shape[:3]
-    step = max(1, int(np.sqrt(h * w / 1024)))
-    ratio = (thumbs[:, ::step, ::step].astype(np.float32) + 1.0) / (
-        plate[None, ::step, ::step].astype(np.float32) + 1.0)
-    inv = 1.0 / np.clip(np.median(ratio.reshape(n, -1, 3), axis=1), 0.25, 4.0)
+    step = coarse_step(*thumbs.shape[1:3])
+    inv = inverse_gains(thumbs, plate[::step, ::step].astype(np.float32) + 1.0)
     out = np.empty_like(thumbs)
-    for t in range(n):
+    for t in range(len(thumbs)):
         # (uint8 in, uint8 out: cv2 rounds and saturates)
         cv2.multiply(cv2.GaussianBlur(thumbs[t], (3, 3), 0),
                      (*(float(g) for g in inv[t]), 0.0), dst=out[t])
     return out
-
-
-def _maxdiff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """max over the channels of ``|a - b|``, (h, w) uint8, for two (h, w, 3) uint8."""
-    c0, c1, c2 = cv2.split(cv2.absdiff(a, b))
-    return cv2.max(cv2.max(c0, c1), c2)
 
 
 def moving_blobs(levels: np.ndarray, tau: float, lags: list[int], close: int) -> np.ndarray:
@@ -195,7 +188,7 @@ def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: flo
     shown = np.zeros((h, w), np.int32)
     shown_out = np.zeros((h, w), np.int32)
     for t in range(n):
-        on = _maxdiff(levels[t], plate) < tau
+        on = channel_max_diff(levels[t], plate) < tau
         shown += on
         shown_out += on & ~blobs[t]
     # The quiet ends: the frames before the blob first covers the pixel and after it
@@ -286,7 +279,7 @@ def retake_passed_by(model, frames: np.ndarray, gains: np.ndarray, thumbs: np.nd
     levels = plate_levels(thumbs, plate_small)
     # (most pixels show the plate most of the time: a robust spread of the noise)
     pick = np.unique(np.linspace(0, n - 1, min(n, 48)).round().astype(int))
-    dev = np.stack([_maxdiff(levels[t, ::2, ::2], plate_small[::2, ::2]) for t in pick])
+    dev = np.stack([channel_max_diff(levels[t, ::2, ::2], plate_small[::2, ::2]) for t in pick])
     tau = max(8.0, 5.0 * 1.4826 * float(np.median(dev)))
     lags = sorted({max(1, round(s / dt)) for s in LAGS_S})
     close = max(3, int(round(CLOSE * max(h, w))) | 1)

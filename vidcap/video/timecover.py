@@ -32,7 +32,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["motion_cover", "thumbnail_step"]
+__all__ = ["channel_max_diff", "coarse_step", "inverse_gains", "motion_cover",
+           "thumbnail_step"]
 
 #: Measure the cover of the motion footprint's rings over every frame (the share of time
 #: a pixel moves) rather than over the sampled frames
@@ -53,6 +54,36 @@ MAX_THUMBS = 600
 def thumbnail_step(n_frames: int) -> int:
     """Every how many frames a thumbnail is taken so that at most :data:`MAX_THUMBS` are."""
     return max(1, -(-int(n_frames) // MAX_THUMBS))
+
+
+def coarse_step(h: int, w: int) -> int:
+    """Pixel step of the ~32 x 32 grid the frames' exposure gains are measured on."""
+    return max(1, int(np.sqrt(h * w / 1024)))
+
+
+def inverse_gains(thumbs: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """1 / each frame's per-channel exposure gain against ``reference``, (N, 3) float32.
+
+    Parameters
+    ----------
+    thumbs : numpy.ndarray, shape (N, h, w, 3), uint8
+    reference : numpy.ndarray, shape (h', w', 3), float32
+        The reference's levels plus one on the :func:`coarse_step` grid (the +1 keeps
+        black pixels out of the ratios' zeros).
+
+    The gain is the median over the grid of (frame + 1) / reference, clipped to
+    [0.25, 4]."""
+    n, h, w = thumbs.shape[:3]
+    step = coarse_step(h, w)
+    ratio = (thumbs[:, ::step, ::step].astype(np.float32) + 1.0) / reference[None]
+    return 1.0 / np.clip(np.median(ratio.reshape(n, -1, 3), axis=1), 0.25, 4.0)
+
+
+def channel_max_diff(a: np.ndarray, b: np.ndarray, dst=None) -> np.ndarray:
+    """max over the channels of ``|a - b|``, (h, w), for two (h, w, 3) images of one
+    dtype (written into ``dst`` when given)."""
+    c0, c1, c2 = cv2.split(cv2.absdiff(a, b))
+    return cv2.max(cv2.max(c0, c1), c2, dst=dst)
 
 
 def motion_cover(thumbs: np.ndarray, *, max_median: int = 48) -> np.ndarray:
@@ -76,12 +107,11 @@ def motion_cover(thumbs: np.ndarray, *, max_median: int = 48) -> np.ndarray:
     """
     n, h, w = thumbs.shape[:3]
     pick = np.unique(np.linspace(0, n - 1, min(n, max_median)).round().astype(int))
-    # Per-frame, per-channel gains against the picked frames' median, on a coarse grid
-    # (as the plate's samples are normalised: slow exposure drift is not motion).
-    step = max(1, int(np.sqrt(h * w / 1024)))
-    coarse = thumbs[:, ::step, ::step].astype(np.float32) + 1.0
-    ratio = coarse / np.median(coarse[pick], axis=0)[None]
-    inv = 1.0 / np.clip(np.median(ratio.reshape(n, -1, 3), axis=1), 0.25, 4.0)
+    # Per-frame, per-channel gains against the picked frames' median (as the plate's
+    # samples are normalised: slow exposure drift is not motion).
+    step = coarse_step(h, w)
+    inv = inverse_gains(thumbs, np.median(
+        thumbs[pick, ::step, ::step].astype(np.float32) + 1.0, axis=0))
     # (frame by frame, in OpenCV: whole-clip float copies and NumPy's max over interleaved
     # channels were most of the cost)
     def level(t):
@@ -91,8 +121,7 @@ def motion_cover(thumbs: np.ndarray, *, max_median: int = 48) -> np.ndarray:
     med = np.median(np.stack([level(t) for t in pick]), axis=0).astype(np.float32)
     dev = np.empty((n, h, w), np.float32)
     for t in range(n):
-        c0, c1, c2 = cv2.split(cv2.absdiff(level(t), med))
-        cv2.max(cv2.max(c0, c1), c2, dst=dev[t])
+        channel_max_diff(level(t), med, dst=dev[t])
     noise = 1.4826 * float(np.median(dev[pick, ::2, ::2]))
     tau = max(8.0, 5.0 * noise)
     return (dev > tau).mean(axis=0, dtype=np.float32)
