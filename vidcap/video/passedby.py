@@ -187,8 +187,9 @@ def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: flo
     n, h, w = levels.shape[:3]
     shown = np.zeros((h, w), np.int32)
     shown_out = np.zeros((h, w), np.int32)
+    on_all = np.empty((n, h, w), bool)  # frame t shows the plate's colour
     for t in range(n):
-        on = channel_max_diff(levels[t], plate) < tau
+        on = np.less(channel_max_diff(levels[t], plate), tau, out=on_all[t])
         shown += on
         shown_out += on & ~blobs[t]
     # The quiet ends: the frames before the blob first covers the pixel and after it
@@ -209,7 +210,7 @@ def passed_by(levels: np.ndarray, blobs: np.ndarray, plate: np.ndarray, tau: flo
     vals = levels[:, cand].astype(np.float32)  # (n, P, 3)
     t = np.arange(n)[:, None]
     first, last = first[cand][None], last[cand][None]
-    on = np.abs(vals - plate[cand][None].astype(np.float32)).max(axis=-1) < tau  # (n, P)
+    on = on_all[:, cand]  # (n, P)
     # The plate's colour in frames next to the blob's, without a break, is the
     # passer-by's still (a slow walker's shirt before the blob's outline took it in).
     inside = blobs[:, cand]
