@@ -128,7 +128,8 @@ def _sample_scores(video, truth, masks, body):
     lr = lift_pose(pose.joints2d, fps=float(truth["fps"]), body=body, image_sides=True,
                    spread=pose.spread, track=track, frame_size=size,
                    model_height=pose.model_height,
-                   method="solve", near_side=front_cue(video, pose.joints2d))
+                   method="solve", near_side=front_cue(video, pose.joints2d,
+                                                                fps=float(truth["fps"])))
     h_px = np.mean(lr.scale) * body.height
     named = np.linalg.norm(lr.joints2d - truth["joints2d"], axis=-1).mean() / h_px * 100
     return (_pairs_error(pose.joints2d, truth["joints2d"]) / h_px * 100, named,

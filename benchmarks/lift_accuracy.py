@@ -384,7 +384,11 @@ def main(argv=None):
     ap.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                     help="the pipeline's silhouettes with or without the graph cut (default: "
                          "vidcap.video.pipeline.DEFAULT_GRAPH_CUT, as vidcap convert)")
+    import lift_solve_tables as st
+
+    st.add_front_options(ap)
     args = ap.parse_args(argv)
+    st.apply_front_options(args)
     body = BodyModel()
     if args.graph_cut is not None:  # the stage cache keys on it: no stale silhouettes
         import vidcap.video.pipeline as pipeline
@@ -399,8 +403,6 @@ def main(argv=None):
 
         lifting.CONSISTENT_NAMES = True
     if args.solve and args.real_only:
-        import lift_solve_tables as st
-
         return _real_table(st, body, args.only)
     if args.solve:
         return solve_tables(args.frames, body, renders=not args.no_renders)
@@ -496,7 +498,7 @@ def _render_clips(body, frames):
                                     rng=np.random.default_rng(0))
         pose = fit_sequence(truth["masks"])
         near, limbs = colour_cues(images, pose.joints2d, pose.model_height, body, front=True,
-                                 limbs=True)
+                                 limbs=True, fps=float(truth["fps"]))
         fit = {"joints2d": pose.joints2d, "spread": pose.spread,
                "model_height": pose.model_height, "near_side": near, "limb_order": limbs}
         out.append((f"{name} yaw {yaw:.0f} (held out)", fit, truth,
@@ -520,7 +522,7 @@ def _sample_clips(body):
                   cache_dir=cache, lift="segment", proportions="seed")  # seed renders
         near, limbs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
                                  res.image_joints2d, res.model_height, body, front=True,
-                                 limbs=True)
+                                 limbs=True, fps=res.fps)
         fit = {"joints2d": res.image_joints2d, "spread": res.spread,
                "model_height": res.model_height, "track": res.track,
                "near_side": near, "limb_order": limbs}
@@ -609,6 +611,13 @@ def _real_clips():
     return out
 
 
+#: Real clips looked at closely when something was chosen: their rows count as tuning.
+#: The face cue's crop size (mmskeleton_clean_jerk's small faces, pose2sim's anonymised
+#: ones) and the face's window not carried on (mmskeleton_taichi: profiles first, a
+#: face later) were set after looking at their head crops (vidcap.video.facecue).
+REAL_LOOKED_AT = ("mmskeleton_clean_jerk", "mmskeleton_taichi", "pose2sim_balance_cam1")
+
+
 def _real_table(st, body, only=None):
     """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz),
     skipped with the reason when absent."""
@@ -624,6 +633,8 @@ def _real_table(st, body, only=None):
             print(f"  skipped: needs {video} and {ref} (run ../shared/tools/mediapipe-reference/"
                   "reference.py VIDEO OUT.npz with VIDCAP_DATA set)")
             continue
+        if video.stem in REAL_LOOKED_AT:
+            label = f"{label or video.name} (tuning: looked at)"
         for r in st.real_rows(video, ref, body, frames, label):
             print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f}")
 

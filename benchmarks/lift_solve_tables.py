@@ -160,6 +160,29 @@ def end_to_end_rows(clips, body):
     return rows
 
 
+def add_front_options(ap) -> None:
+    """The front/back cue's switches of ``lift_accuracy.py --solve`` and
+    ``solve_fitted.py --front``: ``--no-face`` (the arms alone, as before the face cue,
+    ``vidcap.video.pipeline.FACE_CUE``) and ``--front-margin`` (the front threshold with a
+    margin, ``vidcap.video.proposals.NEAR_SIDE_MARGIN_FRONT``; built, off)."""
+    ap.add_argument("--no-face", action="store_true",
+                    help="the front/back cue without the face (vidcap.video.facecue)")
+    ap.add_argument("--front-margin", action="store_true",
+                    help="the front/back cue's front threshold with a margin "
+                         "(vidcap.video.proposals.NEAR_SIDE_MARGIN_FRONT; off by default)")
+
+
+def apply_front_options(args) -> None:
+    """Set the switches of :func:`add_front_options` for this process."""
+    import vidcap.video.pipeline as pipeline
+    import vidcap.video.proposals as proposals
+
+    if args.no_face:
+        pipeline.FACE_CUE = False
+    if args.front_margin:
+        proposals.NEAR_SIDE_MIN_FRONT = proposals.NEAR_SIDE_MARGIN_FRONT
+
+
 #: The lifts of the end-to-end and real tables: the per-segment lift, the solve without
 #: and with the colour frame's front/back cue (:mod:`vidcap.video.frontback`; the
 #: pipeline's default since issue 33's front/back work), and with the leg order too
@@ -222,7 +245,7 @@ def real_rows(video, reference, body, frames=None, label=None):
     rows = []
     near, limbs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
                              res.image_joints2d, res.model_height, res.body, front=True,
-                             limbs=True)
+                             limbs=True, fps=res.fps)
     for method in LIFTS:
         lr = lift_pose(res.image_joints2d, fps=res.fps, body=body, image_sides=True,
                        spread=res.spread, track=res.track, frame_size=size,

@@ -86,7 +86,7 @@ def main():
         res = pipeline_result(video, height=body.height)
         j2 = res.image_joints2d
         near, limbs = colour_cues(iter_frames(video, stop=len(j2)), j2, res.model_height,
-                                  res.body, front=True, limbs=True)
+                                  res.body, front=True, limbs=True, fps=res.fps)
         ref = _mediapipe_2d(ref_path, len(j2))
         size = (res.masks.shape[2], res.masks.shape[1])
         out = {}

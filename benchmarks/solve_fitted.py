@@ -202,11 +202,13 @@ def mirrored(true3):
 
 
 def near_sides(clips, body):
-    """{clip name: the near-side cue (F,)} from each clip's colour frames."""
-    from vidcap.video.frontback import arm_visibility, near_side
+    """{clip name: the front/back cue} from each clip's colour frames, as the pipeline
+    reads it (:func:`vidcap.video.pipeline.colour_cues`: the near side (F,), with the
+    face (F, 2) where ``pipeline.FACE_CUE``)."""
+    from vidcap.video.pipeline import colour_cues
 
-    return {name: near_side(arm_visibility(clip_frames(name.split(" (")[0], body),
-                                           c["joints2d"]))
+    return {name: colour_cues(clip_frames(name.split(" (")[0], body), c["joints2d"],
+                              front=True, limbs=False, fps=float(c["fps"]))[0]
             for name, c in clips}
 
 
@@ -258,7 +260,8 @@ def attribute(clips, body, limbs=False, joints=False):
     def near_fn(name, joints2d):
         c = dict(clips)[name]
         near, order = colour_cues(clip_frames(name.split(" (")[0], body), joints2d,
-                                  c["model_height"], body, front=True, limbs=limbs)
+                                  c["model_height"], body, front=True, limbs=limbs,
+                                  fps=float(c["fps"]))
         return {"near_side": near, "limb_order": order}
 
     cues = "front/back and limb-order cues" if limbs else "front/back cue"
@@ -300,7 +303,9 @@ def main(argv=None):
     ap.add_argument("--joints", action="store_true",
                     help="with --attribute: by limb (the arms' or legs' true 2D or signs) "
                          "and the ceiling of a per-joint confidence (bad 2D joints dropped)")
+    st.add_front_options(ap)
     args = ap.parse_args(argv)
+    st.apply_front_options(args)
     body = BodyModel()
     clips = tuning_clips(body)
     if not args.tuning_only:

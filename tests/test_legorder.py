@@ -237,7 +237,11 @@ def test_colour_cues_read_both_cues_in_one_pass_over_the_frames():
 
     near, order = colour_cues(decoded(), j2, height, body, front=True, limbs=True)
     assert len(seen) == len(j2) + 1  # consumed to the end
-    assert near.shape == (len(j2),) and order.shape == (len(j2), 2)
+    # the front/back cue with the face (vidcap.video.facecue): none on a render
+    assert near.shape == (len(j2), 2) and order.shape == (len(j2), 2)
+    assert np.isfinite(near[:, 1]).any() and np.nansum(near[:, 1]) == 0
+    assert colour_cues(iter(frames), j2, height, body, front=True, limbs=False,
+                       face=False)[0].shape == (len(j2),)
     alone = near_limb(*limb_edges(frames, j2, limb_radii(height, body)))
     assert np.array_equal(np.isnan(order), np.isnan(alone))
     assert np.allclose(order[np.isfinite(order)], alone[np.isfinite(alone)])

@@ -630,7 +630,8 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
             ok, buf = cv2.imencode(".jpg", frame, [cv2.IMWRITE_JPEG_QUALITY, 92])
             jpegs.append(buf)
 
-    near, limbs = pipeline.colour_cues(frames(), joints2d, res.model_height, res.body)
+    near, limbs = pipeline.colour_cues(frames(), joints2d, res.model_height, res.body,
+                                       fps=res.fps)
     n = min(len(jpegs), res.n_frames)
 
     def read_frame(i: int) -> np.ndarray:

@@ -17,7 +17,9 @@ hand end, skin and clothing colours learned from this clip's fitted head and tor
 (:class:`vidcap.video.fit.cues.ColourModel`): an arm hidden behind the body shows
 clothing where the fit put it, one in front shows skin; arms swung clear of the body
 both show skin and give no evidence. :func:`near_side` is the image-left arm's minus
-the image-right arm's.
+the image-right arm's. Where a face is found on the fitted head
+(:mod:`vidcap.video.facecue`) it overrules the arms
+(:func:`vidcap.video.proposals.propose_front`).
 """
 
 from __future__ import annotations

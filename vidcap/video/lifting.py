@@ -569,9 +569,9 @@ def lift_pose(
     view : str
         The user's view of the whole clip (:data:`VIEWS`), applied to the proposed
         orientation (:func:`constrain_orientation`); orientation events override it.
-    near_side, limb_order : array_like, shapes (F,) and (F, 2), optional
-        The colour frame's cues, image-side names: front or back
-        (:func:`vidcap.video.frontback.near_side`), the nearer arm, leg (:func:`near_limb_names`).
+    near_side, limb_order : array_like, shapes (F,) or (F, 2), and (F, 2), optional
+        The colour frame's cues (:func:`vidcap.video.pipeline.colour_cues`): front or back
+        (near side and face), the nearer arm, leg (:func:`near_limb_names`).
     method : {'solve', 'segment'}
         The clip solve (:func:`vidcap.video.solve.stage.solve_lift`) or the seed's
         per-segment lift (:func:`vidcap.video.lift.lift`).

@@ -771,6 +771,12 @@ def _image_joints(pose: dict, masks: MaskStack):
 FRONT_CUE = True
 
 
+#: Whether the front/back cue reads the face too (:mod:`vidcap.video.facecue`: a frontal
+#: face found where the fit put the head says the body faces the camera, whatever the
+#: arms say; no face says nothing).
+FACE_CUE = True
+
+
 #: Whether the 3D stage names the arms and legs by which one the colour frame shows
 #: nearer the camera (:mod:`vidcap.video.legorder`: the nearer leg's borders cross the
 #: farther one, the nearer arm's the torso).
@@ -778,19 +784,26 @@ LIMB_CUE = True
 
 
 def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool | None = None,
-                limbs: bool | None = None, lines=None):
+                limbs: bool | None = None, lines=None, face: bool | None = None,
+                fps: float | None = None):
     """The colour frames' cues in one pass over ``frames`` (an iterable of (H, W, 3) BGR
     frames, consumed to its end) for the image-side named 2D joints (F, 15, 2): the
     front/back cue (:func:`vidcap.video.frontback.near_side`, with ``front``, default
     :data:`FRONT_CUE`), (F,) or None, and the limb order
     (:func:`vidcap.video.legorder.near_limb`, with ``limbs``, default :data:`LIMB_CUE`,
     and the fit's ``model_height`` (F,) px), (F, 2) or None. ``lines``: the limb order's
-    search lines, planned already (:func:`vidcap.video.legorder.plan_lines`)."""
+    search lines, planned already (:func:`vidcap.video.legorder.plan_lines`). With
+    ``face`` (default :data:`FACE_CUE`) the front/back cue is (F, 2): the near side and
+    :func:`vidcap.video.facecue.face_seen` (one frame searched every
+    :data:`vidcap.video.facecue.FACE_STEP_S` at ``fps``, default 30), as
+    :func:`vidcap.video.proposals.propose_front` reads them."""
+    from vidcap.video.facecue import tap_faces
     from vidcap.video.frontback import arm_visibility, near_side
     from vidcap.video.legorder import limb_radii, near_limb, tap_limb_edges
 
     front = FRONT_CUE if front is None else front
     limbs = LIMB_CUE if limbs is None else limbs
+    face = (FACE_CUE if face is None else face) and front
     F = len(joints2d)
     strength, count = np.full((F, 2, 2), np.nan), np.zeros((F, 2, 2))
     if limbs and model_height is not None:
@@ -798,18 +811,24 @@ def colour_cues(frames, joints2d, model_height=None, body=None, *, front: bool |
                                 count, lines)
     else:
         limbs = False
+    seen = np.full(F, np.nan)
+    if face:
+        frames = tap_faces(frames, joints2d, seen, fps=fps or 30.0)
     frames = iter(frames)
     near = near_side(arm_visibility(frames, joints2d)) if front else None
     for _ in frames:  # the rest (all of them without the front cue)
         pass
+    if face:
+        near = np.column_stack([near, seen])
     return near, near_limb(strength, count) if limbs else None
 
 
-def _kept_covers(kept, joints2d, model_height, body):
+def _kept_covers(kept, joints2d, model_height, body, fps: float = 30.0):
     """Whether ``kept`` (a :class:`vidcap.video.keptframes.KeptFrames`, or None) holds every
     pixel :func:`colour_cues` reads for the 2D joints (F, 15, 2): then the cues read it
     and give what a second decode would, to the bit. Returns (bool, the limb order's
     search lines planned for it or None: :func:`colour_cues` reads along them)."""
+    from vidcap.video.facecue import read_bounds as face_bounds
     from vidcap.video.frontback import read_bounds as arm_bounds
     from vidcap.video.legorder import limb_radii, plan_lines
     from vidcap.video.legorder import read_bounds as limb_bounds
@@ -819,16 +838,21 @@ def _kept_covers(kept, joints2d, model_height, body):
         return False, None
     if FRONT_CUE and not kept.covers(arm_bounds(joints2d, kept.frame_shape)):
         return False, None
+    if FRONT_CUE and FACE_CUE and not kept.covers(face_bounds(joints2d, kept.frame_shape,
+                                                              fps=fps)):
+        return False, None
     if LIMB_CUE and model_height is not None:
         lines = plan_lines(joints2d, limb_radii(model_height, body), kept.frame_shape)
         return kept.covers(limb_bounds(lines)), lines
     return True, None
 
 
-def front_cue(video, joints2d) -> np.ndarray:
-    """The near-side cue (F,) of ``video``'s frames (decoded again, one at a time) for
+def front_cue(video, joints2d, fps: float | None = None) -> np.ndarray:
+    """The front/back cue of ``video``'s frames (decoded again, one at a time) for
     the image-side named 2D joints (F, 15, 2): :func:`vidcap.video.frontback.near_side`
-    alone (``vidcap convert`` reads it with the limb order, :func:`colour_cues`).
+    (F,), with the face (F, 2) where :data:`FACE_CUE` (one frame searched every
+    :data:`vidcap.video.facecue.FACE_STEP_S` at ``fps``, default 30), as
+    :func:`colour_cues` reads them (``vidcap convert`` reads them with the limb order).
 
     Decoded again: ``vidcap convert`` reads the colour its silhouette stage kept round
     the person instead (:class:`vidcap.video.keptframes.KeptFrames`, up to a memory
@@ -839,7 +863,7 @@ def front_cue(video, joints2d) -> np.ndarray:
     from vidcap.io.video import iter_frames
 
     return colour_cues(iter_frames(video, stop=len(joints2d)), joints2d, front=True,
-                       limbs=False)[0]
+                       limbs=False, fps=fps)[0]
 
 
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
@@ -862,9 +886,9 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
 
         F = len(joints2d)
         kept = sil.kept
-        covered, lines = _kept_covers(kept, joints2d, model_height, body)
+        covered, lines = _kept_covers(kept, joints2d, model_height, body, fps)
         frames = kept.frames(F) if covered else iter_frames(video, stop=F)
-        near, limbs = colour_cues(frames, joints2d, model_height, body, lines=lines)
+        near, limbs = colour_cues(frames, joints2d, model_height, body, lines=lines, fps=fps)
     lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=model_height, view=view,
