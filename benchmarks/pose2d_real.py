@@ -33,12 +33,16 @@ diagnosed their pipeline losses on them and chose the appearance pass's scene-be
 gate and the lean fit's head row on cam4); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
-[--only NAME] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]`` (``--only``: just
+[--only NAME] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]
+[--passed-by | --no-passed-by]`` (``--only``: just
 the clips whose name contains NAME; ``--rows``: the pipeline table's row kinds, of outline,
 all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six); ``--human``:
 the first table with ``proportions='human'``;
 ``--graph-cut``: the pipeline rows' silhouettes with or without the graph cut, default
-``vidcap.video.pipeline.DEFAULT_GRAPH_CUT``; ``benchmarks/cut_fit.py`` compares the two).
+``vidcap.video.pipeline.DEFAULT_GRAPH_CUT``; ``benchmarks/cut_fit.py`` compares the two;
+``--passed-by``: the plate's passed-by pass on or off, default
+``vidcap.video.passedby.PASSED_BY``: the stage cache does not key on it, so give each
+setting its own, ``VIDCAP_BENCH_CACHE=DIR``, or delete it between runs).
 """
 
 from __future__ import annotations
@@ -114,6 +118,11 @@ def main(argv=None) -> int:
         import vidcap.video.pipeline as pipeline
 
         pipeline.DEFAULT_GRAPH_CUT = "--graph-cut" in argv
+    if "--passed-by" in argv or "--no-passed-by" in argv:
+        # (the stage cache does not key on it: VIDCAP_BENCH_CACHE)
+        from vidcap.video import passedby
+
+        passedby.PASSED_BY = "--passed-by" in argv
     print("2D pose on real clips: 12 limb joints against MediaPipe Pose (image-side labels "
           "matched either way per frame)")
     print(f"{'clip':10} {'joint':11} {'median':>7} {'>10 %':>6}")

@@ -33,7 +33,9 @@ ROOT = Path(__file__).resolve().parents[1]
 #: and the two ``cues`` share the plate and the silhouettes. Its keys name the video and
 #: the options, not the code: delete it (``rm -r .vidcap-cache``) after changing the
 #: silhouettes or the fit, or the benchmarks score the old code's output.
-CACHE = ROOT / ".vidcap-cache"
+#: ``VIDCAP_BENCH_CACHE`` names another folder (two settings measured side by side, each
+#: with its own cache).
+CACHE = Path(os.environ.get("VIDCAP_BENCH_CACHE") or ROOT / ".vidcap-cache")
 #: Scored frame ranges [start, stop) per clip, default the whole clip. onebyone_room: the
 #: two visits CLIPS.md names as good one-person stretches (233-445 and 510-694 inclusive:
 #: one man walks in, stands, leaves; the next walks in, stands, leaves).

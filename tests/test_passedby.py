@@ -4,8 +4,15 @@ from dataclasses import replace
 
 import numpy as np
 
+from vidcap.video import passedby
 from vidcap.video.background import BackgroundModel
-from vidcap.video.passedby import moving_blobs, passed_by, plate_levels, retake_passed_by
+from vidcap.video.passedby import (
+    moving_blobs,
+    passed_by,
+    plate_levels,
+    retake_passed_by,
+    whole_blob_frames,
+)
 
 H, W, N, FPS = 120, 160, 60, 30.0
 BLOCK = (slice(40, 70), slice(90, 110))  # a brown chair
@@ -112,3 +119,74 @@ def test_the_scene_is_what_the_quiet_ends_show_not_a_still_person():
                             np.zeros((1, 2), bool))
     assert flag.tolist() == [[True, False]]
     assert np.abs(scene[0, 0] - S).max() < 3
+
+
+def _dancer(frame, t):
+    """A dancer who stands still for frames 0-24 (torso at x 60-90, the right arm
+    waving) and then steps 12 px right and dances there (the shirt's folds scroll, both
+    arms wave): the frames before the blob first covers her old torso show the torso."""
+    out = frame.copy()
+    x0 = 60 if t < 25 else 72
+    cols = np.arange(x0, x0 + 30)
+    folds = np.where(((cols - x0 + (0 if t < 25 else t)) // 4) % 2 == 0, 60, 30).astype(np.uint8)
+    out[30:100, cols] = np.stack([folds, folds, folds + 140], -1)[None]
+    y = 35 + int(12 * np.sin(t * 0.9))
+    out[y:y + 6, x0 + 30:x0 + 50] = (60, 60, 200)
+    if t >= 25:
+        y = 35 + int(12 * np.cos(t * 0.9))
+        out[y:y + 6, x0 - 22:x0] = (60, 60, 200)
+    return out
+
+
+def test_a_dancer_still_at_the_start_stays_out_of_the_plate(monkeypatch):
+    # The plate holds the scene. Her old torso pixels show the torso outside the blob
+    # (round the waving arm only) at the start and the scene inside the blob once she
+    # dances beside it: without the whole-blob gate the pass takes the torso for the
+    # scene (05_19 3/4 back); with it, the plate stays.
+    rng = np.random.default_rng(4)
+    base, noisy = _scene(rng)
+    frames = np.stack([_dancer(noisy(), t) for t in range(N)])
+    model = _model(base)
+    ones = np.ones((N, 3), np.float32)
+    monkeypatch.setattr(passedby, "MIN_HELD", 0.0)
+    ungated = retake_passed_by(model, frames, ones, frames, step=1, fps=FPS)
+    assert (ungated.plate[30:100, 60:72] != model.plate[30:100, 60:72]).any(-1).mean() > 0.1
+    monkeypatch.undo()
+    out = retake_passed_by(model, frames, ones, frames, step=1, fps=FPS)
+    assert (out.plate == model.plate).all()
+
+
+def test_whole_blob_frames_trust_a_blob_that_holds_what_differs():
+    # Frame 0: the blob is the whole person; 1: the blob is an arm beside a still torso
+    # that differs from the plate; 2: no blob, nothing differs; 3: no blob, a person-sized
+    # block differs (someone standing perfectly still).
+    plate = np.full((60, 80, 3), 100, np.uint8)
+    levels = np.repeat(plate[None], 4, axis=0)
+    blobs = np.zeros((4, 60, 80), bool)
+    levels[0, 10:50, 20:40] = 200
+    blobs[0, 9:51, 19:41] = True
+    levels[1, 10:50, 20:40] = 200
+    levels[1, 15:20, 40:55] = 200
+    blobs[1, 14:21, 40:56] = True
+    levels[3, 10:50, 20:40] = 200
+    blobs[2:] = False
+    assert whole_blob_frames(levels, blobs, plate, 12.0, 6).tolist() == [True, False, True, False]
+
+
+def test_only_trusted_frames_give_the_scene():
+    # One pixel: a still torso's colour Q outside the blob for 20 frames, then the plate's
+    # colour P inside the blob: taken for a passer-by over the scene Q, unless those 20
+    # frames are not trusted (the blob did not hold the person whole).
+    rng = np.random.default_rng(5)
+    n = 60
+    vals = np.zeros((n, 1, 1, 3), np.float32)
+    vals[:20] = (60, 60, 200)
+    vals[20:] = (100, 100, 100)
+    blobs = np.zeros((n, 1, 1), bool)
+    blobs[20:] = True
+    vals = np.clip(vals + rng.normal(0, 1, vals.shape), 0, 255).round().astype(np.uint8)
+    plate = np.full((1, 1, 3), 100, np.uint8)
+    left = np.zeros((1, 1), bool)
+    assert passed_by(vals, blobs, plate, 12.0, 3, left)[0].all()
+    trusted = np.arange(n) >= 20
+    assert not passed_by(vals, blobs, plate, 12.0, 3, left, trusted)[0].any()
