@@ -30,7 +30,8 @@ convert``'s default body). Tuning clips
 (``pose2d_real_pipeline.TUNING``, the "use" column): pose2sim_balance cam1 and
 onebyone_room 233-445 (the ``human`` body's hips and feet), cam4 and cam3 (wt-cam
 diagnosed their pipeline losses on them and chose the appearance pass's scene-beside
-gate and the lean fit's head row on cam4); the others are validation.
+gate and the lean fit's head row on cam4), mmskeleton_taichi (session 27 chose the plate's
+scene-ring switch, ``background.SCENE_RING``, on it); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
 [--only NAME] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]

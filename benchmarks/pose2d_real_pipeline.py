@@ -40,7 +40,7 @@ from vidcap.body import JOINT_NAMES
 #: track_below_threshold) among its variants on these four (frames looked at: cam1, cam3;
 #: the validation clips' frames were looked at for the diagnosis only, nothing chosen).
 TUNING = ("onebyone_room 233-445", "pose2sim_balance_cam1", "pose2sim_balance_cam3",
-          "pose2sim_balance_cam4")
+          "pose2sim_balance_cam4", "mmskeleton_taichi")
 
 
 def _score(clip: RealClip, joints, compare, limb_joints) -> tuple[dict, float, np.ndarray]:

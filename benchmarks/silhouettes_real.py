@@ -273,7 +273,9 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
 #: cam3 since the empty-scene pass's loss there was diagnosed on it (the still-person
 #: helper; vidcap.video.emptyscene.MIN_EMPTY_S chosen with it among the tuning rows).
 REAL_TUNING = {"pose2sim_balance_cam1", "sports2d_walk_turn", "pose2sim_balance_cam4",
-               "sports2d_run", "pose2sim_balance_cam3"}
+               "sports2d_run", "pose2sim_balance_cam3",
+               # the plate's scene-ring switch (background.SCENE_RING) was built on it
+               "mmskeleton_taichi"}
 
 
 def iou(a, b, ignore=None):

@@ -224,3 +224,68 @@ def test_the_colours_are_learned_again_once_an_absorbed_person_is_found(monkeypa
     learned.clear()
     estimate_background(frames, n_samples=8, colour_models=True, person_box=True)
     assert learned == [False]  # nobody absorbed: no second look
+
+
+def _performer_before_a_textured_wall(rng, n=40, h=120, w=160):
+    """A dark-clad performer swaying over the middle of a mottled wall (regions whose
+    means change with the segmentation), a floor band and black letterbox bars: frames
+    (F, H, W, 3) uint8, masks (F, H, W) bool and the empty scene (H, W, 3) uint8."""
+    import cv2
+
+    from tests._synthframes import figure_mask
+
+    wall = np.zeros((h, w, 3), np.float32)
+    wall[:] = (150, 140, 40)
+    blot = cv2.resize(rng.uniform(0, 1, (h // 2, w // 2)).astype(np.float32), (w, h),
+                      interpolation=cv2.INTER_CUBIC)
+    wall *= (0.55 + 0.45 * blot)[..., None]
+    wall += rng.normal(0, 5, wall.shape)
+    wall[90:108] = (190, 190, 195)
+    wall[:10] = 0
+    wall[108:] = 0
+    frames = np.empty((n, h, w, 3), np.float32)
+    masks = np.empty((n, h, w), bool)
+    for i in range(n):
+        ph = 2 * np.pi * i / n
+        m = cv2.dilate(figure_mask(h, w, 0.6 + 0.6 * np.sin(3 * ph), cx=w / 2 + 20 * np.sin(ph)),
+                       np.ones((9, 9), np.uint8)).astype(bool)
+        frames[i] = wall
+        frames[i][m] = (10, 4, 3)
+        masks[i] = m
+    frames = np.clip(frames + rng.normal(0, 2, frames.shape), 0, 255).astype(np.uint8)
+    return frames, masks, np.clip(wall, 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_a_performer_before_a_textured_wall_leaves_the_plate(seed, monkeypatch):
+    """Pixels the performer covers in 50-85 % of the samples: the scene round the
+    footprint, as a set of colours, tells the costume from the wall seen between the
+    steps (without it the costume stays in the plate over a sixth of them)."""
+    import vidcap.video.background as bgm
+
+    frames, masks, truth = _performer_before_a_textured_wall(np.random.default_rng(seed))
+    cover = masks.mean(axis=0)
+    spot = (cover > 0.5) & (cover < 0.85)
+    assert spot.sum() > 1000
+
+    def wrong(on):
+        monkeypatch.setattr(bgm, "SCENE_RING", on)
+        plate = estimate_background(frames, n_samples=24).plate
+        return (_plate_error(plate, truth)[spot] > 100).mean()
+
+    assert wrong(True) < 0.05
+    assert wrong(False) > 0.1
+
+
+def test_letterbox_bars_are_found_only_at_the_edges():
+    from vidcap.video.background import _letterbox
+
+    means = np.full((3, 20, 30, 3), 120.0, np.float32)
+    means[:, :3] = 2.0  # a bar on top
+    means[:, -2:] = 5.0  # and at the bottom
+    means[:, 10] = 1.0  # a dark row inside the picture is scene
+    box = _letterbox(means)
+    assert box[:3].all() and box[-2:].all() and not box[3:-2].any()
+    means[1, 0, 7] = 90.0  # a bar is dark in every sample, and runs from the edge
+    box = _letterbox(means)
+    assert box[-2:].all() and not box[:-2].any()

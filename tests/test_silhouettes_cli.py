@@ -125,12 +125,21 @@ def test_cli_graph_cut_on_an_in_place_clip_and_its_refused_combinations(cli, tmp
 def still_block_clip(tmp_path):
     """A video at 4 fps (a time lapse) of 10 frames of the empty wall (2.5 s), then a
     block that stands still for 90 (2 of the 24 plate samples show the empty wall, 1 s
-    apart), and the block's true masks."""
+    apart), and the block's true masks. A static stripe of the block's colour stands
+    beside it throughout, so the colour is one of the scene's round the block (else the
+    plate's vote takes the wall from those two samples itself,
+    ``background.SCENE_RING``, and the still-person passes have nothing left to do)."""
     from tests.test_emptyscene import _block, _wall
 
     rng = np.random.default_rng(3)
     wall = _wall(rng)
-    frames = np.stack([wall() for _ in range(10)] + [_block(wall()) for _ in range(90)])
+
+    def stripe(img):
+        img[30:80, 76:80] = (30, 40, 200)
+        return img
+
+    frames = np.stack([stripe(wall()) for _ in range(10)]
+                      + [stripe(_block(wall())) for _ in range(90)])
     truth = np.zeros(frames.shape[:3], bool)
     truth[10:, 30:80, 50:70] = True
     video = tmp_path / "stand.mkv"

@@ -24,7 +24,10 @@ the spot) still takes its background from the frames where it is uncovered:
 6. Motion footprint (:func:`_footprint_plate`): the union of the pixels that differ
    from the temporal median in some sample. Inside it, the background around it,
    inpainted across, is a spatial guess that overturns a voted colour far from it
-   when a supported sample colour is near it. Static areas enclosed by the
+   when a supported sample colour is near it; and a voted colour many samples share
+   but unlike every colour of the scene in a ring round the footprint (a dark costume
+   before a mottled wall, where the inpainted guess is smeared) gives way to the samples
+   that show a colour of the ring (:data:`SCENE_RING`). Static areas enclosed by the
    footprint whose ring the limbs cover often (a torso during jumping jacks; "often"
    measured over every frame's time, not the samples: :mod:`vidcap.video.timecover`)
    are body parts that never moved: flagged ``never_seen``, confidence 0.
@@ -75,6 +78,18 @@ __all__ = [
     "sample_frames",
 ]
 
+#: Take scene colours over a voted colour unlike every colour round the footprint
+#: (:func:`_switch_to_scene_colours`). On: ``silhouettes_real.py --quick --no-mediapipe``
+#: (session 27, against the same table of main 77e0cd9) mmskeleton_taichi (tuning: built
+#: on it) 0.225 -> 0.815 median IoU against MediaPipe's masks, onebyone_room 233-445
+#: (validation) 0.189 -> 0.746, the render 06_14 0-3 s front / room plate (validation)
+#: 0.899 -> 0.919; no row of the 74 lower by more than 0.002.
+SCENE_RING = True
+#: The ring round the footprint, in working-size pixels.
+RING_WIDTH = 6
+#: Samples that must show a scene colour there (one is enough where the voted colour
+#: is shared by many; 2 or 3.6 samples took taichi to 0.62 / 0.47, onebyone 0.65 / 0.31).
+SCENE_MIN = 1
 #: L1 (sum over B, G, R) threshold floor, grey levels: differences below this are
 #: never foreground, whatever the measured noise (guards clean synthetic video).
 MIN_THRESHOLD = 12.0
@@ -688,6 +703,14 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
               & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
     if switch.any():
         weights[:, switch] = alt[:, switch]
+    if SCENE_RING:
+        # (only where the voted colour is one many samples share: a still person's,
+        # not a pixel whose every sample differs, where a scene-like one is chance)
+        shared = np.take_along_axis(agree, best[None, None], 1)[:, 0].sum(axis=0)
+        _switch_to_scene_colours(means, voted, filled,
+                                 filled & ~switch & (shared >= max(min_support * k, 2.5)),
+                                 weights, far=3.0 * max(tau, tau_region),
+                                 min_count=SCENE_MIN)
     if not len(hole_ids):
         return out
     _, comp = cv2.connectedComponents(filled.astype(np.uint8), connectivity=8)
@@ -723,6 +746,81 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
         out = keep[cl]
     weights[:, out] = 0
     return out
+
+
+def _scene_distance(ring_colours: np.ndarray, bin_width: int = 8):
+    """A function giving, for colours (..., 3), the Chebyshev distance (grey levels, to
+    ``bin_width``) to the nearest of ``ring_colours`` (N, 3): a distance transform of
+    their occupancy grid in colour space, so any number of queries costs one lookup."""
+    from scipy.ndimage import distance_transform_cdt
+
+    n = 256 // bin_width
+    cells = np.clip(ring_colours // bin_width, 0, n - 1).astype(np.intp)
+    empty = np.ones((n, n, n), bool)
+    empty[cells[:, 0], cells[:, 1], cells[:, 2]] = False
+    grid = distance_transform_cdt(empty, metric="chessboard").astype(np.float32) * bin_width
+
+    def distance(colours):
+        c = np.clip(colours // bin_width, 0, n - 1).astype(np.intp)
+        return grid[c[..., 0], c[..., 1], c[..., 2]]
+
+    return distance
+
+
+def _letterbox(means, dark: float = 16.0):
+    """(h, w) bool: the rows and columns along the frame's edges that are dark in every
+    sample (bars added to fit a frame shape: not part of the scene)."""
+    dark_px = (means.max(axis=-1) < dark).all(axis=0)
+    rows, cols = dark_px.all(axis=1), dark_px.all(axis=0)
+
+    def edge_run(a):
+        keep = np.zeros_like(a)
+        for order in (slice(None), slice(None, None, -1)):
+            run = np.logical_and.accumulate(a[order])
+            keep[order] |= run
+        return keep
+
+    out = np.zeros(dark_px.shape, bool)
+    out[edge_run(rows)] = True
+    out[:, edge_run(cols)] = True
+    return out
+
+
+def _switch_to_scene_colours(means, voted, footprint, candidates, weights, *, far,
+                             min_count):
+    """Where the voted colour is unlike every colour of the scene round the footprint and
+    enough samples show a colour like the scene's, take those samples (``weights``
+    updated in place).
+
+    The inpainted guess of :func:`_footprint_plate` is one colour per pixel, smeared
+    across a large footprint (the floor's grey inpainted up a wall): a performer who
+    stays in front of a textured wall in most samples kept their clothes in the plate
+    (mmskeleton_taichi). The scene round the footprint, as a set of colours, does not
+    smear: a black costume is far from every colour of a teal wall and a grey floor,
+    and the wall seen between the performer's steps is near one of them.
+    """
+    if not candidates.any():
+        return
+    foot = footprint.astype(np.uint8)
+    box = np.ones((3, 3), np.uint8)
+    ring = ((cv2.dilate(foot, box, iterations=RING_WIDTH + 1) > 0)
+            & ~(cv2.dilate(foot, box) > 0))
+    ring &= ~_letterbox(means)
+    if ring.sum() < 50:
+        return
+    scene_d = _scene_distance(np.clip(voted[ring], 0, 255))
+    voted_d = scene_d(np.clip(voted, 0, 255))
+    cand = candidates & (voted_d > far)
+    if not cand.any():
+        return
+    ys, xs = np.nonzero(cand)
+    # The samples that show a colour like the scene's; they need not agree with each
+    # other (a textured wall's regions change their mean with the segmentation), only
+    # be enough of them.
+    like = scene_d(np.clip(means[:, ys, xs], 0, 255)) <= 0.5 * voted_d[ys, xs][None]
+    hit = like.sum(axis=0) >= min_count
+    if hit.any():
+        weights[:, ys[hit], xs[hit]] = like[:, hit]
 
 
 def _finish_regions(frames, gains, weights_small, idx, name, holes=None):
