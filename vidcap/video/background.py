@@ -625,12 +625,14 @@ def _region_vote(frames, gains, *, work_size, segment_scale, min_region, progres
     level = np.take_along_axis(scored, best[None], 0)[0]
     same = np.take_along_axis(agree, best[None, None], 1)[:, 0]  # (k, h, w)
     weights = same & (level >= min_stability)[None]
-    holes = _footprint_plate(small, means, med, tau, best, agree, weights, cover=cover)
+    holes = _footprint_plate(small, means, med, tau, best, agree, weights, cover=cover,
+                             voted_count=np.take_along_axis(support, best[None], 0)[0] * k)
     return weights.astype(np.float32), holes
 
 
 def _footprint_plate(small, means, med, tau, best, agree, weights, *,
-                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15, cover=None):
+                     max_hole_share=0.6, min_evidence=0.25, min_support=0.15, cover=None,
+                     voted_count=None):
     """Background inside the motion footprint, from the background around it.
 
     Updates ``weights`` (k, h, w) in place and returns the static body parts
@@ -662,7 +664,9 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
     With ``cover`` ((h, w), the share of the clip's time each pixel moves:
     :mod:`vidcap.video.timecover`) the rings' cover is measured over time (at least
     :data:`vidcap.video.timecover.MIN_COVER`), not over the samples, so that which frames
-    were drawn does not decide whether a hole is a body part.
+    were drawn does not decide whether a hole is a body part. ``voted_count`` ((h, w)):
+    how many samples show the voted colour (:data:`SCENE_RING`'s switch needs it; without
+    it, the switch does not run).
     """
     k, h, w = small.shape[:3]
     box = np.ones((3, 3), np.uint8)
@@ -703,12 +707,11 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
               & (alt.sum(axis=0) >= max(min_support * k, 2.5)))
     if switch.any():
         weights[:, switch] = alt[:, switch]
-    if SCENE_RING:
+    if SCENE_RING and voted_count is not None:
         # (only where the voted colour is one many samples share: a still person's,
         # not a pixel whose every sample differs, where a scene-like one is chance)
-        shared = np.take_along_axis(agree, best[None, None], 1)[:, 0].sum(axis=0)
         _switch_to_scene_colours(means, voted, filled,
-                                 filled & ~switch & (shared >= max(min_support * k, 2.5)),
+                                 filled & ~switch & (voted_count >= max(min_support * k, 2.5)),
                                  weights, far=3.0 * max(tau, tau_region),
                                  min_count=SCENE_MIN)
     if not len(hole_ids):
