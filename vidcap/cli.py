@@ -96,6 +96,10 @@ def main(argv: list[str] | None = None) -> int:
               "video, or --jobs 1)", file=sys.stderr)
         return EXIT_USER_ERROR
     except Exception as exc:  # noqa: BLE001 - a bug of ours: one line, not a traceback
+        if as_command and interrupt.received():
+            # (the interrupt itself, come back as another exception from a compiled
+            # function it landed in: numba's dispatcher raises SystemError then)
+            interrupt.stop_now()
         if args.debug:
             raise
         print(f"vidcap: internal error: {type(exc).__name__}: {exc} (a bug in vidcap, not in "

@@ -8,9 +8,12 @@ executor) and the process exits with status 130 without waiting for them.
 
 An exception raised from a signal handler is lost when the signal lands inside a
 ctypes callback (numba's compiler calls back into Python from LLVM): Python prints it
-as "Exception ignored" and carries on. So the signal also arms a deadline,
-:data:`GRACE_S`; if the process has not left by then (or Python reports the interrupt
-as lost), :func:`stop_now` removes the temporary outputs still open and exits 130.
+as "Exception ignored" and carries on; inside a numba dispatcher it comes back as
+another exception (``SystemError: ... returned a result with an exception set``), which
+the CLI, seeing :func:`received`, reports as the interruption it is. So the signal also
+arms a deadline, :data:`GRACE_S`; if the process has not left by then (or Python reports
+the interrupt as lost), :func:`stop_now` removes the temporary outputs still open and
+exits 130.
 """
 
 from __future__ import annotations
@@ -40,7 +43,17 @@ def install() -> None:
     sys.unraisablehook = _unraisable
 
 
+_received = False
+
+
+def received() -> bool:
+    """Whether SIGINT or SIGTERM reached this process (since :func:`install`)."""
+    return _received
+
+
 def _on_signal(signum, frame) -> None:
+    global _received
+    _received = True
     if signal.getitimer(signal.ITIMER_REAL)[0] == 0.0:  # the first signal sets the deadline
         signal.setitimer(signal.ITIMER_REAL, GRACE_S)
     raise KeyboardInterrupt

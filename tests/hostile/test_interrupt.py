@@ -127,3 +127,36 @@ def test_an_interrupt_lost_in_a_ctypes_callback_still_stops_the_command(tmp_path
     assert proc.stderr.strip().splitlines()[-1] == "vidcap: interrupted"
     assert took < 5.0, took
     assert list(tmp_path.iterdir()) == []  # neither the output nor its temporary file
+
+
+_WRAPPED_BY_A_COMPILED_CALL = """
+import os, signal, sys
+from vidcap import cli
+import vidcap.commands.info as info
+
+def run(args):  # numba's dispatcher hands an interrupt back as another exception
+    try:
+        os.kill(os.getpid(), signal.SIGTERM)
+    except KeyboardInterrupt as exc:
+        raise SystemError("CPUDispatcher(...) returned a result with an exception set") from exc
+    print("carried on")
+
+info.run = run
+sys.argv = ["vidcap", "info", sys.argv[1]]
+sys.exit(cli.main())
+"""
+
+
+def test_an_interrupt_that_comes_back_as_another_exception_is_still_an_interrupt(tmp_path):
+    """SIGTERM landed inside a numba-compiled call (CI, stop 47: the graph cut's
+    ``band_graph``) and came back as ``SystemError``: exit 130 and "interrupted", not
+    "internal error" and 1."""
+    clip = tmp_path / "clip.mp4"
+    clip.write_bytes(b"")
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    proc = subprocess.run([sys.executable, "-c", _WRAPPED_BY_A_COMPILED_CALL, str(clip)],
+                          env=env, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130, (proc.returncode, proc.stderr[-500:])
+    assert "internal error" not in proc.stderr and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == "vidcap: interrupted"
+    assert "carried on" not in proc.stdout
