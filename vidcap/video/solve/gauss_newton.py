@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vidcap.video.solve.blocksolve import solve_band, upper_band
+from vidcap.video.solve.blocksolve import lower_band, solve_band
 from vidcap.video.solve.residuals import (
     Linearisation,
     Problem,
@@ -40,6 +40,11 @@ class Solution:
 def normal_equations(problem: Problem, lin: Linearisation):
     """Blocks of J^T J and J^T r.
 
+    The second differences and the planted ankles' motion are sums of the joints'
+    rows with fixed coefficients, so their part of block (f, f + s) is
+    ``joints_f^T diag(d_s[f]) joints_{f+s}`` with one weight per joint coordinate
+    (``d_s``, gathered first): one product per block diagonal.
+
     Returns
     -------
     blocks : (3, F, 24, 24) the blocks (f, f), (f, f + 1), (f, f + 2) (zero past the end).
@@ -50,44 +55,41 @@ def normal_equations(problem: Problem, lin: Linearisation):
     F, U, _ = ju.shape
     blocks = np.zeros((3, F, P, P))
     jut = np.swapaxes(ju, 1, 2)
-    blocks[0] = jut @ ju
+    jpt = np.swapaxes(jp, 1, 2)
     grad = (jut @ lin.r[:F * U].reshape(F, U, 1))[..., 0]
     at = F * U
+    d0 = np.zeros((F, 45))  # weights of joints_f^T joints_f, per coordinate
+    d1 = np.zeros((F, 45))  # of joints_f^T joints_{f+1}
+    q = np.zeros((F, 45))  # d(residuals)/d(joints_f)^T r
     if F > 2:
         w2 = pb.acc_weight ** 2
-        jpt = np.swapaxes(jp, 1, 2)
-        g0 = jpt @ jp
-        coef = np.zeros(F)  # sum of squared [1, -2, 1] weights each frame takes part with
-        coef[:-2] += 1.0
-        coef[1:-1] += 4.0
-        coef[2:] += 1.0
-        blocks[0] += w2 * coef[:, None, None] * g0
-        g1 = jpt[:-1] @ jp[1:]  # (F-1)
-        c1 = np.zeros(F - 1)
-        c1[:-1] += -2.0  # residual centred at f + 1: (f, f+1) weights 1 * -2
-        c1[1:] += -2.0  # centred at f: -2 * 1
-        blocks[1, :-1] += w2 * c1[:, None, None] * g1
-        blocks[2, :-2] += w2 * (jpt[:-2] @ jp[2:])
-        s = lin.r[at:at + (F - 2) * 45].reshape(F - 2, 45)
-        q = np.zeros((F, 45))
+        d0[:-2] += w2  # the [1, -2, 1] weights' squares each frame takes part with
+        d0[1:-1] += 4.0 * w2
+        d0[2:] += w2
+        d1[:-2] -= 2.0 * w2  # residual centred at f + 1: (f, f+1) weights 1 * -2
+        d1[1:-1] -= 2.0 * w2  # centred at f: -2 * 1
+        blocks[2, :-2] = w2 * (jpt[:-2] @ jp[2:])
+        s = pb.acc_weight * lin.r[at:at + (F - 2) * 45].reshape(F - 2, 45)
         q[:-2] += s
         q[1:-1] -= 2.0 * s
         q[2:] += s
-        grad += pb.acc_weight * (jpt @ q[..., None])[..., 0]
         at += (F - 2) * 45
     f, ank = contact_pairs(pb.contact)
     if f.size:
         w2 = pb.contact_weight ** 2
         coord = 3 * ank[:, None] + np.arange(3)
-        a = jp[f[:, None], coord]  # (n, 3, 24) at f
-        b = jp[(f - 1)[:, None], coord]  # at f - 1
-        np.add.at(blocks[0], f, w2 * np.einsum("nci,ncj->nij", a, a))
-        np.add.at(blocks[0], f - 1, w2 * np.einsum("nci,ncj->nij", b, b))
-        np.add.at(blocks[1], f - 1, -w2 * np.einsum("nci,ncj->nij", b, a))
-        s = lin.r[at:at + 3 * f.size].reshape(-1, 3)
-        np.add.at(grad, f, pb.contact_weight * np.einsum("nci,nc->ni", a, s))
-        np.add.at(grad, f - 1, -pb.contact_weight * np.einsum("nci,nc->ni", b, s))
+        s = pb.contact_weight * lin.r[at:at + 3 * f.size].reshape(-1, 3)
+        # (frame, coordinate) pairs are distinct within each line (one pair per frame
+        # and ankle): plain indexed adds
+        d0[f[:, None], coord] += w2
+        d0[f[:, None] - 1, coord] += w2
+        d1[f[:, None] - 1, coord] -= w2
+        q[f[:, None], coord] += s
+        q[f[:, None] - 1, coord] -= s
         at += 3 * f.size
+    blocks[0] = jut @ ju + jpt @ (d0[..., None] * jp)
+    blocks[1, :-1] = jpt[:-1] @ (d1[:-1, :, None] * jp[1:])
+    grad += (jpt @ q[..., None])[..., 0]
     hf, across = heading_rows(pb)
     if hf.size:  # one row per frame f >= 1: across . (pelvis_f - pelvis_{f-1})
         a = pb.heading_weight * np.einsum("nc,nci->ni", across, jp[hf, :3])
@@ -134,11 +136,11 @@ def levenberg_marquardt(problem: Problem, params, *, max_iter: int = 30, rtol: f
         blocks, grad = normal_equations(problem, lin)
         g = grad.reshape(-1)
         g[pin > 0] = 0.0
-        ab = upper_band(blocks)
-        diag = ab[-1].copy()  # (F P,) the normal matrix's diagonal
+        ab = lower_band(blocks)
+        diag = ab[0].copy()  # (F P,) the normal matrix's diagonal
         improved = False
         for _ in range(8):
-            ab[-1] = diag + mu * (diag + 1e-6) + pin
+            ab[0] = diag + mu * (diag + 1e-6) + pin
             step = solve_band(ab, -g)
             if step is None:  # not positive definite: damp more
                 mu *= 10.0
