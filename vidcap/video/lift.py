@@ -42,6 +42,7 @@ from vidcap.body import (
     BodyModel,
     segment_vectors,
 )
+from vidcap.video.quantreg import quantile_fit
 
 #: Segments walked down the tree after the torso is placed: (segment, proximal joint).
 _TORSO_CHAIN = ("torso", "head")
@@ -192,7 +193,8 @@ def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91
     :func:`estimate_scale` is the scale where the chain lies in the image plane and
     less where it is foreshortened or bent, so the scale is its upper ``quantile``
     as a smooth function of time: a quantile regression of its logarithm on
-    quadratic B-splines with a knot every ``window`` frames (a linear programme).
+    quadratic B-splines with a knot every ``window`` frames (a linear programme,
+    solved exactly by :func:`vidcap.video.quantreg.quantile_fit`).
     When that changes by less than ``min_change`` over the clip (a fraction), the
     subject keeps its distance within what the estimate can tell (on fitted joints
     gait and pose move it by up to about 5 %) and the clip's single scale is
@@ -216,9 +218,6 @@ def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91
     float or numpy.ndarray, shape (F,)
         Pixels per metre: one number, or one per frame.
     """
-    from scipy.optimize import linprog
-    from scipy.sparse import eye, hstack
-
     body = body or BodyModel()
     j = _check_joints2d(joints2d)
     single = estimate_scale(j, body, quantile=quantile)
@@ -234,19 +233,32 @@ def estimate_scales(joints2d, body: BodyModel | None = None, *, window: int = 91
     knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
     basis = _bspline_design(t, knots, k)  # (F, n_pieces + 3), sparse
     y = np.log(ratio[good])
-    b = basis[good]
-    n, m = b.shape
-    # min q sum(u+) + (1 - q) sum(u-)  s.t.  B beta + u+ - u- = y,  u+, u- >= 0
-    cost = np.r_[np.zeros(m), np.full(n, quantile), np.full(n, 1.0 - quantile)]
-    a_eq = hstack([b, eye(n), -eye(n)], format="csr")
-    bounds = [(None, None)] * m + [(0.0, None)] * (2 * n)
-    res = linprog(cost, A_eq=a_eq, b_eq=y, bounds=bounds, method="highs")
-    if not res.success:
-        return single
-    s = np.exp(basis @ res.x[:m])
+    b = basis[good].toarray()
+    beta = quantile_fit(b, y, quantile)  # a few ms, exact; no scipy.optimize import
+    if beta is None:
+        beta = _quantile_lp(b, y, quantile)
+        if beta is None:
+            return single
+    s = np.exp(basis @ beta)
     if not np.all(np.isfinite(s) & (s > 0)) or s.max() / s.min() - 1.0 < min_change:
         return single
     return s
+
+
+def _quantile_lp(b, y, quantile: float) -> np.ndarray | None:
+    """The quantile regression of ``y`` (n,) on ``b`` (n, m) as a linear programme
+    (HiGHS), where :func:`vidcap.video.quantreg.quantile_fit` certifies no vertex;
+    None when it fails."""
+    from scipy.optimize import linprog
+    from scipy.sparse import csr_matrix, eye, hstack
+
+    n, m = b.shape
+    # min q sum(u+) + (1 - q) sum(u-)  s.t.  B beta + u+ - u- = y,  u+, u- >= 0
+    cost = np.r_[np.zeros(m), np.full(n, quantile), np.full(n, 1.0 - quantile)]
+    a_eq = hstack([csr_matrix(b), eye(n), -eye(n)], format="csr")
+    bounds = [(None, None)] * m + [(0.0, None)] * (2 * n)
+    res = linprog(cost, A_eq=a_eq, b_eq=y, bounds=bounds, method="highs")
+    return res.x[:m] if res.success else None
 
 
 def depth_magnitudes(joints2d, scale, body: BodyModel | None = None):

@@ -21,7 +21,6 @@ are imported here too, so ``from vidcap.video.pipeline import lift_pose`` keeps 
 from __future__ import annotations
 
 import os
-import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -696,9 +695,6 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
         if frames is None:  # the silhouettes came from the cache: cut the crops now
             frames = _colour_crops(video, masks, progress=progress)
     if streamed is not None:
-        # this process only waits for the workers now: meanwhile, load what the lift
-        # needs (a core is free while the last chunk is fitted)
-        _preload_lift()
         pose = streamed.finish(masks, frames=frames, progress=wrap)
     else:
         pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
@@ -719,24 +715,6 @@ def _colour_crops(video, masks: MaskStack, *, progress):
 
     return crops_from_video(video, masks, progress=lambda it, total: bar(
         it, total=total, desc="colour", unit="frame", enabled=progress))
-
-
-def _preload_lift() -> None:
-    """Import ``scipy.optimize`` (for :func:`vidcap.video.lift.estimate_scales`, ~0.2 s once
-    per process) on a daemon thread; an import error is left to the lift to report.
-
-    Only once this process forks no more workers: a fork must not copy a thread
-    midway through an import.
-    """
-    def load():
-        try:
-            import scipy.optimize  # noqa: F401
-        except Exception:  # noqa: BLE001 - the lift itself reports it
-            pass
-
-    threading.Thread(target=load, name="vidcap-preload", daemon=True).start()
-
-
 
 
 # --------------------------------------------------------------------------- 4. lift, 5. motion
