@@ -99,13 +99,16 @@ def _robust(z, tau2):
     return np.where(x > 1e-12, s, 1.0), np.where(x > 1e-12, g, -0.5 / tau2)
 
 
-def prior_residuals(feats, means, factors, consts, *, jacobian=None):
+def prior_residuals(feats, means, factors, consts, *, jacobian=None, out=None):
     """Residuals (..., 32) of features (..., 27) under the mixture: per chain the
     component nearest in cost (``|W (f - mean)|^2 + const``), its whitened misfit and
     sqrt(const). With ``jacobian`` (F, 27, 24) d(features)/d(params), also returns
-    the residuals' Jacobian (F, 32, 24) (the component held)."""
-    out = np.empty(feats.shape[:-1] + (N_ROWS,))
-    jac = None if jacobian is None else np.zeros((jacobian.shape[0], N_ROWS, jacobian.shape[-1]))
+    the residuals' Jacobian (F, 32, 24) (the component held), written into ``out``
+    (F, 32, 24) when given, whose constants' rows must hold zeros."""
+    res = np.empty(feats.shape[:-1] + (N_ROWS,))
+    jac = None
+    if jacobian is not None:
+        jac = np.zeros((jacobian.shape[0], N_ROWS, jacobian.shape[-1])) if out is None else out
     K = len(means)
     for c, (a, b) in enumerate(CHAINS):
         w = factors[:, a:b, a:b]  # (K, n, n)
@@ -116,7 +119,7 @@ def prior_residuals(feats, means, factors, consts, *, jacobian=None):
             feats.shape[:-1] + (K, b - a)) - wm  # (..., K, n)
         best = np.argmin(np.sum(z * z, -1) + consts[:, c], axis=-1)  # (...)
         zb = np.take_along_axis(z, best[..., None, None], axis=-2)[..., 0, :]
-        out[..., N_FEATURES + c] = np.sqrt(consts[best, c])
+        res[..., N_FEATURES + c] = np.sqrt(consts[best, c])
         jz = None if jac is None else w[best] @ jacobian[:, a:b]
         if ROBUST_TAU2:
             sc, g = _robust(zb, ROBUST_TAU2)
@@ -124,10 +127,10 @@ def prior_residuals(feats, means, factors, consts, *, jacobian=None):
                 jz = sc[:, None, None] * (jz + 2.0 * g[:, None, None] * zb[:, :, None]
                                           * (zb[:, None, :] @ jz))
             zb = zb * sc[..., None]
-        out[..., a:b] = zb
+        res[..., a:b] = zb
         if jac is not None:
             jac[:, a:b] = jz
-    return out if jac is None else (out, jac)
+    return res if jac is None else (res, jac)
 
 
 def _chain_gmm(x, k, rng, iters=60, reg=1e-6):

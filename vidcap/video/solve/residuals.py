@@ -257,9 +257,11 @@ def linearise(problem: Problem, params, *, r=None, unary_rows: int | None = None
         res = unary_from_joints(pb, joints, root, p, excess=excess)
         r, unary_rows = np.concatenate([res.ravel(), temporal(pb, joints)]), res.shape[1]
     ju = np.zeros((F, unary_rows, N_PARAMS))
-    ju[:, :30] = (jk[:, :, :2] * pb.weight[:, :, None, None]).reshape(F, 30, N_PARAMS)
+    # products written straight into ju's rows (one pass, no temporaries)
+    np.multiply(jk[:, :, :2], pb.weight[:, :, None, None],
+                out=ju[:, :30].reshape(F, 15, 2, N_PARAMS))
     n_lim = len(LIMITS)
-    ju[:, 30:30 + n_lim] = jlim * pb.limit_weight
+    np.multiply(jlim, pb.limit_weight, out=ju[:, 30:30 + n_lim])
     dzeta = (jk[:, SEGMENT_JOINTS[:, 1], 2] - jk[:, SEGMENT_JOINTS[:, 0], 2]) \
         / pb.lengths[None, :, None]  # (F, 10, 24)
     zeta = segment_zeta(joints, pb.lengths)
@@ -274,8 +276,9 @@ def linearise(problem: Problem, params, *, r=None, unary_rows: int | None = None
     ju[:, at + 2:at + 12] = pb.plane_weight * dzeta
     if pb.prior_weight:
         _, jp = prior_residuals(features(joints, root, pb.lengths), *load_prior(),
-                                jacobian=feature_jacobian(jk, root, pb.lengths))
-        ju[:, at + 12:] = pb.prior_weight * jp
+                                jacobian=feature_jacobian(jk, root, pb.lengths),
+                                out=ju[:, at + 12:])
+        jp *= pb.prior_weight
     return Linearisation(r, ju, jk.reshape(F, 45, N_PARAMS))
 
 
