@@ -649,10 +649,11 @@ class AnnotateApp:
 
         See :mod:`vidcap.ui.access` for what is refused.
         """
-        from vidcap.ui import access
+        from vidcap.ui import access, closedpages
 
         self._update_flagged()
         access.protect(self.server, token)
+        self.ctrl.on_server_ready.add(lambda **_: closedpages.quiet_closed_pages())
         return self.server.start(host=access.LOOPBACK, port=port, open_browser=False,
                                  timeout=0, show_connection_info=False, **kwargs)
 
