@@ -39,6 +39,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from vidcap.video.gaintable import apply_gain
+
 __all__ = ["CUT_REFLECTIONS", "drop_reflection"]
 
 #: On in :func:`vidcap.video.silhouette.extract_silhouettes` (the benchmark's
@@ -153,7 +155,7 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
 
     def scaled(rows):
         """Plate rows at the frame's exposure."""
-        return rows if scale is None else cv2.multiply(rows, (*scale, 0.0))
+        return rows if scale is None else apply_gain(rows, scale)
 
     def row_level(r0, rows):
         """The summed L1 difference over the mask per row, rows ``r0`` on against the

@@ -33,6 +33,7 @@ from vidcap.errors import VidcapError
 from vidcap.video import reflection
 from vidcap.video.background import BackgroundModel, _threshold_from_sigma
 from vidcap.video.blobholes import open_large_holes
+from vidcap.video.gaintable import apply_gain
 from vidcap.video.masks import MaskStack
 
 __all__ = [
@@ -382,7 +383,7 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
     g = _gain(frame, p)
     scaled = np.abs(g - 1).max() > 0.01
     if scaled:
-        ref = cv2.multiply(p.plate, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+        ref = apply_gain(p.plate, g)
         if p.lit is not None:  # lamps and screens keep their level
             ref[p.lit] = p.plate[p.lit]
     else:
@@ -613,7 +614,7 @@ def _edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Pa
     near = cv2.dilate(m, k)
     ref = p.plate_full[y0:y1, x0:x1]
     if np.abs(g - 1).max() > 0.01:
-        ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+        ref = apply_gain(ref, g)
     kern = _kernels()
     l1 = np.empty(m.shape, np.uint8)
     kern.l1_sum(cv2.absdiff(frame[y0:y1, x0:x1], ref), l1)
@@ -653,7 +654,7 @@ def _refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p: _Params
     band = cv2.subtract(cv2.dilate(m, k), cv2.erode(m, k))
     ref = p.plate_full[y0:y1, x0:x1]
     if np.abs(g - 1).max() > 0.01:
-        ref = cv2.multiply(ref, (float(g[0]), float(g[1]), float(g[2]), 0.0))
+        ref = apply_gain(ref, g)
     if p.edge_luma:
         # Video codecs keep colour at half resolution (4:2:0): a colour edge
         # bleeds a pixel or two into the background, brightness does not.
