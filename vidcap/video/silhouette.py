@@ -4,8 +4,8 @@ The fixed-height normalisation the pose fitter works on (seed 004 section 4.2) i
 :func:`vidcap.video.fit.raster.normalise_mask`, beside the rasteriser that shares its
 coordinate convention.
 
-Per frame: the plate is scaled by the frame's own brightness per channel (slow
-lighting drift), the L1 colour difference ``sum_c |frame_c - plate_c|`` (grey
+Per frame: the plate is scaled by the frame's own brightness per channel (slow lighting
+drift; by table lookup, :mod:`vidcap.video.gaintable`), the L1 colour difference ``sum_c |frame_c - plate_c|`` (grey
 levels, 0..765) is compared with a per-pixel threshold ``max(threshold,
 local_factor * noise_map)``, pixels that are merely darker with the background's
 chromaticity (shadows) are dropped, a 3x3 median removes specks, a closing joins
@@ -15,10 +15,9 @@ followed instead: two people do not trade places). Other person-sized blobs are
 reported, not silently dropped. The person's mirror image in a glossy floor or desk
 below them is cut (:mod:`vidcap.video.reflection`).
 
-All image operations are OpenCV on uint8 or one-pass compiled loops where a run of
-whole-array calls went over the same pixels (:mod:`vidcap.video._silhouette_kernels`:
-the channel sum, the shadow test, the edge band's steps), so a 640x480 frame takes
-~2 ms (~3 with the graph cut) on a 2-core machine.
+All image operations are OpenCV on uint8 or one-pass compiled loops where a run of whole-array
+calls went over the same pixels (:mod:`vidcap.video._silhouette_kernels`: the channel sum, the
+shadow test, the edge band's steps): a 640x480 frame takes ~2 ms (~3 with the graph cut).
 """
 
 from __future__ import annotations
