@@ -5,11 +5,11 @@ The fixed-height normalisation the pose fitter works on (seed 004 section 4.2) i
 coordinate convention.
 
 Per frame: the plate is scaled by the frame's own brightness per channel (slow lighting
-drift; by table lookup, :mod:`vidcap.video.gaintable`), the L1 colour difference ``sum_c |frame_c - plate_c|`` (grey
-levels, 0..765) is compared with a per-pixel threshold ``max(threshold,
-local_factor * noise_map)``, pixels that are merely darker with the background's
-chromaticity (shadows) are dropped, a 3x3 median removes specks, a closing joins
-fragments, and the largest connected blob - holes filled - is the person (from the
+drift; by table lookup, :mod:`vidcap.video.gaintable`), the L1 colour difference
+``sum_c |frame_c - plate_c|`` (grey levels, 0..765) is compared with a per-pixel threshold
+``max(threshold, local_factor * noise_map)``, pixels that are merely darker with the
+background's chromaticity (shadows) are dropped, a 3x3 median removes specks, a closing
+joins fragments, and the largest connected blob - holes filled - is the person (from the
 second frame on, a blob of similar size that overlaps the person's previous box is
 followed instead: two people do not trade places). Other person-sized blobs are
 reported, not silently dropped. The person's mirror image in a glossy floor or desk
