@@ -16,8 +16,8 @@ git); when absent it is made with the reference tool
 ``~/.cache/vidcap-mediapipe-reference``), and the clip is skipped, saying why, when neither
 exists. No clip here chose a threshold of the fit (validation).
 
-Then every clip of ``real_clips.py`` (``$VIDCAP_DATA/video``: onebyone_room's two
-one-person stretches, the three pose2sim_balance cameras, the Sports2D walk and run,
+Then every clip of ``real_clips.py`` (``$VIDCAP_DATA/video``: onebyone_room's six
+one-person visits, the three pose2sim_balance cameras, the Sports2D walk and run,
 the TensorFlow.js squats and dance, mmskeleton's tai chi and clean and jerk) and ido_walk
 again, this time
 through vidcap's own pipeline (silhouettes from the video, the tracked fit, the seed's body:

@@ -36,10 +36,14 @@ ROOT = Path(__file__).resolve().parents[1]
 #: ``VIDCAP_BENCH_CACHE`` names another folder (two settings measured side by side, each
 #: with its own cache).
 CACHE = Path(os.environ.get("VIDCAP_BENCH_CACHE") or ROOT / ".vidcap-cache")
-#: Scored frame ranges [start, stop) per clip, default the whole clip. onebyone_room: the
-#: two visits CLIPS.md names as good one-person stretches (233-445 and 510-694 inclusive:
-#: one man walks in, stands, leaves; the next walks in, stands, leaves).
-STRETCHES = {"onebyone_room": ((233, 446), (510, 695))}
+#: Scored frame ranges [start, stop) per clip, default the whole clip. onebyone_room: its six
+#: visits (``lift_accuracy.ONEBYONE_VISITS``), each one person who walks in from the bottom
+#: edge, stands at the table with their back to the camera and leaves to the right: the
+#: first two scored since session 21 (233-445, 510-694 inclusive, the ones CLIPS.md named),
+#: the other four added in session 28 as validation rows (other people and clothes: a grey
+#: cardigan, black, grey, a grey shirt and jeans), measured on main before any change.
+STRETCHES = {"onebyone_room": ((233, 446), (510, 695), (66, 195), (749, 866), (936, 1196),
+                               (1242, 1358))}
 
 
 @dataclass

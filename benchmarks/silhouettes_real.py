@@ -87,7 +87,7 @@ Clips:
   no benchmark had used, over the three plates (same folder, same conversion). 05_19
   3/4 back is tuning since the hall helper looked at it (vidcap.video.passedby).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
-  the pose2sim balance trial seen by three cameras, two visits of onebyone_room, the
+  the pose2sim balance trial seen by three cameras, the six visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
   pose2d_real.py and lift_accuracy.py's real table): every column is scored against
   MediaPipe's person masks instead of a truth ("vs MediaPipe" in the name), so the
