@@ -37,7 +37,10 @@ Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [-
 [--only NAME] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]
 [--passed-by | --no-passed-by]`` (``--only``: just
 the clips whose name contains NAME; ``--rows``: the pipeline table's row kinds, of outline,
-all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six); ``--human``:
+all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six), and
+``human-kK`` (the pipeline's silhouettes fitted again, serially, with the human body as a
+camera of perspective K draws it: :mod:`vidcap.video.fit.perspective`; ``human-k0`` the same
+fit unwarped); ``--human``:
 the first table with ``proportions='human'``;
 ``--graph-cut``: the pipeline rows' silhouettes with or without the graph cut, default
 ``vidcap.video.pipeline.DEFAULT_GRAPH_CUT``; ``benchmarks/cut_fit.py`` compares the two;

@@ -143,6 +143,8 @@ def _joints(clip: RealClip, row: str):
 
     base = row.removesuffix("+solve")
     hidden = "fit" if base == row else "solve"
+    if base.startswith("human-k"):
+        return _fit_with_perspective(clip, float(base.removeprefix("human-k")))
     human = base in ("human", "all-human", "mp-human")
     if not base.startswith("mp-"):
         cues = "all" if base in ("all", "all-human") else "outline"
@@ -155,6 +157,21 @@ def _joints(clip: RealClip, row: str):
     return solve_hidden(pose.joints2d, fps=info.fps,
                         body=human_proportions().body() if human else None, spread=pose.spread,
                         model_height=pose.model_height, frame_size=(info.width, info.height))
+
+
+def _fit_with_perspective(clip: RealClip, k: float) -> np.ndarray:
+    """Row ``human-kK``: the pipeline's silhouettes over ``clip``'s range fitted again
+    (tracked, outline, one process) with the ``human`` body as a camera of perspective
+    ``K`` draws it (:func:`vidcap.video.fit.perspective.perspective_factors`; ``human-k0``:
+    the same serial fit without the warp, the fair comparison). (F, 15, 2) joints."""
+    from vidcap.video.fit.perspective import perspective_factors
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions
+    from vidcap.video.fit.tracking import fit_sequence
+
+    masks = stretch(np.asarray(pipeline_result(clip.video, "outline", proportions="human").masks),
+                    clip)
+    factors = perspective_factors(human_proportions().factors, k)
+    return fit_sequence(masks, cues="outline", **fit_keywords(factors)).joints2d
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,

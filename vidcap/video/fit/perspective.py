@@ -1,0 +1,146 @@
+"""A high (or low) camera's perspective on a standing body, as one number k.
+
+The 2D fit draws the body model by a scaled orthographic projection: every height of the
+body is shrunk alike. A camera above the subject, looking down, is nearer the head than
+the feet, so the upper body comes out larger than the lower: on onebyone_room (a camera
+~2.5 m up) the fit with a real adult's proportions put the shoulders and hips 6-10 % of
+the height above MediaPipe's and the ankles below (benchmarks/RESULTS.md, 2D pose, Real
+video).
+
+A vertical body whose point at height fraction u (0 at the head's top, 1 at the soles)
+lies at depth ``Z(u)`` along the optical axis, linear in u, is imaged at
+
+    g(u) = u (1 + k) / (1 + k u),    1 + k = Z(1) / Z(0),
+
+of its image height (both ends fixed): k is the feet's depth over the head's, less one
+(0 for a level camera, > 0 for a camera above, < 0 below). For a camera at height h_c,
+the subject at horizontal distance D, pitched down by theta,
+``k = H sin(theta) / (D cos(theta) + (h_c - H) sin(theta))``.
+
+:func:`perspective_factors` warps a body's segment lengths by g (what the fit should draw
+for such a camera); :func:`perspective_k` gives k from the camera's height and distance.
+Not yet an option of ``vidcap convert``: ``benchmarks/pose2d_real.py --rows human-k0.35``
+measures it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from vidcap.body import SEGMENT_INDEX, SEGMENTS
+
+__all__ = ["perspective_factors", "perspective_k", "warp_height"]
+
+#: The factor key of the ankles' height above the soles (as in
+#: :data:`vidcap.video.fit.proportions.FOOT`; repeated to keep this module free of the fit).
+_FOOT = "above_feet"
+#: Length groups along the standing body, head to feet, and along a hanging arm.
+_TRUNK = ("head", "torso", "upper_legs", "lower_legs")
+_ARM = ("upper_arms", "lower_arms")
+#: The segment each group's seed ratio is read from.
+_SEGMENT = {"head": "head", "torso": "torso", "upper_legs": "l_upper_leg",
+            "lower_legs": "l_lower_leg", "upper_arms": "l_upper_arm",
+            "lower_arms": "l_lower_arm"}
+
+
+def perspective_k(camera_height: float, distance: float, subject_height: float = 1.75,
+                  pitch_deg: float | None = None) -> float:
+    """k of a camera at ``camera_height`` metres, ``distance`` metres from the subject.
+
+    Parameters
+    ----------
+    camera_height : float
+        The lens above the floor, metres.
+    distance : float
+        Horizontal distance from the camera to the subject, metres (> 0).
+    subject_height : float
+        The subject's standing height H, metres.
+    pitch_deg : float, optional
+        The camera's downward tilt, degrees; default: aimed at the subject's middle
+        (``atan((camera_height - H / 2) / distance)``).
+
+    Returns
+    -------
+    float
+        k (dimensionless), 0 for a camera at mid-height looking level.
+
+    Raises
+    ------
+    ValueError
+        When the head or the feet would be behind the camera.
+
+    Examples
+    --------
+    >>> round(perspective_k(0.875, 3.0), 6)  # at mid-height, level
+    0.0
+    >>> round(perspective_k(2.5, 3.0, pitch_deg=35.0), 3)  # onebyone_room's room
+    0.348
+    """
+    if not (distance > 0 and subject_height > 0):
+        raise ValueError("distance and subject_height must be positive metres")
+    if pitch_deg is None:
+        theta = math.atan2(camera_height - subject_height / 2, distance)
+    else:
+        theta = math.radians(pitch_deg)
+    z_head = distance * math.cos(theta) + (camera_height - subject_height) * math.sin(theta)
+    z_feet = distance * math.cos(theta) + camera_height * math.sin(theta)
+    if z_head <= 0 or z_feet <= 0:
+        raise ValueError("the subject is not in front of the camera at this height, "
+                         "distance and tilt")
+    return z_feet / z_head - 1.0
+
+
+def warp_height(u, k: float):
+    """g(u) = u (1 + k) / (1 + k u): where height fraction ``u`` (0 head top, 1 soles;
+    scalar or array) is imaged, as a fraction of the body's image height."""
+    return u * (1.0 + k) / (1.0 + k * u)
+
+
+def perspective_factors(factors: dict, k: float) -> dict:
+    """The length factors of a body (:func:`vidcap.body.body_with_proportions`' groups, and
+    the ankles' height ``above_feet`` when given) as a camera with perspective ``k`` draws
+    them: each segment of the standing body, arms hanging, stretched or shrunk by the
+    mean slope of g over its span. Widths and other keys are kept.
+
+    Parameters
+    ----------
+    factors : dict
+        Length factors on the seed's ratios by group (``head``, ``torso``, ``upper_legs``,
+        ``lower_legs``, ``upper_arms``, ``lower_arms``; missing: 1) and, optionally,
+        ``above_feet`` (the share of the stature above the ankles; missing: 1).
+    k : float
+        The perspective (:func:`perspective_k`); 0 returns the factors unchanged.
+
+    Returns
+    -------
+    dict
+        The warped factors (``above_feet`` present when it was).
+
+    Examples
+    --------
+    >>> f = perspective_factors({"head": 1.0, "lower_legs": 1.0}, 0.35)
+    >>> f["head"] > 1.0 > f["lower_legs"]
+    True
+    """
+    out = dict(factors)
+    if k == 0:
+        return out
+    length = {g: factors.get(g, 1.0) * SEGMENTS[SEGMENT_INDEX[_SEGMENT[g]]].length_ratio
+              for g in (*_TRUNK, *_ARM)}
+    chain = sum(length[g] for g in _TRUNK)
+    stature = chain / factors.get(_FOOT, 1.0)
+    u = 0.0
+    for g in _TRUNK:  # head top to ankles
+        u1 = u + length[g] / stature
+        out[g] = factors.get(g, 1.0) * (warp_height(u1, k) - warp_height(u, k)) / (u1 - u)
+        if g == "head":
+            shoulder = u1
+        u = u1
+    u = shoulder
+    for g in _ARM:  # a hanging arm, shoulder to wrist
+        u1 = u + length[g] / stature
+        out[g] = factors.get(g, 1.0) * (warp_height(u1, k) - warp_height(u, k)) / (u1 - u)
+        u = u1
+    if _FOOT in factors:
+        out[_FOOT] = float(warp_height(factors[_FOOT], k))
+    return out
