@@ -60,10 +60,19 @@ proportions (same run), the tuning and validation rows' means per body. Errors a
 fractions of the true standing height in pixels. ``--jobs N`` computes rows on N
 processes; ``--proportion-bodies A,seed`` only some bodies.
 
+``--perturb`` (issues 26 and 27) measures the fit's swing on small mask changes: the
+tracked fit (outline only) on the true masks, on the masks eroded and dilated by one pixel
+(3x3 cross) and with a quarter of the pixels either side of the outline flipped (two seeded
+draws): PCK@0.05 of each, their spread (max - min) and mean change, and the share of joints
+the changes moved more than 5 % of the height. Clips: the ``--motions`` / ``--yaws`` ones
+(``--frames``; 0: none) and, with ``VIDCAP_DATA``, the renders of ``silhouettes_real.py``
+marked ``--perturb-renders`` (tuning, the default, or validation; cached there by that
+benchmark).
+
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
 [--proportions] [--torso] [--views side,three-quarter,front] [--save OUT.npz] [--predict]
-[--hidden fit|solve]``
+[--hidden fit|solve] [--perturb [--perturb-renders tuning|validation|none]]``
 """
 
 from __future__ import annotations
@@ -596,6 +605,103 @@ def _print_proportion_rows(keys, results) -> list:
     return table
 
 
+#: ``--perturb``'s mask changes: the true masks, eroded and dilated by one pixel (3x3
+#: cross), and two seeded draws of boundary noise (:func:`perturb_masks`).
+PERTURBATIONS = ("true", "erode", "dilate", "edge0", "edge1")
+
+
+def perturb_masks(masks: np.ndarray, how: str, share: float = 0.25) -> np.ndarray:
+    """``masks`` (F, H, W) changed by one pixel at the outline: ``'true'`` as they are,
+    ``'erode'`` / ``'dilate'`` by a 3x3 cross, ``'edgeN'`` with a ``share`` of the
+    pixels on either side of the outline (those the cross would erode or add) flipped,
+    drawn by ``numpy.random.default_rng(N)``."""
+    import cv2
+
+    if how == "true":
+        return np.asarray(masks, bool)
+    cross = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+    m8 = np.asarray(masks, np.uint8)
+    eroded = np.stack([cv2.erode(m, cross) for m in m8]).astype(bool)
+    dilated = np.stack([cv2.dilate(m, cross) for m in m8]).astype(bool)
+    if how == "erode":
+        return eroded
+    if how == "dilate":
+        return dilated
+    rng = np.random.default_rng(int(how[4:]))
+    flip = (dilated & ~eroded) & (rng.random(m8.shape) < share)
+    return np.asarray(masks, bool) ^ flip
+
+
+def perturb_renders(use: str = "tuning"):
+    """``--perturb``'s renders: ``(label, masks, joints2d)`` of every render of
+    ``silhouettes_real.py`` marked ``use`` ('tuning' or 'validation') whose truth that
+    benchmark has cached under ``$VIDCAP_DATA/sil/renders`` (with joints); none without
+    ``VIDCAP_DATA``."""
+    import os
+
+    data = os.environ.get("VIDCAP_DATA")
+    if not data:
+        return
+    import silhouettes_real as sr
+
+    for name, _, _, _, row_use in sr.RENDERS:
+        stem = name.replace(" / ", "_").replace(" ", "_").replace("/", "-")
+        path = Path(data) / "sil" / "renders" / f"{stem}_truth.npz"
+        if row_use != use or not path.exists():
+            continue
+        got = np.load(path)
+        if "joints2d" in got:
+            yield name.split(" / ")[0], got["masks"], got["joints2d"]
+
+
+def perturbed(frames: int = 60, motions=("131_01", "07_07"), yaws=(90.0, 45.0, 0.0),
+              renders: str | None = "tuning") -> int:
+    """The ``--perturb`` table: the tracked fit (outline only, as ``silhouettes_real.py
+    --pck`` runs it) on each clip's true masks and on the same masks changed by one pixel
+    at the outline (:data:`PERTURBATIONS`): PCK@0.05 of each, their spread (max - min,
+    points), "dev" (the mean |PCK change| of the changed masks, points) and "moved": the
+    share of joints (pairs matched per frame) more than 5 % of the height from where the
+    fit on the true masks put them, over the changed masks. Clips: ``motions`` at
+    ``yaws`` (``frames`` frames, rendered here; none when ``frames`` is 0) and, with
+    ``VIDCAP_DATA`` set, the ``renders`` rows of ``silhouettes_real.py`` (all their
+    frames, :func:`perturb_renders`; None: none)."""
+    from vidcap.synth import render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
+
+    clips = []
+    for name in motions if frames else ():
+        motion = load_motion(name, frames)
+        motion = motion.frames(0, min(frames, len(motion.root_positions)))
+        for yaw in yaws:
+            _, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                   rng=np.random.default_rng(0))
+            clips.append((f"{name} {yaw:g}", truth["masks"], truth["joints2d"]))
+    clips.extend(perturb_renders(renders) if renders else ())
+    print("Tracked 2D fit (outline) on true masks changed by one pixel at the outline: "
+          "PCK@0.05 per mask, spread and dev (points), moved (share of joints > 5 % of the "
+          f"height from the fit on the true masks); renders: {renders}")
+    print(f"{'clip':24} " + " ".join(f"{p:>7}" for p in PERTURBATIONS)
+          + f" {'spread':>7} {'dev':>5} {'moved':>6}")
+    rows = []
+    for label, masks, tj in clips:
+        hpx = body_height_px(tj)[:, None]
+        pck, fits = [], []
+        for how in PERTURBATIONS:
+            joints = fit_sequence(perturb_masks(masks, how), cues="outline").joints2d
+            err, _ = side_agnostic_errors(joints, tj)
+            pck.append(summarise(err / hpx)["pck05"])
+            fits.append(joints)
+        moved = np.mean([np.nanmean(side_agnostic_errors(f, fits[0])[0] / hpx > 0.05)
+                         for f in fits[1:]])
+        dev = 100 * np.mean(np.abs(np.subtract(pck[1:], pck[0])))
+        rows.append((*pck, 100 * (max(pck) - min(pck)), dev, moved))
+        print(f"{label[:24]:24} " + " ".join(f"{v:7.1%}" for v in pck)
+              + f" {rows[-1][-3]:7.1f} {dev:5.1f} {moved:6.1%}", flush=True)
+    mean = np.mean(rows, axis=0)
+    print(f"{'mean':24} " + " ".join(f"{v:7.2%}" for v in mean[:-3])
+          + f" {mean[-3]:7.2f} {mean[-2]:5.2f} {mean[-1]:6.2%}   ({len(rows)} clips)")
+    return 0
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--frames", type=int, default=60, help="frames per clip (30 fps)")
@@ -644,7 +750,18 @@ def main(argv=None) -> int:
                     help="--bodies: every n-th held-out clip only (a quicker subset)")
     ap.add_argument("--torso", action="store_true",
                     help="held-out clips, outline only: PCK and the torso angle's error")
+    ap.add_argument("--perturb", action="store_true",
+                    help="the tracked fit's swing on the true masks changed by one pixel "
+                         "(the --motions/--yaws clips and, with VIDCAP_DATA, tuning renders)")
+    ap.add_argument("--perturb-renders", choices=("tuning", "validation", "none"),
+                    default="tuning",
+                    help="--perturb: which renders of silhouettes_real.py (with VIDCAP_DATA; "
+                         "default tuning); --frames 0 leaves out the --motions clips")
     args = ap.parse_args(argv)
+    if args.perturb:
+        return perturbed(args.frames, tuple(args.motions.split(",")),
+                         tuple(map(float, args.yaws.split(","))),
+                         None if args.perturb_renders == "none" else args.perturb_renders)
     if args.torso:
         return torso_table(args.frames)
     if args.bodies:
