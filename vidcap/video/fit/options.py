@@ -42,6 +42,12 @@ class FitOptions:
         A warm fit below ``fallback`` times the previous frame's S is redone fresh.
     warm_step_deg : float
         First step of a warm angle search, degrees (> 0).
+    polish : bool
+        A fresh fit that challenges a track is first refined by the tracked frame's
+        searches started from it (:func:`vidcap.video.fit.frame.polished`), so it meets
+        the track refined as the track is. Off by default: it steadied the fit on
+        one-pixel mask changes and lifted the held-out side views 83.7 -> 85.3 %, but
+        lost the three-quarter views 87.6 -> 86.6 and the mean (benchmarks/HISTORY.md).
     spread_value : float or None
         Fix the spread at this value in [0, 1] (no search).
     body_height : float or None
@@ -67,6 +73,7 @@ class FitOptions:
     warm_threshold: float = 0.55
     fallback: float = FALLBACK
     warm_step_deg: float = 2.0
+    polish: bool = False
     arm_grid: bool = True
     arm_pairs: bool = True
     leg_grid: bool = True

@@ -49,7 +49,7 @@ import numpy as np
 from vidcap.video.fit.cueframes import FrameCrops, as_frame_crops
 from vidcap.video.fit.labels import LIMB_PAIRS
 from vidcap.video.fit.result import Pose2D
-from vidcap.video.fit.tracking import fit_sequence, sequence_colours
+from vidcap.video.fit.tracking import REINIT_EVERY, fit_sequence, sequence_colours
 from vidcap.video.masks import MaskStack, mask_frames
 
 #: Most worker processes :func:`default_jobs` picks.
@@ -539,7 +539,7 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
 
 def _bounds(n, jobs, tracked, overlap, min_chunk, per_job, kw):
     """:func:`chunk_bounds` as :func:`fit_sequence_chunked` calls it."""
-    align = int(kw.get("reinit_every", 10)) or 1
+    align = int(kw.get("reinit_every", REINIT_EVERY)) or 1
     return chunk_bounds(n, jobs, overlap=overlap if tracked else 0, align=align,
                         min_chunk=min_chunk, per_job=per_job)
 

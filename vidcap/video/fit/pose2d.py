@@ -107,9 +107,11 @@ Beyond the seed:
   :func:`vidcap.video.fit.moves.search_group`). Limbs then keep their labels through crossings. A
   warm fit losing more than 3 % of the previous frame's S is redone from scratch
   and the better kept, and 10 frames after the last fresh fit another one challenges
-  the track (so a wrong but stable track is left). In a side view (spread < 0.3) a fresh fit that
-  takes over keeps the track's limb names (:func:`vidcap.video.fit.labels.keep_labels`): its
-  image-side names would swap the legs against the frames before after every crossing.
+  the track (so a wrong but stable track is left;
+  :data:`vidcap.video.fit.tracking.REINIT_EVERY`). In a side view (spread < 0.3)
+  a fresh fit that takes over keeps the track's limb names
+  (:func:`vidcap.video.fit.labels.keep_labels`): its image-side names would swap the
+  legs against the frames before after every crossing.
   With the hips apart (spread >= 0.4) a tracked frame also tries its legs exchanged
   between the hips (or the ankles, or the knees) and keeps what fits best by S and by
   where the last two frames' knees and ankles were heading, forward and then backward

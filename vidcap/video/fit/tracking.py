@@ -51,6 +51,18 @@ PREDICTED_SEGMENTS = tuple(SEGMENT_INDEX[f"{s}_{p}_leg"] for s in "lr"
 #: by PCK on 59 of 71 frames, the worse on 8 (HISTORY.md). A shorter silhouette (a
 #: crouch) keeps the plain comparison: there the refit was the worse more often.
 TALLER_TIE = 0.1
+#: :func:`fit_sequence`'s ``reinit_every``: a fresh fit challenges the track this many
+#: frames after the last one. A track once formed is held until a fresh fit beats it, so
+#: which of two nearly equal tracks a clip keeps hangs on single frames: the true masks
+#: eroded or dilated by one pixel moved the fit's PCK@0.05 by up to 16 points on a tuning
+#: render (``pose2d_accuracy.py --perturb``). Every 5 frames steadied the fit on the
+#: renders (over 24 tuning and 26 validation renders of ``silhouettes_real.py`` the PCK
+#: spread over the true masks and four one-pixel changes 6.3 -> 5.4 and 6.5 -> 5.7 points)
+#: and lifted the held-out renders 88.28 -> 88.59 %, but lost on the real clips
+#: (``pose2d_real.py --no-all``, the human body's validation clips 7.30 -> 7.67 % of the
+#: height, mmskeleton_clean_jerk 13.7 -> 16.0) and cost ~0.6 ms a frame: 10 stays
+#: (benchmarks/HISTORY.md).
+REINIT_EVERY = 10
 
 
 def predicted_start(prev: FramePose, before: FramePose | None,
@@ -94,7 +106,7 @@ def predicted_start(prev: FramePose, before: FramePose | None,
 
 
 def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = True,
-                 progress=None, reinit_every: int = 10, spread_window: int = 31,
+                 progress=None, reinit_every: int = REINIT_EVERY, spread_window: int = 31,
                  spread_jump: float = 0.25, spread_tie: float = 0.01,
                  back_tie: float | None = 0.002, body_window: int = 91,
                  body_tolerance: float = 0.05, body_backward: bool = True,
@@ -665,5 +677,5 @@ def _smooth_spread(masks, window, jump, tie, options: FitOptions, body, out: _Fr
             refitted = k
 
 
-__all__ = ["PREDICTED_SEGMENTS", "body_heights", "fit_sequence", "predicted_start",
+__all__ = ["PREDICTED_SEGMENTS", "REINIT_EVERY", "body_heights", "fit_sequence", "predicted_start",
            "sequence_colours", "standing_heights"]
