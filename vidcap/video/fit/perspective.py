@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from vidcap.body import SEGMENT_INDEX, SEGMENTS
 
 __all__ = ["perspective_factors", "perspective_k", "warp_height"]
@@ -127,20 +129,15 @@ def perspective_factors(factors: dict, k: float) -> dict:
         return out
     length = {g: factors.get(g, 1.0) * SEGMENTS[SEGMENT_INDEX[_SEGMENT[g]]].length_ratio
               for g in (*_TRUNK, *_ARM)}
-    chain = sum(length[g] for g in _TRUNK)
-    stature = chain / factors.get(_FOOT, 1.0)
-    u = 0.0
-    for g in _TRUNK:  # head top to ankles
-        u1 = u + length[g] / stature
-        out[g] = factors.get(g, 1.0) * (warp_height(u1, k) - warp_height(u, k)) / (u1 - u)
-        if g == "head":
-            shoulder = u1
-        u = u1
-    u = shoulder
-    for g in _ARM:  # a hanging arm, shoulder to wrist
-        u1 = u + length[g] / stature
-        out[g] = factors.get(g, 1.0) * (warp_height(u1, k) - warp_height(u, k)) / (u1 - u)
-        u = u1
+    stature = sum(length[g] for g in _TRUNK) / factors.get(_FOOT, 1.0)
+    # each chain's joints as height fractions from the head's top: head top to ankles,
+    # and a hanging arm from the shoulder (the head's lower end)
+    for chain, top in ((_TRUNK, 0.0), (_ARM, length["head"] / stature)):
+        ends = top + np.cumsum([length[g] / stature for g in chain])
+        starts = np.concatenate(([top], ends[:-1]))
+        for g, u0, u1 in zip(chain, starts, ends, strict=True):
+            slope = (warp_height(u1, k) - warp_height(u0, k)) / (u1 - u0)
+            out[g] = factors.get(g, 1.0) * float(slope)
     if _FOOT in factors:
         out[_FOOT] = float(warp_height(factors[_FOOT], k))
     return out
