@@ -4,17 +4,21 @@ When the user closes the tab (or reloads it) while the annotate server is still 
 a frame, wslink's send task fails with a connection reset; asyncio would print that
 unretrieved exception with a traceback into the user's terminal, as if something had
 broken. Nothing has: the annotations are saved on every edit, not on send. So the
-server's event loop drops connection resets and hands everything else to the usual
-handler.
+server's event loop drops those errors (:data:`CLOSED_PAGE_ERRORS`) and hands everything
+else to the usual handler.
 """
 
 from __future__ import annotations
 
 import asyncio
 
+#: What writing to a page the browser has closed raises, as the socket goes (aiohttp's
+#: ``ClientConnectionResetError`` is a ``ConnectionResetError``).
+CLOSED_PAGE_ERRORS = (ConnectionResetError, ConnectionAbortedError, BrokenPipeError)
+
 
 def _is_closed_page(context: dict) -> bool:
-    return isinstance(context.get("exception"), ConnectionResetError)
+    return isinstance(context.get("exception"), CLOSED_PAGE_ERRORS)
 
 
 def quiet_closed_pages(loop: asyncio.AbstractEventLoop | None = None) -> None:

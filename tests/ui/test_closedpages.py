@@ -27,9 +27,12 @@ def _run_unretrieved(exc: BaseException) -> None:
     asyncio.run(main())
 
 
-def test_reset_connection_is_quiet(caplog):
+@pytest.mark.parametrize("exc", [ClientConnectionResetError("Cannot write to closing transport"),
+                                 BrokenPipeError(32, "Broken pipe"),
+                                 ConnectionAbortedError(103, "Software caused connection abort")])
+def test_closed_page_is_quiet(caplog, exc):
     with caplog.at_level(logging.ERROR, logger="asyncio"):
-        _run_unretrieved(ClientConnectionResetError("Cannot write to closing transport"))
+        _run_unretrieved(exc)
         import gc
 
         gc.collect()
