@@ -29,20 +29,14 @@ import math
 
 import numpy as np
 
-from vidcap.body import SEGMENT_INDEX, SEGMENTS
+from vidcap.body import PROPORTION_GROUPS, SEGMENT_INDEX, SEGMENTS
+from vidcap.video.fit.proportions import FOOT
 
 __all__ = ["perspective_factors", "perspective_k", "warp_height"]
 
-#: The factor key of the ankles' height above the soles (as in
-#: :data:`vidcap.video.fit.proportions.FOOT`; repeated to keep this module free of the fit).
-_FOOT = "above_feet"
 #: Length groups along the standing body, head to feet, and along a hanging arm.
 _TRUNK = ("head", "torso", "upper_legs", "lower_legs")
 _ARM = ("upper_arms", "lower_arms")
-#: The segment each group's seed ratio is read from.
-_SEGMENT = {"head": "head", "torso": "torso", "upper_legs": "l_upper_leg",
-            "lower_legs": "l_lower_leg", "upper_arms": "l_upper_arm",
-            "lower_arms": "l_lower_arm"}
 
 
 def perspective_k(camera_height: float, distance: float, subject_height: float = 1.75,
@@ -127,9 +121,9 @@ def perspective_factors(factors: dict, k: float) -> dict:
     out = dict(factors)
     if k == 0:
         return out
-    length = {g: factors.get(g, 1.0) * SEGMENTS[SEGMENT_INDEX[_SEGMENT[g]]].length_ratio
+    length = {g: factors.get(g, 1.0) * SEGMENTS[SEGMENT_INDEX[PROPORTION_GROUPS[g][0]]].length_ratio
               for g in (*_TRUNK, *_ARM)}
-    stature = sum(length[g] for g in _TRUNK) / factors.get(_FOOT, 1.0)
+    stature = sum(length[g] for g in _TRUNK) / factors.get(FOOT, 1.0)
     # each chain's joints as height fractions from the head's top: head top to ankles,
     # and a hanging arm from the shoulder (the head's lower end)
     for chain, top in ((_TRUNK, 0.0), (_ARM, length["head"] / stature)):
@@ -138,6 +132,6 @@ def perspective_factors(factors: dict, k: float) -> dict:
         for g, u0, u1 in zip(chain, starts, ends, strict=True):
             slope = (warp_height(u1, k) - warp_height(u0, k)) / (u1 - u0)
             out[g] = factors.get(g, 1.0) * float(slope)
-    if _FOOT in factors:
-        out[_FOOT] = float(warp_height(factors[_FOOT], k))
+    if FOOT in factors:
+        out[FOOT] = float(warp_height(factors[FOOT], k))
     return out
