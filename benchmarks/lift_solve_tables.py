@@ -46,16 +46,25 @@ def mpjpe_mm(pred, true) -> float:
 def pa_mpjpe_mm(pred, true) -> float:
     """Mean error of the 12 limb joints after a per-frame similarity alignment (rotation
     without reflection, scale, translation; Umeyama), mm."""
-    a = pred[:, LIMB_JOINTS] - pred[:, LIMB_JOINTS].mean(1, keepdims=True)
-    b = true[:, LIMB_JOINTS] - true[:, LIMB_JOINTS].mean(1, keepdims=True)
-    u, s, vt = np.linalg.svd(np.swapaxes(a, 1, 2) @ b)
+    return float(pa_joint_errors(pred, true).mean() * 1e3)
+
+
+def pa_joint_errors(pred, true) -> np.ndarray:
+    """Error (..., F, 12) of each of the 12 limb joints, metres, after each frame's
+    similarity alignment of ``pred`` (..., F, 15, 3) on ``true`` (F, 15, 3) (rotation
+    without reflection, scale, translation; Umeyama); leading axes of ``pred`` are
+    alternatives of the same frames."""
+    a = pred[..., LIMB_JOINTS, :] - pred[..., LIMB_JOINTS, :].mean(-2, keepdims=True)
+    b = true[..., LIMB_JOINTS, :] - true[..., LIMB_JOINTS, :].mean(-2, keepdims=True)
+    b = np.broadcast_to(b, a.shape)
+    u, s, vt = np.linalg.svd(np.swapaxes(a, -1, -2) @ b)
     d = np.sign(np.linalg.det(u @ vt))
-    fix = np.ones((len(a), 3))
-    fix[:, 2] = d
-    rot = u @ (fix[:, :, None] * vt)
-    scale = (s * fix).sum(1) / (a ** 2).sum(axis=(1, 2))
-    aligned = scale[:, None, None] * a @ rot
-    return float(np.linalg.norm(aligned - b, axis=-1).mean() * 1e3)
+    fix = np.ones(d.shape + (3,))
+    fix[..., 2] = d
+    rot = u @ (fix[..., :, None] * vt)
+    scale = (s * fix).sum(-1) / (a ** 2).sum(axis=(-1, -2))
+    aligned = scale[..., None, None] * a @ rot
+    return np.linalg.norm(aligned - b, axis=-1)
 
 
 def true_planted(true3, fps) -> np.ndarray:

@@ -26,7 +26,10 @@ truth's names.
 
 Run:  python benchmarks/solve_fitted.py [--tuning-only] [--method solve|segment] [--front]
                                         [--legs] [--labels] [--attribute [--joints]]
-                                        [--consistent-names]
+                                        [--consistent-names] [--split]
+
+``--split`` (:mod:`solve_error_split`): where the error lives, frame by frame (the
+frames banded by their worst 2D joint, the best reflection, the grossly wrong joints).
 
 ``--legs``: the colour frame's limb order (:mod:`vidcap.video.legorder`) names the arms
 and legs (tuning: the renders and the samples, as for ``--front``).
@@ -249,10 +252,11 @@ def evaluate(clips, body, method="solve", near=None, legs=None):
     return rows
 
 
-def attribute(clips, body, limbs=False, joints=False):
+def attribute(clips, body, limbs=False, joints=False, split=False):
     """Print the oracle attribution table (:mod:`solve_attribution`); with ``limbs`` the
     limb-order cue on too; with ``joints`` the table by limb instead
-    (:func:`solve_attribution.joint_rows`)."""
+    (:func:`solve_attribution.joint_rows`); with ``split`` the error by frame band
+    (:mod:`solve_error_split`)."""
     import solve_attribution as sa
 
     from vidcap.video.pipeline import colour_cues
@@ -265,6 +269,13 @@ def attribute(clips, body, limbs=False, joints=False):
         return {"near_side": near, "limb_order": order}
 
     cues = "front/back and limb-order cues" if limbs else "front/back cue"
+    if split:
+        import solve_error_split as se
+
+        print(f"Where the error lives ({cues} on): frames by their worst limb joint's "
+              "2D error (% of height)")
+        se.print_split([se.split_row(name, c, body, near_fn) for name, c in clips])
+        return 0
     if joints:
         print(f"PA-MPJPE mm, the 3D stage ({cues} on) with the truth of one limb group, or "
               f"the 2D joints more than a share of the height off weighted "
@@ -303,6 +314,9 @@ def main(argv=None):
     ap.add_argument("--joints", action="store_true",
                     help="with --attribute: by limb (the arms' or legs' true 2D or signs) "
                          "and the ceiling of a per-joint confidence (bad 2D joints dropped)")
+    ap.add_argument("--split", action="store_true",
+                    help="where the error lives: frames by their worst 2D joint, the best "
+                         "reflection, the grossly wrong joints (solve_error_split.py)")
     st.add_front_options(ap)
     args = ap.parse_args(argv)
     st.apply_front_options(args)
@@ -318,8 +332,8 @@ def main(argv=None):
         import vidcap.video.lifting as lifting
 
         lifting.CONSISTENT_NAMES = True
-    if args.attribute:
-        return attribute(clips, body, limbs=args.legs, joints=args.joints)
+    if args.attribute or args.split:
+        return attribute(clips, body, limbs=args.legs, joints=args.joints, split=args.split)
     near = near_sides(clips, body) if args.front else None
     legs = limb_orders(clips, body) if args.legs else None
     rows = evaluate(clips, body, args.method, near, legs)
