@@ -379,6 +379,9 @@ def main(argv=None):
     ap.add_argument("--consistent-names", action="store_true",
                     help="with --solve: the 3D stage repairs the 2D fit's limb names "
                          "(vidcap.video.lifting.CONSISTENT_NAMES, off by default)")
+    ap.add_argument("--real-proportions", choices=("human", "seed"), default="human",
+                    help="with --solve: the real clips' body the pipeline fits and lifts (vidcap "
+                         "convert's --proportions; default human, as convert)")
     ap.add_argument("--only", metavar="NAME",
                     help="with --solve --real-only: just the real clips whose name contains NAME")
     ap.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
@@ -403,9 +406,10 @@ def main(argv=None):
 
         lifting.CONSISTENT_NAMES = True
     if args.solve and args.real_only:
-        return _real_table(st, body, args.only)
+        return _real_table(st, args.real_proportions, args.only)
     if args.solve:
-        return solve_tables(args.frames, body, renders=not args.no_renders)
+        return solve_tables(args.frames, body, renders=not args.no_renders,
+                            real_proportions=args.real_proportions)
     motions = {
         "131_01.bvh": dict(name_or_path=DATA / "131_01.bvh", frame_range=(200, None)),
         "07_07.amc": dict(name_or_path=DATA / "07.asf", amc=DATA / "07_07.amc"),
@@ -531,8 +535,9 @@ def _sample_clips(body):
     return out
 
 
-def solve_tables(frames, body, *, renders=True):
-    """The ``--solve`` tables (see benchmarks/lift_solve_tables.py)."""
+def solve_tables(frames, body, *, renders=True, real_proportions="human"):
+    """The ``--solve`` tables (see benchmarks/lift_solve_tables.py); the real clips' pipeline
+    fits and lifts the ``real_proportions`` body."""
     import lift_solve_tables as st
 
     motions = {
@@ -572,7 +577,7 @@ def solve_tables(frames, body, *, renders=True):
     print("  foot sliding of the truth itself, same frames (mm/frame): " + ", ".join(
         f"{name.split(' (')[0]} {st.sliding_mm(t3, st.true_planted(t3, float(tr['fps']))):.1f}"
         for name, _, tr, t3, _ in clips))
-    _real_table(st, body)
+    _real_table(st, real_proportions)
     return 0
 
 
@@ -618,9 +623,10 @@ def _real_clips():
 REAL_LOOKED_AT = ("mmskeleton_clean_jerk", "mmskeleton_taichi", "pose2sim_balance_cam1")
 
 
-def _real_table(st, body, only=None):
+def _real_table(st, proportions, only=None):
     """Real footage against MediaPipe's world landmarks (mediapipe-reference's npz),
-    skipped with the reason when absent."""
+    the pipeline run with ``proportions`` (``vidcap convert --proportions``), skipped with
+    the reason when absent."""
     print("\nReal footage, PA-MPJPE against MediaPipe Pose's world landmarks (validation; "
           "MediaPipe is a reference, not the truth). 'standing pose': one fixed pose, arms "
           "down, for every frame (no video read):")
@@ -635,7 +641,7 @@ def _real_table(st, body, only=None):
             continue
         if video.stem in REAL_LOOKED_AT:
             label = f"{label or video.name} (tuning: looked at)"
-        for r in st.real_rows(video, ref, body, frames, label):
+        for r in st.real_rows(video, ref, proportions, frames, label):
             print(f"{r[0]} | {r[1]} | {r[2]} | {r[3]:.0f}")
 
 if __name__ == "__main__":

@@ -228,13 +228,42 @@ def mediapipe_world(path, joint_names) -> np.ndarray:
     return out
 
 
-def real_rows(video, reference, body, frames=None, label=None):
+def mediapipe_image_joints(path, joint_names, fitted) -> np.ndarray:
+    """MediaPipe's 2D landmarks of ``path`` (pixels, its own left and right) as (F, 15, 2)
+    joints: the limb joints as they are, pelvis = mid-hips, neck = mid-shoulders, and
+    the head top (no MediaPipe landmark) the ``fitted`` (F, 15, 2) joints' neck-to-head
+    vector set on that neck; NaN frames where a landmark is missing."""
+    ref = np.load(path)
+    common = [str(n) for n in ref["names_vidcap_map"]]
+    marks = ref["landmarks"].astype(float)
+    n = min(len(marks), len(fitted))
+    i = {name: k for k, name in enumerate(joint_names)}
+    out = np.full((n, len(joint_names), 2), np.nan)
+    for j, name in enumerate(joint_names):
+        if name in common:
+            out[:, j] = marks[:n, common.index(name)]
+    out[:, i["pelvis"]] = 0.5 * (out[:, i["l_hip"]] + out[:, i["r_hip"]])
+    out[:, i["neck"]] = 0.5 * (out[:, i["l_shoulder"]] + out[:, i["r_shoulder"]])
+    out[:, i["head_top"]] = (fitted[:n, i["head_top"]] - fitted[:n, i["neck"]]
+                             + out[:, i["neck"]])
+    out[~np.isfinite(out).all(axis=(1, 2))] = np.nan
+    return out
+
+
+#: The row of :func:`real_rows` that lifts MediaPipe's own 2D (a reference for the lift).
+MEDIAPIPE_2D = "solve on MediaPipe's 2D"
+
+
+def real_rows(video, reference, proportions="human", frames=None, label=None):
     """PA-MPJPE (mm) of both lifts on a real clip against MediaPipe's world landmarks, on
     the frames where MediaPipe has every limb joint (and within ``frames``, (F,) bool,
-    when given: the stretches a person is in the picture), and of a fixed standing pose
-    (:func:`standing_baseline_mm`) on the same frames. The pipeline runs on the whole
-    clip (``real_clips.pipeline_result``: default options, stage cache), both lifts too.
-    Rows: (label, default the video's name; frames; lift; mm)."""
+    when given: the stretches a person is in the picture), of a fixed standing pose
+    (:func:`standing_baseline_mm`) and of the solve given MediaPipe's own 2D landmarks
+    and sides (:data:`MEDIAPIPE_2D`: what the lift makes of better 2D; optimistic, as
+    MediaPipe's 2D and world landmarks come from one network) on the same frames. The
+    pipeline runs on the whole clip (``real_clips.pipeline_result``: default options but
+    ``proportions``, as ``vidcap convert --proportions``; stage cache), the lifts too,
+    with the pipeline's body. Rows: (label, default the video's name; frames; lift; mm)."""
     from real_clips import pipeline_result
 
     from vidcap.body import JOINT_NAMES
@@ -242,12 +271,15 @@ def real_rows(video, reference, body, frames=None, label=None):
     from vidcap.video.lifting import lift_pose
     from vidcap.video.pipeline import colour_cues
 
-    res = pipeline_result(Path(video), height=body.height)
+    res = pipeline_result(Path(video), proportions=proportions)
+    body = res.body
     ref = mediapipe_world(reference, JOINT_NAMES)
     size = (res.masks.shape[2], res.masks.shape[1])
-    n = min(len(ref), len(res.image_joints2d))
+    theirs = mediapipe_image_joints(reference, JOINT_NAMES, res.image_joints2d)
+    n = min(len(ref), len(theirs))
     ok = np.isfinite(ref[:n, LIMB_JOINTS]).all(axis=(1, 2))
     ok &= np.isfinite(res.image_joints2d[:n]).all(axis=(1, 2))
+    ok &= np.isfinite(theirs[:n]).all(axis=(1, 2))
     if frames is not None:
         ok &= np.asarray(frames, bool)[:n]
     label = label or Path(video).name
@@ -264,6 +296,9 @@ def real_rows(video, reference, body, frames=None, label=None):
         rows.append((label, int(ok.sum()), method,
                      pa_mpjpe_mm(lr.joints3d[:n][ok], ref[:n][ok])))
     rows.append((label, int(ok.sum()), "standing pose", standing_baseline_mm(ref[:n][ok], body)))
+    lr = lift_pose(theirs[:n], fps=res.fps, body=body, image_sides=False, track=res.track[:n],
+                   frame_size=size, model_height=res.model_height[:n], method="solve")
+    rows.append((label, int(ok.sum()), MEDIAPIPE_2D, pa_mpjpe_mm(lr.joints3d[ok], ref[:n][ok])))
     return rows
 
 
