@@ -49,6 +49,14 @@ only (that table's "cues outline" column) and prints each clip's torso angle err
 (fitted pelvis -> neck against the true one, mean and max over frames) beside its
 PCK@0.05 and the true torso's largest lean from upright.
 
+``--low`` (issue 27 item 4) fits low poses, all tuning (:data:`LOW`: the ``--poses``
+crouch and stretches of CMU 02_06, 05_17, 02_09 and 02_10 with the pelvis down to
+0.44-0.74 of its standing height, at side, three-quarter and front views), tracked with
+cues, and prints PCK@0.05 as fitted and with the solve's hidden joints, per joint
+group, the torso angle's error and the share of frames with a short silhouette; errors
+are fractions of the standing height from the camera's scale (a torso bent toward the
+camera shortens the pelvis-head top line the other tables read the height from).
+
 ``--proportions`` (issue 27) renders bodies scaled away from the seed's ratios (A: legs
 +15 %, arms -10 %, shoulders +20 %; B: legs -10 %, arms +10 %, shoulders -15 %, limbs
 20 % wider) and the seed's own body, on eight clips and yaws each, estimates the
@@ -71,7 +79,7 @@ benchmark).
 
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
-[--proportions] [--torso] [--views side,three-quarter,front] [--save OUT.npz] [--predict]
+[--proportions] [--torso] [--low] [--views side,three-quarter,front] [--save OUT.npz] [--predict]
 [--hidden fit|solve] [--perturb [--perturb-renders tuning|validation|none]]``
 """
 
@@ -485,6 +493,92 @@ def torso_table(frames: int = 60) -> int:
     return 0
 
 
+#: ``--low`` (issue 27 item 4): low poses, all **tuning** (the ``--poses`` crouch and
+#: stretches of CMU trials no 2D benchmark used), as (name, file under
+#: ``$VIDCAP_DATA/mocap/cmu_iclone_humanik`` or "131_01", first second, yaws): 02_06
+#: bending over to scoop something up (pelvis down to 0.5 of its standing height above
+#: the soles), 05_17 a dancer's lunges (0.44), 02_09 a squat while washing (0.68),
+#: 02_10 a bend forward to a low window (0.74).
+LOW = (
+    ("131_01 2-4s", "131_01", 2.0, (90, 45)),
+    ("02_06 5.5-7.5s", "002_06", 5.5, (90, 45, 0)),
+    ("02_06 11.3-13.3s", "002_06", 11.3, (90, 45, 0)),
+    ("05_17 3.5-5.5s", "005_17", 3.5, (90, 45, 0)),
+    ("02_09 5-7s", "002_09", 5.0, (90, 45, 0)),
+    ("02_10 5.8-7.8s", "002_10", 5.8, (90, 45, 0)),
+)
+
+
+def low_motions(frames: int):
+    """The ``--low`` clips: ``(name, motion of ``frames`` frames at 30 fps, yaws)``."""
+    import os
+
+    from vidcap.synth import make_motion
+
+    data = Path(os.environ.get("VIDCAP_DATA", REPO.parent / "data"))
+    for name, source, first, yaws in LOW:
+        if source == "131_01":
+            full = make_motion(MOTION_DIR / "131_01.bvh", fps=30.0)
+        else:
+            full = make_motion(data / "mocap" / "cmu_iclone_humanik" / f"{source}_humanik.bvh",
+                               fps=30.0)
+        start = int(round(first * 30))
+        yield name, full.frames(start, start + frames), yaws
+
+
+def low_table(frames: int = 60, save: str | None = None) -> int:
+    """The ``--low`` table (issue 27 item 4): the :data:`LOW` clips fitted tracked with
+    the frame's cues (``fit_sequence``'s defaults, as ``--held-out``), PCK@0.05 as
+    fitted and with the hidden joints from the 3D solve (``--hidden solve``), per
+    joint group, the median error, the torso angle's mean error and the share of
+    frames whose silhouette is under 0.92 of the body's height ("low"). Errors are
+    fractions of the standing height from the camera's scale (as ``--bodies``)."""
+    from vidcap.synth import render_clip
+    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.hidden import solve_hidden
+
+    groups = {"legs": [JOINT_INDEX[f"{s}_{j}"] for s in "lr" for j in ("knee", "ankle")],
+              "arms": [JOINT_INDEX[f"{s}_{j}"] for s in "lr" for j in ("elbow", "wrist")]}
+    print(f"Tracked 2D fit, cues, low poses ({frames} frames, 640x480, tuning): PCK@0.05, "
+          "with the solve's hidden joints, per group; median / height; torso error (deg)")
+    print(f"{'clip':16} {'yaw':>4} {'low':>4} {'PCK.05':>7} {'+solve':>7} {'legs':>6} "
+          f"{'arms':>6} {'median':>7} {'torso':>6}")
+    rows, saved = [], {}
+    for name, motion, yaws in low_motions(frames):
+        for yaw in yaws:
+            video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
+                                       rng=np.random.default_rng(0))
+            tj, masks = truth["joints2d"], truth["masks"]
+            # the standing height from the camera's scale: the truth's pelvis-head top
+            # line (body_height_px) shrinks to a tenth in a bend toward the camera
+            hpx = np.full((len(tj), 1), 1.75 * np.linalg.norm(truth["camera"][0, :3]))
+            sil = masks.any(axis=2)
+            rows_on = np.where(sil.any(1), sil.shape[1] - np.argmax(sil[:, ::-1], 1)
+                               - np.argmax(sil, 1), 0)
+            low = float(np.mean(rows_on < 0.92 * np.median(hpx)))
+            pose = fit_sequence(masks, frames=video)
+            joints = pose.joints2d
+            solved = solve_hidden(joints, fps=30.0, spread=pose.spread,
+                                  model_height=pose.model_height, frame_size=(640, 480),
+                                  frames=video)
+            frac = side_agnostic_errors(joints, tj)[0] / hpx
+            s = summarise(frac)
+            plus = summarise(side_agnostic_errors(solved, tj)[0] / hpx)["pck05"]
+            parts = [float(np.nanmean(frac[:, g] <= 0.05)) for g in groups.values()]
+            torso = float(np.nanmean(np.abs(torso_angles_deg(joints) - torso_angles_deg(tj))))
+            rows.append((s["pck05"], plus, *parts, s["median"], torso))
+            saved[f"{name} {yaw:g}|truth"], saved[f"{name} {yaw:g}|fit"] = tj, joints
+            print(f"{name:16} {yaw:>4g} {low:4.0%} {s['pck05']:7.1%} {plus:7.1%} "
+                  f"{parts[0]:6.1%} {parts[1]:6.1%} {s['median']:7.4f} {torso:6.1f}",
+                  flush=True)
+    m = np.mean(rows, axis=0)
+    print(f"{'mean':21} {m[0]:7.2%} {m[1]:7.2%} {m[2]:6.1%} {m[3]:6.1%} "
+          f"{np.median(np.asarray(rows)[:, 4]):7.4f} {m[5]:6.1f}   ({len(rows)} clips)")
+    if save:
+        np.savez_compressed(save, **saved)
+    return 0
+
+
 #: ``--proportions``: the bodies (factors of :func:`vidcap.body.body_with_proportions`):
 #: the issue's (A), the opposite scaling with wider limbs (B: a short, broad body) and
 #: the seed's own (its estimate should stay near 0 %).
@@ -748,6 +842,8 @@ def main(argv=None) -> int:
                     help="--bodies: only these render/fit pairs, e.g. human/human,seed/human")
     ap.add_argument("--every", type=int, default=1,
                     help="--bodies: every n-th held-out clip only (a quicker subset)")
+    ap.add_argument("--low", action="store_true",
+                    help="low poses (crouches, bends, lunges; tuning): PCK per joint group")
     ap.add_argument("--torso", action="store_true",
                     help="held-out clips, outline only: PCK and the torso angle's error")
     ap.add_argument("--perturb", action="store_true",
@@ -764,6 +860,8 @@ def main(argv=None) -> int:
                          None if args.perturb_renders == "none" else args.perturb_renders)
     if args.torso:
         return torso_table(args.frames)
+    if args.low:
+        return low_table(args.frames, args.save)
     if args.bodies:
         return body_combinations(args.frames, tuple(args.views.split(",")), args.every,
                                  None if args.combos is None else tuple(args.combos.split(",")))

@@ -15,6 +15,7 @@ import dataclasses
 import numpy as np
 
 from vidcap.video.fit.armpairs import search_arm_pairs
+from vidcap.video.fit.bend import bending, track_bend
 from vidcap.video.fit.crossing import choose_crossing
 from vidcap.video.fit.cues import apply_cues
 from vidcap.video.fit.engine import _MaskEngine
@@ -189,6 +190,8 @@ def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool)
     step = np.deg2rad(options.warm_step_deg)
     st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]], interval=8 * step,
                                     alone=True)
+    if options.track_bend and (crouching(eng) or bending(eng, st)):
+        st = track_bend(eng, st)
     st = search_group(eng, st, _UPPERS, interval=8 * step)
     st = search_group(eng, st, _LEAVES, interval=8 * step)
     if spread:

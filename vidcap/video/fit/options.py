@@ -36,6 +36,9 @@ class FitOptions:
         and keep it when it fits clearly better than the tracked arm
         (:func:`vidcap.video.fit.grids.search_arm_track`: a forearm swinging faster
         than the track's +-16 degrees a frame).
+    track_bend : bool
+        Tracked frames of a body bending or crouching also move the model up and down
+        and turn the torso about the pelvis (:func:`vidcap.video.fit.bend.track_bend`).
     warm_threshold : float
         Similarity of the previous pose needed to warm-start, in [0, 1].
     fallback : float
@@ -78,6 +81,7 @@ class FitOptions:
     arm_pairs: bool = True
     leg_grid: bool = True
     fold_legs: bool = False
+    track_bend: bool = True
     arm_track: bool = False
     spread_value: float | None = None
     body_height: float | None = None

@@ -99,6 +99,13 @@ Beyond the seed:
   thigh pointing at the camera is short in the image, and Algorithm 1 at full length
   turns it elsewhere before Algorithm 6 can shorten it. A tracked crouching frame also
   searches the torso's foreshortening (+-0.3).
+* ``track_bend`` (default on): a tracked frame whose torso leans 20 degrees or more, or
+  whose silhouette is under 0.92 of the model's height, also moves the model up and
+  down and turns the torso (head attached) about the pelvis, +-24 degrees within
+  15-165 (:func:`vidcap.video.fit.bend.track_bend`): a body bending over keeps its
+  hips where the legs hold them while the neck swings down, and the track, which
+  turned the torso about a neck placed for an upright body, kept an upright torso
+  poking out above the outline.
 * Tracking (:func:`fit_sequence`, ``tracked=True``): a frame whose silhouette is
   still covered by the previous frame's pose (S >= ``warm_threshold``) starts every
   search from that pose with narrow intervals, skips the contour analysis, and
