@@ -81,9 +81,10 @@ _SILHOUETTE_VERSION = 5
 #: colours round the footprint, ``background.SCENE_RING``).
 _PLATE_VERSION = 4
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
-#: previous pose, ``fit.frame.kept_or_better``), so a cache written by an older fit is
-#: redone rather than handed back as the new fit's.
-_POSE_VERSION = 1
+#: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
+#: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
+#: than handed back as the new fit's.
+_POSE_VERSION = 2
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
