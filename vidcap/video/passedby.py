@@ -28,7 +28,8 @@ does). Then, per pixel (:func:`passed_by`):
   it in), when they agree on another colour for :data:`MIN_AWAY_S` and hardly show the
   plate's. A person who came and stood still is bracketed by their own coming and going,
   so their still frames are not the scene; the scene is what the pixel showed before the
-  first passer-by and after the last;
+  first passer-by and after the last (but a person standing still is outside the moving
+  blob, so the first test keeps their colour: :mod:`vidcap.video.stayed` handles them);
 * and between the first and the last frame showing the plate's colour, the scene's
   hardly shows (the passer-by hid it while passing; where the scene keeps showing between
   the plate colour's appearances, the plate's colour is the scene seen between a limb's
@@ -49,14 +50,15 @@ whose ghosts and re-take it would otherwise move.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from vidcap.video.timecover import channel_max_diff, coarse_step, inverse_gains
 
-__all__ = ["moving_blobs", "passed_by", "plate_levels", "retake_passed_by", "whole_blob_frames"]
+__all__ = ["ClipMotion", "clip_motion", "moving_blobs", "passed_by", "plate_levels",
+           "retake_from_samples", "retake_passed_by", "whole_blob_frames"]
 
 #: Re-take the plate where it holds a colour that only passed by (called by
 #: :func:`vidcap.video.background.estimate_background` when the thumbnails exist,
@@ -333,12 +335,76 @@ def retake_passed_by(model, frames: np.ndarray, gains: np.ndarray, thumbs: np.nd
         which the pixel lies outside the moving blob (their median, each divided by its
         gain); ``model`` itself when nothing changes.
     """
-    n, h, w = thumbs.shape[:3]
-    k, hh, ww = frames.shape[:3]
-    idx = np.asarray(model.sample_indices)
-    dt = step / float(fps)
-    if n < 3 or len(idx) != k:
+    got = clip_motion(model, frames, thumbs, step=step, fps=fps)
+    if got is None:
         return model
+    left_alone = model.never_seen if model.self_lit is None else (
+        model.never_seen | model.self_lit)
+    left_small = cv2.resize(left_alone.view(np.uint8), got.levels.shape[2:0:-1],
+                            interpolation=cv2.INTER_AREA) > 0
+    min_away = max(3, int(np.ceil(MIN_AWAY_S / got.dt)))
+    flag, scene = passed_by(got.levels, got.blobs, got.plate, got.tau, min_away, left_small)
+    if not flag.any():
+        return model
+    # Again with only the frames whose blob holds the person whole against the plate
+    # re-taken so (a still person beside a moving limb is not the scene).
+    trusted = got.trusted(flag, scene)
+    if not trusted.all():
+        flag, scene = passed_by(got.levels, got.blobs, got.plate, got.tau, min_away,
+                                left_small, trusted)
+        if not flag.any():
+            return model
+    return retake_from_samples(model, frames, gains, got, flag, scene, trusted,
+                               left_alone=left_alone)
+
+
+@dataclass(frozen=True)
+class ClipMotion:
+    """The whole clip at the plate's working size, for the passes that read every frame
+    (:func:`clip_motion`).
+
+    Attributes
+    ----------
+    levels : numpy.ndarray, shape (n, h, w, 3), uint8
+        The thumbnails at the plate's exposure (:func:`plate_levels`).
+    blobs : numpy.ndarray, shape (n, h, w), bool
+        Their moving blobs (:func:`moving_blobs`).
+    plate : numpy.ndarray, shape (h, w, 3), uint8
+        The plate at the thumbnails' size and blur.
+    tau : float
+        Colours within ``tau`` (max over the channels) are the same.
+    dt : float
+        Seconds between two thumbnails.
+    step : int
+        Thumbnail ``i`` is frame ``i * step``.
+    """
+
+    levels: np.ndarray
+    blobs: np.ndarray
+    plate: np.ndarray
+    tau: float
+    dt: float
+    step: int
+
+    def trusted(self, flag: np.ndarray, scene: np.ndarray) -> np.ndarray:
+        """:func:`whole_blob_frames` against the plate with ``scene`` (h, w, 3) put in
+        where ``flag`` (h, w): the frames that may show the scene, (n,) bool."""
+        retaken = self.plate.copy()
+        retaken[flag] = np.clip(np.round(scene[flag]), 0, 255).astype(np.uint8)
+        h, w = self.plate.shape[:2]
+        return whole_blob_frames(self.levels, self.blobs, retaken, self.tau,
+                                 max(1, int(round(NEAR * max(h, w)))))
+
+
+def clip_motion(model, frames: np.ndarray, thumbs: np.ndarray, *, step: int,
+                fps: float) -> ClipMotion | None:
+    """The thumbnails brought to the plate's exposure, their noise level and moving
+    blobs (:class:`ClipMotion`); None for fewer than 3 thumbnails or samples that are
+    not ``model.sample_indices``."""
+    n, h, w = thumbs.shape[:3]
+    if n < 3 or len(np.asarray(model.sample_indices)) != len(frames):
+        return None
+    dt = step / float(fps)
     plate_small = cv2.GaussianBlur(
         cv2.resize(model.plate, (w, h), interpolation=cv2.INTER_AREA), (3, 3), 0)
     levels = plate_levels(thumbs, plate_small)
@@ -348,31 +414,30 @@ def retake_passed_by(model, frames: np.ndarray, gains: np.ndarray, thumbs: np.nd
     tau = max(8.0, 5.0 * 1.4826 * float(np.median(dev)))
     lags = sorted({max(1, round(s / dt)) for s in LAGS_S})
     close = max(3, int(round(CLOSE * max(h, w))) | 1)
-    blobs = moving_blobs(levels, tau, lags, close)
-    left_alone = model.never_seen if model.self_lit is None else (
-        model.never_seen | model.self_lit)
-    left_small = cv2.resize(left_alone.view(np.uint8), (w, h),
-                            interpolation=cv2.INTER_AREA) > 0
-    min_away = max(3, int(np.ceil(MIN_AWAY_S / dt)))
-    flag, scene = passed_by(levels, blobs, plate_small, tau, min_away, left_small)
-    if not flag.any():
-        return model
-    # Again with only the frames whose blob holds the person whole against the plate
-    # re-taken so (a still person beside a moving limb is not the scene).
-    retaken = plate_small.copy()
-    retaken[flag] = np.clip(np.round(scene[flag]), 0, 255).astype(np.uint8)
-    trusted = whole_blob_frames(levels, blobs, retaken, tau,
-                                max(1, int(round(NEAR * max(h, w)))))
-    if not trusted.all():
-        flag, scene = passed_by(levels, blobs, plate_small, tau, min_away, left_small, trusted)
-        if not flag.any():
-            return model
+    return ClipMotion(levels, moving_blobs(levels, tau, lags, close), plate_small, tau, dt,
+                      int(step))
+
+
+def retake_from_samples(model, frames: np.ndarray, gains: np.ndarray, got: ClipMotion,
+                        flag: np.ndarray, scene: np.ndarray, trusted: np.ndarray, *,
+                        left_alone: np.ndarray | None = None, unflag: bool = False):
+    """The plate re-taken at full resolution where ``flag`` (h, w) from the samples whose
+    nearest thumbnail shows ``scene`` (h, w, 3) there, outside the moving blob, in a
+    ``trusted`` (n,) frame (their median, each divided by its gain); pixels
+    ``left_alone`` (H, W) and pixels no such sample shows are not touched. Its
+    confidence and noise map follow; with ``unflag`` the pixels re-taken are no longer
+    never seen (nor still person). ``model`` itself when nothing changes."""
+    levels, blobs, tau = got.levels, got.blobs, got.tau
+    n, h, w = levels.shape[:3]
+    k, hh, ww = frames.shape[:3]
+    idx = np.asarray(model.sample_indices)
     size = (ww, hh)
-    redo = (cv2.resize(flag.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0) & (
-        ~left_alone)
+    redo = cv2.resize(flag.view(np.uint8), size, interpolation=cv2.INTER_NEAREST) > 0
+    if left_alone is not None:
+        redo &= ~left_alone
     # The samples that show the scene's colour there, outside the moving blob (in the
     # nearest thumbnail).
-    near = np.clip(np.round(idx / step).astype(int), 0, n - 1)
+    near = np.clip(np.round(idx / got.step).astype(int), 0, n - 1)
     shows = np.stack([~blobs[i] & (np.abs(levels[i] - scene).max(axis=-1) < tau) & flag
                       & trusted[i] for i in near])
     away = np.stack([cv2.resize(m.view(np.uint8), size, interpolation=cv2.INTER_NEAREST)[redo]
@@ -398,5 +463,9 @@ def retake_passed_by(model, frames: np.ndarray, gains: np.ndarray, thumbs: np.nd
     noise_map[redo] = np.nanmean(np.where(away, l1, np.nan), axis=0)
     conf = model.confidence.copy()
     conf[redo] = away.sum(axis=0) / k
-    return replace(model, plate=plate, confidence=conf.astype(np.float32),
-                   noise_map=noise_map.astype(np.float32))
+    out = replace(model, plate=plate, confidence=conf.astype(np.float32),
+                  noise_map=noise_map.astype(np.float32))
+    if unflag:
+        still = None if model.still_person is None else model.still_person & ~redo
+        out = replace(out, never_seen=model.never_seen & ~redo, still_person=still)
+    return out
