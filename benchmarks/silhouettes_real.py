@@ -2,7 +2,7 @@
 
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
         [--only NAME] [--quick] [--pck] [--graph-cut] [--[no-]empty-scene] [--[no-]person-box]
-        [--[no-]clip-ends]
+        [--[no-]clip-ends] [--[no-]stayed]
         [--[no-]flag-unseen] [--[no-]flag-still]
 
 One table, a row per clip. Per clip, in the same run: vidcap (``estimate_background``
@@ -86,6 +86,13 @@ Clips:
   01_14 (playground), 05_07, 05_11, 05_17, 05_19 (dance) and 06_14 (basketball), trials
   no benchmark had used, over the three plates (same folder, same conversion). 05_19
   3/4 back is tuning since the hall helper looked at it (vidcap.video.passedby).
+* Tuning renders added by the issue-26 arrive helper (wt-arrive): a body that walks in
+  from out of view, stands nearly still for 10 s and walks out (:func:`arrive_motion`,
+  the onebyone_room visits' case), side / room plate and three-quarter back / PETS plate.
+  Made tuning by that helper, with the renders whose internal figures it read to choose
+  vidcap.video.stayed's gate (131_01 2-5 s 120 deg, 14_19 17-20 s front, 02_04 0-3 s,
+  05_11 1-4 s, 05_17 0-3 s) and the onebyone_room visits 66-194 and 1242-1357, which it
+  diagnosed frame by frame (the other four visits stay validation).
 * Real clips without true masks: every clip of ``real_clips.py`` ($VIDCAP_DATA/video:
   the pose2sim balance trial seen by three cameras, the six visits of onebyone_room, the
   Sports2D walk and run, the TensorFlow.js squats and dance; the same list as
@@ -155,7 +162,7 @@ RENDERS = [
     # it lost to FROM_CLIP_ENDS.)
     ("131_01 4-7 s 3/4 / room plate", ("131_01.bvh", 480, 840), 60, "room", "tuning"),
     ("131_01 2-5 s 120 deg / Weizmann plate", ("131_01.bvh", 240, 600), 120, "ido",
-     "validation"),
+     "tuning"),  # arrive: its figures for vidcap.video.stayed.MIN_AREA looked at
     # arms 150 deg is tuning since the issue-26 pckgap helper's refit log, from which
     # vidcap.video.fit.tracking.TALLER_TIE was chosen, held it by a slip of the row filter.
     ("arms 150 deg / room plate", "arms", 150, "room", "tuning"),
@@ -163,7 +170,8 @@ RENDERS = [
     # CMU 14_19 (a subject no benchmark or prior uses) at 2-5 s, 10-13 s, 17-20 s.
     ("14_19 2-5 s side / PETS plate", ("14_19", 240, 600), 90, "vtest", "validation"),
     ("14_19 10-13 s 3/4 / room plate", ("14_19", 1200, 1560), 45, "room", "tuning"),
-    ("14_19 17-20 s front / Weizmann plate", ("14_19", 2040, 2400), 0, "ido", "validation"),
+    ("14_19 17-20 s front / Weizmann plate", ("14_19", 2040, 2400), 0, "ido",
+     "tuning"),  # arrive: vidcap.video.stayed's two-ended gate chosen on it
     # Validation renders added by the issue-26 still helper (nothing tuned on them, added
     # when 131_01 0-3 s and 14_19 10-13 s became tuning): CMU 02_05 (punching, striking),
     # 02_06 (bending over, scooping up, rising), 02_09 (washing oneself), all in place,
@@ -222,7 +230,8 @@ RENDERS = [
     # swordplay, 05_04 / 05_05 / 05_10 / 05_13 / 05_20 dance, 06_15 basketball) and one
     # more stretch of 02_05 (validation, never diagnosed), over the three plates.
     ("01_08 12-15 s side / PETS plate", ("01_08", 721, 901), 90, "vtest", "validation"),
-    ("02_04 0-3 s 3/4 / room plate", ("02_04", 1, 181), 60, "room", "validation"),
+    ("02_04 0-3 s 3/4 / room plate", ("02_04", 1, 181), 60, "room",
+     "tuning"),  # arrive: vidcap.video.stayed's two-ended stay chosen on its loss
     ("02_08 6-9 s side left / Weizmann plate", ("02_08", 391, 571), 270, "ido",
      "validation"),
     ("05_04 0-3 s front / Weizmann plate", ("05_04", 1, 181), 0, "ido", "tuning"),  # wt-0504
@@ -244,14 +253,26 @@ RENDERS = [
     ("01_01 7-10 s front / Weizmann plate", ("01_01", 421, 601), 0, "ido", "validation"),
     ("01_14 4-7 s side / PETS plate", ("01_14", 241, 421), 90, "vtest", "validation"),
     ("05_07 0-3 s 3/4 / room plate", ("05_07", 1, 181), 45, "room", "validation"),
-    ("05_11 1-4 s 3/4 left / PETS plate", ("05_11", 61, 241), 300, "vtest", "validation"),
+    ("05_11 1-4 s 3/4 left / PETS plate", ("05_11", 61, 241), 300, "vtest",
+     "tuning"),  # arrive: its figures for vidcap.video.stayed.MIN_AREA looked at
     ("05_17 0-3 s side left / Weizmann plate", ("05_17", 1, 181), 270, "ido",
-     "validation"),
+     "tuning"),  # arrive: vidcap.video.stayed's two-ended gate chosen on it
     # (05_19: tuning since the issue-26 hall helper (session 26) looked at its plate with
     # vidcap.video.passedby on, which lost it 0.974 -> 0.938, and tried a constant on it)
     ("05_19 0-3 s 3/4 back / PETS plate", ("05_19", 1, 181), 135, "vtest", "tuning"),
     ("06_14 0-3 s front / room plate", ("06_14", 1, 181), 0, "room", "validation"),
+    # Tuning renders added by the issue-26 arrive helper (wt-arrive), built to diagnose a
+    # person who walks in, stands nearly still for 10 s and walks out (the onebyone_room
+    # visits' case) without spending validation data: :func:`arrive_motion`, the body
+    # walking across the frame with the camera's scale fixed so that it starts and ends
+    # out of view (the spot where it stands is seen empty for about a second at each end).
+    ("arrive side / room plate", "arrive", 90, "room", "tuning"),
+    ("arrive 3/4 back / PETS plate", "arrive", 135, "vtest", "tuning"),
 ]
+#: The arriving renders' frame rate, pixels per metre and camera tilt (degrees down):
+#: the scale fixed so that the walk starts and ends out of view; 15 fps keeps the clip
+#: (13 s) at 195 frames.
+ARRIVE_FPS, ARRIVE_SCALE, ARRIVE_TILT = 15.0, 170.0, 10.0
 #: Motion files outside ../shared/data/motion ($VIDCAP_DATA; see benchmarks/DATA.md).
 EXTRA_MOTIONS = {"14_19": Path(REAL or "/nonexistent") / "mocap" / "cmu" / "14_19_humanik.bvh"}
 EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_humanik"
@@ -275,7 +296,11 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
 REAL_TUNING = {"pose2sim_balance_cam1", "sports2d_walk_turn", "pose2sim_balance_cam4",
                "sports2d_run", "pose2sim_balance_cam3",
                # the plate's scene-ring switch (background.SCENE_RING) was built on it
-               "mmskeleton_taichi"}
+               "mmskeleton_taichi",
+               # two onebyone_room visits (scored stretches; the other four stay validation)
+               # since the issue-26 arrive helper diagnosed their plates frame by frame
+               # (vidcap.video.stayed)
+               "onebyone_room 66-194", "onebyone_room 1242-1357"}
 
 
 def iou(a, b, ignore=None):
@@ -349,14 +374,18 @@ def _render_frames(motion, yaw, which, n_frames, rng_seed):
     rng = np.random.default_rng(rng_seed)
     plate = real_plate(which)
     lamp = lamp_mask(plate.shape[:2], rng)
-    if isinstance(motion, tuple):
+    view = {}
+    if motion == "arrive":
+        mo = arrive_motion(ARRIVE_FPS, rng=rng)
+        view = {"pixels_per_metre": ARRIVE_SCALE, "elevation_deg": ARRIVE_TILT}
+    elif isinstance(motion, tuple):
         f, a, b = motion
         mo = synth.make_motion(EXTRA_MOTIONS.get(f, MOTION / f), frame_range=(a, b),
                                fps=30.0)
     else:
         mo = synth.make_motion(motion, n_frames=n_frames, rng=rng)
     frames, truth = synth.render_clip(mo, rng=rng, yaw_deg=yaw, background=plate,
-                                      noise=3.0, lighting_drift=0.15)
+                                      noise=3.0, lighting_drift=0.15, **view)
     # The lamp is self-lit and saturates: it keeps its level whatever the exposure
     # does to the rest of the scene (and never covers the person: it is behind).
     bright = np.array([250, 252, 255], np.float32)
@@ -364,6 +393,40 @@ def _render_frames(motion, yaw, which, n_frames, rng_seed):
     noise = rng.normal(0, 2.0, frames.shape[:3] + (1,)).astype(np.float32)
     frames = np.clip(frames * (1 - a) + a * (bright + noise), 0, 255).astype(np.uint8)
     return frames, truth, mo.fps
+
+
+def arrive_motion(fps: float, walk_s: float = 1.5, stand_s: float = 10.0, rng=None):
+    """A body that walks in, stands nearly still and walks on (a `vidcap.synth` walk).
+
+    The procedural walk (``2 * walk_s`` long, centred on the spot where it stops) is
+    held, ``stand_s`` seconds, at the frame nearest its middle where the ankles pass
+    each other (the feet together), with the trunk swaying +-3 degrees at 0.25 Hz
+    (tiny motion, as a person standing); then it walks on from there.
+
+    Returns
+    -------
+    vidcap.kinematics.Motion
+    """
+    from scipy.spatial.transform import Rotation
+
+    from vidcap.kinematics import Motion
+    from vidcap.synth.procedural import walk_motion
+
+    rng = np.random.default_rng(0) if rng is None else rng
+    nw, ns = int(round(2 * walk_s * fps)), int(round(stand_s * fps))
+    walk = walk_motion(n_frames=nw, fps=fps, rng=rng)
+    names = list(walk.skeleton.joint_names)
+    ank = walk.positions()[:, [names.index("l_ankle"), names.index("r_ankle")], 2]
+    near = np.arange(nw // 2 - int(0.4 * fps), nw // 2 + int(0.4 * fps))
+    a = int(near[np.argmin(np.abs(ank[near, 0] - ank[near, 1]))])
+    idx = np.concatenate([np.arange(a), np.full(ns, a), np.arange(a, nw)])
+    rot = walk.rotations[idx].copy()
+    t = np.arange(ns) / fps
+    sway = Rotation.from_rotvec(np.outer(np.deg2rad(3.0) * np.sin(2 * np.pi * 0.25 * t),
+                                         [0.0, 1.0, 0.0]))
+    p = names.index("pelvis")
+    rot[a:a + ns, p] = (sway * Rotation.from_quat(rot[a:a + ns, p])).as_quat()
+    return Motion(walk.skeleton, walk.root_positions[idx], rot, fps)
 
 
 def real_clip(fname, a, b, cache: Path):
@@ -486,6 +549,12 @@ SWITCHES = (
     ("both-ends", "emptyscene", "BOTH_ENDS",
      "vidcap's plate: an empty stretch at the clip's start and one at its end counted "
      "together (vidcap.video.emptyscene; default: emptyscene.BOTH_ENDS, on)"),
+    ("stayed", "stayed", "STAYED",
+     "vidcap's plate re-taken where a person came, stayed and went, from what the clip's "
+     "first and last half second show (vidcap.video.stayed; default: stayed.STAYED, on)"),
+    ("came-went", "stayed", "SEEN",
+     "with --stayed, where someone came and went also one end, and a colour the clip shows "
+     "most of the time (vidcap.video.stayed.SEEN; default: on)"),
     ("shorten-run", "reflection", "SHORTEN_RUN",
      "vidcap's silhouettes: a reflection run that fails the colour test cut short at its "
      "longest start that passes it (vidcap.video.reflection; default: "
@@ -617,7 +686,8 @@ def main(argv=None) -> int:
         got = real_clip(clip.video.name, clip.start, clip.stop, cache)
         if got is None:
             continue
-        use = "tuning" if clip.video.stem in REAL_TUNING else "validation"
+        use = ("tuning" if clip.video.stem in REAL_TUNING or clip.name in REAL_TUNING
+               else "validation")
         clips.append((name, use, got[0], got[1], None))
     for name, use, video, truth, joints in clips:
         if args.only and args.only not in name:

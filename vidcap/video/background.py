@@ -53,7 +53,10 @@ the spot) still takes its background from the frames where it is uncovered:
    seen and inpainted (:func:`vidcap.video.absorbed.flag_unseen`); for a person who stays in
    one place, so are footprint pixels between the person's whose plate and every sample
    are unlike the scene round them, whatever the colour models say (a still torso of the
-   floor's colour; :data:`vidcap.video.absorbed.FLAG_STILL`).
+   floor's colour; :data:`vidcap.video.absorbed.FLAG_STILL`). Then (with the
+   still-person passes), where a person came, stood for most of the clip and went, what the
+   clip's first and last half second show away from them is taken back
+   (:mod:`vidcap.video.stayed`).
 
 ``method='median'`` gives the plain per-pixel temporal median as a baseline.
 """
@@ -434,17 +437,31 @@ def estimate_background(
 
     model = refine_plate(model, frames, gains, weights_small.shape[1:],
                          colour_models=colour_models)
-    if EMPTY_SCENE if empty_scene is None else empty_scene:
+    n = len(source) if info is None else info.n_frames
+    still = EMPTY_SCENE if empty_scene is None else empty_scene
+    return _later_passes(model, frames, gains, thumbs, info, n, still,
+                         PERSON_BOX if person_box is None else person_box)
+
+
+def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, person_box: bool):
+    """Step 8's passes after :func:`vidcap.video.platepass.refine_plate` (module
+    docstring), in their order: the empty scene (with ``still``, the still-person
+    passes), the passed-by colours, the absorbed person (with ``person_box``), the unseen
+    flags and, last, the person who came, stayed and went (with ``still``); ``n`` frames
+    in the clip, ``thumbs`` every frame's thumbnail or None."""
+    if still:
         from vidcap.video.emptyscene import plate_from_empty
 
         fps = _fps(info)
-        n = len(source) if info is None else info.n_frames
+        idx = model.sample_indices
         model = plate_from_empty(model, frames, gains, times=idx / fps,
                                  ends=(0.0, max(n - 1, int(idx[-1])) / fps))
-    if thumbs is not None:
-        model = _passed_by(model, frames, gains, thumbs, info,
-                           len(source) if info is None else info.n_frames)
-    if PERSON_BOX if person_box is None else person_box:
+    from vidcap.video import passedby, stayed
+
+    if thumbs is not None and passedby.PASSED_BY:
+        model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
+                                passedby.retake_passed_by)
+    if person_box:
         from vidcap.video.personbox import absorbed_person
 
         found = absorbed_person(model, frames, gains)
@@ -460,21 +477,21 @@ def estimate_background(
 
     if absorbed.FLAG_UNSEEN:
         model = absorbed.flag_unseen(model, frames, gains)
+    if thumbs is not None and stayed.STAYED and still:
+        # (last: the passes before it flag never seen, and guess, what it takes back)
+        model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
+                                stayed.retake_stayed)
     return model
 
 
-def _passed_by(model, frames, gains, thumbs, info, n: int):
-    """``model`` with the plate re-taken where it holds a colour that only passed by
-    (:func:`vidcap.video.passedby.retake_passed_by`, when
-    :data:`vidcap.video.passedby.PASSED_BY`), the colour models learned again when it
-    changed (they were learned against the old plate); ``n`` frames in the clip."""
-    from vidcap.video import passedby
+def _thumbnail_pass(model, frames, gains, thumbs, info, n: int, retake):
+    """``model`` after ``retake`` (a pass over every frame's thumbnail:
+    :func:`vidcap.video.passedby.retake_passed_by`,
+    :func:`vidcap.video.stayed.retake_stayed`), the colour models learned again when the
+    plate changed (they were learned against the old plate); ``n`` frames in the clip."""
     from vidcap.video.timecover import thumbnail_step
 
-    if not passedby.PASSED_BY:
-        return model
-    found = passedby.retake_passed_by(model, frames, gains, thumbs, fps=_fps(info),
-                                      step=thumbnail_step(n))
+    found = retake(model, frames, gains, thumbs, fps=_fps(info), step=thumbnail_step(n))
     if found is not model and model.colours is not None:
         from vidcap.video.graphcut import clip_colours
 
