@@ -93,6 +93,20 @@ def test_the_moving_blob_is_the_walker_filled_not_where_they_were():
     assert not blobs[t][:, : x0 - 6].any()
 
 
+def test_a_clip_shorter_than_twice_a_lag_still_finds_its_walker():
+    # 7 frames, lags up to 6: the two-sided test has no frame for the lags of 4 and 6, the
+    # one-sided ends still mark the walker (this raised a broadcast error before)
+    rng = np.random.default_rng(3)
+    _, noisy = _scene(rng)
+    frames = np.stack([_walker(noisy(), 30 + 10 * t) for t in range(7)])
+    levels = plate_levels(frames, np.median(frames, axis=0).astype(np.uint8))
+    blobs = moving_blobs(levels, 12.0, [2, 4, 6], 13)
+    assert blobs.shape == (7, H, W)
+    person = np.zeros((H, W), bool)
+    person[30:100, 60:90] = True  # frame 3
+    assert (blobs[3] & person).sum() > 0.5 * person.sum()
+
+
 def test_the_scene_is_what_the_quiet_ends_show_not_a_still_person():
     # Two pixels, 60 frames, the plate holds colour P at both.
     # A: the scene S for 10 frames, then a passer-by in P inside the moving blob for

@@ -152,7 +152,8 @@ def moving_blobs(levels: np.ndarray, tau: float, lags: list[int], close: int) ->
         a = cv2.absdiff(levels[lag:].reshape(n - lag, -1), levels[:n - lag].reshape(n - lag, -1))
         a = a.reshape(n - lag, h, w, 3)
         d = np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2]) > tau
-        moving[lag:n - lag] |= d[:n - 2 * lag] & d[lag:]
+        if n > 2 * lag:  # frames with both neighbours (none in a clip shorter than 2 lags)
+            moving[lag:n - lag] |= d[:n - 2 * lag] & d[lag:]
         if i == 0:  # the ends, one-sided
             ends = min(lag, n - lag)
             moving[:ends] |= d[:ends]
