@@ -114,6 +114,20 @@ def test_a_wavering_view_is_reported_with_the_option_that_fixes_it():
     assert not any("--view" in m for m in _result_with(few).notices())
 
 
+def test_an_estimated_plate_with_many_empty_frames_or_a_poor_fit_suggests_a_photo():
+    ok = _result_with(["right"] * 40)
+    assert not any("--background" in m for m in ok.notices())
+    empty = _result_with(["right"] * 40)
+    empty.image_joints2d[:12] = np.nan  # 30 % of the frames without a person
+    assert any("--background plate.png" in m for m in empty.notices())
+    poor = _result_with(["right"] * 40)
+    poor.similarity[:] = 0.36
+    assert any("--background plate.png" in m for m in poor.notices())
+    # a photo of the scene was given: nothing to suggest
+    poor.plate_estimated = False
+    assert not any("--background" in m for m in poor.notices())
+
+
 def test_fill_gaps():
     j = np.arange(4 * 15 * 2, dtype=float).reshape(4, 15, 2)
     g = j.copy()

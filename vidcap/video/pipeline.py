@@ -231,7 +231,8 @@ def run(
         jitter_after=out.motion.jitter_after, timings=timings,
         image_joints2d=out.joints2d, spread=pose["spread"], track=out.track,
         model_height=out.model_height, outside=out.outside, view=view,
-        frame_times=frame_times(video), body=body, proportions=estimate)
+        frame_times=frame_times(video), body=body, proportions=estimate,
+        plate_estimated=background is None)
 
 
 # --------------------------------------------------------------------------- helpers

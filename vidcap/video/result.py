@@ -17,6 +17,10 @@ from vidcap.video.masks import MaskStack
 
 #: Median 2D-fit similarity (Eq. 3.1) below which a result is reported as a poor fit.
 POOR_FIT = 0.5
+#: Share of the frames without a person above which, with an estimated plate, the user is
+#: told a still person may have been taken into it (issue 26, Build 6: dancers holding a
+#: pose for 3 s left 23 of 90 frames without a person and the rest fitted at S 0.36).
+MISSING_HINT = 0.2
 
 #: A proposal that reads this share of frames or more both as a side view and as a
 #: three-quarter (or front/back) view is reported (see :meth:`ConvertResult.notices`).
@@ -62,6 +66,8 @@ class ConvertResult:
     #: The subject's proportions as estimated from the clip
     #: (:class:`vidcap.video.fit.proportions.ProportionEstimate`; None: the seed's used).
     proportions: object = None
+    #: The plate was estimated from the clip (no ``--background`` given).
+    plate_estimated: bool = True
 
     @property
     def n_frames(self) -> int:
@@ -121,11 +127,20 @@ class ConvertResult:
                        "at the ends")
         s = np.asarray(self.similarity, float)[~missing & ~outside]
         s = s[np.isfinite(s)]
-        if s.size and np.median(s) < POOR_FIT:
+        poor = bool(s.size) and np.median(s) < POOR_FIT
+        if poor:
             out.append(f"the body model fits the silhouettes poorly (median similarity "
                        f"{np.median(s):.2f}; one whole person gives 0.7-0.9): is it one "
                        "person, seen whole, in front of a background with nothing else "
                        "moving?")
+        if self.plate_estimated and (poor or (n and missing.sum() > MISSING_HINT * n)):
+            # the plate is estimated from the clip itself: whatever stands still in most
+            # of it (a person holding a pose) is taken for the scene, and the silhouettes
+            # then miss it without any sign in the plate
+            out.append("a person who keeps still for much of the clip can be taken into the "
+                       "background estimated from it: if the silhouettes (vidcap review) "
+                       "miss them, give a photo of the empty scene with --background "
+                       "plate.png")
         if self.variable_rate:
             gaps = np.diff(self.frame_times) * 1e3
             out.append(f"variable frame rate (frames {gaps.min():.0f}-{gaps.max():.0f} ms "
