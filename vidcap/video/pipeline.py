@@ -227,10 +227,9 @@ def run(
     return ConvertResult(
         video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
         scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
-        motion=out.motion.motion, jitter_before=out.motion.jitter_before,
-        jitter_after=out.motion.jitter_after, timings=timings,
-        image_joints2d=out.joints2d, spread=pose["spread"], track=out.track,
-        model_height=out.model_height, outside=out.outside, view=view,
+        motion=out.motion.motion, jitter_before=out.motion.jitter_before, timings=timings,
+        jitter_after=out.motion.jitter_after, image_joints2d=out.joints2d, track=out.track,
+        spread=pose["spread"], model_height=out.model_height, outside=out.outside, view=view,
         frame_times=frame_times(video), body=body, proportions=estimate,
         plate_estimated=background is None)
 
