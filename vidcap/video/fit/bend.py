@@ -29,7 +29,7 @@ BEND_FROM = np.deg2rad(20.0)
 BEND_STEP = np.deg2rad(24.0)
 
 
-def bending(eng: _MaskEngine, st: FitState) -> bool:
+def bending(st: FitState) -> bool:
     """True where the tracked torso leans :data:`BEND_FROM` or more from upright."""
     return abs(st.angles[S["torso"]] - np.pi / 2) >= BEND_FROM
 

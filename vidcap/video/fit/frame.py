@@ -190,7 +190,7 @@ def _fit_warm(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool)
     step = np.deg2rad(options.warm_step_deg)
     st, _ = search_torso_about_neck(eng, st, start=st.angles[S["torso"]], interval=8 * step,
                                     alone=True)
-    if options.track_bend and (crouching(eng) or bending(eng, st)):
+    if options.track_bend and (crouching(eng) or bending(st)):
         st = track_bend(eng, st)
     st = search_group(eng, st, _UPPERS, interval=8 * step)
     st = search_group(eng, st, _LEAVES, interval=8 * step)
