@@ -387,14 +387,18 @@ class ClipMotion:
     dt: float
     step: int
 
+    def plate_with(self, flag: np.ndarray, scene: np.ndarray) -> np.ndarray:
+        """The plate (h, w, 3) uint8 with ``scene`` (h, w, 3) put in where ``flag``."""
+        retaken = self.plate.copy()
+        retaken[flag] = np.clip(np.round(scene[flag]), 0, 255).astype(np.uint8)
+        return retaken
+
     def trusted(self, flag: np.ndarray, scene: np.ndarray) -> np.ndarray:
         """:func:`whole_blob_frames` against the plate with ``scene`` (h, w, 3) put in
         where ``flag`` (h, w): the frames that may show the scene, (n,) bool."""
-        retaken = self.plate.copy()
-        retaken[flag] = np.clip(np.round(scene[flag]), 0, 255).astype(np.uint8)
         h, w = self.plate.shape[:2]
-        return whole_blob_frames(self.levels, self.blobs, retaken, self.tau,
-                                 max(1, int(round(NEAR * max(h, w)))))
+        return whole_blob_frames(self.levels, self.blobs, self.plate_with(flag, scene),
+                                 self.tau, max(1, int(round(NEAR * max(h, w)))))
 
 
 def clip_motion(model, frames: np.ndarray, thumbs: np.ndarray, *, step: int,

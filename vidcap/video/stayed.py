@@ -191,8 +191,7 @@ def _usable(got, flag: np.ndarray, scene: np.ndarray, end: int) -> np.ndarray:
     from that plate (the person, still or not)."""
     n, h, w = got.levels.shape[:3]
     usable = ~got.blobs & got.trusted(flag, scene)[:, None, None]
-    retaken = got.plate.copy()
-    retaken[flag] = np.clip(np.round(scene[flag]), 0, 255).astype(np.uint8)
+    retaken = got.plate_with(flag, scene)
     r = max(1, int(round(APART * max(h, w))))
     reach = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     box = np.ones((3, 3), np.uint8)
