@@ -245,11 +245,10 @@ def test_second_run_uses_the_stage_cache(converted):
 
 def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
     """A clip of two chunks' length: jobs=2 (workers started early, labels reconciled)
-    gives the serial fit on the first chunk and a fit as good on the second, the same BVH
-    frame count; --jobs 0 is refused. (The second chunk starts fresh: it used to settle on
-    the serial fit's frames too, but a one-pixel change of the silhouettes, the shadow
-    test's soft-shade zone, lets it settle in another optimum of the same quality.)"""
-    from vidcap.body import JOINT_NAMES
+    and jobs=1 (the same chunks fitted one after another in this process) give the same
+    2D fit to the bit, with the frame's cues too (a side view's arms were named the
+    other way round from a chunk on, when one process fitted the clip in one pass); the
+    same BVH frame count, one pose cache entry for both; --jobs 0 is refused."""
     from vidcap.synth import make_motion, synth_clip
     from vidcap.video.pipeline import convert
 
@@ -258,25 +257,17 @@ def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
                rng=np.random.default_rng(0), show_progress=False)
     two = convert(video, tmp_path / "a.bvh", cache_dir=tmp_path / "cache", progress=False,
                   jobs=2)
-    one = convert(video, tmp_path / "b.bvh", cache_dir=tmp_path / "cache", progress=False,
-                  jobs=1)
+    one = convert(video, tmp_path / "b.bvh", cache_dir=None, progress=False, jobs=1)
     assert two.n_frames == one.n_frames == 130
-    same = np.all(np.abs(two.image_joints2d - one.image_joints2d) < 1e-9, axis=(1, 2))
-    # the first chunk is the serial fit, but for its last frames: the clip-wide priors
-    # (the body's height, the spread: windows of 91 and 31 frames) see frames past the
-    # chunk in the serial fit and may refit those frames otherwise (with the fit's
-    # below-threshold track, frames 55-59 here)
-    assert same[:50].all()
-    with np.load(tmp_path / "truth.npz") as truth:
-        names = list(truth["joint_names"])
-        true2d = truth["joints2d"][:, [names.index(n) for n in JOINT_NAMES]]
-    edge_two, edge_one = (np.linalg.norm(r.image_joints2d - true2d, axis=-1)[50:60].mean()
-                          for r in (two, one))
-    assert edge_two <= 1.15 * edge_one + 0.5, (edge_two, edge_one)
-    err_two, err_one = (np.linalg.norm(r.image_joints2d - true2d, axis=-1)[60:].mean()
-                        for r in (two, one))
-    assert err_two <= 1.15 * err_one + 0.5, (err_two, err_one)  # px, 240-pixel frames
-    assert len(list((tmp_path / "cache").glob("pose2d-*.npz"))) == 2  # keyed apart
+    np.testing.assert_array_equal(one.image_joints2d, two.image_joints2d)
+    cues = [convert(video, tmp_path / f"c{j}.bvh", cache_dir=None, progress=False, jobs=j,
+                    cues="all") for j in (1, 2)]
+    np.testing.assert_array_equal(cues[0].image_joints2d, cues[1].image_joints2d)
+    assert not np.array_equal(cues[0].image_joints2d, one.image_joints2d)  # the cues read
+    again = convert(video, tmp_path / "d.bvh", cache_dir=tmp_path / "cache", progress=False,
+                    jobs=1)
+    assert len(list((tmp_path / "cache").glob("pose2d-*.npz"))) == 1  # one plan, one entry
+    assert again.timings["pose2d"] < 0.5
     assert read_bvh(tmp_path / "a.bvh").n_frames == 130
     r = run_cli("convert", video, "-o", tmp_path / "c.bvh", "--jobs", "0")
     assert r.returncode == 2 and "--jobs" in r.stderr

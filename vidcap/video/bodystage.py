@@ -18,13 +18,15 @@ _VERSION = 3  # 3: the arms measured by length profiles (issue 27)
 
 def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_job: int,
                       progress, fixed: ProportionEstimate | None = None,
-                      ) -> tuple[dict, ProportionEstimate]:
+                      workers: int | None = None) -> tuple[dict, ProportionEstimate]:
     """The subject's proportions and the 2D pose fitted with them, cached or computed.
 
     ``fixed``: these proportions (e.g. :data:`vidcap.video.fit.proportions.HUMAN`'s)
     instead of an estimate from the clip. The pose's ``model_height`` is the model's
     (head top to ankles: the feet, :attr:`ProportionEstimate.foot`, left out), which
-    the lift reads against the body's height.
+    the lift reads against the body's height. ``jobs`` and ``per_job`` plan the fit's
+    chunks, ``workers`` (default ``jobs``) fit them
+    (:func:`vidcap.video.fit.parallel.fit_sequence_chunked`).
 
     Returns
     -------
@@ -55,7 +57,7 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
                    enabled=progress)
 
     pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
-                                **fit_keywords(est.factors))
+                                workers=workers, **fit_keywords(est.factors))
     out = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity,
            "model_height": pose.model_height * (1.0 - est.foot)}

@@ -59,6 +59,14 @@ from vidcap.video.userregions import region_cache_part
 #: silhouettes are out, so shorter chunks leave less of the fit to wait for after the
 #: last frame is extracted (each chunk after the first costs ``overlap`` extra frames).
 _CHUNKS_PER_JOB = 2
+#: The processes ``run`` plans the 2D fit's chunks for, whatever its ``jobs``
+#: (:func:`vidcap.video.fit.parallel.chunk_bounds`): a tracked chunk's fit depends on
+#: where the chunk starts, so chunks planned by ``jobs`` gave another fit on one process
+#: than on two (frames differed on 1 % of a 300-frame walk with the outline, on 34 % with
+#: the cues: a side view's arms named the other way round from a chunk on). Planned
+#: alike, one process fits the same chunks one after another (the same result); more
+#: than ``_PLAN_JOBS * _CHUNKS_PER_JOB`` processes leave the extra ones idle in the fit.
+_PLAN_JOBS = 2
 
 #: The fit's cues by default (``run``'s ``cues``; ``vidcap convert --cues``).
 DEFAULT_CUES = "outline"
@@ -194,20 +202,20 @@ def run(
     graph_cut, still, k_plate, k_sil = _stage_keys(video, background, ann, graph_cut, log,
                                                    still_person)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
-    per_job = _CHUNKS_PER_JOB if jobs > 1 else 1  # jobs=1: fitted here, one chunk
-    pool = _start_fit_workers(cache, k_sil, info.n_frames or 0, jobs, per_job, cues, proportions)
+    plan, per_job = _PLAN_JOBS, _CHUNKS_PER_JOB  # the chunks alike for any jobs
+    pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, proportions, jobs)
     try:
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log,
                                  colour_models=graph_cut, still_person=still, notice=True)
         with _timed(timings, "silhouettes"):
-            streamed, crops = _streamed_fit(pool, info.n_frames, jobs, per_job, cues, proportions)
+            streamed, crops = _streamed_fit(pool, info.n_frames, plan, per_job, cues, proportions)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
                                     progress=progress, regions=_regions(ann, plate),
                                     graph_cut=graph_cut, log=log, n_frames=info.n_frames)
         _report_silhouettes(sil, info.n_frames, log)
-        pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=jobs,
-                                          per_job=per_job, streamed=streamed, log=log,
+        pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
+                                          per_job=per_job, streamed=streamed, log=log, workers=jobs,
                                           progress=progress, timings=timings,
                                           cues=(cues, crops, video))
     except BaseException:
@@ -253,7 +261,7 @@ def _fixed_body_keywords(proportions: str) -> dict:
 
 
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
-               progress, timings, log, cues=(DEFAULT_CUES, None, None)):
+               progress, timings, log, cues=(DEFAULT_CUES, None, None), workers=None):
     """The 2D pose (:func:`_pose_stage`) fitted with the body's proportions: the seed's,
     a real adult's (``'human'``, :func:`vidcap.video.fit.proportions.human_proportions`,
     one fit with them), or with ``'auto'`` the subject's own estimated from a first fit
@@ -261,12 +269,13 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
     (:func:`vidcap.video.bodystage.proportions_stage`, the outline only): the 3D lift
     and the motion's skeleton then use them, ``body``'s height still the standing
     height. Returns (pose, body, estimate or None). ``cues``: ``(cues, crops, video)``
-    of :func:`_pose_stage`.
+    of :func:`_pose_stage`; ``jobs`` and ``per_job`` plan the chunks, ``workers``
+    (default ``jobs``) fit them.
     """
     with _timed(timings, "pose2d"):
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
                            streamed=streamed, progress=progress, cues=cues[0],
-                           crops=cues[1], video=cues[2],
+                           crops=cues[1], video=cues[2], workers=workers,
                            fit_kw=_fixed_body_keywords(proportions))
     if proportions == "seed":
         return pose, body, None
@@ -279,7 +288,8 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
 
         with _timed(timings, "proportions"):
             pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs,
-                                               per_job=per_job, progress=progress)
+                                               per_job=per_job, progress=progress,
+                                               workers=workers)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
 
@@ -348,15 +358,18 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
             f"(frames count from 0)", source)
 
 
-def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
-                       per_job: int, cues: str = DEFAULT_CUES, proportions: str = "seed"):
+def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs: int,
+                       per_job: int, cues: str = DEFAULT_CUES, proportions: str = "seed",
+                       workers: int | None = None):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
-    plate and extracts the silhouettes; None when the fit is serial or cached."""
+    plate and extracts the silhouettes; None when the fit is one chunk, on one process
+    (``workers``, default ``jobs``; the chunks planned for ``jobs`` are then fitted here)
+    or cached."""
     from vidcap.video.fit.parallel import FitPool, chunk_bounds
 
-    expected = chunk_bounds(n_frames, jobs, per_job=per_job)
-    if len(expected) < 2:
+    expected = chunk_bounds(n_frames or 0, jobs, per_job=per_job)
+    if len(expected) < 2 or (jobs if workers is None else workers) < 2:
         return None
     pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues,
                                                _fixed_body_keywords(proportions)))
@@ -367,7 +380,7 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int, jobs: int,
     from vidcap.video.silhouette import load_kernels
 
     load_kernels()
-    return FitPool(min(jobs, len(expected)))
+    return FitPool(min(jobs if workers is None else workers, len(expected)))
 
 
 # --------------------------------------------------------------------------- 1. plate
@@ -665,7 +678,7 @@ def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES, fit_kw: dict | None 
 
 def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, per_job: int,
                 streamed, progress, cues: str = DEFAULT_CUES, crops=None,
-                video=None, fit_kw: dict | None = None) -> dict:
+                video=None, fit_kw: dict | None = None, workers: int | None = None) -> dict:
     """The 2D pose, cached or fitted (by ``streamed`` when it was fed the silhouettes,
     else by :func:`vidcap.video.fit.parallel.fit_sequence_chunked`), with the colour
     frames' cues (``cues='all'``: ``crops``, filled while the silhouettes were
@@ -700,7 +713,7 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
         pose = streamed.finish(masks, frames=frames, progress=wrap)
     else:
         pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
-                                    frames=frames, cues=cues, **fit_kw)
+                                    frames=frames, cues=cues, workers=workers, **fit_kw)
     # the model's height is head top to ankles: a body with feet leaves them out
     hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity,

@@ -478,7 +478,7 @@ def _context():
 def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True,
                          progress=None, overlap: int = 10, min_chunk: int = 60,
                          per_job: int = 1, pool: FitPool | None = None, frames=None,
-                         **kw) -> Pose2D:
+                         workers: int | None = None, **kw) -> Pose2D:
     """:func:`vidcap.video.fit.pose2d.fit_sequence` in chunks on ``jobs`` worker processes.
 
     Parameters
@@ -486,8 +486,9 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     masks : numpy.ndarray, shape (F, H, W), bool, or MaskStack
         Silhouettes in original-frame pixels.
     jobs : int, optional
-        Worker processes (default :func:`default_jobs`). 1, or a clip shorter than
-        two chunks of ``min_chunk`` frames, runs ``fit_sequence`` in this process.
+        Worker processes (default :func:`default_jobs`), and the processes the chunks
+        are planned for (:func:`chunk_bounds`). 1, or a clip shorter than two chunks
+        of ``min_chunk`` frames, runs ``fit_sequence`` in this process.
     tracked : bool
         As in ``fit_sequence``; per-frame fitting (False) needs no overlap.
     progress : callable, optional
@@ -507,6 +508,11 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         The colour frames for the cues (``fit_sequence``'s ``frames``): cut to the
         silhouettes' boxes (:class:`~vidcap.video.fit.cueframes.FrameCrops`) once
         here, and each chunk's crops sent to its worker.
+    workers : int, optional
+        Worker processes for chunks planned for ``jobs`` (default ``jobs``; ignored
+        with ``pool``). 1: the chunks are fitted here, one after another, and joined as
+        the workers' would be: the same result as on any number of processes (a
+        tracked chunk's fit depends on where it starts, so one serial pass differs).
     **kw
         Passed to ``fit_sequence`` (``reinit_every``, ``height``, ``cues``, ...).
 
@@ -523,11 +529,14 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     jobs = max(1, int(jobs))
     own = pool is None
     if own:
-        n_chunks = len(_bounds(len(masks), jobs, tracked, overlap, min_chunk, per_job, kw))
-        if jobs == 1 or n_chunks < 2:
+        bounds = _bounds(len(masks), jobs, tracked, overlap, min_chunk, per_job, kw)
+        if len(bounds) < 2:
             return fit_sequence(masks, tracked=tracked, progress=progress, frames=frames,
                                 **kw)
-        pool = FitPool(min(jobs, n_chunks), warm=False)
+        workers = jobs if workers is None else max(1, int(workers))
+        if workers == 1:
+            return _fit_here(masks, frames, bounds, tracked, progress, kw)
+        pool = FitPool(min(workers, len(bounds)), warm=False)
     try:
         fit = StreamedFit(pool, len(masks), jobs=jobs, tracked=tracked, overlap=overlap,
                           min_chunk=min_chunk, per_job=per_job, **kw)
@@ -535,6 +544,29 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     finally:
         if own:
             pool.close()
+
+
+def _fit_here(masks: MaskStack, frames, bounds, tracked: bool, progress, kw) -> Pose2D:
+    """The chunks ``bounds`` fitted in this process one after another and joined, as
+    :class:`StreamedFit`'s workers fit them (the clip's colour model learned once)."""
+    colours = sequence_colours(masks, frames, **kw)
+    if colours is not None:
+        kw = {**kw, "colours": colours}
+    parts = []
+
+    def fitted():
+        for chunk in bounds:
+            s, b, e = chunk
+            f = _fit_end(bounds, chunk, tracked)
+            # bit-packed crops, as the workers are sent them
+            sil = masks[s:f] if isinstance(masks, MaskStack) else MaskStack.from_masks(masks[s:f])
+            parts.append(_fit_chunk(sil, None if frames is None else frames[s:f], b - s,
+                                    tracked, kw, e - s))
+            yield from range(b, e)
+
+    for _ in (fitted() if progress is None else progress(fitted(), total=len(masks))):
+        pass
+    return _join(bounds, parts, len(masks), tracked)
 
 
 def _bounds(n, jobs, tracked, overlap, min_chunk, per_job, kw):
