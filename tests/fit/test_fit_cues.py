@@ -324,3 +324,33 @@ def test_the_colour_frames_are_the_clips_first_with_a_silhouette_known_once_all_
     # a short clip: all it has; an empty one: none
     np.testing.assert_array_equal(colour_frames(has[:18]), [15, 16, 17])
     assert colour_frames(np.zeros(5, bool)).size == 0
+
+
+def test_the_fits_the_colours_are_learned_from_serve_the_main_pass(monkeypatch):
+    """The frames the clip's colour model is learned from are fitted from scratch once:
+    where the main pass fits one of them from scratch too (its first frame, a
+    challenge), it takes that fit, and the clip's fit is the same to the bit as with
+    the model handed in (learned apart, every fit made again)."""
+    from vidcap.video.fit import frame
+    from vidcap.video.fit.cuecolours import colour_frames
+    from vidcap.video.fit.tracking import sequence_colours
+
+    frames, masks, _, _ = _arm_across_torso(n=24)
+    model = sequence_colours(masks, frames)
+    calls = []
+    real = frame.fit_normalised
+
+    def counted(eng, **kw):
+        calls.append(kw.get("previous") is None)
+        return real(eng, **kw)
+
+    monkeypatch.setattr(frame, "fit_normalised", counted)
+    given = fit_sequence(masks, frames=frames, colours=model)
+    from_scratch_given = sum(calls)
+    calls.clear()
+    learned = fit_sequence(masks, frames=frames)
+    for key, value in given.arrays().items():
+        np.testing.assert_array_equal(learned.arrays()[key], value, err_msg=key)
+    # frame 0 (and a challenge) are among the frames learned from: fitted once
+    assert 0 in colour_frames(np.ones(24, bool))
+    assert sum(calls) < from_scratch_given  # (the learning's own fits are not counted)

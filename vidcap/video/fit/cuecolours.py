@@ -65,7 +65,8 @@ def colour_frames(has_pixels: np.ndarray, *, final: bool = True) -> np.ndarray |
     return idx[pick.astype(np.int64)]
 
 
-def learn_clip_colours(masks, crops, options: FitOptions, frames=None) -> ColourModel:
+def learn_clip_colours(masks, crops, options: FitOptions, frames=None,
+                       scratch: dict | None = None) -> ColourModel:
     """The clip's :class:`~vidcap.video.fit.cues.ColourModel`.
 
     Parameters
@@ -79,6 +80,10 @@ def learn_clip_colours(masks, crops, options: FitOptions, frames=None) -> Colour
         The fit's (normalised height, body).
     frames : sequence of int, optional
         The frames to learn from (default :func:`colour_frames` of the whole clip).
+    scratch : dict, optional
+        Filled with each of those frames' fit from scratch, ``{k: (state, crossed)}``
+        (:func:`vidcap.video.fit.frame.fit_normalised`'s), for the fit of the clip to
+        use again (:func:`vidcap.video.fit.frame.fit_frame`'s ``scratch``).
 
     Returns
     -------
@@ -98,7 +103,9 @@ def learn_clip_colours(masks, crops, options: FitOptions, frames=None) -> Colour
         norm = normalise_mask(np.asarray(mask, bool), height=options.height,
                               body_height=options.body_height, origin=origin)
         eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
-        st, _, _ = fit_normalised(eng, options=options)
+        st, crossed, _ = fit_normalised(eng, options=options)
+        if scratch is not None:
+            scratch[int(k)] = (st, crossed)
         image = crops.cue_image(int(k), norm)
         bins = chroma_bins(image)
         # the arms placed by the cues first: an arm across the torso, which the outline

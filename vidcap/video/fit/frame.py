@@ -314,7 +314,7 @@ def _refine(eng: _MaskEngine, st: FitState, options: FitOptions, spread: bool) -
 
 def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
               challenge: bool = False, options: FitOptions, cues=None,
-              heading: np.ndarray | None = None) -> FramePose:
+              heading: np.ndarray | None = None, scratch=None) -> FramePose:
     """:func:`fit_pose` of a normalised silhouette with options already checked.
 
     ``heading``: where the knees and ankles (left knee, left ankle, right knee, right
@@ -326,10 +326,19 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     (:func:`vidcap.video.fit.cues.cue_image`) and the clip's
     :class:`~vidcap.video.fit.cues.ColourModel`: the arms are then placed by the
     frame's cues as well (:func:`vidcap.video.fit.cues.apply_cues`); None: outline only.
+
+    ``scratch``: ``(state, crossed)`` of :func:`fit_normalised` of ``norm`` without a
+    previous pose (this frame's fit from scratch), when it was made already (the clip's
+    colour model is learned from such fits, :mod:`vidcap.video.fit.cuecolours`): used
+    instead of fitting the frame from scratch again (the same fit).
     """
     eng = _MaskEngine(norm, caps=options.caps, body=options.body, foot=options.foot)
     start = None if previous is None else warm_start(eng, previous, options)
-    st, crossed, warm = fit_normalised(eng, previous=previous, options=options, start=start)
+    if previous is None and scratch is not None:
+        (st, crossed), warm = scratch, False
+    else:
+        st, crossed, warm = fit_normalised(eng, previous=previous, options=options,
+                                           start=start)
     compared = False  # the track already beat this frame's fresh fit
     if previous is not None and not warm:
         tracked = track_below_threshold(eng, st, previous, options, start=start)
@@ -344,7 +353,8 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
                          or (options.fallback > 0 and tracked_s < LEAN_BELOW))
     if slipping and not compared:
         # the track is slipping: fit this frame from scratch, keep the better fit
-        fresh, fresh_crossed, _ = fit_normalised(eng, options=options)
+        fresh, fresh_crossed = (fit_normalised(eng, options=options)[:2] if scratch is None
+                                else scratch)
         if options.polish:
             fresh = polished(eng, fresh, options)
         if eng.similarity(fresh) > eng.similarity(st):

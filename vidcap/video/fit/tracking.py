@@ -301,8 +301,11 @@ class _Normalised:
         # cut to the silhouettes' boxes, as the pipeline sends them to chunked fits
         self.frames = (None if frames is None
                        else as_frame_crops(frames, masks, height=options.height))
+        # the colour model is learned from fits from scratch of a few frames, which the
+        # main pass would make again where it challenges the track (the same frames)
+        self.scratch: dict = {}
         if self.frames is not None and colours is None:
-            colours = learn_clip_colours(masks, self.frames, options)
+            colours = learn_clip_colours(masks, self.frames, options, scratch=self.scratch)
         self.colours = colours  # the clip's, the same for every frame
 
     def cues(self, k: int, norm: NormalisedMask):
@@ -348,7 +351,7 @@ def _track(normalised: _Normalised, frames, out: _Frames, *, tracked: bool, rein
                    and before.warm else None)
         fp = fit_frame(norm, previous=start_pose if tracked else None,
                        challenge=challenge, options=options, cues=normalised.cues(k, norm),
-                       heading=heading)
+                       heading=heading, scratch=normalised.scratch.pop(k, None))
         if challenge or not fp.warm:
             last_fresh = k
         out.put(k, fp)
