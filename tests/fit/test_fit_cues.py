@@ -310,19 +310,27 @@ def test_edges_alone_do_not_move_an_arm_but_a_forearm_on_skin_does():
 
 
 def test_the_colour_frames_are_the_clips_first_with_a_silhouette_known_once_all_are_in():
-    from vidcap.video.fit.cuecolours import COLOUR_SAMPLES, COLOUR_SPAN, colour_frames
+    from vidcap.video.fit.cuecolours import (
+        COLOUR_SAMPLES,
+        COLOUR_SPAN,
+        COLOUR_STEP,
+        colour_frames,
+    )
+    from vidcap.video.fit.tracking import REINIT_EVERY
 
     has = np.zeros(200, bool)
     has[15:] = True  # the person enters at frame 15
     got = colour_frames(has)
-    assert len(got) == COLOUR_SAMPLES and got[0] == 15 and got[-1] == 15 + COLOUR_SPAN - 1
-    assert np.all(np.diff(got) > 0) and has[got].all()
+    assert len(got) == COLOUR_SAMPLES and got[0] == 15 and got[-1] < 15 + COLOUR_SPAN
+    # the frames a tracked fit from frame 15 challenges its track at
+    assert COLOUR_STEP == REINIT_EVERY and np.all(np.diff(got) == REINIT_EVERY)
+    assert has[got].all()
     # a streamed clip: unknown while fewer than COLOUR_SPAN frames with a person are in,
     # then the same frames whatever comes later
     assert colour_frames(has[:15 + COLOUR_SPAN - 1], final=False) is None
     np.testing.assert_array_equal(colour_frames(has[:15 + COLOUR_SPAN], final=False), got)
     # a short clip: all it has; an empty one: none
-    np.testing.assert_array_equal(colour_frames(has[:18]), [15, 16, 17])
+    np.testing.assert_array_equal(colour_frames(has[:27]), [15, 25])
     assert colour_frames(np.zeros(5, bool)).size == 0
 
 

@@ -7,11 +7,14 @@ went (the model of frame k holding frames 0..k), every frame of a chunked fit
 knew only its own frames), and the fits differed on half of the frames. Here the model
 is one for the whole clip, learned before any frame is fitted from a few frames of the
 clip's start (:func:`colour_frames`: frames with a silhouette, the first
-:data:`COLOUR_SPAN` of them, :data:`COLOUR_SAMPLES` evenly spread), each fitted from
-scratch (a fit that depends on that frame and the frames sampled before it only), and
-handed to every chunk. The start of the clip, so a streamed fit (the pipeline's, chunks sent while
-later frames are still being extracted) has it as soon as its first chunk is ready
-(chunks hold at least 60 frames).
+:data:`COLOUR_SPAN` of them, every :data:`COLOUR_STEP`-th), each fitted from scratch (a
+fit that depends on that frame and the frames sampled before it only), and handed to
+every chunk. Those are the frames where a tracked fit challenges its track with a fit
+from scratch (:data:`vidcap.video.fit.tracking.REINIT_EVERY` apart from the first), so
+one serial fit makes those fits once (:func:`learn_clip_colours`' ``scratch``). The
+start of the clip, so a streamed fit (the pipeline's, chunks sent while later frames
+are still being extracted) has it as soon as its first chunk is ready (chunks hold at
+least 60 frames).
 """
 
 from __future__ import annotations
@@ -33,9 +36,14 @@ from vidcap.video.masks import frames_with_pixels
 
 #: The model is learned from the clip's first this many frames with a silhouette.
 COLOUR_SPAN = 60
-#: ... at this many of them, evenly spread (each costs a fit from scratch and a cue
-#: search over every arm angle, ~8 ms).
-COLOUR_SAMPLES = 10
+#: ... every this many of them (each costs a fit from scratch, ~5 ms, which the main
+#: pass of a serial fit takes on where it challenges the track, and a cue search over
+#: every arm angle, ~3 ms): tracking.REINIT_EVERY, the challenges' spacing. (Ten frames
+#: evenly spread, none shared with the main pass, cost the 60-frame walk of
+#: ``pose2d_speed.py`` 1.5 ms a frame.)
+COLOUR_STEP = 10
+#: The most frames the model is learned from.
+COLOUR_SAMPLES = -(-COLOUR_SPAN // COLOUR_STEP)
 
 
 def colour_frames(has_pixels: np.ndarray, *, final: bool = True) -> np.ndarray | None:
@@ -53,16 +61,14 @@ def colour_frames(has_pixels: np.ndarray, *, final: bool = True) -> np.ndarray |
     Returns
     -------
     numpy.ndarray of int or None
-        Up to :data:`COLOUR_SAMPLES` frame indices, ascending, evenly spread over the
-        first :data:`COLOUR_SPAN` frames with a silhouette (empty: none has one).
+        Up to :data:`COLOUR_SAMPLES` frame indices, ascending: every
+        :data:`COLOUR_STEP`-th of the first :data:`COLOUR_SPAN` frames with a silhouette,
+        from the first (empty: none has one).
     """
     idx = np.flatnonzero(np.asarray(has_pixels, bool))[:COLOUR_SPAN]
     if len(idx) < COLOUR_SPAN and not final:
         return None
-    if not len(idx):
-        return idx
-    pick = np.unique(np.round(np.linspace(0, len(idx) - 1, min(COLOUR_SAMPLES, len(idx)))))
-    return idx[pick.astype(np.int64)]
+    return idx[::COLOUR_STEP]
 
 
 def learn_clip_colours(masks, crops, options: FitOptions, frames=None,
@@ -120,4 +126,5 @@ def learn_clip_colours(masks, crops, options: FitOptions, frames=None,
     return model
 
 
-__all__ = ["COLOUR_SAMPLES", "COLOUR_SPAN", "colour_frames", "learn_clip_colours"]
+__all__ = ["COLOUR_SAMPLES", "COLOUR_SPAN", "COLOUR_STEP", "colour_frames",
+           "learn_clip_colours"]
