@@ -124,11 +124,14 @@ class ColourModel:
     def __init__(self):
         self.counts = np.zeros((2, _BINS * _BINS))
         self._table = None
+        self._learned = None
 
     @property
     def learned(self) -> bool:
         """Both regions have been seen (at least a few pixels each)."""
-        return bool((self.counts.sum(axis=1) >= 8).all())
+        if self._learned is None:  # read by every frame's cue maps: kept till learn()
+            self._learned = bool((self.counts.sum(axis=1) >= 8).all())
+        return self._learned
 
     def learn(self, bins: np.ndarray, skin: np.ndarray, cloth: np.ndarray) -> None:
         """Add the pixels of the ``skin`` and ``cloth`` masks (h, w bool) of one frame,
@@ -136,7 +139,7 @@ class ColourModel:
         n = _BINS * _BINS
         self.counts[0] += np.bincount(bins[skin], minlength=n)
         self.counts[1] += np.bincount(bins[cloth], minlength=n)
-        self._table = None
+        self._table = self._learned = None
 
     def table(self) -> np.ndarray:
         """P(skin | chromaticity bin), (``_BINS`` ** 2,) float32."""
@@ -332,6 +335,11 @@ def cue_kernels():
     """The compiled cue kernel module, or None (numpy path; the same terms)."""
     if _kernels() is None:  # the fit's switch (tests turn the compiled paths off)
         return None
+    return _cue_module()
+
+
+@functools.cache
+def _cue_module():
     from vidcap.video.fit import _cue_kernels
     return _cue_kernels
 
@@ -407,10 +415,10 @@ def _fore_options(fu: float, fl: float) -> tuple[tuple[float, float], ...]:
     so the outline fit draws it short; the frame's skin and edges can show it whole.
     """
     out = [(float(fu), float(fl))]
-    for opt in ((u, low) for u in (fu, 0.7, 1.0) for low in (fl, 1.0)):
-        opt = (float(opt[0]), float(opt[1]))
-        if min(max(abs(a - b) for a, b in zip(opt, o, strict=True)) for o in out) > 0.05:
-            out.append(opt)
+    for u in (float(fu), 0.7, 1.0):
+        for low in (float(fl), 1.0):
+            if all(max(abs(u - a), abs(low - b)) > 0.05 for a, b in out):
+                out.append((u, low))
     return tuple(out)
 
 
