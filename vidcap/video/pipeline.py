@@ -93,7 +93,7 @@ _PLATE_VERSION = 5
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
 #: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
 #: than handed back as the new fit's.
-_POSE_VERSION = 2
+_POSE_VERSION = 3
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
