@@ -209,10 +209,9 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     found = _best_run(weak_pair, n, min_bins, MIN_SHARE * total, start=start)
     if found is None:
         return 0
-    colour = binned(cv2.bitwise_and(box, box, mask=m).sum(axis=1, dtype=np.int32)
-                    ).astype(np.float32) / per_bin[:, None]  # (nb, 3) mean frame colour
-    vec = colour - binned(cv2.bitwise_and(ref, ref, mask=m).sum(axis=1, dtype=np.int32)
-                          ).astype(np.float32) / per_bin[:, None]  # mean difference
+    # (nb, 3) mean frame colour, and the mean difference from the plate
+    colour = binned(_row_sums(box, m)).astype(np.float32) / per_bin[:, None]
+    vec = colour - binned(_row_sums(ref, m)).astype(np.float32) / per_bin[:, None]
     # Not the same clothes carried on: a reflection's colour is the surface's, tinted;
     # legs against a darker floor are weaker than the shirt against a white wall but of
     # the shirt's colour (sports2d_walk_turn: black trousers).
@@ -232,6 +231,15 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     if found is None:
         return 0
     return _cut_run(found, box, ref, m, level, step, start)
+
+
+def _row_sums(image: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """(rows, 3) int32 sums of the 3-channel ``image``'s pixels under the mask ``m``,
+    per row: ``cv2.reduce`` gives the same integers as NumPy's ``sum(axis=1)`` about 8x
+    faster (NumPy's strided reduction with a cast took ~4 ms a 700x300 box at
+    1000x1000)."""
+    masked = cv2.bitwise_and(image, image, mask=m)
+    return cv2.reduce(masked, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)[:, 0]
 
 
 def _cut_run(found, box, ref, m, level, step: int, start) -> int:
