@@ -289,3 +289,17 @@ def test_letterbox_bars_are_found_only_at_the_edges():
     means[1, 0, 7] = 90.0  # a bar is dark in every sample, and runs from the edge
     box = _letterbox(means)
     assert box[-2:].all() and not box[:-2].any()
+
+
+def test_l1_adds_the_channels_as_numpys_reduction_does():
+    """The finish's L1 residual (three additions) equals ``np.abs(r).sum(axis=-1)`` to
+    the bit, whatever the layout."""
+    from vidcap.video.background import _l1
+
+    rng = np.random.default_rng(5)
+    for shape in [(24, 50, 40, 3), (3, 7, 5, 3), (100, 3)]:
+        r = (rng.integers(0, 256, shape).astype(np.float32)
+             - rng.uniform(0, 255, shape).astype(np.float32) * np.float32(1.0371))
+        assert np.array_equal(_l1(r), np.abs(r).sum(axis=-1))
+        strided = r[::2, ..., :] if r.ndim == 4 else r
+        assert np.array_equal(_l1(strided), np.abs(strided).sum(axis=-1))

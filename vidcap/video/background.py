@@ -887,17 +887,20 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
     weights = weights[:, ::st, ::st]
     ref = plate[::st, ::st].astype(np.float32)[None] * gains[:, None, None, :]
     resid = frames.astype(np.float32) - ref  # (K, h, w, 3)
-    l1 = np.abs(resid).sum(axis=-1)
+    l1 = _l1(resid)
     bgw = weights > 0
     if method == "median":
         # Background = close to the median; the bulk of pixels in most frames.
         bgw = l1 < max(3.0 * 1.4826 * float(np.median(l1)) + 6.0, MIN_THRESHOLD)
         conf = _upsample(bgw.mean(axis=0).astype(np.float32), full_hw)
-    sel = resid[bgw]
-    if len(sel) < 16:
-        sel = resid.reshape(-1, 3)
-    if len(sel) > 200_000:  # plenty for a robust spread; the median is the cost
-        sel = sel[:: len(sel) // 200_000]
+    # The background samples' residuals, every n-th of them: their positions first
+    # (``resid[bgw]`` copied all of them, ~0.9 s of CPU for 24 samples at 1000x1000).
+    at = np.flatnonzero(bgw)
+    if len(at) < 16:
+        at = np.arange(bgw.size)
+    if len(at) > 200_000:  # plenty for a robust spread; the median is the cost
+        at = at[:: len(at) // 200_000]
+    sel = resid.reshape(-1, 3)[at]
     sigma = (1.4826 * np.median(np.abs(sel - np.median(sel, axis=0)), axis=0)).astype(
         np.float32)
     thr = _threshold_from_sigma(sigma, l1[bgw] if bgw.any() else l1.ravel())
@@ -926,6 +929,15 @@ def _finish(frames, gains, plate, weights, conf, method, idx, name, never_seen=N
         never_seen=never_seen, noise_sigma=sigma, noise_map=noise_map.astype(np.float32),
         threshold=float(thr), method=method, n_samples=k,
         moving_fraction=moving_fraction, sample_indices=np.asarray(idx))
+
+
+def _l1(resid: np.ndarray) -> np.ndarray:
+    """``np.abs(resid).sum(axis=-1)`` of (..., 3) float32 residuals, the same values: the
+    channels added in the order NumPy's reduction adds them, as three whole-array
+    additions (a reduction over a 3-long axis runs an inner loop per pixel, ~7x
+    slower)."""
+    a = np.abs(resid)
+    return a[..., 0] + a[..., 1] + a[..., 2]
 
 
 def _upsample(img: np.ndarray, hw) -> np.ndarray:
