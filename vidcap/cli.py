@@ -85,7 +85,10 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_USER_ERROR
     try:
         _check_outputs(args)
-        return int(args._run(args) or 0)
+        from vidcap.video.hugepages import small_pages
+
+        with small_pages():  # (the video stages' large temporaries: vidcap.video.hugepages)
+            return int(args._run(args) or 0)
     except VidcapError as exc:
         if args.debug:
             traceback.print_exc()

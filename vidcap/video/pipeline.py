@@ -942,7 +942,10 @@ def convert(
         cache_dir = out_bvh.parent / ".vidcap-cache"
     elif cache_dir is False:
         cache_dir = None
-    result = run(video, cache_dir=cache_dir, **options)
+    from vidcap.video.hugepages import small_pages
+
+    with small_pages():  # (the video stages' large temporaries: vidcap.video.hugepages)
+        result = run(video, cache_dir=cache_dir, **options)
     motion, times = result.motion_and_times(out_bvh)
     write_motion(out_bvh, motion, rig=rig, times=times)
     if save is not None:
