@@ -27,3 +27,21 @@ def test_table_saturates_and_rounds():
     assert table[3, 0, 1] == 2  # 1.5 rounds to even, as OpenCV does
     assert table[5, 0, 1] == 2  # 2.5 too
     assert np.array_equal(table[:, 0, 2], np.arange(256))
+
+
+def test_gained_plate_crops_equal_the_lookup_of_each_crop():
+    """Crops inside the last one computed are cut from it; others computed anew; the
+    bytes always those of apply_gain on the crop (and the plate itself without a gain)."""
+    from vidcap.video.gaintable import GainedPlate
+
+    rng = np.random.default_rng(4)
+    plate = rng.integers(0, 256, (60, 50, 3), dtype=np.uint8)
+    g = (1.07, 0.93, 1.21)
+    gp = GainedPlate(plate, g)
+    for box in [(5, 50, 3, 40), (10, 30, 3, 20), (5, 50, 3, 40), (0, 60, 0, 50),
+                (40, 60, 30, 50), (2, 9, 45, 50)]:
+        y0, y1, x0, x1 = box
+        assert np.array_equal(gp.crop(*box), apply_gain(plate[y0:y1, x0:x1], g)), box
+    plain = GainedPlate(plate, None)
+    assert np.shares_memory(plain.crop(3, 9, 4, 8), plate)
+    assert np.array_equal(plain.crop(3, 9, 4, 8), plate[3:9, 4:8])

@@ -28,6 +28,15 @@ def _kernels():
     return _silhouette_kernels
 
 
+def _plate_crop(p, g, gained, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
+    """The full-resolution plate's crop at the frame's gain ``g`` (unscaled where the
+    gain is within 1 % of 1), from ``gained`` when the caller has it."""
+    if gained is not None:
+        return gained.crop(y0, y1, x0, x1)
+    ref = p.plate_full[y0:y1, x0:x1]
+    return apply_gain(ref, g) if np.abs(g - 1).max() > 0.01 else ref
+
+
 def rect_within(mask: np.ndarray, box) -> tuple[int, int, int, int]:
     """``cv2.boundingRect(mask)`` when every non-zero pixel of ``mask`` lies in ``box``
     ``(x0, y0, x1, y1)``: only the box is scanned (a 640x480 mask took ~35 us)."""
@@ -37,7 +46,7 @@ def rect_within(mask: np.ndarray, box) -> tuple[int, int, int, int]:
 
 
 def edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p,
-                     floor: int = 0, reach=None):
+                     floor: int = 0, reach=None, gained=None):
     """Re-decide the pixels near the outline by the person's own contrast.
 
     Antialiasing, optics and the codec (4:2:0 colour at half resolution, the
@@ -53,6 +62,8 @@ def edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p,
     than the band) the outline stays. Work is confined to the mask's bounding
     rectangle. ``reach``: a box ``(x0, y0, x1, y1)`` holding every pixel of the mask,
     when the caller has one. Returns such a box after the change (the crop worked on).
+    ``gained``: the full-resolution plate at the frame's gain ``g``
+    (:class:`vidcap.video.gaintable.GainedPlate`), when the caller has one.
     """
     r = p.edge_band
     x, y, w, h = cv2.boundingRect(mask) if reach is None else rect_within(mask, reach)
@@ -62,9 +73,7 @@ def edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p,
     k = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     inner = cv2.erode(m, k)
     near = cv2.dilate(m, k)
-    ref = p.plate_full[y0:y1, x0:x1]
-    if np.abs(g - 1).max() > 0.01:
-        ref = apply_gain(ref, g)
+    ref = _plate_crop(p, g, gained, y0, y1, x0, x1)
     kern = _kernels()
     l1 = np.empty(m.shape, np.uint8)
     kern.l1_sum(cv2.absdiff(frame[y0:y1, x0:x1], ref), l1)
@@ -86,14 +95,14 @@ def edge_by_contrast(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p,
 
 
 def refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p,
-                 floor: int = 0, reach=None):
+                 floor: int = 0, reach=None, gained=None):
     """Re-decide, at full resolution, the pixels near an outline found at work scale.
 
     The band of ``work_scale`` pixels either side of the outline takes the
     full-resolution threshold test (no shadow test); the rest of the mask stays.
     Work is confined to the mask's bounding rectangle, so it grows with the
-    person's outline, not with the frame. ``reach``, and the box returned: as
-    :func:`edge_by_contrast`'s.
+    person's outline, not with the frame. ``reach``, ``gained`` and the box returned:
+    as :func:`edge_by_contrast`'s.
     """
     r = int(np.ceil(max(p.fx, p.fy)))
     x, y, w, h = cv2.boundingRect(mask) if reach is None else rect_within(mask, reach)
@@ -102,9 +111,7 @@ def refine_edges(mask: np.ndarray, frame: np.ndarray, g: np.ndarray, p,
     m = mask[y0:y1, x0:x1]
     k = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
     band = cv2.subtract(cv2.dilate(m, k), cv2.erode(m, k))
-    ref = p.plate_full[y0:y1, x0:x1]
-    if np.abs(g - 1).max() > 0.01:
-        ref = apply_gain(ref, g)
+    ref = _plate_crop(p, g, gained, y0, y1, x0, x1)
     if p.edge_luma:
         # Video codecs keep colour at half resolution (4:2:0): a colour edge
         # bleeds a pixel or two into the background, brightness does not.

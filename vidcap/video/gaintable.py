@@ -14,7 +14,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-__all__ = ["apply_gain", "gain_table"]
+__all__ = ["GainedPlate", "apply_gain", "gain_table"]
 
 #: Every byte value, once per channel: (256, 1, 3) uint8.
 _BYTES = np.repeat(np.arange(256, dtype=np.uint8).reshape(256, 1, 1), 3, axis=2)
@@ -61,3 +61,39 @@ def apply_gain(image: np.ndarray, gain) -> np.ndarray:
     True
     """
     return cv2.LUT(image, gain_table(gain))
+
+
+class GainedPlate:
+    """A plate at one frame's exposure, computed crop by crop as the frame's stages ask.
+
+    The full-resolution stages of a silhouette (the edge band,
+    :func:`vidcap.video.edgeband.edge_by_contrast`, then the reflection test,
+    :func:`vidcap.video.reflection.drop_reflection`) each scaled their crop of the plate,
+    the reflection test twice, and each crop lies inside the edge band's: a crop inside
+    the last one computed is cut from it (the lookup is per pixel: the same bytes).
+    At 1000x1000 that is ~0.3 s of the silhouettes' CPU over 394 frames.
+
+    Parameters
+    ----------
+    plate : numpy.ndarray, shape (H, W, 3), uint8
+    gain : array_like, shape (3,), or None
+        The frame's per-channel gain (B, G, R); None: the plate as it is.
+    """
+
+    def __init__(self, plate: np.ndarray, gain=None):
+        self.plate = plate
+        self.table = None if gain is None else gain_table(gain)
+        self._last = None  # ((y0, y1, x0, x1), the crop at the gain)
+
+    def crop(self, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
+        """``plate[y0:y1, x0:x1]`` at the gain (a view of the plate or of a crop computed
+        before: do not write to it)."""
+        if self.table is None:
+            return self.plate[y0:y1, x0:x1]
+        if self._last is not None:
+            (a0, a1, b0, b1), done = self._last
+            if a0 <= y0 and y1 <= a1 and b0 <= x0 and x1 <= b1:
+                return done[y0 - a0:y1 - a0, x0 - b0:x1 - b0]
+        done = cv2.LUT(self.plate[y0:y1, x0:x1], self.table)
+        self._last = ((y0, y1, x0, x1), done)
+        return done

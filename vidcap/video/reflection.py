@@ -39,7 +39,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from vidcap.video.gaintable import apply_gain
+from vidcap.video.gaintable import GainedPlate
 
 __all__ = ["CUT_REFLECTIONS", "drop_reflection"]
 
@@ -128,8 +128,9 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
         The person's mask; changed in place.
     frame : numpy.ndarray, shape (H, W, 3), uint8
         The frame (BGR).
-    plate : numpy.ndarray, shape (H, W, 3), uint8
-        The background plate.
+    plate : numpy.ndarray, shape (H, W, 3), uint8, or GainedPlate
+        The background plate, or the plate at the frame's exposure already
+        (:class:`vidcap.video.gaintable.GainedPlate`; then ``gain`` is not used).
     gain : array-like, shape (3,), optional
         The frame's per-channel exposure relative to the plate (B, G, R; default 1).
     row_step : int
@@ -150,12 +151,13 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
         return 0
     m = m8[top:top + height, x0:x0 + w]
     box = frame[top:top + height, x0:x0 + w]
-    ref = plate[top:top + height, x0:x0 + w]
-    scale = None if gain is None else tuple(float(v) for v in np.asarray(gain, np.float64))
+    if not isinstance(plate, GainedPlate):
+        plate = GainedPlate(plate, None if gain is None else
+                            tuple(float(v) for v in np.asarray(gain, np.float64)))
 
-    def scaled(rows):
-        """Plate rows at the frame's exposure."""
-        return rows if scale is None else apply_gain(rows, scale)
+    def scaled(r0):
+        """The plate's rows from ``r0`` on, at the frame's exposure."""
+        return plate.crop(top + r0, top + height, x0, x0 + w)
 
     def row_level(r0, rows):
         """The summed L1 difference over the mask per row, rows ``r0`` on against the
@@ -192,10 +194,10 @@ def drop_reflection(mask: np.ndarray, frame: np.ndarray, plate: np.ndarray,
     if nb - 1 - min_bins <= mid:
         return 0
     gate = WEAK if START_WEAK is None else max(WEAK, START_WEAK)
-    lower = binned(row_level(mid * step, scaled(ref[mid * step:])), mid) / per_bin[mid:]
+    lower = binned(row_level(mid * step, scaled(mid * step)), mid) / per_bin[mid:]
     if not np.any(lower[2:nb - min_bins + 1 - mid] < gate * lower[:nb - min_bins - 1 - mid]):
         return 0
-    ref = scaled(ref)  # once for the rest (the lower half alone above)
+    ref = scaled(0)  # once for the rest (the lower half alone above)
     level = binned(row_level(0, ref)) / per_bin
     seen = n > 0
     # weak_pair[i, j]: bin i is weak against bin j. The level alone first: most of the

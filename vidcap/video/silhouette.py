@@ -33,7 +33,7 @@ from vidcap.video import reflection
 from vidcap.video.background import BackgroundModel, _threshold_from_sigma
 from vidcap.video.blobholes import open_large_holes
 from vidcap.video.edgeband import edge_by_contrast, rect_within, refine_edges
-from vidcap.video.gaintable import apply_gain
+from vidcap.video.gaintable import GainedPlate, apply_gain
 from vidcap.video.masks import MaskStack
 
 __all__ = [
@@ -447,14 +447,15 @@ def silhouette_frame(frame: np.ndarray, p: _Params, prev_box=None, keep=None
                 reach = _union(reach, cv2.boundingRect(c), mask.shape)
             for i in parts:
                 open_large_holes(mask, contours[i], fg, p)
+            # the full-resolution plate at the frame's gain, scaled once for both
+            gained = GainedPlate(p.plate_full, g if scaled else None)
             if p.edge_band > 0:
-                reach = edge_by_contrast(mask, full_frame, g, p, floor, reach)
+                reach = edge_by_contrast(mask, full_frame, g, p, floor, reach, gained)
             elif p.work_size is not None:
-                reach = refine_edges(mask, full_frame, g, p, floor, reach)
+                reach = refine_edges(mask, full_frame, g, p, floor, reach, gained)
             x, y, w, h = rect_within(mask, reach)
             if p.reflections and reflection.drop_reflection(
-                    mask, full_frame, p.plate_full, g if scaled else None,
-                    max(1, round(p.fy)), (x, y, w, h)):
+                    mask, full_frame, gained, None, max(1, round(p.fy)), (x, y, w, h)):
                 x, y, w, h = rect_within(mask, reach)
             if keep is not None:  # (the edge refinement may reach into a region)
                 mask &= keep[1]
