@@ -171,3 +171,26 @@ def test_a_still_part_unlike_the_scene_around_stays_person_when_colours_are_unsu
     assert person[:, :, :5].all() and not person[:, :, 5:20].any()
     monkeypatch.setattr(appearance, "NEVER_KEEP", 0.0)
     assert not appearance._keep_unlike(wk, llr)[:, 10:30, 20:42].any()
+
+
+def test_small_samples_are_made_once_per_set_of_samples():
+    """The passes' work images: the same array for the same samples, gains and size
+    (read only), made anew for other gains, another size or other samples; equal to
+    the resize, divide and clip they stand for."""
+    import cv2
+
+    from vidcap.video.appearance import _small_samples
+
+    rng = np.random.default_rng(8)
+    frames = rng.integers(0, 256, (4, 40, 30, 3), dtype=np.uint8)
+    gains = rng.uniform(0.9, 1.1, (4, 3)).astype(np.float32)
+    a = _small_samples(frames, gains, 15, 20)
+    want = np.clip(np.stack([cv2.resize(f, (15, 20), interpolation=cv2.INTER_AREA)
+                             for f in frames]).astype(np.float32)
+                   / gains[:, None, None, :], 0, 255)
+    assert np.array_equal(a, want) and not a.flags.writeable
+    assert _small_samples(frames, gains.copy(), 15, 20) is a
+    assert _small_samples(frames, gains * 1.01, 15, 20) is not a
+    b = _small_samples(frames, gains, 10, 12)
+    assert b.shape == (4, 12, 10, 3)
+    assert _small_samples(frames.copy(), gains, 10, 12) is not b
