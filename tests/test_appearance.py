@@ -194,3 +194,13 @@ def test_small_samples_are_made_once_per_set_of_samples():
     b = _small_samples(frames, gains, 10, 12)
     assert b.shape == (4, 12, 10, 3)
     assert _small_samples(frames.copy(), gains, 10, 12) is not b
+
+
+def test_small_samples_are_not_kept_past_their_samples():
+    from vidcap.video import appearance
+
+    frames = np.zeros((3, 20, 20, 3), np.uint8)
+    appearance._small_samples(frames, np.ones((3, 3), np.float32), 10, 10)
+    assert appearance._LAST_SMALL is not None
+    del frames
+    assert appearance._LAST_SMALL is None

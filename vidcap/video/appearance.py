@@ -252,7 +252,7 @@ def _small_samples(frames: np.ndarray, gains: np.ndarray, w: int, h: int) -> np.
 
     The plate's passes (the appearance plate, the absorbed person, the colour models,
     the unseen flags) each build a :class:`_Work` from the same samples: the last ones
-    are kept (weakly: not past the plate stage), ~0.1 s of CPU a pass at 1000x1000.
+    are kept while the samples live, ~0.1 s of CPU a pass at 1000x1000.
     The samples are never changed in place.
     """
     global _LAST_SMALL
@@ -266,10 +266,18 @@ def _small_samples(frames: np.ndarray, gains: np.ndarray, w: int, h: int) -> np.
     small = np.clip(small.astype(np.float32) / gains[:, None, None, :], 0, 255)
     small.flags.writeable = False
     try:
-        _LAST_SMALL = (weakref.ref(frames), np.array(gains), (w, h), small)
+        # (dropped with the samples: nothing is held past the plate stage)
+        _LAST_SMALL = (weakref.ref(frames, _forget_small), np.array(gains), (w, h), small)
     except TypeError:  # (an array-like that takes no weak reference: not kept)
         _LAST_SMALL = None
     return small
+
+
+def _forget_small(ref) -> None:
+    """Drop the small samples of :func:`_small_samples` once their samples are gone."""
+    global _LAST_SMALL
+    if _LAST_SMALL is not None and _LAST_SMALL[0] is ref:
+        _LAST_SMALL = None
 
 
 class _Work:
