@@ -40,7 +40,9 @@ from vidcap.body import JOINT_NAMES
 #: track_below_threshold) among its variants on these four (frames looked at: cam1, cam3;
 #: the validation clips' frames were looked at for the diagnosis only, nothing chosen).
 TUNING = ("onebyone_room 233-445", "pose2sim_balance_cam1", "pose2sim_balance_cam3",
-          "pose2sim_balance_cam4", "mmskeleton_taichi")
+          "pose2sim_balance_cam4", "mmskeleton_taichi",
+          # the came-stayed-went plate pass (vidcap.video.stayed) was tuned on these two
+          "onebyone_room 66-194", "onebyone_room 1242-1357")
 
 
 def _score(clip: RealClip, joints, compare, limb_joints) -> tuple[dict, float, np.ndarray]:
