@@ -6,6 +6,10 @@ later processes instead of compiling again. No fastmath: :func:`span_setup` and
 :func:`span_row` compute a segment's row span with exactly the float operations of
 :func:`vidcap.video.fit.raster.segment_spans`, so the compiled and numpy paths cover the
 same pixels (tests/fit/test_fit_raster.py checks it).
+
+Loops over rows read a segment's set-up as a tuple of floats, not as the view
+``setup[k]``: numba counts references to each array view it makes and to each array
+an inlined function takes (atomic increments, which cost more than a row's span).
 """
 
 import math
@@ -97,6 +101,26 @@ def span_cols(q, x1, y1, y, caps, w):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def span_cols_flat(q, y0, y1, w, first, last):
+    """:func:`span_cols` of a segment without caps on rows y0 <= y < y1 into ``first``,
+    ``last`` [y]: the same floats, in a loop without branches (which the compiler
+    vectorises)."""
+    cx, cy, half_a, half_c, s_a, s_c = q[0], q[1], q[2], q[3], q[4], q[5]
+    fw = float(w)
+    for y in range(y0, y1):
+        dyc = float(y) - cy
+        mid_a = cx - dyc * s_a
+        mid_c = cx + dyc * s_c
+        left = max(mid_a - half_a, mid_c - half_c)
+        right = min(mid_a + half_a, mid_c + half_c)
+        lo = np.ceil(min(max(left, -1e6), 1e6))
+        hi = np.floor(min(max(right, -1e6), 1e6))
+        f = min(max(lo, 0.0), fw)
+        first[y] = int(f)
+        last[y] = int(min(max(hi + 1.0, f), fw))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def row_range(p0, p1, radii, b, y0, y1):
     """Rows y0 <= y < y1 that candidate b's segments may cover (a conservative window).
 
@@ -170,7 +194,9 @@ def count_one(p0, p1, radii, b, cum, t, y0, y1, caps, first, last, setup, out):
         for k in range(n_k):
             if fy < setup[k, 9] or fy >= setup[k, 10]:
                 continue
-            f, e = span_cols(setup[k], p1[b, k, 0], p1[b, k, 1], fy, caps, w)
+            q = (setup[k, 0], setup[k, 1], setup[k, 2], setup[k, 3], setup[k, 4],
+                 setup[k, 5], setup[k, 6], setup[k, 7], setup[k, 8])  # not a view
+            f, e = span_cols(q, p1[b, k, 0], p1[b, k, 1], fy, caps, w)
             if e <= f:
                 continue
             m = insert_run(first, last, m, f, e)
@@ -306,15 +332,19 @@ def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, 
     upper and lower arm (radii (2,)) against one table.
 
     The candidates of one upper arm direction (consecutive rows of du) share its row
-    spans: they are computed once per direction, not once per candidate (the same
-    spans :func:`count_one` computes, so the same counts).
+    spans and their counts: computed once per direction (the spans :func:`count_one`
+    computes), summed over rows as prefix sums. A candidate's own work is the rows its
+    lower arm can reach: there the union of the two runs counts the upper arm's, plus
+    the lower arm's, less their overlap (integers: the counts of the merged runs).
     """
-    h = cum.shape[2]
     w = cum.shape[3] - 1
     n_c = cum.shape[1]
-    p0, p1, first, last, setup, d = candidate_scratch(2)
-    up_f = np.zeros(h, np.int64)  # the current upper arm's run on each row: [f, e)
-    up_e = np.zeros(h, np.int64)
+    p0, p1, _, _, setup, d = candidate_scratch(2)
+    up_f = np.zeros(y1 + 1, np.int64)  # the current upper arm's run on each row: [f, e)
+    up_e = np.zeros(y1 + 1, np.int64)
+    up_sum = np.zeros((n_c, y1 + 1), np.int64)  # its counts on rows y0 .. y - 1
+    low_f = np.zeros(y1 + 1, np.int64)  # the lower arm's
+    low_e = np.zeros(y1 + 1, np.int64)
     prev_x, prev_y = np.nan, np.nan
     for b in range(du.shape[0]):
         ex = shoulder[0] + du[b, 0] * len_u
@@ -332,32 +362,45 @@ def arm_pair_terms(du, dl, shoulder, len_u, len_l, radii, cum, y0, y1, caps, a, 
             span_setup(shoulder[0], shoulder[1], ex, ey, radii[0], setup[0])
             top = np.floor(min(shoulder[1], ey) - radii[0]) - 1.0
             bottom = np.ceil(max(shoulder[1], ey) + radii[0]) + 2.0
+            q_up = (setup[0, 0], setup[0, 1], setup[0, 2], setup[0, 3], setup[0, 4],
+                    setup[0, 5], setup[0, 6], setup[0, 7], setup[0, 8])  # not a view
             for y in range(y0, y1):
                 up_f[y] = 0
                 up_e[y] = 0
                 fy = float(y)
-                if fy < top or fy >= bottom:
-                    continue
-                up_f[y], up_e[y] = span_cols(setup[0], ex, ey, fy, caps, w)
-        # the lower arm, row by row as count_one does
+                if not (fy < top or fy >= bottom):
+                    up_f[y], up_e[y] = span_cols(q_up, ex, ey, fy, caps, w)
+                for c in range(n_c):
+                    n = 0
+                    if up_e[y] > up_f[y]:
+                        n = cum[0, c, y, up_e[y]] - cum[0, c, y, up_f[y]]
+                    up_sum[c, y + 1] = up_sum[c, y] + n
+        # the lower arm, on the rows it can reach (as count_one's)
         span_setup(ex, ey, p1[0, 1, 0], p1[0, 1, 1], radii[1], setup[1])
         top = np.floor(min(ey, p1[0, 1, 1]) - radii[1]) - 1.0
         bottom = np.ceil(max(ey, p1[0, 1, 1]) + radii[1]) + 2.0
         r0, r1 = row_range(p0, p1, radii, 0, y0, y1)
-        d[0] = 0
-        d[1] = 0
-        for y in range(r0, r1):
-            m = 0
-            if up_e[y] > up_f[y]:
-                m = insert_run(first, last, m, up_f[y], up_e[y])
-            fy = float(y)
-            if not (fy < top or fy >= bottom):
-                f, e = span_cols(setup[1], p1[0, 1, 0], p1[0, 1, 1], fy, caps, w)
-                if e > f:
-                    m = insert_run(first, last, m, f, e)
-            for r in range(merge_runs(first, last, m)):
-                for c in range(n_c):
-                    d[c] += cum[0, c, y, last[r]] - cum[0, c, y, first[r]]
+        for c in range(n_c):
+            d[c] = up_sum[c, r1] - up_sum[c, r0]
+        l0 = int(min(max(top, float(r0)), float(r1)))
+        l1 = int(min(max(bottom, float(l0)), float(r1)))
+        if caps:
+            q_low = (setup[1, 0], setup[1, 1], setup[1, 2], setup[1, 3], setup[1, 4],
+                     setup[1, 5], setup[1, 6], setup[1, 7], setup[1, 8])  # not a view
+            for y in range(l0, l1):
+                low_f[y], low_e[y] = span_cols(q_low, p1[0, 1, 0], p1[0, 1, 1], float(y),
+                                               caps, w)
+        else:
+            span_cols_flat(setup[1], l0, l1, w, low_f, low_e)
+        for y in range(l0, l1):
+            f, e = low_f[y], low_e[y]
+            if e <= f:
+                continue
+            of, oe = max(f, up_f[y]), min(e, up_e[y])  # the overlap with the upper arm's
+            for c in range(n_c):
+                d[c] += cum[0, c, y, e] - cum[0, c, y, f]
+                if oe > of:
+                    d[c] -= cum[0, c, y, oe] - cum[0, c, y, of]
         x[b], q[b] = _terms(a, m0 + d[0], i0 + d[1])
 
 
@@ -514,8 +557,10 @@ def draw(p0, p1, radii, x0, y0, caps, out):
             one[0] = radii[b, k]
             i0, i1 = row_range(p0[b:b + 1, k:k + 1], p1[b:b + 1, k:k + 1], one, 0,
                                int(y0), int(y0) + h)
+            q = (setup[0], setup[1], setup[2], setup[3], setup[4],
+                 setup[5], setup[6], setup[7], setup[8])  # a tuple: not counted
             for i in range(i0 - int(y0), i1 - int(y0)):
-                lo, hi = span_row(setup, x1, y1, float(y0 + i), caps)
+                lo, hi = span_row(q, x1, y1, float(y0 + i), caps)
                 f = int(min(max(lo - x0, 0.0), w))
                 e = int(min(max(hi - x0 + 1.0, float(f)), w))
                 for x in range(f, e):
@@ -605,7 +650,9 @@ def base_tables(p0, p1, radii, sil, sil_cum, y0, y1, f0, f1, caps, cum):
         for k in range(n_k):
             if y < reach[k, 0] or y >= reach[k, 1]:
                 continue  # the segment does not reach this row
-            f, e = span_cols(setup[k], p1[k, 0], p1[k, 1], float(y), caps, w)
+            q = (setup[k, 0], setup[k, 1], setup[k, 2], setup[k, 3], setup[k, 4],
+                 setup[k, 5], setup[k, 6], setup[k, 7], setup[k, 8])  # not a view
+            f, e = span_cols(q, p1[k, 0], p1[k, 1], float(y), caps, w)
             if e <= f:
                 continue
             n = insert_run(first, last, n, f, e)
@@ -740,7 +787,9 @@ def group_span_tables(p0, p1, radii, caps, segs, child, sil, rows, cum, m_base, 
         i0, i1 = row_range(p0[k:k + 1].reshape(1, 1, 2), p1[k:k + 1].reshape(1, 1, 2), one, 0,
                            0, h)
         for y in range(i0, i1):
-            f, e = span_cols(setup, p1[k, 0], p1[k, 1], float(y), caps, w)
+            q = (setup[0], setup[1], setup[2], setup[3], setup[4],
+                 setup[5], setup[6], setup[7], setup[8])  # not a view
+            f, e = span_cols(q, p1[k, 0], p1[k, 1], float(y), caps, w)
             span_f[y, k] = f
             span_e[y, k] = e
             for x in range(f, e):
