@@ -205,7 +205,7 @@ def test_being_split_list_is_current():
 #: Which packages each layer may import (besides its own modules): the layout shows the
 #: two paths and what they share, so a file's place says what it may depend on.
 SHARED = ("vidcap.body", "vidcap.kinematics", "vidcap.errors", "vidcap.fileio",
-          "vidcap.interrupt", "vidcap.outputguard")
+          "vidcap.interrupt", "vidcap.outputguard", "vidcap.kernelcache")
 LAYERS = {
     "vidcap.io": SHARED,
     "vidcap.mocap": (*SHARED, "vidcap.io"),

@@ -8,10 +8,12 @@ numpy path's (N, samples, 4) intermediates.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numba
 import numpy as np
 
+from vidcap.kernelcache import refresh_when_changed
 from vidcap.video.fit._kernels import arm_pair_terms
 
 
@@ -330,3 +332,9 @@ def cue_stack(img, gx, gy, sil, inside, table, n_bins, bins, stack, energy):
                 stack[i, j, 2] = 0.0
                 stack[i, j, 3] = 0.0
     return n
+
+
+# arm_pair_terms and its helpers are inlined from _kernels, whose constants come from
+# modes: numba's cache would not see a change there (vidcap.kernelcache)
+refresh_when_changed(globals(), [Path(__file__).with_name("_kernels.py"),
+                                 Path(__file__).with_name("modes.py")])

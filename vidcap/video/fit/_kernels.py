@@ -13,10 +13,12 @@ an inlined function takes (atomic increments, which cost more than a row's span)
 """
 
 import math
+from pathlib import Path
 
 import numba
 import numpy as np
 
+from vidcap.kernelcache import refresh_when_changed
 from vidcap.video.fit.modes import (
     SEARCH_LIMB_ANGLE,
     SEARCH_LIMB_RATIO,
@@ -1224,3 +1226,8 @@ def widest_run_middles(band, out):
             out[count] = mid
             count += 1
     return count
+
+
+# the SEARCH_* constants are compiled in as literals: numba's cache would not see a
+# change to modes.py (vidcap.kernelcache)
+refresh_when_changed(globals(), [Path(__file__).with_name("modes.py")])
