@@ -98,6 +98,12 @@ def run(args) -> int:
     notice = plate_notice(bg)
     if notice:
         print(notice, file=sys.stderr)
+    if args.background is None:
+        from vidcap.video.stillcheck import still_warning
+
+        still = still_warning(sil.bbox, (info.height, info.width))
+        if still:
+            print(still, file=sys.stderr)
     multi = int((sil.n_other_blobs > 0).sum())
     print(f"{args.output}: {n} frames, person found in {int(sil.found.sum())}, "
           f"threshold {sil.threshold:.1f}, background {bg.method}"

@@ -133,7 +133,14 @@ class ConvertResult:
                        f"{np.median(s):.2f}; one whole person gives 0.7-0.9): is it one "
                        "person, seen whole, in front of a background with nothing else "
                        "moving?")
-        if self.plate_estimated and (poor or (n and missing.sum() > MISSING_HINT * n)):
+        still = None
+        if self.plate_estimated:
+            from vidcap.video.stillcheck import still_warning
+
+            still = still_warning(self.bbox, self.masks.shape[1:])
+        if still:
+            out.insert(0, still)  # (first: the rest follows from it)
+        elif self.plate_estimated and (poor or (n and missing.sum() > MISSING_HINT * n)):
             # the plate is estimated from the clip itself: whatever stands still in most
             # of it (a person holding a pose) is taken for the scene, and the silhouettes
             # then miss it without any sign in the plate
