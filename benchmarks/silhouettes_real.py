@@ -577,6 +577,9 @@ SWITCHES = (
     ("came-went", "stayed", "SEEN",
      "with --stayed, where someone came and went also one end, and a colour the clip shows "
      "most of the time (vidcap.video.stayed.SEEN; default: on)"),
+    ("steady-scene", "steadyscene", "STEADY_SCENE",
+     "vidcap's plate re-taken where a never-seen pixel shows a second steady colour nearer "
+     "the inpainted guess (vidcap.video.steadyscene; default: steadyscene.STEADY_SCENE)"),
     ("shorten-run", "reflection", "SHORTEN_RUN",
      "vidcap's silhouettes: a reflection run that fails the colour test cut short at its "
      "longest start that passes it (vidcap.video.reflection; default: "

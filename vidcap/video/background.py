@@ -477,11 +477,27 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
 
     if absorbed.FLAG_UNSEEN:
         model = absorbed.flag_unseen(model, frames, gains)
+    if still:
+        model = _steady_pass(model, frames, gains, info)
     if thumbs is not None and stayed.STAYED and still:
         # (last: the passes before it flag never seen, and guess, what it takes back)
         model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
                                 stayed.retake_stayed)
     return model
+
+
+def _steady_pass(model, frames, gains, info):
+    """``model`` after :func:`vidcap.video.steadyscene.retake_steady` (never-seen pixels
+    that show the scene in a second steady state), the colour models learned again when
+    the plate changed."""
+    from vidcap.video.steadyscene import retake_steady
+
+    found = retake_steady(model, frames, gains, model.sample_indices / _fps(info))
+    if found is not model and model.colours is not None:
+        from vidcap.video.graphcut import clip_colours
+
+        found = replace(found, colours=clip_colours(found, frames, gains))
+    return found
 
 
 def _thumbnail_pass(model, frames, gains, thumbs, info, n: int, retake):

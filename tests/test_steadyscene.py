@@ -1,0 +1,64 @@
+"""vidcap.video.steadyscene: never-seen pixels re-taken from a second steady state."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from vidcap.video import steadyscene
+from vidcap.video.background import BackgroundModel
+from vidcap.video.steadyscene import retake_steady, steady_runs
+
+GREY, RED, BLUE = (120, 120, 120), (40, 40, 200), (200, 60, 40)
+
+
+def test_steady_runs_are_the_unbroken_agreeing_stretch_round_each_sample():
+    c = np.array([[0], [1], [2], [90], [91], [90], [0]], np.float32)[:, :, None] * [1, 1, 1]
+    start, stop = steady_runs(c.astype(np.float32), tau=10.0)
+    assert start[:, 0].tolist() == [0, 0, 0, 3, 3, 3, 6]
+    assert stop[:, 0].tolist() == [2, 2, 2, 5, 5, 5, 6]  # the last 0 is cut off by the 90s
+
+
+def _clip(rng, k=12):
+    """K samples 12x12: columns 0-3 a person who stands, then steps aside (the wall
+    shows from sample 6 on); 4-7 a person there throughout; 8-11 two poses of the
+    person (red, then blue). All never seen, the plate a grey guess."""
+    frames = np.empty((k, 12, 12, 3), np.float32)
+    frames[:] = GREY
+    frames[:6, :, 0:4] = RED
+    frames[:, :, 4:8] = RED
+    frames[:6, :, 8:12] = RED
+    frames[6:, :, 8:12] = BLUE
+    frames += rng.normal(0, 1.5, frames.shape)
+    frames = np.clip(frames, 0, 255).astype(np.uint8)
+    guess = np.full((12, 12, 3), (112, 126, 118), np.uint8)  # inpainted: near the wall
+    model = BackgroundModel.from_plate(guess, noise_sigma=1.5)
+    return frames, replace(model, never_seen=np.ones((12, 12), bool))
+
+
+def test_the_scene_seen_after_a_still_person_steps_aside_is_taken_back(monkeypatch):
+    monkeypatch.setattr(steadyscene, "STEADY_SCENE", True)
+    rng = np.random.default_rng(0)
+    frames, model = _clip(rng)
+    times = np.arange(len(frames)) * 0.5
+    out = retake_steady(model, frames, np.ones((len(frames), 3), np.float32), times)
+    # stood, then left: the wall, no longer never seen, confidence its share of samples
+    assert not out.never_seen[:, 0:4].any()
+    assert np.abs(out.plate[:, 0:4].astype(int) - GREY).max() <= 3
+    assert np.allclose(out.confidence[:, 0:4], 0.5)
+    # never left, or two poses of the person, neither near the guess: still never seen
+    assert out.never_seen[:, 4:12].all()
+    assert (out.plate[:, 4:12] == model.plate[:, 4:12]).all()
+
+
+def test_short_stretches_and_the_switch_leave_the_plate(monkeypatch):
+    rng = np.random.default_rng(1)
+    frames, model = _clip(rng)
+    ones = np.ones((len(frames), 3), np.float32)
+    # off (the default): the same object back
+    monkeypatch.setattr(steadyscene, "STEADY_SCENE", False)
+    assert retake_steady(model, frames, ones, np.arange(12) * 0.5) is model
+    monkeypatch.setattr(steadyscene, "STEADY_SCENE", True)
+    # the wall's six samples within 0.5 s: not a steady state (MIN_SECONDS)
+    assert retake_steady(model, frames, ones, np.arange(12) * 0.05) is model
