@@ -129,6 +129,11 @@ def main(argv=None) -> int:
         from vidcap.video import passedby
 
         passedby.PASSED_BY = "--passed-by" in argv
+    if "--unsteady-plate" in argv or "--no-unsteady-plate" in argv:
+        # (the stage cache does not key on it: VIDCAP_BENCH_CACHE)
+        from vidcap.video import steadyscene
+
+        steadyscene.UNSTEADY_PLATE = "--unsteady-plate" in argv
     print("2D pose on real clips: 12 limb joints against MediaPipe Pose (image-side labels "
           "matched either way per frame)")
     print(f"{'clip':10} {'joint':11} {'median':>7} {'>10 %':>6}")

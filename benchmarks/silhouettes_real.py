@@ -580,6 +580,9 @@ SWITCHES = (
     ("steady-scene", "steadyscene", "STEADY_SCENE",
      "vidcap's plate re-taken where a never-seen pixel shows a second steady colour nearer "
      "the inpainted guess (vidcap.video.steadyscene; default: steadyscene.STEADY_SCENE)"),
+    ("unsteady-plate", "steadyscene", "UNSTEADY_PLATE",
+     "vidcap's plate re-taken where its colour is in no two consecutive samples and another "
+     "stays for half of them (vidcap.video.steadyscene; default: steadyscene.UNSTEADY_PLATE)"),
     ("shorten-run", "reflection", "SHORTEN_RUN",
      "vidcap's silhouettes: a reflection run that fails the colour test cut short at its "
      "longest start that passes it (vidcap.video.reflection; default: "

@@ -62,3 +62,44 @@ def test_short_stretches_and_the_switch_leave_the_plate(monkeypatch):
     monkeypatch.setattr(steadyscene, "STEADY_SCENE", True)
     # the wall's six samples within 0.5 s: not a steady state (MIN_SECONDS)
     assert retake_steady(model, frames, ones, np.arange(12) * 0.05) is model
+
+
+def _passer_by(rng, k=12):
+    """K samples 12x12 with a seen plate. Columns 0-3: the scene (grey) steady for the
+    first eight samples, then someone passing (another colour each sample); the plate a
+    blend of them that no two consecutive samples show. Columns 4-7: someone came and
+    stood (red, steady in samples 2-9) with the scene only at the clip's ends, the plate
+    the scene. Columns 8-11: as 0-3 but the plate confident (a pass put it there)."""
+    frames = np.empty((k, 12, 12, 3), np.float32)
+    frames[:] = GREY
+    passing = rng.uniform(0, 255, size=(k - 8, 3))
+    frames[8:, :, 0:4] = passing[:, None, None, :]
+    frames[8:, :, 8:12] = passing[:, None, None, :]
+    frames[1:11, :, 4:8] = RED
+    frames[1, :, 4:8] = BLUE  # (coming in)
+    frames[10, :, 4:8] = BLUE  # (going out)
+    frames += rng.normal(0, 1.5, frames.shape)
+    frames = np.clip(frames, 0, 255).astype(np.uint8)
+    plate = np.full((12, 12, 3), GREY, np.uint8)
+    plate[:, 0:4] = plate[:, 8:12] = (190, 200, 215)  # the vote's blend
+    model = BackgroundModel.from_plate(plate, noise_sigma=1.5)
+    conf = np.full((12, 12), 0.2, np.float32)
+    conf[:, 8:12] = 0.9
+    return frames, replace(model, confidence=conf)
+
+
+def test_a_plate_colour_no_steady_stretch_shows_gives_way_to_the_scene_that_stayed(
+        monkeypatch):
+    monkeypatch.setattr(steadyscene, "UNSTEADY_PLATE", True)
+    monkeypatch.setattr(steadyscene, "STEADY_SCENE", False)
+    rng = np.random.default_rng(2)
+    frames, model = _passer_by(rng)
+    out = retake_steady(model, frames, np.ones((len(frames), 3), np.float32),
+                        np.arange(len(frames)) * 0.5)
+    assert np.abs(out.plate[:, 0:4].astype(int) - GREY).max() <= 3
+    assert np.allclose(out.confidence[:, 0:4], 8 / 12)
+    # the person who came and stood is not the scene; a confident plate is kept
+    assert (out.plate[:, 4:12] == model.plate[:, 4:12]).all()
+    monkeypatch.setattr(steadyscene, "UNSTEADY_PLATE", False)
+    assert retake_steady(model, frames, np.ones((len(frames), 3), np.float32),
+                         np.arange(len(frames)) * 0.5) is model

@@ -445,11 +445,13 @@ def estimate_background(
 
 def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, person_box: bool):
     """Step 8's passes after :func:`vidcap.video.platepass.refine_plate` (module
-    docstring), in their order: the empty scene (with ``still``, the still-person
-    passes), the passed-by colours, the absorbed person (with ``person_box``), the unseen
-    flags and, last, the person who came, stayed and went (with ``still``); ``n`` frames
-    in the clip, ``thumbs`` every frame's thumbnail or None."""
+    docstring), in their order: the plate's unsteady colours and the empty scene (with
+    ``still``, the still-person passes), the passed-by colours, the absorbed person
+    (with ``person_box``), the unseen flags, the never-seen pixels' second steady state
+    and, last, the person who came, stayed and went (with ``still``); ``n`` frames in the
+    clip, ``thumbs`` every frame's thumbnail or None."""
     if still:
+        model = _steady_pass(model, frames, gains, info, never=False)
         from vidcap.video.emptyscene import plate_from_empty
 
         fps = _fps(info)
@@ -478,7 +480,7 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
     if absorbed.FLAG_UNSEEN:
         model = absorbed.flag_unseen(model, frames, gains)
     if still:
-        model = _steady_pass(model, frames, gains, info)
+        model = _steady_pass(model, frames, gains, info, unsteady=False)
     if thumbs is not None and stayed.STAYED and still:
         # (last: the passes before it flag never seen, and guess, what it takes back)
         model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
@@ -486,13 +488,13 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
     return model
 
 
-def _steady_pass(model, frames, gains, info):
-    """``model`` after :func:`vidcap.video.steadyscene.retake_steady` (never-seen pixels
-    that show the scene in a second steady state), the colour models learned again when
-    the plate changed."""
+def _steady_pass(model, frames, gains, info, **rules):
+    """``model`` after :func:`vidcap.video.steadyscene.retake_steady` (``rules``: its
+    ``never`` and ``unsteady`` keywords), the colour models learned again when the plate
+    changed."""
     from vidcap.video.steadyscene import retake_steady
 
-    found = retake_steady(model, frames, gains, model.sample_indices / _fps(info))
+    found = retake_steady(model, frames, gains, model.sample_indices / _fps(info), **rules)
     if found is not model and model.colours is not None:
         from vidcap.video.graphcut import clip_colours
 
