@@ -103,3 +103,23 @@ def test_a_plate_colour_no_steady_stretch_shows_gives_way_to_the_scene_that_stay
     monkeypatch.setattr(steadyscene, "UNSTEADY_PLATE", False)
     assert retake_steady(model, frames, np.ones((len(frames), 3), np.float32),
                          np.arange(len(frames)) * 0.5) is model
+
+
+def test_a_steady_colour_the_clip_models_call_the_person_is_not_taken(monkeypatch):
+    from vidcap.video.appearance import colour_model
+
+    monkeypatch.setattr(steadyscene, "UNSTEADY_PLATE", True)
+    rng = np.random.default_rng(3)
+    frames, model = _passer_by(rng)
+    grey = np.tile(np.asarray(GREY, np.float32), (200, 1))
+    red = np.tile(np.asarray(RED, np.float32), (200, 1))
+    ones, times = np.ones((len(frames), 3), np.float32), np.arange(len(frames)) * 0.5
+    # grey the scene's colour: taken as before
+    scene_grey = replace(model, colours=np.stack([colour_model(red, uniform=0.1),
+                                                  colour_model(grey, uniform=0.1)]))
+    out = retake_steady(scene_grey, frames, ones, times)
+    assert np.abs(out.plate[:, 0:4].astype(int) - GREY).max() <= 3
+    # grey the person's (a sleeve that stayed): the plate kept
+    person_grey = replace(model, colours=np.stack([colour_model(grey, uniform=0.1),
+                                                   colour_model(red, uniform=0.1)]))
+    assert retake_steady(person_grey, frames, ones, times) is person_grey

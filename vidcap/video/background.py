@@ -36,7 +36,9 @@ the spot) still takes its background from the frames where it is uncovered:
    flagged (``never_seen``) and inpainted from the surrounding background
    (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
 8. Second looks (:func:`vidcap.video.platepass.refine_plate`: self-lit pixels, the
-   appearance pass, plate -> person -> plate); then (:data:`EMPTY_SCENE`,
+   appearance pass, plate -> person -> plate); then (with the still-person passes) a
+   plate colour no steady stretch of samples shows gives way to one that stayed
+   (:mod:`vidcap.video.steadyscene`); then (:data:`EMPTY_SCENE`,
    :data:`PERSON_BOX`, on by default), samples that show the empty
    scene where the plate holds a person who stood still later (a *ghost*, told by
    its outline: :mod:`vidcap.video.emptyscene`) give the plate back there; where the
@@ -490,12 +492,14 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
 
 def _steady_pass(model, frames, gains, info, **rules):
     """``model`` after :func:`vidcap.video.steadyscene.retake_steady` (``rules``: its
-    ``never`` and ``unsteady`` keywords), the colour models learned again when the plate
-    changed."""
+    ``never`` and ``unsteady`` keywords), the colour models learned again when the
+    never-seen rule changed the plate."""
     from vidcap.video.steadyscene import retake_steady
 
     found = retake_steady(model, frames, gains, model.sample_indices / _fps(info), **rules)
-    if found is not model and model.colours is not None:
+    # (the unsteady colours are a few pixels: the colour models learned on the plate before
+    # them serve, and learning them again cost the 1000x1000 clip's convert 1.6 s)
+    if found is not model and model.colours is not None and rules.get("never", True):
         from vidcap.video.graphcut import clip_colours
 
         found = replace(found, colours=clip_colours(found, frames, gains))

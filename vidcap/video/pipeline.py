@@ -87,8 +87,9 @@ _SILHOUETTE_VERSION = 5
 #: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts; 3:
 #: absorbed parts no sample uncovers flagged never seen, ``absorbed.flag_unseen``; 4: scene
 #: colours round the footprint, ``background.SCENE_RING``; 5: the scene where a person
-#: came, stood and went, ``stayed.retake_stayed``).
-_PLATE_VERSION = 5
+#: came, stood and went, ``stayed.retake_stayed``; 6: a plate colour no steady stretch
+#: shows gives way to one that stayed, ``steadyscene.UNSTEADY_PLATE``).
+_PLATE_VERSION = 6
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
 #: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
