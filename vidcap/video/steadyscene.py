@@ -129,15 +129,29 @@ def steady_runs(colours: np.ndarray, tau: float) -> tuple[np.ndarray, np.ndarray
     return start, stop
 
 
-def _two_states(colours, times, tau, guess):
-    """Per pixel of ``colours`` (K, P, 3): the scene's steady state as (take (P,) bool,
-    members (K, P) bool) -- the samples of the run nearer ``guess`` (P, 3) when the pixel
-    has two steady states of different colours and that one is clearly nearer."""
-    k, p = colours.shape[:2]
+def _steady_states(colours, times, tau):
+    """:func:`steady_runs` of ``colours`` (K, P, 3) with each run's length and whether it
+    is a steady state (:data:`MIN_SAMPLES`, :data:`MIN_SECONDS`): (start, stop, length,
+    ok), each (K, P)."""
     start, stop = steady_runs(colours, tau)
     length = stop - start + 1
-    span = times[stop] - times[start]
-    ok = (length >= MIN_SAMPLES) & (span >= MIN_SECONDS)
+    ok = (length >= MIN_SAMPLES) & (times[stop] - times[start] >= MIN_SECONDS)
+    return start, stop, length, ok
+
+
+def _members(start, stop, anchor):
+    """(K, P) bool: per pixel, the samples of the run round sample ``anchor`` (P,)."""
+    cols = np.arange(start.shape[1])
+    order = np.arange(len(start))[:, None]
+    return (order >= start[anchor, cols][None]) & (order <= stop[anchor, cols][None])
+
+
+def _two_states(colours, times, tau, guess):
+    """Per pixel of ``colours`` (K, P, 3): the scene's steady state as (take (P,) bool,
+    members (K, P) bool, None) -- the samples of the run nearer ``guess`` (P, 3) when the
+    pixel has two steady states of different colours and that one is clearly nearer."""
+    p = colours.shape[1]
+    start, stop, length, ok = _steady_states(colours, times, tau)
     score = np.where(ok, length, 0)
     a = np.argmax(score, axis=0)  # the longest steady state
     cols = np.arange(p)
@@ -151,23 +165,20 @@ def _two_states(colours, times, tau, guess):
     scene = np.where(da <= db, a, b)
     near, far = np.minimum(da, db), np.maximum(da, db)
     take = both & (near < NEARER * far)
-    order = np.arange(k)[:, None]
-    members = (order >= start[scene, cols][None]) & (order <= stop[scene, cols][None])
-    return take, members
+    return take, _members(start, stop, scene), None
 
 
 def _longest_steady(colours, times, tau, plate):
     """Per pixel of ``colours`` (K, P, 3) whose ``plate`` colour (P, 3) no two consecutive
-    samples show: (take (P,) bool, members (K, P) bool), the longest steady state when
-    it is one (:data:`MIN_SAMPLES`, :data:`MIN_SECONDS`)."""
+    samples show: (take (P,) bool, members (K, P) bool, median (P, 3)), the longest steady
+    state when it is one (:data:`MIN_SAMPLES`, :data:`MIN_SECONDS`) and its colours'
+    median."""
     k, p = colours.shape[:2]
-    start, stop = steady_runs(colours, tau)
-    length = stop - start + 1
-    ok = (length >= MIN_SAMPLES) & (times[stop] - times[start] >= MIN_SECONDS)
+    start, stop, length, ok = _steady_states(colours, times, tau)
     a = np.argmax(np.where(ok, length, 0), axis=0)
     cols = np.arange(p)
     order = np.arange(k)[:, None]
-    members = (order >= start[a, cols][None]) & (order <= stop[a, cols][None])
+    members = _members(start, stop, a)
     # the plate's colour on both sides of the steady state: the scene seen between a
     # still torso's moments, not a passer-by before or after the scene
     shown = np.abs(colours - plate[None]).sum(axis=-1) <= tau
@@ -182,7 +193,7 @@ def _longest_steady(colours, times, tau, plate):
     # (the scene before someone came or after they went reaches a clip end; a person who
     # came and stood, breathing, does not: the scene shows there at the ends)
     long &= (start[a, cols] == 0) | (stop[a, cols] == k - 1)
-    return ok[a, cols] & ~(before & after) & far & long, members
+    return ok[a, cols] & ~(before & after) & far & long, members, value
 
 
 def _unsteady_candidates(model, frames, gains):
@@ -283,8 +294,9 @@ def _scene_coloured(model, part):
 
 def _decided(model, frames, gains, times, ys, xs, decide):
     """The pixels (``ys``, ``xs``) that ``decide`` (:func:`_two_states`,
-    :func:`_longest_steady`) re-takes: their rows, columns, new colours (N, 3) (the median
-    of the chosen state's samples) and the share of samples in that state."""
+    :func:`_longest_steady`: take, members, the members' median or None) re-takes: their
+    rows, columns, new colours (N, 3) (the median of the chosen state's samples) and the
+    share of samples in that state."""
     g = np.asarray(gains, np.float32)[:, None, :]
     tau = float(model.threshold)
     take = np.zeros(len(ys), bool)
@@ -293,10 +305,13 @@ def _decided(model, frames, gains, times, ys, xs, decide):
     for s in range(0, len(ys), BLOCK):
         sl = slice(s, s + BLOCK)
         colours = frames[:, ys[sl], xs[sl]].astype(np.float32) / g
-        t, members = decide(colours, times, tau, model.plate[ys[sl], xs[sl]].astype(np.float32))
+        t, members, median = decide(colours, times, tau,
+                                    model.plate[ys[sl], xs[sl]].astype(np.float32))
         take[sl] = t
-        masked = np.where(members[..., None], colours, np.nan)
-        with np.errstate(all="ignore"):
-            value[sl] = np.where(t[:, None], np.nanmedian(masked, axis=0), 0)
+        if median is None:  # (a rule that did not need it: made here)
+            masked = np.where(members[..., None], colours, np.nan)
+            with np.errstate(all="ignore"):
+                median = np.nanmedian(masked, axis=0)
+        value[sl] = np.where(t[:, None], median, 0)
         share[sl] = members.mean(axis=0)
     return ys[take], xs[take], value[take], share[take]
