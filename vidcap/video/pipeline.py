@@ -370,7 +370,8 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs
     from vidcap.video.fit.parallel import FitPool, chunk_bounds
 
     expected = chunk_bounds(n_frames or 0, jobs, per_job=per_job)
-    if len(expected) < 2 or (jobs if workers is None else workers) < 2:
+    workers = jobs if workers is None else workers
+    if len(expected) < 2 or workers < 2:
         return None
     pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues,
                                                _fixed_body_keywords(proportions)))
@@ -381,7 +382,7 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs
     from vidcap.video.silhouette import load_kernels
 
     load_kernels()
-    return FitPool(min(jobs if workers is None else workers, len(expected)))
+    return FitPool(min(workers, len(expected)))
 
 
 # --------------------------------------------------------------------------- 1. plate
