@@ -243,6 +243,38 @@ if [ -d "$MIRROR/perfanalytics+pose2sim/repo" ]; then
         "$P2S:Pose2Sim/Demo_SinglePerson/calibration/Calib.qca.txt" > "$LIFT/Calib.qca.txt"
 fi
 
+# The pose prior's CMU trials on the iClone rig (benchmarks/DATA.md, "The clip solve's pose
+# prior"), and the renders' motions below: every file of subjects 001, 002, 003, 005 and 006
+# in `DragonForgedTheArtist/IClone-CMU-Mocap`'s snapshot (49 trials; never subject 007).
+ICLONE=79529f962ade3274163af53cd92179cee2ed9407
+ICL_GIT="$MIRROR/DragonForgedTheArtist+IClone-CMU-Mocap/repo"
+if [ -d "$ICL_GIT" ]; then
+    mkdir -p "$DATA/../mocap/cmu_iclone"
+    git --git-dir="$ICL_GIT" ls-tree -r --name-only "$ICLONE" -- All_BVH/subjects \
+        | grep -E '^All_BVH/subjects/00[12356]/[0-9_]+\.bvh$' | while read -r f; do
+        out="$DATA/../mocap/cmu_iclone/$(basename "$f")"
+        [ -s "$out" ] || git --git-dir="$ICL_GIT" show "$ICLONE:$f" > "$out" 2>/dev/null \
+            || rm -f "$out"  # (a path the snapshot lists without its blob)
+    done
+else
+    echo "skip cmu_iclone: $ICL_GIT missing (fetch github:DragonForgedTheArtist/IClone-CMU-Mocap first)" >&2
+fi
+
+# pyCGM's sample trials for joints_accuracy.py (benchmarks/DATA.md, "Marker path"): each
+# SampleData/<folder>/<file> as <folder>_<file>.
+PYCGM=1750a62ccda8c60171ebe3d45f929c96e00a8300
+PYCGM_GIT="$MIRROR/cadop+pyCGM/repo"
+if [ -d "$PYCGM_GIT" ]; then
+    mkdir -p "$DATA/../mocap/pycgm"
+    for f in Test_Files/Movement_trial.c3d Test_Files/Static_trial.c3d Test_Files/Test.vsk \
+             59993_Frame/59993_Frame_Static.c3d ROM/Sample_Static.c3d Sample_2/RoboStatic.c3d; do
+        out="$DATA/../mocap/pycgm/${f//\//_}"
+        [ -s "$out" ] || git --git-dir="$PYCGM_GIT" show "$PYCGM:SampleData/$f" > "$out"
+    done
+else
+    echo "skip pycgm: $PYCGM_GIT missing (fetch github:cadop/pyCGM first)" >&2
+fi
+
 # CMU 02_05, 02_06, 02_07, 02_09, 02_10, 05_02, 05_09, 05_12, 05_18, 06_10, 06_11, 06_12,
 # 01_08, 02_04, 02_08, 05_04, 05_05, 05_10, 05_13, 05_20, 06_15
 # (in place) for silhouettes_real.py's renders: the pose prior's iClone files ($VIDCAP_DATA/mocap/cmu_iclone, see benchmarks/DATA.md) with
