@@ -36,10 +36,12 @@ scene-ring switch, ``background.SCENE_RING``, on it), onebyone_room 66-194 and 1
 silhouettes); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
-[--only NAME] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]
+[--only NAME] [--tuning | --validation] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]
 [--passed-by | --no-passed-by]`` (``--only``: just
-the clips whose name contains NAME; ``--rows``: the pipeline table's row kinds, of outline,
-all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six), and
+the clips whose name contains NAME; ``--tuning`` / ``--validation``: just the tuning or the
+validation clips of the pipeline table; ``--rows``: the pipeline table's row kinds, of
+outline, all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six),
+mp-all-human (``mp-human`` with ``--cues all``), and
 ``human-kK`` (the pipeline's silhouettes fitted again, serially, with the human body as a
 camera of perspective K draws it: :mod:`vidcap.video.fit.perspective`; ``human-k0`` the same
 fit unwarped); ``--human``:
@@ -163,7 +165,8 @@ def main(argv=None) -> int:
     rows = rows if "--no-all" in argv else rows[:1] + ("all",) + rows[1:] + ("all-human",)
     if "--rows" in argv:
         rows = tuple(argv[argv.index("--rows") + 1].split(","))
-    pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS, cues=rows, only=only)
+    use = "tuning" if "--tuning" in argv else "validation" if "--validation" in argv else None
+    pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS, cues=rows, only=only, use=use)
     return 0
 
 

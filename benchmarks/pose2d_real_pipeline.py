@@ -118,18 +118,25 @@ def _has_masks(path: Path) -> bool:
         return "masks" in d.files
 
 
-def _fit_reference_masks(clip: RealClip, proportions: str = "seed"):
+def _fit_reference_masks(clip: RealClip, proportions: str = "seed", cues: str = "outline"):
     """The tracked fit (outline) to MediaPipe's masks over ``clip``'s range, a
     :class:`vidcap.video.fit.result.Pose2D`: what the fit does with silhouettes better
     than vidcap's own (cues column ``mp-masks``; ``mp-human``: with
-    ``proportions='human'``)."""
+    ``proportions='human'``; ``mp-all-human``: and ``cues='all'``, the clip's colour
+    frames over the range as the cues' frames: the cues apart from the silhouettes)."""
+    from vidcap.io.video import iter_frames
+    from vidcap.video.fit.cueframes import FrameCrops
     from vidcap.video.fit.proportions import fit_keywords, human_proportions
     from vidcap.video.fit.tracking import fit_sequence
 
     with np.load(clip.reference) as d:
         masks = stretch(d["masks"], clip).astype(bool)
     kw = fit_keywords(human_proportions().factors) if proportions == "human" else {}
-    return fit_sequence(masks, cues="outline", **kw)
+    frames = None
+    if cues == "all":
+        frames = FrameCrops.from_frames(
+            iter_frames(clip.video, start=clip.start, stop=clip.start + len(masks)), masks)
+    return fit_sequence(masks, cues=cues, frames=frames, **kw)
 
 
 def _joints(clip: RealClip, row: str):
@@ -147,12 +154,12 @@ def _joints(clip: RealClip, row: str):
     hidden = "fit" if base == row else "solve"
     if base.startswith("human-k"):
         return _fit_with_perspective(clip, float(base.removeprefix("human-k")))
-    human = base in ("human", "all-human", "mp-human")
+    human = base in ("human", "all-human", "mp-human", "mp-all-human")
+    cues = "all" if base in ("all", "all-human", "mp-all-human") else "outline"
     if not base.startswith("mp-"):
-        cues = "all" if base in ("all", "all-human") else "outline"
         return pipeline_result(clip.video, cues, proportions="human" if human else "seed",
                                hidden=hidden).image_joints2d
-    pose = _fit_reference_masks(clip, "human" if human else "seed")
+    pose = _fit_reference_masks(clip, "human" if human else "seed", cues)
     if hidden == "fit":
         return pose.joints2d
     info = probe(clip.video)
@@ -177,13 +184,15 @@ def _fit_with_perspective(clip: RealClip, k: float) -> np.ndarray:
 
 
 def pipeline_tables(ido, reference, compare, limb_joints, *,
-                    cues=("outline", "all", "mp-masks", "human", "mp-human"), only=None):
+                    cues=("outline", "all", "mp-masks", "human", "mp-human"), only=None,
+                    use=None):
     """Print the tables. ``ido``: (name, video) of ido_walk; ``reference(name, video)``:
     its MediaPipe npz or None; ``compare(ref, pred)``: compare.py's joint scores.
     ``cues``: ``vidcap convert --cues`` values, ``mp-masks``: the fit (outline) to
     MediaPipe's masks instead of vidcap's silhouettes (clips whose reference has masks),
-    ``human`` / ``mp-human``: the same with ``proportions='human'``. ``only``: just the
-    clips whose name contains it."""
+    ``human`` / ``mp-human``: the same with ``proportions='human'``, ``mp-all-human``:
+    ``mp-human`` with ``cues='all'``. ``only``: just the clips whose name contains it;
+    ``use``: just the ``'tuning'`` or the ``'validation'`` clips (None: both)."""
     print("\nThrough vidcap's own pipeline (silhouettes from the video, tracked fit; the seed's "
           "body (proportions='seed') in the outline, all and mp-masks rows, a real adult's "
           "(proportions='human', the default since wt-human) in the human rows; 'use': "
@@ -195,11 +204,12 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
     ref = reference(name, video) if video.exists() else None
     if ref is not None:
         clips.insert(0, RealClip(name, video, ref, 0, None))
-    clips = [c for c in clips if not only or only in c.name]
+    clips = [c for c in clips if (not only or only in c.name)
+             and (use is None or (c.name in TUNING) == (use == "tuning"))]
     if not clips:
         print("  no real clip found")
         return
-    print(f"{'clip':26} {'use':10} {'cues':8} {'frames':>6} {'vidcap':>6} {'median':>7} "
+    print(f"{'clip':26} {'use':10} {'cues':12} {'frames':>6} {'vidcap':>6} {'median':>7} "
           f"{'>10 %':>6}  worst joint (>10 %)")
     per_joint = []
     for clip in clips:
@@ -212,23 +222,23 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
             medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
             worst = int(np.nanargmax(shares))
             use = "tuning" if clip.name in TUNING else "validation"
-            print(f"{clip.name:26} {use:10} {c:8} {res['frames_with_reference']:6d} "
+            print(f"{clip.name:26} {use:10} {c:12} {res['frames_with_reference']:6d} "
                   f"{covered:6.1%} "
                   f"{np.median(medians):7.1%} {np.nanmean(shares):6.0%}  "
                   f"{limb_joints[worst]} ({shares[worst]:.0%})")
             per_joint.append((clip.name, c, medians, shares, signed))
     print("\nPer joint: median % of height / share of frames > 10 % apart")
-    print(f"{'clip':26} {'row':8} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
+    print(f"{'clip':26} {'row':12} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
                                                for j in limb_joints))
     rows = sorted(per_joint, key=lambda r: cues.index(r[1]))
     for name, c, medians, shares, _ in rows:
-        print(f"{name:26} {c:8} " + " ".join(f"{m * 100:5.1f}/{s * 100:3.0f}"
+        print(f"{name:26} {c:12} " + " ".join(f"{m * 100:5.1f}/{s * 100:3.0f}"
                                              for m, s in zip(medians, shares, strict=True)))
     print("\nPer joint, where vidcap's joint sits: median offset from MediaPipe's, % of height, "
           "down / right (+: vidcap's lower / to the right; a high camera shows as shoulders "
           "and hips up, ankles down)")
-    print(f"{'clip':26} {'row':8} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
+    print(f"{'clip':26} {'row':12} " + " ".join(f"{j.replace('shoulder', 'shld'):>9}"
                                                for j in limb_joints))
     for name, c, _, _, signed in rows:
-        print(f"{name:26} {c:8} " + " ".join(f"{dy * 100:5.1f}/{dx * 100:3.0f}"
+        print(f"{name:26} {c:12} " + " ".join(f"{dy * 100:5.1f}/{dx * 100:3.0f}"
                                              for dx, dy in signed))
