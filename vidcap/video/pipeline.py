@@ -88,8 +88,10 @@ _SILHOUETTE_VERSION = 5
 #: absorbed parts no sample uncovers flagged never seen, ``absorbed.flag_unseen``; 4: scene
 #: colours round the footprint, ``background.SCENE_RING``; 5: the scene where a person
 #: came, stood and went, ``stayed.retake_stayed``; 6: a plate colour no steady stretch
-#: shows gives way to one that stayed, ``steadyscene.UNSTEADY_PLATE``).
-_PLATE_VERSION = 6
+#: shows gives way to one that stayed, ``steadyscene.UNSTEADY_PLATE``; 7: a guessed
+#: plate colour no sample shows gives way to the one most samples show,
+#: ``platepass.MODE_RETAKE``).
+_PLATE_VERSION = 7
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
 #: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather

@@ -38,6 +38,11 @@ MIN_SEEN_SHARE = 0.2
 #: Dilation of the first-pass person, share of the frame's height (its blurred
 #: outline, a shadow at the feet).
 PERSON_MARGIN = 0.02
+#: Re-take the guessed area's plate from the colour its samples show most often
+#: (:func:`_retake_modes`).
+MODE_RETAKE = True
+#: Share of the samples the most shown colour needs (:func:`_retake_modes`).
+MODE_SHARE = 0.5
 
 
 def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
@@ -76,6 +81,8 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
     model = appearance_plate(model, frames, gains)
     model = retake_absorbed(model, frames, gains)
     model = _second_pass(model, frames, gains)
+    if MODE_RETAKE:
+        model = _retake_modes(model, frames, gains)
     if still_parts:
         model = _with_still_parts(model, frames, gains, small_hw)
     if not colour_models:
@@ -229,3 +236,71 @@ def _second_pass(model, frames, gains):
     plate[box][redo[box]] = again[redo[box]]
     conf = np.maximum(model.confidence, np.where(redo, count / k, 0)).astype(np.float32)
     return replace(model, plate=plate, never_seen=model.never_seen & ~redo, confidence=conf)
+
+
+
+def _retake_modes(model, frames, gains):
+    """The guessed area (never seen and the ring round it, as :func:`_second_pass`)
+    re-taken where no sample shows the plate's colour and most samples show one colour:
+    the median of the samples within the threshold of it. A plate colour no sample
+    shows is a guess (inpainted, or the vote's mix of the person's colours: a ghost
+    beside a person who sways over the same spot), while the scene seen in most samples
+    is what the pixel is."""
+    from vidcap.video.platemedian import masked_median, normalised_u8
+
+    k, hh, ww = frames.shape[:3]
+    if k < 4 or not model.never_seen.any():
+        return model
+    r = max(3, int(round(0.03 * hh)))
+    guessed = cv2.dilate(model.never_seen.view(np.uint8),
+                         np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+    if model.self_lit is not None:
+        guessed &= ~model.self_lit
+    ys, xs = np.nonzero(guessed)
+    tmap = np.maximum(model.threshold, 3.0 * model.noise_map[ys, xs]).astype(np.float32)
+    # (K, N, 3) the guessed pixels' samples at the plate's exposure
+    sub = normalised_u8(frames[:, ys, xs][:, None], gains)[:, 0].astype(np.int16)
+    plate = model.plate[ys, xs].astype(np.int16)
+    unshown = ~(np.abs(sub - plate).sum(-1) <= tmap).any(axis=0)
+    sub, tmap, plate = sub[:, unshown], tmap[unshown], plate[unshown]
+    ys, xs = ys[unshown], xs[unshown]
+    need = max(3, int(np.ceil(MODE_SHARE * k)))
+    if len(ys) == 0:
+        return model
+    best = np.zeros(len(ys), np.int32)
+    best_i = np.zeros(len(ys), np.intp)
+    for i in range(k):
+        support = (np.abs(sub - sub[i]).sum(-1) <= tmap).sum(axis=0)
+        better = support > best
+        best[better] = support[better]
+        best_i[better] = i
+    # ... and other samples show something else: a colour every sample shows never
+    # changed, and the vote's verdict (a person who never moved) stands.
+    keep = (best >= need) & (k - best >= max(3, int(np.ceil(MIN_SEEN_SHARE * k))))
+    if not keep.any():
+        return model
+    sub, tmap, plate = sub[:, keep], tmap[keep], plate[keep]
+    ys, xs, best_i = ys[keep], xs[keep], best_i[keep]
+    colour = sub[best_i, np.arange(len(ys))]
+    near = np.abs(sub - colour).sum(-1) <= tmap
+    again = masked_median(sub.astype(np.uint8)[:, None], ~near[:, None])[0]
+    far = np.abs(again.astype(np.int16) - plate).sum(-1) > tmap
+    if not far.any():
+        return model
+    ys, xs, again, near = ys[far], xs[far], again[far], near[:, far]
+    out = model.plate.copy()
+    out[ys, xs] = again
+    # Plate, person, plate: with the new colours the samples that show them must show
+    # them outside the person (a person who stands on the pixel throughout would show
+    # his own colour in most samples, inside his blob).
+    inside = _person_masks(replace(model, plate=out), frames, gains)[:, ys, xs] > 0
+    apart = (near & ~inside).sum(axis=0) > (near & inside).sum(axis=0)
+    if not apart.any():
+        return model
+    out[ys[~apart], xs[~apart]] = model.plate[ys[~apart], xs[~apart]]
+    ys, xs, near = ys[apart], xs[apart], near[:, apart]
+    redo = np.zeros((hh, ww), bool)
+    redo[ys, xs] = True
+    conf = model.confidence.copy()
+    conf[ys, xs] = np.maximum(conf[ys, xs], near.mean(axis=0))
+    return replace(model, plate=out, never_seen=model.never_seen & ~redo, confidence=conf)
