@@ -283,8 +283,16 @@ def _retake_modes(model, frames, gains):
     ys, xs, best_i = ys[keep], xs[keep], best_i[keep]
     colour = sub[best_i, np.arange(len(ys))]
     near = np.abs(sub - colour).sum(-1) <= tmap
+    # The other samples must not agree on a second colour: two steady colours (the
+    # scene, and a part of the person who holds still over it for a while) are not
+    # told apart by how often each is shown; the person passing shows many colours.
+    second = np.zeros(len(ys), np.int32)
+    for i in range(k):
+        support = ((np.abs(sub - sub[i]).sum(-1) <= tmap) & ~near).sum(axis=0)
+        second = np.maximum(second, np.where(near[i], 0, support))
     again = masked_median(sub.astype(np.uint8)[:, None], ~near[:, None])[0]
-    far = np.abs(again.astype(np.int16) - plate).sum(-1) > tmap
+    far = ((np.abs(again.astype(np.int16) - plate).sum(-1) > tmap)
+           & (second < max(3, int(np.ceil(MIN_SEEN_SHARE * k)))))
     if not far.any():
         return model
     ys, xs, again, near = ys[far], xs[far], again[far], near[:, far]
