@@ -141,15 +141,18 @@ def test_a_guessed_colour_no_sample_shows_gives_way_to_the_one_most_show():
     shows and the scene shows in 6 of 10 samples (a ghost: it becomes the scene); B's
     plate is also unshown but the scene shows in only 3 (no colour most samples show:
     it stays); C's plate is a colour 2 samples show (it stays though the scene shows in
-    the other 8). Outside the guessed area nothing changes."""
+    the other 8); D is A with the other 4 samples showing one steady colour (a person's
+    part held still: two steady colours, it stays). Outside the guessed area nothing
+    changes."""
     from vidcap.video.platepass import _retake_modes
 
     rng = np.random.default_rng(3)
-    k, h, w = 10, 40, 60
+    k, h, w = 10, 40, 80
     frames = np.full((k, h, w, 3), 100, np.uint8)
     frames += rng.integers(0, 3, frames.shape, dtype=np.uint8)  # sensor noise
     a, b, c = (slice(10, 20), slice(5, 15)), (slice(10, 20), slice(25, 35)), \
         (slice(10, 20), slice(45, 55))
+    d = (slice(10, 20), slice(65, 75))
     for t in range(k):  # the person, a different colour each sample
         person = rng.integers(0, 256, 3, dtype=np.uint8)
         if t >= 6:
@@ -157,11 +160,12 @@ def test_a_guessed_colour_no_sample_shows_gives_way_to_the_one_most_show():
         if t >= 3:
             frames[t][b] = person
     frames[:2, c[0], c[1]] = (30, 200, 30)
+    frames[6:, d[0], d[1]] = (40, 40, 160)
     plate = np.full((h, w, 3), 100, np.uint8)
-    plate[a] = plate[b] = (200, 60, 60)  # guesses (inpainted from the person)
+    plate[a] = plate[b] = plate[d] = (200, 60, 60)  # guesses (inpainted from the person)
     plate[c] = (30, 200, 30)
     never = np.zeros((h, w), bool)
-    for s in (a, b, c):
+    for s in (a, b, c, d):
         never[s] = True
     model = BackgroundModel(plate=plate, confidence=np.where(never, 0.0, 1.0).astype(
         np.float32), never_seen=never, noise_sigma=np.full(3, 1.0, np.float32),
@@ -171,4 +175,5 @@ def test_a_guessed_colour_no_sample_shows_gives_way_to_the_one_most_show():
     assert not out.never_seen[a].any()
     assert (out.plate[b] == (200, 60, 60)).all() and out.never_seen[b].all()
     assert (out.plate[c] == (30, 200, 30)).all() and out.never_seen[c].all()
+    assert (out.plate[d] == (200, 60, 60)).all() and out.never_seen[d].all()
     assert (out.plate[~never] == 100).all()

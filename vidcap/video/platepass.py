@@ -20,6 +20,13 @@ sampled frames:
   between legs apart, the floor between the feet) gets its real background back
   and stops being flagged never seen. Only the never-seen area and a ring around
   it (where the plate was inpainted) are re-taken: elsewhere the vote saw it.
+* **A guessed colour no sample shows** (:func:`_retake_modes`, :data:`MODE_RETAKE`): in
+  the same area, a plate colour that none of the samples shows there gives way to the
+  colour most samples show, when the others show the person passing (many colours,
+  not a second steady one) and the samples showing it lie outside the person. The
+  ghosts beside a person who sways over the same spot (pose2sim cam3's window and
+  mats: the vote's mix of his colours, the first-pass person swallowing the ghost so
+  that the pass above never saw the scene there).
 """
 
 from __future__ import annotations
@@ -236,7 +243,6 @@ def _second_pass(model, frames, gains):
     plate[box][redo[box]] = again[redo[box]]
     conf = np.maximum(model.confidence, np.where(redo, count / k, 0)).astype(np.float32)
     return replace(model, plate=plate, never_seen=model.never_seen & ~redo, confidence=conf)
-
 
 
 def _retake_modes(model, frames, gains):
