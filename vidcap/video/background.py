@@ -36,7 +36,8 @@ the spot) still takes its background from the frames where it is uncovered:
    flagged (``never_seen``) and inpainted from the surrounding background
    (:func:`cv2.inpaint`), so that the person standing there differs from the plate.
 8. Second looks (:func:`vidcap.video.platepass.refine_plate`: self-lit pixels, the
-   appearance pass, plate -> person -> plate); then (with the still-person passes) a
+   appearance pass, plate -> person -> plate, a guessed colour no sample shows given
+   way to the one most samples show); then (with the still-person passes) a
    plate colour no steady stretch of samples shows gives way to one that stayed
    (:mod:`vidcap.video.steadyscene`); then (:data:`EMPTY_SCENE`,
    :data:`PERSON_BOX`, on by default), samples that show the empty
