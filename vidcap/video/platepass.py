@@ -202,17 +202,22 @@ def dilate_in_box(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     return out
 
 
+def _guessed_area(model) -> np.ndarray:
+    """Where the first plate is a guess, (H, W) bool: the never-seen area and the ring
+    it was inpainted from, 3 % of the frame's height wide (elsewhere the vote saw the
+    background)."""
+    r = max(3, int(round(0.03 * model.never_seen.shape[0])))
+    return cv2.dilate(model.never_seen.view(np.uint8),
+                      np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+
+
 def _second_pass(model, frames, gains):
     from vidcap.video.platemedian import robust_plate as _robust_plate
 
     k, hh, ww = frames.shape[:3]
     if k < 4 or not model.never_seen.any():
         return model
-    # Only where the first plate is a guess: the never-seen area and the ring it
-    # was inpainted from (elsewhere the vote saw the background).
-    r = max(3, int(round(0.03 * hh)))
-    guessed = cv2.dilate(model.never_seen.view(np.uint8),
-                         np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+    guessed = _guessed_area(model)
     masks = _person_masks(model, frames, gains)
     if not masks.any():
         return model
@@ -257,9 +262,7 @@ def _retake_modes(model, frames, gains):
     k, hh, ww = frames.shape[:3]
     if k < 4 or not model.never_seen.any():
         return model
-    r = max(3, int(round(0.03 * hh)))
-    guessed = cv2.dilate(model.never_seen.view(np.uint8),
-                         np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+    guessed = _guessed_area(model)
     if model.self_lit is not None:
         guessed &= ~model.self_lit
     ys, xs = np.nonzero(guessed)
