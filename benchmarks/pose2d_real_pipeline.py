@@ -221,8 +221,8 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
             shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]
             medians = [res["joints"][j]["swap"]["median"] for j in limb_joints]
             worst = int(np.nanargmax(shares))
-            use = "tuning" if clip.name in TUNING else "validation"
-            print(f"{clip.name:26} {use:10} {c:12} {res['frames_with_reference']:6d} "
+            clip_use = "tuning" if clip.name in TUNING else "validation"
+            print(f"{clip.name:26} {clip_use:10} {c:12} {res['frames_with_reference']:6d} "
                   f"{covered:6.1%} "
                   f"{np.median(medians):7.1%} {np.nanmean(shares):6.0%}  "
                   f"{limb_joints[worst]} ({shares[worst]:.0%})")
