@@ -202,6 +202,12 @@ def dilate_in_box(mask: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     return out
 
 
+def _min_seen(k: int) -> int:
+    """The fewest of ``k`` samples that count as showing something: :data:`MIN_SEEN_SHARE`
+    of them, at least 3."""
+    return max(3, int(np.ceil(MIN_SEEN_SHARE * k)))
+
+
 def _guessed_area(model) -> np.ndarray:
     """Where the first plate is a guess, (H, W) bool: the never-seen area and the ring
     it was inpainted from, 3 % of the frame's height wide (elsewhere the vote saw the
@@ -235,7 +241,7 @@ def _second_pass(model, frames, gains):
     seen = (covered == 0).astype(np.uint8)
     count = np.zeros((hh, ww), np.int32)
     count[box] = seen.sum(axis=0, dtype=np.int32)
-    enough = count[box] >= max(3, int(np.ceil(MIN_SEEN_SHARE * k)))
+    enough = count[box] >= _min_seen(k)
     again = _robust_plate(frames[:, box[0], box[1]], gains, seen)
     far = np.abs(again.astype(np.int16) - model.plate[box].astype(np.int16)).sum(axis=-1)
     redo = np.zeros((hh, ww), bool)
@@ -285,7 +291,7 @@ def _retake_modes(model, frames, gains):
         best_i[better] = i
     # ... and other samples show something else: a colour every sample shows never
     # changed, and the vote's verdict (a person who never moved) stands.
-    keep = (best >= need) & (k - best >= max(3, int(np.ceil(MIN_SEEN_SHARE * k))))
+    keep = (best >= need) & (k - best >= _min_seen(k))
     if not keep.any():
         return model
     sub, tmap, plate = sub[:, keep], tmap[keep], plate[keep]
@@ -301,7 +307,7 @@ def _retake_modes(model, frames, gains):
         second = np.maximum(second, np.where(near[i], 0, support))
     again = masked_median(sub.astype(np.uint8)[:, None], ~near[:, None])[0]
     far = ((np.abs(again.astype(np.int16) - plate).sum(-1) > tmap)
-           & (second < max(3, int(np.ceil(MIN_SEEN_SHARE * k)))))
+           & (second < _min_seen(k)))
     if not far.any():
         return model
     ys, xs, again, near = ys[far], xs[far], again[far], near[:, far]
