@@ -2,6 +2,7 @@
 
     VIDCAP_DATA=/work/data python benchmarks/silhouettes_real.py [--frames 90] [--no-mediapipe]
         [--only NAME] [--quick] [--pck] [--graph-cut] [--[no-]empty-scene] [--[no-]person-box]
+        [--[no-]held-pose]
         [--[no-]clip-ends] [--[no-]stayed]
         [--[no-]flag-unseen] [--[no-]flag-still]
 
@@ -290,6 +291,15 @@ RENDERS = [
     ("01_14 10.5-13.5 s 150 deg / Weizmann plate", ("01_14", 631, 811), 150, "ido",
      "validation"),
     ("05_19 4-7 s side / PETS plate", ("05_19", 241, 421), 90, "vtest", "validation"),
+    # Tuning renders added by the issue-26 held-pose helper (wt-held): a body that holds
+    # one pose of a tuning trial for the whole clip (:func:`hold_motion`: a few source
+    # frames swayed through, or frozen), the case of the two validation dancers above
+    # that the plate absorbs whole, built so that the still-person gate is chosen
+    # without them.
+    ("held 05_02 3/4 / PETS plate", ("hold", "05_02", 150, 4), 45, "vtest", "tuning"),
+    ("held 05_09 front / Weizmann plate", ("hold", "05_09", 200, 4), 0, "ido", "tuning"),
+    ("held 131_01 side / room plate", ("hold", "131_01.bvh", 100, 0), 90, "room", "tuning"),
+    ("held 02_06 3/4 back / PETS plate", ("hold", "02_06", 300, 6), 135, "vtest", "tuning"),
 ]
 #: The arriving renders' frame rate, pixels per metre and camera tilt (degrees down):
 #: the scale fixed so that the walk starts and ends out of view; 15 fps keeps the clip
@@ -400,6 +410,9 @@ def _render_frames(motion, yaw, which, n_frames, rng_seed):
     if motion == "arrive":
         mo = arrive_motion(ARRIVE_FPS, rng=rng)
         view = {"pixels_per_metre": ARRIVE_SCALE, "elevation_deg": ARRIVE_TILT}
+    elif isinstance(motion, tuple) and motion[0] == "hold":
+        mo = hold_motion(EXTRA_MOTIONS.get(motion[1], MOTION / motion[1]), motion[2],
+                         n_frames, sway_frames=motion[3])
     elif isinstance(motion, tuple):
         f, a, b = motion
         mo = synth.make_motion(EXTRA_MOTIONS.get(f, MOTION / f), frame_range=(a, b),
@@ -449,6 +462,27 @@ def arrive_motion(fps: float, walk_s: float = 1.5, stand_s: float = 10.0, rng=No
     p = names.index("pelvis")
     rot[a:a + ns, p] = (sway * Rotation.from_quat(rot[a:a + ns, p])).as_quat()
     return Motion(walk.skeleton, walk.root_positions[idx], rot, fps)
+
+
+def hold_motion(path, frame: int, n_frames: int, *, sway_frames: int = 4,
+                fps: float = 30.0, period_s: float = 3.0):
+    """A body that holds one pose of a motion file for ``n_frames`` (a dancer holding a
+    pose, issue 26): the source frames ``frame .. frame + sway_frames`` (at ``fps``)
+    played forth and back once every ``period_s`` seconds (a sway of a few frames of
+    the motion; 0 for a frozen pose), the root where it is in them.
+
+    Returns
+    -------
+    vidcap.kinematics.Motion
+    """
+    from vidcap.kinematics import Motion
+
+    mo = synth.make_motion(path, frame_range=(frame, frame + 2 * max(1, sway_frames) + 1),
+                           fps=fps)
+    m = min(max(0, sway_frames), mo.n_frames - 1)
+    t = np.arange(n_frames) / fps
+    idx = np.round(0.5 * m * (1.0 - np.cos(2 * np.pi * t / period_s))).astype(int)
+    return Motion(mo.skeleton, mo.root_positions[idx], mo.rotations[idx], fps)
 
 
 def real_clip(fname, a, b, cache: Path):
@@ -547,6 +581,10 @@ SWITCHES = (
     ("person-box", "background", "PERSON_BOX",
      "vidcap's plate: a still person found by the HOG detector and grabCut "
      "(vidcap.video.personbox; default: background.PERSON_BOX)"),
+    ("held-pose", "heldpose", "HELD_POSE",
+     "vidcap's plate: the person-box search also when the samples' first-pass silhouettes "
+     "are nearly empty (a person who held one pose; vidcap.video.heldpose; default: "
+     "heldpose.HELD_POSE, on)"),
     ("clip-ends", "emptyscene", "FROM_CLIP_ENDS",
      "the empty scene's stretch measured from the clip's first / last frame (default: "
      "vidcap.video.emptyscene.FROM_CLIP_ENDS)"),

@@ -203,7 +203,7 @@ def test_the_colours_are_learned_again_once_an_absorbed_person_is_found(monkeypa
     from dataclasses import replace
 
     import vidcap.video.graphcut as graphcut
-    import vidcap.video.personbox as personbox
+    import vidcap.video.heldpose as heldpose
 
     frames, _ = clip(12, 60, 80, rng=np.random.default_rng(5), walk=True)
     learned = []
@@ -216,11 +216,11 @@ def test_the_colours_are_learned_again_once_an_absorbed_person_is_found(monkeypa
         return replace(model, still_person=np.ones(model.plate.shape[:2], bool))
 
     monkeypatch.setattr(graphcut, "clip_colours", colours)
-    monkeypatch.setattr(personbox, "absorbed_person", found)
+    monkeypatch.setattr(heldpose, "absorbed_or_held", found)
     bg = estimate_background(frames, n_samples=8, colour_models=True, person_box=True)
     # learned on the plate stage's model, then again on the model with the person
     assert learned == [False, True] and bg.colours[0, 0] == 2
-    monkeypatch.setattr(personbox, "absorbed_person", lambda model, *_, **__: model)
+    monkeypatch.setattr(heldpose, "absorbed_or_held", lambda model, *_, **__: model)
     learned.clear()
     estimate_background(frames, n_samples=8, colour_models=True, person_box=True)
     assert learned == [False]  # nobody absorbed: no second look

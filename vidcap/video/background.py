@@ -467,9 +467,9 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
         model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
                                 passedby.retake_passed_by)
     if person_box:
-        from vidcap.video.personbox import absorbed_person
+        from vidcap.video.heldpose import absorbed_or_held
 
-        found = absorbed_person(model, frames, gains)
+        found = absorbed_or_held(model, frames, gains)
         if found is not model and model.colours is not None:
             # The person's colours were learned while the plate held the still person
             # (05_04 front: the trousers were scene to them, and the cut took the legs

@@ -80,19 +80,21 @@ def _hog():
     return _HOG
 
 
-def detect_people(frame: np.ndarray, *, min_score: float = MIN_SCORE
+def detect_people(frame: np.ndarray, *, min_score: float = MIN_SCORE, rows: int = 480
                   ) -> tuple[np.ndarray, np.ndarray]:
     """People in one frame by OpenCV's HOG detector.
 
     The frame is padded below by a quarter of its height (a person cut off by the
-    frame's lower edge still fits the detector's window) and shrunk to at most 480
-    rows (the window is 128 rows: larger frames only cost time).
+    frame's lower edge still fits the detector's window) and shrunk to at most
+    ``rows`` rows (the window is 128 rows: larger frames only cost time).
 
     Parameters
     ----------
     frame : numpy.ndarray, shape (H, W, 3), uint8
     min_score : float
         Smallest SVM score kept.
+    rows : int
+        The frame's height, at most, as searched.
 
     Returns
     -------
@@ -101,7 +103,7 @@ def detect_people(frame: np.ndarray, *, min_score: float = MIN_SCORE
     scores : numpy.ndarray, shape (N,), float
     """
     h, w = frame.shape[:2]
-    s = min(1.0, 480.0 / h)
+    s = min(1.0, rows / h)
     img = frame if s == 1.0 else cv2.resize(frame, (max(1, int(w * s)), max(1, int(h * s))),
                                             interpolation=cv2.INTER_AREA)
     img = cv2.copyMakeBorder(img, 0, img.shape[0] // 4, 0, 0, cv2.BORDER_REPLICATE)
@@ -208,7 +210,8 @@ def absorbed_person(model, frames: np.ndarray, gains: np.ndarray, *,
 
 
 def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
-                  n_detect: int = N_DETECT, max_cover: float = MAX_COVER):
+                  n_detect: int = N_DETECT, max_cover: float = MAX_COVER,
+                  unseen_gate: bool = True, rows: tuple[int, ...] = (480,)):
     """:func:`absorbed_person` and why it decided so.
 
     The cheap tests come first: the detector's boxes of the first three samples
@@ -216,6 +219,11 @@ def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     first is cut by ``cv2.grabCut`` (the first cut tells an absorbed person from a
     visible one), and the detector must find someone again within :data:`GIVE_UP`
     samples of its first find.
+
+    ``unseen_gate`` False runs the detector whatever the plate left never seen (a
+    person who held one pose, :mod:`vidcap.video.heldpose`); ``rows``: the heights the
+    detector searches each sample at (:func:`detect_people`), the next only when the
+    one before found nobody.
 
     Returns
     -------
@@ -229,7 +237,7 @@ def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     from vidcap.video.platepass import _person_masks
 
     k = frames.shape[0]
-    if k < 2 or model.never_seen_fraction < MIN_NEVER_SEEN:
+    if k < 2 or (unseen_gate and model.never_seen_fraction < MIN_NEVER_SEEN):
         return model, SAW_ALL  # the plate saw the whole scene: nobody absorbed (no cost)
     pick = np.unique(np.linspace(0, k - 1, min(n_detect, k)).round().astype(int))
     cuts, where, boxes, pending, first = [], [], [], [], 0
@@ -240,7 +248,7 @@ def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
             # A person absorbed for the whole clip stands in every sample, where the
             # detector sees them again: its first find was not such a person.
             return model, NOT_AGAIN
-        found, scores = detect_people(frames[t])
+        found, scores = _detect(frames[t], rows)
         if not len(found):
             continue
         b = enclosing_box(found, scores)
@@ -275,6 +283,16 @@ def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     if np.median(inter / union) < STILL_IOU:
         return model, CUTS_MOVE  # the plate sees round them, nothing to add
     return _add_still(model, frames, gains, cuts, where)
+
+
+def _detect(frame, rows):
+    """:func:`detect_people` at each height of ``rows`` in turn, up to the first that
+    finds someone."""
+    for r in rows:
+        found, scores = detect_people(frame, rows=r)
+        if len(found):
+            break
+    return found, scores
 
 
 def _cut_pending(frames, pending, cuts, where) -> bool:
