@@ -300,6 +300,8 @@ RENDERS = [
     ("held 05_09 front / Weizmann plate", ("hold", "05_09", 200, 4), 0, "ido", "tuning"),
     ("held 131_01 side / room plate", ("hold", "131_01.bvh", 100, 0), 90, "room", "tuning"),
     ("held 02_06 3/4 back / PETS plate", ("hold", "02_06", 300, 6), 135, "vtest", "tuning"),
+    ("held 05_20 front / room plate", ("hold", "05_20", 100, 12), 0, "room", "tuning"),
+    ("held 05_05 side left / Weizmann plate", ("hold", "05_05", 60, 8), 270, "ido", "tuning"),
 ]
 #: The arriving renders' frame rate, pixels per metre and camera tilt (degrees down):
 #: the scale fixed so that the walk starts and ends out of view; 15 fps keeps the clip
