@@ -302,6 +302,9 @@ RENDERS = [
     ("held 02_06 3/4 back / PETS plate", ("hold", "02_06", 300, 6), 135, "vtest", "tuning"),
     ("held 05_20 front / room plate", ("hold", "05_20", 100, 12), 0, "room", "tuning"),
     ("held 05_05 side left / Weizmann plate", ("hold", "05_05", 60, 8), 270, "ido", "tuning"),
+    ("held 05_13 3/4 / PETS plate", ("hold", "05_13", 100, 20), 45, "vtest", "tuning"),
+    ("held 05_09 3/4 left / room plate", ("hold", "05_09", 150, 20), 300, "room", "tuning"),
+    ("held 02_07 front / PETS plate", ("hold", "02_07", 120, 16), 0, "vtest", "tuning"),
 ]
 #: The arriving renders' frame rate, pixels per metre and camera tilt (degrees down):
 #: the scale fixed so that the walk starts and ends out of view; 15 fps keeps the clip
