@@ -20,6 +20,8 @@ from vidcap.video.hidden import (
 
 ARM = {s: [J[f"{s}_shoulder"], J[f"{s}_elbow"], J[f"{s}_wrist"]] for s in "lr"}
 LEGS = [J[f"{s}_{p}"] for s in "lr" for p in ("hip", "knee", "ankle")]
+HIPS = [J["l_hip"], J["r_hip"]]
+LOWER_LEGS = [J[f"{s}_{p}"] for s in "lr" for p in ("knee", "ankle")]
 
 
 def _walk(n=30, yaw_deg=90.0):
@@ -67,7 +69,7 @@ def _front_pose(n=5):
     return j3, uv
 
 
-def test_fill_hidden_takes_hidden_arms_and_shoulders_from_the_3d_and_keeps_the_rest():
+def test_fill_hidden_takes_hidden_arms_shoulders_and_hips_from_the_3d_and_keeps_the_rest():
     j3, uv = _front_pose()
     fit = uv.copy()
     # the 2D fit's left arm hung down along the torso (the frame shows nothing of the
@@ -76,7 +78,7 @@ def test_fill_hidden_takes_hidden_arms_and_shoulders_from_the_3d_and_keeps_the_r
     fit[:, J["l_wrist"]] = fit[:, J["l_shoulder"]] + [25.0, 110.0]
     fit[:, J["l_shoulder"]] += [4.0, 2.0]
     fit[:, J["r_wrist"]] += [0.0, 6.0]  # a visible arm fitted a little off: kept
-    fit[:, LEGS] += 3.0  # legs fitted a little off: kept
+    fit[:, LEGS] += 3.0  # legs fitted a little off: knees and ankles kept, hips solved
     assert hidden_arms(fit).tolist() == [[True, False]] * len(fit)
     # the solve names arms by the body's sides: exchanged, they are matched back
     named = j3[:, [0, 1, 2, 6, 7, 8, 3, 4, 5, 9, 10, 11, 12, 13, 14]]
@@ -84,8 +86,28 @@ def test_fill_hidden_takes_hidden_arms_and_shoulders_from_the_3d_and_keeps_the_r
     np.testing.assert_allclose(out[:, ARM["l"]], uv[:, ARM["l"]], atol=1e-6)
     np.testing.assert_allclose(out[:, J["r_shoulder"]], uv[:, J["r_shoulder"]], atol=1e-6)
     np.testing.assert_array_equal(out[:, ARM["r"][1:]], fit[:, ARM["r"][1:]])
-    np.testing.assert_array_equal(out[:, LEGS], fit[:, LEGS])
+    np.testing.assert_array_equal(out[:, LOWER_LEGS], fit[:, LOWER_LEGS])
+    np.testing.assert_allclose(out[:, HIPS], uv[:, HIPS], atol=1e-6)
     np.testing.assert_array_equal(out[:, :3], fit[:, :3])
+
+
+def test_fill_hidden_matches_the_solves_legs_to_the_fits_before_taking_its_hips():
+    """The solve names legs by the body's sides, the fit by the image's: each frame's
+    hips come from the solve's leg nearer the fit's leg of that name. A walk turned 30
+    degrees from facing the camera (hips ~30 px apart), its fitted hips 6 px off and the
+    solve's legs named the other way round in every other frame: the hips land on the
+    true ones, the knees and ankles stay."""
+    j3, uv = _walk(6, yaw_deg=30.0)
+    assert np.linalg.norm(uv[:, J["l_hip"]] - uv[:, J["r_hip"]], axis=-1).min() > 20.0
+    fit = uv.copy()
+    fit[:, HIPS] += [6.0, -4.0]
+    named = j3.copy()
+    left, right = [J[f"l_{p}"] for p in ("hip", "knee", "ankle")], \
+        [J[f"r_{p}"] for p in ("hip", "knee", "ankle")]
+    named[::2][:, left + right] = j3[::2][:, right + left]
+    out = fill_hidden(fit, named)
+    np.testing.assert_allclose(out[:, HIPS], uv[:, HIPS], atol=1e-6)
+    np.testing.assert_array_equal(out[:, LOWER_LEGS], fit[:, LOWER_LEGS])
 
 
 def test_hidden_joints_name_each_elbow_and_wrist_inside_the_torso():
@@ -129,14 +151,15 @@ def test_fill_hidden_leaves_frames_without_a_fit_empty():
 
 
 def test_solve_hidden_keeps_a_consistent_pose_and_the_legs():
-    """The walk's exact 2D is a pose the solve can take: the arms it puts back stay
-    within 2 % of the height of where they were, and the legs are the fit's."""
+    """The walk's exact 2D is a pose the solve can take: the arms and hips it puts back
+    stay within 2 % of the height of where they were, and the knees and ankles are the
+    fit's."""
     _, uv = _walk(30)
     out = solve_hidden(uv, fps=30.0, frame_size=(640, 480))
     height = 200.0 * 1.75
-    arms = ARM["l"] + ARM["r"]
-    assert np.median(np.linalg.norm(out[:, arms] - uv[:, arms], axis=-1)) < 0.02 * height
-    np.testing.assert_array_equal(out[:, LEGS], uv[:, LEGS])
+    for joints in (ARM["l"] + ARM["r"], HIPS):
+        assert np.median(np.linalg.norm(out[:, joints] - uv[:, joints], axis=-1)) < 0.02 * height
+    np.testing.assert_array_equal(out[:, LOWER_LEGS], uv[:, LOWER_LEGS])
 
 
 FOREARMS = {s: [J[f"{s}_elbow"], J[f"{s}_wrist"]] for s in "lr"}
@@ -225,10 +248,10 @@ def test_convert_and_pose2d_refuse_an_unknown_hidden_before_any_work(tmp_path, c
         assert r.returncode == 2 and "--hidden" in r.stderr
 
 
-def test_run_with_hidden_solve_changes_only_the_arms_and_shoulders_of_its_2d(tmp_path):
+def test_run_with_hidden_solve_changes_only_the_arms_shoulders_and_hips_of_its_2d(tmp_path):
     """``pipeline.run(hidden='solve')`` (``vidcap convert``'s default): the same fit, the
-    same 3D, and in both 2D outputs only the shoulders and arms may differ; with the
-    per-segment lift nothing changes."""
+    same 3D, and in both 2D outputs only the shoulders, arms and hips may differ; with
+    the per-segment lift nothing changes."""
     from vidcap.synth import make_motion, synth_clip
     from vidcap.video.pipeline import run
 
@@ -239,7 +262,7 @@ def test_run_with_hidden_solve_changes_only_the_arms_and_shoulders_of_its_2d(tmp
     fit, solved = run(video, hidden="fit", **kw), run(video, hidden="solve", **kw)
     np.testing.assert_array_equal(fit.lifted.joints3d, solved.lifted.joints3d)
     arms = ARM["l"] + ARM["r"]
-    rest = [k for k in range(15) if k not in arms]
+    rest = [k for k in range(15) if k not in arms + HIPS]
     for a, b in ((fit.image_joints2d, solved.image_joints2d),
                  (fit.lifted.joints2d, solved.lifted.joints2d)):
         np.testing.assert_array_equal(a[:, rest], b[:, rest])

@@ -8,8 +8,8 @@ rigid bones, joint limits, the pose prior learned from motion capture (how peopl
 an arm, in the torso's frame, whichever way they face) and smoothness over the clip.
 :func:`fill_hidden` reprojects the solve's 3D joints into the image (scaled
 orthographic, each frame aligned on the pelvis, neck and head top the 2D fit found)
-and puts them in place of the 2D fit's shoulders, of every wrist the fit drew inside
-the torso's outline and of every elbow drawn there or hanging such a wrist
+and puts them in place of the 2D fit's shoulders and hips, of every wrist the fit drew
+inside the torso's outline and of every elbow drawn there or hanging such a wrist
 (:func:`hidden_joints`); everything else, a wrist out in the open included, stays as
 fitted.
 
@@ -39,6 +39,8 @@ CONVERT_HIDDEN = "solve"
 #: The joints each frame's reprojection is aligned on (the axis the silhouette pins down).
 AXIS = (JOINT_INDEX["pelvis"], JOINT_INDEX["neck"], JOINT_INDEX["head_top"])
 _ARMS = {s: (JOINT_INDEX[f"{s}_shoulder"], JOINT_INDEX[f"{s}_elbow"], JOINT_INDEX[f"{s}_wrist"])
+         for s in "lr"}
+_LEGS = {s: (JOINT_INDEX[f"{s}_hip"], JOINT_INDEX[f"{s}_knee"], JOINT_INDEX[f"{s}_ankle"])
          for s in "lr"}
 #: Pelvis to head top as a share of the body height (Table 3.1: torso + head).
 _AXIS_SHARE = (SEGMENTS[SEGMENT_INDEX["torso"]].length_ratio
@@ -107,23 +109,30 @@ def hidden_arms(joints2d) -> np.ndarray:
 
 
 def _matched(rep: np.ndarray, j2: np.ndarray) -> np.ndarray:
-    """``rep`` with its arms exchanged in the frames where the other order lies nearer
-    the 2D fit's arms (the solve names arms by the body's sides, the fit by the image's)."""
-    left, right = list(_ARMS["l"]), list(_ARMS["r"])
-    same = (np.linalg.norm(rep[:, left] - j2[:, left], axis=-1).sum(1)
-            + np.linalg.norm(rep[:, right] - j2[:, right], axis=-1).sum(1))
-    swap = (np.linalg.norm(rep[:, left] - j2[:, right], axis=-1).sum(1)
-            + np.linalg.norm(rep[:, right] - j2[:, left], axis=-1).sum(1))
+    """``rep`` with its arms, and apart from them its legs, exchanged in the frames where
+    the other order lies nearer the 2D fit's (the solve names limbs by the body's sides,
+    the fit by the image's)."""
     out = rep.copy()
-    f = swap < same
-    out[np.ix_(f, left + right)] = rep[np.ix_(f, right + left)]
+    for left, right in ((list(_ARMS["l"]), list(_ARMS["r"])),
+                        (list(_LEGS["l"]), list(_LEGS["r"]))):
+        same = (np.linalg.norm(rep[:, left] - j2[:, left], axis=-1).sum(1)
+                + np.linalg.norm(rep[:, right] - j2[:, right], axis=-1).sum(1))
+        swap = (np.linalg.norm(rep[:, left] - j2[:, right], axis=-1).sum(1)
+                + np.linalg.norm(rep[:, right] - j2[:, left], axis=-1).sum(1))
+        f = swap < same
+        out[np.ix_(f, left + right)] = rep[np.ix_(f, right + left)]
     return out
 
 
 def fill_hidden(joints2d, joints3d) -> np.ndarray:
-    """The 2D fit's joints with the shoulders, the wrists :func:`hidden_joints` names
-    and the elbows it names or that hang such a wrist taken from the 3D solve
-    (:func:`reproject`).
+    """The 2D fit's joints with the shoulders, the hips, the wrists
+    :func:`hidden_joints` names and the elbows it names or that hang such a wrist taken
+    from the 3D solve (:func:`reproject`).
+
+    The hips, like the shoulders, are points inside the outline the silhouette does not
+    mark: the fit draws them at the pelvis across its spread, the solve with the torso's
+    3D turn (on the tuning renders the solve's hips gained 0.1 PCK point upright and 0.3
+    on the low poses; its knees and ankles, which the outline shows, lost; RESULTS.md).
 
     A wrist out beside or in front of the torso is where the image shows it, even when
     its elbow lies inside the outline: it stays as fitted (the whole arm taken from
@@ -134,8 +143,8 @@ def fill_hidden(joints2d, joints3d) -> np.ndarray:
     joints2d : numpy.ndarray, shape (F, 15, 2)
         The 2D fit's joints, pixels, image-side names (NaN frames stay NaN).
     joints3d : numpy.ndarray, shape (F, 15, 3)
-        The clip solve's joints for the same frames (any names: each frame's arms are
-        matched to the nearer 2D arms).
+        The clip solve's joints for the same frames (any names: each frame's arms and
+        legs are matched to the nearer 2D ones).
 
     Returns
     -------
@@ -149,6 +158,7 @@ def fill_hidden(joints2d, joints3d) -> np.ndarray:
     for col, s in enumerate("lr"):
         sh, el, wr = _ARMS[s]
         out[ok, sh] = rep[ok, sh]
+        out[ok, _LEGS[s][0]] = rep[ok, _LEGS[s][0]]
         # a wrist the torso hides hides its elbow's place too (the fit hangs both
         # from it); a wrist out in the open is kept where the image shows it
         elbow, wrist = hid[:, col, 0] | hid[:, col, 1], hid[:, col, 1]
