@@ -41,7 +41,7 @@ the fit as it comes and relabelled by the solve over time
 (``fit_sequence(relabel=True)``). ``--views`` keeps only some views' clips, ``--save``
 writes every clip's truth and fitted joints for diagnostics, ``--predict`` fits with
 ``fit_sequence(predict=True)``. ``--hidden solve`` adds both fits with the joints the image
-cannot show (the shoulders, arms inside the torso's outline) taken from the 3D clip solve
+cannot show (the shoulders, hips, arms inside the torso's outline) taken from the 3D clip solve
 (:mod:`vidcap.video.hidden`, ``vidcap pose2d --hidden solve``).
 
 ``--torso`` (issue 27 item 4) fits the ``--held-out`` clips once each, tracked, outline

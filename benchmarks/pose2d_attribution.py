@@ -29,16 +29,21 @@ benchmark uses; ``$VIDCAP_DATA/mocap/cmu/14_19_humanik.bvh``, benchmarks/get_dat
 by wt-sideview (issue 27): 6-8 s at yaws 90 and 270, 13-15 s at 80, 20-22 s at 100 (hands
 above the head throughout). Stretches the silhouette benchmarks do not render.
 
-``--hidden solve``: the cue fit's joints the image cannot show (shoulders, arms inside the
+``--hidden solve``: the cue fit's joints the image cannot show (shoulders, hips, arms inside the
 torso's outline) taken from the 3D clip solve first (:func:`vidcap.video.hidden.solve_hidden`,
 ``vidcap pose2d --hidden solve``), so the table says where the misses are after it.
+
+``--per-joint`` (with ``--hidden solve``, not ``--rehang``): per view and joint, the share of
+joint-frames missed after the solve (PCK points) and of those the fit had within 5 % where
+the solve's joint replaced it ("fit had") or the solve had where the fit's was kept ("solve
+had"): what choosing between the two per joint could gain at most (wt-farm, issue 27).
 
 ``--rehang`` (with ``--hidden solve``): :func:`~vidcap.video.hidden.solve_hidden` with
 ``rehang=True`` (forearms hung from the shoulders the solve fits the better, a side view's
 legs named by the render's limb order; not the default, wt-sidearms, issue 27).
 
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_attribution.py [--clips "131_01 110,walk 45"]
-[--hidden fit|solve] [--rehang] [--extra]`` (≈ 4 min).
+[--hidden fit|solve] [--rehang] [--per-joint] [--extra]`` (≈ 4 min).
 """
 
 from __future__ import annotations
@@ -161,6 +166,47 @@ def attribute(cues: np.ndarray, outline: np.ndarray, truth: dict) -> dict:
     return row
 
 
+def per_joint(fit: np.ndarray, filled: np.ndarray, solved: np.ndarray,
+              tj: np.ndarray) -> np.ndarray:
+    """(3, 15) counts of joint-frames: missed by ``filled`` (the fit with the solve's
+    joints, :func:`vidcap.video.hidden.fill_hidden`), of those the ``fit`` had within 5 %
+    where ``filled`` took the solve's joint, and the ``solved`` joint
+    (:func:`vidcap.video.hidden.solve_in_image`) had where ``filled`` kept the fit's;
+    pairs matched per frame as ``filled``'s."""
+    h = body_height_px(tj)[:, None]
+    _, swapped = side_agnostic_errors(filled, tj)
+    err = []
+    for x in (fit, filled, solved):
+        y = x.copy()
+        for k, (a, b) in enumerate((ARMS, LEGS)):
+            f = swapped[:, k]
+            y[np.ix_(f, a + b)] = x[np.ix_(f, b + a)]
+        err.append(np.linalg.norm(y - tj, axis=-1) / h)
+    ef, ei, es = err
+    miss, taken = ei > 0.05, np.linalg.norm(filled - fit, axis=-1) > 1e-9
+    return np.stack([miss.sum(0), (miss & taken & (ef <= 0.05)).sum(0),
+                     (miss & ~taken & (es <= 0.05)).sum(0)])
+
+
+def _print_per_joint(counts: dict) -> None:
+    """The ``--per-joint`` table: per view, :func:`per_joint`'s counts as PCK points."""
+    from vidcap.body import JOINT_NAMES
+
+    print("\nPer joint after the solve, PCK points: missed; of those, the fit had it where the "
+          "solve's replaced it / the solve had it where the fit's was kept")
+    for view in ("side", "three-quarter", "front"):
+        sel = [c for (_, yaw), c in counts.items() if view_of(yaw) == view]
+        if not sel:
+            continue
+        n = 15 * sum(c[1] for c in sel)
+        tot = np.sum([c[0] for c in sel], axis=0) * 100.0 / n
+        print(f"  {view} ({len(sel)}): " + ", ".join(
+            f"{name} {m:.2f} ({f:.2f} / {v:.2f})" for name, (m, f, v)
+            in zip(JOINT_NAMES, tot.T, strict=True) if m > 0))
+        m, f, v = tot.sum(axis=1)
+        print(f"  {'':{len(view)}}  sum {m:.2f} ({f:.2f} / {v:.2f})")
+
+
 COLUMNS = ("PCK", "far in", "near in", "arm out", "shoulders", "legs", "axis", "O far in",
            "O near in", "O exchange", "O shoulders", "O legs", "O axis", "interp true",
            "interp fit")
@@ -192,13 +238,20 @@ def main(argv=None) -> int:
     ap.add_argument("--rehang", action="store_true",
                     help="--hidden solve: solve_hidden(rehang=True) (forearms re-hung, legs "
                          "named by the limb order; not the default)")
+    ap.add_argument("--per-joint", action="store_true",
+                    help="--hidden solve: per joint, the misses and what the fit or the "
+                         "solve had of them")
     ap.add_argument("--extra", action="store_true",
                     help="also the CMU 14_19 side tuning renders ($VIDCAP_DATA)")
     args = ap.parse_args(argv)
     from vidcap.synth import render_clip
     from vidcap.video.fit.pose2d import fit_sequence
-    from vidcap.video.hidden import solve_hidden
+    from vidcap.video.hidden import fill_hidden, solve_hidden, solve_in_image
+    from vidcap.video.lifting import lift_pose
 
+    if args.per_joint and (args.hidden != "solve" or args.rehang):
+        ap.error("--per-joint needs --hidden solve without --rehang")
+    counts = {}
     keep = None if args.clips is None else set(args.clips.split(","))
     rows = {}
     print("Tuning renders (60 frames, 640x480, 30 fps), tracked, true silhouettes: PCK@0.05, "
@@ -210,7 +263,14 @@ def main(argv=None) -> int:
                                    rng=np.random.default_rng(0))
         pose = fit_sequence(truth["masks"], frames=video, cues="all")
         cues = pose.joints2d
-        if args.hidden == "solve":
+        if args.per_joint:  # solve_hidden's own solve, kept to compare joint by joint
+            j3 = lift_pose(cues, fps=30.0, image_sides=True, spread=pose.spread,
+                           model_height=pose.model_height, frame_size=(640, 480)).joints3d
+            filled = fill_hidden(cues, j3)
+            counts[(name, yaw)] = (per_joint(cues, filled, solve_in_image(cues, j3),
+                                             truth["joints2d"]), len(cues))
+            cues = filled
+        elif args.hidden == "solve":
             cues = solve_hidden(cues, fps=30.0, spread=pose.spread,
                                 model_height=pose.model_height, frame_size=(640, 480),
                                 frames=video, rehang=args.rehang)
@@ -242,6 +302,8 @@ def main(argv=None) -> int:
                 cells.append(f"{arm} {c[0] / max(c[1], 1):.1%} / {o[0] / max(o[1], 1):.1%}"
                              f" (of {c[1]})")
             print(f"  {view:13} " + ";  ".join(cells))
+    if counts:
+        _print_per_joint(counts)
     return 0
 
 

@@ -16,6 +16,7 @@ from vidcap.video.hidden import (
     rehang_arms,
     reproject,
     solve_hidden,
+    solve_in_image,
 )
 
 ARM = {s: [J[f"{s}_shoulder"], J[f"{s}_elbow"], J[f"{s}_wrist"]] for s in "lr"}
@@ -148,6 +149,16 @@ def test_fill_hidden_leaves_frames_without_a_fit_empty():
     fit[1] = np.nan
     out = fill_hidden(fit, j3)
     assert np.isnan(out[1]).all() and np.isfinite(out[[0, 2]]).all()
+
+
+def test_solve_in_image_names_the_solves_limbs_as_the_fit_does():
+    """The exact 3D of a turned walk with both limb pairs named the other way round in
+    every third frame: drawn in the image, every joint lands on the fit's own."""
+    j3, uv = _walk(9, yaw_deg=30.0)
+    named = j3.copy()
+    order = [0, 1, 2, 6, 7, 8, 3, 4, 5, 12, 13, 14, 9, 10, 11]
+    named[::3] = j3[::3][:, order]
+    np.testing.assert_allclose(solve_in_image(uv, named), uv, atol=1e-6)
 
 
 def test_solve_hidden_keeps_a_consistent_pose_and_the_legs():

@@ -18,7 +18,10 @@ tuning renders PCK@0.05 93.77 -> 95.04 %, where which joints to replace was chos
 arms inside and the shoulders; every arm joint or the upper body as good, every joint or
 the legs too worse); on the 40 held-out renders (``benchmarks/pose2d_accuracy.py
 --held-out --hidden solve``) 86.37 -> 87.23 % with the cues, 85.04 -> 85.77 % with the
-outline; on real clips against MediaPipe equal or nearer with the default body.
+outline; on real clips against MediaPipe equal or nearer with the default body. The hips
+from the solve as well (wt-farm, session 32, chosen on the tuning renders: 93.52 -> 93.60 %
+on pose2d_attribution's 19 with ``--extra``, 64.87 -> 65.16 on the 17 low poses): held out
+89.06 -> 89.22 % with the cues, 87.84 -> 87.93 with the outline (same fits, one run).
 """
 
 from __future__ import annotations
@@ -124,6 +127,14 @@ def _matched(rep: np.ndarray, j2: np.ndarray) -> np.ndarray:
     return out
 
 
+def solve_in_image(joints2d, joints3d) -> np.ndarray:
+    """(F, 15, 2) the 3D solve drawn in the 2D fit's image (:func:`reproject`) with its
+    arms and legs named as the fit's (each frame's pair matched to the nearer 2D one):
+    the joints :func:`fill_hidden` takes from."""
+    j2 = np.asarray(joints2d, dtype=float)
+    return _matched(reproject(joints3d, j2), j2)
+
+
 def fill_hidden(joints2d, joints3d) -> np.ndarray:
     """The 2D fit's joints with the shoulders, the hips, the wrists
     :func:`hidden_joints` names and the elbows it names or that hang such a wrist taken
@@ -151,7 +162,7 @@ def fill_hidden(joints2d, joints3d) -> np.ndarray:
     numpy.ndarray, shape (F, 15, 2)
     """
     j2 = np.asarray(joints2d, dtype=float)
-    rep = _matched(reproject(joints3d, j2), j2)
+    rep = solve_in_image(j2, joints3d)
     out = j2.copy()
     ok = np.isfinite(rep).all(axis=(1, 2)) & np.isfinite(j2).all(axis=(1, 2))
     hid = hidden_joints(j2) & ok[:, None, None]
@@ -193,7 +204,7 @@ def arm_residual(joints3d, joints2d) -> np.ndarray:
     frame's arms matched to the nearer 2D ones), lie from the 2D arms: the sum over the
     shoulders, elbows and wrists, in body heights (pelvis to head top, Table 3.1)."""
     j2 = np.asarray(joints2d, dtype=float)
-    rep = _matched(reproject(joints3d, j2), j2)
+    rep = solve_in_image(j2, joints3d)
     arms = [*_ARMS["l"], *_ARMS["r"]]
     height = np.linalg.norm(j2[:, JOINT_INDEX["head_top"]] - j2[:, JOINT_INDEX["pelvis"]],
                             axis=-1) / _AXIS_SHARE
@@ -295,4 +306,5 @@ def solve_hidden(joints2d, *, fps: float, body=None, spread=None, model_height=N
 
 __all__ = ["AXIS", "CONVERT_HIDDEN", "DEFAULT_HIDDEN", "HIDDEN_CHOICES", "REHANG_SPREAD",
            "REHANG_WINDOW", "arm_residual", "check_hidden", "exchange_forearms", "fill_hidden",
-           "hidden_arms", "hidden_joints", "leg_order", "rehang_arms", "reproject", "solve_hidden"]
+           "hidden_arms", "hidden_joints", "leg_order", "rehang_arms", "reproject", "solve_hidden",
+           "solve_in_image"]

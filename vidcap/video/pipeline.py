@@ -180,8 +180,9 @@ def run(
         The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) and the plate's
         still-person passes: see :func:`_graph_cut_option`, :func:`_still_person_option`.
     hidden : {'fit', 'solve'}
-        The 2D joints returned as fitted, or with the shoulders and the arms the torso
-        hides from the 3D (:func:`vidcap.video.hidden.fill_hidden`; ``lift='solve'``).
+        The 2D joints returned as fitted, or with the shoulders, the hips and the arms
+        the torso hides from the 3D (:func:`vidcap.video.hidden.fill_hidden`;
+        ``lift='solve'``).
 
     Returns
     -------
@@ -910,8 +911,8 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
 
 def _with_hidden(out: _Lifted) -> _Lifted:
     """``out`` with its 2D joints (the fit's image-side ones and the lift's body-side
-    ones) taking the shoulders and the arms inside the torso's outline from the 3D
-    (:func:`vidcap.video.hidden.fill_hidden`)."""
+    ones) taking the shoulders, the hips and the arms inside the torso's outline from
+    the 3D (:func:`vidcap.video.hidden.fill_hidden`)."""
     import dataclasses
 
     lifted = dataclasses.replace(out.lifted,
