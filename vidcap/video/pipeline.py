@@ -180,9 +180,8 @@ def run(
         The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) and the plate's
         still-person passes: see :func:`_graph_cut_option`, :func:`_still_person_option`.
     hidden : {'fit', 'solve'}
-        The 2D joints returned as fitted, or with the shoulders, the hips and the arms
-        the torso hides from the 3D (:func:`vidcap.video.hidden.fill_hidden`;
-        ``lift='solve'``).
+        The 2D joints as fitted, or with the shoulders, hips and arms the torso hides
+        from the 3D (:func:`vidcap.video.hidden.fill_hidden`; ``lift='solve'``).
 
     Returns
     -------
