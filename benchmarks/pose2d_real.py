@@ -31,7 +31,7 @@ convert``'s default body). Tuning clips
 onebyone_room 233-445 (the ``human`` body's hips and feet), cam4 and cam3 (wt-cam
 diagnosed their pipeline losses on them and chose the appearance pass's scene-beside
 gate and the lean fit's head row on cam4), mmskeleton_taichi (session 27 chose the plate's
-scene-ring switch, ``background.SCENE_RING``, on it), onebyone_room 66-194 and 1242-1357
+scene-ring switch, ``regionvote.SCENE_RING``, on it), onebyone_room 66-194 and 1242-1357
 (session 29 tuned the came-stayed-went plate pass, ``vidcap.video.stayed``, on their
 silhouettes); the others are validation.
 

@@ -332,7 +332,7 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
 #: helper; vidcap.video.emptyscene.MIN_EMPTY_S chosen with it among the tuning rows).
 REAL_TUNING = {"pose2sim_balance_cam1", "sports2d_walk_turn", "pose2sim_balance_cam4",
                "sports2d_run", "pose2sim_balance_cam3",
-               # the plate's scene-ring switch (background.SCENE_RING) was built on it
+               # the plate's scene-ring switch (regionvote.SCENE_RING) was built on it
                "mmskeleton_taichi",
                # two onebyone_room visits (scored stretches; the other four stay validation)
                # since the issue-26 arrive helper diagnosed their plates frame by frame

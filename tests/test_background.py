@@ -261,7 +261,7 @@ def test_a_performer_before_a_textured_wall_leaves_the_plate(seed, monkeypatch):
     """Pixels the performer covers in 50-85 % of the samples: the scene round the
     footprint, as a set of colours, tells the costume from the wall seen between the
     steps (without it the costume stays in the plate over a sixth of them)."""
-    import vidcap.video.background as bgm
+    import vidcap.video.regionvote as rv
 
     frames, masks, truth = _performer_before_a_textured_wall(np.random.default_rng(seed))
     cover = masks.mean(axis=0)
@@ -269,7 +269,7 @@ def test_a_performer_before_a_textured_wall_leaves_the_plate(seed, monkeypatch):
     assert spot.sum() > 1000
 
     def wrong(on):
-        monkeypatch.setattr(bgm, "SCENE_RING", on)
+        monkeypatch.setattr(rv, "SCENE_RING", on)
         plate = estimate_background(frames, n_samples=24).plate
         return (_plate_error(plate, truth)[spot] > 100).mean()
 
@@ -278,7 +278,7 @@ def test_a_performer_before_a_textured_wall_leaves_the_plate(seed, monkeypatch):
 
 
 def test_letterbox_bars_are_found_only_at_the_edges():
-    from vidcap.video.background import _letterbox
+    from vidcap.video.regionvote import _letterbox
 
     means = np.full((3, 20, 30, 3), 120.0, np.float32)
     means[:, :3] = 2.0  # a bar on top

@@ -128,7 +128,7 @@ def still_block_clip(tmp_path):
     apart), and the block's true masks. A static stripe of the block's colour stands
     beside it throughout, so the colour is one of the scene's round the block (else the
     plate's vote takes the wall from those two samples itself,
-    ``background.SCENE_RING``, and the still-person passes have nothing left to do)."""
+    ``regionvote.SCENE_RING``, and the still-person passes have nothing left to do)."""
     from tests.test_emptyscene import _block, _wall
 
     rng = np.random.default_rng(3)

@@ -8,12 +8,8 @@ import pytest
 
 from tests._synthframes import background, figure_mask
 from vidcap.video import timecover
-from vidcap.video.background import (
-    _frame_gains,
-    _region_vote,
-    estimate_background,
-    sample_frames,
-)
+from vidcap.video.background import _frame_gains, estimate_background, sample_frames
+from vidcap.video.regionvote import region_vote
 from vidcap.video.timecover import motion_cover, thumbnail_step
 
 
@@ -76,8 +72,8 @@ def test_a_still_torso_is_a_hole_of_the_footprint_whatever_frames_are_drawn():
     for seed in range(6):
         smp, _ = sample_frames(frames, n_samples=24, rng=np.random.default_rng(seed))
         for cov, out in ((cover, with_time), (None, with_samples)):
-            _, holes = _region_vote(smp, _frame_gains(smp), work_size=160, segment_scale=60.0,
-                                    min_region=12, progress=False, cover=cov)
+            _, holes = region_vote(smp, _frame_gains(smp), work_size=160, segment_scale=60.0,
+                                   min_region=12, progress=False, cover=cov)
             out.append(holes[core_small].mean())
     assert min(with_time) > 0.9
     assert min(with_samples) < 0.5 < max(with_samples)

@@ -86,7 +86,7 @@ DEFAULT_PROPORTIONS = "human"
 _SILHOUETTE_VERSION = 5
 #: Bumped when the estimated plate changes (issue 26: self-lit pixels, still parts; 3:
 #: absorbed parts no sample uncovers flagged never seen, ``absorbed.flag_unseen``; 4: scene
-#: colours round the footprint, ``background.SCENE_RING``; 5: the scene where a person
+#: colours round the footprint, ``regionvote.SCENE_RING``; 5: the scene where a person
 #: came, stood and went, ``stayed.retake_stayed``; 6: a plate colour no steady stretch
 #: shows gives way to one that stayed, ``steadyscene.UNSTEADY_PLATE``; 7: a guessed
 #: plate colour no sample shows gives way to the one most samples show,

@@ -6,7 +6,7 @@ covers the pixels where they stand in most frames. The plate's vote
 (:mod:`vidcap.video.background`) takes their colours there, and the passes after it
 flag what they cover never seen and guess it; worse, the passes made for a person who
 never leaves (:mod:`vidcap.video.appearance`, :func:`vidcap.video.absorbed.flag_unseen`,
-the footprint's static parts in :func:`vidcap.video.background._footprint_plate`) take
+the footprint's static parts in :func:`vidcap.video.regionvote._footprint_plate`) take
 scenery near the still person, which the clip shows nearly all the time, for never seen
 (a grey pillar beside a woman in a grey cardigan, the skirting board along the walk, the
 table's foot) and inpaint it: a false blob in every frame. The scene there is seen in

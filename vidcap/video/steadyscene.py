@@ -73,7 +73,7 @@ NEARER = 0.5
 #: where without the colour test below it gave 0.314 / 0.278 -> 0.381 / 0.228 but cost
 #: mmskeleton_taichi (tuning) 0.815 -> 0.753 (a
 #: dark sleeve steady in 21 of 24 samples from the start undid the scene colour
-#: background.SCENE_RING took from the one sample that shows it); with it hallmonitor
+#: regionvote.SCENE_RING took from the one sample that shows it); with it hallmonitor
 #: stays 0.315 (the chair's colour is the man's trousers' to the colour models). Each
 #: guard below was added for a tuning row the rule broke (benchmarks/HISTORY.md,
 #: Silhouettes). Cost: 0.07 s on a 640x480 render's plate, 0.28 s on the 1000x1000

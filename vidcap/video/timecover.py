@@ -3,7 +3,7 @@
 The plate (:mod:`vidcap.video.background`) is estimated from a couple of dozen sampled
 frames. For a person who barely moves, which frames are drawn decided the plate: a still
 torso is told from scenery as a hole of the motion footprint
-(:func:`vidcap.video.background._footprint_plate`) whose ring the limbs cover often, and
+(:func:`vidcap.video.regionvote._footprint_plate`) whose ring the limbs cover often, and
 that cover was counted over the *samples*. CMU 02_07 11-14 s front (a swordsman who
 hardly moves): the ring round the still torso was covered in 0.28 of seed 0's samples and
 0.20 of seeds 1-3's, the test asked 0.25, and the row's median IoU was 0.91 or 0.51-0.66
@@ -37,7 +37,7 @@ __all__ = ["channel_max_diff", "coarse_step", "inverse_gains", "motion_cover",
 
 #: Measure the cover of the motion footprint's rings over every frame (the share of time
 #: a pixel moves) rather than over the sampled frames
-#: (:func:`vidcap.video.background._footprint_plate`).
+#: (:func:`vidcap.video.regionvote._footprint_plate`).
 TIME_COVER = True
 #: A hole of the footprint is a body part that never moved when its ring is covered for
 #: at least this share of the time (the samples' test asked 0.25 of the samples). On the
