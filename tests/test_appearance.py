@@ -173,34 +173,44 @@ def test_a_still_part_unlike_the_scene_around_stays_person_when_colours_are_unsu
     assert not appearance._keep_unlike(wk, llr)[:, 10:30, 20:42].any()
 
 
-def test_small_samples_are_made_once_per_set_of_samples():
-    """The passes' work images: the same array for the same samples, gains and size
-    (read only), made anew for other gains, another size or other samples; equal to
-    the resize, divide and clip they stand for."""
+def test_small_samples_are_the_resize_divide_and_clip_they_stand_for():
+    """The passes' work images: area resize to the working size, divided by the gains,
+    clipped, read only; a pass given them works on them, one given another size's
+    makes its own."""
     import cv2
 
-    from vidcap.video.appearance import _small_samples
+    from vidcap.video.appearance import _Work, small_samples
+    from vidcap.video.background import BackgroundModel
 
     rng = np.random.default_rng(8)
     frames = rng.integers(0, 256, (4, 40, 30, 3), dtype=np.uint8)
     gains = rng.uniform(0.9, 1.1, (4, 3)).astype(np.float32)
-    a = _small_samples(frames, gains, 15, 20)
+    a = small_samples(frames, gains, 20)
     want = np.clip(np.stack([cv2.resize(f, (15, 20), interpolation=cv2.INTER_AREA)
                              for f in frames]).astype(np.float32)
                    / gains[:, None, None, :], 0, 255)
     assert np.array_equal(a, want) and not a.flags.writeable
-    assert _small_samples(frames, gains.copy(), 15, 20) is a
-    assert _small_samples(frames, gains * 1.01, 15, 20) is not a
-    b = _small_samples(frames, gains, 10, 12)
-    assert b.shape == (4, 12, 10, 3)
-    assert _small_samples(frames.copy(), gains, 10, 12) is not b
+    model = BackgroundModel.from_plate(np.full((40, 30, 3), 128, np.uint8), noise_sigma=1.0)
+    assert _Work(model, frames, gains, 20, a).small is a
+    other = _Work(model, frames, gains, 10, a).small
+    assert other.shape == (4, 10, 8, 3) and other is not a
 
 
-def test_small_samples_are_not_kept_past_their_samples():
+def test_the_plate_makes_the_small_samples_once(monkeypatch):
+    """Every colour pass of one plate (appearance, absorbed, colour models, unseen
+    flags) works on the one set of small samples the orchestration made."""
+    from tests._synthframes import clip
     from vidcap.video import appearance
+    from vidcap.video.background import estimate_background
 
-    frames = np.zeros((3, 20, 20, 3), np.uint8)
-    appearance._small_samples(frames, np.ones((3, 3), np.float32), 10, 10)
-    assert appearance._LAST_SMALL is not None
-    del frames
-    assert appearance._LAST_SMALL is None
+    made = []
+    real = appearance.small_samples
+
+    def counted(*args, **kw):
+        made.append(1)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(appearance, "small_samples", counted)
+    frames, _ = clip(30, 90, 120, rng=np.random.default_rng(9), walk=False)
+    estimate_background(frames, n_samples=12, colour_models=True)
+    assert len(made) == 1

@@ -127,7 +127,7 @@ CONFIRMED_SHARE, AWAY = 0.25, 0.05
 
 
 def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
-                    work_size: int = 320) -> object:
+                    work_size: int = 320, small: np.ndarray | None = None) -> object:
     """Re-take the plate where it shows the person although the scene was seen.
 
     Parameters
@@ -140,6 +140,8 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
         Their per-channel gains relative to the plate.
     work_size : int
         Long side, pixels, of the working resolution of the colour decisions.
+    small : numpy.ndarray, shape (K, h, w, 3), optional
+        :func:`vidcap.video.appearance.small_samples` of ``frames`` at ``work_size``.
 
     Returns
     -------
@@ -150,7 +152,7 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     from vidcap.video.platemedian import robust_plate
 
     k = len(frames)
-    ev = _evidence(model, frames, gains, work_size)
+    ev = _evidence(model, frames, gains, work_size, small=small)
     if ev is None:
         return model
     wk, cand, llr = ev["wk"], ev["cand"], ev["llr"]
@@ -179,7 +181,7 @@ def retake_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     return replace(model, plate=plate, confidence=conf, never_seen=model.never_seen & ~take)
 
 
-def _evidence(model, frames, gains, work_size, still=False):
+def _evidence(model, frames, gains, work_size, still=False, small=None):
     """What :func:`retake_absorbed` and :func:`flag_unseen` decide on, as a dict: the
     samples at the working resolution (``wk``), the person's colours (``px``), the
     scene's model (``scene``), the footprint grown by :data:`REACH` (``foot``), the
@@ -198,7 +200,7 @@ def _evidence(model, frames, gains, work_size, still=False):
 
     if len(frames) < 4:
         return None
-    wk = _Work(model, frames, gains, work_size)
+    wk = _Work(model, frames, gains, work_size, small)
     if wk.med_area < 16:
         return None
     px = _person_colours(wk)
@@ -225,7 +227,7 @@ def _evidence(model, frames, gains, work_size, still=False):
 
 
 def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
-                work_size: int = 320) -> object:
+                work_size: int = 320, small: np.ndarray | None = None) -> object:
     """Flag never seen the plate pixels that show the person and that no sample shows
     uncovered (see :data:`FLAG_UNSEEN`).
 
@@ -248,6 +250,8 @@ def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
         Their per-channel gains relative to the plate.
     work_size : int
         Long side, pixels, of the working resolution of the colour decisions.
+    small : numpy.ndarray, shape (K, h, w, 3), optional
+        :func:`vidcap.video.appearance.small_samples` of ``frames`` at ``work_size``.
 
     Returns
     -------
@@ -258,7 +262,7 @@ def flag_unseen(model, frames: np.ndarray, gains: np.ndarray, *,
     from vidcap.video.appearance import colour_model, log_ratio
 
     # (the still test needs no candidate of the colour models)
-    ev = _evidence(model, frames, gains, work_size, still=True)
+    ev = _evidence(model, frames, gains, work_size, still=True, small=small)
     if ev is None:
         return model
     wk, cand = ev["wk"], ev["cand"]

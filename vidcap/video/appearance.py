@@ -53,7 +53,7 @@ from vidcap.video.masks import centroid_columns
 
 __all__ = ["appearance_plate", "between_moved", "colour_model", "log_ratio",
            "nearest_scene_distance",
-           "person_scene_models"]
+           "person_scene_models", "small_samples"]
 
 #: Quantisation levels per colour channel of the colour models.
 BINS = 16
@@ -241,54 +241,50 @@ def _smooth(llr: np.ndarray, size: int) -> np.ndarray:
     return out
 
 
-#: The last samples made small by :func:`_small_samples`: (a weak reference to the
-#: samples, their gains, (w, h), the small samples).
-_LAST_SMALL: tuple | None = None
-
-
-def _small_samples(frames: np.ndarray, gains: np.ndarray, w: int, h: int) -> np.ndarray:
-    """The samples (K, H, W, 3) uint8 at (w, h) by area averaging, divided by their gains
-    (K, 3) and clipped to 0-255, float32 (read only).
+def small_samples(frames: np.ndarray, gains: np.ndarray,
+                  work_size: int = WORK_SIZE) -> np.ndarray:
+    """The samples at the plate passes' working resolution.
 
     The plate's passes (the appearance plate, the absorbed person, the colour models,
-    the unseen flags) each build a :class:`_Work` from the same samples: the last ones
-    are kept while the samples live, ~0.1 s of CPU a pass at 1000x1000.
-    The samples are never changed in place.
-    """
-    global _LAST_SMALL
-    last = _LAST_SMALL
-    if (last is not None and last[0]() is frames and last[2] == (w, h)
-            and np.array_equal(last[1], gains)):
-        return last[3]
-    import weakref
+    the unseen flags) each work on the same small samples: the plate's orchestration
+    (:func:`vidcap.video.background.estimate_background`) makes them once and hands
+    them down (``small=``), ~0.1 s of CPU a pass at 1000x1000.
 
+    Parameters
+    ----------
+    frames : numpy.ndarray, shape (K, H, W, 3), uint8
+        The samples.
+    gains : numpy.ndarray, shape (K, 3)
+        Their per-channel gains relative to the plate.
+    work_size : int
+        Long side of the working resolution, pixels.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, h, w, 3), float32
+        By area averaging, divided by the gains and clipped to 0-255; read only.
+    """
+    from vidcap.video.regionvote import work_hw
+
+    h, w = work_hw(frames.shape[1:3], work_size)
     small = np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA) for f in frames])
     small = np.clip(small.astype(np.float32) / gains[:, None, None, :], 0, 255)
     small.flags.writeable = False
-    try:
-        # (dropped with the samples: nothing is held past the plate stage)
-        _LAST_SMALL = (weakref.ref(frames, _forget_small), np.array(gains), (w, h), small)
-    except TypeError:  # (an array-like that takes no weak reference: not kept)
-        _LAST_SMALL = None
     return small
-
-
-def _forget_small(ref) -> None:
-    """Drop the small samples of :func:`_small_samples` once their samples are gone."""
-    global _LAST_SMALL
-    if _LAST_SMALL is not None and _LAST_SMALL[0] is ref:
-        _LAST_SMALL = None
 
 
 class _Work:
     """The samples at the working resolution and what the first plate says there."""
 
-    def __init__(self, model, frames, gains, work_size):
+    def __init__(self, model, frames, gains, work_size, small=None):
+        from vidcap.video.regionvote import work_hw
+
         k, hh, ww = frames.shape[:3]
-        s = min(1.0, work_size / max(hh, ww))
-        h, w = max(2, round(hh * s)), max(2, round(ww * s))
+        h, w = work_hw((hh, ww), work_size)
         self.k, self.h, self.w, self.full = k, h, w, (hh, ww)
-        self.small = _small_samples(frames, gains, w, h)
+        # (the orchestration's small samples when they are at this size)
+        self.small = (small if small is not None and small.shape == (k, h, w, 3)
+                      else small_samples(frames, gains, work_size))
         self.plate = cv2.resize(model.plate, (w, h),
                                 interpolation=cv2.INTER_AREA).astype(np.float32)
         self.never = self.down(model.never_seen)
@@ -393,7 +389,7 @@ def _grow_absorbed(wk: _Work, person_seen: np.ndarray):
 
 
 def person_scene_models(model, frames: np.ndarray, gains: np.ndarray, *,
-                        work_size: int = WORK_SIZE):
+                        work_size: int = WORK_SIZE, small: np.ndarray | None = None):
     """The person's and the scene's colour models over the clip, for any clip.
 
     The person: what differs by a margin from the plate where it was seen, over all
@@ -409,6 +405,8 @@ def person_scene_models(model, frames: np.ndarray, gains: np.ndarray, *,
     gains : numpy.ndarray, shape (K, 3)
     work_size : int
         Long side of the working resolution, pixels.
+    small : numpy.ndarray, shape (K, h, w, 3), optional
+        :func:`small_samples` of ``frames`` at ``work_size``, when the caller has them.
 
     Returns
     -------
@@ -419,7 +417,7 @@ def person_scene_models(model, frames: np.ndarray, gains: np.ndarray, *,
     """
     if len(frames) < 2:
         return None
-    wk = _Work(model, frames, gains, work_size)
+    wk = _Work(model, frames, gains, work_size, small)
     px = _person_colours(wk)
     if px is None:
         # (a person who never leaves the never-seen area: what the samples show there)
@@ -434,7 +432,7 @@ def person_scene_models(model, frames: np.ndarray, gains: np.ndarray, *,
 
 
 def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
-                     work_size: int = WORK_SIZE) -> object:
+                     work_size: int = WORK_SIZE, small: np.ndarray | None = None) -> object:
     """Re-take the plate where the person stays, deciding person by appearance.
 
     Parameters
@@ -447,6 +445,8 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
         Their per-channel gains relative to the plate.
     work_size : int
         Long side of the working resolution, pixels.
+    small : numpy.ndarray, shape (K, h, w, 3), optional
+        :func:`small_samples` of ``frames`` at ``work_size``, when the caller has them.
 
     Returns
     -------
@@ -457,7 +457,7 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     """
     if len(frames) < 4:
         return model
-    wk = _Work(model, frames, gains, work_size)
+    wk = _Work(model, frames, gains, work_size, small)
     if wk.med_area < 16 or not _in_place(wk.fg):
         return model
     px = _person_colours(wk)

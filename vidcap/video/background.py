@@ -427,25 +427,31 @@ def estimate_background(
                                  segment_scale=segment_scale, min_region=min_region,
                                  progress=progress, cover=cover)
     model = _finish_regions(frames, gains, weights_small, idx, name, holes)
+    from vidcap.video.appearance import small_samples
     from vidcap.video.platepass import refine_plate
 
+    # (the colour passes' samples at their working size, made once for all of them)
+    small = small_samples(frames, gains)
     model = refine_plate(model, frames, gains, weights_small.shape[1:],
-                         colour_models=colour_models)
+                         colour_models=colour_models, small=small)
     n = len(source) if info is None else info.n_frames
     still = EMPTY_SCENE if empty_scene is None else empty_scene
-    return _later_passes(model, frames, gains, thumbs, info, n, still,
+    return _later_passes(model, (frames, gains, small), thumbs, info, n, still,
                          PERSON_BOX if person_box is None else person_box)
 
 
-def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, person_box: bool):
+def _later_passes(model, samples, thumbs, info, n: int, still: bool, person_box: bool):
     """Step 8's passes after :func:`vidcap.video.platepass.refine_plate` (module
     docstring), in their order: the plate's unsteady colours and the empty scene (with
     ``still``, the still-person passes), the passed-by colours, the absorbed person
     (with ``person_box``), the unseen flags, the never-seen pixels' second steady state
     and, last, the person who came, stayed and went (with ``still``); ``n`` frames in the
-    clip, ``thumbs`` every frame's thumbnail or None."""
+    clip, ``thumbs`` every frame's thumbnail or None; ``samples`` the plate's samples,
+    their gains and the colour passes' small samples
+    (:func:`vidcap.video.appearance.small_samples`)."""
+    frames, gains, small = samples
     if still:
-        model = _steady_pass(model, frames, gains, info, never=False)
+        model = _steady_pass(model, samples, info, never=False)
         from vidcap.video.emptyscene import plate_from_empty
 
         fps = _fps(info)
@@ -455,7 +461,7 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
     from vidcap.video import passedby, stayed
 
     if thumbs is not None and passedby.PASSED_BY:
-        model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
+        model = _thumbnail_pass(model, samples, thumbs, info, n,
                                 passedby.retake_passed_by)
     if person_box:
         from vidcap.video.heldpose import absorbed_or_held
@@ -467,49 +473,52 @@ def _later_passes(model, frames, gains, thumbs, info, n: int, still: bool, perso
             # out): learn them again now that the person differs from the plate.
             from vidcap.video.graphcut import clip_colours
 
-            found = replace(found, colours=clip_colours(found, frames, gains))
+            found = replace(found, colours=clip_colours(found, frames, gains, small))
         model = found
     from vidcap.video import absorbed
 
     if absorbed.FLAG_UNSEEN:
-        model = absorbed.flag_unseen(model, frames, gains)
+        model = absorbed.flag_unseen(model, frames, gains, small=small)
     if still:
-        model = _steady_pass(model, frames, gains, info, unsteady=False)
+        model = _steady_pass(model, samples, info, unsteady=False)
     if thumbs is not None and stayed.STAYED and still:
         # (last: the passes before it flag never seen, and guess, what it takes back)
-        model = _thumbnail_pass(model, frames, gains, thumbs, info, n,
+        model = _thumbnail_pass(model, samples, thumbs, info, n,
                                 stayed.retake_stayed)
     return model
 
 
-def _steady_pass(model, frames, gains, info, **rules):
+def _steady_pass(model, samples, info, **rules):
     """``model`` after :func:`vidcap.video.steadyscene.retake_steady` (``rules``: its
     ``never`` and ``unsteady`` keywords), the colour models learned again when the
-    never-seen rule changed the plate."""
+    never-seen rule changed the plate; ``samples`` as :func:`_later_passes`'."""
     from vidcap.video.steadyscene import retake_steady
 
+    frames, gains, small = samples
     found = retake_steady(model, frames, gains, model.sample_indices / _fps(info), **rules)
     # (the unsteady colours are a few pixels: the colour models learned on the plate before
     # them serve, and learning them again cost the 1000x1000 clip's convert 1.6 s)
     if found is not model and model.colours is not None and rules.get("never", True):
         from vidcap.video.graphcut import clip_colours
 
-        found = replace(found, colours=clip_colours(found, frames, gains))
+        found = replace(found, colours=clip_colours(found, frames, gains, small))
     return found
 
 
-def _thumbnail_pass(model, frames, gains, thumbs, info, n: int, retake):
+def _thumbnail_pass(model, samples, thumbs, info, n: int, retake):
     """``model`` after ``retake`` (a pass over every frame's thumbnail:
     :func:`vidcap.video.passedby.retake_passed_by`,
     :func:`vidcap.video.stayed.retake_stayed`), the colour models learned again when the
-    plate changed (they were learned against the old plate); ``n`` frames in the clip."""
+    plate changed (they were learned against the old plate); ``n`` frames in the clip;
+    ``samples`` as :func:`_later_passes`'."""
     from vidcap.video.timecover import thumbnail_step
 
+    frames, gains, small = samples
     found = retake(model, frames, gains, thumbs, fps=_fps(info), step=thumbnail_step(n))
     if found is not model and model.colours is not None:
         from vidcap.video.graphcut import clip_colours
 
-        found = replace(found, colours=clip_colours(found, frames, gains))
+        found = replace(found, colours=clip_colours(found, frames, gains, small))
     return found
 
 

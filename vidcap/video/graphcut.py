@@ -119,7 +119,8 @@ TRACE = None
 
 
 
-def clip_colours(model, frames: np.ndarray, gains: np.ndarray) -> np.ndarray | None:
+def clip_colours(model, frames: np.ndarray, gains: np.ndarray,
+                 small: np.ndarray | None = None) -> np.ndarray | None:
     """The colour models of the person and of the scene over the clip.
 
     Parameters
@@ -130,6 +131,8 @@ def clip_colours(model, frames: np.ndarray, gains: np.ndarray) -> np.ndarray | N
         The samples it was estimated from.
     gains : numpy.ndarray, shape (K, 3)
         Their per-channel gains relative to the plate.
+    small : numpy.ndarray, shape (K, h, w, 3), optional
+        :func:`vidcap.video.appearance.small_samples` of ``frames``.
 
     Returns
     -------
@@ -140,7 +143,7 @@ def clip_colours(model, frames: np.ndarray, gains: np.ndarray) -> np.ndarray | N
     """
     from vidcap.video.appearance import person_scene_models
 
-    got = person_scene_models(model, frames, gains)
+    got = person_scene_models(model, frames, gains, small=small)
     return None if got is None else np.stack(got).astype(np.float32)
 
 

@@ -53,7 +53,8 @@ MODE_SHARE = 0.5
 
 
 def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
-                 still_parts: bool = False, colour_models: bool = False) -> object:
+                 still_parts: bool = False, colour_models: bool = False,
+                 small: np.ndarray | None = None) -> object:
     """Self-lit pixels, the appearance pass, absorbed pixels re-taken, then one plate ->
     person -> plate pass (then, when asked, the still parts of the person by appearance).
 
@@ -76,17 +77,22 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
         Learn the clip's person and scene colours for the silhouettes' graph cut
         (:func:`vidcap.video.graphcut.clip_colours`); on when the cut runs
         (``--graph-cut``).
+    small : numpy.ndarray, shape (K, h, w, 3), optional
+        :func:`vidcap.video.appearance.small_samples` of ``frames``, which the colour
+        passes share (made here when not given).
 
     Returns
     -------
     vidcap.video.background.BackgroundModel
     """
     from vidcap.video.absorbed import retake_absorbed
-    from vidcap.video.appearance import appearance_plate
+    from vidcap.video.appearance import appearance_plate, small_samples
 
     model = _with_self_lit(model, frames, gains, small_hw)
-    model = appearance_plate(model, frames, gains)
-    model = retake_absorbed(model, frames, gains)
+    if small is None:
+        small = small_samples(frames, gains)
+    model = appearance_plate(model, frames, gains, small=small)
+    model = retake_absorbed(model, frames, gains, small=small)
     model = _second_pass(model, frames, gains)
     if MODE_RETAKE:
         model = _retake_modes(model, frames, gains)
@@ -96,7 +102,7 @@ def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
         return model
     from vidcap.video.graphcut import clip_colours
 
-    return replace(model, colours=clip_colours(model, frames, gains))
+    return replace(model, colours=clip_colours(model, frames, gains, small))
 
 
 def _with_still_parts(model, frames, gains, small_hw):
