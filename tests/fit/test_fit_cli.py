@@ -131,7 +131,10 @@ def test_pose2d_cli_human_proportions(tmp_path, cli):
     assert np.isfinite(Pose2D.load(out).joints2d).all()
 
 
-def test_pose2d_cli_hidden_solve_changes_only_arms_and_shoulders(tmp_path, cli):
+def test_pose2d_cli_hidden_solve_changes_only_arms_shoulders_and_hips(tmp_path, cli):
+    """``--hidden solve`` takes the shoulders, the hips and the hidden arms from the clip
+    solve (vidcap.video.hidden.fill_hidden); the head, neck, pelvis, knees and ankles stay
+    as fitted."""
     from vidcap.body import JOINT_INDEX as J
 
     video, masks, _ = _clip(tmp_path)
@@ -141,9 +144,11 @@ def test_pose2d_cli_hidden_solve_changes_only_arms_and_shoulders(tmp_path, cli):
     assert r.returncode == 0, r.stderr
     a, b = Pose2D.load(fit).joints2d, Pose2D.load(solved).joints2d
     arms = [J[f"{s}_{p}"] for s in "lr" for p in ("shoulder", "elbow", "wrist")]
-    rest = [k for k in range(15) if k not in arms]
+    hips = [J["l_hip"], J["r_hip"]]
+    rest = [k for k in range(15) if k not in arms + hips]
     np.testing.assert_array_equal(a[:, rest], b[:, rest])
     assert np.isfinite(b).all() and not np.array_equal(a[:, arms], b[:, arms])
+    assert not np.array_equal(a[:, hips], b[:, hips])
 
 
 def test_pose2d_cli_without_masks_gives_the_plates_notice(tmp_path, cli):
