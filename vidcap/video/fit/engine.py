@@ -66,6 +66,7 @@ class _MaskEngine:
     def __init__(self, norm: NormalisedMask, *, caps: bool, body: BodyModel | None = None,
                  foot: float = 0.0):
         self.norm = norm
+        self.body, self.foot_share = body, foot  # as given (:mod:`.headzone` makes another)
         self.sil = norm.mask
         self.h, self.w = self.sil.shape
         # Body height = silhouette height (or the body's, when given apart from it),

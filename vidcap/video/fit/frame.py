@@ -22,6 +22,7 @@ from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.fold import crouching, fold_thighs
 from vidcap.video.fit.foreshortening import fit_foreshortening, search_fore
 from vidcap.video.fit.grids import search_arm_grid, search_arm_track, search_leg_grid
+from vidcap.video.fit.headzone import clear_head_zone
 from vidcap.video.fit.labels import keep_labels
 from vidcap.video.fit.legs import (
     fit_upper_legs,
@@ -366,6 +367,8 @@ def fit_frame(norm: NormalisedMask, *, previous: FramePose | None = None,
     if heading is not None and (warm or not challenge) and st.spread >= CROSSING_SPREAD:
         st = choose_crossing(eng, st, norm.to_normalised(heading),
                              interval=8 * np.deg2rad(options.warm_step_deg))
+    if options.head_zone > 0:
+        st = clear_head_zone(eng, st, options.head_zone)
     if cues is not None:
         # a tracked frame's arms moved little: searched near where they are, unless
         # challenged or tracked from a start below the warm threshold (then over every

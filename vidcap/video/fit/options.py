@@ -36,6 +36,11 @@ class FitOptions:
         and keep it when it fits clearly better than the tracked arm
         (:func:`vidcap.video.fit.grids.search_arm_track`: a forearm swinging faster
         than the track's +-16 degrees a frame).
+    head_zone : float
+        Where an elbow or a wrist lies within this many head lengths of the head's
+        centre (above the neck), both arms are searched again with the head zone of the
+        silhouette taken for the model's head (:func:`vidcap.video.fit.headzone.
+        clear_head_zone`: hair is no arm); 0: off.
     track_bend : bool
         Tracked frames of a body bending or crouching also move the model up and down
         and turn the torso about the pelvis (:func:`vidcap.video.fit.bend.track_bend`).
@@ -83,6 +88,7 @@ class FitOptions:
     fold_legs: bool = False
     track_bend: bool = True
     arm_track: bool = False
+    head_zone: float = 1.25
     spread_value: float | None = None
     body_height: float | None = None
     tie: float = 0.01
@@ -94,7 +100,7 @@ class FitOptions:
                 or not self.height >= 1:
             raise ValueError(f"height must be a positive whole number of pixels, got "
                              f"{self.height!r}")
-        for name in ("warm_threshold", "fallback", "tie"):
+        for name in ("warm_threshold", "fallback", "tie", "head_zone"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
