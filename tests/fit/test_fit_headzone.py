@@ -3,10 +3,16 @@
 import cv2
 import numpy as np
 
-from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
+from vidcap.body import JOINT_INDEX
 from vidcap.video.fit.engine import _MaskEngine
 from vidcap.video.fit.frame import fit_frame
-from vidcap.video.fit.headzone import clear_head_zone, head_zone, zone_engine
+from vidcap.video.fit.headzone import (
+    MIN_HAIR,
+    clear_head_zone,
+    hair_pixels,
+    head_zone,
+    zone_engine,
+)
 from vidcap.video.fit.limits import REST_DEG
 from vidcap.video.fit.normalise import normalise_mask
 from vidcap.video.fit.options import FitOptions
@@ -41,10 +47,12 @@ def test_head_zone_is_round_the_head_above_the_neck():
     points = np.array([[100.0, 80.0],   # the head's centre
                        [140.0, 70.0],   # beside the head, 41 from the centre
                        [130.0, 105.0],  # within reach of the centre but below the neck
-                       [100.0, 35.0],   # above the head top, 45 from the centre
+                       [100.0, 52.0],   # 0.2 head lengths above the head top
+                       [100.0, 40.0],   # 0.5 head lengths above it: out of the band
                        [170.0, 80.0]])  # 70 from the centre
-    assert head_zone(j, points).tolist() == [True, True, False, True, False]
-    assert head_zone(j, points, heads=1.0).tolist() == [True, False, False, False, False]
+    assert head_zone(j, points).tolist() == [True, True, False, True, False, False]
+    assert head_zone(j, points, heads=1.0).tolist() == [True, False, False, True, False,
+                                                        False]
 
 
 def test_hair_is_no_arm():
@@ -57,13 +65,17 @@ def test_hair_is_no_arm():
     norm = normalise_mask(mask, height=80)
     off = fit_frame(norm, options=FitOptions(head_zone=0.0))
     assert min(off.joints[JOINT_INDEX[f"{s}_wrist"], 1] for s in "lr") < neck_y
-    on = fit_frame(norm, options=FitOptions())
+    on = fit_frame(norm, options=FitOptions(head_zone=1.25))
     errors = []
     for s in "lr":
         fitted = on.joints[JOINT_INDEX[f"{s}_wrist"]]
         assert fitted[1] > neck_y + 0.2 * H, s
         errors.append(min(np.linalg.norm(fitted - j[JOINT_INDEX[f"{t}_wrist"]]) for t in "lr"))
     assert min(errors) <= 0.03 * H
+
+
+def test_off_by_default():
+    assert FitOptions().head_zone == 0.0
 
 
 def test_no_arm_in_the_zone_leaves_the_state():
@@ -73,14 +85,14 @@ def test_no_arm_in_the_zone_leaves_the_state():
     assert clear_head_zone(eng, st) is st
 
 
-def test_zone_engine_shows_the_model_head_in_the_zone():
-    mask, _ = _side_figure_with_hair()
+def test_zone_engine_leaves_out_the_hair():
+    mask, j = _side_figure_with_hair()
     eng = _MaskEngine(normalise_mask(mask, height=80), caps=False)
     st = place_torso(eng, FitState.rest(spread=0.1))
-    zeng = zone_engine(eng, st)
-    head = eng.model(st, segments=[SEGMENT_INDEX["head"]])
-    ys, xs = np.mgrid[0:eng.h, 0:eng.w]
-    zone = head_zone(eng.joints(st), np.stack([xs, ys], -1).astype(float))
-    assert np.array_equal(zeng.sil[zone], head[zone])
-    assert np.array_equal(zeng.sil[~zone], eng.sil[~zone])
-    assert zeng.sil.sum() < eng.sil.sum()  # the hair is gone
+    hair = hair_pixels(eng, st)
+    assert hair.sum() >= MIN_HAIR * eng.sil.sum()
+    # all of it round the head: above the neck
+    ys = np.nonzero(hair)[0]
+    assert ys.max() < eng.joints(st)[JOINT_INDEX["neck"], 1]
+    zeng = zone_engine(eng, hair)
+    assert np.array_equal(zeng.sil, eng.sil & ~hair)

@@ -95,10 +95,9 @@ _SILHOUETTE_VERSION = 5
 _PLATE_VERSION = 8
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
-#: follows the bend, ``fit.bend``; 4: arms folded up into the hair searched again,
-#: ``fit.headzone``), so a cache written by an older fit is redone rather than handed
-#: back as the new fit's.
-_POSE_VERSION = 4
+#: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
+#: than handed back as the new fit's.
+_POSE_VERSION = 3
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only

@@ -37,10 +37,12 @@ class FitOptions:
         (:func:`vidcap.video.fit.grids.search_arm_track`: a forearm swinging faster
         than the track's +-16 degrees a frame).
     head_zone : float
-        Where an elbow or a wrist lies within this many head lengths of the head's
-        centre (above the neck), both arms are searched again with the head zone of the
-        silhouette taken for the model's head (:func:`vidcap.video.fit.headzone.
-        clear_head_zone`: hair is no arm); 0: off.
+        Where an arm's elbow and wrist lie within this many head lengths of the head's
+        centre (above the neck), both arms are searched again without the silhouette's
+        pieces round the head that may be hair (:func:`vidcap.video.fit.headzone.
+        clear_head_zone`); 0 (the default): off. Not the default: it mends arms folded
+        up into a ponytail but mistakes raised arms beside the head for hair
+        (benchmarks/HISTORY.md, session 32, wt-runarms).
     track_bend : bool
         Tracked frames of a body bending or crouching also move the model up and down
         and turn the torso about the pelvis (:func:`vidcap.video.fit.bend.track_bend`).
@@ -88,7 +90,7 @@ class FitOptions:
     fold_legs: bool = False
     track_bend: bool = True
     arm_track: bool = False
-    head_zone: float = 1.25
+    head_zone: float = 0.0
     spread_value: float | None = None
     body_height: float | None = None
     tie: float = 0.01
