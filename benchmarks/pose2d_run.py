@@ -4,20 +4,30 @@ On the real clip sports2d_run (a woman running past in side view, elbows bent at
 height) the fit drew both arms folded up beside the head. These **tuning** renders
 reproduce a run in side view and print, per clip, PCK@0.05 and per arm joint the
 median error and the median vertical offset from the truth (% of the body height, +:
-the fit's joint lower), of the tracked fit (true silhouettes, the frame's cues) as it
-comes and with ``--hidden solve`` (:func:`vidcap.video.hidden.solve_hidden`, as
-``vidcap convert`` does).
+the fit's joint lower), of the tracked fit (true silhouettes; outline only and the human
+body by default, as ``vidcap convert``) as it comes and with ``--hidden solve``
+(:func:`vidcap.video.hidden.solve_hidden`, as ``vidcap convert`` does).
 
 Clips (all tuning; nothing here is validation): CMU 02_03 (run/jog; the pose prior's
 iClone file ``$VIDCAP_DATA/mocap/cmu_iclone/002_03.bvh`` with its joints renamed as
 ``get_data.sh`` does for ``cmu_iclone_humanik``, converted on first run into
-``--cache``) at yaws 90, 270, 80 and 105, and :func:`run_motion`, a procedural run
-(elbows bent 80-100 degrees, the upper arms swinging -35..+45 degrees about a forward
-lean) at 90, 270 and 100. Elbows and wrists of a side view's run lie inside the
-torso's outline much of the time.
+``--cache``) at yaws 90, 270, 80 and 105 (86 source frames at 60 fps: 43 frames), and
+:func:`run_motion`, a procedural run (elbows bent 80-100 degrees, the upper arms
+swinging -35..+45 degrees about a forward lean) at 90, 270 and 100. Elbows and wrists of
+a side view's run lie inside the torso's outline much of the time.
+
+The ``+hair`` clips are the same renders with a head of hair and a ponytail drawn on the
+true silhouettes (:func:`with_hair`): without them the fit draws the arms where they
+are; with them the far arm folds up into the ponytail (elbow about 20 %, wrist 25-28 %
+of the height too high), the failure of sports2d_run. ``--head-zone K``: the fit's
+``head_zone`` option (:mod:`vidcap.video.fit.headzone`, off by default; 1.25 its value
+when on). Session 32 (wt-runarms): mean PCK@0.05 of the 14 clips, as fitted / +solve,
+80.48 / 81.56 off, 82.21 / 84.40 with ``--head-zone 1.25``; the clips without hair
+unchanged (benchmarks/HISTORY.md).
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_run.py
-[--clips "run 90,02_03 270"] [--body seed|human] [--cache DIR]``
+[--clips "run 90,02_03 270"] [--body seed|human] [--cues outline|all] [--head-zone K]
+[--cache DIR]`` (about 1 min).
 """
 
 from __future__ import annotations
@@ -153,7 +163,7 @@ def main(argv=None) -> int:
     body = est.body(1.75)
     if args.head_zone is not None:
         kw["head_zone"] = args.head_zone
-    print("Running side views (tuning), true silhouettes, tracked with the cues: PCK@0.05 "
+    print("Running side views (tuning), true silhouettes, tracked: PCK@0.05 "
           "and per joint median error / median offset down (+: the fit's lower), % of height")
     print(f"{'clip':10} {'yaw':>4} {'hidden':6} {'PCK':>6} "
           + " ".join(f"{n:>12}" for n in ARM_JOINTS))
