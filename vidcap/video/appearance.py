@@ -50,6 +50,7 @@ import cv2
 import numpy as np
 
 from vidcap.video.masks import centroid_columns
+from vidcap.video.regionvote import work_hw
 
 __all__ = ["appearance_plate", "between_moved", "colour_model", "log_ratio",
            "nearest_scene_distance",
@@ -264,8 +265,6 @@ def small_samples(frames: np.ndarray, gains: np.ndarray,
     numpy.ndarray, shape (K, h, w, 3), float32
         By area averaging, divided by the gains and clipped to 0-255; read only.
     """
-    from vidcap.video.regionvote import work_hw
-
     h, w = work_hw(frames.shape[1:3], work_size)
     small = np.stack([cv2.resize(f, (w, h), interpolation=cv2.INTER_AREA) for f in frames])
     small = np.clip(small.astype(np.float32) / gains[:, None, None, :], 0, 255)
@@ -277,8 +276,6 @@ class _Work:
     """The samples at the working resolution and what the first plate says there."""
 
     def __init__(self, model, frames, gains, work_size, small=None):
-        from vidcap.video.regionvote import work_hw
-
         k, hh, ww = frames.shape[:3]
         h, w = work_hw((hh, ww), work_size)
         self.k, self.h, self.w, self.full = k, h, w, (hh, ww)
