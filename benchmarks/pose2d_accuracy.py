@@ -77,10 +77,14 @@ the changes moved more than 5 % of the height. Clips: the ``--motions`` / ``--ya
 marked ``--perturb-renders`` (tuning, the default, or validation; cached there by that
 benchmark).
 
+``--ensemble N`` (with ``--held-out``, ``--low`` and ``--perturb``) fits every clip as the
+per-joint median of N fits on its masks as given, eroded, dilated and with the outline's
+pixels flipped (:mod:`vidcap.video.fit.ensemble`, ``vidcap pose2d --ensemble N``).
+
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
 [--proportions] [--torso] [--low] [--views side,three-quarter,front] [--save OUT.npz] [--predict]
-[--hidden fit|solve] [--perturb [--perturb-renders tuning|validation|none]]``
+[--hidden fit|solve] [--perturb [--perturb-renders tuning|validation|none]] [--ensemble N]``
 """
 
 from __future__ import annotations
@@ -107,6 +111,21 @@ from vidcap.video.fit.parallel import fit_sequence_chunked  # noqa: E402
 MOTION_DIR = REPO.parent / "shared" / "data" / "motion"
 
 ARMS, LEGS = LIMB_PAIR_JOINTS["arms"], LIMB_PAIR_JOINTS["legs"]  # (left, right) joints
+
+
+#: ``--ensemble``: fits on this many versions of the masks changed at the outline, joined
+#: per joint by their median (:func:`vidcap.video.fit.ensemble.fit_ensemble`); 1: one fit.
+ENSEMBLE = 1
+
+
+def fitter():
+    """``fit_sequence``, or :func:`~vidcap.video.fit.ensemble.fit_ensemble` of
+    :data:`ENSEMBLE` members (``--ensemble``), for the tables that take it."""
+    from functools import partial
+
+    from vidcap.video.fit.ensemble import fit_ensemble
+
+    return partial(fit_ensemble, ensemble=ENSEMBLE)
 
 
 def side_agnostic_errors(pred: np.ndarray, truth: np.ndarray):
@@ -311,7 +330,7 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
     ``rehang``: that solve with ``rehang=True`` (forearms re-hung, legs named by the
     render's limb order)."""
     from vidcap.synth import render_clip
-    from vidcap.video.fit.pose2d import fit_sequence
+    fit_sequence = fitter()
     from vidcap.video.hidden import solve_hidden
 
     variants = ((f"cues {cues}", {"cues": cues, "predict": predict}),
@@ -534,7 +553,7 @@ def low_table(frames: int = 60, save: str | None = None) -> int:
     frames whose silhouette is under 0.92 of the body's height ("low"). Errors are
     fractions of the standing height from the camera's scale (as ``--bodies``)."""
     from vidcap.synth import render_clip
-    from vidcap.video.fit.pose2d import fit_sequence
+    fit_sequence = fitter()
     from vidcap.video.hidden import solve_hidden
 
     groups = {"legs": [JOINT_INDEX[f"{s}_{j}"] for s in "lr" for j in ("knee", "ankle")],
@@ -760,7 +779,7 @@ def perturbed(frames: int = 60, motions=("131_01", "07_07"), yaws=(90.0, 45.0, 0
     ``VIDCAP_DATA`` set, the ``renders`` rows of ``silhouettes_real.py`` (all their
     frames, :func:`perturb_renders`; None: none)."""
     from vidcap.synth import render_clip
-    from vidcap.video.fit.pose2d import fit_sequence
+    fit_sequence = fitter()
 
     clips = []
     for name in motions if frames else ():
@@ -853,7 +872,12 @@ def main(argv=None) -> int:
                     default="tuning",
                     help="--perturb: which renders of silhouettes_real.py (with VIDCAP_DATA; "
                          "default tuning); --frames 0 leaves out the --motions clips")
+    ap.add_argument("--ensemble", type=int, default=1,
+                    help="--held-out, --low, --perturb: fit each clip as the per-joint median "
+                         "of N fits on its masks changed at the outline (default 1: one fit)")
     args = ap.parse_args(argv)
+    global ENSEMBLE
+    ENSEMBLE = args.ensemble
     if args.perturb:
         return perturbed(args.frames, tuple(args.motions.split(",")),
                          tuple(map(float, args.yaws.split(","))),

@@ -47,6 +47,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from vidcap.video.fit.cueframes import FrameCrops, as_frame_crops
+from vidcap.video.fit.ensemble import fit_ensemble
 from vidcap.video.fit.labels import LIMB_PAIRS
 from vidcap.video.fit.result import Pose2D
 from vidcap.video.fit.tracking import REINIT_EVERY, fit_sequence, sequence_colours
@@ -464,7 +465,7 @@ def _fit_chunk(masks: MaskStack, frames, skip: int, tracked: bool, kw: dict,
             if skip <= k < (total if stop is None else stop) and _QUEUE is not None:
                 _QUEUE.put(1)
 
-    pose = fit_sequence(masks, tracked=tracked, progress=report, frames=frames, **kw)
+    pose = fit_ensemble(masks, tracked=tracked, progress=report, frames=frames, **kw)
     return pose.arrays()
 
 
@@ -514,7 +515,8 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
         the workers' would be: the same result as on any number of processes (a
         tracked chunk's fit depends on where it starts, so one serial pass differs).
     **kw
-        Passed to ``fit_sequence`` (``reinit_every``, ``height``, ``cues``, ...).
+        Passed to ``fit_sequence`` (``reinit_every``, ``height``, ``cues``, ...);
+        ``ensemble``: each chunk fitted as :func:`vidcap.video.fit.ensemble.fit_ensemble`.
 
     Returns
     -------
@@ -531,7 +533,7 @@ def fit_sequence_chunked(masks, *, jobs: int | None = None, tracked: bool = True
     if own:
         bounds = _bounds(len(masks), jobs, tracked, overlap, min_chunk, per_job, kw)
         if len(bounds) < 2:
-            return fit_sequence(masks, tracked=tracked, progress=progress, frames=frames,
+            return fit_ensemble(masks, tracked=tracked, progress=progress, frames=frames,
                                 **kw)
         workers = jobs if workers is None else max(1, int(workers))
         if workers == 1:
@@ -649,7 +651,7 @@ class StreamedFit:
         bounds = _bounds(n, self.jobs, self.tracked, self.overlap, self.min_chunk,
                          self.per_job, self.kw)
         if len(bounds) < 2:
-            return fit_sequence(masks, tracked=self.tracked, progress=progress,
+            return fit_ensemble(masks, tracked=self.tracked, progress=progress,
                                 frames=frames, **self.kw)
         self._colours(masks, frames, None)
         for chunk in bounds:

@@ -241,7 +241,8 @@ def sequence_colours(masks, frames, *, n: int | None = None, **kw) -> ColourMode
         return None
     from vidcap.video.fit.cuecolours import colour_frames
 
-    own = set(inspect.signature(fit_sequence).parameters) - {"kw"}
+    # ``ensemble`` is fit_ensemble's, which hands the rest on to fit_sequence
+    own = (set(inspect.signature(fit_sequence).parameters) - {"kw"}) | {"ensemble"}
     options = FitOptions.from_keywords({k: v for k, v in kw.items() if k not in own})
     samples = colour_frames(frames_with_pixels(masks if n is None else masks[:n]),
                             final=n is None)
