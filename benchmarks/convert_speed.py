@@ -11,7 +11,9 @@ runs it by default, its estimated plate (with the colour models) already in the 
 cache: the cut runs, the plate's time is left out. Wall-clock times. Target: >= 100
 fps excluding plate estimation.
 
-Run:  python benchmarks/convert_speed.py [--frames 300] [--cues outline|all]
+``--ensemble N``: the 2D fit as N fits joined per joint (``vidcap convert --ensemble``).
+
+Run:  python benchmarks/convert_speed.py [--frames 300] [--cues outline|all] [--ensemble N]
 """
 
 from __future__ import annotations
@@ -43,8 +45,13 @@ def main(argv=None):
                     help="fitting processes (default: vidcap's default, the usable CPUs)")
     ap.add_argument("--cues", default=None, choices=("outline", "all"),
                     help="the 2D fit's cues (default: vidcap convert's)")
+    ap.add_argument("--ensemble", type=int, default=1, metavar="N",
+                    help="fits joined per joint in the 2D fit (vidcap convert --ensemble; "
+                    "default 1)")
     args = ap.parse_args(argv)
-    cue_kw = {} if args.cues is None else {"cues": args.cues}
+    fit_kw = {} if args.cues is None else {"cues": args.cues}
+    if args.ensemble != 1:
+        fit_kw["ensemble"] = args.ensemble
     import cv2
 
     from vidcap.synth import make_motion
@@ -64,14 +71,14 @@ def main(argv=None):
         cv2.imwrite(str(d / "plate.png"), plate.plate)
         (t_conv, cpu_conv), res = _timed(
             convert, video, d / "walk.bvh", background=d / "plate.png", cache_dir=None,
-            progress=False, jobs=args.jobs, proportions="seed", **cue_kw)
+            progress=False, jobs=args.jobs, proportions="seed", **fit_kw)
         (t_serial, cpu_serial), serial = _timed(
             convert, video, d / "walk1.bvh", background=d / "plate.png", cache_dir=None,
-            progress=False, jobs=1, proportions="seed", **cue_kw)
+            progress=False, jobs=1, proportions="seed", **fit_kw)
         cache_dir, cut_on = _cache_plate(video, d)
         (t_cut, cpu_cut), cut = _timed(convert, video, d / "walk2.bvh", cache_dir=cache_dir,
                                        progress=False, jobs=args.jobs, proportions="seed",
-                                       **cue_kw)
+                                       **fit_kw)
     jobs = default_jobs() if args.jobs is None else args.jobs
     rows = [("decode only", t_decode, None), ("plate estimation", t_plate, None),
             (f"convert given the plate ({jobs} fitting processes)", t_conv, cpu_conv)]
@@ -80,7 +87,7 @@ def main(argv=None):
     rows += [(f"  stage: {k}", v, None) for k, v in serial.timings.items() if k != "plate"]
     rows += [(f"convert, estimated plate cached (graph cut: {cut_on})", t_cut, cpu_cut)]
     rows += [(f"  stage: {k}", v, None) for k, v in cut.timings.items() if k != "plate"]
-    print(f"{n} frames, 640x480; load {os.getloadavg()[0]:.1f}")
+    print(f"{n} frames, 640x480; --ensemble {args.ensemble}; load {os.getloadavg()[0]:.1f}")
     print("step | seconds | fps | x decode time | CPU s (all processes)")
     print("--- | --- | --- | --- | ---")
     for name, t, cpu in rows:

@@ -60,7 +60,8 @@ def test_convert_raises_the_clis_errors(tmp_path):
     with pytest.raises(VideoError):
         vidcap.convert(tmp_path / "missing.mp4")
     for kw, match in (({"height": -1.0}, "--height"), ({"jobs": 0}, "--jobs"),
-                      ({"view": "sideways"}, "unknown view")):
+                      ({"view": "sideways"}, "unknown view"), ({"ensemble": 6}, "--ensemble"),
+                      ({"ensemble": 2.5}, "--ensemble")):
         with pytest.raises(UsageError, match=match):
             vidcap.convert(WALK, **kw)
 

@@ -273,6 +273,30 @@ def test_convert_fits_long_clips_in_chunks_like_one_process(tmp_path):
     assert r.returncode == 2 and "--jobs" in r.stderr
 
 
+def test_convert_ensemble_in_chunks_like_one_process(tmp_path):
+    """``--ensemble 2`` (each chunk fitted on the masks as given and eroded, joined per
+    joint): jobs=2 and jobs=1 give the same 2D fit and BVH to the bit, another fit than
+    one member's, in a pose cache entry of its own."""
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.pipeline import convert
+
+    video, cache = tmp_path / "long.mp4", tmp_path / "cache"
+    synth_clip(video, tmp_path / "truth.npz", make_motion("walk", n_frames=130),
+               size=(320, 240), rng=np.random.default_rng(0), show_progress=False)
+    runs = {(n, j): convert(video, tmp_path / f"e{n}j{j}.bvh", cache_dir=cache if j == 2 else None,
+                            progress=False, jobs=j, ensemble=n)
+            for n, j in ((2, 2), (2, 1), (1, 2))}
+    np.testing.assert_array_equal(runs[2, 1].image_joints2d, runs[2, 2].image_joints2d)
+    assert (tmp_path / "e2j1.bvh").read_text() == (tmp_path / "e2j2.bvh").read_text()
+    assert not np.array_equal(runs[2, 2].image_joints2d, runs[1, 2].image_joints2d)
+    assert np.isfinite(runs[2, 2].image_joints2d).all()
+    assert len(list(cache.glob("pose2d-*.npz"))) == 2  # one entry each
+    again = convert(video, tmp_path / "again.bvh", cache_dir=cache, progress=False, jobs=1,
+                    ensemble=2)
+    assert again.timings["pose2d"] < 0.5
+    np.testing.assert_array_equal(again.image_joints2d, runs[2, 2].image_joints2d)
+
+
 def test_view_side_on_a_real_side_view_walk(tmp_path, shared_data):
     """Weizmann's ido walks across the picture, seen from his right side. Told
     ``--view side``, every frame is a side view facing the walking direction (image

@@ -26,7 +26,8 @@ from vidcap.errors import UsageError
 
 def check_convert_options(*, height: float, jobs: int | None, view: str = "auto",
                           smooth: float = 1.0, keyframes: float | None = None,
-                          cues: str = "outline", proportions: str = "human") -> None:
+                          cues: str = "outline", proportions: str = "human",
+                          ensemble: int | str = 1) -> None:
     """Raise :class:`UsageError` for an option of ``convert`` that cannot work.
 
     Shared by :func:`convert` and ``vidcap convert``, so both refuse the same values.
@@ -44,6 +45,7 @@ def check_convert_options(*, height: float, jobs: int | None, view: str = "auto"
     if view not in VIEWS:
         raise UsageError(f"unknown view {view!r}; use one of {', '.join(VIEWS)}")
     check_cues_option(cues)
+    check_ensemble_option(ensemble)
     from vidcap.video.fit.proportions import PROPORTION_CHOICES
 
     if proportions not in PROPORTION_CHOICES:
@@ -58,6 +60,24 @@ def check_cues_option(cues: str) -> None:
 
     if cues not in CUE_MODES:
         raise UsageError(f"unknown --cues {cues!r}; use one of {', '.join(CUE_MODES)}")
+
+
+def check_ensemble_option(ensemble: int | str) -> int:
+    """``ensemble`` (``--ensemble``'s text, or an int) as the number of fits
+    (:func:`vidcap.video.fit.ensemble.fit_ensemble`); :class:`UsageError` unless it is a
+    whole number from 1 to ``len(MEMBERS)``."""
+    from operator import index
+
+    from vidcap.video.fit.ensemble import MEMBERS
+
+    try:
+        n = int(ensemble) if isinstance(ensemble, str) else index(ensemble)
+    except (TypeError, ValueError):
+        n = None
+    if n is None or isinstance(ensemble, bool) or not 1 <= n <= len(MEMBERS):
+        raise UsageError(f"--ensemble must be a whole number from 1 to {len(MEMBERS)}, "
+                         f"got {ensemble}")
+    return n
 
 
 @dataclass(frozen=True)
@@ -120,7 +140,7 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
             progress: bool = False, cues: str | None = None,
             proportions: str | None = None,
             graph_cut: bool | None = None,
-            still_person: bool | None = None) -> VideoMotion:
+            still_person: bool | None = None, ensemble: int = 1) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -155,6 +175,10 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         The plate also from frames that show the empty scene, and a person who never
         moves looked for by a person detector (``vidcap convert --still-person``);
         default :func:`vidcap.video.pipeline.default_still_person`.
+    ensemble : int
+        The 2D fit on this many versions of the silhouettes changed by one pixel at the
+        outline, joined per joint by the median (``vidcap convert --ensemble``, 1 to 5;
+        :func:`vidcap.video.fit.ensemble.fit_ensemble`); costs that many fits.
 
     Returns
     -------
@@ -179,7 +203,8 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
                           proportions=proportions)
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
               progress=progress, cues=cues, proportions=proportions,
-              graph_cut=graph_cut, still_person=still_person)
+              graph_cut=graph_cut, still_person=still_person,
+              ensemble=check_ensemble_option(ensemble))
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))
@@ -275,4 +300,5 @@ def solution_notices(sol, trial_path) -> list[str]:
     return notices + [f"joint {r.joint}: {r.warning()}" for r in sol.reports if r.warning()]
 
 
-__all__ = ["JointCentres", "VideoMotion", "check_convert_options", "convert", "joints"]
+__all__ = ["JointCentres", "VideoMotion", "check_convert_options", "check_ensemble_option",
+           "convert", "joints"]

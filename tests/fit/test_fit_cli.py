@@ -167,3 +167,70 @@ def test_pose2d_cli_without_masks_gives_the_plates_notice(tmp_path, cli):
               if line.startswith("notice: the background")]
     assert notice, shown.stderr
     assert notice[0] in fitted.stderr.splitlines()
+
+
+def test_pose2d_cli_ensemble_option(tmp_path, cli):
+    """``--ensemble 1`` is the one fit of the default, to the bit; ``--ensemble 3`` (the
+    median of fits on the masks as given, eroded and dilated) moves joints but stays as
+    near the truth."""
+    video, masks, truth = _clip(tmp_path)
+    poses = {}
+    for n in (None, "1", "3"):
+        out = tmp_path / f"pose{n}.npz"
+        r = cli("pose2d", video, "--masks", masks, "-o", out,
+                *(() if n is None else ("--ensemble", n)))
+        assert r.returncode == 0, r.stderr
+        poses[n] = Pose2D.load(out).joints2d
+    np.testing.assert_array_equal(poses["1"], poses[None])
+    assert poses["3"].shape == (4, 15, 2) and np.isfinite(poses["3"]).all()
+    assert not np.array_equal(poses["3"], poses["1"])
+    hpx = np.ptp(truth["joints2d"][0, :, 1])
+    err = {n: np.linalg.norm(poses[n] - truth["joints2d"], axis=-1) for n in ("1", "3")}
+    assert np.median(err["3"][:, :3]) < 0.05 * hpx  # pelvis, neck, head top
+    assert np.mean(err["3"]) < np.mean(err["1"]) + 0.02 * hpx
+
+
+@pytest.mark.parametrize("command,bad", [("pose2d", "0"), ("pose2d", "6"), ("pose2d", "2.5"),
+                                         ("convert", "x")])
+def test_bad_ensemble_is_a_one_line_error(tmp_path, cli, command, bad):
+    video, masks, _ = _clip(tmp_path)
+    out = tmp_path / ("o.npz" if command == "pose2d" else "o.bvh")
+    extra = ("--masks", masks) if command == "pose2d" else ()
+    r = cli(command, video, *extra, "-o", out, "--ensemble", bad)
+    assert r.returncode == 2 and not out.exists()
+    assert r.stderr.strip().count("\n") == 0  # one line, no usage text, no traceback
+    assert r.stderr.startswith("vidcap: error: --ensemble") and f"got {bad}" in r.stderr
+    assert "1 to 5" in r.stderr
+
+
+def test_ensemble_option_checks_and_pose_cache_key():
+    """The option's values; a fit of several members has a cache key of its own, one
+    member keeps the key of the fit before the option (for every body)."""
+    from vidcap.api import check_ensemble_option
+    from vidcap.commands import convert as convert_cmd
+    from vidcap.errors import UsageError
+    from vidcap.video import pipeline
+    from vidcap.video.fit.ensemble import MEMBERS
+
+    assert convert_cmd.ENSEMBLE_MAX == len(MEMBERS)
+    assert [check_ensemble_option(v) for v in (1, "2", " 5 ", np.int64(3))] == [1, 2, 5, 3]
+    for bad in (0, 6, "2.5", 2.0, "", None, True):
+        with pytest.raises(UsageError, match="--ensemble"):
+            check_ensemble_option(bad)
+    chunks = [(0, 0, 70), (60, 70, 140)]
+    for proportions in ("seed", "human"):
+        one = pipeline._fit_keywords(proportions)
+        assert pipeline._fit_keywords(proportions, 1) == one and "ensemble" not in one
+        for cues in ("outline", "all"):
+            key = pipeline._pose_key("sil", chunks, cues, one)
+            assert pipeline._pose_key("sil", chunks, cues, {**one, "ensemble": 1}) == key
+            keys = {pipeline._pose_key("sil", chunks, cues, pipeline._fit_keywords(proportions, n))
+                    for n in (2, 3, 5)}
+            assert len(keys) == 3 and key not in keys
+    # the seed's body, one fit: the key of before the option, {} or None
+    assert pipeline._pose_key("sil", chunks, "outline", {"ensemble": 1}) == \
+        pipeline._pose_key("sil", chunks, "outline")
+    # 'auto' replaces its first fit by one with the estimate: only that one is an ensemble
+    assert pipeline._fit_keywords("auto", 3) == {}
+    with pytest.raises(ValueError, match="ensemble"):
+        pipeline.run("nothing.mp4", ensemble=6)

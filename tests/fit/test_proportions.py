@@ -215,6 +215,7 @@ def test_proportions_stage_with_fixed_human_body(tmp_path):
     fitted with them, the pose's model height the model's (the feet left out), cached."""
     from vidcap.synth import make_motion, render_clip
     from vidcap.video.bodystage import proportions_stage
+    from vidcap.video.fit.ensemble import fit_ensemble
     from vidcap.video.fit.tracking import fit_sequence
     from vidcap.video.stagecache import StageCache
 
@@ -233,6 +234,12 @@ def test_proportions_stage_with_fixed_human_body(tmp_path):
                                     progress=False, fixed=human)
     assert est2.factors == pytest.approx(human.factors)
     np.testing.assert_allclose(again["joints2d"], pose["joints2d"])
+    # an ensemble of fits (vidcap convert --ensemble) is its own entry, not the one fit's
+    two, _ = proportions_stage(cache, "k", t["masks"], jobs=1, per_job=1, progress=False,
+                               fixed=human, ensemble=2)
+    assert len(list(tmp_path.glob("proportions-*.npz"))) == 2
+    np.testing.assert_allclose(two["joints2d"], fit_ensemble(
+        t["masks"], ensemble=2, **fit_keywords(human.factors)).joints2d)
 
 
 def test_compose_multiplies_groups_and_resolves_aliases():

@@ -12,6 +12,7 @@ from vidcap.commands.convert import (
     DEFAULT_CUES,
     POSE2D_HIDDEN,
     add_cues_argument,
+    add_ensemble_argument,
     add_hidden_argument,
     add_proportions_argument,
 )
@@ -47,6 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "and the clip fitted again with them (all but seed written as "
                              "body_lengths/body_widths, fractions of the standing height)")
     add_cues_argument(parser)
+    add_ensemble_argument(parser)
     add_hidden_argument(parser, "joints2d (the solve runs after the fit: about 2.6 ms a "
                         "frame)", POSE2D_HIDDEN)
 
@@ -99,17 +101,18 @@ def compute_masks(video, crops=None, log=None) -> np.ndarray:
 
 def run(args) -> int:
     """Fit the model and write the .npz atomically."""
-    from vidcap.api import check_cues_option
+    from vidcap.api import check_cues_option, check_ensemble_option
     from vidcap.fileio import progress
     from vidcap.io.video import probe
     from vidcap.video.fit.cueframes import FrameCrops, crops_from_video
-    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.fit.ensemble import fit_ensemble
     from vidcap.video.masks import frames_with_pixels
 
     if args.height < 16:
         raise UsageError(f"--height must be at least 16 pixels, got {args.height}")
     cues = DEFAULT_CUES if args.cues is None else args.cues
     check_cues_option(cues)
+    ensemble = check_ensemble_option(args.ensemble)
     info = probe(args.video)
     frames = None
     if cues == "all" and not args.masks:
@@ -142,8 +145,10 @@ def run(args) -> int:
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),
                  "body_widths": 2.0 * body.segment_radii()}
-    pose = fit_sequence(
-        masks, tracked=not args.per_frame, height=args.height, refine=not args.no_refine,
+    # (one member: fit_sequence itself, as before the option)
+    pose = fit_ensemble(
+        masks, ensemble=ensemble, tracked=not args.per_frame, height=args.height,
+        refine=not args.no_refine,
         progress=lambda it, total: progress(it, total=total, desc="pose2d", unit="frame"),
         frames=frames, cues=cues, **fit_kw,
     )

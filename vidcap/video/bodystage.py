@@ -18,7 +18,8 @@ _VERSION = 3  # 3: the arms measured by length profiles (issue 27)
 
 def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_job: int,
                       progress, fixed: ProportionEstimate | None = None,
-                      workers: int | None = None) -> tuple[dict, ProportionEstimate]:
+                      workers: int | None = None,
+                      ensemble: int = 1) -> tuple[dict, ProportionEstimate]:
     """The subject's proportions and the 2D pose fitted with them, cached or computed.
 
     ``fixed``: these proportions (e.g. :data:`vidcap.video.fit.proportions.HUMAN`'s)
@@ -26,7 +27,8 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
     (head top to ankles: the feet, :attr:`ProportionEstimate.foot`, left out), which
     the lift reads against the body's height. ``jobs`` and ``per_job`` plan the fit's
     chunks, ``workers`` (default ``jobs``) fit them
-    (:func:`vidcap.video.fit.parallel.fit_sequence_chunked`).
+    (:func:`vidcap.video.fit.parallel.fit_sequence_chunked`); ``ensemble``: that many fits
+    on the silhouettes changed at the outline, joined (:mod:`vidcap.video.fit.ensemble`).
 
     Returns
     -------
@@ -39,7 +41,9 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
 
     key = stage_key("proportions", _VERSION, k_sil,
                     chunk_bounds(len(masks), jobs, per_job=per_job),
-                    None if fixed is None else sorted(fixed.factors.items()))
+                    None if fixed is None else sorted(fixed.factors.items()),
+                    # one fit keeps the key it had before ensembles
+                    *(() if ensemble == 1 else (f"ensemble={int(ensemble)}",)))
     names = ("factor_names", "factor_values", "evidence", "seed_similarity")
     hit = cache.load("proportions", key, required=names + ("model_height",))
     if hit is not None:
@@ -57,7 +61,8 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
                    enabled=progress)
 
     pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
-                                workers=workers, **fit_keywords(est.factors))
+                                workers=workers, **fit_keywords(est.factors),
+                                **({} if ensemble == 1 else {"ensemble": int(ensemble)}))
     out = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity,
            "model_height": pose.model_height * (1.0 - est.foot)}

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import os
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -134,7 +134,7 @@ def run(
     jobs: int | None = None, view: str = "auto",
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS, cues: str = DEFAULT_CUES,
     graph_cut: bool | None = None, still_person: bool | None = None,
-    hidden: str = DEFAULT_HIDDEN,
+    hidden: str = DEFAULT_HIDDEN, ensemble: int = 1,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -182,6 +182,10 @@ def run(
     hidden : {'fit', 'solve'}
         The 2D joints as fitted, or with the shoulders, hips and arms the torso hides
         from the 3D (:func:`vidcap.video.hidden.fill_hidden`; ``lift='solve'``).
+    ensemble : int
+        The 2D fit on this many versions of the silhouettes changed at the outline,
+        joined per joint by the median (:func:`vidcap.video.fit.ensemble.fit_ensemble`,
+        1 to 5; 1: one fit); costs that many fits.
 
     Returns
     -------
@@ -192,7 +196,7 @@ def run(
     from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    _check_options(view, lift, proportions, cues, hidden)  # before any work
+    _check_options(view, lift, proportions, cues, hidden, ensemble)  # before any work
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -207,13 +211,16 @@ def run(
                                                    still_person)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plan, per_job = _PLAN_JOBS, _CHUNKS_PER_JOB  # the chunks alike for any jobs
-    pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, proportions, jobs)
-    try:
+    fit_kw = _fit_keywords(proportions, ensemble)
+    pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw, jobs)
+    # the pool is closed after the fit; on an error or Ctrl-C its running chunks are
+    # nobody's, and it is killed (FitPool.__exit__)
+    with pool if pool is not None else nullcontext():
         with _timed(timings, "plate"):
             plate = _plate_stage(cache, k_plate, video, plate, progress=progress, log=log,
                                  colour_models=graph_cut, still_person=still, notice=True)
         with _timed(timings, "silhouettes"):
-            streamed, crops = _streamed_fit(pool, info.n_frames, plan, per_job, cues, proportions)
+            streamed, crops = _streamed_fit(pool, info.n_frames, plan, per_job, cues, fit_kw)
             sil = _silhouette_stage(cache, k_sil, video, plate, streamed=streamed, crops=crops,
                                     progress=progress, regions=_regions(ann, plate),
                                     graph_cut=graph_cut, log=log, n_frames=info.n_frames)
@@ -221,14 +228,7 @@ def run(
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
                                           per_job=per_job, streamed=streamed, log=log, workers=jobs,
                                           progress=progress, timings=timings,
-                                          cues=(cues, crops, video))
-    except BaseException:
-        if pool is not None:
-            pool.kill()  # an error or Ctrl-C: the running chunks are nobody's now
-        raise
-    finally:
-        if pool is not None:
-            pool.close()
+                                          cues=(cues, crops, video), ensemble=ensemble)
 
     with _timed(timings, "lift+motion"):
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
@@ -253,19 +253,23 @@ def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
                          + " or ".join(repr(c) for c in choices))
 
 
-def _fixed_body_keywords(proportions: str) -> dict:
+def _fit_keywords(proportions: str, ensemble: int = 1) -> dict:
     """The 2D fit's ``body`` and ``foot`` for a body known before the fit
-    (``proportions='human'``: :func:`vidcap.video.fit.proportions.human_proportions`);
-    {} for the seed's (the fit's default) and for ``'auto'`` (estimated after a first fit)."""
+    (``proportions='human'``: :func:`vidcap.video.fit.proportions.human_proportions`;
+    none for the seed's, the fit's default, and for ``'auto'``, estimated after a first
+    fit), and its ``ensemble`` when more than one fit (one: no key, as before ensembles;
+    ``'auto'``: one, its first fit is replaced by :func:`_fit_stage`'s with the estimate)."""
+    kw = {} if ensemble == 1 or proportions == "auto" else {"ensemble": int(ensemble)}
     if proportions != "human":
-        return {}
+        return kw
     from vidcap.video.fit.proportions import fit_keywords, human_proportions
 
-    return fit_keywords(human_proportions().factors)
+    return {**fit_keywords(human_proportions().factors), **kw}
 
 
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
-               progress, timings, log, cues=(DEFAULT_CUES, None, None), workers=None):
+               progress, timings, log, cues=(DEFAULT_CUES, None, None), workers=None,
+               ensemble: int = 1):
     """The 2D pose (:func:`_pose_stage`) fitted with the body's proportions: the seed's,
     a real adult's (``'human'``, :func:`vidcap.video.fit.proportions.human_proportions`,
     one fit with them), or with ``'auto'`` the subject's own estimated from a first fit
@@ -274,13 +278,13 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
     and the motion's skeleton then use them, ``body``'s height still the standing
     height. Returns (pose, body, estimate or None). ``cues``: ``(cues, crops, video)``
     of :func:`_pose_stage`; ``jobs`` and ``per_job`` plan the chunks, ``workers``
-    (default ``jobs``) fit them.
+    (default ``jobs``) fit them; ``ensemble``: fits joined per chunk (:func:`_fit_keywords`).
     """
     with _timed(timings, "pose2d"):
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
                            streamed=streamed, progress=progress, cues=cues[0],
                            crops=cues[1], video=cues[2], workers=workers,
-                           fit_kw=_fixed_body_keywords(proportions))
+                           fit_kw=_fit_keywords(proportions, ensemble))
     if proportions == "seed":
         return pose, body, None
     from vidcap.video.fit.proportions import human_proportions
@@ -293,13 +297,13 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
         with _timed(timings, "proportions"):
             pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs,
                                                per_job=per_job, progress=progress,
-                                               workers=workers)
+                                               workers=workers, ensemble=ensemble)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
 
 
 def _check_options(view: str, lift: str, proportions: str, cues: str,
-                   hidden: str = DEFAULT_HIDDEN) -> None:
+                   hidden: str = DEFAULT_HIDDEN, ensemble: int = 1) -> None:
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
     from vidcap.video.fit.cues import CUE_MODES
@@ -308,21 +312,26 @@ def _check_options(view: str, lift: str, proportions: str, cues: str,
     _check_choice("proportions", proportions, PROPORTION_CHOICES)
     _check_choice("cues", cues, tuple(CUE_MODES))
     check_hidden(hidden)
+    from vidcap.video.fit.ensemble import MEMBERS
+
+    if isinstance(ensemble, bool) or ensemble not in range(1, len(MEMBERS) + 1):
+        raise ValueError(f"ensemble must be a whole number from 1 to {len(MEMBERS)}, "
+                         f"got {ensemble!r}")
 
 
 def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,
-                  proportions: str = "seed"):
+                  fit_kw: dict | None = None):
     """The :class:`vidcap.video.fit.parallel.StreamedFit` that fits each chunk of frames as
     soon as its silhouettes are there (None without ``pool``), and the
     :class:`vidcap.video.fit.cueframes.FrameCrops` to fill with the colour crops the cues
-    read as the silhouettes are extracted (None for ``cues='outline'``). ``proportions``:
-    the fit's body (:func:`_fixed_body_keywords`); ``n_frames`` None: 0 (not known)."""
+    read as the silhouettes are extracted (None for ``cues='outline'``). ``fit_kw``: the
+    fit's body and ensemble (:func:`_fit_keywords`); ``n_frames`` None: 0 (not known)."""
     from vidcap.video.fit.cueframes import FrameCrops
     from vidcap.video.fit.parallel import StreamedFit
 
     streamed = (None if pool is None
                 else StreamedFit(pool, n_frames or 0, jobs=jobs, per_job=per_job, cues=cues,
-                                 **_fixed_body_keywords(proportions)))
+                                 **(fit_kw or {})))
     return streamed, (FrameCrops() if cues == "all" else None)
 
 
@@ -363,21 +372,20 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
 
 
 def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs: int,
-                       per_job: int, cues: str = DEFAULT_CUES, proportions: str = "seed",
+                       per_job: int, cues: str = DEFAULT_CUES, fit_kw: dict | None = None,
                        workers: int | None = None):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
     plate and extracts the silhouettes; None when the fit is one chunk, on one process
     (``workers``, default ``jobs``; the chunks planned for ``jobs`` are then fitted here)
-    or cached."""
+    or cached. ``fit_kw``: the fit's body and ensemble (:func:`_fit_keywords`)."""
     from vidcap.video.fit.parallel import FitPool, chunk_bounds
 
     expected = chunk_bounds(n_frames or 0, jobs, per_job=per_job)
     workers = jobs if workers is None else workers
     if len(expected) < 2 or workers < 2:
         return None
-    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues,
-                                               _fixed_body_keywords(proportions)))
+    pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues, fit_kw))
     if pose_path and pose_path.exists():
         return None
     # the silhouettes need numba here anyway: loaded before the fork, the workers'
@@ -674,10 +682,13 @@ def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES, fit_kw: dict | None 
     # chunked fits may differ from a serial one (rarely, see fit.parallel): keyed apart
     parts = ("pose2d", _POSE_VERSION, k_sil) if len(chunks) < 2 else (
         "pose2d", _POSE_VERSION, k_sil, chunks)
-    if fit_kw:  # a body other than the seed's (the seed's keeps the key it had)
+    fit_kw = fit_kw or {}
+    if fit_kw.get("body") is not None:  # a body other than the seed's (the seed's keeps its key)
         body = fit_kw["body"]
         parts += (f"body={body.segment_lengths().round(6).tolist()}"
                   f"{body.segment_radii().round(6).tolist()}", f"foot={fit_kw.get('foot', 0):.6f}")
+    if fit_kw.get("ensemble", 1) != 1:  # one fit keeps the key it had before ensembles
+        parts += (f"ensemble={int(fit_kw['ensemble'])}",)
     return stage_key(*parts) if cues == "outline" else stage_key(*parts, f"cues={cues}")
 
 
