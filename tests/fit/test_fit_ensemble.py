@@ -90,3 +90,20 @@ def test_one_member_is_the_plain_fit_and_the_count_is_checked():
     for bad in (0, 6):
         with pytest.raises(ValueError, match="ensemble must be"):
             fit_ensemble(masks, ensemble=bad)
+
+
+def test_one_progress_bar_counts_every_frame_once_over_all_members():
+    from vidcap.synth import make_motion, render_clip
+
+    motion = make_motion("walk", n_frames=7)
+    _, truth = render_clip(motion, size=(160, 120), noise=0.0, rng=np.random.default_rng(0))
+    calls, seen = [], []
+
+    def progress(it, total):
+        calls.append(total)
+        for k in it:
+            seen.append(k)
+            yield k
+
+    fit_ensemble(truth["masks"], cues="outline", ensemble=3, progress=progress)
+    assert calls == [7] and seen == list(range(7))

@@ -186,8 +186,9 @@ def fit_ensemble(masks, *, ensemble: int = 1, progress=None, frames=None,
     ensemble : int
         Members, 1 to ``len(MEMBERS)``; 1 is ``fit_sequence`` itself.
     progress : callable, optional
-        As ``fit_sequence``'s; wraps the last member's frames (the members run one after
-        another).
+        As ``fit_sequence``'s, called once for the clip's F frames: the members run one
+        after another, and member i advances it over the i-th N-th of the frames
+        (:func:`_shared_progress`).
     frames, cues, colours, **kw
         As ``fit_sequence``'s; with the frame's cues the colour model is learned once,
         from the masks as given, and shared by every member.
@@ -212,12 +213,33 @@ def fit_ensemble(masks, *, ensemble: int = 1, progress=None, frames=None,
         frames = as_frame_crops(frames, masks, height=kw.get("height", 80))
     if frames is not None and cues == "all" and colours is None:
         colours = sequence_colours(masks, frames, **kw)
-    poses = []
+    poses, bar = [], None if progress is None else iter(progress(range(len(masks)),
+                                                                  total=len(masks)))
     for i, how in enumerate(MEMBERS[:ensemble]):
         member = masks if how == "as_given" else changed_masks(masks, how)
-        poses.append(fit_sequence(member, progress=progress if i == ensemble - 1 else None,
+        poses.append(fit_sequence(member, progress=_shared_progress(bar, i, ensemble),
                                   frames=frames, cues=cues, colours=colours, **kw))
+    for _ in bar or ():  # let the bar finish (a frame no member iterated: none)
+        pass
     return combine(poses)
+
+
+def _shared_progress(bar, i: int, n: int):
+    """``fit_sequence``'s ``progress`` for member ``i`` of ``n``: its frames pass
+    through unchanged, and those in the i-th n-th of the clip advance ``bar`` (an
+    iterator over the clip's frames made by the caller's ``progress``): one bar over
+    all members, each frame reported once, in order. None without a bar."""
+    if bar is None:
+        return None
+
+    def wrap(frames, total):
+        lo, hi = i * total // n, (i + 1) * total // n
+        for k in frames:
+            if lo <= k < hi:
+                next(bar, None)
+            yield k
+
+    return wrap
 
 
 __all__ = ["EDGE_SHARE", "MEMBERS", "changed_mask", "changed_masks", "combine", "fit_ensemble"]
