@@ -387,10 +387,15 @@ def main(argv=None):
     ap.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
                     help="the pipeline's silhouettes with or without the graph cut (default: "
                          "vidcap.video.pipeline.DEFAULT_GRAPH_CUT, as vidcap convert)")
+    ap.add_argument("--ensemble", type=int, default=1,
+                    help="with --solve: the end-to-end rows' 2D fit as the median of N fits "
+                         "(vidcap convert --ensemble N; default 1)")
     import lift_solve_tables as st
 
     st.add_front_options(ap)
     args = ap.parse_args(argv)
+    global ENSEMBLE
+    ENSEMBLE = args.ensemble
     st.apply_front_options(args)
     body = BodyModel()
     if args.graph_cut is not None:  # the stage cache keys on it: no stale silhouettes
@@ -486,9 +491,14 @@ SOLVE_RENDERS = (("131_01 2-4s", "131_01", 60, 60.0), ("131_01 5-7s", "131_01", 
                  ("07_07 end", "07_07", -60, 90.0), ("07_07 0.7-2.7s", "07_07", 20, 30.0))
 
 
+#: ``--ensemble N``: the 2D fit of the end-to-end rows (renders and samples) as the median
+#: of N fits on masks changed at the outline (``vidcap convert --ensemble N``); 1: one fit.
+ENSEMBLE = 1
+
+
 def _render_clips(body, frames):
     from vidcap.synth import render_clip
-    from vidcap.video.fit.pose2d import fit_sequence
+    from vidcap.video.fit.ensemble import fit_ensemble
     from vidcap.video.pipeline import colour_cues
 
     full = {"131_01": make_motion(DATA / "131_01.bvh", body=body, fps=30.0),
@@ -500,7 +510,7 @@ def _render_clips(body, frames):
         motion = full[source].frames(start, min(start + frames, n))
         images, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                     rng=np.random.default_rng(0))
-        pose = fit_sequence(truth["masks"])
+        pose = fit_ensemble(truth["masks"], ensemble=ENSEMBLE)
         near, limbs = colour_cues(images, pose.joints2d, pose.model_height, body, front=True,
                                  limbs=True, fps=float(truth["fps"]))
         fit = {"joints2d": pose.joints2d, "spread": pose.spread,
@@ -523,7 +533,8 @@ def _sample_clips(body):
             continue
         t = dict(np.load(truth_path))
         res = run(video, height=body.height, smooth_sigma=0.0, progress=False,
-                  cache_dir=cache, lift="segment", proportions="seed")  # seed renders
+                  cache_dir=cache, lift="segment", proportions="seed",  # seed renders
+                  ensemble=ENSEMBLE)
         near, limbs = colour_cues(iter_frames(video, stop=len(res.image_joints2d)),
                                  res.image_joints2d, res.model_height, body, front=True,
                                  limbs=True, fps=res.fps)
