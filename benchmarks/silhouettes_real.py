@@ -702,17 +702,22 @@ def pck_cell(pair) -> str:
 
 def pck_summary(rows, key: str, label: str) -> str:
     """The rows with ``key``'s PCK pair within :data:`PCK_GAP` points (|silhouettes -
-    true masks|), all and validation, and the mean PCK on either mask."""
+    true masks|), all, validation and tuning, and the mean PCK on either mask over the
+    renders where both fits placed joints (a render with no silhouette has no PCK: it
+    counts as out)."""
     got = [r for r in rows if r[key] is not None]
     if not got:
         return f"{label}: no render with true joints."
     pairs = 100 * np.array([r[key] for r in got])
-    near = np.abs(pairs[:, 0] - pairs[:, 1]) <= PCK_GAP
+    near = np.abs(pairs[:, 0] - pairs[:, 1]) <= PCK_GAP  # NaN: False
     val = np.array([r["use"] == "validation" for r in got])
+    fit = np.isfinite(pairs).all(axis=1)
+    mean = pairs[fit].mean(axis=0)
     return (f"{label}: within {PCK_GAP:g} PCK points of the true masks on {near.sum()} of "
             f"{len(got)} renders (validation {(near & val).sum()} of {val.sum()}, tuning "
-            f"{(near & ~val).sum()} of {(~val).sum()}); mean PCK {pairs[:, 0].mean():.2f} % "
-            f"on vidcap's silhouettes, {pairs[:, 1].mean():.2f} % on the true masks.")
+            f"{(near & ~val).sum()} of {(~val).sum()}); mean PCK {mean[0]:.2f} % on vidcap's "
+            f"silhouettes, {mean[1]:.2f} % on the true masks ({fit.sum()} renders with both "
+            "fits).")
 
 
 def main(argv=None) -> int:
