@@ -37,14 +37,19 @@ silhouettes); the others are validation.
 
 Usage: ``VIDCAP_DATA=/work/data PYTHONPATH=. python benchmarks/pose2d_real.py [--no-all]
 [--only NAME] [--tuning | --validation] [--rows R1,R2] [--human] [--graph-cut | --no-graph-cut]
-[--passed-by | --no-passed-by]`` (``--only``: just
+[--passed-by | --no-passed-by] [--ensemble N]`` (``--only``: just
 the clips whose name contains NAME; ``--tuning`` / ``--validation``: just the tuning or the
 validation clips of the pipeline table; ``--rows``: the pipeline table's row kinds, of
 outline, all, mp-masks, human, mp-human, all-human (without ``--no-all``: all six),
 mp-all-human (``mp-human`` with ``--cues all``), and
 ``human-kK`` (the pipeline's silhouettes fitted again, serially, with the human body as a
 camera of perspective K draws it: :mod:`vidcap.video.fit.perspective`; ``human-k0`` the same
-fit unwarped); ``--human``:
+fit unwarped), ``human-eN`` / ``outline-eN`` (that row's silhouettes fitted again
+as the pipeline fits them, each chunk as :func:`vidcap.video.fit.ensemble.fit_ensemble` of
+N members; ``-e1``: the plain row's fit again); ``--ensemble N``: a ``human-eN`` /
+``outline-eN`` row beside each ``human`` / ``outline`` row of the pipeline table (with
+``+solve`` alike), and the
+first table's fit also as an ensemble of N (its ``eN 12 jts`` line); ``--human``:
 the first table with ``proportions='human'``;
 ``--graph-cut``: the pipeline rows' silhouettes with or without the graph cut, default
 ``vidcap.video.pipeline.DEFAULT_GRAPH_CUT``; ``benchmarks/cut_fit.py`` compares the two;
@@ -66,8 +71,6 @@ import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
-
-from vidcap.video.fit.tracking import fit_sequence  # noqa: E402
 
 SHARED = REPO.parent / "shared"
 TOOL = SHARED / "tools" / "mediapipe-reference"
@@ -100,12 +103,15 @@ def reference(name: str, video: Path) -> Path | None:
     return out
 
 
-def score(ref: Path, masks: np.ndarray, human: bool = False) -> dict:
+def score(ref: Path, masks: np.ndarray, human: bool = False, ensemble: int = 1) -> dict:
     """compare.py's joint scores of the tracked fit to ``masks`` against ``ref``
-    (``human``: with ``proportions='human'``)."""
+    (``human``: with ``proportions='human'``; ``ensemble``: the fit as
+    :func:`vidcap.video.fit.ensemble.fit_ensemble` of that many members)."""
+    from vidcap.video.fit.ensemble import fit_ensemble
     from vidcap.video.fit.proportions import fit_keywords, human_proportions
 
-    pose = fit_sequence(masks, **(fit_keywords(human_proportions().factors) if human else {}))
+    pose = fit_ensemble(masks, ensemble=ensemble,
+                        **(fit_keywords(human_proportions().factors) if human else {}))
     with tempfile.TemporaryDirectory() as tmp:
         pred = Path(tmp) / "pose2d.npz"
         pose.save(pred)
@@ -122,6 +128,7 @@ def compare(ref: Path, pred: Path) -> dict:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     only = argv[argv.index("--only") + 1] if "--only" in argv else None
+    ensemble = int(argv[argv.index("--ensemble") + 1]) if "--ensemble" in argv else 1
     if "--graph-cut" in argv or "--no-graph-cut" in argv:  # the stage cache keys on it
         import vidcap.video.pipeline as pipeline
 
@@ -159,12 +166,21 @@ def main(argv=None) -> int:
         print(f"{name:10} {'12 joints':11} {np.median(medians):7.1%}   (median of the joints' "
               f"medians; {res['frames_with_reference']} frames, height "
               f"{res['median_height_px']:.0f} px)")
+        if ensemble > 1:
+            res = score(ref, masks, human="--human" in argv, ensemble=ensemble)
+            medians = [res["joints"][j]["swap"]["median"] for j in LIMB_JOINTS]
+            print(f"{name:10} {f'e{ensemble} 12 jts':11} {np.median(medians):7.1%}   "
+                  f"(the 12 joints of the fit as an ensemble of {ensemble})")
     from pose2d_real_pipeline import pipeline_tables
 
     rows = ("outline", "mp-masks", "human", "mp-human")
     rows = rows if "--no-all" in argv else rows[:1] + ("all",) + rows[1:] + ("all-human",)
     if "--rows" in argv:
         rows = tuple(argv[argv.index("--rows") + 1].split(","))
+    if ensemble > 1:  # each plain fit's ensemble beside it (human+solve: human-eN+solve)
+        rows = tuple(r for row in rows for r in (
+            (row, row.replace("+", f"-e{ensemble}+", 1) if "+" in row else f"{row}-e{ensemble}")
+            if row.removesuffix("+solve") in ("human", "outline") else (row,)))
     use = "tuning" if "--tuning" in argv else "validation" if "--validation" in argv else None
     pipeline_tables(CLIPS[0][:2], reference, compare, LIMB_JOINTS, cues=rows, only=only, use=use)
     return 0
