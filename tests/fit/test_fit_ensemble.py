@@ -62,10 +62,12 @@ def test_the_median_outvotes_one_member_and_follows_the_first_members_names():
     out = combine([_pose(a, 0.0), _pose(b, 1.0), _pose(c, 2.0)])
     assert np.allclose(out.joints2d, truth)
     # per-frame arrays come from the member nearest the median: never the one 40 px off
-    assert out.spread[2] != 2.0
+    assert out.similarity[2] != 2.0
+    # but the spread and the model's height the solve reads are the members' medians
+    assert np.allclose(out.spread, 1.0) and np.allclose(out.model_height, 101.0)
     # the renamed member's leg segments were swapped back with its joints
     seg = [SEGMENT_NAMES.index(n) for n in ("l_upper_leg", "r_upper_leg")]
-    picked_b = out.spread == 1.0
+    picked_b = out.similarity == 1.0
     if picked_b.any():
         assert np.allclose(out.angles[picked_b][:, seg], np.array(seg)[::-1] + 1.0)
     # a frame no member fitted stays NaN

@@ -145,9 +145,12 @@ def combine(poses: list[Pose2D]) -> Pose2D:
     Pose2D
         ``joints2d`` (F, 15, 2) px: the per-joint median (NaN where every member has
         none). The per-segment and per-frame arrays (angles, foreshortening, scores,
-        margins, spread, similarity, warm, model height) are those of the member whose
-        joints lie nearest the median in that frame: a fit the image supports, not a
-        blend of angles.
+        margins, similarity, warm) are those of the member whose joints lie nearest the
+        median in that frame: a fit the image supports, not a blend of angles. The
+        torso's ``spread`` and the ``model_height``, the two numbers per frame the 3D
+        solve reads beside the joints, are the members' medians like the joints: the
+        nearest member changes from frame to frame, and its spread jumped with it
+        (onebyone_room's tuning visits, ``pose2d_real.py --ensemble 5``).
     """
     if len(poses) == 1:
         return poses[0]
@@ -164,12 +167,15 @@ def combine(poses: list[Pose2D]) -> Pose2D:
     def pick(values: np.ndarray) -> np.ndarray:
         return values[nearest, frames]
 
-    heights = None if poses[0].model_height is None else pick(
-        np.stack([p.model_height for p in poses]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        spread = np.nanmedian(np.stack([p.spread for p in poses]), axis=0)
+        heights = None if poses[0].model_height is None else np.nanmedian(
+            np.stack([p.model_height for p in poses]), axis=0)
     return Pose2D(poses[0].joint_names, median,
                   *(pick(np.stack([m[k] for m in members]))
                     for k in ("angles", "foreshortening", "scores", "margins")),
-                  pick(np.stack([p.spread for p in poses])),
+                  spread,
                   pick(np.stack([p.similarity for p in poses])),
                   pick(np.stack([p.warm for p in poses])), poses[0].tracked,
                   model_height=heights)
