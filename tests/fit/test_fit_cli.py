@@ -234,3 +234,28 @@ def test_ensemble_option_checks_and_pose_cache_key():
     assert pipeline._fit_keywords("auto", 3) == {}
     with pytest.raises(ValueError, match="ensemble"):
         pipeline.run("nothing.mp4", ensemble=6)
+
+
+def test_pose2d_hidden_solve_reads_the_height_to_the_ankles(tmp_path, monkeypatch):
+    """With a body that has feet (``--proportions human``, the default) the 3D solve is
+    given the model's height without them, as ``vidcap convert`` gives it (the fitted
+    model is drawn head top to soles)."""
+    import vidcap.video.hidden as hidden
+    from vidcap.cli import main
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions
+
+    video, masks, _ = _clip(tmp_path)
+    seen = {}
+
+    def spy(joints2d, **kw):
+        seen["model_height"] = kw["model_height"]
+        return joints2d
+
+    monkeypatch.setattr(hidden, "solve_hidden", spy)
+    out = tmp_path / "solved.npz"
+    assert main(["pose2d", str(video), "--masks", str(masks), "-o", str(out),
+                 "--hidden", "solve"]) == 0
+    foot = fit_keywords(human_proportions().factors)["foot"]
+    assert 0.0 < foot < 0.1
+    fitted = Pose2D.load(out).model_height
+    np.testing.assert_allclose(seen["model_height"], fitted * (1.0 - foot))

@@ -159,7 +159,10 @@ def run(args) -> int:
 
         joints = solve_hidden(pose.joints2d, fps=info.fps, body=None if estimate is None
                               else estimate.body(), spread=pose.spread,
-                              model_height=pose.model_height, frame_size=(info.width, info.height))
+                              # head top to ankles, as the pipeline hands it to the 3D stage:
+                              # a body with feet (--proportions human) leaves them out
+                              model_height=pose.model_height * (1.0 - fit_kw.get("foot", 0.0)),
+                              frame_size=(info.width, info.height))
         pose = replace(pose, joints2d=joints)
     from vidcap.fileio import savez_atomic
 
