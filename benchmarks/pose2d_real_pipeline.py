@@ -174,9 +174,12 @@ def _joints(clip: RealClip, row: str):
     if hidden == "fit":
         return pose.joints2d
     info = probe(clip.video)
-    return solve_hidden(pose.joints2d, fps=info.fps,
-                        body=human_proportions().body() if human else None, spread=pose.spread,
-                        model_height=pose.model_height, frame_size=(info.width, info.height))
+    body = human_proportions() if human else None
+    # head top to ankles, as convert's 3D stage reads it (a body with feet leaves them out)
+    return solve_hidden(pose.joints2d, fps=info.fps, body=None if body is None else body.body(),
+                        spread=pose.spread, frame_size=(info.width, info.height),
+                        model_height=pose.model_height * (1.0 - (0.0 if body is None
+                                                                 else body.foot)))
 
 
 def _fit_with_perspective(clip: RealClip, k: float) -> np.ndarray:
