@@ -66,18 +66,12 @@ def check_ensemble_option(ensemble: int | str) -> int:
     """``ensemble`` (``--ensemble``'s text, or an int) as the number of fits
     (:func:`vidcap.video.fit.ensemble.fit_ensemble`); :class:`UsageError` unless it is a
     whole number from 1 to ``len(MEMBERS)``."""
-    from operator import index
-
-    from vidcap.video.fit.ensemble import MEMBERS
+    from vidcap.video.fit.ensemble import member_count
 
     try:
-        n = int(ensemble) if isinstance(ensemble, str) else index(ensemble)
-    except (TypeError, ValueError):
-        n = None
-    if n is None or isinstance(ensemble, bool) or not 1 <= n <= len(MEMBERS):
-        raise UsageError(f"--ensemble must be a whole number from 1 to {len(MEMBERS)}, "
-                         f"got {ensemble}")
-    return n
+        return member_count(ensemble)
+    except ValueError as exc:
+        raise UsageError(f"--{exc}") from None
 
 
 @dataclass(frozen=True)

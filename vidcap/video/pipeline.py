@@ -196,7 +196,7 @@ def run(
     from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    _check_options(view, lift, proportions, cues, hidden, ensemble)  # before any work
+    ensemble = _check_options(view, lift, proportions, cues, hidden, ensemble)  # before any work
     video = Path(video)
     info = probe(video)
     body = BodyModel(height=height)
@@ -303,7 +303,8 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
 
 
 def _check_options(view: str, lift: str, proportions: str, cues: str,
-                   hidden: str = DEFAULT_HIDDEN, ensemble: int = 1) -> None:
+                   hidden: str = DEFAULT_HIDDEN, ensemble: int = 1) -> int:
+    """ValueError for an option ``run`` cannot take; returns ``ensemble`` as an int."""
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
     from vidcap.video.fit.cues import CUE_MODES
@@ -312,11 +313,9 @@ def _check_options(view: str, lift: str, proportions: str, cues: str,
     _check_choice("proportions", proportions, PROPORTION_CHOICES)
     _check_choice("cues", cues, tuple(CUE_MODES))
     check_hidden(hidden)
-    from vidcap.video.fit.ensemble import MEMBERS
+    from vidcap.video.fit.ensemble import member_count
 
-    if isinstance(ensemble, bool) or ensemble not in range(1, len(MEMBERS) + 1):
-        raise ValueError(f"ensemble must be a whole number from 1 to {len(MEMBERS)}, "
-                         f"got {ensemble!r}")
+    return member_count(ensemble)
 
 
 def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,

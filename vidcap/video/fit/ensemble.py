@@ -46,6 +46,28 @@ _PAIR_SEGMENTS = tuple(
     for parts in (("upper_arm", "lower_arm"), ("upper_leg", "lower_leg")))
 
 
+def member_count(ensemble) -> int:
+    """``ensemble`` as a number of members: a whole number (an ``int``, a NumPy integer
+    or its text) from 1 to ``len(MEMBERS)``.
+
+    Raises
+    ------
+    ValueError
+        Otherwise (a bool, a fraction, text that is no whole number, out of range);
+        the message names the value: ``ensemble must be a whole number from 1 to 5, got X``.
+    """
+    from operator import index
+
+    try:
+        n = int(ensemble) if isinstance(ensemble, str) else index(ensemble)
+    except (TypeError, ValueError):
+        n = None
+    if n is None or isinstance(ensemble, bool) or not 1 <= n <= len(MEMBERS):
+        raise ValueError(f"ensemble must be a whole number from 1 to {len(MEMBERS)}, "
+                         f"got {ensemble}")
+    return n
+
+
 def changed_mask(mask: np.ndarray, how: str, share: float = EDGE_SHARE) -> np.ndarray:
     """One silhouette changed by one pixel at its outline.
 
@@ -206,11 +228,10 @@ def fit_ensemble(masks, *, ensemble: int = 1, progress=None, frames=None,
     Raises
     ------
     ValueError
-        If ``ensemble`` is out of range (or as ``fit_sequence``).
+        If ``ensemble`` is no whole number from 1 to ``len(MEMBERS)``
+        (:func:`member_count`), or as ``fit_sequence``.
     """
-    ensemble = int(ensemble)
-    if not 1 <= ensemble <= len(MEMBERS):
-        raise ValueError(f"ensemble must be 1 to {len(MEMBERS)}, got {ensemble}")
+    ensemble = member_count(ensemble)
     if ensemble == 1:
         return fit_sequence(masks, progress=progress, frames=frames, cues=cues,
                             colours=colours, **kw)
@@ -248,4 +269,5 @@ def _shared_progress(bar, i: int, n: int):
     return wrap
 
 
-__all__ = ["EDGE_SHARE", "MEMBERS", "changed_mask", "changed_masks", "combine", "fit_ensemble"]
+__all__ = ["EDGE_SHARE", "MEMBERS", "changed_mask", "changed_masks", "combine", "fit_ensemble",
+           "member_count"]
