@@ -727,22 +727,23 @@ def perturb_masks(masks: np.ndarray, how: str, share: float = 0.25) -> np.ndarra
     """``masks`` (F, H, W) changed by one pixel at the outline: ``'true'`` as they are,
     ``'erode'`` / ``'dilate'`` by a 3x3 cross, ``'edgeN'`` with a ``share`` of the
     pixels on either side of the outline (those the cross would erode or add) flipped,
-    drawn by ``numpy.random.default_rng(N)``."""
-    import cv2
+    drawn by ``numpy.random.default_rng(N)`` over the whole stack (unlike
+    :func:`vidcap.video.fit.ensemble.changed_mask`'s per-frame draws, which the erosion
+    and dilation here are)."""
+    from vidcap.video.fit.ensemble import changed_mask
 
+    masks = np.asarray(masks, bool)
     if how == "true":
-        return np.asarray(masks, bool)
-    cross = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
-    m8 = np.asarray(masks, np.uint8)
-    eroded = np.stack([cv2.erode(m, cross) for m in m8]).astype(bool)
-    dilated = np.stack([cv2.dilate(m, cross) for m in m8]).astype(bool)
+        return masks
+    eroded = np.stack([changed_mask(m, "erode") for m in masks])
+    dilated = np.stack([changed_mask(m, "dilate") for m in masks])
     if how == "erode":
         return eroded
     if how == "dilate":
         return dilated
     rng = np.random.default_rng(int(how[4:]))
-    flip = (dilated & ~eroded) & (rng.random(m8.shape) < share)
-    return np.asarray(masks, bool) ^ flip
+    flip = (dilated & ~eroded) & (rng.random(masks.shape) < share)
+    return masks ^ flip
 
 
 def perturb_renders(use: str = "tuning"):
