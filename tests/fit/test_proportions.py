@@ -14,6 +14,7 @@ from vidcap.video.fit.proportions import (
     fit_keywords,
     human_proportions,
     sample_windows,
+    to_ankles,
 )
 from vidcap.video.fit.raster import draw_pose, model_dimensions, pose_joints
 
@@ -160,6 +161,23 @@ def test_the_feet_below_the_ankles_are_left_out():
     assert (without[ankles, 1] - truth[ankles, 1]).min() > 0.6 * foot_px  # at the soles
     knees = [JOINT_INDEX["l_knee"], JOINT_INDEX["r_knee"]]
     assert np.abs(with_feet[knees] - truth[knees]).max() < 3.0
+
+
+def test_model_height_cut_to_the_ankles():
+    """The 3D stage takes the model's height head top to ankles: a body with feet (6 %
+    of its standing height) fitted to a figure 200 px head top to ankles gives about
+    213 px to the soles and 200 px once cut; the seed's body (no ``foot``) is kept."""
+    from vidcap.video.fit.tracking import fit_sequence
+
+    body = human_proportions().body(1.0)
+    mask, _ = _standing_with_feet(body, 0.06 / 0.94 * 200.0)
+    fit_kw = {"body": body, "foot": 0.06}
+    height = fit_sequence(np.repeat(mask[None], 3, axis=0), cues="outline",
+                          **fit_kw).model_height
+    assert np.abs(height / (200.0 / 0.94) - 1.0).max() < 0.03
+    assert np.abs(to_ankles(height, fit_kw) / 200.0 - 1.0).max() < 0.03
+    np.testing.assert_array_equal(to_ankles(height, {"body": body}), height)
+    np.testing.assert_array_equal(to_ankles(height), height)
 
 
 def test_human_proportions_put_the_joints_of_the_table():

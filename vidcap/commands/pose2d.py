@@ -155,13 +155,14 @@ def run(args) -> int:
     if args.hidden == "solve":
         from dataclasses import replace
 
+        from vidcap.video.fit.proportions import to_ankles
         from vidcap.video.hidden import solve_hidden
 
         joints = solve_hidden(pose.joints2d, fps=info.fps, body=None if estimate is None
                               else estimate.body(), spread=pose.spread,
                               # head top to ankles, as the pipeline hands it to the 3D stage:
                               # a body with feet (--proportions human) leaves them out
-                              model_height=pose.model_height * (1.0 - fit_kw.get("foot", 0.0)),
+                              model_height=to_ankles(pose.model_height, fit_kw),
                               frame_size=(info.width, info.height))
         pose = replace(pose, joints2d=joints)
     from vidcap.fileio import savez_atomic

@@ -9,7 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from vidcap.video.fit.proportions import ProportionEstimate, estimate_proportions, fit_keywords
+from vidcap.video.fit.proportions import (
+    ProportionEstimate,
+    estimate_proportions,
+    fit_keywords,
+    to_ankles,
+)
 from vidcap.video.stagecache import StageCache, stage_key
 
 #: Bumped when the estimator's results change for the same silhouettes.
@@ -65,7 +70,7 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
                                 **({} if ensemble == 1 else {"ensemble": int(ensemble)}))
     out = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity,
-           "model_height": pose.model_height * (1.0 - est.foot)}
+           "model_height": to_ankles(pose.model_height, {"foot": est.foot})}
     names_in = sorted(est.factors)
     cache.save("proportions", key, **out, factor_names=np.array(names_in, dtype=str),
                factor_values=np.array([est.factors[n] for n in names_in], float),

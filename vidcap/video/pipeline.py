@@ -708,6 +708,7 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
     """
     from vidcap.fileio import progress as bar
     from vidcap.video.fit.parallel import chunk_bounds, fit_sequence_chunked
+    from vidcap.video.fit.proportions import to_ankles
 
     fit_kw = fit_kw or {}
     key = _pose_key(k_sil, chunk_bounds(len(masks), jobs, per_job=per_job), cues, fit_kw)
@@ -732,7 +733,7 @@ def _pose_stage(cache: StageCache, k_sil: str, masks: MaskStack, *, jobs: int, p
     # the model's height is head top to ankles: a body with feet leaves them out
     hit = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity,
-           "model_height": pose.model_height * (1.0 - fit_kw.get("foot", 0.0))}
+           "model_height": to_ankles(pose.model_height, fit_kw)}
     cache.save("pose2d", key, **hit)
     return hit
 

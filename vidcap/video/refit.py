@@ -109,6 +109,7 @@ def refit_changed(masks: MaskStack, pose: dict, changed, *, progress=None,
         The new fit (same keys and shapes; new arrays, ``pose`` is not modified).
     """
     from vidcap.video.fit.parallel import reconcile_labels
+    from vidcap.video.fit.proportions import to_ankles
     from vidcap.video.fit.tracking import fit_sequence
 
     changed = np.asarray(changed, bool)
@@ -128,7 +129,7 @@ def refit_changed(masks: MaskStack, pose: dict, changed, *, progress=None,
 
         new = fit_sequence(masks[start:end], progress=report, **(fit_kw or {})).arrays()
         new = {k: np.asarray(new[k]) for k in POSE_KEYS}
-        new["model_height"] = new["model_height"] * (1.0 - (fit_kw or {}).get("foot", 0.0))
+        new["model_height"] = to_ankles(new["model_height"], fit_kw)
         same = ~changed[start:end]  # frames the old fit saw the same silhouette in
         if same.any() and (start, end) != (0, n):
             new = _swap(new, reconcile_labels({"joints2d": out["joints2d"][start:end][same]},

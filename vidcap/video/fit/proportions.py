@@ -285,6 +285,26 @@ def fit_keywords(factors: dict) -> dict:
     return out
 
 
+def to_ankles(model_height, fit_kw: dict | None = None):
+    """The fitted model's height cut to head top → ankles, as the 3D stage takes it.
+
+    Parameters
+    ----------
+    model_height : array_like, shape (F,)
+        The fit's model height per frame (head top to soles), pixels.
+    fit_kw : dict, optional
+        The fit's options (:func:`fit_keywords`); their ``foot`` (the share of the
+        height below the ankles) is left out. Without one (the seed's body, no feet)
+        the height is returned as it is.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F,)
+        Pixels.
+    """
+    return np.asarray(model_height) * (1.0 - (fit_kw or {}).get("foot", 0.0))
+
+
 def _search(score, factors: dict, name: str, step: float, reach: int):
     """One coordinate: S at ``factors[name]`` times ``1 + k step`` for ``|k| <= reach``
     (within :data:`LIMITS`), then the vertex of a parabola fitted (least squares) to
@@ -383,4 +403,5 @@ def _leg_split(factors: dict, upper: float) -> dict:
 
 
 __all__ = ["FOOT", "HUMAN", "LIMITS", "PROPORTION_CHOICES", "SEARCHED", "ProportionEstimate",
-           "estimate_proportions", "fit_keywords", "human_proportions", "sample_windows"]
+           "estimate_proportions", "fit_keywords", "human_proportions", "sample_windows",
+           "to_ankles"]
