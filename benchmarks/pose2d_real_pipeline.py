@@ -34,7 +34,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from real_clips import RealClip, pipeline_result, real_clips, stretch
+from real_clips import RealClip, known_camera, pipeline_result, real_clips, stretch
 
 from vidcap.body import JOINT_NAMES
 
@@ -165,6 +165,8 @@ def _joints(clip: RealClip, row: str):
         return _ensemble_joints(clip.video, body, int(members), hidden)
     if base.startswith("human-k"):
         return _fit_with_perspective(clip, float(base.removeprefix("human-k")))
+    if base in ("human-cam", "mp-human-cam"):
+        return _with_known_camera(clip, base, hidden)
     human = base in ("human", "all-human", "mp-human", "mp-all-human")
     cues = "all" if base in ("all", "all-human", "mp-all-human") else "outline"
     if not base.startswith("mp-"):
@@ -195,6 +197,25 @@ def _fit_with_perspective(clip: RealClip, k: float) -> np.ndarray:
                     clip)
     factors = perspective_factors(human_proportions().factors, k)
     return fit_sequence(masks, cues="outline", **fit_keywords(factors)).joints2d
+
+
+def _with_known_camera(clip: RealClip, base: str, hidden: str):
+    """Rows ``human-cam`` (``vidcap convert --camera`` with the calibration's values,
+    :func:`real_clips.known_camera`, and the subject's stature as ``--height``) and
+    ``mp-human-cam`` (the fit to MediaPipe's masks with the body warped alike)."""
+    from vidcap.video.fit.perspective import camera_perspective, perspective_factors
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions
+    from vidcap.video.fit.tracking import fit_sequence
+
+    camera, stature = known_camera(clip.name)
+    if base == "human-cam":
+        return pipeline_result(clip.video, "outline", height=stature, proportions="human",
+                               hidden=hidden, camera=camera).image_joints2d
+    with np.load(clip.reference) as d:
+        masks = stretch(d["masks"], clip).astype(bool)
+    k = camera_perspective(camera, stature)
+    return fit_sequence(masks, cues="outline", **fit_keywords(
+        perspective_factors(human_proportions().factors, k))).joints2d
 
 
 @functools.cache  # onebyone_room's six stretches share one fit and solve of the video
@@ -302,6 +323,8 @@ def pipeline_tables(ido, reference, compare, limb_joints, *,
         for c in cues:
             if c.startswith("mp-") and not _has_masks(clip.reference):
                 continue
+            if "-cam" in c and known_camera(clip.name) is None:
+                continue  # no camera geometry known for this clip
             joints = _joints(clip, c)
             res, covered, signed = _score(clip, joints, compare, limb_joints)
             shares = [1 - res["joints"][j]["swap"]["pck10"] for j in limb_joints]

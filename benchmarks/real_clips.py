@@ -145,17 +145,50 @@ def load_truth(clip: MaskedClip) -> tuple[np.ndarray, np.ndarray]:
 
 
 def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75,
-                    proportions: str = "seed", hidden: str = "fit"):
+                    proportions: str = "seed", hidden: str = "fit", camera=None):
     """vidcap's :func:`vidcap.video.pipeline.run` on the whole ``video`` (default options but
     ``cues`` and ``proportions``; no smoothing, the per-segment lift: the 3D is re-run per
     stretch), cached by stage in :data:`CACHE`. ``hidden='solve'``: ``vidcap convert
     --hidden solve``, the clip solve as the lift and the joints the image cannot show
-    taken from it (:mod:`vidcap.video.hidden`)."""
+    taken from it (:mod:`vidcap.video.hidden`). ``camera``: ``vidcap convert --camera``'s
+    (height, distance, pitch), as :func:`known_camera` gives it."""
     from vidcap.video.pipeline import run
 
     return run(video, height=height, smooth_sigma=0.0, progress=False, cache_dir=CACHE,
                lift="solve" if hidden == "solve" else "segment", cues=cues,
-               proportions=proportions, hidden=hidden)
+               proportions=proportions, hidden=hidden, camera=camera)
+
+
+#: The clips whose camera stands where a calibration says: the Pose2Sim trial's Qualisys
+#: calibration (``benchmarks/triangulate_pose2sim.py`` keeps each camera's pose in the
+#: lab's frame, z up, the floor at z = 0).
+_CALIBRATED = {"pose2sim_balance_cam1": 0, "pose2sim_balance_cam3": 2,
+               "pose2sim_balance_cam4": 3}
+
+
+def known_camera(name: str):
+    """``vidcap convert --camera``'s values for clip ``name`` as a user who knows the
+    lab would give them, from the calibration and the subject's triangulated position,
+    with the subject's standing height: ``((height m, distance m, pitch deg), stature
+    m)``; None for a clip whose camera is not known (every clip but the three calibrated
+    pose2sim cameras)."""
+    if name not in _CALIBRATED:
+        return None
+    path = Path(os.environ.get("VIDCAP_DATA", "/nonexistent")) / "lift" / \
+        "pose2sim_balance_3d.npz"
+    if not path.exists():
+        return None
+    with np.load(path, allow_pickle=True) as d:
+        rot, t, joints = d["R"][_CALIBRATED[name]], d["t"][_CALIBRATED[name]], d["joints"]
+        names = [str(n) for n in d["names"]]
+    lens = -rot.T @ t  # the camera's centre in the lab, metres
+    axis = rot[2]  # its optical axis in the lab (OpenCV camera: z forward)
+    hips = np.nanmean(joints[:, [names.index("left_hip"), names.index("right_hip")]], axis=1)
+    distance = float(np.nanmedian(np.hypot(*(hips[:, :2] - lens[:2]).T)))
+    # the nose of a subject standing on one straight leg, and ~11 cm of head above it
+    stature = float(np.nanmedian(joints[:, names.index("nose"), 2])) + 0.11
+    pitch = float(np.degrees(np.arcsin(-axis[2])))
+    return (float(lens[2]), distance, pitch), stature
 
 
 def stretch(arr, clip: RealClip):

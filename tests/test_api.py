@@ -61,7 +61,8 @@ def test_convert_raises_the_clis_errors(tmp_path):
         vidcap.convert(tmp_path / "missing.mp4")
     for kw, match in (({"height": -1.0}, "--height"), ({"jobs": 0}, "--jobs"),
                       ({"view": "sideways"}, "unknown view"), ({"ensemble": 6}, "--ensemble"),
-                      ({"ensemble": 2.5}, "--ensemble")):
+                      ({"ensemble": 2.5}, "--ensemble"), ({"camera": (2.0, 0.0)}, "--camera"),
+                      ({"camera": "2.5"}, "--camera")):
         with pytest.raises(UsageError, match=match):
             vidcap.convert(WALK, **kw)
 

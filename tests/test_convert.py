@@ -334,3 +334,25 @@ def test_variable_rate_video_gives_a_bvh_in_step_with_it(converted, tmp_path):
     i = JOINT_INDEX["pelvis"]
     a, b = m.positions()[:, i, 0], whole.positions()[:, i, 0]
     assert np.abs((a - a[0]) - (b - b[0])).max() < 0.08  # metres, over a 1.1 m walk
+
+
+def test_convert_with_a_camera_above(tmp_path):
+    """``camera=(2.5, 3)`` (k ~ 0.35): the 2D fit draws the body warped (the image joints
+    move, the neck lower under a larger head), the skeleton written keeps the body's own
+    proportions, and the 3D stage reads un-warped joints (the motion is finite)."""
+    from vidcap.body import JOINT_INDEX
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.pipeline import convert
+
+    video = tmp_path / "walk.mp4"
+    synth_clip(video, tmp_path / "truth.npz", make_motion("walk", n_frames=40),
+               size=(320, 240), rng=np.random.default_rng(0), show_progress=False)
+    runs = {cam: convert(video, tmp_path / f"{cam is None}.bvh", cache_dir=None,
+                         progress=False, jobs=1, camera=cam) for cam in (None, (2.5, 3.0))}
+    plain, high = runs[None], runs[2.5, 3.0]
+    np.testing.assert_allclose(high.body.segment_lengths(), plain.body.segment_lengths())
+    neck, top = JOINT_INDEX["neck"], JOINT_INDEX["head_top"]
+    drop = {c: np.median(r.image_joints2d[:, neck, 1] - r.image_joints2d[:, top, 1])
+            for c, r in (("plain", plain), ("high", high))}
+    assert drop["high"] > 1.1 * drop["plain"]
+    assert np.isfinite(high.motion.positions()).all()

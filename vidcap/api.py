@@ -53,6 +53,30 @@ def check_convert_options(*, height: float, jobs: int | None, view: str = "auto"
                          + ", ".join(PROPORTION_CHOICES))
 
 
+def check_camera_option(camera, height: float = 1.75) -> tuple[float, ...] | None:
+    """``camera`` (``--camera``'s text ``HEIGHT,DISTANCE[,PITCH]``, or a tuple; None: no
+    camera given) as a tuple of floats that :func:`vidcap.video.pipeline.run` takes;
+    :class:`UsageError` unless it is two or three numbers of a camera that sees a subject
+    ``height`` metres tall (a positive distance, a pitch within ±89 degrees)."""
+    if camera is None:
+        return None
+    from vidcap.video.fit.perspective import camera_perspective
+
+    try:
+        parts = camera.split(",") if isinstance(camera, str) else list(camera)
+        values = tuple(float(p) for p in parts)
+    except (TypeError, ValueError):
+        values = ()
+    if len(values) not in (2, 3):
+        raise UsageError(f"--camera takes HEIGHT,DISTANCE[,PITCH] (metres, metres, degrees "
+                         f"down), got {camera!r}")
+    try:
+        camera_perspective(values, height)
+    except ValueError as exc:
+        raise UsageError(f"--camera {','.join(f'{v:g}' for v in values)}: {exc}") from None
+    return values
+
+
 def check_cues_option(cues: str) -> None:
     """:class:`UsageError` unless ``cues`` is a ``--cues`` value
     (:data:`vidcap.video.fit.cues.CUE_MODES`)."""
@@ -134,7 +158,8 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
             progress: bool = False, cues: str | None = None,
             proportions: str | None = None,
             graph_cut: bool | None = None,
-            still_person: bool | None = None, ensemble: int = 1) -> VideoMotion:
+            still_person: bool | None = None, ensemble: int = 1,
+            camera: tuple[float, ...] | str | None = None) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -173,6 +198,11 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         The 2D fit on this many versions of the silhouettes changed by one pixel at the
         outline, joined per joint by the median (``vidcap convert --ensemble``, 1 to 5;
         :func:`vidcap.video.fit.ensemble.fit_ensemble`); costs that many fits.
+    camera : (height, distance[, pitch]) or str, optional
+        The camera's height above the floor and horizontal distance from the subject,
+        metres, and its downward tilt, degrees (``vidcap convert --camera``; default
+        aimed at the subject's middle): the 2D fit draws the body as such a camera's
+        perspective images it (:mod:`vidcap.video.fit.perspective`). Default: none.
 
     Returns
     -------
@@ -198,7 +228,8 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
     res = run(video, annotations=annotations, height=height, view=view, jobs=jobs,
               progress=progress, cues=cues, proportions=proportions,
               graph_cut=graph_cut, still_person=still_person,
-              ensemble=check_ensemble_option(ensemble))
+              ensemble=check_ensemble_option(ensemble),
+              camera=check_camera_option(camera, height))
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))
@@ -294,5 +325,6 @@ def solution_notices(sol, trial_path) -> list[str]:
     return notices + [f"joint {r.joint}: {r.warning()}" for r in sol.reports if r.warning()]
 
 
-__all__ = ["JointCentres", "VideoMotion", "check_convert_options", "check_ensemble_option",
+__all__ = ["JointCentres", "VideoMotion", "check_camera_option", "check_convert_options",
+           "check_ensemble_option",
            "convert", "joints"]

@@ -211,6 +211,7 @@ def test_ensemble_option_checks_and_pose_cache_key():
     from vidcap.errors import UsageError
     from vidcap.video import pipeline
     from vidcap.video.fit.ensemble import MEMBERS
+    from vidcap.video.fitbody import fit_keywords_for
 
     assert convert_cmd.ENSEMBLE_MAX == len(MEMBERS)
     assert [check_ensemble_option(v) for v in (1, "2", " 5 ", np.int64(3))] == [1, 2, 5, 3]
@@ -219,19 +220,25 @@ def test_ensemble_option_checks_and_pose_cache_key():
             check_ensemble_option(bad)
     chunks = [(0, 0, 70), (60, 70, 140)]
     for proportions in ("seed", "human"):
-        one = pipeline._fit_keywords(proportions)
-        assert pipeline._fit_keywords(proportions, 1) == one and "ensemble" not in one
+        one = fit_keywords_for(proportions)
+        assert fit_keywords_for(proportions, 1) == one and "ensemble" not in one
         for cues in ("outline", "all"):
             key = pipeline._pose_key("sil", chunks, cues, one)
             assert pipeline._pose_key("sil", chunks, cues, {**one, "ensemble": 1}) == key
-            keys = {pipeline._pose_key("sil", chunks, cues, pipeline._fit_keywords(proportions, n))
+            keys = {pipeline._pose_key("sil", chunks, cues, fit_keywords_for(proportions, n))
                     for n in (2, 3, 5)}
             assert len(keys) == 3 and key not in keys
     # the seed's body, one fit: the key of before the option, {} or None
     assert pipeline._pose_key("sil", chunks, "outline", {"ensemble": 1}) == \
         pipeline._pose_key("sil", chunks, "outline")
     # 'auto' replaces its first fit by one with the estimate: only that one is an ensemble
-    assert pipeline._fit_keywords("auto", 3) == {}
+    assert fit_keywords_for("auto", 3) == {}
+    # a camera's perspective: the known bodies warped (a key of their own), the seed's
+    # body without one keeps the key of before; the estimated one is fitted as measured
+    assert fit_keywords_for("seed", 1, 0.0) == {}
+    assert "body" in fit_keywords_for("seed", 1, 0.3)
+    assert fit_keywords_for("human", 1, 0.3) != fit_keywords_for("human")
+    assert fit_keywords_for("auto", 1, 0.3) == {}
     with pytest.raises(ValueError, match="ensemble"):
         pipeline.run("nothing.mp4", ensemble=6)
 
@@ -259,3 +266,41 @@ def test_pose2d_hidden_solve_reads_the_height_to_the_ankles(tmp_path, monkeypatc
     assert 0.0 < foot < 0.1
     fitted = Pose2D.load(out).model_height
     np.testing.assert_allclose(seen["model_height"], fitted * (1.0 - foot))
+
+
+@pytest.mark.parametrize("command,bad,says", [
+    ("pose2d", "2,abc", "HEIGHT,DISTANCE"), ("pose2d", "1,2,3,4", "HEIGHT,DISTANCE"),
+    ("convert", "2,0", "positive"), ("convert", "5,1,-60", "not in front"),
+    ("convert", "2,3,95", "89 degrees")])
+def test_bad_camera_is_a_one_line_error(tmp_path, cli, command, bad, says):
+    video, masks, _ = _clip(tmp_path)
+    out = tmp_path / ("o.npz" if command == "pose2d" else "o.bvh")
+    extra = ("--masks", masks) if command == "pose2d" else ()
+    r = cli(command, video, *extra, "-o", out, "--camera", bad)
+    assert r.returncode == 2 and not out.exists()
+    assert r.stderr.strip().count("\n") == 0, r.stderr  # one line, no traceback
+    assert r.stderr.startswith("vidcap: error: --camera") and says in r.stderr
+
+
+def test_pose2d_camera_draws_the_head_larger(tmp_path, cli):
+    """``--camera 2.5,3`` (a camera above, looking down: k ~ 0.35) fits a body whose
+    head is drawn larger and legs shorter: the joints move; with ``--hidden solve`` the
+    solve reads them un-warped and its joints come back warped, finite."""
+    video, masks, _ = _clip(tmp_path)
+    poses = {}
+    for name, extra in (("plain", ()), ("cam", ("--camera", "2.5,3")),
+                        ("cam_solve", ("--camera", "2.5,3", "--hidden", "solve"))):
+        out = tmp_path / f"{name}.npz"
+        r = cli("pose2d", video, "--masks", masks, "-o", out, *extra)
+        assert r.returncode == 0, r.stderr
+        poses[name] = Pose2D.load(out)
+    from vidcap.body import JOINT_INDEX
+
+    def head_share(p):  # neck's depth below the head top over the ankles' depth
+        j = p.joints2d
+        ankle = j[:, [JOINT_INDEX["l_ankle"], JOINT_INDEX["r_ankle"]], 1].mean(1)
+        top = j[:, JOINT_INDEX["head_top"], 1]
+        return np.median((j[:, JOINT_INDEX["neck"], 1] - top) / (ankle - top))
+
+    assert head_share(poses["cam"]) > 1.1 * head_share(poses["plain"])
+    assert np.isfinite(poses["cam_solve"].joints2d).all()

@@ -62,3 +62,54 @@ def test_warped_trunk_lands_where_the_camera_images_the_joints():
     assert np.allclose(v, warp_height(u, k), atol=1e-12)
     assert f["head"] > HUMAN["head"] and f["lower_legs"] < HUMAN["lower_legs"]
     assert f["above_feet"] > HUMAN["above_feet"]  # the feet look shorter from above
+
+
+def _pinhole_joints(k_geometry, heights, stature=1.75, px_per_unit=400.0):
+    """(1, J, 2) image joints (rows down) of points at ``heights`` metres on a vertical
+    line imaged by the pinhole camera ``k_geometry`` = (camera height, distance, pitch°)."""
+    h, d, pitch = k_geometry
+    rows = _pinhole_rows(heights, h, d, np.radians(pitch)) * px_per_unit
+    joints = np.zeros((1, 15, 2))
+    joints[0, :, 0] = 100.0
+    joints[0, :, 1] = rows
+    return joints
+
+
+@pytest.mark.parametrize("geometry", [(2.5, 3.0, 35.0), (1.9, 3.1, 22.5), (0.4, 2.5, -10.0)])
+def test_unwarp_gives_the_rows_of_a_camera_without_perspective(geometry):
+    """A pinhole camera's rows of a standing body (head top at 0, then joints down to
+    the ankles), un-warped with the camera's k: each joint's row from the head top is
+    proportional to its depth below the head top, as scaled orthography draws it."""
+    from vidcap.body import JOINT_INDEX
+    from vidcap.video.fit.perspective import unwarp_joints
+
+    H, above_feet = 1.75, 0.96
+    k = perspective_k(*geometry[:2], H, geometry[2])
+    heights = np.linspace(H, H * (1 - above_feet), 15)  # head top first, ankles last
+    order = np.argsort([JOINT_INDEX["head_top"]] + [i for i in range(15)
+                                                    if i != JOINT_INDEX["head_top"]])
+    heights = heights[order]  # head_top gets the body's top, the others below it
+    joints = _pinhole_joints(geometry, heights)
+    top = joints[0, JOINT_INDEX["head_top"], 1]
+    model_height = np.array([joints[0, :, 1].max() - top])  # head top to ankles
+    flat, flat_height = unwarp_joints(joints, model_height, k, above_feet)
+    depth_below_top = (H - heights) / (H * above_feet)
+    rows = (flat[0, :, 1] - top) / flat_height[0]
+    assert np.allclose(rows, depth_below_top, atol=1e-9)
+    assert np.array_equal(flat[..., 0], joints[..., 0])  # columns kept
+
+
+def test_warp_undoes_unwarp_and_k0_changes_nothing():
+    from vidcap.video.fit.perspective import unwarp_joints, warp_joints
+
+    rng = np.random.default_rng(3)
+    joints = rng.uniform(0, 300, (5, 15, 2))
+    height = rng.uniform(150, 250, 5)
+    for k in (0.35, -0.1):
+        flat, h = unwarp_joints(joints, height, k, 0.95)
+        back, h_back = warp_joints(flat, h, k, 0.95)
+        np.testing.assert_allclose(back, joints, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(h_back, height, rtol=1e-12)
+    same, h0 = unwarp_joints(joints, height, 0.0, 0.95)
+    np.testing.assert_array_equal(same, joints)
+    np.testing.assert_array_equal(h0, height)

@@ -93,6 +93,18 @@ def add_ensemble_argument(parser: argparse.ArgumentParser) -> None:
                         f"{ENSEMBLE_MAX}. Default: 1 (one fit)")
 
 
+def add_camera_argument(parser: argparse.ArgumentParser) -> None:
+    """``--camera``, shared by ``vidcap convert`` and ``vidcap pose2d`` (checked by
+    :func:`vidcap.api.check_camera_option`: a bad value is a one-line error)."""
+    parser.add_argument("--camera", default=None, metavar="HEIGHT,DISTANCE[,PITCH]",
+                        help="where the camera stands: its lens's height above the floor "
+                        "and its horizontal distance from the subject, metres, and "
+                        "optionally its downward tilt in degrees (default: aimed at the "
+                        "subject's middle), e.g. 2.5,3. A camera high above the subject (a "
+                        "wall or ceiling mount) images the head larger than the feet; "
+                        "the 2D model is drawn so. Default: no perspective")
+
+
 def add_hidden_argument(parser: argparse.ArgumentParser, where: str, default: str) -> None:
     """``--hidden``, shared by ``vidcap convert`` and ``vidcap pose2d``; ``where``: what
     the 2D joints it changes are, in the command's words."""
@@ -141,6 +153,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "use them (--height stays the standing height)")
     add_cues_argument(parser)
     add_ensemble_argument(parser)
+    add_camera_argument(parser)
     add_hidden_argument(parser, "the 2D joints of --save (with --lift solve; the solve runs "
                         "anyway)", CONVERT_HIDDEN)
     parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
@@ -173,7 +186,7 @@ def run(args) -> int:
     """Run ``vidcap convert``."""
     import numpy as np
 
-    from vidcap.api import check_convert_options, check_ensemble_option
+    from vidcap.api import check_camera_option, check_convert_options, check_ensemble_option
     from vidcap.video.annotations import default_path
     from vidcap.video.pipeline import convert
 
@@ -181,6 +194,7 @@ def run(args) -> int:
     check_convert_options(height=args.height, jobs=args.jobs, view=args.view,
                           smooth=args.smooth, keyframes=args.keyframes, cues=cues)
     ensemble = check_ensemble_option(args.ensemble)
+    camera = check_camera_option(args.camera, args.height)
     log = (lambda m: None) if args.quiet else (lambda m: print(f"vidcap: {m}", file=sys.stderr))
     res = convert(
         args.video, args.output, save=args.save, cache_dir=not args.no_cache,
@@ -188,7 +202,7 @@ def run(args) -> int:
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
         view=args.view, rig=args.rig, lift=args.lift, proportions=args.proportions,
         cues=cues, graph_cut=args.graph_cut, still_person=args.still_person,
-        hidden=args.hidden, ensemble=ensemble,
+        hidden=args.hidden, ensemble=ensemble, camera=camera,
     )
     if not args.quiet:
         lr = res.lifted

@@ -11,6 +11,7 @@ import numpy as np
 from vidcap.commands.convert import (
     DEFAULT_CUES,
     POSE2D_HIDDEN,
+    add_camera_argument,
     add_cues_argument,
     add_ensemble_argument,
     add_hidden_argument,
@@ -49,6 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "body_lengths/body_widths, fractions of the standing height)")
     add_cues_argument(parser)
     add_ensemble_argument(parser)
+    add_camera_argument(parser)
     add_hidden_argument(parser, "joints2d (the solve runs after the fit: about 2.6 ms a "
                         "frame)", POSE2D_HIDDEN)
 
@@ -101,7 +103,7 @@ def compute_masks(video, crops=None, log=None) -> np.ndarray:
 
 def run(args) -> int:
     """Fit the model and write the .npz atomically."""
-    from vidcap.api import check_cues_option, check_ensemble_option
+    from vidcap.api import check_camera_option, check_cues_option, check_ensemble_option
     from vidcap.fileio import progress
     from vidcap.io.video import probe
     from vidcap.video.fit.cueframes import FrameCrops, crops_from_video
@@ -113,6 +115,7 @@ def run(args) -> int:
     cues = DEFAULT_CUES if args.cues is None else args.cues
     check_cues_option(cues)
     ensemble = check_ensemble_option(args.ensemble)
+    camera = check_camera_option(args.camera)  # the subject taken 1.75 m tall
     info = probe(args.video)
     frames = None
     if cues == "all" and not args.masks:
@@ -131,17 +134,23 @@ def run(args) -> int:
         if len(frames) != len(masks):
             raise InputFileError(f"{len(masks)} masks but {len(frames)} video frames",
                                  args.masks or args.video)
-    fit_kw, extra, estimate = {}, {}, None
-    if args.proportions != "seed":
-        from vidcap.video.fit.proportions import (
-            estimate_proportions,
-            fit_keywords,
-            human_proportions,
-        )
+    from vidcap.video.fit.perspective import camera_perspective, perspective_factors
+    from vidcap.video.fit.proportions import (
+        FOOT,
+        estimate_proportions,
+        fit_keywords,
+        human_proportions,
+    )
 
+    k = camera_perspective(camera, 1.75)
+    # the seed's and a real adult's body drawn as the camera images them; the estimated
+    # one is measured on the image, warped already
+    fit_kw, extra, estimate = (fit_keywords(perspective_factors({}, k)) if k else {}), {}, None
+    if args.proportions != "seed":
         estimate = (human_proportions() if args.proportions == "human" else
                     estimate_proportions(masks, height=args.height, refine=not args.no_refine))
-        fit_kw = fit_keywords(estimate.factors)
+        fit_kw = fit_keywords(estimate.factors if args.proportions != "human"
+                              else perspective_factors(estimate.factors, k))
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),
                  "body_widths": 2.0 * body.segment_radii()}
@@ -155,16 +164,19 @@ def run(args) -> int:
     if args.hidden == "solve":
         from dataclasses import replace
 
+        from vidcap.video.fit.perspective import unwarp_joints, warp_joints
         from vidcap.video.fit.proportions import to_ankles
         from vidcap.video.hidden import solve_hidden
 
-        joints = solve_hidden(pose.joints2d, fps=info.fps, body=None if estimate is None
+        # head top to ankles, as the pipeline hands it to the 3D stage: a body with feet
+        # (--proportions human) leaves them out; un-warped for a camera's perspective
+        above = 1.0 if estimate is None else estimate.factors.get(FOOT, 1.0)
+        joints, height = unwarp_joints(pose.joints2d, to_ankles(pose.model_height, fit_kw),
+                                       k, above)
+        joints = solve_hidden(joints, fps=info.fps, body=None if estimate is None
                               else estimate.body(), spread=pose.spread,
-                              # head top to ankles, as the pipeline hands it to the 3D stage:
-                              # a body with feet (--proportions human) leaves them out
-                              model_height=to_ankles(pose.model_height, fit_kw),
-                              frame_size=(info.width, info.height))
-        pose = replace(pose, joints2d=joints)
+                              model_height=height, frame_size=(info.width, info.height))
+        pose = replace(pose, joints2d=warp_joints(joints, height, k, above)[0])
     from vidcap.fileio import savez_atomic
 
     savez_atomic(args.output, **pose.arrays(), **extra)

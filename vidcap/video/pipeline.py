@@ -31,6 +31,8 @@ import numpy as np
 from vidcap.body import BodyModel
 from vidcap.errors import AnnotationError
 from vidcap.video.annotations import Annotations, default_path
+from vidcap.video.fit.perspective import camera_perspective, unwarp_joints, warp_joints
+from vidcap.video.fitbody import ankle_share, fit_keywords_for, unwarped_estimate
 from vidcap.video.hidden import DEFAULT_HIDDEN, check_hidden, fill_hidden
 from vidcap.video.keptframes import KeptFrames
 from vidcap.video.lifting import (
@@ -135,6 +137,7 @@ def run(
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS, cues: str = DEFAULT_CUES,
     graph_cut: bool | None = None, still_person: bool | None = None,
     hidden: str = DEFAULT_HIDDEN, ensemble: int = 1,
+    camera: tuple[float, ...] | None = None,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -150,9 +153,8 @@ def run(
     smooth_sigma : float
         Gaussian smoothing of the motion in frames (0 = none).
     keyframe_score : float, optional
-        Key only the frames whose 2D fit similarity is at least this (plus enough
-        frames to leave no gap over 10 frames) and Slerp between them (seed 004
-        section 3.1.5 keys the poses); default: every frame is a key.
+        Key only the frames whose 2D fit similarity is at least this (and enough to leave
+        no gap over 10 frames), Slerp between (seed 004 3.1.5); default: every frame.
     cache_dir : path, optional
         Stage cache folder (None = no caching).
     progress : bool, optional
@@ -183,9 +185,9 @@ def run(
         The 2D joints as fitted, or with the shoulders, hips and arms the torso hides
         from the 3D (:func:`vidcap.video.hidden.fill_hidden`; ``lift='solve'``).
     ensemble : int
-        The 2D fit on this many versions of the silhouettes changed at the outline,
-        joined per joint by the median (:func:`vidcap.video.fit.ensemble.fit_ensemble`,
-        1 to 5; 1: one fit); costs that many fits.
+        Fits joined per joint (:func:`vidcap.video.fit.ensemble.fit_ensemble`, 1 to 5).
+    camera : (height m, distance m[, pitch deg]), optional
+        Where the camera stands (:mod:`vidcap.video.fitbody`; default none).
 
     Returns
     -------
@@ -196,12 +198,10 @@ def run(
     from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    ensemble = _check_options(view, lift, proportions, cues, hidden, ensemble)  # before any work
-    video = Path(video)
-    info = probe(video)
-    body = BodyModel(height=height)
-    cache = StageCache(cache_dir, log=log)
-    timings = {}
+    ensemble, k = _check_options(view, lift, proportions, cues, hidden, ensemble,  # before
+                                 camera, height)  # any work; k: the camera's perspective
+    video, body, timings = Path(video), BodyModel(height=height), {}
+    info, cache = probe(video), StageCache(cache_dir, log=log)
     ann, ann_source = _load_annotations(annotations, video, log, (info.width, info.height))
 
     # a given plate is read first: a bad file is reported before any worker starts
@@ -211,7 +211,7 @@ def run(
                                                    still_person)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plan, per_job = _PLAN_JOBS, _CHUNKS_PER_JOB  # the chunks alike for any jobs
-    fit_kw = _fit_keywords(proportions, ensemble)
+    fit_kw = fit_keywords_for(proportions, ensemble, k)
     pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw, jobs)
     # the pool is closed after the fit; on an error or Ctrl-C its running chunks are
     # nobody's, and it is killed (FitPool.__exit__)
@@ -228,14 +228,15 @@ def run(
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
                                           per_job=per_job, streamed=streamed, log=log, workers=jobs,
                                           progress=progress, timings=timings,
-                                          cues=(cues, crops, video), ensemble=ensemble)
+                                          cues=(cues, crops, video), ensemble=ensemble,
+                                          perspective=k)
 
     with _timed(timings, "lift+motion"):
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
                                body=body, annotations=ann, ann_source=ann_source, view=view,
                                smooth_sigma=smooth_sigma, keyframe_score=keyframe_score,
                                log=log, lift_method=lift, video=video, hidden=hidden,
-                               jobs=jobs)
+                               jobs=jobs, perspective=(k, ankle_share(estimate)))
     return ConvertResult(
         video=str(video), fps=info.fps, masks=sil.masks, bbox=np.asarray(sil.bbox),
         scores=pose["scores"], similarity=pose["similarity"], lifted=out.lifted,
@@ -253,23 +254,9 @@ def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
                          + " or ".join(repr(c) for c in choices))
 
 
-def _fit_keywords(proportions: str, ensemble: int = 1) -> dict:
-    """The 2D fit's ``body`` and ``foot`` for a body known before the fit
-    (``proportions='human'``: :func:`vidcap.video.fit.proportions.human_proportions`;
-    none for the seed's, the fit's default, and for ``'auto'``, estimated after a first
-    fit), and its ``ensemble`` when more than one fit (one: no key, as before ensembles;
-    ``'auto'``: one, its first fit is replaced by :func:`_fit_stage`'s with the estimate)."""
-    kw = {} if ensemble == 1 or proportions == "auto" else {"ensemble": int(ensemble)}
-    if proportions != "human":
-        return kw
-    from vidcap.video.fit.proportions import fit_keywords, human_proportions
-
-    return {**fit_keywords(human_proportions().factors), **kw}
-
-
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
                progress, timings, log, cues=(DEFAULT_CUES, None, None), workers=None,
-               ensemble: int = 1):
+               ensemble: int = 1, perspective: float = 0.0):
     """The 2D pose (:func:`_pose_stage`) fitted with the body's proportions: the seed's,
     a real adult's (``'human'``, :func:`vidcap.video.fit.proportions.human_proportions`,
     one fit with them), or with ``'auto'`` the subject's own estimated from a first fit
@@ -278,13 +265,15 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
     and the motion's skeleton then use them, ``body``'s height still the standing
     height. Returns (pose, body, estimate or None). ``cues``: ``(cues, crops, video)``
     of :func:`_pose_stage`; ``jobs`` and ``per_job`` plan the chunks, ``workers``
-    (default ``jobs``) fit them; ``ensemble``: fits joined per chunk (:func:`_fit_keywords`).
+    (default ``jobs``) fit them; ``ensemble``: fits joined per chunk (:func:`fit_keywords_for`).
+    ``perspective``: the camera's k; the fit draws the body warped by it, and the
+    estimate, measured on the image, is un-warped for the 3D lift.
     """
     with _timed(timings, "pose2d"):
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
                            streamed=streamed, progress=progress, cues=cues[0],
                            crops=cues[1], video=cues[2], workers=workers,
-                           fit_kw=_fit_keywords(proportions, ensemble))
+                           fit_kw=fit_keywords_for(proportions, ensemble, perspective))
     if proportions == "seed":
         return pose, body, None
     from vidcap.video.fit.proportions import human_proportions
@@ -298,13 +287,16 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
             pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs,
                                                per_job=per_job, progress=progress,
                                                workers=workers, ensemble=ensemble)
+        estimate = unwarped_estimate(estimate, perspective)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
 
 
 def _check_options(view: str, lift: str, proportions: str, cues: str,
-                   hidden: str = DEFAULT_HIDDEN, ensemble: int = 1) -> int:
-    """ValueError for an option ``run`` cannot take; returns ``ensemble`` as an int."""
+                   hidden: str = DEFAULT_HIDDEN, ensemble: int = 1, camera=None,
+                   height: float = 1.75) -> tuple[int, float]:
+    """ValueError for an option ``run`` cannot take; returns ``ensemble`` as an int and
+    the ``camera``'s perspective k for a subject ``height`` metres tall."""
     check_view(view)
     _check_choice("lift", lift, ("solve", "segment"))
     from vidcap.video.fit.cues import CUE_MODES
@@ -315,7 +307,7 @@ def _check_options(view: str, lift: str, proportions: str, cues: str,
     check_hidden(hidden)
     from vidcap.video.fit.ensemble import member_count
 
-    return member_count(ensemble)
+    return member_count(ensemble), camera_perspective(camera, height)
 
 
 def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,
@@ -324,7 +316,7 @@ def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str
     soon as its silhouettes are there (None without ``pool``), and the
     :class:`vidcap.video.fit.cueframes.FrameCrops` to fill with the colour crops the cues
     read as the silhouettes are extracted (None for ``cues='outline'``). ``fit_kw``: the
-    fit's body and ensemble (:func:`_fit_keywords`); ``n_frames`` None: 0 (not known)."""
+    fit's body and ensemble (:func:`fit_keywords_for`); ``n_frames`` None: 0 (not known)."""
     from vidcap.video.fit.cueframes import FrameCrops
     from vidcap.video.fit.parallel import StreamedFit
 
@@ -377,7 +369,7 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs
     first so that they load their compiled kernels while this process estimates the
     plate and extracts the silhouettes; None when the fit is one chunk, on one process
     (``workers``, default ``jobs``; the chunks planned for ``jobs`` are then fitted here)
-    or cached. ``fit_kw``: the fit's body and ensemble (:func:`_fit_keywords`)."""
+    or cached. ``fit_kw``: the fit's body and ensemble (:func:`fit_keywords_for`)."""
     from vidcap.video.fit.parallel import FitPool, chunk_bounds
 
     expected = chunk_bounds(n_frames or 0, jobs, per_job=per_job)
@@ -879,14 +871,18 @@ def front_cue(video, joints2d, fps: float | None = None) -> np.ndarray:
 def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, body,
                      annotations: Annotations, ann_source, view: str, smooth_sigma: float,
                      keyframe_score: float | None, log, lift_method: str = "solve",
-                     video=None, hidden: str = DEFAULT_HIDDEN, jobs: int = 1) -> _Lifted:
+                     video=None, hidden: str = DEFAULT_HIDDEN, jobs: int = 1,
+                     perspective: tuple[float, float] = (0.0, 1.0)) -> _Lifted:
     """The 3D lift (:func:`vidcap.video.lifting.lift_pose`) with the user's events, then the
     motion (:func:`vidcap.video.motion.build_motion`), keyed on the best-fitting frames when
     ``keyframe_score`` is given. With ``video`` its frames are decoded again for the
     front/back cue and the limb order (:func:`colour_cues`), unless the silhouette
     stage kept all of them (``sil.kept``). ``hidden='solve'`` with the
     clip solve: the 2D joints with the ones the torso hides from it (:func:`_with_hidden`).
-    ``jobs`` processes solve the clip (:mod:`vidcap.video.solve.split`)."""
+    ``jobs`` processes solve the clip (:mod:`vidcap.video.solve.split`). ``perspective``:
+    the camera's k and the body's ankle height share; the 3D stage reads the fitted
+    joints un-warped (:func:`vidcap.video.fit.perspective.unwarp_joints`), the colour
+    cues and the returned image joints stay as fitted."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
@@ -899,9 +895,10 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
         covered, lines = _kept_covers(kept, joints2d, model_height, body, fps)
         frames = kept.frames(F) if covered else iter_frames(video, stop=F)
         near, limbs = colour_cues(frames, joints2d, model_height, body, lines=lines, fps=fps)
-    lifted = lift_pose(joints2d, fps=fps, body=body, annotations=annotations,
+    flat2d, flat_height = unwarp_joints(joints2d, model_height, *perspective)
+    lifted = lift_pose(flat2d, fps=fps, body=body, annotations=annotations,
                        image_sides=True, spread=pose["spread"], track=track,
-                       frame_size=frame_size, model_height=model_height, view=view,
+                       frame_size=frame_size, model_height=flat_height, view=view,
                        method=lift_method, near_side=near, limb_order=limbs, jobs=jobs)
     keys = None
     if keyframe_score is not None:
@@ -916,19 +913,23 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
         motion = build_motion(lifted.joints3d, fps, body=body, smooth_sigma=smooth_sigma,
                               keys=keys)
     out = _Lifted(lifted, motion, joints2d, model_height, outside, track)
-    return _with_hidden(out) if hidden == "solve" and lift_method == "solve" else out
+    if hidden == "solve" and lift_method == "solve":
+        return _with_hidden(out, perspective)
+    return out
 
 
-def _with_hidden(out: _Lifted) -> _Lifted:
+def _with_hidden(out: _Lifted, perspective: tuple[float, float] = (0.0, 1.0)) -> _Lifted:
     """``out`` with its 2D joints (the fit's image-side ones and the lift's body-side
     ones) taking the shoulders, the hips and the arms inside the torso's outline from
-    the 3D (:func:`vidcap.video.hidden.fill_hidden`)."""
+    the 3D (:func:`vidcap.video.hidden.fill_hidden`); the image-side ones filled
+    un-warped and warped back for a camera's perspective ``(k, above_feet)``."""
     import dataclasses
 
     lifted = dataclasses.replace(out.lifted,
                                  joints2d=fill_hidden(out.lifted.joints2d, out.lifted.joints3d))
-    return dataclasses.replace(out, lifted=lifted,
-                               joints2d=fill_hidden(out.joints2d, out.lifted.joints3d))
+    flat2d, flat_height = unwarp_joints(out.joints2d, out.model_height, *perspective)
+    image2d = warp_joints(fill_hidden(flat2d, out.lifted.joints3d), flat_height, *perspective)[0]
+    return dataclasses.replace(out, lifted=lifted, joints2d=image2d)
 
 
 # --------------------------------------------------------------------------- convert

@@ -18,9 +18,11 @@ the subject at horizontal distance D, pitched down by theta,
 ``k = H sin(theta) / (D cos(theta) + (h_c - H) sin(theta))``.
 
 :func:`perspective_factors` warps a body's segment lengths by g (what the fit should draw
-for such a camera); :func:`perspective_k` gives k from the camera's height and distance.
-Not yet an option of ``vidcap convert``: ``benchmarks/pose2d_real.py --rows human-k0.35``
-measures it.
+for such a camera); :func:`perspective_k` gives k from the camera's height and distance
+(``vidcap convert --camera HEIGHT,DISTANCE[,PITCH]``); :func:`unwarp_joints` maps the
+fitted joints' rows back by g's inverse, so the 3D stage (scaled orthography) reads a body
+whose heights are shrunk alike, and :func:`warp_joints` maps them forward again.
+``benchmarks/pose2d_real.py --rows human-cam`` measures it on cameras of known geometry.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ import numpy as np
 from vidcap.body import PROPORTION_GROUPS, SEGMENT_INDEX, SEGMENTS
 from vidcap.video.fit.proportions import FOOT
 
-__all__ = ["perspective_factors", "perspective_k", "warp_height"]
+__all__ = ["camera_perspective", "inverse_k", "perspective_factors", "perspective_k",
+           "unwarp_joints", "warp_height", "warp_joints"]
 
 #: Length groups along the standing body, head to feet, and along a hanging arm.
 _TRUNK = ("head", "torso", "upper_legs", "lower_legs")
@@ -86,6 +89,40 @@ def perspective_k(camera_height: float, distance: float, subject_height: float =
     return z_feet / z_head - 1.0
 
 
+def camera_perspective(camera, height: float) -> float:
+    """k for ``vidcap convert --camera``'s values and a subject ``height`` metres tall.
+
+    Parameters
+    ----------
+    camera : sequence of 2 or 3 floats, or None
+        The lens's height above the floor and its horizontal distance from the subject,
+        metres, and optionally its downward tilt, degrees (default: aimed at the
+        subject's middle). None: no camera given.
+    height : float
+        The subject's standing height, metres.
+
+    Returns
+    -------
+    float
+        k (:func:`perspective_k`); 0 for None.
+
+    Raises
+    ------
+    ValueError
+        For a camera that is not two or three finite numbers, a tilt beyond ±89 degrees,
+        or one that cannot see the subject.
+    """
+    if camera is None:
+        return 0.0
+    if len(camera) not in (2, 3) or not all(math.isfinite(c) for c in camera):
+        raise ValueError(f"camera is (height, distance[, pitch]) in metres and degrees, "
+                         f"got {camera!r}")
+    if len(camera) == 3 and not -89.0 <= camera[2] <= 89.0:
+        raise ValueError(f"camera pitch must be within ±89 degrees, got {camera[2]}")
+    return perspective_k(float(camera[0]), float(camera[1]), float(height),
+                         None if len(camera) == 2 else float(camera[2]))
+
+
 def warp_height(u, k: float):
     """g(u) = u (1 + k) / (1 + k u): where height fraction ``u`` (0 head top, 1 soles;
     scalar or array) is imaged, as a fraction of the body's image height."""
@@ -135,3 +172,72 @@ def perspective_factors(factors: dict, k: float) -> dict:
     if FOOT in factors:
         out[FOOT] = float(warp_height(factors[FOOT], k))
     return out
+
+
+def inverse_k(k: float) -> float:
+    """The k of g's inverse: ``warp_height(warp_height(u, k), inverse_k(k)) == u``."""
+    return -k / (1.0 + k)
+
+
+def _remap_rows(joints2d, model_height, k: float, ankle_from: float):
+    """Rows of ``joints2d`` (F, J, 2) moved by g (parameter ``k``) along the body's
+    height, head top fixed; ``model_height`` (F,) spans head top to ankles, which sit at
+    ``ankle_from`` of the height to the soles. Returns (joints, model_height)."""
+    from vidcap.body import JOINT_INDEX
+
+    joints = np.array(joints2d, dtype=float, copy=True)
+    height = np.asarray(model_height, float)
+    if k == 0:  # no perspective: as they are, to the bit
+        return joints, height.copy()
+    stature = height / ankle_from  # head top to soles, px
+    top = joints[:, JOINT_INDEX["head_top"], 1][:, None]
+    v = (joints[..., 1] - top) / stature[:, None]
+    # g is a projective map of the line: finite while 1 + k v > 0, which holds for any
+    # row above 1 / |k| statures below the head (k > -1 for a camera that sees the subject)
+    joints[..., 1] = top + stature[:, None] * warp_height(v, k)
+    return joints, stature * warp_height(ankle_from, k)
+
+
+def unwarp_joints(joints2d, model_height, k: float, above_feet: float = 1.0):
+    """Fitted 2D joints as a camera without perspective would image them.
+
+    Each joint's row, as a fraction v of the body's image height from the head's top,
+    goes to g⁻¹(v) (:func:`inverse_k`), the head top fixed: the body the fit drew warped
+    by g (:func:`perspective_factors`) comes back to the body's own proportions, which the
+    3D stage's scaled orthography expects. Columns are kept (the horizontal
+    magnification's change along the body is left out, as the fit's widths leave it).
+
+    Parameters
+    ----------
+    joints2d : array_like, shape (F, 15, 2)
+        Image joints (x right, y down), pixels, with ``head_top`` among them.
+    model_height : array_like, shape (F,)
+        The fitted body's image height from the head's top to the ankles, pixels.
+    k : float
+        The camera's perspective (:func:`perspective_k`); 0 changes nothing.
+    above_feet : float
+        The ankles' height as a share of the standing height (the body's ``above_feet``,
+        1 for the seed's body).
+
+    Returns
+    -------
+    joints : numpy.ndarray, shape (F, 15, 2)
+    model_height : numpy.ndarray, shape (F,)
+        Head top to ankles after the change, pixels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> j = np.zeros((1, 15, 2)); j[0, :, 1] = np.linspace(0.0, 100.0, 15)
+    >>> back, h = warp_joints(*unwarp_joints(j, [100.0], 0.3), 0.3)
+    >>> bool(np.allclose(back, j)) and bool(np.allclose(h, 100.0))
+    True
+    """
+    return _remap_rows(joints2d, model_height, inverse_k(k), float(warp_height(above_feet, k)))
+
+
+def warp_joints(joints2d, model_height, k: float, above_feet: float = 1.0):
+    """The inverse of :func:`unwarp_joints`: joints of a body with its own proportions
+    as the camera of perspective ``k`` images them (same arguments and returns;
+    ``model_height`` the unwarped body's head top to ankles)."""
+    return _remap_rows(joints2d, model_height, k, above_feet)
