@@ -296,6 +296,23 @@ RENDERS = [
     ("01_14 10.5-13.5 s 150 deg / Weizmann plate", ("01_14", 631, 811), 150, "ido",
      "validation"),
     ("05_19 4-7 s side / PETS plate", ("05_19", 241, 421), 90, "vtest", "validation"),
+    # Validation renders added in session 34, when the held-pose tuning renders had left
+    # 46 of 101 rows validation: the trials of subjects 005 and 006 no row used yet
+    # (get_data.sh converts them), each trial's most in-place 3 s by the rule above
+    # (hips within 0.8-2.0 m of their mean: these dancers travel and the players dribble),
+    # views and plates in turn. Measured once on main before anything was chosen on them.
+    ("05_03 0.5-3.5 s side / PETS plate", ("05_03", 29, 209), 90, "vtest", "validation"),
+    ("05_06 4.2-7.2 s 3/4 / Weizmann plate", ("05_06", 253, 433), 45, "ido", "validation"),
+    ("05_08 2.8-5.8 s front / room plate", ("05_08", 169, 349), 0, "room", "validation"),
+    ("05_14 0.2-3.2 s 3/4 back / PETS plate", ("05_14", 15, 195), 135, "vtest",
+     "validation"),
+    ("05_15 1.4-4.4 s side left / Weizmann plate", ("05_15", 85, 265), 270, "ido",
+     "validation"),
+    ("05_16 0.7-3.7 s 3/4 left / room plate", ("05_16", 43, 223), 300, "room", "validation"),
+    ("06_06 0-3 s 150 deg / PETS plate", ("06_06", 1, 181), 150, "vtest", "validation"),
+    ("06_08 0-2.8 s front / Weizmann plate", ("06_08", 1, 170), 0, "ido", "validation"),
+    ("06_02 0-3 s side / room plate", ("06_02", 1, 181), 90, "room", "validation"),
+    ("06_03 0-3 s 3/4 / PETS plate", ("06_03", 1, 181), 45, "vtest", "validation"),
     # Tuning renders added by the issue-26 held-pose helper (wt-held): a body that holds
     # one pose of a tuning trial for the whole clip (:func:`hold_motion`: a few source
     # frames swayed through, or frozen), the case of the two validation dancers above
@@ -323,7 +340,8 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
                                 "02_07", "02_10", "06_10", "06_11", "06_12", "01_08", "02_04",
                                 "02_08", "05_04", "05_05", "05_10", "05_13", "05_20", "06_15",
                                 "01_01", "01_14", "05_07", "05_11", "05_17", "05_19",
-                                "06_14")})
+                                "06_14", "05_03", "05_06", "05_08", "05_14", "05_15",
+                                "05_16", "06_06", "06_08", "06_02", "06_03")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
