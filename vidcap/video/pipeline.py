@@ -93,8 +93,10 @@ _SILHOUETTE_VERSION = 5
 #: shows gives way to one that stayed, ``steadyscene.UNSTEADY_PLATE``; 7: a guessed
 #: plate colour no sample shows gives way to the one most samples show,
 #: ``platepass.MODE_RETAKE``; 8: a person who held one pose, found by the person box
-#: when the samples' first-pass silhouettes are nearly empty, ``heldpose.HELD_POSE``).
-_PLATE_VERSION = 8
+#: when the samples' first-pass silhouettes are nearly empty, ``heldpose.HELD_POSE``; 9:
+#: a footprint hole the moving body does not touch in every sample is scene,
+#: ``regionvote.MIN_ATTACHED``).
+_PLATE_VERSION = 9
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
 #: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather

@@ -234,14 +234,15 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
 
         min_evidence = MIN_COVER
     unseen = voted_d > far
+    moving_t = dev > tau  # (k, h, w): what moves in each sample
+    moving_t = moving_t[moving_t.reshape(k, -1).sum(axis=1) > MIN_ACTIVE_PX]
     for i in hole_ids:
         hole = lab == i
-        c = np.bincount(comp[hole]).argmax()
-        if hole_area[i] > max_hole_share * comp_area[c]:
+        if hole_area[i] > max_hole_share * comp_area[np.bincount(comp[hole]).argmax()]:
             continue
         ring = cv2.dilate(hole.astype(np.uint8), box, iterations=2).astype(bool) & (
             sealed > 0)
-        if ring.any() and cover[ring].mean() >= min_evidence:
+        if ring.any() and cover[ring].mean() >= min_evidence and _attached(hole, moving_t, box):
             out |= hole & unseen
     if out.any():
         # Footprint pixels next to a static body part, far from the guess in every
@@ -254,6 +255,30 @@ def _footprint_plate(small, means, med, tau, best, agree, weights, *,
         out = keep[cl]
     weights[:, out] = 0
     return out
+
+
+#: A hole of the motion footprint is a body part that never moved only if the moving
+#: body touches it (within :data:`ATTACH_PX` pixels at the vote's working size) in at
+#: least this share of the samples where something moves (more than
+#: :data:`MIN_ACTIVE_PX` pixels): a still torso or leg is attached to the moving limbs
+#: in every sample, while a piece of scene the person walks round (a table a dancer
+#: crosses in front of: CMU 05_08 2.8-5.8 s front, now tuning, touched in 18 of 23
+#: samples, the dancer 18-22 px away in the others) is left alone when the person is
+#: elsewhere. On every other tuning render with such holes (jacks, arms, 02_06, 02_07,
+#: 05_02, 05_20) the body part was touched in 23 of 23 samples, at most 3 px away.
+MIN_ATTACHED = 0.9
+ATTACH_PX = 3
+MIN_ACTIVE_PX = 20
+
+
+def _attached(hole: np.ndarray, moving: np.ndarray, box: np.ndarray) -> bool:
+    """Whether the moving pixels of the samples ``moving`` (k', h, w) bool come within
+    :data:`ATTACH_PX` of ``hole`` (h, w) in at least :data:`MIN_ATTACHED` of them (no
+    sample: True, as before the test)."""
+    if not len(moving):
+        return True
+    near = cv2.dilate(hole.astype(np.uint8), box, iterations=ATTACH_PX).astype(bool) & ~hole
+    return bool(moving[:, near].any(axis=1).mean() >= MIN_ATTACHED)
 
 
 def _scene_distance(ring_colours: np.ndarray, bin_width: int = 8):
