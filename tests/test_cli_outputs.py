@@ -90,3 +90,27 @@ def test_a_bug_of_ours_is_one_line_not_a_traceback(tmp_path, video, capsys, monk
     assert not (tmp_path / "o.bvh").exists()
     with pytest.raises(IndexError):
         main(["--debug", "convert", str(video), "-o", str(tmp_path / "o.bvh")])
+
+
+def test_batch_hands_camera_and_ensemble_to_every_clip(tmp_path, video, capsys, monkeypatch):
+    """``vidcap batch --camera 2.5,3 --ensemble 2``: every clip's conversion gets them, as
+    ``vidcap convert`` would; a bad value is one line and exit 2 before any clip runs."""
+    import vidcap.batch.local as local
+
+    seen = []
+
+    def fake_run_local(tasks, jobs):
+        for task in tasks:
+            seen.append(task.options)
+            yield {"file": task.video, "output": task.output, "frames": 1, "seconds": 0.1,
+                   "fps": 10.0, "status": "ok", "message": ""}
+
+    monkeypatch.setattr(local, "run_local", fake_run_local)
+    code = main(["batch", str(video), "-o", str(tmp_path / "out"), "--camera", "2.5,3",
+                 "--ensemble", "2"])
+    assert code == 0 and len(seen) == 1
+    assert seen[0]["camera"] == (2.5, 3.0) and seen[0]["ensemble"] == 2
+    capsys.readouterr()
+    code, err = _error(capsys, ["batch", video, "-o", tmp_path / "out2", "--camera", "2.5"])
+    assert code == 2 and len(err) == 1 and err[0].startswith("vidcap: error: --camera")
+    assert not (tmp_path / "out2").exists() and len(seen) == 1

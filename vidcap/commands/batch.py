@@ -17,7 +17,12 @@ import os
 import sys
 from pathlib import Path
 
-from vidcap.commands.convert import VIEW_CHOICES, add_rig_argument
+from vidcap.commands.convert import (
+    VIEW_CHOICES,
+    add_camera_argument,
+    add_ensemble_argument,
+    add_rig_argument,
+)
 from vidcap.errors import UsageError
 
 NAME = "batch"
@@ -44,6 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="file written per video: BVH (default), binary glTF (.glb) or "
                         "glTF JSON + .bin")
     add_rig_argument(parser)
+    add_camera_argument(parser)  # one rig filmed every clip: its camera, as in convert
+    add_ensemble_argument(parser)
     parser.add_argument("--force", action="store_true",
                         help="redo outputs that are newer than their inputs")
     parser.add_argument("--clip-jobs", type=int, default=1, metavar="N",
@@ -174,12 +181,16 @@ def run(args) -> int:
         if getattr(args, name) < 1:
             raise UsageError(f"--{name.replace('_', '-')} must be at least 1, "
                              f"got {getattr(args, name)}")
+    from vidcap.api import check_camera_option, check_ensemble_option
+
+    camera = check_camera_option(args.camera, args.height)
+    ensemble = check_ensemble_option(args.ensemble)
     videos = expand_inputs(args.inputs)
     if not videos:
         raise UsageError("no input videos")
     outdir = _make_outdir(args.outdir)
     options = {"height": args.height, "view": args.view, "jobs": args.clip_jobs,
-               "rig": args.rig}
+               "rig": args.rig, "camera": camera, "ensemble": ensemble}
     outputs = output_paths(videos, outdir, FORMATS[args.format])
     written = [f for out in outputs for f in output_files(out)]  # a .gltf brings its .bin
     check_outputs({"outdir": [*written, outdir / "summary.csv"]},
