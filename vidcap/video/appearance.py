@@ -501,17 +501,31 @@ def nearest_scene_distance(colour, ys, xs, plate, scene, radius: int, step: int)
     numpy.ndarray, shape (N,), float32
         The smallest L1 distance over the disc's scene pixels; inf where it has none.
     """
-    h, w = scene.shape
     best = np.full(len(ys), np.inf, np.float32)
+    if not len(ys):
+        return best
+    dtype = np.result_type(colour, plate)
+    # The plate padded by its edge pixels (what clipping the offsets to the frame read)
+    # with the pixels that are not scene set to inf, one channel plane at a time: each
+    # offset is then one gather per channel at a flat index, no clipping, no masking.
+    pad = radius
+    planes = [np.pad(np.where(scene, plate[..., c], np.inf).astype(dtype, copy=False), pad,
+                     mode="edge").ravel() for c in range(3)]
+    wp = scene.shape[1] + 2 * pad
+    base = (np.asarray(ys, np.intp) + pad) * wp + (np.asarray(xs, np.intp) + pad)
+    c0, c1, c2 = (np.ascontiguousarray(colour[:, c], dtype=dtype) for c in range(3))
+    d = np.empty(len(ys), dtype)
+    tmp = np.empty(len(ys), dtype)
     # a loop over the disc's offsets (tens), each vectorised over all N pixels
     for dy in range(-radius, radius + 1, step):
         for dx in range(-radius, radius + 1, step):
             if dx * dx + dy * dy > radius * radius:
                 continue
-            y = np.clip(ys + dy, 0, h - 1)
-            x = np.clip(xs + dx, 0, w - 1)
-            d = np.abs(colour - plate[y, x]).sum(axis=-1)
-            np.minimum(best, np.where(scene[y, x], d, np.inf), out=best)
+            at = base + (dy * wp + dx)
+            np.abs(np.subtract(c0, planes[0].take(at), out=d), out=d)
+            d += np.abs(np.subtract(c1, planes[1].take(at), out=tmp), out=tmp)
+            d += np.abs(np.subtract(c2, planes[2].take(at), out=tmp), out=tmp)
+            np.minimum(best, d, out=best)  # (inf where the pixel is not scene)
     return best
 
 

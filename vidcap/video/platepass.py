@@ -262,6 +262,16 @@ def _second_pass(model, frames, gains):
     return replace(model, plate=plate, never_seen=model.never_seen & ~redo, confidence=conf)
 
 
+def _close_to(sub: np.ndarray, i: int, tmap: np.ndarray) -> np.ndarray:
+    """(K, N) bool: the samples ``sub`` (K, N, 3) int16 within ``tmap`` (N,) of sample
+    ``i``'s colour in L1 (summed over the channel planes: the same integers as the
+    (K, N, 3) differences summed, without their temporaries)."""
+    d = np.abs(sub[..., 0] - sub[i, :, 0])
+    d += np.abs(sub[..., 1] - sub[i, :, 1])
+    d += np.abs(sub[..., 2] - sub[i, :, 2])
+    return d <= tmap
+
+
 def _retake_modes(model, frames, gains):
     """The guessed area (never seen and the ring round it, as :func:`_second_pass`)
     re-taken where no sample shows the plate's colour and most samples show one colour:
@@ -291,7 +301,7 @@ def _retake_modes(model, frames, gains):
     best = np.zeros(len(ys), np.int32)
     best_i = np.zeros(len(ys), np.intp)
     for i in range(k):
-        support = (np.abs(sub - sub[i]).sum(-1) <= tmap).sum(axis=0)
+        support = _close_to(sub, i, tmap).sum(axis=0)
         better = support > best
         best[better] = support[better]
         best_i[better] = i
@@ -309,7 +319,7 @@ def _retake_modes(model, frames, gains):
     # told apart by how often each is shown; the person passing shows many colours.
     second = np.zeros(len(ys), np.int32)
     for i in range(k):
-        support = ((np.abs(sub - sub[i]).sum(-1) <= tmap) & ~near).sum(axis=0)
+        support = (_close_to(sub, i, tmap) & ~near).sum(axis=0)
         second = np.maximum(second, np.where(near[i], 0, support))
     again = masked_median(sub.astype(np.uint8)[:, None], ~near[:, None])[0]
     far = ((np.abs(again.astype(np.int16) - plate).sum(-1) > tmap)
