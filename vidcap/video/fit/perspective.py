@@ -89,6 +89,12 @@ def perspective_k(camera_height: float, distance: float, subject_height: float =
     return z_feet / z_head - 1.0
 
 
+#: The most the feet's depth may differ from the head's (1 + k, either way) for
+#: :func:`camera_perspective`: nearer, the body's widths and the arms' lengths change along
+#: it too much for one number (a camera at head height 1 cm away gives k = 15,000).
+MAX_DEPTH_RATIO = 3.0
+
+
 def camera_perspective(camera, height: float) -> float:
     """k for ``vidcap convert --camera``'s values and a subject ``height`` metres tall.
 
@@ -110,7 +116,7 @@ def camera_perspective(camera, height: float) -> float:
     ------
     ValueError
         For a camera that is not two or three finite numbers, a tilt beyond ±89 degrees,
-        or one that cannot see the subject.
+        one that cannot see the subject or one nearer than :data:`MAX_DEPTH_RATIO` allows.
     """
     if camera is None:
         return 0.0
@@ -119,8 +125,13 @@ def camera_perspective(camera, height: float) -> float:
                          f"got {camera!r}")
     if len(camera) == 3 and not -89.0 <= camera[2] <= 89.0:
         raise ValueError(f"camera pitch must be within ±89 degrees, got {camera[2]}")
-    return perspective_k(float(camera[0]), float(camera[1]), float(height),
-                         None if len(camera) == 2 else float(camera[2]))
+    k = perspective_k(float(camera[0]), float(camera[1]), float(height),
+                      None if len(camera) == 2 else float(camera[2]))
+    if not 1.0 / MAX_DEPTH_RATIO <= 1.0 + k <= MAX_DEPTH_RATIO:
+        raise ValueError(f"the camera is too near the subject: the feet would be "
+                         f"{1.0 + k:.3g} times as far as the head (one perspective number "
+                         f"holds to {MAX_DEPTH_RATIO:g} times either way)")
+    return k
 
 
 def warp_height(u, k: float):
