@@ -277,7 +277,7 @@ fi
 
 # CMU 02_05, 02_06, 02_07, 02_09, 02_10, 05_02, 05_09, 05_12, 05_18, 06_10, 06_11, 06_12,
 # 01_08, 02_04, 02_08, 05_04, 05_05, 05_10, 05_13, 05_20, 06_15, and (session 34) 05_03,
-# 05_06, 05_08, 05_14, 05_15, 05_16, 06_06, 06_08, 06_02, 06_03, 06_04
+# 05_06, 05_08, 05_14, 05_15, 05_16, 06_06, 06_08, 06_02, 06_03, 06_04, 06_05, 06_07, 06_09, 03_01
 # (in place) for silhouettes_real.py's renders: the pose prior's iClone files ($VIDCAP_DATA/mocap/cmu_iclone, see benchmarks/DATA.md) with
 # the 15 mapped joints renamed to HumanIK names and the face under the head replaced by
 # an end site 18 cm up the head (the head top; the face's motion columns dropped).
@@ -287,7 +287,8 @@ if [ -f "$ICL/002_05.bvh" ]; then
     for t in 002_05 002_06 002_07 002_09 002_10 005_02 005_09 005_12 005_18 \
              006_10 006_11 006_12 001_08 002_04 002_08 005_04 005_05 005_10 005_13 \
              005_20 006_15 001_01 001_14 005_07 005_11 005_17 005_19 006_14 \
-             005_03 005_06 005_08 005_14 005_15 005_16 006_06 006_08 006_02 006_03 006_04; do
+             005_03 005_06 005_08 005_14 005_15 005_16 006_06 006_08 006_02 006_03 006_04 \
+             006_05 006_07 006_09 003_01; do
         python - "$ICL/$t.bvh" "$DATA/../mocap/cmu_iclone_humanik/${t}_humanik.bvh" <<'PY'
 import re
 import sys

@@ -317,6 +317,13 @@ RENDERS = [
     ("06_03 0-3 s 3/4 / PETS plate", ("06_03", 1, 181), 45, "vtest", "validation"),
     ("06_04 0.2-3.2 s 3/4 back / Weizmann plate", ("06_04", 15, 195), 135, "ido",
      "validation"),
+    # Four more (session 34, end): people who travel (dribbling, a walk on uneven
+    # ground), two marked tuning from the start so that a later session can look at
+    # travelling people without spending validation rows.
+    ("06_05 0-3 s front / room plate", ("06_05", 1, 181), 0, "room", "validation"),
+    ("06_09 0-2.5 s side left / PETS plate", ("06_09", 1, 150), 270, "vtest", "validation"),
+    ("06_07 0-3 s 3/4 left / Weizmann plate", ("06_07", 1, 181), 300, "ido", "tuning"),
+    ("03_01 0-3 s 150 deg / room plate", ("03_01", 1, 181), 150, "room", "tuning"),
     # Tuning renders added by the issue-26 held-pose helper (wt-held): a body that holds
     # one pose of a tuning trial for the whole clip (:func:`hold_motion`: a few source
     # frames swayed through, or frozen), the case of the two validation dancers above
@@ -345,7 +352,8 @@ EXTRA_MOTIONS.update({t: Path(REAL or "/nonexistent") / "mocap" / "cmu_iclone_hu
                                 "02_08", "05_04", "05_05", "05_10", "05_13", "05_20", "06_15",
                                 "01_01", "01_14", "05_07", "05_11", "05_17", "05_19",
                                 "06_14", "05_03", "05_06", "05_08", "05_14", "05_15",
-                                "05_16", "06_06", "06_08", "06_02", "06_03", "06_04")})
+                                "05_16", "06_06", "06_08", "06_02", "06_03", "06_04",
+                                "06_05", "06_09", "06_07", "03_01")})
 
 #: Real clips without true masks come from ``real_clips.py`` (the one clip list of the
 #: real-footage benchmarks), scored against MediaPipe's person masks, a second
