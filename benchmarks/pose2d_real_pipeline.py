@@ -155,7 +155,7 @@ def _joints(clip: RealClip, row: str):
     ``mp-`` rows and the ensemble rows ``human-eN`` / ``outline-eN``:
     :func:`vidcap.video.hidden.solve_hidden`, ``vidcap pose2d --hidden solve``)."""
     from vidcap.io.video import probe
-    from vidcap.video.fit.proportions import human_proportions
+    from vidcap.video.fit.proportions import human_proportions, to_ankles
     from vidcap.video.hidden import solve_hidden
 
     base = row.removesuffix("+solve")
@@ -180,8 +180,8 @@ def _joints(clip: RealClip, row: str):
     # head top to ankles, as convert's 3D stage reads it (a body with feet leaves them out)
     return solve_hidden(pose.joints2d, fps=info.fps, body=None if body is None else body.body(),
                         spread=pose.spread, frame_size=(info.width, info.height),
-                        model_height=pose.model_height * (1.0 - (0.0 if body is None
-                                                                 else body.foot)))
+                        model_height=to_ankles(pose.model_height,
+                                               None if body is None else {"foot": body.foot}))
 
 
 def _fit_with_perspective(clip: RealClip, k: float) -> np.ndarray:
@@ -250,7 +250,7 @@ def _fit_ensemble(video: Path, body: str, members: int):
     :func:`vidcap.video.hidden.solve_hidden` of a ``+solve`` row reads both)."""
     from vidcap.video import pipeline
     from vidcap.video.fit.parallel import fit_sequence_chunked
-    from vidcap.video.fit.proportions import fit_keywords, human_proportions
+    from vidcap.video.fit.proportions import fit_keywords, human_proportions, to_ankles
     from vidcap.video.person import partly_outside
 
     human = body == "human"
@@ -258,7 +258,7 @@ def _fit_ensemble(video: Path, body: str, members: int):
     kw = fit_keywords(human_proportions().factors) if human else {}
     pose = fit_sequence_chunked(masks, jobs=pipeline._PLAN_JOBS, per_job=pipeline._CHUNKS_PER_JOB,
                                 workers=1, cues="outline", ensemble=members, **kw)
-    joints, model_height = pose.joints2d.copy(), pose.model_height * (1.0 - kw.get("foot", 0.0))
+    joints, model_height = pose.joints2d.copy(), to_ankles(pose.model_height, kw)
     outside = partly_outside(masks)
     joints[outside], model_height[outside] = np.nan, np.nan
     return joints, pose.spread, model_height
