@@ -134,23 +134,23 @@ def run(args) -> int:
         if len(frames) != len(masks):
             raise InputFileError(f"{len(masks)} masks but {len(frames)} video frames",
                                  args.masks or args.video)
-    from vidcap.video.fit.perspective import camera_perspective, perspective_factors
+    from vidcap.video.fit.perspective import camera_perspective
     from vidcap.video.fit.proportions import (
-        FOOT,
         estimate_proportions,
         fit_keywords,
         human_proportions,
     )
+    from vidcap.video.fitbody import ankle_share, fit_keywords_for
 
     k = camera_perspective(camera, 1.75)
-    # the seed's and a real adult's body drawn as the camera images them; the estimated
-    # one is measured on the image, warped already
-    fit_kw, extra, estimate = (fit_keywords(perspective_factors({}, k)) if k else {}), {}, None
+    # the seed's and a real adult's body drawn as the camera images them, as convert
+    # draws them; the estimated one is measured on the image, warped already
+    fit_kw, extra, estimate = fit_keywords_for(args.proportions, 1, k), {}, None
     if args.proportions != "seed":
         estimate = (human_proportions() if args.proportions == "human" else
                     estimate_proportions(masks, height=args.height, refine=not args.no_refine))
-        fit_kw = fit_keywords(estimate.factors if args.proportions != "human"
-                              else perspective_factors(estimate.factors, k))
+        if args.proportions == "auto":
+            fit_kw = fit_keywords(estimate.factors)
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),
                  "body_widths": 2.0 * body.segment_radii()}
@@ -170,7 +170,7 @@ def run(args) -> int:
 
         # head top to ankles, as the pipeline hands it to the 3D stage: a body with feet
         # (--proportions human) leaves them out; un-warped for a camera's perspective
-        above = 1.0 if estimate is None else estimate.factors.get(FOOT, 1.0)
+        above = ankle_share(estimate)
         joints, height = unwarp_joints(pose.joints2d, to_ankles(pose.model_height, fit_kw),
                                        k, above)
         joints = solve_hidden(joints, fps=info.fps, body=None if estimate is None
