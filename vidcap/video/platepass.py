@@ -50,6 +50,10 @@ PERSON_MARGIN = 0.02
 MODE_RETAKE = True
 #: Share of the samples the most shown colour needs (:func:`_retake_modes`).
 MODE_SHARE = 0.5
+#: A self-lit pixel's sample is the lamp's noise unless it is this many times further
+#: from the plate than the samples' median distance (plus as many thresholds): a
+#: person in front of the lamp (:func:`_with_self_lit`).
+LIT_OUTLIER = 3.0
 
 
 def refine_plate(model, frames: np.ndarray, gains: np.ndarray, small_hw, *,
@@ -150,6 +154,10 @@ def _with_self_lit(model, frames, gains, small_hw):
     # A lit wall's glow is part lamp, part scene: it follows the exposure in part.
     # Its spread about the unscaled plate is its noise (the per-pixel threshold).
     resid = np.abs(samples.astype(np.float32) - plate[lit].astype(np.float32)).sum(axis=-1)
+    # ... but not a sample where someone stands in front of it: their distance from the
+    # lamp is no noise of the lamp's, and as a threshold it hid them there (06_07)
+    usual = resid <= LIT_OUTLIER * np.median(resid, axis=0) + LIT_OUTLIER * model.threshold
+    resid = np.where(usual, resid, 0.0)
     noise_map = model.noise_map.copy()
     noise_map[lit] = np.maximum(noise_map[lit], resid.max(axis=0) / 2.0)
     never = model.never_seen & ~lit  # a lamp is scene, seen in every frame
