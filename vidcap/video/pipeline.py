@@ -95,7 +95,8 @@ _SILHOUETTE_VERSION = 5
 #: ``platepass.MODE_RETAKE``; 8: a person who held one pose, found by the person box
 #: when the samples' first-pass silhouettes are nearly empty, ``heldpose.HELD_POSE``; 9:
 #: a footprint hole the moving body does not touch in every sample is scene,
-#: ``regionvote.MIN_ATTACHED``).
+#: ``regionvote.MIN_ATTACHED``; 10: a lamp a person crosses still found self-lit,
+#: ``stillparts.self_lit``).
 _PLATE_VERSION = 10
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching

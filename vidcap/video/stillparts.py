@@ -231,7 +231,7 @@ def self_lit(raw: np.ndarray, gains: np.ndarray, noise: float) -> np.ndarray:
     predicted = (level[..., :3] * drift).max(axis=-1)
     lit &= (s_norm <= PREDICTED_RATIO * predicted) & (s_norm >= predicted / PREDICTED_RATIO)
     lit = cv2.morphologyEx(lit.astype(np.uint8), cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(lit, connectivity=8)
+    _, lab, stats, _ = cv2.connectedComponentsWithStats(lit, connectivity=8)
     big = stats[:, cv2.CC_STAT_AREA] >= MIN_LIT_SHARE * lit.size
     big[0] = False
     lit = big[lab].astype(np.uint8)
