@@ -304,3 +304,28 @@ def test_pose2d_camera_draws_the_head_larger(tmp_path, cli):
 
     assert head_share(poses["cam"]) > 1.1 * head_share(poses["plain"])
     assert np.isfinite(poses["cam_solve"].joints2d).all()
+
+
+def test_pose2d_auto_proportions_with_a_camera_hands_on_the_unwarped_body(tmp_path, cli):
+    """``--proportions auto --camera``: the body is measured on the image (a camera
+    above draws the head larger and the legs shorter), so the lengths written are the
+    measurement un-warped for the camera, as ``vidcap convert`` hands them to the 3D;
+    without a camera they are the measurement itself."""
+    from vidcap.video.fit.perspective import camera_perspective
+    from vidcap.video.fit.proportions import estimate_proportions
+    from vidcap.video.fitbody import unwarped_estimate
+
+    video, masks, _ = _clip(tmp_path)
+    lengths = {}
+    for name, extra in (("plain", ()), ("cam", ("--camera", "2.5,3"))):
+        out = tmp_path / f"{name}.npz"
+        r = cli("pose2d", video, "--masks", masks, "-o", out, "--proportions", "auto",
+                *extra)
+        assert r.returncode == 0, r.stderr
+        lengths[name] = np.load(out)["body_lengths"]
+    measured = estimate_proportions(np.load(masks)["masks"])
+    assert lengths["plain"] == pytest.approx(measured.body(1.0).segment_lengths())
+    k = camera_perspective((2.5, 3.0), 1.75)
+    flat = unwarped_estimate(measured, k).body(1.0).segment_lengths()
+    assert lengths["cam"] == pytest.approx(flat)
+    assert not np.allclose(lengths["cam"], lengths["plain"], rtol=1e-3)

@@ -140,17 +140,19 @@ def run(args) -> int:
         fit_keywords,
         human_proportions,
     )
-    from vidcap.video.fitbody import ankle_share, fit_keywords_for
+    from vidcap.video.fitbody import ankle_share, fit_keywords_for, unwarped_estimate
 
     k = camera_perspective(camera, 1.75)
     # the seed's and a real adult's body drawn as the camera images them, as convert
-    # draws them; the estimated one is measured on the image, warped already
+    # draws them; the estimated one is measured on the image, warped already: fitted as
+    # measured, and (as convert hands it on) un-warped for the solve and the lengths
     fit_kw, extra, estimate = fit_keywords_for(args.proportions, 1, k), {}, None
     if args.proportions != "seed":
         estimate = (human_proportions() if args.proportions == "human" else
                     estimate_proportions(masks, height=args.height, refine=not args.no_refine))
         if args.proportions == "auto":
             fit_kw = fit_keywords(estimate.factors)
+            estimate = unwarped_estimate(estimate, k)
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),
                  "body_widths": 2.0 * body.segment_radii()}
