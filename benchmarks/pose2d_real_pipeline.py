@@ -160,6 +160,8 @@ def _joints(clip: RealClip, row: str):
 
     base = row.removesuffix("+solve")
     hidden = "fit" if base == row else "solve"
+    if base in ("human-erode", "human-dilate"):
+        return _fit_ensemble(clip.video, "human", 1, base.removeprefix("human-"))[0]
     if base.startswith(("human-e", "outline-e")):
         body, members = base.split("-e")
         return _ensemble_joints(clip.video, body, int(members), hidden)
@@ -238,7 +240,7 @@ def _ensemble_joints(video: Path, body: str, members: int, hidden: str) -> np.nd
 
 
 @functools.cache
-def _fit_ensemble(video: Path, body: str, members: int):
+def _fit_ensemble(video: Path, body: str, members: int, change: str = "as_given"):
     """Rows ``human-eN`` and ``outline-eN``: the pipeline's silhouettes (``body`` 'human'
     or 'outline', the seed's) of the whole ``video`` fitted again in the chunks the pipeline
     plans (:data:`vidcap.video.pipeline._PLAN_JOBS`, ``_CHUNKS_PER_JOB``; one process,
@@ -247,7 +249,10 @@ def _fit_ensemble(video: Path, body: str, members: int):
     where the person is mostly outside the picture left out as the pipeline leaves
     them. Over the whole video: the joints (F, 15, 2) px, the torso's spread (F,) and
     the model's height head top to ankles (F,) px (as the pipeline keeps it: the
-    :func:`vidcap.video.hidden.solve_hidden` of a ``+solve`` row reads both)."""
+    :func:`vidcap.video.hidden.solve_hidden` of a ``+solve`` row reads both). ``change``:
+    the silhouettes first changed at the outline as an ensemble's member changes them
+    (:func:`vidcap.video.fit.ensemble.changed_masks`; rows ``human-erode`` and
+    ``human-dilate``, one fit each)."""
     from vidcap.video import pipeline
     from vidcap.video.fit.parallel import fit_sequence_chunked
     from vidcap.video.fit.proportions import fit_keywords, human_proportions, to_ankles
@@ -256,6 +261,10 @@ def _fit_ensemble(video: Path, body: str, members: int):
     human = body == "human"
     masks = pipeline_result(video, "outline", proportions="human" if human else "seed").masks
     kw = fit_keywords(human_proportions().factors) if human else {}
+    if change != "as_given":
+        from vidcap.video.fit.ensemble import changed_masks
+
+        masks = changed_masks(masks, change)
     pose = fit_sequence_chunked(masks, jobs=pipeline._PLAN_JOBS, per_job=pipeline._CHUNKS_PER_JOB,
                                 workers=1, cues="outline", ensemble=members, **kw)
     joints, model_height = pose.joints2d.copy(), to_ankles(pose.model_height, kw)
