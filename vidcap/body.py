@@ -247,6 +247,11 @@ class BodyModel:
         Segment widths (diameters) in metres overriding the Table 3.2 ratios, keyed
         by segment name. The torso's width is the shoulders' breadth (the shoulder
         joints sit at its corners, the hips a quarter of it from the pelvis).
+    shoulder_drop : float
+        How far below the torso's top corners the shoulder joints sit, metres (0, the
+        seed's: at the corners). A real shoulder's joint centre (the humerus' head) lies
+        a few centimetres below the top of the shoulder's outline, which the torso's
+        top edge follows.
 
     A subject's own proportions (:mod:`vidcap.video.fit.proportions` estimates them
     from a clip) are built with :func:`body_with_proportions`, which keeps ``height``
@@ -264,10 +269,16 @@ class BodyModel:
     height: float = DEFAULT_HEIGHT_M
     lengths: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     widths: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    shoulder_drop: float = 0.0
 
     def __post_init__(self):
         if not np.isfinite(self.height) or self.height <= 0:
             raise ValueError(f"height must be a positive number of metres, got {self.height!r}")
+        drop = float(self.shoulder_drop)
+        if not (np.isfinite(drop) and 0.0 <= drop < 0.1 * self.height):
+            raise ValueError(f"shoulder_drop must be in [0, 0.1 x height) metres, got "
+                             f"{self.shoulder_drop!r}")
+        object.__setattr__(self, "shoulder_drop", drop)
         for name in ("lengths", "widths"):
             values = {k: float(v) for k, v in dict(getattr(self, name)).items()}
             unknown = set(values) - set(SEGMENT_NAMES)
@@ -280,12 +291,13 @@ class BodyModel:
 
     def __reduce__(self):
         # a MappingProxyType does not pickle: rebuild from plain dicts (fit workers)
-        return (type(self), (self.height, dict(self.lengths), dict(self.widths)))
+        return (type(self), (self.height, dict(self.lengths), dict(self.widths),
+                             self.shoulder_drop))
 
     @property
     def custom(self) -> bool:
         """True when any length or width is this subject's own (not the seed's ratios)."""
-        return bool(self.lengths) or bool(self.widths)
+        return bool(self.lengths) or bool(self.widths) or bool(self.shoulder_drop)
 
     def length(self, segment: str) -> float:
         """Length of ``segment`` in metres."""
@@ -326,14 +338,15 @@ class BodyModel:
         """
         L = self.length
         sw, hw = self.shoulder_half_width, self.hip_half_width
+        top = L("torso") - self.shoulder_drop  # the shoulder joints' height on the torso
         off = {
             "pelvis": (0.0, 0.0, 0.0),
             "neck": (0.0, L("torso"), 0.0),
             "head_top": (0.0, L("head"), 0.0),
-            "l_shoulder": (-sw, L("torso"), 0.0),
+            "l_shoulder": (-sw, top, 0.0),
             "l_elbow": (-L("l_upper_arm"), 0.0, 0.0),
             "l_wrist": (-L("l_lower_arm"), 0.0, 0.0),
-            "r_shoulder": (sw, L("torso"), 0.0),
+            "r_shoulder": (sw, top, 0.0),
             "r_elbow": (L("r_upper_arm"), 0.0, 0.0),
             "r_wrist": (L("r_lower_arm"), 0.0, 0.0),
             "l_hip": (-hw, 0.0, 0.0),
@@ -412,6 +425,10 @@ PROPORTION_ALIASES = MappingProxyType({
     "arms": ("upper_arms", "lower_arms"),
     "legs": ("upper_legs", "lower_legs"),
 })
+#: The key of :func:`body_with_proportions`' ``factors`` that is not a factor: the shoulder
+#: joints' drop below the torso's top corners as a share of the standing height
+#: (:attr:`BodyModel.shoulder_drop`).
+SHOULDER_DROP = "shoulder_drop"
 #: Width factors :func:`body_with_proportions` takes (``shoulders``: the torso's width).
 WIDTH_GROUPS = MappingProxyType({
     "shoulders": ("torso",),
@@ -432,7 +449,10 @@ def body_with_proportions(height: float = DEFAULT_HEIGHT_M, factors=None, *,
     factors : mapping of str to float, optional
         Length factors by :data:`PROPORTION_GROUPS` name (or an alias of
         :data:`PROPORTION_ALIASES`: ``legs``, ``arms``) and width factors by
-        :data:`WIDTH_GROUPS` name, e.g. ``{"legs": 1.15, "arms": 0.9, "shoulders": 1.2}``.
+        :data:`WIDTH_GROUPS` name, e.g. ``{"legs": 1.15, "arms": 0.9, "shoulders": 1.2}``;
+        and :data:`SHOULDER_DROP`, the shoulder joints' drop below the torso's top
+        corners as a share of ``height`` (in [0, 0.1); default 0), rescaled with the
+        lengths (so it stays the share it is of head + torso + leg).
     keep_height : bool
         Rescale every length and width together so head + torso + leg stays
         ``height`` (the subject's standing height is the metric scale); False keeps
@@ -456,7 +476,12 @@ def body_with_proportions(height: float = DEFAULT_HEIGHT_M, factors=None, *,
     f_len = dict.fromkeys(SEGMENT_NAMES, 1.0)
     f_wid = dict.fromkeys(SEGMENT_NAMES, 1.0)
     # aliases first, so a group's own factor (``upper_legs``) wins over ``legs``
-    items = sorted(dict(factors or {}).items(), key=lambda kv: kv[0] not in PROPORTION_ALIASES)
+    factors = dict(factors or {})
+    drop = float(factors.pop(SHOULDER_DROP, 0.0))
+    if not (np.isfinite(drop) and 0.0 <= drop < 0.1):
+        raise ValueError(f"{SHOULDER_DROP} must be a share of the height in [0, 0.1), got "
+                         f"{drop!r}")
+    items = sorted(factors.items(), key=lambda kv: kv[0] not in PROPORTION_ALIASES)
     for name, value in items:
         value = float(value)
         if not (np.isfinite(value) and value > 0):
@@ -481,7 +506,8 @@ def body_with_proportions(height: float = DEFAULT_HEIGHT_M, factors=None, *,
                    lengths["r_upper_leg"] + lengths["r_lower_leg"])
         k = height / (legs + lengths["torso"] + lengths["head"])
     return BodyModel(height=height, lengths={s: v * k for s, v in lengths.items()},
-                     widths={s: v * k for s, v in widths.items()})
+                     widths={s: v * k for s, v in widths.items()},
+                     shoulder_drop=drop * height * k)
 
 
 def segment_vectors(joints: np.ndarray) -> np.ndarray:

@@ -101,6 +101,10 @@ def test_cues_default_and_pose_cache_key(monkeypatch):
     seed_key = pipeline._pose_key("sil", [(0, 0, 100)], "outline")
     assert pipeline._pose_key("sil", [(0, 0, 100)], "outline", {}) == seed_key
     assert pipeline._pose_key("sil", [(0, 0, 100)], "outline", fit_keywords(HUMAN)) != seed_key
+    # a body whose shoulder joints alone sit elsewhere is another fit
+    dropped = {**HUMAN, "shoulder_drop": 0.03}
+    assert pipeline._pose_key("sil", [(0, 0, 100)], "outline", fit_keywords(dropped)) \
+        != pipeline._pose_key("sil", [(0, 0, 100)], "outline", fit_keywords(HUMAN))
     keys = {cues: pipeline._pose_key("sil", [(0, 0, 100)], cues) for cues in ("all", "outline")}
     assert keys["all"] != keys["outline"]  # a fit with cues is not read back as one without
     # nor is a cache written by an older fit read back as the new fit's
@@ -112,8 +116,9 @@ def test_cues_default_and_pose_cache_key(monkeypatch):
 
 def test_pose2d_cli_human_proportions(tmp_path, cli):
     """``--proportions human``: the fit uses a real adult's proportions, written as
-    fractions of the stature (the upper arm longer than the seed's, the lower arm
-    shorter; head top to ankles 0.961 of it: the feet below)."""
+    fractions of the stature (the upper arm, from the shoulder joint 0.022 below the
+    top of the shoulder, longer than the seed's, the lower arm shorter; head top to
+    ankles 0.961 of it: the feet below)."""
     video, masks, _ = _clip(tmp_path)
     out = tmp_path / "pose2d.npz"
     r = cli("pose2d", video, "--masks", masks, "-o", out, "--proportions", "human")
@@ -123,7 +128,8 @@ def test_pose2d_cli_human_proportions(tmp_path, cli):
     from vidcap.body import SEGMENT_INDEX
 
     lengths = d["body_lengths"]
-    assert lengths[SEGMENT_INDEX["l_upper_arm"]] == pytest.approx(0.188, abs=1e-3)
+    assert lengths[SEGMENT_INDEX["l_upper_arm"]] == pytest.approx(0.166, abs=1e-3)
+    assert float(d["body_shoulder_drop"]) == pytest.approx(0.022, abs=1e-4)
     assert lengths[SEGMENT_INDEX["l_lower_arm"]] == pytest.approx(0.145, abs=1e-3)
     legs = lengths[SEGMENT_INDEX["l_upper_leg"]] + lengths[SEGMENT_INDEX["l_lower_leg"]]
     assert legs + lengths[SEGMENT_INDEX["torso"]] + lengths[SEGMENT_INDEX["head"]] \

@@ -189,21 +189,60 @@ def test_pose_joints_batch_equals_pose_joints_bit_for_bit(monkeypatch):
     angles = rng.uniform(-7, 7, (b, 10))
     fore = rng.uniform(0.01, 1, (b, 10))
     spread = rng.uniform(0, 1, b)
-    lengths, _, sh, hip = raster.model_dimensions(83.7)
-    want = raster.pose_joints(root, angles, fore, spread, lengths, sh, hip)
-    got = raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip)
-    assert got.shape == (b, 15, 2)
-    np.testing.assert_array_equal(got, want)
-    # the one-pose kernel (the fitter's current pose) takes cos/sin itself (libm):
-    # the same joints up to the last bit where numpy's differ
-    one = np.empty((1, 15, 2))
-    for k in range(b):
-        raster._kernels().pose_one(root[k], angles[k], fore[k], float(spread[k]), lengths,
-                                   float(sh), float(hip), *raster._KERNEL_TABLES, one)
-        np.testing.assert_allclose(one[0], want[k], rtol=0, atol=1e-9)
-    monkeypatch.setattr(raster, "_kernels", lambda: None)
-    np.testing.assert_array_equal(
-        raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip), want)
+    from vidcap.body import BodyModel
+
+    kernels = raster._kernels
+    # the seed's body (shoulders at the torso's top corners) and one whose shoulder
+    # joints sit below them
+    for body in (None, BodyModel(shoulder_drop=0.04)):
+        monkeypatch.setattr(raster, "_kernels", kernels)
+        lengths, _, _, hip = raster.model_dimensions(83.7, body)
+        sh = raster.model_shoulder(83.7, body)
+        want = raster.pose_joints(root, angles, fore, spread, lengths, sh, hip)
+        got = raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip)
+        assert got.shape == (b, 15, 2)
+        np.testing.assert_array_equal(got, want)
+        # the one-pose kernel (the fitter's current pose) takes cos/sin itself (libm):
+        # the same joints up to the last bit where numpy's differ
+        one = np.empty((1, 15, 2))
+        for k in range(b):
+            raster._kernels().pose_one(root[k], angles[k], fore[k], float(spread[k]), lengths,
+                                       sh, float(hip), *raster._KERNEL_TABLES, one)
+            np.testing.assert_allclose(one[0], want[k], rtol=0, atol=1e-9)
+        monkeypatch.setattr(raster, "_kernels", lambda: None)
+        np.testing.assert_array_equal(
+            raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip), want)
+
+
+def test_shoulder_drop_moves_the_shoulders_down_the_torso():
+    """A body whose shoulder joints sit ``shoulder_drop`` below the torso's top corners:
+    in 2D both shoulders move that far (in pixels of the model's height) from the neck
+    along the torso's axis, whatever the torso's angle and the spread; nothing else
+    moves; in 3D the rest pose's shoulders are that much lower."""
+    from vidcap.body import JOINT_INDEX, BodyModel
+    from vidcap.video.fit import raster
+
+    body, h = BodyModel(height=1.75, shoulder_drop=0.0385), 80.0
+    lengths, _, lateral, hip = raster.model_dimensions(h, body)
+    pair = raster.model_shoulder(h, body)
+    assert pair[0] == pytest.approx(lateral) and pair[1] == pytest.approx(0.0385 / 1.75 * h)
+    rng = np.random.default_rng(5)
+    angles = rng.uniform(-3, 3, (20, 10))
+    spread = rng.uniform(0, 1, 20)
+    root = rng.uniform(0, 100, (20, 2))
+    fore = np.ones((20, 10))
+    flat = raster.pose_joints(root, angles, fore, spread, lengths, lateral, hip)
+    low = raster.pose_joints_batch(root, angles, fore, spread, lengths, pair, hip)
+    up = raster.direction(angles[:, 0])  # the torso's axis, pelvis -> neck
+    for n in ("l_shoulder", "r_shoulder"):
+        np.testing.assert_allclose(flat[:, JOINT_INDEX[n]] - low[:, JOINT_INDEX[n]],
+                                   pair[1] * up, atol=1e-9)
+    others = [JOINT_INDEX[n] for n in ("pelvis", "neck", "head_top", "l_hip", "r_knee")]
+    np.testing.assert_array_equal(flat[:, others], low[:, others])
+    rest = body.rest_positions()
+    seed = BodyModel(height=1.75).rest_positions()
+    assert seed[JOINT_INDEX["l_shoulder"], 1] - rest[JOINT_INDEX["l_shoulder"], 1] \
+        == pytest.approx(0.0385)
 
 
 def test_span_similarity_equals_counts_then_similarity(monkeypatch):

@@ -182,8 +182,10 @@ def test_model_height_cut_to_the_ankles():
 
 def test_human_proportions_put_the_joints_of_the_table():
     """The human body's joints standing (arms down), as fractions of the stature, are
-    the anthropometric table's: shoulder 0.818, elbow 0.630, wrist 0.485, knee 0.285,
-    ankle 0.039 (the feet below the model); the hips at 0.500 (chosen on real clips)."""
+    the anthropometric table's: the top of the shoulders 0.818 (the torso's top
+    corners), elbow 0.630, wrist 0.485, knee 0.285, ankle 0.039 (the feet below the
+    model); the hips at 0.500 (chosen on real clips); the shoulder joints, where the
+    arms turn, 0.022 below the top of the shoulders (0.796)."""
     est = human_proportions()
     assert est.foot == pytest.approx(0.039)
     body = est.body(1.0)  # stature 1: head top to ankles 0.961
@@ -191,9 +193,14 @@ def test_human_proportions_put_the_joints_of_the_table():
     top = 1.0
     shoulder = top - body.length("head")
     assert shoulder == pytest.approx(0.818, abs=1e-3)
-    assert shoulder - body.length("l_upper_arm") == pytest.approx(0.630, abs=1e-3)
-    assert shoulder - body.length("l_upper_arm") - body.length("l_lower_arm") \
+    joint = shoulder - body.shoulder_drop
+    assert joint == pytest.approx(0.796, abs=1e-3)
+    assert joint - body.length("l_upper_arm") == pytest.approx(0.630, abs=1e-3)
+    assert joint - body.length("l_upper_arm") - body.length("l_lower_arm") \
         == pytest.approx(0.485, abs=1e-3)
+    # the rest pose (arms out) puts the shoulder joints there too, 1 m tall
+    rest = body.rest_positions() / body.standing_height * 0.961 + [0, 0.039, 0]
+    assert rest[JOINT_INDEX["l_shoulder"], 1] == pytest.approx(0.796, abs=1e-3)
     hip = shoulder - body.length("torso")
     assert hip == pytest.approx(0.500, abs=1e-3)
     assert hip - body.length("l_upper_leg") == pytest.approx(0.285, abs=1e-3)

@@ -155,7 +155,8 @@ def run(args) -> int:
             estimate = unwarped_estimate(estimate, k)
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),
-                 "body_widths": 2.0 * body.segment_radii()}
+                 "body_widths": 2.0 * body.segment_radii(),
+                 "body_shoulder_drop": np.float64(body.shoulder_drop)}
     # (one member: fit_sequence itself, as before the option)
     pose = fit_ensemble(
         masks, ensemble=ensemble, tracked=not args.per_frame, height=args.height,

@@ -492,8 +492,11 @@ def lift(
     n = np.linalg.norm(lat, axis=-1, keepdims=True)
     lat = np.where(n > 1e-9, lat / np.maximum(n, 1e-12), left)
     sw, hw = body.shoulder_half_width, body.hip_half_width
-    J[:, ji["l_shoulder"]] = J[:, ji["neck"]] + sw * lat
-    J[:, ji["r_shoulder"]] = J[:, ji["neck"]] - sw * lat
+    # (the shoulder joints below the torso's top corners, down its axis, as the body's
+    # rest pose puts them)
+    top = J[:, ji["neck"]] - body.shoulder_drop * axis
+    J[:, ji["l_shoulder"]] = top + sw * lat
+    J[:, ji["r_shoulder"]] = top - sw * lat
     J[:, ji["l_hip"]] = J[:, ji["pelvis"]] + hw * lat
     J[:, ji["r_hip"]] = J[:, ji["pelvis"]] - hw * lat
 

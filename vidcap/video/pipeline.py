@@ -681,6 +681,8 @@ def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES, fit_kw: dict | None 
         body = fit_kw["body"]
         parts += (f"body={body.segment_lengths().round(6).tolist()}"
                   f"{body.segment_radii().round(6).tolist()}", f"foot={fit_kw.get('foot', 0):.6f}")
+        if body.shoulder_drop:  # (a body without one keeps the key it had before)
+            parts += (f"shoulder_drop={body.shoulder_drop / body.height:.6f}",)
     if fit_kw.get("ensemble", 1) != 1:  # one fit keeps the key it had before ensembles
         parts += (f"ensemble={int(fit_kw['ensemble'])}",)
     return stage_key(*parts) if cues == "outline" else stage_key(*parts, f"cues={cues}")

@@ -194,15 +194,17 @@ class ConvertResult:
         )
 
     def _body_arrays(self) -> dict:
-        """``body_lengths`` and ``body_widths`` (10,) m, ``body_height`` () m, and
-        ``body_estimated`` () bool (proportions other than the seed's: the subject's own
-        or, with ``proportions='human'``, a real adult's)."""
+        """``body_lengths`` and ``body_widths`` (10,) m, ``body_height`` () m,
+        ``body_shoulder_drop`` () m (the shoulder joints below the torso's top corners)
+        and ``body_estimated`` () bool (proportions other than the seed's: the subject's
+        own or, with ``proportions='human'``, a real adult's)."""
         from vidcap.body import BodyModel
 
         body = self.body if self.body is not None else BodyModel()
         return {"body_lengths": body.segment_lengths(),
                 "body_widths": 2.0 * body.segment_radii(),
                 "body_height": np.float64(body.height),
+                "body_shoulder_drop": np.float64(body.shoulder_drop),
                 "body_estimated": np.bool_(self.proportions is not None)}
 
 def true_runs(flags) -> list[tuple[int, int]]:

@@ -576,7 +576,8 @@ def joints(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, ord
 
     c, s (B, 10): cos and sin of the segment angles; c_left, s_left (B,): of the torso
     angle + pi/2; joints placed in ``order`` from ``parent``, offset by segment
-    ``kind[j] >= 0`` or laterally (-1/-2 shoulder +/-, -3/-4 hip +/-).
+    ``kind[j] >= 0`` or laterally (-1/-2 shoulder +/-, -3/-4 hip +/-). ``shoulder``
+    (2,): the shoulders' lateral offset and their drop down the torso from the neck.
     """
     n_b = root.shape[0]
     for b in range(n_b):
@@ -593,17 +594,24 @@ def joints(root, c, s, c_left, s_left, fore, spread, lengths, shoulder, hip, ord
                 dx = c[b, k] * fl
                 dy = -s[b, k] * fl
             elif k >= -2:
-                dx = shoulder * lx
-                dy = shoulder * ly
+                dx = shoulder[0] * lx
+                dy = shoulder[0] * ly
+                if k == -2:
+                    dx = -dx
+                    dy = -dy
+                if shoulder[1] != 0.0:
+                    # down the torso's axis (segment 0, (cos, -sin) of its angle) from
+                    # the neck, in pose_joints' order of operations
+                    dx = dx - shoulder[1] * c[b, 0]
+                    dy = dy - shoulder[1] * -s[b, 0]
             else:
                 dx = hip * lx
                 dy = hip * ly
-            if k == -2 or k == -4:
-                out[b, j, 0] = out[b, p, 0] - dx
-                out[b, j, 1] = out[b, p, 1] - dy
-            else:
-                out[b, j, 0] = out[b, p, 0] + dx
-                out[b, j, 1] = out[b, p, 1] + dy
+                if k == -4:
+                    dx = -dx
+                    dy = -dy
+            out[b, j, 0] = out[b, p, 0] + dx
+            out[b, j, 1] = out[b, p, 1] + dy
 
 
 @numba.njit(cache=True, nogil=True)

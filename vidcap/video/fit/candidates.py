@@ -38,7 +38,8 @@ from vidcap.video.fit.state import FitState
 _NO_LIMB = (0.0, 0.0, 0.0, np.zeros(2), np.zeros(2), np.zeros((1, 2)), np.zeros((1, 2)),
             np.zeros(1))
 _NO_POSE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(2), 0.0, np.zeros(2), np.zeros(10),
-            np.zeros(10), 0.0, np.zeros(10), 0.0, 0.0, *_KERNEL_TABLES, np.zeros(1, np.int64),
+            np.zeros(10), 0.0, np.zeros(10), np.zeros(2), 0.0, *_KERNEL_TABLES,
+            np.zeros(1, np.int64),
             np.zeros(1, np.int64))
 NOWHERE = np.zeros(2)  # no neck (an action that does not turn the torso about it)
 
@@ -108,7 +109,7 @@ def _search_compiled(kernels, eng, st, action, moving, rows, lo, hi, *, division
     f64 = np.float64
     pose = (np.asarray(idx, np.int64), np.asarray(coef, f64), np.asarray(neck, f64),
             float(length), fixed, _carray(st.root, f64), _carray(st.angles, f64),
-            _carray(st.fore, f64), float(st.spread), eng.L_c, float(eng.shoulder),
+            _carray(st.fore, f64), float(st.spread), eng.L_c, eng.shoulder,
             float(eng.hip), *_KERNEL_TABLES)
 
     def run(lo_, hi_, centre, warm, width, period, gap_period, pref, divisions_, min_step_):

@@ -26,6 +26,7 @@ from vidcap.video.fit.raster import (
     _kernels,
     draw_pose,
     model_dimensions,
+    model_shoulder,
     pose_joints_batch,
     span_counts,
 )
@@ -83,7 +84,8 @@ class _MaskEngine:
         self.H = (height - self.foot) / (1.0 + ends) if caps else height - self.foot
         # a silhouette taller than the body (raised arms): its top need not be the head
         self.taller = norm.height > 1.02 * (self.H + self.foot)
-        self.L, self.R, self.shoulder, self.hip = model_dimensions(self.H, body)
+        self.L, self.R, _, self.hip = model_dimensions(self.H, body)
+        self.shoulder = model_shoulder(self.H, body)  # (lateral, drop)
         self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
         self.caps = caps
         self.sil_rows, self.sil_cum = norm.count_tables  # shared by every fit of this mask
@@ -164,7 +166,7 @@ def _pose_joints_compiled(kernels, eng, st):
     out = np.empty((1, 15, 2))  # one pose: one compiled call, no batch set-up
     kernels.pose_one(_carray(st.root, np.float64), _carray(st.angles, np.float64),
                      _carray(st.fore, np.float64), float(st.spread), eng.L_c,
-                     float(eng.shoulder), float(eng.hip), *_KERNEL_TABLES, out)
+                     eng.shoulder, float(eng.hip), *_KERNEL_TABLES, out)
     return out[0]
 
 

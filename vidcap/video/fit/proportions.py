@@ -39,6 +39,7 @@ from vidcap.body import (
     PROPORTION_ALIASES,
     PROPORTION_GROUPS,
     SEGMENT_INDEX,
+    SHOULDER_DROP,
     BodyModel,
     body_with_proportions,
 )
@@ -76,11 +77,21 @@ FOOT, FOOT_LIMITS = "above_feet", (0.8, 1.0)
 #: or a standing body's hips are, so the fit cannot correct that itself. Head = top to
 #: shoulders, torso = shoulders to hips, upper arm = shoulder to elbow, lower arm =
 #: elbow to wrist; the ankles 0.039 H above the soles (the model ends there). The
-#: model's head top is the stature's (the table's eye height 0.936 is below it).
+#: model's head top is the stature's (the table's eye height 0.936 is below it). The
+#: table's shoulder is the acromion, the top of the shoulder's outline, which the torso's
+#: top edge follows; the shoulder *joints* (the humerus' head, where the arm turns, and
+#: where MediaPipe and motion-capture skeletons put the shoulders) sit
+#: ``HUMAN_SHOULDER_DROP`` = 0.022 H lower (3.9 cm at 1.75 m; the low end of published
+#: offsets: Rab et al. 2002 put the joint 17 % of the biacromial breadth, ~0.038 H, below
+#: an acromion skin marker), chosen a priori, not on any clip, with the upper arm
+#: 0.188 - 0.022 so that a hanging elbow stays at the table's 0.630 (benchmarks/HISTORY.md,
+#: session 36: against MediaPipe, 2D 7.81 -> 7.71 % of the height on the 16 real clips,
+#: 3D PA-MPJPE 162.7 -> 148.2 mm).
+HUMAN_SHOULDER_DROP = 0.022
 HUMAN = {"head": 0.182 / (25 / 175), "torso": 0.318 / (52 / 175),
          "upper_legs": 0.215 / (46 / 175), "lower_legs": 0.246 / (52 / 175),
-         "upper_arms": 0.188 / (25 / 175), "lower_arms": 0.145 / (35 / 175),
-         FOOT: 0.961}
+         "upper_arms": (0.188 - HUMAN_SHOULDER_DROP) / (25 / 175),
+         "lower_arms": 0.145 / (35 / 175), FOOT: 0.961, SHOULDER_DROP: HUMAN_SHOULDER_DROP}
 #: What ``proportions=`` may be: the seed's ratios, the subject's estimated from the
 #: clip (:func:`estimate_proportions`), or a real adult's (:func:`human_proportions`).
 PROPORTION_CHOICES = ("seed", "auto", "human")
@@ -272,7 +283,10 @@ def compose(base: dict | None, factors: dict) -> dict:
         return out
 
     b, f = resolved(base), resolved(factors)
-    return {k: b.get(k, 1.0) * f.get(k, 1.0) for k in sorted(set(b) | set(f))}
+    out = {k: b.get(k, 1.0) * f.get(k, 1.0) for k in sorted(set(b) | set(f))}
+    if SHOULDER_DROP in out:  # a share of the height, not a factor: the later one's
+        out[SHOULDER_DROP] = f.get(SHOULDER_DROP, b.get(SHOULDER_DROP))
+    return out
 
 
 def fit_keywords(factors: dict) -> dict:

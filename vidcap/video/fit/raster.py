@@ -102,6 +102,36 @@ def model_dimensions(height_px: float, body: BodyModel | None = None):
     return lengths * k, radii * k, shoulder * k, hip * k
 
 
+def model_shoulder(height_px: float, body: BodyModel | None = None) -> np.ndarray:
+    """Where the shoulder joints sit from the neck, in pixels, as :func:`pose_joints`'s
+    ``shoulder`` takes it.
+
+    Parameters
+    ----------
+    height_px : float
+        Body height in pixels.
+    body : BodyModel, optional
+        Proportions (default: the seed's, whose shoulders are the torso's top corners).
+
+    Returns
+    -------
+    numpy.ndarray, shape (2,)
+        The lateral offset at spread 1 and the drop below the neck along the torso
+        (:attr:`vidcap.body.BodyModel.shoulder_drop`: a real shoulder joint's centre lies
+        below the top of the shoulder's outline).
+    """
+    body = BodyModel() if body is None else body
+    k = height_px / body.height
+    return np.array([body.shoulder_half_width * k, body.shoulder_drop * k])
+
+
+def _shoulder_pair(shoulder) -> np.ndarray:
+    """``shoulder`` as (lateral, drop) float64: a number is a lateral offset, no drop."""
+    pair = np.zeros(2)
+    pair[:np.size(shoulder)] = np.ravel(np.asarray(shoulder, dtype=float))[:2]
+    return pair
+
+
 def _body_metres(body: BodyModel):
     """(height, lengths, radii, shoulder, hip) of ``body`` in metres."""
     return (body.height, body.segment_lengths(), body.segment_radii(),
@@ -132,8 +162,11 @@ def pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip) ->
         Lateral spread of shoulders and hips, 0 (side view) to 1 (front view).
     lengths : array_like, shape (10,)
         Segment lengths in pixels.
-    shoulder, hip : float
-        Lateral offsets of shoulders and hips in pixels at spread 1.
+    shoulder : float or array_like, shape (2,)
+        Lateral offset of the shoulders in pixels at spread 1, or that and their drop
+        below the neck along the torso (:func:`model_shoulder`).
+    hip : float
+        Lateral offset of the hips in pixels at spread 1.
 
     Returns
     -------
@@ -149,11 +182,15 @@ def pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip) ->
     # Image-left perpendicular of the torso axis: the torso points up (a ~ 90 deg), its
     # left in the image is the direction rotated +90 deg (counter-clockwise, y up).
     left = direction(angles[..., _SEG["torso"]] + np.pi / 2) * spread[..., None]
-    lat_s, lat_h = shoulder * left, hip * left
+    lateral, drop = _shoulder_pair(shoulder)
+    lat_s, lat_h = lateral * left, hip * left
     # every joint = its parent + one offset, placed level by level down the tree
     offs = np.empty((*shape, 15, 2))
     offs[..., _BONE_JOINTS, :] = vec[..., _BONE_SEGS, :]
     offs[..., _LATERAL, :] = np.stack([lat_s, -lat_s, lat_h, -lat_h], axis=-2)
+    if drop:  # both shoulders down the torso's axis from the neck
+        down = drop * direction(angles[..., _SEG["torso"]])
+        offs[..., _LATERAL[:2], :] -= down[..., None, :]
     j = np.empty((*shape, 15, 2))
     j[..., JOINT_INDEX["pelvis"], :] = root
     for child, parent in _LEVELS:
@@ -213,7 +250,8 @@ def pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, h
     angles, foreshortening : numpy.ndarray, shape (B, 10)
     spread : numpy.ndarray, shape (B,)
     lengths : numpy.ndarray, shape (10,)
-    shoulder, hip : float
+    shoulder : float or array_like, shape (2,)
+    hip : float
         As in :func:`pose_joints`.
 
     Returns
@@ -232,7 +270,8 @@ def pose_joints_batch(root, angles, foreshortening, spread, lengths, shoulder, h
     out = np.empty((angles.shape[0], 15, 2))
     kernels.joints(_carray(root, np.float64), c, s, np.cos(left), np.sin(left),
                _carray(foreshortening, np.float64), _carray(spread, np.float64),
-               _carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES, out)
+               _carray(lengths, np.float64), _shoulder_pair(shoulder), float(hip),
+               *_KERNEL_TABLES, out)
     return out
 
 #: Segments moved when a segment's own parameter changes: itself and its descendants.
@@ -745,7 +784,7 @@ def pose_scorer(lengths, shoulder, hip, segments, radii, cum, a, m_base, i_base,
                                    table=np.zeros(len(root), np.int64), caps=caps)
 
         return numpy_path
-    head = (_carray(lengths, np.float64), float(shoulder), float(hip), *_KERNEL_TABLES,
+    head = (_carray(lengths, np.float64), _shoulder_pair(shoulder), float(hip), *_KERNEL_TABLES,
             _PROX[segments].astype(np.int64), _DIST[segments].astype(np.int64),
             _carray(radii, np.float64), cum, y0, y1, bool(caps), int(a), m_base, i_base)
     kernel = kernels.pose_terms
@@ -949,6 +988,7 @@ __all__ = [
     "limb_scorer",
     "limb_similarity",
     "model_dimensions",
+    "model_shoulder",
     "normalise_mask",
     "pose_joints",
     "pose_joints_batch",
