@@ -366,6 +366,11 @@ if [ -x "$MP_PY" ] && [ -z "${NO_MEDIAPIPE:-}" ]; then
             "$MP_PY" "$REF" "$MASKS/$v.mp4" "$MASKS/$v.mediapipe.npz" --masks
         fi
     done
+    # ido_walk's 2D and world landmarks for lift_accuracy.py --solve --real-only
+    IDO="$(cd "$(dirname "$0")/.." && pwd)/../shared/data/video/ido_walk.avi"
+    if [ -f "$IDO" ] && [ ! -f "$DATA/../lift/ido_walk_mediapipe.npz" ]; then
+        "$MP_PY" "$REF" "$IDO" "$DATA/../lift/ido_walk_mediapipe.npz"
+    fi
     for i in 1 2 3 4; do
         if [ -f "$LIFT/cam0$i.mp4" ] && [ ! -f "$LIFT/cam0$i.mediapipe.npz" ]; then
             "$MP_PY" "$REF" "$LIFT/cam0$i.mp4" "$LIFT/cam0$i.mediapipe.npz"

@@ -103,8 +103,7 @@ def model_dimensions(height_px: float, body: BodyModel | None = None):
 
 
 def model_shoulder(height_px: float, body: BodyModel | None = None) -> np.ndarray:
-    """Where the shoulder joints sit from the neck, in pixels, as :func:`pose_joints`'s
-    ``shoulder`` takes it.
+    """The shoulder joints from the neck, pixels, as :func:`pose_joints` takes them.
 
     Parameters
     ----------
@@ -116,9 +115,8 @@ def model_shoulder(height_px: float, body: BodyModel | None = None) -> np.ndarra
     Returns
     -------
     numpy.ndarray, shape (2,)
-        The lateral offset at spread 1 and the drop below the neck along the torso
-        (:attr:`vidcap.body.BodyModel.shoulder_drop`: a real shoulder joint's centre lies
-        below the top of the shoulder's outline).
+        The lateral offset at spread 1 and the drop down the torso's axis
+        (:attr:`vidcap.body.BodyModel.shoulder_drop`).
     """
     body = BodyModel() if body is None else body
     k = height_px / body.height
