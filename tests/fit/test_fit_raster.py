@@ -196,8 +196,8 @@ def test_pose_joints_batch_equals_pose_joints_bit_for_bit(monkeypatch):
     # joints sit below them
     for body in (None, BodyModel(shoulder_drop=0.04)):
         monkeypatch.setattr(raster, "_kernels", kernels)
-        lengths, _, _, hip = raster.model_dimensions(83.7, body)
-        sh = raster.model_shoulder(83.7, body)
+        lengths, _, lateral, hip = raster.model_dimensions(83.7, body)
+        sh = raster.model_shoulder(lateral, 83.7, body)
         want = raster.pose_joints(root, angles, fore, spread, lengths, sh, hip)
         got = raster.pose_joints_batch(root, angles, fore, spread, lengths, sh, hip)
         assert got.shape == (b, 15, 2)
@@ -224,7 +224,7 @@ def test_shoulder_drop_moves_the_shoulders_down_the_torso():
 
     body, h = BodyModel(height=1.75, shoulder_drop=0.0385), 80.0
     lengths, _, lateral, hip = raster.model_dimensions(h, body)
-    pair = raster.model_shoulder(h, body)
+    pair = raster.model_shoulder(lateral, h, body)
     assert pair[0] == pytest.approx(lateral) and pair[1] == pytest.approx(0.0385 / 1.75 * h)
     rng = np.random.default_rng(5)
     angles = rng.uniform(-3, 3, (20, 10))

@@ -84,8 +84,8 @@ class _MaskEngine:
         self.H = (height - self.foot) / (1.0 + ends) if caps else height - self.foot
         # a silhouette taller than the body (raised arms): its top need not be the head
         self.taller = norm.height > 1.02 * (self.H + self.foot)
-        self.L, self.R, _, self.hip = model_dimensions(self.H, body)
-        self.shoulder = model_shoulder(self.H, body)  # (lateral, drop)
+        self.L, self.R, lateral, self.hip = model_dimensions(self.H, body)
+        self.shoulder = model_shoulder(lateral, self.H, body)  # (lateral, drop)
         self.top = norm.top + (self.R[S["head"]] if caps else 0.0)
         self.caps = caps
         self.sil_rows, self.sil_cum = norm.count_tables  # shared by every fit of this mask

@@ -139,8 +139,8 @@ def _profiles(mask, joints, angles, fore_grid, grid, spread, model_height, body)
     profile height ``h_px``."""
     norm = normalise_mask(mask, height=PROFILE_HEIGHT, body_height=float(model_height))
     h_px = norm.body_height
-    L, R, _, hip = model_dimensions(h_px, body)
-    shoulder = model_shoulder(h_px, body)
+    L, R, lateral, hip = model_dimensions(h_px, body)
+    shoulder = model_shoulder(lateral, h_px, body)
     root = norm.to_normalised(joints[JOINT_INDEX["pelvis"]])
     n_p, n_g = fore_grid.shape[:2]
     f = fore_grid.reshape(-1, 10)

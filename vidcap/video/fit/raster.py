@@ -102,11 +102,13 @@ def model_dimensions(height_px: float, body: BodyModel | None = None):
     return lengths * k, radii * k, shoulder * k, hip * k
 
 
-def model_shoulder(height_px: float, body: BodyModel | None = None) -> np.ndarray:
+def model_shoulder(lateral: float, height_px: float, body: BodyModel | None = None):
     """The shoulder joints from the neck, pixels, as :func:`pose_joints` takes them.
 
     Parameters
     ----------
+    lateral : float
+        Their lateral offset at spread 1, pixels (:func:`model_dimensions`' ``shoulder``).
     height_px : float
         Body height in pixels.
     body : BodyModel, optional
@@ -115,12 +117,11 @@ def model_shoulder(height_px: float, body: BodyModel | None = None) -> np.ndarra
     Returns
     -------
     numpy.ndarray, shape (2,)
-        The lateral offset at spread 1 and the drop down the torso's axis
+        ``lateral`` and the drop down the torso's axis
         (:attr:`vidcap.body.BodyModel.shoulder_drop`).
     """
-    body = BodyModel() if body is None else body
-    k = height_px / body.height
-    return np.array([body.shoulder_half_width * k, body.shoulder_drop * k])
+    drop = 0.0 if body is None else body.shoulder_drop * (height_px / body.height)
+    return np.array([lateral, drop])
 
 
 def _shoulder_pair(shoulder) -> np.ndarray:
@@ -160,11 +161,9 @@ def pose_joints(root, angles, foreshortening, spread, lengths, shoulder, hip) ->
         Lateral spread of shoulders and hips, 0 (side view) to 1 (front view).
     lengths : array_like, shape (10,)
         Segment lengths in pixels.
-    shoulder : float or array_like, shape (2,)
-        Lateral offset of the shoulders in pixels at spread 1, or that and their drop
-        below the neck along the torso (:func:`model_shoulder`).
-    hip : float
-        Lateral offset of the hips in pixels at spread 1.
+    shoulder, hip : float
+        Lateral offsets of shoulders and hips in pixels at spread 1; ``shoulder`` may be
+        (lateral, drop below the neck down the torso's axis) (:func:`model_shoulder`).
 
     Returns
     -------
