@@ -158,3 +158,80 @@ def test_a_still_person_whose_best_box_swaps_for_a_part_is_absorbed(monkeypatch)
     out, reason = find_absorbed(model, frames, np.ones((8, 3)))
     assert reason == ABSORBED and set(cuts) == {whole}
     assert out.still_person[15:85, 62:78].all()
+
+
+def _moving_cuts(monkeypatch, frames, shift_legs: bool):
+    """A cut per sample i: a torso swinging 6 px a sample over legs that stay (or
+    that swing with it, ``shift_legs``); the detector's box the same throughout."""
+    import vidcap.video.personbox as pb
+
+    def cut(frame, box, *_, **__):
+        i = next(k for k in range(len(frames)) if frames[k].ctypes.data == frame.ctypes.data)
+        dx = 6 * (i % 4)
+        out = np.zeros(frame.shape[:2], bool)
+        out[12:50, 52 + dx:76 + dx] = True  # head and torso
+        lx = dx if shift_legs else 0
+        out[50:90, 58 + lx:72 + lx] = True  # the legs
+        return out
+
+    monkeypatch.setattr(pb, "cut_in_box", cut)
+
+
+def test_legs_held_under_a_swinging_torso_are_absorbed(monkeypatch):
+    import vidcap.video.personbox as pb
+    from vidcap.video.personbox import ABSORBED, CUTS_MOVE, find_absorbed
+
+    monkeypatch.setattr(pb, "IN_PLACE", False)  # the default: such cuts move
+    frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
+    _moving_cuts(monkeypatch, frames, shift_legs=False)
+    assert find_absorbed(model, frames, np.ones((8, 3)))[1] == CUTS_MOVE
+    monkeypatch.setattr(pb, "IN_PLACE", True)
+    frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
+    _moving_cuts(monkeypatch, frames, shift_legs=False)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == ABSORBED
+    assert out.still_person[52:88, 59:71].all()  # the legs, in every cut
+    assert not out.still_person[:, :50].any() and not out.still_person[:, 95:].any()
+
+
+def test_a_person_rocking_on_their_legs_is_left_to_the_plate(monkeypatch):
+    import vidcap.video.personbox as pb
+    from vidcap.video.personbox import CUTS_MOVE, find_absorbed
+
+    monkeypatch.setattr(pb, "IN_PLACE", True)
+    frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
+    _moving_cuts(monkeypatch, frames, shift_legs=True)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == CUTS_MOVE and out is model
+
+
+def test_a_part_found_inside_the_first_box_is_the_whole_person_again(monkeypatch):
+    from vidcap.video.personbox import ABSORBED, find_absorbed
+
+    # The whole person in the first sample, then only a head and a raised arm
+    # (a dancer whose legs the plate holds): no box moved.
+    whole, head = (40, 10, 100, 90), (55, 10, 85, 45)
+    frames, model, cuts = _absorbed_scene(monkeypatch, [whole] + [head] * 7)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == ABSORBED and set(cuts) == {whole}
+
+
+def test_a_first_find_of_part_of_a_visible_blob_does_not_decide(monkeypatch):
+    import vidcap.video.platepass as pp
+    from vidcap.video.personbox import ABSORBED, find_absorbed
+
+    # Sample 0: the first-pass silhouette shows a tall blob and the detector boxes
+    # only its top (covered: the person would count as visible); every later sample
+    # shows nothing where the whole person is boxed (absorbed).
+    whole, head = (40, 10, 100, 90), (55, 10, 85, 40)
+    frames, model, cuts = _absorbed_scene(monkeypatch, [head] + [whole] * 7)
+    blob = np.zeros(frames.shape[1:3], np.uint8)
+    blob[5:92, 45:95] = 1
+
+    def person_masks(_model, fr, _gains):
+        first = fr[:1].ctypes.data == frames[0].ctypes.data
+        return np.stack([blob if first and len(fr) == 1 else np.zeros_like(blob)] * len(fr))
+
+    monkeypatch.setattr(pp, "_person_masks", person_masks)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == ABSORBED and cuts[0] == head and set(cuts[1:]) == {whole}
