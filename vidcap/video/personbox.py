@@ -72,8 +72,9 @@ CUT_SIZE = 320
 #: (cdnet_office_stand, tuning: 0.94, 0.99, 0.98, 0.89, 0.17 where he steps aside,
 #: 0.86, 0.65; median 0.89).
 STILL_IOU = 0.8
-#: The first three cuts overlapping less than this (IoU, each with the next) show a
-#: person who moves about: nothing is cut further. Between it and :data:`STILL_IOU`
+#: With :data:`IN_PLACE`, the first three cuts overlapping less than this (IoU, each
+#: with the next; else :data:`STILL_IOU`) show a person who moves about: nothing is cut
+#: further. Between it and :data:`STILL_IOU`
 #: the cuts of a person who bends or waves on legs that never move (02_07 4-7 s side,
 #: a dancer's legs in the plate: 0.38, 0.42, then 0.63-0.82) go on to
 #: :func:`_moves_in_place`.
@@ -357,7 +358,7 @@ MIN_PART = 0.5
 def _part_of_blob(cut: np.ndarray, seen: np.ndarray) -> bool:
     """Whether ``cut`` (H, W) bool is under :data:`MIN_PART` of the blobs of ``seen``
     (H, W) bool (8-connected) it touches."""
-    n, labels = cv2.connectedComponents(seen.view(np.uint8), connectivity=8)
+    _, labels = cv2.connectedComponents(seen.view(np.uint8), connectivity=8)
     touched = np.unique(labels[cut & seen])
     touched = touched[touched > 0]
     if not len(touched):
@@ -375,7 +376,8 @@ def _cut_pending(frames, pending, cuts, where) -> bool:
             continue
         cuts.append(cut)
         where.append(t)
-        if len(cuts) == 3 and max(_iou(cuts[0], cuts[1]), _iou(cuts[1], cuts[2])) < MOVE_IOU:
+        least = MOVE_IOU if IN_PLACE else STILL_IOU  # (without the in-place path, why cut on)
+        if len(cuts) == 3 and max(_iou(cuts[0], cuts[1]), _iou(cuts[1], cuts[2])) < least:
             return True
     return False
 
