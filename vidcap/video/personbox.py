@@ -443,18 +443,22 @@ def _whole_of(box, first):
     """``first`` when ``box`` lies inside it (:data:`NESTED` of its area) and is
     under :data:`MIN_PART` of its size: the detector found a part of the person it
     found whole in the first box (a head and a raised arm), else ``box``."""
-    iw = max(0, min(box[2], first[2]) - max(box[0], first[0]))
-    ih = max(0, min(box[3], first[3]) - max(box[1], first[1]))
     area = (box[2] - box[0]) * (box[3] - box[1])
     whole = (first[2] - first[0]) * (first[3] - first[1])
-    return first if iw * ih >= NESTED * max(area, 1) and area < MIN_PART * whole else box
+    inside = _box_inter(box, first) >= NESTED * max(area, 1)
+    return first if inside and area < MIN_PART * whole else box
+
+
+def _box_inter(a, b) -> int:
+    """Area of the overlap of two ``x0, y0, x1, y1`` boxes, pixels."""
+    iw = max(0, min(a[2], b[2]) - max(a[0], b[0]))
+    ih = max(0, min(a[3], b[3]) - max(a[1], b[1]))
+    return iw * ih
 
 
 def _box_iou(a, b) -> float:
     """IoU of two ``x0, y0, x1, y1`` boxes."""
-    iw = max(0, min(a[2], b[2]) - max(a[0], b[0]))
-    ih = max(0, min(a[3], b[3]) - max(a[1], b[1]))
-    inter = iw * ih
+    inter = _box_inter(a, b)
     union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
     return float(inter / max(union, 1))
 
