@@ -285,7 +285,8 @@ RENDERS = [
     # 2D fit's low-pose set (pose2d_accuracy.py --low: 02_06, 02_09, 02_10, 05_17)
     # tuned that stretch on; views and plates in turn. Measured once on main a70dab6
     # before anything was chosen on them.
-    ("05_18 5.5-8.5 s 3/4 / PETS plate", ("05_18", 331, 511), 45, "vtest", "validation"),
+    # 05_18 is tuning since session 38 (heldpose.MAX_SHOWN was chosen on it).
+    ("05_18 5.5-8.5 s 3/4 / PETS plate", ("05_18", 331, 511), 45, "vtest", "tuning"),
     ("05_12 3.5-6.5 s front / Weizmann plate", ("05_12", 211, 391), 0, "ido", "validation"),
     ("01_08 15-18 s side left / room plate", ("01_08", 901, 1081), 270, "room",
      "validation"),
@@ -336,6 +337,14 @@ RENDERS = [
     ("06_11 6-9 s front / room plate", ("06_11", 361, 541), 0, "room", "validation"),
     ("05_07 6-9 s 3/4 / Weizmann plate", ("05_07", 361, 541), 45, "ido", "validation"),
     ("01_14 14-17 s 3/4 back / PETS plate", ("01_14", 841, 1021), 135, "vtest", "validation"),
+    # Validation renders added in session 38, when 05_18 5.5-8.5 s 3/4 became tuning (the
+    # held-pose gate's one larger sample, heldpose.MAX_SHOWN, was chosen on it): per
+    # trial, the 3 s overlapping no other row whose last 2.5 s move least (the joints'
+    # median mean speed at 30 fps; a person who settles and holds), the two stillest of
+    # all trials (02_06: 0.18 m/s, 01_08: 0.30), picked by that rule alone before either
+    # was rendered, measured on main before the change.
+    ("02_06 15.5-18.5 s side / room plate", ("02_06", 931, 1111), 90, "room", "validation"),
+    ("01_08 5.5-8.5 s 3/4 / Weizmann plate", ("01_08", 331, 511), 45, "ido", "validation"),
     # Tuning renders added by the issue-26 held-pose helper (wt-held): a body that holds
     # one pose of a tuning trial for the whole clip (:func:`hold_motion`: a few source
     # frames swayed through, or frozen), the case of the two validation dancers above

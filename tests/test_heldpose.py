@@ -26,7 +26,19 @@ def test_a_person_who_shows_in_the_samples_is_not_nearly_empty():
     frames = np.repeat(plate[None], 8, axis=0)
     frames[:, 20:90, 50:70] = (20, 20, 200)  # 11 % of the frame, unlike the plate
     assert not nearly_empty(model, frames, np.ones((8, 3)))
-    frames[:7] = plate  # shown in one sample of eight: still not a held pose
+    frames[2:] = plate  # shown in two samples of eight: someone passing, not a held pose
+    assert not nearly_empty(model, frames, np.ones((8, 3)))
+
+
+def test_one_sample_of_a_person_settling_into_a_pose_keeps_the_gate_open():
+    from vidcap.video.heldpose import MAX_SHOWN, nearly_empty
+
+    plate, model = _scene()
+    frames = np.repeat(plate[None], 8, axis=0)
+    frames[:MAX_SHOWN, 20:90, 50:70] = (20, 20, 200)  # the first sample: still moving
+    frames[MAX_SHOWN:, 60:64, 50:70] = (20, 20, 200)  # then a hand that sways (0.7 %)
+    assert nearly_empty(model, frames, np.ones((8, 3)))
+    frames[MAX_SHOWN, 20:90, 50:70] = (20, 20, 200)  # one more sample shows the body
     assert not nearly_empty(model, frames, np.ones((8, 3)))
 
 

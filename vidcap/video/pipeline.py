@@ -96,8 +96,9 @@ _SILHOUETTE_VERSION = 5
 #: when the samples' first-pass silhouettes are nearly empty, ``heldpose.HELD_POSE``; 9:
 #: a footprint hole the moving body does not touch in every sample is scene,
 #: ``regionvote.MIN_ATTACHED``; 10: a lamp a person crosses still found self-lit,
-#: ``stillparts.self_lit``).
-_PLATE_VERSION = 10
+#: ``stillparts.self_lit``; 11: the held-pose gate lets one sample show more,
+#: ``heldpose.MAX_SHOWN``).
+_PLATE_VERSION = 11
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
 #: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
