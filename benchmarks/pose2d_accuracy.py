@@ -42,7 +42,9 @@ the fit as it comes and relabelled by the solve over time
 writes every clip's truth and fitted joints for diagnostics, ``--predict`` fits with
 ``fit_sequence(predict=True)``. ``--hidden solve`` adds both fits with the joints the image
 cannot show (the shoulders, hips, arms inside the torso's outline) taken from the 3D clip solve
-(:mod:`vidcap.video.hidden`, ``vidcap pose2d --hidden solve``).
+(:mod:`vidcap.video.hidden`, ``vidcap pose2d --hidden solve``). ``--cmu`` adds 76 clips
+of 38 CMU trials nobody tuned the fit on (:mod:`held_out_cmu`, ``$VIDCAP_DATA``: playground,
+chores, dance, basketball), with their means apart from the 40 above.
 
 ``--torso`` (issue 27 item 4) fits the ``--held-out`` clips once each, tracked, outline
 only (that table's "cues outline" column) and prints each clip's torso angle error
@@ -84,6 +86,7 @@ pixels flipped (:mod:`vidcap.video.fit.ensemble`, ``vidcap pose2d --ensemble N``
 Usage: ``PYTHONPATH=. python benchmarks/pose2d_accuracy.py [--frames N] [--height PX] [--caps]
 [--no-refine] [--motions 131_01,07_07] [--yaws 90,45,0] [--jobs N] [--poses] [--held-out]
 [--proportions] [--torso] [--low] [--views side,three-quarter,front] [--save OUT.npz] [--predict]
+[--cmu]
 [--hidden fit|solve] [--perturb [--perturb-renders tuning|validation|none]] [--ensemble N]``
 """
 
@@ -312,7 +315,7 @@ def clip_matched_errors(pred: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS,
              save: str | None = None, predict: bool = False, hidden: str = "fit",
-             rehang: bool = False) -> int:
+             rehang: bool = False, cmu: bool = False) -> int:
     """The ``--held-out`` table: tracked PCK@0.05 per clip and the mean, with the
     frame's cues (``cues``) and with the outline only (same run), and the means and
     median errors per view, so a change to the search is judged on clips it was not
@@ -328,7 +331,12 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
     columns, both fits with the joints the image cannot show taken from the 3D clip
     solve (:func:`vidcap.video.hidden.solve_hidden`, ``--hidden solve``), same run;
     ``rehang``: that solve with ``rehang=True`` (forearms re-hung, legs named by the
-    render's limb order)."""
+    render's limb order); ``cmu``: also the CMU trials of :mod:`held_out_cmu` (one
+    stretch each, two views), their means printed apart and with the others."""
+    import itertools
+
+    from held_out_cmu import cmu_motions
+
     from vidcap.synth import render_clip
     fit_sequence = fitter()
     from vidcap.video.hidden import solve_hidden
@@ -343,11 +351,15 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
           + f" {'clip':>6} {'clip relab':>10} {'flips':>5} {'relabelled':>10} {'median':>7}"
           + ("".join(f" {v[5:] + ' +solve':>13}" for v, _ in variants)
              if hidden == "solve" else ""))
-    table, flips, seen, medians, saved = [], [], [], [], {}
-    for name, motion, yaws in held_out_motions(frames):
+    table, flips, seen, medians, saved, groups = [], [], [], [], {}, []
+    clips = itertools.chain(((n, m, y, "five motions") for n, m, y in held_out_motions(frames)),
+                            ((n, m, y, "CMU trials") for n, m, y in
+                             (cmu_motions(frames) if cmu else ())))
+    for name, motion, yaws, group in clips:
         for yaw in yaws:
             if view_of(yaw) not in views:
                 continue
+            groups.append(group)
             video, truth = render_clip(motion, yaw_deg=yaw, size=(640, 480), noise=0.0,
                                        rng=np.random.default_rng(0))
             tj = truth["joints2d"]
@@ -399,6 +411,17 @@ def held_out(frames: int = 60, cues: str = "all", views: tuple[str, ...] = VIEWS
                   + f" {m[2]:6.2%} {m[3]:10.2%} {'':5} {'':10} {np.median(medians[here]):7.4f}"
                   + "".join(f" {v:13.2%}" for v in m[4:]) + f"   ({here.sum()} clips)")
     print(f"median error / height over clips (cues {cues}): {np.median(medians):.4f}")
+    groups = np.asarray(groups)
+    if len(set(groups)) > 1:
+        for group in dict.fromkeys(groups):
+            for view in (None, *VIEWS):
+                here = (groups == group) & ((seen == view) if view else True)
+                if here.any():
+                    m = table[here].mean(0)
+                    print(f"{'mean ' + group + (', ' + view if view else ''):40} "
+                          + " ".join(f"{v:7.2%}" for v in m[:2]) + f" median "
+                          f"{np.median(medians[here]):7.4f}  +solve "
+                          + " ".join(f"{v:7.2%}" for v in m[4:]) + f"   ({here.sum()} clips)")
     if save:
         np.savez_compressed(save, **saved)
     return 0
@@ -832,6 +855,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cues", choices=("all", "outline"), default="all",
                     help="the frame's cues inside the outline (all, the default) or the "
                          "silhouette only (outline)")
+    ap.add_argument("--cmu", action="store_true",
+                    help="--held-out: also one stretch of every CMU trial in $VIDCAP_DATA "
+                         "nobody tuned the fit on (benchmarks/held_out_cmu.py), two views each")
     ap.add_argument("--held-out", action="store_true",
                     help="tracked PCK on clips the search was not tuned on, with the "
                          "temporal options off in turn")
@@ -896,7 +922,7 @@ def main(argv=None) -> int:
         return unusual_poses()
     if args.held_out:
         return held_out(args.frames, args.cues, tuple(args.views.split(",")), args.save,
-                        args.predict, args.hidden, args.rehang)
+                        args.predict, args.hidden, args.rehang, cmu=args.cmu)
 
     from vidcap.synth import render_clip
 
