@@ -1,6 +1,6 @@
 """More held-out motions for the 2D fit (issue 27): CMU trials nobody tuned the fit on.
 
-``pose2d_accuracy.py --held-out`` fits 40 clips cut from five motions (CMU 131_01 and
+``pose2d_accuracy.py --held-out`` fitted 40 clips cut from five motions (CMU 131_01 and
 07_07, the built-in walk, jacks and arms). Issue 27 asks for motions nobody tuned on; the
 CMU iClone trials of ``$VIDCAP_DATA/mocap/cmu_iclone_humanik`` (subjects 1, 2, 3, 5 and 6:
 playground, everyday chores, walks on uneven ground, dance, basketball; benchmarks/DATA.md)
