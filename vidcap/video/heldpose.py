@@ -27,10 +27,10 @@ __all__ = ["absorbed_or_held", "nearly_empty"]
 #: Look for a person who held one pose (off: only :mod:`vidcap.video.personbox`'s gate).
 HELD_POSE = True
 #: The samples' first-pass silhouettes cover less than this share of the frame in
-#: every sample looked at. The largest of them on the held poses rendered over the
-#: real plates (``silhouettes_real.py``'s "held" rows, tuning): 0.0-1.5 %; on every
-#: other tuning row 3.3 % or more (05_04 0-3 s front, 1.3 %, is personbox's own: it
-#: leaves 0.5 % never seen).
+#: every sample looked at but :data:`MAX_SHOWN`. The largest of them on the held
+#: poses rendered over the real plates (``silhouettes_real.py``'s "held" rows,
+#: tuning): 0.0-1.5 %; on every other tuning row 3.3 % or more (05_04 0-3 s front,
+#: 1.3 %, is personbox's own: it leaves 0.5 % never seen).
 MAX_AREA = 0.02
 #: Samples allowed a larger silhouette than :data:`MAX_AREA`: a person settling into
 #: the pose they then hold shows in the first sample (05_18 5.5-8.5 s 3/4: 3.0 % in
