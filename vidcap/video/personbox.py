@@ -304,9 +304,7 @@ def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     if len(cuts) < 2:
         return model, TOO_FEW
     cuts = np.stack(cuts)
-    inter = (cuts[1:] & cuts[:-1]).sum(axis=(1, 2))
-    union = np.maximum((cuts[1:] | cuts[:-1]).sum(axis=(1, 2)), 1)
-    if np.median(inter / union) >= STILL_IOU:
+    if np.median(_consecutive_ious(cuts)) >= STILL_IOU:
         return _add_still(model, frames, gains, cuts, where)
     if IN_PLACE and _moves_in_place(model, frames, gains, cuts, where, max_cover):
         return _add_still(model, frames, gains, cuts, where)
@@ -328,8 +326,7 @@ def _moves_in_place(model, frames, gains, cuts, where, max_cover) -> bool:
         return False
     rows = np.nonzero(cuts.any(axis=(0, 2)))[0]
     legs = cuts[:, (rows[0] + rows[-1]) // 2:]  # the lower half of what was cut
-    overlaps = [_iou(a, b) for a, b in zip(legs[1:], legs[:-1], strict=True)]
-    if np.median(overlaps) < STILL_IOU:
+    if np.median(_consecutive_ious(legs)) < STILL_IOU:
         return False  # the legs move too: a person rocking, stepping or turning
     core = cuts.mean(axis=0) >= MIN_AGREE  # what _add_still would take
     if not core.any():
@@ -471,6 +468,12 @@ def _boxes_move(boxes) -> bool:
 
 def _iou(a: np.ndarray, b: np.ndarray) -> float:
     return float((a & b).sum() / max(1, (a | b).sum()))
+
+
+def _consecutive_ious(masks: np.ndarray) -> np.ndarray:
+    """IoU of each of ``masks`` (K, H, W) bool with the next, (K - 1,)."""
+    inter = (masks[1:] & masks[:-1]).sum(axis=(1, 2))
+    return inter / np.maximum((masks[1:] | masks[:-1]).sum(axis=(1, 2)), 1)
 
 
 #: Share of the cut samples (and at least 2) a pixel the person covered must be seen
