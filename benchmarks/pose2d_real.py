@@ -44,7 +44,9 @@ outline, all, mp-masks, human, mp-human, all-human (without ``--no-all``: all si
 mp-all-human (``mp-human`` with ``--cues all``), and
 ``human-kK`` (the pipeline's silhouettes fitted again, serially, with the human body as a
 camera of perspective K draws it: :mod:`vidcap.video.fit.perspective`; ``human-k0`` the same
-fit unwarped), ``human-erode`` / ``human-dilate`` (the ``human`` row's silhouettes eroded
+fit unwarped), ``human-auto`` (``vidcap convert --camera auto``: the perspective read from
+the plate's verticals and the person, :mod:`vidcap.video.vanishing`; ``human-cam`` with
+a calibrated camera's), ``human-erode`` / ``human-dilate`` (the ``human`` row's silhouettes eroded
 or dilated by a 3x3 cross, as an ensemble's members change them, and fitted again),
 ``human-eN`` / ``outline-eN`` (that row's silhouettes fitted again
 as the pipeline fits them, each chunk as :func:`vidcap.video.fit.ensemble.fit_ensemble` of

@@ -169,6 +169,9 @@ def _joints(clip: RealClip, row: str):
         return _fit_with_perspective(clip, float(base.removeprefix("human-k")))
     if base in ("human-cam", "mp-human-cam"):
         return _with_known_camera(clip, base, hidden)
+    if base == "human-auto":  # vidcap convert --camera auto
+        return pipeline_result(clip.video, "outline", proportions="human", hidden=hidden,
+                               camera="auto").image_joints2d
     human = base in ("human", "all-human", "mp-human", "mp-all-human")
     cues = "all" if base in ("all", "all-human", "mp-all-human") else "outline"
     if not base.startswith("mp-"):

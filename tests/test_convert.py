@@ -356,3 +356,44 @@ def test_convert_with_a_camera_above(tmp_path):
             for c, r in (("plain", plain), ("high", high))}
     assert drop["high"] > 1.1 * drop["plain"]
     assert np.isfinite(high.motion.positions()).all()
+
+
+def test_convert_reads_the_camera_from_the_scene(tmp_path):
+    """``camera='auto'``: a walk rendered over a room whose verticals meet far below the
+    frame (a camera looking down) is fitted with the body warped, as a given camera's is
+    (the neck lower under a larger head), and the log says what the scene gave; a plain
+    backdrop gives no perspective (the same fit as without a camera)."""
+    import cv2
+
+    from vidcap.body import JOINT_INDEX
+    from vidcap.synth import make_motion, synth_clip
+    from vidcap.video.pipeline import convert
+
+    rng = np.random.default_rng(0)
+    room = np.clip(rng.normal(190, 4, (240, 320, 3)), 0, 255).astype(np.uint8)
+    for x in np.arange(10, 320, 30):  # door frames, shelves: verticals toward (160, 1200)
+        d = np.array([160.0 - x, 1200.0 - 5.0])
+        end = np.array([x, 5.0]) + d / np.linalg.norm(d) * 110
+        cv2.line(room, (int(x), 5), tuple(np.int32(end)), (70, 70, 70), 2)
+    video = tmp_path / "walk.mp4"
+    synth_clip(video, tmp_path / "truth.npz", make_motion("walk", n_frames=40), size=(320, 240),
+               rng=np.random.default_rng(0), show_progress=False, background=room)
+    logs = []
+    runs = {cam: convert(video, tmp_path / f"{cam}.bvh", cache_dir=None, progress=False, jobs=1,
+                         camera=cam, log=logs.append if cam == "auto" else None)
+            for cam in (None, "auto")}
+    said = [m for m in logs if m.startswith("camera perspective")]
+    assert len(said) == 1 and "k = 0." in said[0], logs
+    neck, top = JOINT_INDEX["neck"], JOINT_INDEX["head_top"]
+    drop = {c: np.median(r.image_joints2d[:, neck, 1] - r.image_joints2d[:, top, 1])
+            for c, r in runs.items()}
+    assert drop["auto"] > 1.05 * drop[None]
+    plain = tmp_path / "plain.mp4"
+    synth_clip(plain, tmp_path / "truth2.npz", make_motion("walk", n_frames=40), size=(320, 240),
+               rng=np.random.default_rng(0), show_progress=False)
+    logs.clear()
+    a = convert(plain, tmp_path / "a.bvh", cache_dir=None, progress=False, jobs=1,
+                camera="auto", log=logs.append)
+    b = convert(plain, tmp_path / "b.bvh", cache_dir=None, progress=False, jobs=1)
+    assert any(m.startswith("camera perspective") for m in logs)
+    np.testing.assert_array_equal(a.image_joints2d, b.image_joints2d)

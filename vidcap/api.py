@@ -53,13 +53,17 @@ def check_convert_options(*, height: float, jobs: int | None, view: str = "auto"
                          + ", ".join(PROPORTION_CHOICES))
 
 
-def check_camera_option(camera, height: float = 1.75) -> tuple[float, ...] | None:
-    """``camera`` (``--camera``'s text ``HEIGHT,DISTANCE[,PITCH]``, or a tuple; None: no
-    camera given) as a tuple of floats that :func:`vidcap.video.pipeline.run` takes;
-    :class:`UsageError` unless it is two or three numbers of a camera that sees a subject
-    ``height`` metres tall (a positive distance, a pitch within ±89 degrees)."""
+def check_camera_option(camera, height: float = 1.75) -> tuple[float, ...] | str | None:
+    """``camera`` (``--camera``'s text ``HEIGHT,DISTANCE[,PITCH]`` or ``auto``, or a tuple;
+    None: no camera given) as :func:`vidcap.video.pipeline.run` takes it: a tuple of
+    floats, or ``'auto'`` (the perspective read from the scene,
+    :mod:`vidcap.video.vanishing`); :class:`UsageError` unless it is ``auto`` or two or
+    three numbers of a camera that sees a subject ``height`` metres tall (a positive
+    distance, a pitch within ±89 degrees)."""
     if camera is None:
         return None
+    if isinstance(camera, str) and camera.strip().lower() == "auto":
+        return "auto"
     from vidcap.video.fit.perspective import camera_perspective
 
     try:
@@ -69,7 +73,7 @@ def check_camera_option(camera, height: float = 1.75) -> tuple[float, ...] | Non
         values = ()
     if len(values) not in (2, 3):
         raise UsageError(f"--camera takes HEIGHT,DISTANCE[,PITCH] (metres, metres, degrees "
-                         f"down), got {camera!r}")
+                         f"down) or auto, got {camera!r}")
     try:
         camera_perspective(values, height)
     except ValueError as exc:
@@ -202,7 +206,9 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         The camera's height above the floor and horizontal distance from the subject,
         metres, and its downward tilt, degrees (``vidcap convert --camera``; default
         aimed at the subject's middle): the 2D fit draws the body as such a camera's
-        perspective images it (:mod:`vidcap.video.fit.perspective`). Default: none.
+        perspective images it (:mod:`vidcap.video.fit.perspective`); ``"auto"``: the
+        perspective read from the scene's vertical lines and the person standing
+        (:mod:`vidcap.video.vanishing`). Default: none.
 
     Returns
     -------

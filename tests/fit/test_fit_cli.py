@@ -277,7 +277,8 @@ def test_pose2d_hidden_solve_reads_the_height_to_the_ankles(tmp_path, monkeypatc
 @pytest.mark.parametrize("command,bad,says", [
     ("pose2d", "2,abc", "HEIGHT,DISTANCE"), ("pose2d", "1,2,3,4", "HEIGHT,DISTANCE"),
     ("convert", "2,0", "positive"), ("convert", "5,1,-60", "not in front"),
-    ("convert", "2,3,95", "89 degrees"), ("pose2d", "1.75,0.01", "too near")])
+    ("convert", "2,3,95", "89 degrees"), ("pose2d", "1.75,0.01", "too near"),
+    ("pose2d", "auto", "vidcap convert"), ("convert", "above", "or auto")])
 def test_bad_camera_is_a_one_line_error(tmp_path, cli, command, bad, says):
     video, masks, _ = _clip(tmp_path)
     out = tmp_path / ("o.npz" if command == "pose2d" else "o.bvh")

@@ -96,13 +96,16 @@ def add_ensemble_argument(parser: argparse.ArgumentParser) -> None:
 def add_camera_argument(parser: argparse.ArgumentParser) -> None:
     """``--camera``, shared by ``vidcap convert`` and ``vidcap pose2d`` (checked by
     :func:`vidcap.api.check_camera_option`: a bad value is a one-line error)."""
-    parser.add_argument("--camera", default=None, metavar="HEIGHT,DISTANCE[,PITCH]",
+    parser.add_argument("--camera", default=None, metavar="HEIGHT,DISTANCE[,PITCH]|auto",
                         help="where the camera stands: its lens's height above the floor "
                         "and its horizontal distance from the subject, metres, and "
                         "optionally its downward tilt in degrees (default: aimed at the "
                         "subject's middle), e.g. 2.5,3. A camera high above the subject (a "
                         "wall or ceiling mount) images the head larger than the feet; "
-                        "the 2D model is drawn so. Default: no perspective")
+                        "the 2D model is drawn so. 'auto' (vidcap convert and batch): read "
+                        "from where the scene's vertical lines meet and the person standing "
+                        "(none when the background shows no such lines). Default: no "
+                        "perspective")
 
 
 def add_hidden_argument(parser: argparse.ArgumentParser, where: str, default: str) -> None:

@@ -116,6 +116,9 @@ def run(args) -> int:
     check_cues_option(cues)
     ensemble = check_ensemble_option(args.ensemble)
     camera = check_camera_option(args.camera)  # the subject taken 1.75 m tall
+    if camera == "auto":
+        raise UsageError("--camera auto reads the background plate that vidcap convert "
+                         "estimates: give the camera as HEIGHT,DISTANCE[,PITCH] here")
     info = probe(args.video)
     frames = None
     if cues == "all" and not args.masks:

@@ -141,7 +141,7 @@ def run(
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS, cues: str = DEFAULT_CUES,
     graph_cut: bool | None = None, still_person: bool | None = None,
     hidden: str = DEFAULT_HIDDEN, ensemble: int = 1,
-    camera: tuple[float, ...] | None = None,
+    camera: tuple[float, ...] | str | None = None,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -190,8 +190,11 @@ def run(
         from the 3D (:func:`vidcap.video.hidden.fill_hidden`; ``lift='solve'``).
     ensemble : int
         Fits joined per joint (:func:`vidcap.video.fit.ensemble.fit_ensemble`, 1 to 5).
-    camera : (height m, distance m[, pitch deg]), optional
-        Where the camera stands (:mod:`vidcap.video.fitbody`; default none).
+    camera : (height m, distance m[, pitch deg]) or 'auto', optional
+        Where the camera stands (:mod:`vidcap.video.fitbody`; default none); ``'auto'``:
+        its perspective read from the scene's vertical lines and the person standing
+        (:func:`vidcap.video.vanishing.scene_perspective`, once the silhouettes exist: the
+        fit then waits for them instead of fitting each chunk as it is extracted).
 
     Returns
     -------
@@ -202,8 +205,9 @@ def run(
     from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
+    auto_camera = camera == "auto"  # k: the camera's perspective (auto: read from the scene)
     ensemble, k = _check_options(view, lift, proportions, cues, hidden, ensemble,  # before
-                                 camera, height)  # any work; k: the camera's perspective
+                                 None if auto_camera else camera, height)  # any work
     video, body, timings = Path(video), BodyModel(height=height), {}
     info, cache = probe(video), StageCache(cache_dir, log=log)
     ann, ann_source = _load_annotations(annotations, video, log, (info.width, info.height))
@@ -216,7 +220,9 @@ def run(
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plan, per_job = _PLAN_JOBS, _CHUNKS_PER_JOB  # the chunks alike for any jobs
     fit_kw = fit_keywords_for(proportions, ensemble, k)
-    pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw, jobs)
+    pool = (None if auto_camera  # the body the fit draws waits for the scene's k
+            else _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw,
+                                    jobs))
     # the pool is closed after the fit; on an error or Ctrl-C its running chunks are
     # nobody's, and it is killed (FitPool.__exit__)
     with pool if pool is not None else nullcontext():
@@ -229,6 +235,10 @@ def run(
                                     progress=progress, regions=_regions(ann, plate),
                                     graph_cut=graph_cut, log=log, n_frames=info.n_frames)
         _report_silhouettes(sil, info.n_frames, log)
+        if auto_camera:
+            from vidcap.video.vanishing import scene_k
+
+            k = scene_k(plate.plate, sil.masks, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
                                           per_job=per_job, streamed=streamed, log=log, workers=jobs,
                                           progress=progress, timings=timings,
