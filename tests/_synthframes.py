@@ -75,3 +75,16 @@ def clip(
         frames[i] = np.clip(img, 0, 255).astype(np.uint8)
         masks[i] = m > 0
     return frames, masks
+
+
+def room_with_verticals(h: int, w: int, vanishing_y: float, rng: np.random.Generator
+                        ) -> np.ndarray:
+    """A light BGR plate (H, W, 3) uint8 with dark lines from its top edge toward the point
+    ``(w / 2, vanishing_y)`` far below the frame: a room's door frames and shelves seen by
+    a camera looking down (:mod:`vidcap.video.vanishing`)."""
+    room = np.clip(rng.normal(190, 4, (h, w, 3)), 0, 255).astype(np.uint8)
+    for x in np.arange(10, w, 30):
+        d = np.array([w / 2 - x, vanishing_y - 5.0])
+        end = np.array([x, 5.0]) + d / np.linalg.norm(d) * 0.45 * h
+        cv2.line(room, (int(x), 5), tuple(np.int32(end)), (70, 70, 70), 2)
+    return room

@@ -363,18 +363,12 @@ def test_convert_reads_the_camera_from_the_scene(tmp_path):
     frame (a camera looking down) is fitted with the body warped, as a given camera's is
     (the neck lower under a larger head), and the log says what the scene gave; a plain
     backdrop gives no perspective (the same fit as without a camera)."""
-    import cv2
-
+    from tests._synthframes import room_with_verticals
     from vidcap.body import JOINT_INDEX
     from vidcap.synth import make_motion, synth_clip
     from vidcap.video.pipeline import convert
 
-    rng = np.random.default_rng(0)
-    room = np.clip(rng.normal(190, 4, (240, 320, 3)), 0, 255).astype(np.uint8)
-    for x in np.arange(10, 320, 30):  # door frames, shelves: verticals toward (160, 1200)
-        d = np.array([160.0 - x, 1200.0 - 5.0])
-        end = np.array([x, 5.0]) + d / np.linalg.norm(d) * 110
-        cv2.line(room, (int(x), 5), tuple(np.int32(end)), (70, 70, 70), 2)
+    room = room_with_verticals(240, 320, 1200.0, np.random.default_rng(0))
     video = tmp_path / "walk.mp4"
     synth_clip(video, tmp_path / "truth.npz", make_motion("walk", n_frames=40), size=(320, 240),
                rng=np.random.default_rng(0), show_progress=False, background=room)

@@ -278,7 +278,7 @@ def test_pose2d_hidden_solve_reads_the_height_to_the_ankles(tmp_path, monkeypatc
     ("pose2d", "2,abc", "HEIGHT,DISTANCE"), ("pose2d", "1,2,3,4", "HEIGHT,DISTANCE"),
     ("convert", "2,0", "positive"), ("convert", "5,1,-60", "not in front"),
     ("convert", "2,3,95", "89 degrees"), ("pose2d", "1.75,0.01", "too near"),
-    ("pose2d", "auto", "vidcap convert"), ("convert", "above", "or auto")])
+    ("convert", "above", "or auto")])
 def test_bad_camera_is_a_one_line_error(tmp_path, cli, command, bad, says):
     video, masks, _ = _clip(tmp_path)
     out = tmp_path / ("o.npz" if command == "pose2d" else "o.bvh")
@@ -336,3 +336,30 @@ def test_pose2d_auto_proportions_with_a_camera_hands_on_the_unwarped_body(tmp_pa
     flat = unwarped_estimate(measured, k).body(1.0).segment_lengths()
     assert lengths["cam"] == pytest.approx(flat)
     assert not np.allclose(lengths["cam"], lengths["plain"], rtol=1e-3)
+
+
+def test_pose2d_camera_auto_reads_the_room(tmp_path, cli):
+    """``--camera auto`` with masks given: the plate is estimated from the video for its
+    verticals (meeting far below: a camera looking down), stderr says what k they give,
+    and the body is drawn warped (the neck lower under a larger head) as with a given
+    camera."""
+    from tests._synthframes import room_with_verticals
+    from vidcap.body import JOINT_INDEX
+    from vidcap.synth import make_motion, synth_clip
+
+    video, truth = tmp_path / "clip.mp4", tmp_path / "truth.npz"
+    room = room_with_verticals(240, 320, 1200.0, np.random.default_rng(0))
+    synth_clip(video, truth, make_motion("walk", n_frames=20), size=(320, 240),
+               rng=np.random.default_rng(0), background=room)
+    masks = tmp_path / "masks.npz"
+    np.savez(masks, masks=np.load(truth)["masks"])
+    drops = {}
+    for name, extra in (("plain", ()), ("auto", ("--camera", "auto"))):
+        out = tmp_path / f"{name}.npz"
+        r = cli("pose2d", video, "--masks", masks, "-o", out, *extra)
+        assert r.returncode == 0, r.stderr
+        assert ("camera perspective" in r.stderr) == (name == "auto")
+        j = np.load(out)["joints2d"]
+        drops[name] = np.median(j[:, JOINT_INDEX["neck"], 1] - j[:, JOINT_INDEX["head_top"], 1])
+    assert "k = 0." in r.stderr
+    assert drops["auto"] > 1.05 * drops["plain"]

@@ -102,7 +102,7 @@ def add_camera_argument(parser: argparse.ArgumentParser) -> None:
                         "optionally its downward tilt in degrees (default: aimed at the "
                         "subject's middle), e.g. 2.5,3. A camera high above the subject (a "
                         "wall or ceiling mount) images the head larger than the feet; "
-                        "the 2D model is drawn so. 'auto' (vidcap convert and batch): read "
+                        "the 2D model is drawn so. 'auto': read "
                         "from where the scene's vertical lines meet and the person standing "
                         "(none when the background shows no such lines). Default: no "
                         "perspective")

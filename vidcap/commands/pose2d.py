@@ -76,11 +76,12 @@ def load_masks(path):
         raise InputFileError(f"cannot read masks ({exc})", path) from None
 
 
-def compute_masks(video, crops=None, log=None) -> np.ndarray:
+def compute_masks(video, crops=None, log=None, plates=None) -> np.ndarray:
     """Silhouettes of ``video`` as ``vidcap silhouettes`` computes them (``crops``: a
     :class:`vidcap.video.fit.cueframes.FrameCrops` filled with the colour frames'
     crops meanwhile; ``log``: called with the plate's notice, as ``vidcap silhouettes``
-    prints it, when the plate is a guess over a noticeable area)."""
+    prints it, when the plate is a guess over a noticeable area; ``plates``: a list the
+    plate, a :class:`vidcap.video.background.BackgroundModel`, is appended to)."""
     try:
         from vidcap.video.background import estimate_plate
         from vidcap.video.inputchecks import plate_notice
@@ -93,12 +94,26 @@ def compute_masks(video, crops=None, log=None) -> np.ndarray:
     # default (the same sampled frames, colour models and still-person passes)
     background = estimate_plate(video, colour_models=DEFAULT_GRAPH_CUT,
                                 still_person=default_still_person())
+    if plates is not None:
+        plates.append(background)
     notice = plate_notice(background)
     if notice and log is not None:
         log(notice)
     return extract_silhouettes(video, background, crops=crops,
                                graph_cut=DEFAULT_GRAPH_CUT and background.colours is not None
                                ).masks
+
+
+def _scene_k(video, masks, plates) -> float:
+    """``--camera auto``: the perspective read from the plate's verticals and the person
+    (:func:`vidcap.video.vanishing.scene_k`), the plate estimated here when the masks were
+    given; what the scene gave is printed to stderr."""
+    from vidcap.video.background import estimate_plate
+    from vidcap.video.vanishing import scene_k
+
+    plate = plates[0] if plates else estimate_plate(video, colour_models=False,
+                                                    still_person=False)
+    return scene_k(plate.plate, masks, log=lambda msg: print(msg, file=sys.stderr))
 
 
 def run(args) -> int:
@@ -116,15 +131,13 @@ def run(args) -> int:
     check_cues_option(cues)
     ensemble = check_ensemble_option(args.ensemble)
     camera = check_camera_option(args.camera)  # the subject taken 1.75 m tall
-    if camera == "auto":
-        raise UsageError("--camera auto reads the background plate that vidcap convert "
-                         "estimates: give the camera as HEIGHT,DISTANCE[,PITCH] here")
     info = probe(args.video)
     frames = None
     if cues == "all" and not args.masks:
         frames = FrameCrops(height=args.height)  # cut as the silhouettes are extracted
+    plates = []  # the plate the silhouettes come from (--camera auto reads its verticals)
     masks = load_masks(args.masks) if args.masks else compute_masks(
-        args.video, frames, log=lambda msg: print(msg, file=sys.stderr))
+        args.video, frames, log=lambda msg: print(msg, file=sys.stderr), plates=plates)
     if masks.shape[1:] != (info.height, info.width):
         raise InputFileError(
             f"masks are {masks.shape[2]}x{masks.shape[1]} but the video is "
@@ -145,7 +158,8 @@ def run(args) -> int:
     )
     from vidcap.video.fitbody import ankle_share, fit_keywords_for, unwarped_estimate
 
-    k = camera_perspective(camera, 1.75)
+    k = (_scene_k(args.video, masks, plates) if camera == "auto"
+         else camera_perspective(camera, 1.75))
     # the seed's and a real adult's body drawn as the camera images them, as convert
     # draws them; the estimated one is measured on the image, warped already: fitted as
     # measured, and (as convert hands it on) un-warped for the solve and the lengths

@@ -56,6 +56,7 @@ from vidcap.video.person import partly_outside, person_track
 from vidcap.video.result import MIXED_VIEW, POOR_FIT, ConvertResult, frame_runs, true_runs
 from vidcap.video.stagecache import StageCache, stage_key, video_identity
 from vidcap.video.userregions import region_cache_part
+from vidcap.video.vanishing import scene_k
 
 #: Chunks per fitting process in ``run``: the fit of each chunk starts as soon as its
 #: silhouettes are out, so shorter chunks leave less of the fit to wait for after the
@@ -191,10 +192,7 @@ def run(
     ensemble : int
         Fits joined per joint (:func:`vidcap.video.fit.ensemble.fit_ensemble`, 1 to 5).
     camera : (height m, distance m[, pitch deg]) or 'auto', optional
-        Where the camera stands (:mod:`vidcap.video.fitbody`; default none); ``'auto'``:
-        its perspective read from the scene's vertical lines and the person standing
-        (:func:`vidcap.video.vanishing.scene_perspective`, once the silhouettes exist: the
-        fit then waits for them instead of fitting each chunk as it is extracted).
+        Where it stands (:mod:`vidcap.video.fitbody`), or read (:mod:`vidcap.video.vanishing`).
 
     Returns
     -------
@@ -205,9 +203,8 @@ def run(
     from vidcap.video.fit.parallel import default_jobs
 
     log = log or (lambda msg: None)
-    auto_camera = camera == "auto"  # k: the camera's perspective (auto: read from the scene)
     ensemble, k = _check_options(view, lift, proportions, cues, hidden, ensemble,  # before
-                                 None if auto_camera else camera, height)  # any work
+                                 camera, height)  # any work; k: the camera's perspective
     video, body, timings = Path(video), BodyModel(height=height), {}
     info, cache = probe(video), StageCache(cache_dir, log=log)
     ann, ann_source = _load_annotations(annotations, video, log, (info.width, info.height))
@@ -220,9 +217,8 @@ def run(
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plan, per_job = _PLAN_JOBS, _CHUNKS_PER_JOB  # the chunks alike for any jobs
     fit_kw = fit_keywords_for(proportions, ensemble, k)
-    pool = (None if auto_camera  # the body the fit draws waits for the scene's k
-            else _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw,
-                                    jobs))
+    pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw, jobs,
+                              stream=camera != "auto")  # auto: the fit waits for the scene's k
     # the pool is closed after the fit; on an error or Ctrl-C its running chunks are
     # nobody's, and it is killed (FitPool.__exit__)
     with pool if pool is not None else nullcontext():
@@ -235,15 +231,11 @@ def run(
                                     progress=progress, regions=_regions(ann, plate),
                                     graph_cut=graph_cut, log=log, n_frames=info.n_frames)
         _report_silhouettes(sil, info.n_frames, log)
-        if auto_camera:
-            from vidcap.video.vanishing import scene_k
-
-            k = scene_k(plate.plate, sil.masks, log)
+        k = scene_k(plate.plate, sil.masks, log) if camera == "auto" else k
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
                                           per_job=per_job, streamed=streamed, log=log, workers=jobs,
-                                          progress=progress, timings=timings,
-                                          cues=(cues, crops, video), ensemble=ensemble,
-                                          perspective=k)
+                                          progress=progress, timings=timings, perspective=k,
+                                          cues=(cues, crops, video), ensemble=ensemble)
 
     with _timed(timings, "lift+motion"):
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
@@ -321,7 +313,9 @@ def _check_options(view: str, lift: str, proportions: str, cues: str,
     check_hidden(hidden)
     from vidcap.video.fit.ensemble import member_count
 
-    return member_count(ensemble), camera_perspective(camera, height)
+    # 'auto': k is read from the scene once the silhouettes exist (vidcap.video.vanishing)
+    return member_count(ensemble), 0.0 if camera == "auto" else camera_perspective(camera,
+                                                                                  height)
 
 
 def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,
@@ -378,17 +372,18 @@ def _check_events(ann: Annotations, n_frames: int, source) -> None:
 
 def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs: int,
                        per_job: int, cues: str = DEFAULT_CUES, fit_kw: dict | None = None,
-                       workers: int | None = None):
+                       workers: int | None = None, *, stream: bool = True):
     """The 2D fit's worker processes (a :class:`vidcap.video.fit.parallel.FitPool`), started
     first so that they load their compiled kernels while this process estimates the
     plate and extracts the silhouettes; None when the fit is one chunk, on one process
     (``workers``, default ``jobs``; the chunks planned for ``jobs`` are then fitted here)
-    or cached. ``fit_kw``: the fit's body and ensemble (:func:`fit_keywords_for`)."""
+    or cached, or not to ``stream`` (the body the fit draws is known only after the
+    silhouettes). ``fit_kw``: the fit's body and ensemble (:func:`fit_keywords_for`)."""
     from vidcap.video.fit.parallel import FitPool, chunk_bounds
 
     expected = chunk_bounds(n_frames or 0, jobs, per_job=per_job)
     workers = jobs if workers is None else workers
-    if len(expected) < 2 or workers < 2:
+    if len(expected) < 2 or workers < 2 or not stream:
         return None
     pose_path = cache.path("pose2d", _pose_key(k_sil, expected, cues, fit_kw))
     if pose_path and pose_path.exists():
