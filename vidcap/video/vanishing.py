@@ -202,12 +202,12 @@ def person_axes(masks, *, max_frames: int = MAX_FRAMES):
     picks = np.unique(np.linspace(0, n - 1, min(n, max_frames)).round().astype(int)) if n else []
     tops, bottoms = [], []
     for f in picks:
-        rows = np.flatnonzero(np.asarray(masks[f]).any(axis=1))
+        m = np.asarray(masks[f])
+        rows = np.flatnonzero(m.any(axis=1))
         if len(rows) < 10:
             continue
         y0, y1 = int(rows[0]), int(rows[-1])
         band = max(2, (y1 - y0) // 10)
-        m = np.asarray(masks[f])
         xs_top = np.nonzero(m[y0:y0 + band])[1]
         xs_bottom = np.nonzero(m[y1 - band + 1:y1 + 1])[1]
         tops.append((xs_top.mean(), y0))
