@@ -314,8 +314,8 @@ def _check_options(view: str, lift: str, proportions: str, cues: str,
     from vidcap.video.fit.ensemble import member_count
 
     # 'auto': k is read from the scene once the silhouettes exist (vidcap.video.vanishing)
-    return member_count(ensemble), 0.0 if camera == "auto" else camera_perspective(camera,
-                                                                                  height)
+    k = 0.0 if camera == "auto" else camera_perspective(camera, height)
+    return member_count(ensemble), k
 
 
 def _streamed_fit(pool, n_frames: int | None, jobs: int, per_job: int, cues: str,
