@@ -372,12 +372,14 @@ def test_convert_reads_the_camera_from_the_scene(tmp_path):
     video = tmp_path / "walk.mp4"
     synth_clip(video, tmp_path / "truth.npz", make_motion("walk", n_frames=40), size=(320, 240),
                rng=np.random.default_rng(0), show_progress=False, background=room)
-    logs = []
+    logs, told = [], []
     runs = {cam: convert(video, tmp_path / f"{cam}.bvh", cache_dir=None, progress=False, jobs=1,
-                         camera=cam, log=logs.append if cam == "auto" else None)
+                         camera=cam, log=logs.append if cam == "auto" else told.append)
             for cam in (None, "auto")}
     said = [m for m in logs if m.startswith("camera perspective")]
     assert len(said) == 1 and "k = 0." in said[0], logs
+    # without --camera the fit is the level one, and the user is told of the high camera
+    assert sum(m.startswith("notice: the camera looks down") for m in told) == 1, told
     neck, top = JOINT_INDEX["neck"], JOINT_INDEX["head_top"]
     drop = {c: np.median(r.image_joints2d[:, neck, 1] - r.image_joints2d[:, top, 1])
             for c, r in runs.items()}
@@ -388,6 +390,9 @@ def test_convert_reads_the_camera_from_the_scene(tmp_path):
     logs.clear()
     a = convert(plain, tmp_path / "a.bvh", cache_dir=None, progress=False, jobs=1,
                 camera="auto", log=logs.append)
-    b = convert(plain, tmp_path / "b.bvh", cache_dir=None, progress=False, jobs=1)
+    told.clear()
+    b = convert(plain, tmp_path / "b.bvh", cache_dir=None, progress=False, jobs=1,
+                log=told.append)
     assert any(m.startswith("camera perspective") for m in logs)
+    assert not any("the camera looks" in m for m in told), told
     np.testing.assert_array_equal(a.image_joints2d, b.image_joints2d)

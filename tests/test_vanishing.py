@@ -8,10 +8,13 @@ import pytest
 
 from vidcap.video.fit.perspective import warp_height
 from vidcap.video.vanishing import (
+    ScenePerspective,
+    camera_notice,
     k_from_vanishing_point,
     line_segments,
     person_axes,
     scene_k,
+    scene_k_for,
     scene_perspective,
     vanishing_families,
 )
@@ -118,3 +121,22 @@ def test_person_axes_reads_the_tallest_frames():
     top, bottom = person_axes(np.concatenate([masks, short]))
     assert len(top) == 3
     assert np.allclose(top[:, 1], TOP, atol=1) and np.allclose(bottom[:, 1], BOTTOM, atol=1)
+
+
+def test_a_high_camera_is_told_to_a_user_who_described_none():
+    vp = (330.0, 1500.0)  # k 0.27: a camera looking down
+    plate, masks = _plate(vp), _person_masks(vp)
+    said = []
+    assert scene_k_for(None, 0.0, plate, masks, said.append) == 0.0  # told, not applied
+    assert len(said) == 1 and said[0].startswith("notice: the camera looks down on")
+    assert "--camera auto" in said[0] and "k = 0.2" in said[0]
+    said.clear()  # a camera the user described, or a level one: nothing to tell
+    assert scene_k_for((2.5, 3.0), 0.31, plate, masks, said.append) == 0.31
+    level = (330.0, 1e7)
+    assert scene_k_for(None, 0.0, _plate(level), _person_masks(level), said.append) == 0.0
+    assert said == []
+    assert scene_k_for("auto", 0.0, plate, masks, said.append) == pytest.approx(_true_k(vp),
+                                                                               abs=0.03)
+    below = ScenePerspective(-0.2, None, 5, 2.0, "")
+    assert "looks up at" in camera_notice(below) and "low" in camera_notice(below)
+    assert camera_notice(ScenePerspective(0.07, None, 5, 2.0, "")) is None

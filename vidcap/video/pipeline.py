@@ -56,7 +56,7 @@ from vidcap.video.person import partly_outside, person_track
 from vidcap.video.result import MIXED_VIEW, POOR_FIT, ConvertResult, frame_runs, true_runs
 from vidcap.video.stagecache import StageCache, stage_key, video_identity
 from vidcap.video.userregions import region_cache_part
-from vidcap.video.vanishing import scene_k
+from vidcap.video.vanishing import scene_k_for
 
 #: Chunks per fitting process in ``run``: the fit of each chunk starts as soon as its
 #: silhouettes are out, so shorter chunks leave less of the fit to wait for after the
@@ -231,7 +231,7 @@ def run(
                                     progress=progress, regions=_regions(ann, plate),
                                     graph_cut=graph_cut, log=log, n_frames=info.n_frames)
         _report_silhouettes(sil, info.n_frames, log)
-        k = scene_k(plate.plate, sil.masks, log) if camera == "auto" else k
+        k = scene_k_for(camera, k, plate.plate, sil.masks, log)
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
                                           per_job=per_job, streamed=streamed, log=log, workers=jobs,
                                           progress=progress, timings=timings, perspective=k,

@@ -38,8 +38,8 @@ import cv2
 import numpy as np
 
 __all__ = ["K_LEVEL", "K_RANGE", "MAX_MISFIT_DEG", "ScenePerspective", "k_from_vanishing_point",
-           "line_segments", "person_axes", "scene_k", "scene_perspective",
-           "vanishing_families"]
+           "NOTICE_K", "camera_notice", "line_segments", "person_axes", "scene_k",
+           "scene_k_for", "scene_perspective", "vanishing_families"]
 
 #: Segments within this many degrees of the image's vertical may be the scene's verticals
 #: (a camera pitched 35 degrees down images a vertical at the frame's edge ~20 degrees off).
@@ -67,6 +67,12 @@ K_RANGE = (-0.25, 1.0)
 #: verticals meet ever so far away; warping the body by so little only moves the fit by
 #: its own swing).
 K_LEVEL = 0.05
+#: A k at least this far from 0 read from the scene of a clip given no ``--camera`` is
+#: told to the user (:func:`camera_notice`): the 16 real videos with a level camera read
+#: |k| < 0.05, the 7 high ones 0.14-0.48 (SBI's corridor ceiling cameras, Pose2Sim's lab
+#: cameras, onebyone's wall mount; ``benchmarks/scene_perspective.py``), where the level
+#: body's shoulders and hips read 2-12 % of the height high.
+NOTICE_K = 0.1
 #: Frames whose person is at least this share of the clip's 90th-percentile image height
 #: give axes (a person standing, not crouched, bent or half out of view).
 TALL = 0.85
@@ -288,3 +294,29 @@ def scene_k(plate: np.ndarray, masks, log=None) -> float:
     if log is not None:
         log(f"camera perspective: {found.reason}")
     return found.k
+
+
+def camera_notice(found: ScenePerspective) -> str | None:
+    """One line for a user who described no camera when the scene shows one well above
+    or below the subject (|k| >= :data:`NOTICE_K`), else None."""
+    if abs(found.k) < NOTICE_K:
+        return None
+    above = found.k > 0
+    return (f"notice: the camera looks {'down on' if above else 'up at'} the subject (the "
+            f"scene's verticals meet {'below' if above else 'above'} the frame, k = "
+            f"{found.k:.2f}): the 2D body, drawn for a camera level with the subject's "
+            f"middle, reads the shoulders and hips {'high' if above else 'low'}; "
+            "--camera auto draws it as this camera sees it")
+
+
+def scene_k_for(camera, k: float, plate: np.ndarray, masks, log=None) -> float:
+    """``vidcap convert``'s k once the silhouettes exist: the scene's with ``camera``
+    'auto' (:func:`scene_k`), else ``k`` as given; with no ``camera`` at all, the scene
+    is read anyway and :func:`camera_notice` told to ``log``."""
+    if camera == "auto":
+        return scene_k(plate, masks, log)
+    if camera is None and log is not None:
+        notice = camera_notice(scene_perspective(plate, masks))
+        if notice:
+            log(notice)
+    return k
