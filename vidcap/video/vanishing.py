@@ -310,9 +310,27 @@ def camera_notice(found: ScenePerspective) -> str | None:
 
 
 def scene_k_for(camera, k: float, plate: np.ndarray, masks, log=None) -> float:
-    """``vidcap convert``'s k once the silhouettes exist: the scene's with ``camera``
-    'auto' (:func:`scene_k`), else ``k`` as given; with no ``camera`` at all, the scene
-    is read anyway and :func:`camera_notice` told to ``log``."""
+    """``vidcap convert``'s k once the silhouettes exist.
+
+    Parameters
+    ----------
+    camera : None, 'auto' or sequence of float
+        ``--camera``'s value.
+    k : float
+        The k of a described camera (:func:`vidcap.video.fit.perspective.camera_perspective`).
+    plate : numpy.ndarray, shape (H, W, 3), uint8
+        The background plate (BGR).
+    masks : sequence of numpy.ndarray (H, W) bool
+        The person's silhouettes.
+    log : callable, optional
+        Gets :func:`scene_k`'s line with 'auto', :func:`camera_notice`'s with no camera.
+
+    Returns
+    -------
+    float
+        The scene's k with 'auto' (:func:`scene_k`), else ``k`` as given: with no
+        ``camera`` the scene is read only to tell the user of a camera far from level.
+    """
     if camera == "auto":
         return scene_k(plate, masks, log)
     if camera is None and log is not None:
