@@ -8,7 +8,7 @@ from vidcap.body import JOINT_INDEX, SEGMENT_INDEX
 from vidcap.errors import VidcapError
 from vidcap.video.annotations import Annotations
 from vidcap.video.lift import swap_sides
-from vidcap.video.masks import MaskStack, pixel_counts, touches_border
+from vidcap.video.masks import MaskStack, edges_reached, pixel_counts, touches_border
 from vidcap.video.pipeline import (
     VIEWS,
     ConvertResult,
@@ -19,6 +19,7 @@ from vidcap.video.pipeline import (
     partly_outside,
     person_track,
 )
+from vidcap.video.result import cut_notice
 
 
 def _mpjpe(a, b):
@@ -161,6 +162,36 @@ def test_frames_mostly_outside_the_picture_are_left_out():
     cut = np.zeros((8, 60, 80), bool)
     cut[:, 30:, 30:50] = True
     assert not partly_outside(cut).any()
+
+
+def test_a_person_cut_off_by_the_picture_is_told_which_edge_and_when():
+    """Feet below the frame in 6 of 8 frames (a webcam's thighs-up shot): the notice names
+    the bottom edge and the frames; a head above it in 1 of 8 (12.5 %, over CUT_SHARE) is
+    named too; a person clear of every edge gets no notice, and frames without a fitted
+    person are not counted."""
+    masks = np.zeros((8, 60, 80), bool)
+    masks[:, 20:58, 30:50] = True
+    masks[2:, 58:] = masks[2:, 57:58]  # frames 2-7 reach the last row
+    stack = MaskStack.from_masks(masks)
+    seen = np.ones(8, bool)
+    for m in (masks, stack):
+        assert edges_reached(m)[:, 1].tolist() == [False] * 2 + [True] * 6
+        assert not edges_reached(m)[:, [0, 2, 3]].any()
+        note = cut_notice(m, seen)
+        assert "bottom edge in 6 of 8 frames (2-7)" in note and "feet" in note
+        assert "top" not in note and "the head" not in note
+    assert cut_notice(masks[:2], seen[:2]) is None  # clear of every edge
+    # frames without a fitted person do not count: 6 cut frames of 60 seen are 10 %
+    few = np.concatenate([masks, np.repeat(masks[:1], 52, axis=0)])
+    assert "6 of 60" in cut_notice(few, np.ones(60, bool))
+    assert cut_notice(few, np.r_[np.zeros(8, bool), np.ones(52, bool)]) is None
+    assert cut_notice(few, np.r_[np.ones(4, bool), np.zeros(4, bool), np.ones(52, bool)]) \
+        is None  # 2 cut frames of 56 seen: under CUT_SHARE
+    head = masks.copy()
+    head[0, :21, 35:45] = True  # the head above the frame in frame 0 only
+    note = cut_notice(head, seen)
+    assert "bottom edge in 6 of 8 frames (2-7) and its top edge in 1 of 8 frames (0)" in note
+    assert "cuts off the feet or legs and the head there" in note
 
 def test_stage_cache_round_trip_and_damage(tmp_path):
     c = StageCache(tmp_path)

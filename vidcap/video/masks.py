@@ -239,15 +239,33 @@ def pixel_counts(masks) -> np.ndarray:
     return np.asarray(masks, dtype=bool).reshape(len(masks), -1).sum(axis=1)
 
 
-def touches_border(masks) -> np.ndarray:
-    """(F,) bool: frames whose mask reaches the first or last row or column."""
+def edges_reached(masks) -> np.ndarray:
+    """Which of the picture's edges each frame's mask reaches.
+
+    Parameters
+    ----------
+    masks : MaskStack or numpy.ndarray, shape (F, H, W) bool
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (F, 4)
+        The mask has a pixel on the first row, the last row, the first column, the last
+        column (top, bottom, left, right); all False for an empty frame.
+    """
     if isinstance(masks, MaskStack):
         b = masks.boxes
         h, w = masks.frame_shape
         full = (b[:, 1] > b[:, 0]) & (b[:, 3] > b[:, 2])
-        return full & ((b[:, 0] == 0) | (b[:, 1] == h) | (b[:, 2] == 0) | (b[:, 3] == w))
+        return full[:, None] & np.stack(
+            [b[:, 0] == 0, b[:, 1] == h, b[:, 2] == 0, b[:, 3] == w], axis=1)
     m = np.asarray(masks, dtype=bool)
-    return (m[:, 0].any(-1) | m[:, -1].any(-1) | m[:, :, 0].any(-1) | m[:, :, -1].any(-1))
+    return np.stack([m[:, 0].any(-1), m[:, -1].any(-1), m[:, :, 0].any(-1),
+                     m[:, :, -1].any(-1)], axis=1)
+
+
+def touches_border(masks) -> np.ndarray:
+    """(F,) bool: frames whose mask reaches the first or last row or column."""
+    return edges_reached(masks).any(axis=1)
 
 
 def frames_with_pixels(masks) -> np.ndarray:
@@ -281,5 +299,5 @@ def centroid_columns(fg: np.ndarray, min_pixels: int = 16) -> np.ndarray:
     return (fg.sum(axis=1) * np.arange(w)).sum(axis=1)[ok] / n[ok]
 
 
-__all__ = ["MaskStack", "centroid_columns", "frames_with_pixels", "mask_frames",
+__all__ = ["MaskStack", "centroid_columns", "edges_reached", "frames_with_pixels", "mask_frames",
            "pixel_counts", "read_npz_masks", "touches_border"]

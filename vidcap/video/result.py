@@ -26,6 +26,15 @@ MISSING_HINT = 0.2
 #: three-quarter (or front/back) view is reported (see :meth:`ConvertResult.notices`).
 MIXED_VIEW = 0.2
 
+#: Share of the frames with a person whose silhouette reaches one edge of the picture
+#: from which the user is told the body is cut off there (a person filmed from the
+#: thighs up by a webcam, feet below a tripod's frame): the 2D model is a whole body
+#: scaled to the silhouette's height, so what is out of view makes the fit a guess.
+CUT_SHARE = 0.1
+#: What an edge of the picture cuts off.
+_CUT_PARTS = {"bottom": "the feet or legs", "top": "the head", "left": "a side of the body",
+              "right": "a side of the body"}
+
 @dataclass
 class ConvertResult:
     """Everything :func:`vidcap.video.pipeline.run` computed.
@@ -125,6 +134,9 @@ class ConvertResult:
             out.append(f"no person in {int(missing.sum())} of {len(missing)} frames "
                        f"({frame_runs(missing)}): poses interpolated across them, held "
                        "at the ends")
+        cut = cut_notice(self.masks, ~missing & ~outside)
+        if cut:
+            out.append(cut)
         s = np.asarray(self.similarity, float)[~missing & ~outside]
         s = s[np.isfinite(s)]
         poor = bool(s.size) and np.median(s) < POOR_FIT
@@ -207,6 +219,44 @@ class ConvertResult:
                 "body_shoulder_drop": np.float64(body.shoulder_drop),
                 "body_estimated": np.bool_(self.proportions is not None)}
 
+def cut_notice(masks, seen) -> str | None:
+    """The sentence telling the user the picture's edges cut the person off, or None.
+
+    Parameters
+    ----------
+    masks : MaskStack or numpy.ndarray, shape (F, H, W) bool
+    seen : numpy.ndarray of bool, shape (F,)
+        The frames with a fitted person (the others are not counted).
+
+    Returns
+    -------
+    str or None
+        Each edge (bottom, top, left, right) reached in at least :data:`CUT_SHARE` of
+        the ``seen`` frames, with its frame count and runs; None when none is.
+    """
+    from vidcap.video.masks import edges_reached
+
+    seen = np.asarray(seen, bool)
+    if not seen.any():
+        return None
+    reached = edges_reached(masks) & seen[:, None]
+    parts, cut_off = [], []
+    for i in (1, 0, 2, 3):  # bottom first: feet below the frame are the common case
+        edge = ("top", "bottom", "left", "right")[i]
+        n = int(reached[:, i].sum())
+        if n >= CUT_SHARE * seen.sum():
+            parts.append(f"{edge} edge in {n} of {int(seen.sum())} frames "
+                         f"({frame_runs(reached[:, i])})")
+            if _CUT_PARTS[edge] not in cut_off:
+                cut_off.append(_CUT_PARTS[edge])
+    if not parts:
+        return None
+    return (f"the person reaches the picture's {' and its '.join(parts)}: the picture "
+            f"cuts off {' and '.join(cut_off)} there, and the 2D model, a whole body fitted "
+            "to what is in view, guesses its scale and the parts it cannot see in those "
+            "frames; frame the whole body, head to feet")
+
+
 def true_runs(flags) -> list[tuple[int, int]]:
     """The runs of True in ``flags`` (F,) as (first, last) frame pairs."""
     f = np.r_[False, np.asarray(flags, bool), False].astype(int)
@@ -220,4 +270,5 @@ def frame_runs(flags, limit: int = 4) -> str:
     return ", ".join(parts[:limit]) + (", ..." if len(parts) > limit else "")
 
 
-__all__ = ["MIXED_VIEW", "POOR_FIT", "ConvertResult", "frame_runs", "true_runs"]
+__all__ = ["CUT_SHARE", "MIXED_VIEW", "POOR_FIT", "ConvertResult", "cut_notice", "frame_runs",
+           "true_runs"]
