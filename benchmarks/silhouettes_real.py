@@ -110,6 +110,12 @@ same silhouettes, the pair for the per-joint median of N fits on the masks as gi
 eroded, dilated and with the outline's pixels flipped
 (:func:`vidcap.video.fit.ensemble.fit_ensemble`), and the same count for it.
 
+``--small`` renders every row at Weizmann's size instead, 180x144 with the body ~79 px
+tall (the dataset's real clips: 70-90 px), over the same plates shrunk; rows named
+"@ 180x144". The "use" column stays the 640x480 row's (what chose thresholds there);
+:data:`vidcap.video.personbox.ENLARGE_BELOW` was built on the first run of the small
+validation rows (session 41).
+
 Renders and MediaPipe masks are cached under ``$VIDCAP_DATA/sil/`` (outside git);
 without ``VIDCAP_DATA`` the renders go to a temporary folder and MediaPipe is
 skipped (said so in the table). The "use" column says which clips chose thresholds
@@ -438,9 +444,22 @@ def lamp_mask(shape, rng) -> np.ndarray:
     return cv2.GaussianBlur(m, (0, 0), h * 0.01)
 
 
+#: ``--small``: every render at Weizmann's size instead, (width, height) and pixels per
+#: metre (a 1.75 m body ~79 px tall, as the dataset's people are 70-90 px); None: 640x480,
+#: the body filling three quarters of the height.
+SMALL = None
+SMALL_SIZE = ((180, 144), 45.0)
+
+
+def _stem(name: str) -> str:
+    """The render's file stem (its size's suffix with ``--small``)."""
+    stem = name.replace(" / ", "_").replace(" ", "_").replace("/", "-")
+    return stem if SMALL is None else f"{stem}_{SMALL[0][0]}x{SMALL[0][1]}"
+
+
 def render(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
     """Render one in-place clip to H.264; returns (video path, truth masks)."""
-    stem = name.replace(" / ", "_").replace(" ", "_").replace("/", "-")
+    stem = _stem(name)
     video, tpath = out_dir / f"{stem}.mp4", out_dir / f"{stem}_truth.npz"
     if video.exists() and tpath.exists():
         return video, np.load(tpath)["masks"]
@@ -453,7 +472,7 @@ def render(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
 def truth_joints(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
     """The render's true 2D joints (F, 15, 2), re-rendered in memory when the cached
     truth predates them (the render is seeded: the same clip)."""
-    stem = name.replace(" / ", "_").replace(" ", "_").replace("/", "-")
+    stem = _stem(name)
     tpath = out_dir / f"{stem}_truth.npz"
     got = np.load(tpath)
     if "joints2d" in got:
@@ -465,7 +484,7 @@ def truth_joints(name, motion, yaw, which, n_frames, out_dir: Path, rng_seed=0):
 
 def _render_frames(motion, yaw, which, n_frames, rng_seed):
     rng = np.random.default_rng(rng_seed)
-    plate = real_plate(which)
+    plate = real_plate(which) if SMALL is None else real_plate(which, size=SMALL[0])
     lamp = lamp_mask(plate.shape[:2], rng)
     view = {}
     if motion == "arrive":
@@ -480,6 +499,8 @@ def _render_frames(motion, yaw, which, n_frames, rng_seed):
                                fps=30.0)
     else:
         mo = synth.make_motion(motion, n_frames=n_frames, rng=rng)
+    if SMALL is not None:  # (the walk-in too: the same body size in the small frame)
+        view = {**view, "pixels_per_metre": SMALL[1], "size": SMALL[0]}
     frames, truth = synth.render_clip(mo, rng=rng, yaw_deg=yaw, background=plate,
                                       noise=3.0, lighting_drift=0.15, **view)
     # The lamp is self-lit and saturates: it keeps its level whatever the exposure
@@ -795,6 +816,9 @@ def main(argv=None) -> int:
     for flag, _, _, text in SWITCHES:
         ap.add_argument(f"--{flag}", action=argparse.BooleanOptionalAction, default=None,
                         help=text)
+    ap.add_argument("--small", action="store_true",
+                    help="every render at Weizmann's size instead (180x144, the body ~79 px "
+                         "tall; rows named '@ 180x144')")
     args = ap.parse_args(argv)
     import importlib
 
@@ -802,9 +826,11 @@ def main(argv=None) -> int:
         value = getattr(args, flag.replace("-", "_"))
         if value is not None:
             setattr(importlib.import_module(f"vidcap.video.{module}"), name, value)
-    global GRAPH_CUT, PLATE_SEED
+    global GRAPH_CUT, PLATE_SEED, SMALL
     from vidcap.video.pipeline import DEFAULT_GRAPH_CUT
 
+    if args.small:
+        SMALL = SMALL_SIZE
     if args.seed is not None:
         PLATE_SEED = args.seed
 
@@ -839,7 +865,8 @@ def main(argv=None) -> int:
         video, truth = render(name, motion, yaw, which, args.frames, cache)
         joints = (truth_joints(name, motion, yaw, which, args.frames, cache)
                   if args.pck else None)
-        clips.append((name, use, video, truth, joints))
+        clips.append((name if SMALL is None else f"{name} @ 180x144", use, video, truth,
+                      joints))
     from real_clips import load_truth, masked_clips, real_clips
 
     ignores = {}

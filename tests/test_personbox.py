@@ -235,3 +235,32 @@ def test_a_first_find_of_part_of_a_visible_blob_does_not_decide(monkeypatch):
     monkeypatch.setattr(pp, "_person_masks", person_masks)
     out, reason = find_absorbed(model, frames, np.ones((8, 3)))
     assert reason == ABSORBED and cuts[0] == head and set(cuts[1:]) == {whole}
+
+
+def test_a_person_in_a_small_frame_is_searched_for_enlarged(monkeypatch):
+    """A walk rendered toward the camera at Weizmann's size (180x144, the body ~79 px
+    tall, under the detector's 128-row window): found in some frames once the frame is
+    enlarged to the searched height, in none at its own size."""
+    import vidcap.video.personbox as pb
+    from vidcap import synth
+
+    rng = np.random.default_rng(0)
+    frames, truth = synth.render_clip(synth.make_motion("walk", n_frames=30, rng=rng), rng=rng,
+                                      yaw_deg=0, size=(180, 144), pixels_per_metre=45.0,
+                                      noise=2.0)
+    picks = range(0, 30, 3)
+
+    def found_boxes():
+        out = []
+        for k in picks:
+            boxes, _ = detect_people(frames[k])
+            out += [(k, b) for b in boxes]
+        return out
+
+    enlarged = found_boxes()
+    assert len({k for k, _ in enlarged}) >= 2
+    for k, (x0, y0, x1, y1) in enlarged:  # round the figure, not elsewhere
+        ys, xs = np.nonzero(truth["masks"][k])
+        assert x0 <= xs.mean() <= x1 and y0 <= ys.mean() <= y1
+    monkeypatch.setattr(pb, "ENLARGE_BELOW", 0)  # searched at the frame's own size
+    assert found_boxes() == []
