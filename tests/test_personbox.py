@@ -23,6 +23,18 @@ def test_the_cut_finds_the_figure_in_its_box():
     assert not cut[:, :45].any()  # nothing outside the box
 
 
+def test_a_box_round_no_person_cuts_nothing():
+    """A detector's box round a lit strip of wall with a speck in it: whatever grabCut
+    makes of the speck fills far less of the box than a person (a fifth or more), so
+    the cut is empty; the figure of the test above fills its box enough to stay."""
+    rng = np.random.default_rng(1)
+    img = rng.integers(100, 140, (120, 160, 3)).astype(np.uint8)
+    img[40:43, 78:81] = (30, 30, 200)  # 9 px of red in a 60x95 box
+    assert not cut_in_box(img, (50, 20, 110, 115)).any()
+    img[30:110, 70:90] = (30, 30, 200)
+    assert cut_in_box(img, (50, 20, 110, 115)).sum() > 0.2 * 60 * 95
+
+
 def test_a_plate_that_saw_everything_is_left_alone():
     frames = np.full((4, 64, 64, 3), 100, np.uint8)
     model = BackgroundModel.from_plate(frames[0], noise_sigma=2.0)
