@@ -193,6 +193,7 @@ def test_a_person_cut_off_by_the_picture_is_told_which_edge_and_when():
     assert "bottom edge in 6 of 8 frames (2-7) and its top edge in 1 of 8 frames (0)" in note
     assert "cuts off the feet or legs and the head there" in note
 
+
 def test_stage_cache_round_trip_and_damage(tmp_path):
     c = StageCache(tmp_path)
     assert c.load("pose2d", "k1") is None

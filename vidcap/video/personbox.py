@@ -208,9 +208,9 @@ def cut_in_box(frame: np.ndarray, box, sure: np.ndarray | None = None, *,
     if s < 1.0:
         fg = cv2.resize(fg, (cw, ch), interpolation=cv2.INTER_NEAREST)
     out = np.zeros((h, w), bool)
+    if np.count_nonzero(fg) < MIN_FILL * bw * bh:
+        return out  # a few pixels: the detector boxed no person
     out[cy0:cy1, cx0:cx1] = fg > 0
-    if out.sum() < MIN_FILL * bw * bh:
-        out[:] = False  # a few pixels: the detector boxed no person
     return out
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from vidcap.body import JOINT_NAMES, SEGMENT_NAMES
 from vidcap.fileio import savez_atomic
 from vidcap.video.lifting import LiftResult
-from vidcap.video.masks import MaskStack
+from vidcap.video.masks import MaskStack, edges_reached
 
 #: Median 2D-fit similarity (Eq. 3.1) below which a result is reported as a poor fit.
 POOR_FIT = 0.5
@@ -219,6 +219,7 @@ class ConvertResult:
                 "body_shoulder_drop": np.float64(body.shoulder_drop),
                 "body_estimated": np.bool_(self.proportions is not None)}
 
+
 def cut_notice(masks, seen) -> str | None:
     """The sentence telling the user the picture's edges cut the person off, or None.
 
@@ -234,15 +235,13 @@ def cut_notice(masks, seen) -> str | None:
         Each edge (bottom, top, left, right) reached in at least :data:`CUT_SHARE` of
         the ``seen`` frames, with its frame count and runs; None when none is.
     """
-    from vidcap.video.masks import edges_reached
-
     seen = np.asarray(seen, bool)
     if not seen.any():
         return None
     reached = edges_reached(masks) & seen[:, None]
     parts, cut_off = [], []
-    for i in (1, 0, 2, 3):  # bottom first: feet below the frame are the common case
-        edge = ("top", "bottom", "left", "right")[i]
+    # bottom first: feet below the frame are the common case
+    for i, edge in ((1, "bottom"), (0, "top"), (2, "left"), (3, "right")):
         n = int(reached[:, i].sum())
         if n >= CUT_SHARE * seen.sum():
             parts.append(f"{edge} edge in {n} of {int(seen.sum())} frames "
