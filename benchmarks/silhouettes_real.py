@@ -865,8 +865,8 @@ def main(argv=None) -> int:
         video, truth = render(name, motion, yaw, which, args.frames, cache)
         joints = (truth_joints(name, motion, yaw, which, args.frames, cache)
                   if args.pck else None)
-        clips.append((name if SMALL is None else f"{name} @ 180x144", use, video, truth,
-                      joints))
+        size = "" if SMALL is None else f" @ {SMALL[0][0]}x{SMALL[0][1]}"
+        clips.append((name + size, use, video, truth, joints))
     from real_clips import load_truth, masked_clips, real_clips
 
     ignores = {}
