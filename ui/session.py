@@ -31,7 +31,8 @@ from vidcap.body import (
     BodyModel,
 )
 from vidcap.errors import AnnotationError
-from vidcap.video.annotations import PAIRS
+from vidcap.video.annotations import PAIRS, Annotations
+from vidcap.video.flatview import NO_PERSPECTIVE, flat_view
 
 
 @dataclass
@@ -90,6 +91,12 @@ class ClipData:
         The colour frames' limb order (:func:`vidcap.video.legorder.near_limb`), as
         ``vidcap convert`` reads it (:func:`vidcap.video.pipeline.colour_cues`); kept as
         loaded when silhouettes are recomputed.
+    perspective : (float, float)
+        The camera's perspective k and the body's ankle share the 2D fit drew with
+        (``vidcap annotate --camera``, :attr:`vidcap.video.result.ConvertResult.perspective`);
+        the lift reads the fitted and the user's placed joints un-warped by it, as
+        ``vidcap convert`` does (:func:`vidcap.video.flatview.flat_view`), and the page
+        shows them on the frame. Default: a level camera.
     """
 
     video: Path
@@ -109,6 +116,7 @@ class ClipData:
     fit_kw: dict = field(default_factory=dict)
     near_side: np.ndarray | None = None
     limb_order: np.ndarray | None = None
+    perspective: tuple[float, float] = NO_PERSPECTIVE
 
     def __post_init__(self):
         self.video = Path(self.video)
@@ -189,8 +197,6 @@ class AnnotateSession(RegionEditing):
 
     def __init__(self, clip: ClipData, annotations_path, *, low_fit: float = 0.5,
                  low_doubt: float = 0.05, defer_refresh: bool = False, lift: str = "solve"):
-        from vidcap.video.annotations import Annotations
-
         self.clip = clip
         self.path = Path(annotations_path)
         self.low_fit = float(low_fit)
@@ -229,9 +235,11 @@ class AnnotateSession(RegionEditing):
         from vidcap.video.lifting import fill_gaps, frame_scales, lift_pose, model_scales
 
         clip = self.clip
-        self._filled = fill_gaps(clip.joints2d)
+        flat2d, self._flat_height, _ = flat_view(clip.joints2d, clip.model_height,
+                                                 Annotations(), clip.perspective)
+        self._filled = fill_gaps(flat2d)
         scale = frame_scales(self._filled, clip.fps, clip.body)  # as lift_pose does
-        self._segment_scale = model_scales(clip.model_height, len(self._filled), clip.body)
+        self._segment_scale = model_scales(self._flat_height, len(self._filled), clip.body)
         rho = torso_width_ratio(self._filled, scale if self._segment_scale is None
                                 else self._segment_scale, clip.body)
         if clip.spread is not None:
@@ -247,9 +255,11 @@ class AnnotateSession(RegionEditing):
         from vidcap.video.lifting import lift_pose
 
         c = self.clip
-        return lift_pose(c.joints2d, fps=c.fps, body=c.body, annotations=annotations,
+        flat2d, flat_height, flat_events = flat_view(c.joints2d, c.model_height, annotations,
+                                                     c.perspective)
+        return lift_pose(flat2d, fps=c.fps, body=c.body, annotations=flat_events,
                          image_sides=c.image_sides, spread=c.spread, track=c.track,
-                         frame_size=c.size, model_height=c.model_height, method=self.lift,
+                         frame_size=c.size, model_height=flat_height, method=self.lift,
                          near_side=c.near_side, limb_order=c.limb_order)
 
     def _take(self, res) -> None:
@@ -266,7 +276,7 @@ class AnnotateSession(RegionEditing):
             self.n_frames, near_plane=self._near_plane)
         self.user_orient = np.asarray(user_orient).astype(str)
         self._user_sides = self.annotations.sides(self.n_frames)
-        self.joints2d = np.asarray(res.joints2d, float)
+        self.joints2d = self._on_frame(res.joints2d)
         self.joints3d = np.asarray(res.joints3d, float)
         self.signs = np.asarray(res.signs).astype(int)
         self.orientation = np.asarray(res.orientation).astype(str)
@@ -289,7 +299,8 @@ class AnnotateSession(RegionEditing):
         user_orient = np.asarray(user_orient).astype(str)
         sides = self.annotations.sides(self.n_frames)
         orientation, yaw, j2 = apply_user_view(
-            self._filled, self.proposed_orientation, self._rho, user_orient, user_joints,
+            self._filled, self.proposed_orientation, self._rho, user_orient,
+            self._flat_points(user_joints),
             image_sides=self.clip.image_sides, user_sides=sides, facing=res.facing,
             names_swapped=getattr(res, "names_swapped", None))
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
@@ -302,8 +313,28 @@ class AnnotateSession(RegionEditing):
                             segment_scale=self._segment_scale).joints3d
         (self.user_signs, self.user_orient, self.user_joints, self.orientation, self.yaw,
          self.joints2d, self.signs, self.joints3d) = (user_signs, user_orient, user_joints,
-                                                      orientation, yaw, j2, signs, joints3d)
+                                                      orientation, yaw, self._on_frame(j2),
+                                                      signs, joints3d)
         self._user_sides = sides
+
+    def _flat_points(self, points) -> np.ndarray:
+        """Points on the frame (F, N, 2) as the lift reads them: un-warped like the
+        fitted joints (a level camera: as they are)."""
+        from vidcap.video.fit.perspective import unwarp_points
+
+        k, above_feet = self.clip.perspective
+        if k == 0 or self.clip.model_height is None:
+            return points
+        return unwarp_points(points, self.clip.joints2d, self.clip.model_height, k, above_feet)
+
+    def _on_frame(self, joints2d) -> np.ndarray:
+        """The lift's 2D joints (un-warped) where the frame shows them, for the page."""
+        from vidcap.video.fit.perspective import warp_joints
+
+        k, above_feet = self.clip.perspective
+        if k == 0 or self._flat_height is None:
+            return np.asarray(joints2d, float)
+        return warp_joints(joints2d, self._flat_height, k, above_feet)[0]
 
     def _quick_solve(self, j2, yaw, user_signs, user_orient, user_joints, sides, signs,
                      centre):
@@ -571,7 +602,7 @@ def default_annotations_path(video: str | os.PathLike) -> Path:
 
 def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None = None,
               height: float = 1.75, progress: bool | None = None, log=None,
-              annotations: str | os.PathLike | None = None) -> ClipData:
+              annotations: str | os.PathLike | None = None, **fit) -> ClipData:
     """Run the pipeline's heavy stages for ``video`` (or load them from its stage cache).
 
     Parameters
@@ -590,6 +621,10 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
         The annotations file: its regions (scene_region, person_box) shape the
         silhouettes, as in ``vidcap convert``. A file that cannot be read counts as
         none (the session reports it).
+    **fit
+        The 2D fit's options of :func:`vidcap.video.pipeline.run` (``proportions``,
+        ``cues``, ``ensemble``, ``camera``): the same as ``vidcap convert``'s give the
+        page the fit, and the 3D view, the motion file will get.
 
     Returns
     -------
@@ -613,7 +648,7 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
     # regions only (the silhouettes depend on them)
     regions = _file_regions(annotations, video)
     res = pipeline.run(video, annotations=regions, height=height, cache_dir=cache_dir,
-                       progress=progress, log=log)
+                       progress=progress, log=log, **fit)
     joints2d, spread = res.image_joints2d, res.spread
     jpegs = []
     size = (0, 0)
@@ -647,7 +682,8 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     track=None if track is None else track[:n],
                     model_height=None if res.model_height is None else res.model_height[:n],
                     body=res.body or BodyModel(height=height), size=size,
-                    fit_kw=_fit_keywords(res.proportions),
+                    fit_kw=_fit_keywords(res.proportions, res.perspective[0]),
+                    perspective=res.perspective,
                     resegment=_resegmenter(video, cache_dir, log),
                     pose={"joints2d": joints2d[:n], "scores": res.scores[:n],
                           "similarity": res.similarity[:n], "spread": spread[:n],
@@ -656,13 +692,16 @@ def load_clip(video: str | os.PathLike, *, cache_dir: str | os.PathLike | None =
                     limb_order=None if limbs is None else limbs[:n])
 
 
-def _fit_keywords(proportions) -> dict:
-    """The 2D fit's ``body``/``foot`` keywords for a run's proportions (None: the seed's)."""
-    if proportions is None:
+def _fit_keywords(proportions, k: float = 0.0) -> dict:
+    """The 2D fit's ``body``/``foot`` keywords for a run's proportions (None: the seed's)
+    as a camera of perspective ``k`` images them (the body the run's fit drew)."""
+    if proportions is None and k == 0:
         return {}
+    from vidcap.video.fit.perspective import perspective_factors
     from vidcap.video.fit.proportions import fit_keywords
 
-    return fit_keywords(proportions.factors)
+    factors = {} if proportions is None else proportions.factors
+    return fit_keywords(perspective_factors(factors, k))
 
 
 def _file_regions(path, video: Path):

@@ -237,3 +237,13 @@ def test_cli_annotate_user_errors(cli, tmp_path):
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "missing.mp4" in r.stderr
     r = cli("annotate", tmp_path / "missing.mp4", "--port", "70000")
     assert r.returncode == 2 and "--port" in r.stderr
+
+
+@pytest.mark.parametrize("option", [("--camera", "2.5"), ("--camera", "1,2,95"),
+                                    ("--cues", "skin"), ("--ensemble", "9")])
+def test_cli_annotate_bad_fit_option(cli, tmp_path, option):
+    # convert's fit options, checked before any work as convert checks them
+    video = Path(__file__).resolve().parents[2] / "sample_videos" / "walk_side.mp4"
+    r = cli("annotate", video, "--no-browser", "--cache-dir", tmp_path / "cache", *option)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and option[0] in r.stderr
+    assert not (tmp_path / "cache").exists()

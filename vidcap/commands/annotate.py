@@ -5,6 +5,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from vidcap.commands.convert import (
+    DEFAULT_CUES,
+    add_camera_argument,
+    add_cues_argument,
+    add_ensemble_argument,
+    add_proportions_argument,
+)
 from vidcap.errors import UsageError
 
 NAME = "annotate"
@@ -29,6 +36,13 @@ def add_arguments(parser) -> None:
                         help="the subject's height in metres (default 1.75)")
     parser.add_argument("--cache-dir", metavar="DIR",
                         help="stage cache (default: .vidcap-cache beside the video)")
+    # the 2D fit's options, as `vidcap convert` takes them: give the same ones to both,
+    # and the page shows (and its cache holds) the fit the motion file will get
+    add_proportions_argument(parser, "the body model's proportions, as `vidcap convert "
+                             "--proportions` (default human)")
+    add_cues_argument(parser)
+    add_ensemble_argument(parser)
+    add_camera_argument(parser)
 
 
 def run(args) -> int:
@@ -44,6 +58,13 @@ def run(args) -> int:
 
     if not 0.5 <= args.height <= 2.5:
         raise UsageError(f"--height must be 0.5..2.5 metres, got {args.height}")
+    from vidcap.api import check_camera_option, check_cues_option, check_ensemble_option
+
+    cues = DEFAULT_CUES if args.cues is None else args.cues
+    check_cues_option(cues)
+    fit = {"proportions": args.proportions, "cues": cues,
+           "ensemble": check_ensemble_option(args.ensemble),
+           "camera": check_camera_option(args.camera, args.height)}
 
     def log(msg: str) -> None:
         print(f"vidcap annotate: {msg}", file=sys.stderr, flush=True)
@@ -51,7 +72,7 @@ def run(args) -> int:
     path = args.annotations or default_annotations_path(video)
     # the file's regions shape the silhouettes; its other events are the session's
     clip = load_clip(video, cache_dir=args.cache_dir, height=args.height, log=log,
-                     annotations=path)
+                     annotations=path, **fit)
     session = AnnotateSession(clip, path)
     annotate.serve(session, port=args.port, open_browser=not args.no_browser)
     return 0

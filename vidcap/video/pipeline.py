@@ -33,6 +33,7 @@ from vidcap.errors import AnnotationError
 from vidcap.video.annotations import Annotations, default_path
 from vidcap.video.fit.perspective import camera_perspective, unwarp_joints, warp_joints
 from vidcap.video.fitbody import ankle_share, fit_keywords_for, unwarped_estimate
+from vidcap.video.flatview import flat_view
 from vidcap.video.hidden import DEFAULT_HIDDEN, check_hidden, fill_hidden
 from vidcap.video.keptframes import KeptFrames
 from vidcap.video.lifting import (
@@ -250,7 +251,7 @@ def run(
         jitter_after=out.motion.jitter_after, image_joints2d=out.joints2d, track=out.track,
         spread=pose["spread"], model_height=out.model_height, outside=out.outside, view=view,
         frame_times=frame_times(video), body=body, proportions=estimate,
-        plate_estimated=background is None)
+        plate_estimated=background is None, perspective=(k, ankle_share(estimate)))
 
 
 # --------------------------------------------------------------------------- helpers
@@ -892,8 +893,8 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
     clip solve: the 2D joints with the ones the torso hides from it (:func:`_with_hidden`).
     ``jobs`` processes solve the clip (:mod:`vidcap.video.solve.split`). ``perspective``:
     the camera's k and the body's ankle height share; the 3D stage reads the fitted
-    joints un-warped (:func:`vidcap.video.fit.perspective.unwarp_joints`), the colour
-    cues and the returned image joints stay as fitted."""
+    joints and the user's placed ones un-warped (:func:`vidcap.video.flatview.flat_view`),
+    the colour cues and the returned image joints stay as fitted."""
     joints2d, model_height, outside = _image_joints(pose, sil.masks)
     track = person_track(sil.bbox, sil.masks, exclude=outside)
     _check_events(annotations, len(sil.masks), ann_source)
@@ -906,8 +907,8 @@ def _lift_and_motion(pose: dict, sil: _Silhouettes, *, fps: float, frame_size, b
         covered, lines = _kept_covers(kept, joints2d, model_height, body, fps)
         frames = kept.frames(F) if covered else iter_frames(video, stop=F)
         near, limbs = colour_cues(frames, joints2d, model_height, body, lines=lines, fps=fps)
-    flat2d, flat_height = unwarp_joints(joints2d, model_height, *perspective)
-    lifted = lift_pose(flat2d, fps=fps, body=body, annotations=annotations,
+    flat2d, flat_height, flat_events = flat_view(joints2d, model_height, annotations, perspective)
+    lifted = lift_pose(flat2d, fps=fps, body=body, annotations=flat_events,
                        image_sides=True, spread=pose["spread"], track=track,
                        frame_size=frame_size, model_height=flat_height, view=view,
                        method=lift_method, near_side=near, limb_order=limbs, jobs=jobs)

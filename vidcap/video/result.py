@@ -77,6 +77,10 @@ class ConvertResult:
     proportions: object = None
     #: The plate was estimated from the clip (no ``--background`` given).
     plate_estimated: bool = True
+    #: The camera's perspective k and the body's ankle share (``above_feet``) the fit drew
+    #: with; the 3D stage read the joints un-warped by them
+    #: (:func:`vidcap.video.flatview.flat_view`). ``(0.0, 1.0)``: a level camera.
+    perspective: tuple[float, float] = (0.0, 1.0)
 
     @property
     def n_frames(self) -> int:

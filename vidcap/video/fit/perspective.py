@@ -35,7 +35,7 @@ from vidcap.body import PROPORTION_GROUPS, SEGMENT_INDEX, SEGMENTS
 from vidcap.video.fit.proportions import FOOT
 
 __all__ = ["camera_perspective", "inverse_k", "perspective_factors", "perspective_k",
-           "unwarp_joints", "warp_height", "warp_joints"]
+           "unwarp_joints", "unwarp_points", "warp_height", "warp_joints"]
 
 #: Length groups along the standing body, head to feet, and along a hanging arm.
 _TRUNK = ("head", "torso", "upper_legs", "lower_legs")
@@ -190,10 +190,11 @@ def inverse_k(k: float) -> float:
     return -k / (1.0 + k)
 
 
-def _remap_rows(joints2d, model_height, k: float, ankle_from: float):
+def _remap_rows(joints2d, model_height, k: float, ankle_from: float, top=None):
     """Rows of ``joints2d`` (F, J, 2) moved by g (parameter ``k``) along the body's
     height, head top fixed; ``model_height`` (F,) spans head top to ankles, which sit at
-    ``ankle_from`` of the height to the soles. Returns (joints, model_height)."""
+    ``ankle_from`` of the height to the soles; ``top`` (F,): the head top's rows (default:
+    ``joints2d``'s own ``head_top``). Returns (joints, model_height)."""
     from vidcap.body import JOINT_INDEX
 
     joints = np.array(joints2d, dtype=float, copy=True)
@@ -201,7 +202,8 @@ def _remap_rows(joints2d, model_height, k: float, ankle_from: float):
     if k == 0:  # no perspective: as they are, to the bit
         return joints, height.copy()
     stature = height / ankle_from  # head top to soles, px
-    top = joints[:, JOINT_INDEX["head_top"], 1][:, None]
+    top = (joints[:, JOINT_INDEX["head_top"], 1] if top is None
+           else np.asarray(top, float))[:, None]
     v = (joints[..., 1] - top) / stature[:, None]
     # g is a projective map of the line: finite while 1 + k v > 0, which holds for any
     # row above 1 / |k| statures below the head (k > -1 for a camera that sees the subject)
@@ -252,3 +254,30 @@ def warp_joints(joints2d, model_height, k: float, above_feet: float = 1.0):
     as the camera of perspective ``k`` images them (same arguments and returns;
     ``model_height`` the unwarped body's head top to ankles)."""
     return _remap_rows(joints2d, model_height, k, above_feet)
+
+
+def unwarp_points(points, joints2d, model_height, k: float, above_feet: float = 1.0):
+    """Other image points of each frame moved as :func:`unwarp_joints` moves that
+    frame's fitted joints: the joints the user placed by hand, say, for a 3D stage that
+    reads the fitted joints un-warped.
+
+    Parameters
+    ----------
+    points : array_like, shape (F, N, 2)
+        Image points (x right, y down), pixels; NaN stays NaN, and a frame without a
+        fitted head top or height keeps its points as they are.
+    joints2d : array_like, shape (F, 15, 2)
+        The fitted joints whose ``head_top`` row stays fixed.
+    model_height, k, above_feet
+        As :func:`unwarp_joints`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (F, N, 2)
+    """
+    from vidcap.body import JOINT_INDEX
+
+    top = np.asarray(joints2d, float)[:, JOINT_INDEX["head_top"], 1]
+    moved = _remap_rows(points, model_height, inverse_k(k), float(warp_height(above_feet, k)),
+                        top=top)[0]
+    return np.where(np.isfinite(moved), moved, points)
