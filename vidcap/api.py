@@ -163,7 +163,8 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
             proportions: str | None = None,
             graph_cut: bool | None = None,
             still_person: bool | None = None, ensemble: int = 1,
-            camera: tuple[float, ...] | str | None = None) -> VideoMotion:
+            camera: tuple[float, ...] | str | None = None,
+            seated: bool = False) -> VideoMotion:
     """3D motion of the one person in a single-camera video (``vidcap convert``).
 
     Parameters
@@ -209,6 +210,9 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
         perspective images it (:mod:`vidcap.video.fit.perspective`); ``"auto"``: the
         perspective read from the scene's vertical lines and the person standing
         (:mod:`vidcap.video.vanishing`). Default: none.
+    seated : bool
+        The subject sits or crouches for seconds at a time (``vidcap convert --seated``):
+        the 2D fit probes the body's scale there (:mod:`vidcap.video.fit.lowbody`).
 
     Returns
     -------
@@ -235,7 +239,7 @@ def convert(video: str | os.PathLike, *, annotations: str | os.PathLike | None =
               progress=progress, cues=cues, proportions=proportions,
               graph_cut=graph_cut, still_person=still_person,
               ensemble=check_ensemble_option(ensemble),
-              camera=check_camera_option(camera, height))
+              camera=check_camera_option(camera, height), seated=bool(seated))
     F = res.n_frames
     times = (np.arange(F) / res.fps if res.frame_times is None
              else np.asarray(res.frame_times, dtype=float))

@@ -11,6 +11,7 @@ from vidcap.commands.convert import (
     add_cues_argument,
     add_ensemble_argument,
     add_proportions_argument,
+    add_seated_argument,
 )
 from vidcap.errors import UsageError
 
@@ -43,6 +44,7 @@ def add_arguments(parser) -> None:
     add_cues_argument(parser)
     add_ensemble_argument(parser)
     add_camera_argument(parser)
+    add_seated_argument(parser)
 
 
 def run(args) -> int:
@@ -64,7 +66,7 @@ def run(args) -> int:
     check_cues_option(cues)
     fit = {"proportions": args.proportions, "cues": cues,
            "ensemble": check_ensemble_option(args.ensemble),
-           "camera": check_camera_option(args.camera, args.height)}
+           "camera": check_camera_option(args.camera, args.height), "seated": args.seated}
 
     def log(msg: str) -> None:
         print(f"vidcap annotate: {msg}", file=sys.stderr, flush=True)

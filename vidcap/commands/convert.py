@@ -108,6 +108,16 @@ def add_camera_argument(parser: argparse.ArgumentParser) -> None:
                         "perspective")
 
 
+def add_seated_argument(parser: argparse.ArgumentParser) -> None:
+    """``--seated``, shared by the commands that fit the 2D body model."""
+    parser.add_argument("--seated", action="store_true",
+                        help="the subject sits (or crouches) for seconds at a time: the 2D "
+                        "fit then tries the body larger than its silhouette where the "
+                        "silhouette says so (a seated person's is ~0.8 of the standing "
+                        "height; seated renders 53 -> 67 %% PCK). Off by default: on some "
+                        "real clips of people standing it draws the body too large")
+
+
 def add_hidden_argument(parser: argparse.ArgumentParser, where: str, default: str) -> None:
     """``--hidden``, shared by ``vidcap convert`` and ``vidcap pose2d``; ``where``: what
     the 2D joints it changes are, in the command's words."""
@@ -157,6 +167,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_cues_argument(parser)
     add_ensemble_argument(parser)
     add_camera_argument(parser)
+    add_seated_argument(parser)
     add_hidden_argument(parser, "the 2D joints of --save (with --lift solve; the solve runs "
                         "anyway)", CONVERT_HIDDEN)
     parser.add_argument("--graph-cut", action=argparse.BooleanOptionalAction, default=None,
@@ -205,7 +216,7 @@ def run(args) -> int:
         smooth_sigma=args.smooth, keyframe_score=args.keyframes, log=log, jobs=args.jobs,
         view=args.view, rig=args.rig, lift=args.lift, proportions=args.proportions,
         cues=cues, graph_cut=args.graph_cut, still_person=args.still_person,
-        hidden=args.hidden, ensemble=ensemble, camera=camera,
+        hidden=args.hidden, ensemble=ensemble, camera=camera, seated=args.seated,
     )
     if not args.quiet:
         lr = res.lifted

@@ -16,6 +16,7 @@ from vidcap.commands.convert import (
     add_ensemble_argument,
     add_hidden_argument,
     add_proportions_argument,
+    add_seated_argument,
 )
 from vidcap.errors import InputFileError, UsageError
 
@@ -51,6 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_cues_argument(parser)
     add_ensemble_argument(parser)
     add_camera_argument(parser)
+    add_seated_argument(parser)
     add_hidden_argument(parser, "joints2d (the solve runs after the fit: about 2.6 ms a "
                         "frame)", POSE2D_HIDDEN)
 
@@ -163,12 +165,13 @@ def run(args) -> int:
     # the seed's and a real adult's body drawn as the camera images them, as convert
     # draws them; the estimated one is measured on the image, warped already: fitted as
     # measured, and (as convert hands it on) un-warped for the solve and the lengths
-    fit_kw, extra, estimate = fit_keywords_for(args.proportions, 1, k), {}, None
+    fit_kw, extra, estimate = fit_keywords_for(args.proportions, 1, k, args.seated), {}, None
     if args.proportions != "seed":
         estimate = (human_proportions() if args.proportions == "human" else
                     estimate_proportions(masks, height=args.height, refine=not args.no_refine))
         if args.proportions == "auto":
-            fit_kw = fit_keywords(estimate.factors)
+            fit_kw = {**fit_keywords(estimate.factors),
+                      **({"low_body": True} if args.seated else {})}
             estimate = unwarped_estimate(estimate, k)
         body = estimate.body(1.0)
         extra = {"body_lengths": body.segment_lengths(),

@@ -52,7 +52,7 @@ def parse_proportions(text: str) -> dict[str, float]:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Fill the ``vidcap synth`` parser."""
     parser.add_argument(
-        "--motion", default="walk", metavar="walk|jacks|arms|M.bvh|M.asf",
+        "--motion", default="walk", metavar="walk|jacks|arms|sit|M.bvh|M.asf",
         help="built-in motion or a BVH / ASF file to retarget onto the body (default: walk)",
     )
     parser.add_argument("--amc", metavar="M.amc", help="AMC motion for an ASF skeleton")

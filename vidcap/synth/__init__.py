@@ -47,7 +47,13 @@ from vidcap.synth.clip import (
     truth_arrays,
 )
 from vidcap.synth.motions import make_motion, parse_range
-from vidcap.synth.procedural import BUILTIN_MOTIONS, arms_motion, jacks_motion, walk_motion
+from vidcap.synth.procedural import (
+    BUILTIN_MOTIONS,
+    arms_motion,
+    jacks_motion,
+    sit_motion,
+    walk_motion,
+)
 from vidcap.synth.render import SHIRT, SKIN, TROUSERS, finish_frame, lighting_gains, render_body
 from vidcap.synth.retarget import (
     JOINT_MAPS,
@@ -62,5 +68,5 @@ __all__ = ["BUILTIN_MOTIONS", "Clip", "JOINT_MAPS", "OrthoCamera", "SHIRT", "SKI
            "finish_frame", "iter_frames", "jacks_motion", "keep_arms_out_of_torso",
            "lighting_gains", "load_background", "make_background", "make_camera", "make_motion",
            "mean_heading", "parse_range", "prepare_clip", "project", "render_body", "render_clip",
-           "render_frame", "retarget", "source_joint_positions", "synth_clip", "truth_arrays",
-           "walk_motion"]
+           "render_frame", "retarget", "sit_motion", "source_joint_positions", "synth_clip",
+           "truth_arrays", "walk_motion"]

@@ -14,13 +14,20 @@ from vidcap.body import (
 )
 from vidcap.errors import InputFileError, UsageError
 from vidcap.kinematics import Motion
-from vidcap.synth.procedural import BUILTIN_MOTIONS, arms_motion, jacks_motion, walk_motion
+from vidcap.synth.procedural import (
+    BUILTIN_MOTIONS,
+    arms_motion,
+    jacks_motion,
+    sit_motion,
+    walk_motion,
+)
 from vidcap.synth.retarget import (
     retarget,
 )
 
 #: The built-in motions by name.
-_PROCEDURAL = {"walk": walk_motion, "jacks": jacks_motion, "arms": arms_motion}
+_PROCEDURAL = {"walk": walk_motion, "jacks": jacks_motion, "arms": arms_motion,
+               "sit": sit_motion}
 
 
 def parse_range(text: str | None) -> tuple[int | None, int | None]:
@@ -53,7 +60,7 @@ def make_motion(
     Parameters
     ----------
     name_or_path : str or path-like
-        ``'walk'``, ``'jacks'``, ``'arms'`` (:data:`BUILTIN_MOTIONS`), a ``.bvh`` file
+        ``'walk'``, ``'jacks'``, ``'arms'``, ``'sit'`` (:data:`BUILTIN_MOTIONS`), a ``.bvh`` file
         or an ``.asf`` file (with ``amc``).
     body : BodyModel, optional
         Target body (default 1.75 m).

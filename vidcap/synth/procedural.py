@@ -1,5 +1,6 @@
 """Built-in procedural motions, generated directly on our skeleton: a walk, jumping
-jacks and arm gestures (:func:`walk_motion`, :func:`jacks_motion`, :func:`arms_motion`)."""
+jacks, arm gestures and a seated figure (:func:`walk_motion`, :func:`jacks_motion`,
+:func:`arms_motion`, :func:`sit_motion`)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from vidcap.kinematics import Motion
 from vidcap.synth._geometry import unit
 
 #: Built-in procedural motions (generated directly on our skeleton).
-BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "jacks", "arms")
+BUILTIN_MOTIONS: tuple[str, ...] = ("walk", "jacks", "arms", "sit")
 
 
 def _swing(rest_dir, toward, angle) -> Rotation:
@@ -218,4 +219,43 @@ def arms_motion(
             side, np.deg2rad(5.0) + np.deg2rad(10.0) * c, np.deg2rad(3.0) + np.deg2rad(20.0) * c
         )
     ang["pelvis"] = _swing(_UP, _RIGHT, np.deg2rad(4.0) * np.sin(2 * np.pi * 0.25 * t))
+    return _per_frame_floor(_pose_motion(body, fps, ang, np.zeros((n_frames, 3))))
+
+
+def sit_motion(
+    body: BodyModel | None = None,
+    *,
+    n_frames: int = 90,
+    fps: float = 30.0,
+    rng: np.random.Generator | None = None,
+    stand_s: float = 0.0,
+) -> Motion:
+    """Procedural figure seated on an (unseen) chair, gesturing with both arms.
+
+    Hips flexed ~88 degrees and knees ~90 (the shins upright, the feet on the floor),
+    the trunk leaning forward ~8 degrees and swaying; the arms move in front of and
+    beside the body (shoulders 12-32 degrees out, 35-70 forward, elbows 60-110).
+    ``stand_s`` > 0: standing that long first, then sitting down over one second (the
+    body then stays seated). ``rng`` varies rates and phases slightly. Parameters and
+    return as :func:`walk_motion`.
+    """
+    body = body or BodyModel()
+    var = (lambda s: 1.0 + s * rng.standard_normal()) if rng is not None else (lambda s: 1.0)
+    phase0 = rng.uniform(0, 2 * np.pi) if rng is not None else 0.0
+    t = np.arange(n_frames) / fps
+    seat = np.clip((t - stand_s) / 1.0, 0.0, 1.0) if stand_s > 0 else np.ones(n_frames)
+    seat = 0.5 - 0.5 * np.cos(np.pi * seat)  # 0 standing .. 1 seated
+    ph = 2 * np.pi * 0.4 * var(0.05) * t + phase0
+    ang = {}
+    for side, sign, lag in (("l", 1.0, 0.0), ("r", -1.0, 1.7)):
+        ang[f"{side}_hip"], ang[f"{side}_knee"] = _leg(
+            side, np.deg2rad(88.0) * seat, np.deg2rad(90.0) * seat,
+            abduct=np.deg2rad(6.0) * seat)
+        wave = lambda rate, shift: 0.5 + 0.5 * np.sin(rate * ph + shift)  # noqa: E731
+        ang[f"{side}_shoulder"], ang[f"{side}_elbow"] = _arm(
+            side, np.deg2rad(12.0) + np.deg2rad(20.0) * wave(1.0, lag),
+            np.deg2rad(35.0) + np.deg2rad(35.0) * wave(0.7, 0.5 + 2.0 * lag / 1.7),
+            np.deg2rad(60.0) + np.deg2rad(50.0) * wave(1.3, sign))
+    lean = np.deg2rad(8.0) * seat + np.deg2rad(4.0) * np.sin(0.5 * ph) * seat
+    ang["pelvis"] = _swing(_UP, _FWD, lean)
     return _per_frame_floor(_pose_motion(body, fps, ang, np.zeros((n_frames, 3))))

@@ -17,15 +17,20 @@ from vidcap.video.fit.proportions import FOOT, fit_keywords, human_proportions
 __all__ = ["ankle_share", "fit_keywords_for", "unwarped_estimate"]
 
 
-def fit_keywords_for(proportions: str, ensemble: int = 1, perspective: float = 0.0) -> dict:
+def fit_keywords_for(proportions: str, ensemble: int = 1, perspective: float = 0.0,
+                     seated: bool = False) -> dict:
     """The 2D fit's ``body`` and ``foot`` for a body known before the fit
     (``proportions='human'``: :func:`vidcap.video.fit.proportions.human_proportions`;
     none for the seed's, the fit's default, and for ``'auto'``, estimated after a first
     fit), and its ``ensemble`` when more than one fit (one: no key, as before ensembles;
     ``'auto'``: one, its first fit is replaced by the fit with the estimate). A camera's
     ``perspective`` (k, not 0) warps a known body as the camera images it
-    (:func:`vidcap.video.fit.perspective.perspective_factors`)."""
+    (:func:`vidcap.video.fit.perspective.perspective_factors`). ``seated``: the body's
+    scale probed where it sits or crouches for seconds (``low_body``,
+    :mod:`vidcap.video.fit.lowbody`)."""
     kw = {} if ensemble == 1 or proportions == "auto" else {"ensemble": int(ensemble)}
+    if seated:
+        kw["low_body"] = True
     if proportions == "auto" or (proportions == "seed" and perspective == 0):
         return kw
     factors = human_proportions().factors if proportions == "human" else {}

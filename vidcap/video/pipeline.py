@@ -103,9 +103,10 @@ _SILHOUETTE_VERSION = 5
 _PLATE_VERSION = 11
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
-#: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
-#: than handed back as the new fit's.
-_POSE_VERSION = 3
+#: follows the bend, ``fit.bend``; 5: a body seated for seconds fitted at its standing
+#: height, ``fit.lowbody``), so a cache written by an older fit is redone rather than
+#: handed back as the new fit's.
+_POSE_VERSION = 5
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
@@ -143,7 +144,7 @@ def run(
     lift: str = "solve", proportions: str = DEFAULT_PROPORTIONS, cues: str = DEFAULT_CUES,
     graph_cut: bool | None = None, still_person: bool | None = None,
     hidden: str = DEFAULT_HIDDEN, ensemble: int = 1,
-    camera: tuple[float, ...] | str | None = None,
+    camera: tuple[float, ...] | str | None = None, seated: bool = False,
 ) -> ConvertResult:
     """Run the whole video path on ``video``.
 
@@ -168,18 +169,15 @@ def run(
     log : callable, optional
         Called with one-line status messages.
     jobs : int, optional
-        Worker processes for the 2D fit (default: the usable CPUs, at most
-        :data:`vidcap.video.fit.parallel.MAX_JOBS`; 1 fits in this process, as are clips
-        under 120 frames, :func:`~vidcap.video.fit.parallel.fit_sequence_chunked`), started
-        while the silhouettes are extracted; 2 or more also solve a long clip's 3D in two
+        Worker processes for the 2D fit (default: the usable CPUs, at most ``MAX_JOBS``; 1
+        or under 120 frames: here, :mod:`vidcap.video.fit.parallel`), started while the
+        silhouettes are extracted; 2 or more also solve a long clip's 3D in two
         halves at once (:mod:`vidcap.video.solve.split`).
     view : str
-        How the camera sees the subject for the whole clip
-        (:data:`vidcap.video.lifting.VIEWS`; default ``auto``: proposed per frame);
-        see :func:`vidcap.video.lifting.constrain_orientation`.
+        How the camera sees the subject for the whole clip (:data:`~vidcap.video.lifting.VIEWS`;
+        ``auto``: proposed per frame; :func:`~vidcap.video.lifting.constrain_orientation`).
     lift : {'solve', 'segment'}
-        The 3D lift: one kinematic solve over the clip (:mod:`vidcap.video.solve`) or the
-        seed's per-segment lift (:func:`vidcap.video.lift.lift`).
+        One kinematic solve over the clip (:mod:`vidcap.video.solve`) or the seed's lift.
     proportions : {'human', 'seed', 'auto'}
         A real adult's (:data:`DEFAULT_PROPORTIONS`), the seed's, the subject's (``_fit_stage``).
     cues : {'outline', 'all'}
@@ -194,6 +192,8 @@ def run(
         Fits joined per joint (:func:`vidcap.video.fit.ensemble.fit_ensemble`, 1 to 5).
     camera : (height m, distance m[, pitch deg]) or 'auto', optional
         Where it stands (:mod:`vidcap.video.fitbody`), or read (:mod:`vidcap.video.vanishing`).
+    seated : bool
+        The body's scale probed where it sits for seconds (:mod:`vidcap.video.fit.lowbody`).
 
     Returns
     -------
@@ -217,7 +217,7 @@ def run(
                                                    still_person)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
     plan, per_job = _PLAN_JOBS, _CHUNKS_PER_JOB  # the chunks alike for any jobs
-    fit_kw = fit_keywords_for(proportions, ensemble, k)
+    fit_kw = fit_keywords_for(proportions, ensemble, k, seated)
     pool = _start_fit_workers(cache, k_sil, info.n_frames, plan, per_job, cues, fit_kw, jobs,
                               stream=camera != "auto")  # auto: the fit waits for the scene's k
     # the pool is closed after the fit; on an error or Ctrl-C its running chunks are
@@ -236,7 +236,8 @@ def run(
         pose, body, estimate = _fit_stage(cache, k_sil, sil.masks, body, proportions, jobs=plan,
                                           per_job=per_job, streamed=streamed, log=log, workers=jobs,
                                           progress=progress, timings=timings, perspective=k,
-                                          cues=(cues, crops, video), ensemble=ensemble)
+                                          cues=(cues, crops, video), ensemble=ensemble,
+                                          seated=seated)
 
     with _timed(timings, "lift+motion"):
         out = _lift_and_motion(pose, sil, fps=info.fps, frame_size=(info.width, info.height),
@@ -263,7 +264,7 @@ def _check_choice(name: str, value: str, choices: tuple[str, ...]) -> None:
 
 def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, streamed,
                progress, timings, log, cues=(DEFAULT_CUES, None, None), workers=None,
-               ensemble: int = 1, perspective: float = 0.0):
+               ensemble: int = 1, perspective: float = 0.0, seated: bool = False):
     """The 2D pose (:func:`_pose_stage`) fitted with the body's proportions: the seed's,
     a real adult's (``'human'``, :func:`vidcap.video.fit.proportions.human_proportions`,
     one fit with them), or with ``'auto'`` the subject's own estimated from a first fit
@@ -280,7 +281,7 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
         pose = _pose_stage(cache, k_sil, masks, jobs=jobs, per_job=per_job,
                            streamed=streamed, progress=progress, cues=cues[0],
                            crops=cues[1], video=cues[2], workers=workers,
-                           fit_kw=fit_keywords_for(proportions, ensemble, perspective))
+                           fit_kw=fit_keywords_for(proportions, ensemble, perspective, seated))
     if proportions == "seed":
         return pose, body, None
     from vidcap.video.fit.proportions import human_proportions
@@ -692,6 +693,8 @@ def _pose_key(k_sil: str, chunks, cues: str = DEFAULT_CUES, fit_kw: dict | None 
             parts += (f"shoulder_drop={body.shoulder_drop / body.height:.6f}",)
     if fit_kw.get("ensemble", 1) != 1:  # one fit keeps the key it had before ensembles
         parts += (f"ensemble={int(fit_kw['ensemble'])}",)
+    if fit_kw.get("low_body"):
+        parts += ("low_body",)
     return stage_key(*parts) if cues == "outline" else stage_key(*parts, f"cues={cues}")
 
 

@@ -22,6 +22,7 @@ from vidcap.video.fit.cuecolours import learn_clip_colours
 from vidcap.video.fit.cueframes import as_frame_crops
 from vidcap.video.fit.cues import CUE_MODES, ColourModel
 from vidcap.video.fit.frame import fit_frame, recross
+from vidcap.video.fit.lowbody import refit_low_body
 from vidcap.video.fit.normalise import NormalisedMask, normalise_mask
 from vidcap.video.fit.options import FitOptions
 from vidcap.video.fit.raster import image_angle
@@ -112,7 +113,7 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
                  body_tolerance: float = 0.05, body_backward: bool = True,
                  relabel: bool = False, frames=None, cues: str = "all", arm_solve: bool = True,
                  predict: bool = False, crossing: bool = True, colours: ColourModel | None = None,
-                 **kw) -> Pose2D:
+                 low_body: bool = False, **kw) -> Pose2D:
     """Fit every frame of a silhouette sequence.
 
     Parameters
@@ -181,6 +182,9 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
         one-frame misplacement is outvoted by its neighbours.
     predict, crossing : bool
         Legs carried on by warm starts (:func:`predicted_start`); passing legs (:mod:`.crossing`).
+    low_body : bool
+        Tracked mode: a body seated or crouched for seconds probed at larger heights
+        (:mod:`vidcap.video.fit.lowbody`; ``vidcap convert --seated``). Off by default.
     colours : ColourModel, optional
         The clip's colours for the cues (default: learned first, :func:`sequence_colours`).
     **kw
@@ -211,11 +215,8 @@ def fit_sequence(masks: np.ndarray | Sequence[np.ndarray], *, tracked: bool = Tr
     normalised = _Normalised(masks, options, frames if cues == "all" else None, colours)
     _track(normalised, it, out, tracked=tracked, reinit_every=reinit_every, back_tie=back_tie,
            options=options, predict=predict, crossing=crossing)
-    body = np.full(n, np.nan)  # the body's height where a frame was fitted at it, px
-    if tracked and body_window > 1 and n > 2:
-        # the heights the main pass scaled the model to (the silhouettes', unless given)
-        body = _refit_body_height(masks, body_window, body_tolerance, options, out.height.copy(),
-                                  out, normalised.cues, backward=body_backward)
+    body = _height_passes(masks, out, options, normalised.cues, body_window if tracked else 0,
+                          body_tolerance, body_backward, tracked and low_body)
     if tracked and spread_window > 1 and options.spread and n > 2:
         _smooth_spread(masks, spread_window, spread_jump, spread_tie, options, body, out,
                        normalised.cues)
@@ -599,6 +600,47 @@ def _refit_body_height(masks, window, tolerance, options: FitOptions, height, ou
     if backward:
         _refit_body_backward(masks, body, off, used, options, out, cues_of, height=height)
     return used
+
+
+def _height_passes(masks, out: _Frames, options: FitOptions, cues_of, window: int,
+                   tolerance: float, backward: bool, low_body: bool) -> np.ndarray:
+    """The body-height pass (``window`` > 1, :func:`_refit_body_height`) and the seated
+    body's (``low_body``, :func:`_refit_low_body`; off by default: on real clips of
+    people standing, whose silhouettes carry shadow or scene, S can favour a larger model
+    as much, Pose2Sim cam4) on the tracked fit ``out`` (in place); returns the body's
+    height where a frame was refitted at it, px (NaN elsewhere)."""
+    n = len(out.sim)
+    body = np.full(n, np.nan)
+    if window > 1 and n > 2:
+        # the heights the main pass scaled the model to (the silhouettes', unless given)
+        body = _refit_body_height(masks, window, tolerance, options, out.height.copy(), out,
+                                  cues_of, backward=backward)
+    if low_body and n > 2:
+        low = _refit_low_body(masks, options, out, cues_of, anchored=np.isfinite(body))
+        body = np.where(np.isfinite(low), low, body)
+    return body
+
+
+def _refit_low_body(masks, options: FitOptions, out: _Frames, cues_of=None,
+                    anchored=None) -> np.ndarray:
+    """:func:`vidcap.video.fit.lowbody.refit_low_body` on this clip's fit (in place);
+    returns the heights (px) refitted frames were fitted at, NaN elsewhere."""
+    def normalise(k, body_height):
+        return _normalise_frame(masks, k, height=options.height, body_height=float(body_height))
+
+    def fit(norm, previous, k):
+        return fit_frame(norm, previous=previous, options=options,
+                         cues=None if cues_of is None else cues_of(k, norm))
+
+    def keep(k, fp):
+        if fp is None:
+            return out.get(k, height_px=float(out.height[k]))
+        out.put(k, fp)
+        out.linked[k] = fp.warm
+        return fp
+
+    return refit_low_body(len(out.sim), out.sim.copy(), out.height.copy(), normalise, fit, keep,
+                          anchored=anchored)
 
 
 def _refit_body_backward(masks, body, off, used, options: FitOptions, out: _Frames,
