@@ -2,24 +2,29 @@
 
 The tracked fit draws the model at the body's height, which :func:`~vidcap.video.fit.
 tracking.body_heights` reads as the median silhouette height over about three seconds.
-That holds while the person stands for most of the window; a person seated (an office
+That holds while the person stands for part of the window; a person seated (an office
 chair, a sofa: Human3.6M's Sitting, Eating, Phoning) or crouched for longer has a
 silhouette about 0.8 of the standing height in every frame, and the model is drawn that
 much too small: thighs and shins too short, the shoulders at the chin. On renders of a
 seated figure (true silhouettes) PCK@0.05 was 30-53 % at the silhouettes' height and
 55-84 % at the true one.
 
-The silhouette itself says which is right. Fitted afresh at 1.0, 1.15, 1.3 and 1.45
-times the height the track drew it at, a seated body scores S 0.64, 0.80, 0.87, 0.84
-(true 1.25), while a standing one scores best at 1.0 (walks, jacks, arm raises, every
-view; one front-on walk 0.921 vs 0.931 at 1.1, inside :data:`GAIN`). So, per window of
-:data:`WINDOW` frames whose fits are poor (median S under :data:`GATE`; a standing clip
-with clean silhouettes costs nothing), a few frames are fitted afresh at those factors;
-where enough of them score clearly better at a larger one, the window's frames are
-refitted, tracked, at the factor their S peaks at (interpolated between the probed
-ones), each kept only where its S is higher. Frames the body-height pass refitted at a
-height read from standing frames nearby (a crouch between upright frames) are left
-alone: that height is already the standing one.
+On clean silhouettes the silhouette itself says which is right: fitted afresh at larger
+heights, a seated body's S rises from 0.64 at its silhouette's height to 0.87 at 1.3 times
+it (true 1.25), while a standing one scores best at 1.0 (walks, jacks, arm raises, every
+view). So, per window of :data:`WINDOW` frames whose fits are middling (median S in
+[:data:`FLOOR`, :data:`GATE`)), a few frames are fitted afresh at :data:`FACTORS`; where
+enough of them score clearly better at a larger one, the window's frames are refitted,
+tracked, at the factor their S peaks at (interpolated between the probed ones), each kept
+only where its S is higher. Frames the body-height pass refitted at a height read from
+standing frames nearby (a crouch between upright frames) are left alone: that height is
+already the standing one.
+
+On real silhouettes, which carry shadow and scene, S also favours a larger model where
+the person stands (Pose2Sim cam4: 5.2 -> 6.3 % of the height against MediaPipe), so
+:func:`~vidcap.video.fit.tracking.fit_sequence` runs this only when asked (``low_body``;
+``vidcap convert --seated``). Figures: benchmarks/RESULTS.md, "A person seated for
+seconds".
 """
 
 from __future__ import annotations
@@ -47,8 +52,8 @@ GATE = 0.85
 #: only because it covers more of the blob.
 FLOOR = 0.5
 #: S by which a sample frame's best larger factor must beat its fresh fit at 1.0 for the
-#: frame to call the body larger (a seated body: 0.2; real upright clips: mostly under
-#: 0.05, single frames to 0.13).
+#: frame to call the body larger (a seated body: 0.2; real upright clips mostly under
+#: 0.07, but Pose2Sim cam4 0.12-0.19 in four frames of six).
 GAIN = 0.1
 #: Share of the sample frames that must call the body larger for the window's refit.
 SHARE = 0.5
