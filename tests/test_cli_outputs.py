@@ -107,9 +107,10 @@ def test_batch_hands_camera_and_ensemble_to_every_clip(tmp_path, video, capsys, 
 
     monkeypatch.setattr(local, "run_local", fake_run_local)
     code = main(["batch", str(video), "-o", str(tmp_path / "out"), "--camera", "2.5,3",
-                 "--ensemble", "2"])
+                 "--ensemble", "2", "--seated"])
     assert code == 0 and len(seen) == 1
     assert seen[0]["camera"] == (2.5, 3.0) and seen[0]["ensemble"] == 2
+    assert seen[0]["seated"] is True
     capsys.readouterr()
     code, err = _error(capsys, ["batch", video, "-o", tmp_path / "out2", "--camera", "2.5"])
     assert code == 2 and len(err) == 1 and err[0].startswith("vidcap: error: --camera")

@@ -22,6 +22,7 @@ from vidcap.commands.convert import (
     add_camera_argument,
     add_ensemble_argument,
     add_rig_argument,
+    add_seated_argument,
 )
 from vidcap.errors import UsageError
 
@@ -51,6 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_rig_argument(parser)
     add_camera_argument(parser)  # one rig filmed every clip: its camera, as in convert
     add_ensemble_argument(parser)
+    add_seated_argument(parser)
     parser.add_argument("--force", action="store_true",
                         help="redo outputs that are newer than their inputs")
     parser.add_argument("--clip-jobs", type=int, default=1, metavar="N",
@@ -191,6 +193,8 @@ def run(args) -> int:
     outdir = _make_outdir(args.outdir)
     options = {"height": args.height, "view": args.view, "jobs": args.clip_jobs,
                "rig": args.rig, "camera": camera, "ensemble": ensemble}
+    if args.seated:  # (a plain run keeps the options it had before the flag)
+        options["seated"] = True
     outputs = output_paths(videos, outdir, FORMATS[args.format])
     written = [f for out in outputs for f in output_files(out)]  # a .gltf brings its .bin
     check_outputs({"outdir": [*written, outdir / "summary.csv"]},
