@@ -120,16 +120,19 @@ ARMS, LEGS = LIMB_PAIR_JOINTS["arms"], LIMB_PAIR_JOINTS["legs"]  # (left, right)
 #: ``--ensemble``: fits on this many versions of the masks changed at the outline, joined
 #: per joint by their median (:func:`vidcap.video.fit.ensemble.fit_ensemble`); 1: one fit.
 ENSEMBLE = 1
+#: ``--seated``: the fit probes a seated body's scale (``vidcap convert --seated``).
+SEATED = False
 
 
 def fitter():
     """``fit_sequence``, or :func:`~vidcap.video.fit.ensemble.fit_ensemble` of
-    :data:`ENSEMBLE` members (``--ensemble``), for the tables that take it."""
+    :data:`ENSEMBLE` members (``--ensemble``), for the tables that take it; with
+    ``--seated``, ``low_body=True``."""
     from functools import partial
 
     from vidcap.video.fit.ensemble import fit_ensemble
 
-    return partial(fit_ensemble, ensemble=ENSEMBLE)
+    return partial(fit_ensemble, ensemble=ENSEMBLE, **({"low_body": True} if SEATED else {}))
 
 
 def side_agnostic_errors(pred: np.ndarray, truth: np.ndarray):
@@ -907,9 +910,12 @@ def main(argv=None) -> int:
     ap.add_argument("--ensemble", type=int, default=1,
                     help="--held-out, --low, --perturb: fit each clip as the per-joint median "
                          "of N fits on its masks changed at the outline (default 1: one fit)")
+    ap.add_argument("--seated", action="store_true",
+                    help="--held-out, --low, --perturb: the fit as `vidcap convert --seated` "
+                         "(the seated body's scale probed)")
     args = ap.parse_args(argv)
-    global ENSEMBLE
-    ENSEMBLE = args.ensemble
+    global ENSEMBLE, SEATED
+    ENSEMBLE, SEATED = args.ensemble, args.seated
     if args.perturb:
         return perturbed(args.frames, tuple(args.motions.split(",")),
                          tuple(map(float, args.yaws.split(","))),
