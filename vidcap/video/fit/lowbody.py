@@ -3,7 +3,7 @@
 The tracked fit draws the model at the body's height, which :func:`~vidcap.video.fit.
 tracking.body_heights` reads as the median silhouette height over about three seconds.
 That holds while the person stands for part of the window; a person seated (an office
-chair, a sofa: Human3.6M's Sitting, Eating, Phoning) or crouched for longer has a
+chair, a sofa, at a desk eating or on the phone) or crouched for longer has a
 silhouette about 0.8 of the standing height in every frame, and the model is drawn that
 much too small: thighs and shins too short, the shoulders at the chin. On renders of a
 seated figure (true silhouettes) PCK@0.05 was 30-53 % at the silhouettes' height and
