@@ -32,7 +32,7 @@ from vidcap.body import (
 )
 from vidcap.errors import AnnotationError
 from vidcap.video.annotations import PAIRS, Annotations
-from vidcap.video.flatview import NO_PERSPECTIVE, flat_view
+from vidcap.video.flatview import NO_PERSPECTIVE, flat_points, flat_view
 
 
 @dataclass
@@ -300,7 +300,8 @@ class AnnotateSession(RegionEditing):
         sides = self.annotations.sides(self.n_frames)
         orientation, yaw, j2 = apply_user_view(
             self._filled, self.proposed_orientation, self._rho, user_orient,
-            self._flat_points(user_joints),
+            flat_points(user_joints, self.clip.joints2d, self.clip.model_height,
+                        self.clip.perspective),
             image_sides=self.clip.image_sides, user_sides=sides, facing=res.facing,
             names_swapped=getattr(res, "names_swapped", None))
         signs = np.where(user_signs != 0, user_signs, res.signs).astype(int)
@@ -316,16 +317,6 @@ class AnnotateSession(RegionEditing):
                                                       orientation, yaw, self._on_frame(j2),
                                                       signs, joints3d)
         self._user_sides = sides
-
-    def _flat_points(self, points) -> np.ndarray:
-        """Points on the frame (F, N, 2) as the lift reads them: un-warped like the
-        fitted joints (a level camera: as they are)."""
-        from vidcap.video.fit.perspective import unwarp_points
-
-        k, above_feet = self.clip.perspective
-        if k == 0 or self.clip.model_height is None:
-            return points
-        return unwarp_points(points, self.clip.joints2d, self.clip.model_height, k, above_feet)
 
     def _on_frame(self, joints2d) -> np.ndarray:
         """The lift's 2D joints (un-warped) where the frame shows them, for the page."""

@@ -16,7 +16,7 @@ import numpy as np
 from vidcap.video.annotations import Annotations, Event
 from vidcap.video.fit.perspective import unwarp_joints, unwarp_points
 
-__all__ = ["NO_PERSPECTIVE", "flat_view", "unwarped_joint_events"]
+__all__ = ["NO_PERSPECTIVE", "flat_points", "flat_view", "unwarped_joint_events"]
 
 #: ``(k, above_feet)`` of a level camera: nothing is moved.
 NO_PERSPECTIVE = (0.0, 1.0)
@@ -53,6 +53,17 @@ def flat_view(joints2d, model_height, annotations: Annotations,
     return flat2d, flat_height, events
 
 
+def flat_points(points, joints2d, model_height,
+                perspective: tuple[float, float] = NO_PERSPECTIVE) -> np.ndarray:
+    """Points on the frame (F, N, 2), the user's placed joints say, as the 3D stage reads
+    them: un-warped as each frame's fitted ``joints2d`` are
+    (:func:`vidcap.video.fit.perspective.unwarp_points`); as they are for a level camera
+    or without the fitted heights (``model_height`` None)."""
+    if perspective[0] == 0 or model_height is None:
+        return points
+    return unwarp_points(points, joints2d, model_height, *perspective)
+
+
 def unwarped_joint_events(annotations: Annotations, joints2d, model_height,
                           perspective: tuple[float, float]) -> Annotations:
     """``annotations`` with each ``joint`` event's pixel moved as its frame's fitted joints
@@ -68,7 +79,7 @@ def unwarped_joint_events(annotations: Annotations, joints2d, model_height,
     inside = frames < len(joints2d)
     at = np.minimum(frames, len(joints2d) - 1)
     points = np.array([events[i].value for i in placed], float)[:, None, :]
-    moved = unwarp_points(points, joints2d[at], height[at], *perspective)[:, 0]
+    moved = flat_points(points, joints2d[at], height[at], perspective)[:, 0]
     moved[~inside] = points[~inside, 0]
     out = list(events)
     for i, uv in zip(placed, moved, strict=True):
