@@ -103,10 +103,10 @@ _SILHOUETTE_VERSION = 5
 _PLATE_VERSION = 11
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
-#: follows the bend, ``fit.bend``; 5: a body seated for seconds fitted at its standing
-#: height, ``fit.lowbody``), so a cache written by an older fit is redone rather than
-#: handed back as the new fit's.
-_POSE_VERSION = 5
+#: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
+#: than handed back as the new fit's. (``--seated`` fits are keyed apart by
+#: :func:`_pose_key`; the default fit did not change with them.)
+_POSE_VERSION = 3
 
 #: The silhouettes' graph cut (:mod:`vidcap.video.graphcut`) by default (``run``'s
 #: ``graph_cut``; ``vidcap convert --graph-cut / --no-graph-cut``). On: it decides only
