@@ -276,3 +276,55 @@ def test_a_person_in_a_small_frame_is_searched_for_enlarged(monkeypatch):
         assert x0 <= xs.mean() <= x1 and y0 <= ys.mean() <= y1
     monkeypatch.setattr(pb, "ENLARGE_BELOW", 0)  # searched at the frame's own size
     assert found_boxes() == []
+
+
+def test_a_side_on_person_is_found_by_the_second_detector():
+    """A walk seen side-on at Weizmann's size: the default detector (trained on people
+    facing or leaving the camera) finds nobody; the Daimler detector, trained on
+    pedestrians crossing a street, boxes the figure in every look, and nothing on a
+    blank frame."""
+    from vidcap import synth
+
+    rng = np.random.default_rng(0)
+    frames, truth = synth.render_clip(synth.make_motion("walk", n_frames=30, rng=rng), rng=rng,
+                                      yaw_deg=90, size=(180, 144), pixels_per_metre=45.0,
+                                      noise=2.0)
+    for k in range(0, 30, 3):
+        assert len(detect_people(frames[k])[0]) == 0
+        boxes, scores = detect_people(frames[k], detector="daimler")
+        ys, xs = np.nonzero(truth["masks"][k])
+        assert any(x0 <= xs.mean() <= x1 and y0 <= ys.mean() <= y1
+                   for x0, y0, x1, y1 in boxes)
+    boxes, _ = detect_people(np.full((144, 180, 3), 128, np.uint8), detector="daimler")
+    assert boxes.shape == (0, 4)
+
+
+def test_the_second_detector_searches_only_where_the_first_found_nobody(monkeypatch):
+    import vidcap.video.personbox as pb
+    from vidcap.video.personbox import ABSORBED, NOBODY, find_absorbed
+
+    # A still person only the Daimler detector sees.
+    boxes = [(50 + i % 2, 10, 90 + i % 2, 90 + i % 3) for i in range(8)]
+    frames, model, cuts = _absorbed_scene(monkeypatch, boxes)
+    asked, detect = [], pb.detect_people
+
+    def only_daimler(frame, detector="default", **kw):
+        asked.append(detector)
+        if detector == "default":
+            return np.zeros((0, 4), np.int64), np.zeros(0)
+        return detect(frame, **kw)
+
+    monkeypatch.setattr(pb, "detect_people", only_daimler)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == ABSORBED and out.still_person is not None
+    assert asked[:pb.GIVE_UP] == ["default"] * pb.GIVE_UP and asked[pb.GIVE_UP] == "daimler"
+    monkeypatch.setattr(pb, "SECOND_DETECTOR", False)
+    assert find_absorbed(model, frames, np.ones((8, 3)))[1] == NOBODY
+
+    # Where the default detector finds the person, the second one never runs.
+    asked.clear()
+    monkeypatch.setattr(pb, "SECOND_DETECTOR", True)
+    monkeypatch.setattr(pb, "detect_people", lambda frame, detector="default", **kw: (
+        asked.append(detector) or detect(frame, **kw)))
+    assert find_absorbed(model, frames, np.ones((8, 3)))[1] == ABSORBED
+    assert set(asked) == {"default"}
