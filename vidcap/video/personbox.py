@@ -185,10 +185,8 @@ def detect_people(frame: np.ndarray, *, min_score: float | None = None, rows: in
     if img.shape[0] < win_h or img.shape[1] < win_w:
         return np.zeros((0, 4), np.int64), np.zeros(0)
     # (the smaller window's stride and padding halved with it)
-    step = (4, 4) if daimler else (8, 8)
-    rects, weights = hog.detectMultiScale(img, winStride=step,
-                                          padding=(8, 8) if daimler else (16, 16),
-                                          scale=1.05)
+    step, pad = ((4, 4), (8, 8)) if daimler else ((8, 8), (16, 16))
+    rects, weights = hog.detectMultiScale(img, winStride=step, padding=pad, scale=1.05)
     if len(rects) == 0:
         return np.zeros((0, 4), np.int64), np.zeros(0)
     rects = np.asarray(rects, np.float64) / s
@@ -319,12 +317,12 @@ def find_absorbed(model, frames: np.ndarray, gains: np.ndarray, *,
     k = frames.shape[0]
     if k < 2 or (unseen_gate and model.never_seen_fraction < MIN_NEVER_SEEN):
         return model, SAW_ALL  # the plate saw the whole scene: nobody absorbed (no cost)
-    found = _search(model, frames, gains, n_detect, max_cover, rows, "default")
-    if found[1] == NOBODY and SECOND_DETECTOR:
-        # (a person the default detector does not see, often side-on: every test below
-        # applies to the second detector's finds as to the first's)
-        found = _search(model, frames, gains, n_detect, max_cover, rows, "daimler")
-    return found
+    got = _search(model, frames, gains, n_detect, max_cover, rows, "default")
+    if got[1] == NOBODY and SECOND_DETECTOR:
+        # (a person the default detector does not see, often side-on: every test of
+        # the search applies to the second detector's finds as to the first's)
+        got = _search(model, frames, gains, n_detect, max_cover, rows, "daimler")
+    return got
 
 
 def _search(model, frames, gains, n_detect: int, max_cover: float, rows, detector: str):
