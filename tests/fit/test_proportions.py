@@ -265,6 +265,36 @@ def test_proportions_stage_with_fixed_human_body(tmp_path):
     assert len(list(tmp_path.glob("proportions-*.npz"))) == 2
     np.testing.assert_allclose(two["joints2d"], fit_ensemble(
         t["masks"], ensemble=2, **fit_keywords(human.factors)).joints2d)
+    # --seated: the fit with the proportions probes the seated scale too, its own entry
+    seated, _ = proportions_stage(cache, "k", t["masks"], jobs=1, per_job=1,
+                                  progress=False, fixed=human, seated=True)
+    assert len(list(tmp_path.glob("proportions-*.npz"))) == 3
+    np.testing.assert_allclose(seated["joints2d"], fit_sequence(
+        t["masks"], low_body=True, **fit_keywords(human.factors)).joints2d)
+
+
+def test_proportions_stage_hands_the_seated_probe_to_its_fit(tmp_path, monkeypatch):
+    """``vidcap convert --proportions auto --seated``: the refit with the estimate gets
+    ``low_body`` as the first fit did (it used to be dropped there)."""
+    import vidcap.video.fit.parallel as parallel
+    from vidcap.video.bodystage import proportions_stage
+    from vidcap.video.stagecache import StageCache
+
+    seen = []
+
+    class _Pose:
+        joints2d = scores = spread = similarity = model_height = np.zeros((2, 15, 2))
+
+    def fake(masks, **kw):
+        seen.append(kw.get("low_body", False))
+        return _Pose()
+
+    monkeypatch.setattr(parallel, "fit_sequence_chunked", fake)
+    masks = np.zeros((2, 8, 8), bool)
+    for seated in (False, True):
+        proportions_stage(StageCache(tmp_path / str(seated)), "k", masks, jobs=1, per_job=1,
+                          progress=False, fixed=human_proportions(), seated=seated)
+    assert seen == [False, True]
 
 
 def test_compose_multiplies_groups_and_resolves_aliases():

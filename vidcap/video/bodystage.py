@@ -23,8 +23,8 @@ _VERSION = 3  # 3: the arms measured by length profiles (issue 27)
 
 def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_job: int,
                       progress, fixed: ProportionEstimate | None = None,
-                      workers: int | None = None,
-                      ensemble: int = 1) -> tuple[dict, ProportionEstimate]:
+                      workers: int | None = None, ensemble: int = 1,
+                      seated: bool = False) -> tuple[dict, ProportionEstimate]:
     """The subject's proportions and the 2D pose fitted with them, cached or computed.
 
     ``fixed``: these proportions (e.g. :data:`vidcap.video.fit.proportions.HUMAN`'s)
@@ -33,7 +33,9 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
     the lift reads against the body's height. ``jobs`` and ``per_job`` plan the fit's
     chunks, ``workers`` (default ``jobs``) fit them
     (:func:`vidcap.video.fit.parallel.fit_sequence_chunked`); ``ensemble``: that many fits
-    on the silhouettes changed at the outline, joined (:mod:`vidcap.video.fit.ensemble`).
+    on the silhouettes changed at the outline, joined (:mod:`vidcap.video.fit.ensemble`);
+    ``seated``: the fit with the estimate probes a seated body's scale as the first fit
+    did (``low_body``, :mod:`vidcap.video.fit.lowbody`).
 
     Returns
     -------
@@ -47,8 +49,9 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
     key = stage_key("proportions", _VERSION, k_sil,
                     chunk_bounds(len(masks), jobs, per_job=per_job),
                     None if fixed is None else sorted(fixed.factors.items()),
-                    # one fit keeps the key it had before ensembles
-                    *(() if ensemble == 1 else (f"ensemble={int(ensemble)}",)))
+                    # one fit (and not seated) keeps the key it had before the options
+                    *(() if ensemble == 1 else (f"ensemble={int(ensemble)}",)),
+                    *(("low_body",) if seated else ()))
     names = ("factor_names", "factor_values", "evidence", "seed_similarity")
     hit = cache.load("proportions", key, required=names + ("model_height",))
     if hit is not None:
@@ -67,7 +70,8 @@ def proportions_stage(cache: StageCache, k_sil: str, masks, *, jobs: int, per_jo
 
     pose = fit_sequence_chunked(masks, jobs=jobs, progress=wrap, per_job=per_job,
                                 workers=workers, **fit_keywords(est.factors),
-                                **({} if ensemble == 1 else {"ensemble": int(ensemble)}))
+                                **({} if ensemble == 1 else {"ensemble": int(ensemble)}),
+                                **({"low_body": True} if seated else {}))
     out = {"joints2d": pose.joints2d, "scores": pose.scores, "spread": pose.spread,
            "similarity": pose.similarity,
            "model_height": to_ankles(pose.model_height, {"foot": est.foot})}

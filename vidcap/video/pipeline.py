@@ -296,7 +296,8 @@ def _fit_stage(cache, k_sil, masks, body, proportions: str, *, jobs, per_job, st
         with _timed(timings, "proportions"):
             pose, estimate = proportions_stage(cache, k_sil, masks, jobs=jobs,
                                                per_job=per_job, progress=progress,
-                                               workers=workers, ensemble=ensemble)
+                                               workers=workers, ensemble=ensemble,
+                                               seated=seated)
         estimate = unwarped_estimate(estimate, perspective)
     log(estimate.summary())
     return pose, estimate.body(body.height), estimate
