@@ -114,7 +114,9 @@ eroded, dilated and with the outline's pixels flipped
 tall (the dataset's real clips: 70-90 px), over the same plates shrunk; rows named
 "@ 180x144". The "use" column stays the 640x480 row's (what chose thresholds there);
 :data:`vidcap.video.personbox.ENLARGE_BELOW` was built on the first run of the small
-validation rows (session 41).
+validation rows (session 41). The real clips taller than 144 rows are shrunk to 144 rows
+too, video and masks (``benchmarks/small_real.py``; rows named "@ WxH"): real bodies at
+the size the independent checks use.
 
 Renders and MediaPipe masks are cached under ``$VIDCAP_DATA/sil/`` (outside git);
 without ``VIDCAP_DATA`` the renders go to a temporary folder and MediaPipe is
@@ -818,7 +820,8 @@ def main(argv=None) -> int:
                         help=text)
     ap.add_argument("--small", action="store_true",
                     help="every render at Weizmann's size instead (180x144, the body ~79 px "
-                         "tall; rows named '@ 180x144')")
+                         "tall; rows named '@ 180x144'), and the real clips with true "
+                         "masks shrunk to 144 rows (benchmarks/small_real.py)")
     args = ap.parse_args(argv)
     import importlib
 
@@ -868,14 +871,20 @@ def main(argv=None) -> int:
         size = "" if SMALL is None else f" @ {SMALL[0][0]}x{SMALL[0][1]}"
         clips.append((name + size, use, video, truth, joints))
     from real_clips import load_truth, masked_clips, real_clips
+    from small_real import small_clip
 
     ignores = {}
     for clip in masked_clips(log=lambda msg: print(f"({msg})")):
         name = f"{clip.name} (real, true masks)"
         if args.only and args.only not in name:
             continue
-        truth, ignores[name] = load_truth(clip)
-        clips.append((name, clip.use, clip.video, truth, None))
+        truth, ignore = load_truth(clip)
+        video = clip.video
+        if SMALL is not None and (got := small_clip(video, (truth, ignore), cache)):
+            video, (truth, ignore), size = got  # real bodies at Weizmann's height
+            name = f"{clip.name} (real, true masks) @ {size[0]}x{size[1]}"
+        ignores[name] = ignore
+        clips.append((name, clip.use, video, truth, None))
     for clip in real_clips(log=lambda msg: print(f"({msg})")):
         name = f"{clip.name} (real, vs MediaPipe)"
         if args.only and args.only not in name:
@@ -883,6 +892,9 @@ def main(argv=None) -> int:
         got = real_clip(clip.video.name, clip.start, clip.stop, cache)
         if got is None:
             continue
+        if SMALL is not None and (small := small_clip(got[0], got[1:], cache)):
+            got = (small[0], *small[1])
+            name = f"{clip.name} (real, vs MediaPipe) @ {small[2][0]}x{small[2][1]}"
         use = ("tuning" if clip.video.stem in REAL_TUNING or clip.name in REAL_TUNING
                else "validation")
         clips.append((name, use, got[0], got[1], None))
