@@ -18,7 +18,10 @@ again as the pipeline fits them (the whole video, its chunks) but each chunk as
 :func:`vidcap.video.fit.ensemble.fit_ensemble` of N members (``pose2d_real.py --ensemble N``;
 ``-e1`` repeats the plain row's fit, a check; with ``+solve`` the hidden joints from
 :func:`vidcap.video.hidden.solve_hidden` as for the ``mp-`` rows, not convert's own path:
-compare ``-eN+solve`` with ``-e1+solve``).
+compare ``-eN+solve`` with ``-e1+solve``); ``human-empty``: the ``human`` row with the
+plate taken from frames that show the scene empty where a user would know them
+(``vidcap convert --background START:END``, :data:`real_clips.EMPTY_FRAMES`; the
+``human`` row elsewhere).
 Then per row kind, over the tuning clips, the validation clips and all, the mean of the
 clips' medians and of their shares > 10 % apart, and how many clips meet issue 27's 5 % of
 the height; per joint (each row kind): median / share > 10 %; and where vidcap's joint sits against
@@ -34,7 +37,14 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from real_clips import RealClip, known_camera, pipeline_result, real_clips, stretch
+from real_clips import (
+    EMPTY_FRAMES,
+    RealClip,
+    known_camera,
+    pipeline_result,
+    real_clips,
+    stretch,
+)
 
 from vidcap.body import JOINT_NAMES
 
@@ -169,6 +179,9 @@ def _joints(clip: RealClip, row: str):
         return _fit_with_perspective(clip, float(base.removeprefix("human-k")))
     if base in ("human-cam", "mp-human-cam"):
         return _with_known_camera(clip, base, hidden)
+    if base == "human-empty":  # vidcap convert --background START:END where it is known
+        return pipeline_result(clip.video, "outline", proportions="human", hidden=hidden,
+                               background=EMPTY_FRAMES.get(clip.video.stem)).image_joints2d
     if base == "human-auto":  # vidcap convert --camera auto
         return pipeline_result(clip.video, "outline", proportions="human", hidden=hidden,
                                camera="auto").image_joints2d

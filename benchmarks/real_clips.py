@@ -144,19 +144,27 @@ def load_truth(clip: MaskedClip) -> tuple[np.ndarray, np.ndarray]:
         return z["masks"].astype(bool), z["ignore"].astype(bool)
 
 
+#: Frames of a real video that show its scene empty, as a user who looked would give them
+#: to ``vidcap convert --background START:END`` (onebyone_room: the empty room between two
+#: visitors, benchmarks/DATA.md).
+EMPTY_FRAMES = {"onebyone_room": "35:65"}
+
+
 def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75,
-                    proportions: str = "seed", hidden: str = "fit", camera=None):
+                    proportions: str = "seed", hidden: str = "fit", camera=None,
+                    background=None):
     """vidcap's :func:`vidcap.video.pipeline.run` on the whole ``video`` (default options but
     ``cues`` and ``proportions``; no smoothing, the per-segment lift: the 3D is re-run per
     stretch), cached by stage in :data:`CACHE`. ``hidden='solve'``: ``vidcap convert
     --hidden solve``, the clip solve as the lift and the joints the image cannot show
     taken from it (:mod:`vidcap.video.hidden`). ``camera``: ``vidcap convert --camera``'s
-    (height, distance, pitch), as :func:`known_camera` gives it."""
+    (height, distance, pitch), as :func:`known_camera` gives it; ``background``: its
+    ``--background``."""
     from vidcap.video.pipeline import run
 
     return run(video, height=height, smooth_sigma=0.0, progress=False, cache_dir=CACHE,
                lift="solve" if hidden == "solve" else "segment", cues=cues,
-               proportions=proportions, hidden=hidden, camera=camera)
+               proportions=proportions, hidden=hidden, camera=camera, background=background)
 
 
 #: The clips whose camera stands where a calibration says: the Pose2Sim trial's Qualisys

@@ -138,8 +138,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--annotations", metavar="A.json",
                         help="depth/orientation/joint annotations (default: "
                         "VIDEO_STEM.vidcap.json beside the video, if present)")
-    parser.add_argument("--background", metavar="PLATE.png",
-                        help="background plate image (default: estimated from the video)")
+    parser.add_argument("--background", metavar="PLATE.png|START:END",
+                        help="background plate: an image of the empty scene, or frames of "
+                        "the video that show it empty (START:END, counted from 0, END "
+                        "excluded; either may be left out; the plate is their median). "
+                        "Default: estimated from the video")
     parser.add_argument("--height", type=float, default=1.75, metavar="M",
                         help="subject's height in metres (default 1.75)")
     parser.add_argument("--smooth", type=float, default=1.0, metavar="SIGMA",

@@ -18,8 +18,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("-o", "--output", type=Path, required=True,
                         help="output .npz: masks (F,H,W) bool, bbox (F,4) x0,y0,x1,y1 "
                              "(exclusive ends), plate (H,W,3) uint8, confidence (H,W), ...")
-    parser.add_argument("--background", type=Path, metavar="PLATE",
-                        help="use this image of the empty scene instead of estimating one")
+    parser.add_argument("--background", type=Path, metavar="PLATE.png|START:END",
+                        help="use this image of the empty scene instead of estimating one, "
+                             "or frames of the video that show the scene empty (START:END, "
+                             "counted from 0, END excluded; either may be left out)")
     parser.add_argument("--method", choices=("felzenszwalb", "median"), default="felzenszwalb",
                         help="background estimate: Felzenszwalb regions + per-pixel votes "
                              "(default) or the plain temporal median")
@@ -70,7 +72,7 @@ def run(args) -> int:
                                 default_still_person())
     info = probe(args.video)
     if args.background is not None:
-        bg = load_plate(args.background)
+        bg = load_plate(args.background, args.video)
         if bg.plate.shape[:2] != (info.height, info.width):
             raise UsageError(
                 f"the background image is {bg.plate.shape[1]}x{bg.plate.shape[0]} but the "

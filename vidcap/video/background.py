@@ -195,14 +195,22 @@ class BackgroundModel:
                    method="given")
 
 
-def load_plate(path: str | os.PathLike) -> BackgroundModel:
-    """Read a background image (PNG, JPEG, ...) as a :class:`BackgroundModel`.
+def load_plate(path: str | os.PathLike, video: str | os.PathLike | None = None
+               ) -> BackgroundModel:
+    """Read a background image (PNG, JPEG, ...) as a :class:`BackgroundModel`; with
+    ``video``, ``path`` may instead name frames of it that show the empty scene,
+    ``'START:END'`` (:func:`vidcap.video.emptyframes.empty_plate`).
 
     Raises
     ------
     InputFileError
-        The file is missing or not an image.
+        The file is missing or not an image; the frames hold none of the video's.
     """
+    from vidcap.video.emptyframes import empty_plate, frame_range
+
+    frames = None if video is None else frame_range(path)
+    if frames is not None:
+        return BackgroundModel.from_plate(empty_plate(video, *frames))
     if not os.path.isfile(path):
         raise InputFileError("no such background image", path)
     data = np.fromfile(path, np.uint8)

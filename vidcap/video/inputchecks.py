@@ -106,4 +106,5 @@ def plate_notice(model) -> str | None:
         return None
     return (f"notice: the background behind {100 * share:.1f}% of the frame was never seen "
             "uncovered (someone stays there throughout), so the silhouettes there are a "
-            "guess; a photo of the empty scene (--background plate.png) settles it")
+            "guess; a photo of the empty scene (--background plate.png), or the frames "
+            "that show it empty (--background START:END), settles it")

@@ -31,6 +31,7 @@ import numpy as np
 from vidcap.body import BodyModel
 from vidcap.errors import AnnotationError
 from vidcap.video.annotations import Annotations, default_path
+from vidcap.video.emptyframes import given_plate_identity
 from vidcap.video.fit.perspective import camera_perspective, unwarp_joints, warp_joints
 from vidcap.video.fitbody import ankle_share, fit_keywords_for, unwarped_estimate
 from vidcap.video.flatview import flat_view
@@ -155,8 +156,8 @@ def run(
     video : str or path-like
     annotations : path or Annotations, optional
         Default: ``VIDEO_STEM.vidcap.json`` beside the video when it exists.
-    background : path, optional
-        A background plate image; default: estimated from the video.
+    background : path or str, optional
+        An image of the empty scene or ``'START:END'`` (frames showing it); default: estimated.
     height : float
         Subject's height in metres.
     smooth_sigma : float
@@ -214,7 +215,7 @@ def run(
 
     # a given plate is read first: a bad file is reported before any worker starts
     with _timed(timings, "plate"):
-        plate = load_plate(background) if background is not None else None
+        plate = load_plate(background, video) if background is not None else None
     graph_cut, still, k_plate, k_sil = _stage_keys(video, background, ann, graph_cut, log,
                                                    still_person)
     jobs = default_jobs() if jobs is None else max(1, int(jobs))
@@ -404,8 +405,8 @@ def _start_fit_workers(cache: StageCache, k_sil: str, n_frames: int | None, jobs
 # --------------------------------------------------------------------------- 1. plate
 def _plate_key(video_id: dict, background, colour_models: bool = False,
                still_person: bool = False) -> str:
-    if background is not None:
-        return stage_key("plate-file", video_identity(background))
+    if background is not None:  # an image, or frames of the video (emptyframes)
+        return stage_key("plate-file", *given_plate_identity(background, video_id))
     # the colour models and the still-person passes join the key only when asked for:
     # entries without them stay valid
     extra = (("colours",) if colour_models else ()) + (
