@@ -172,6 +172,9 @@ def _joints(clip: RealClip, row: str):
     hidden = "fit" if base == row else "solve"
     if base in ("human-erode", "human-dilate"):
         return _fit_ensemble(clip.video, "human", 1, base.removeprefix("human-"))[0]
+    if base == "human-empty":  # vidcap convert --background START:END where it is known
+        return pipeline_result(clip.video, "outline", proportions="human", hidden=hidden,
+                               background=EMPTY_FRAMES.get(clip.video.stem)).image_joints2d
     if base.startswith(("human-e", "outline-e")):
         body, members = base.split("-e")
         return _ensemble_joints(clip.video, body, int(members), hidden)
@@ -179,9 +182,6 @@ def _joints(clip: RealClip, row: str):
         return _fit_with_perspective(clip, float(base.removeprefix("human-k")))
     if base in ("human-cam", "mp-human-cam"):
         return _with_known_camera(clip, base, hidden)
-    if base == "human-empty":  # vidcap convert --background START:END where it is known
-        return pipeline_result(clip.video, "outline", proportions="human", hidden=hidden,
-                               background=EMPTY_FRAMES.get(clip.video.stem)).image_joints2d
     if base == "human-auto":  # vidcap convert --camera auto
         return pipeline_result(clip.video, "outline", proportions="human", hidden=hidden,
                                camera="auto").image_joints2d

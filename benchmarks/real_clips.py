@@ -146,8 +146,9 @@ def load_truth(clip: MaskedClip) -> tuple[np.ndarray, np.ndarray]:
 
 #: Frames of a real video that show its scene empty, as a user who looked would give them
 #: to ``vidcap convert --background START:END`` (onebyone_room: the empty room between two
-#: visitors, benchmarks/DATA.md).
-EMPTY_FRAMES = {"onebyone_room": "35:65"}
+#: visitors, benchmarks/DATA.md; cdnet_office_enter: the office before the man walks in,
+#: frame 82 of its truth the first with him).
+EMPTY_FRAMES = {"onebyone_room": "35:65", "cdnet_office_enter": "0:80"}
 
 
 def pipeline_result(video: Path, cues: str = "outline", height: float = 1.75,

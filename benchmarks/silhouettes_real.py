@@ -116,7 +116,9 @@ tall (the dataset's real clips: 70-90 px), over the same plates shrunk; rows nam
 :data:`vidcap.video.personbox.ENLARGE_BELOW` was built on the first run of the small
 validation rows (session 41). The real clips taller than 144 rows are shrunk to 144 rows
 too, video and masks (``benchmarks/small_real.py``; rows named "@ WxH"): real bodies at
-the size the independent checks use.
+the size the independent checks use. A real clip with true masks whose empty scene a user
+can name (:data:`real_clips.EMPTY_FRAMES`) gets a second row, "--background START:END": the
+plate from those frames (``vidcap convert --background START:END``), no graph cut.
 
 Renders and MediaPipe masks are cached under ``$VIDCAP_DATA/sil/`` (outside git);
 without ``VIDCAP_DATA`` the renders go to a temporary folder and MediaPipe is
@@ -143,7 +145,7 @@ sys.path.insert(0, str(ROOT))
 from vidcap import synth  # noqa: E402
 from vidcap.io.video import read_frames, write_video  # noqa: E402
 from vidcap.video.background import PLATE_SEED as VIDCAP_PLATE_SEED  # noqa: E402
-from vidcap.video.background import estimate_background  # noqa: E402
+from vidcap.video.background import estimate_background, load_plate  # noqa: E402
 from vidcap.video.silhouette import extract_silhouettes  # noqa: E402
 
 SHARED = ROOT.parent / "shared" / "data" / "video"
@@ -450,6 +452,9 @@ def lamp_mask(shape, rng) -> np.ndarray:
 #: metre (a 1.75 m body ~79 px tall, as the dataset's people are 70-90 px); None: 640x480,
 #: the body filling three quarters of the height.
 SMALL = None
+#: Rows scored with ``--background START:END`` instead of the estimated plate: row name ->
+#: 'START:END' (:data:`real_clips.EMPTY_FRAMES`).
+GIVEN_EMPTY: dict[str, str] = {}
 SMALL_SIZE = ((180, 144), 45.0)
 
 
@@ -717,8 +722,13 @@ SWITCHES = (
 )
 
 
-def run_vidcap(video, method):
-    # the frames `vidcap convert` samples (PLATE_SEED), or another draw (--seed)
+def run_vidcap(video, method, empty=None):
+    # the frames `vidcap convert` samples (PLATE_SEED), or another draw (--seed); with
+    # ``empty`` ('START:END'), `--background START:END`'s given plate (no graph cut)
+    if empty is not None:
+        bg = load_plate(empty, video)
+        return np.asarray(extract_silhouettes(video, bg, require_person=False,
+                                              progress=False, graph_cut=False).masks), bg
     bg = estimate_background(video, method=method, colour_models=GRAPH_CUT,
                              rng=np.random.default_rng(PLATE_SEED))
     sil = extract_silhouettes(video, bg, require_person=False, progress=False,
@@ -743,7 +753,7 @@ def score_clip(name, use, video, truth, mp, quick=False, joints2d=None, ignore=N
 
     row = {"clip": name, "use": use, "frames": len(truth)}
     t = time.perf_counter()
-    masks, bg = run_vidcap(video, "felzenszwalb")
+    masks, bg = run_vidcap(video, "felzenszwalb", GIVEN_EMPTY.get(name))
     row["secs"] = time.perf_counter() - t
     row["vidcap"] = score(masks)
     row["pck"] = None if joints2d is None else pck_pair(masks, truth, joints2d)
@@ -870,7 +880,7 @@ def main(argv=None) -> int:
                   if args.pck else None)
         size = "" if SMALL is None else f" @ {SMALL[0][0]}x{SMALL[0][1]}"
         clips.append((name + size, use, video, truth, joints))
-    from real_clips import load_truth, masked_clips, real_clips
+    from real_clips import EMPTY_FRAMES, load_truth, masked_clips, real_clips
     from small_real import small_clip
 
     ignores = {}
@@ -885,6 +895,11 @@ def main(argv=None) -> int:
             name = f"{clip.name} (real, true masks) @ {size[0]}x{size[1]}"
         ignores[name] = ignore
         clips.append((name, clip.use, video, truth, None))
+        if clip.name in EMPTY_FRAMES:  # the user's rescue: the frames that show it empty
+            GIVEN_EMPTY[f"{name} --background {EMPTY_FRAMES[clip.name]}"] = EMPTY_FRAMES[clip.name]
+            ignores[f"{name} --background {EMPTY_FRAMES[clip.name]}"] = ignore
+            clips.append((f"{name} --background {EMPTY_FRAMES[clip.name]}", clip.use, video,
+                          truth, None))
     for clip in real_clips(log=lambda msg: print(f"({msg})")):
         name = f"{clip.name} (real, vs MediaPipe)"
         if args.only and args.only not in name:
