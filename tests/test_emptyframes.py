@@ -91,3 +91,23 @@ def test_the_stage_cache_tells_ranges_and_images_apart(tmp_path):
     img = tmp_path / "plate.png"
     img.write_bytes(b"png")
     assert given_plate_identity(img, video_id)[0]["path"] == str(img.resolve())
+
+
+def test_large_frames_take_fewer_samples(tmp_path, monkeypatch):
+    import vidcap.io.video as vio
+    import vidcap.video.emptyframes as ef
+
+    video, scene, _ = _arrives_and_stays(tmp_path)
+    asked = []
+    real = vio.iter_frames
+
+    def counting(path, **kw):
+        asked.append(len(kw["only"]))
+        return real(path, **kw)
+
+    monkeypatch.setattr(vio, "iter_frames", counting)
+    ef.empty_plate(video, 0, 8)
+    monkeypatch.setattr(ef, "MAX_BYTES", 96 * 128 * 3 * 2)  # room for two frames: five
+    plate = ef.empty_plate(video, 0, 8)
+    assert asked == [8, ef.MIN_SAMPLES]
+    assert np.median(np.abs(plate.astype(int) - scene.astype(int))) <= 3

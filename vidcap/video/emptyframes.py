@@ -18,10 +18,14 @@ import re
 
 import numpy as np
 
-__all__ = ["N_SAMPLES", "empty_plate", "frame_range", "given_plate_identity"]
+__all__ = ["MAX_BYTES", "N_SAMPLES", "empty_plate", "frame_range", "given_plate_identity"]
 
 #: Frames (at most) the median is taken over.
 N_SAMPLES = 25
+#: ... and at most this many bytes of them (a 4K clip's 25 frames would be 0.6 GB, and
+#: the median sorts a copy): fewer frames for large ones, at least :data:`MIN_SAMPLES`.
+MAX_BYTES = 200_000_000
+MIN_SAMPLES = 5
 
 _RANGE = re.compile(r"^\s*(\d*)\s*:\s*(\d*)\s*$")
 
@@ -46,9 +50,10 @@ def empty_plate(video, start: int, end: int | None, *, n_samples: int = N_SAMPLE
     ----------
     video : str or path-like
     start, end : int
-        Frame indices, 0-based, ``end`` exclusive (None: the clip's last frame).
+        Frame indices, 0-based, ``end`` exclusive (None: to the clip's end).
     n_samples : int
-        Frames the per-pixel median is taken over (evenly spread; all when fewer).
+        Frames the per-pixel median is taken over (evenly spread; all when fewer; fewer
+        for large frames, :data:`MAX_BYTES`).
 
     Returns
     -------
@@ -65,7 +70,9 @@ def empty_plate(video, start: int, end: int | None, *, n_samples: int = N_SAMPLE
     from vidcap.errors import InputFileError, VideoError
     from vidcap.io.video import iter_frames, probe
 
-    n_frames = probe(video).n_frames  # (the container's count: decoding says the rest)
+    info = probe(video)
+    n_frames = info.n_frames  # (the container's count: decoding says the rest)
+    n_samples = min(n_samples, max(MIN_SAMPLES, MAX_BYTES // (3 * info.width * info.height)))
     stop = n_frames if end is None else min(int(end), n_frames)
     take = (np.unique(np.linspace(start, stop - 1, min(n_samples, stop - start)).round())
             if 0 <= start < stop else np.zeros(0))
