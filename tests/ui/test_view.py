@@ -247,3 +247,13 @@ def test_cli_annotate_bad_fit_option(cli, tmp_path, option):
     r = cli("annotate", video, "--no-browser", "--cache-dir", tmp_path / "cache", *option)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and option[0] in r.stderr
     assert not (tmp_path / "cache").exists()
+
+
+def test_cli_annotate_takes_converts_background(cli, tmp_path):
+    # the plate convert was given, frames of the video here: a range past its end is
+    # the same one-line error convert gives, so the option reached the pipeline
+    video = Path(__file__).resolve().parents[2] / "sample_videos" / "walk_side.mp4"
+    r = cli("annotate", video, "--no-browser", "--cache-dir", tmp_path / "cache",
+            "--background", "900:")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1
+    assert "--background 900: holds no frame of the video" in r.stderr

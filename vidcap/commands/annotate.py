@@ -45,6 +45,10 @@ def add_arguments(parser) -> None:
     add_ensemble_argument(parser)
     add_camera_argument(parser)
     add_seated_argument(parser)
+    parser.add_argument("--background", metavar="PLATE.png|START:END",
+                        help="the background plate, as `vidcap convert --background`: an "
+                        "image of the empty scene or frames of the video that show it "
+                        "(default: estimated from the video)")
 
 
 def run(args) -> int:
@@ -66,7 +70,8 @@ def run(args) -> int:
     check_cues_option(cues)
     fit = {"proportions": args.proportions, "cues": cues,
            "ensemble": check_ensemble_option(args.ensemble),
-           "camera": check_camera_option(args.camera, args.height), "seated": args.seated}
+           "camera": check_camera_option(args.camera, args.height), "seated": args.seated,
+           "background": args.background}
 
     def log(msg: str) -> None:
         print(f"vidcap annotate: {msg}", file=sys.stderr, flush=True)
