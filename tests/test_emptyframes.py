@@ -111,3 +111,15 @@ def test_large_frames_take_fewer_samples(tmp_path, monkeypatch):
     plate = ef.empty_plate(video, 0, 8)
     assert asked == [8, ef.MIN_SAMPLES]
     assert np.median(np.abs(plate.astype(int) - scene.astype(int))) <= 3
+
+
+def test_a_range_across_a_frame_size_change_is_one_clear_error(tmp_path):
+    from tests.hostile.test_video import _ts_clip
+
+    a, b, joined = tmp_path / "a.ts", tmp_path / "b.ts", tmp_path / "joined.ts"
+    _ts_clip(a, 160, 120, 12, 0)
+    _ts_clip(b, 200, 150, 12, 1)
+    joined.write_bytes(a.read_bytes() + b.read_bytes())
+    assert empty_plate(joined, 0, 10).shape == (120, 160, 3)  # before the join: fine
+    with pytest.raises(InputFileError, match="the frame size changes within --background 0:"):
+        empty_plate(joined, 0, None)

@@ -22,6 +22,9 @@ import numpy as np
 from vidcap.errors import VideoError
 from vidcap.fileio import atomic_path
 
+#: The problem a :class:`~vidcap.errors.VideoError` names when a read yields no frame.
+NO_FRAMES = "no decodable video frames"
+
 
 @dataclass(frozen=True)
 class VideoInfo:
@@ -320,7 +323,7 @@ def iter_frames(
         img = _to_bgr(frame)
         yield _upright(img, turns)
     if n == 0 and (stop is None or stop > start):
-        raise VideoError("no decodable video frames", path)
+        raise VideoError(NO_FRAMES, path)
 
 
 def iter_thumbnails(
@@ -370,7 +373,7 @@ def iter_thumbnails(
         if thumb is not None or img is not None:
             yield i, thumb, img
     if n == 0:
-        raise VideoError("no decodable video frames", path)
+        raise VideoError(NO_FRAMES, path)
 
 
 def _upright(img: np.ndarray, turns: int) -> np.ndarray:

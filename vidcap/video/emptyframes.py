@@ -68,7 +68,7 @@ def empty_plate(video, start: int, end: int | None, *, n_samples: int = N_SAMPLE
         and its frame count).
     """
     from vidcap.errors import InputFileError, VideoError
-    from vidcap.io.video import iter_frames, probe
+    from vidcap.io.video import NO_FRAMES, iter_frames, probe
 
     info = probe(video)
     n_frames = info.n_frames  # (the container's count: decoding says the rest)
@@ -76,15 +76,20 @@ def empty_plate(video, start: int, end: int | None, *, n_samples: int = N_SAMPLE
     stop = n_frames if end is None else min(int(end), n_frames)
     take = (np.unique(np.linspace(start, stop - 1, min(n_samples, stop - start)).round())
             if 0 <= start < stop else np.zeros(0))
+    got = f"{start}:{'' if end is None else end}"
     try:
         frames = [] if not take.size else list(iter_frames(
             video, start=start, stop=stop, only=set(take.astype(int).tolist())))
-    except VideoError:  # none decoded from there on: the container over-counted
-        frames = []
+    except VideoError as exc:
+        if exc.problem != NO_FRAMES:
+            raise
+        frames = []  # none decoded from there on: the container over-counted
     if not frames:
-        got = f"{start}:{'' if end is None else end}"
         raise InputFileError(f"--background {got} holds no frame of the video, which has "
                              f"{n_frames} (frames count from 0, the end is excluded)", video)
+    if any(f.shape != frames[0].shape for f in frames):
+        raise InputFileError(f"the frame size changes within --background {got}; re-encode "
+                             "the video at one size", video)
     return np.median(np.stack(frames), axis=0).round().astype(np.uint8)
 
 
