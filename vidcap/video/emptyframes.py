@@ -70,6 +70,9 @@ def empty_plate(video, start: int, end: int | None, *, n_samples: int = N_SAMPLE
     from vidcap.errors import InputFileError, VideoError
     from vidcap.io.video import NO_FRAMES, iter_frames, probe
 
+    if end is not None and end <= start:
+        raise InputFileError(f"--background {start}:{end} names no frame: END must be after "
+                             "START (frames count from 0, the end is excluded)", video)
     info = probe(video)
     n_frames = info.n_frames  # (the container's count: decoding says the rest)
     n_samples = min(n_samples, max(MIN_SAMPLES, MAX_BYTES // (3 * info.width * info.height)))
