@@ -830,8 +830,8 @@ def main(argv=None) -> int:
                         help=text)
     ap.add_argument("--small", action="store_true",
                     help="every render at Weizmann's size instead (180x144, the body ~79 px "
-                         "tall; rows named '@ 180x144'), and the real clips with true "
-                         "masks shrunk to 144 rows (benchmarks/small_real.py)")
+                         "tall; rows named '@ 180x144'), and the real clips shrunk to "
+                         "144 rows (benchmarks/small_real.py)")
     args = ap.parse_args(argv)
     import importlib
 
@@ -896,10 +896,9 @@ def main(argv=None) -> int:
         ignores[name] = ignore
         clips.append((name, clip.use, video, truth, None))
         if clip.name in EMPTY_FRAMES:  # the user's rescue: the frames that show it empty
-            GIVEN_EMPTY[f"{name} --background {EMPTY_FRAMES[clip.name]}"] = EMPTY_FRAMES[clip.name]
-            ignores[f"{name} --background {EMPTY_FRAMES[clip.name]}"] = ignore
-            clips.append((f"{name} --background {EMPTY_FRAMES[clip.name]}", clip.use, video,
-                          truth, None))
+            rescue = f"{name} --background {EMPTY_FRAMES[clip.name]}"
+            GIVEN_EMPTY[rescue], ignores[rescue] = EMPTY_FRAMES[clip.name], ignore
+            clips.append((rescue, clip.use, video, truth, None))
     for clip in real_clips(log=lambda msg: print(f"({msg})")):
         name = f"{clip.name} (real, vs MediaPipe)"
         if args.only and args.only not in name:

@@ -12,6 +12,7 @@ scaled by area averaging (as a camera's sensor at that resolution would see it) 
 written to H.264 (crf 18); the masks are scaled the same way and kept where at least
 half of a pixel was the person (or unscored).
 """
+
 from __future__ import annotations
 
 from pathlib import Path
