@@ -65,21 +65,21 @@ def empty_plate(video, start: int, end: int | None, *, n_samples: int = N_SAMPLE
     ------
     InputFileError
         The range holds no frame of the video (one line naming the video, the range
-        and its frame count).
+        and its frame count), or is empty, or spans a change of the frame size.
     """
     from vidcap.errors import InputFileError, VideoError
     from vidcap.io.video import NO_FRAMES, iter_frames, probe
 
+    got = f"{start}:{'' if end is None else end}"  # as the user wrote it
     if end is not None and end <= start:
-        raise InputFileError(f"--background {start}:{end} names no frame: END must be after "
-                             "START (frames count from 0, the end is excluded)", video)
+        raise InputFileError(f"--background {got} names no frame: END must be after START "
+                             "(frames count from 0, the end is excluded)", video)
     info = probe(video)
     n_frames = info.n_frames  # (the container's count: decoding says the rest)
     n_samples = min(n_samples, max(MIN_SAMPLES, MAX_BYTES // (3 * info.width * info.height)))
     stop = n_frames if end is None else min(int(end), n_frames)
     take = (np.unique(np.linspace(start, stop - 1, min(n_samples, stop - start)).round())
             if 0 <= start < stop else np.zeros(0))
-    got = f"{start}:{'' if end is None else end}"
     try:
         frames = [] if not take.size else list(iter_frames(
             video, start=start, stop=stop, only=set(take.astype(int).tolist())))
