@@ -194,6 +194,7 @@ def test_legs_held_under_a_swinging_torso_are_absorbed(monkeypatch):
     from vidcap.video.personbox import ABSORBED, CUTS_MOVE, find_absorbed
 
     monkeypatch.setattr(pb, "IN_PLACE", False)  # the default: such cuts move
+    monkeypatch.setattr(pb, "STILL_CORE", False)  # (its own test is below)
     frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
     _moving_cuts(monkeypatch, frames, shift_legs=False)
     assert find_absorbed(model, frames, np.ones((8, 3)))[1] == CUTS_MOVE
@@ -211,6 +212,7 @@ def test_a_person_rocking_on_their_legs_is_left_to_the_plate(monkeypatch):
     from vidcap.video.personbox import CUTS_MOVE, find_absorbed
 
     monkeypatch.setattr(pb, "IN_PLACE", True)
+    monkeypatch.setattr(pb, "STILL_CORE", False)  # (its own test is below)
     frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
     _moving_cuts(monkeypatch, frames, shift_legs=True)
     out, reason = find_absorbed(model, frames, np.ones((8, 3)))
@@ -328,3 +330,81 @@ def test_the_second_detector_searches_only_where_the_first_found_nobody(monkeypa
         asked.append(detector) or detect(frame, **kw)))
     assert find_absorbed(model, frames, np.ones((8, 3)))[1] == ABSORBED
     assert set(asked) == {"default"}
+
+
+def _swinging_legs(monkeypatch, frames):
+    """A cut per sample i: a head and torso that stay over legs that swing 8 px a
+    sample (a walk or jumping jacks on the spot, as the detector's grabCut sees it)."""
+    import vidcap.video.personbox as pb
+
+    def cut(frame, box, *_, **__):
+        i = next(k for k in range(len(frames)) if frames[k].ctypes.data == frame.ctypes.data)
+        dx = 8 * (i % 4) - 12
+        out = np.zeros(frame.shape[:2], bool)
+        out[12:50, 56:72] = True  # head and torso, the same in every sample
+        out[50:90, 60 + dx:68 + dx] = True  # a swinging leg
+        return out
+
+    monkeypatch.setattr(pb, "cut_in_box", cut)
+
+
+def test_a_still_torso_over_swinging_legs_is_absorbed(monkeypatch):
+    import vidcap.video.personbox as pb
+    from vidcap.video.personbox import ABSORBED, CUTS_MOVE, find_absorbed
+
+    monkeypatch.setattr(pb, "STILL_CORE", False)
+    frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
+    _swinging_legs(monkeypatch, frames)
+    assert find_absorbed(model, frames, np.ones((8, 3)))[1] == CUTS_MOVE
+    monkeypatch.setattr(pb, "STILL_CORE", True)
+    frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
+    _swinging_legs(monkeypatch, frames)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == ABSORBED
+    assert out.still_person[14:48, 58:70].all()  # the torso, in every cut
+    # a leg's place is the person in at most a quarter of the cuts: left to the plate
+    assert not out.still_person[52:88, :56].any() and not out.still_person[:, 76:].any()
+
+
+def test_cuts_that_share_too_little_are_a_person_moving_about(monkeypatch):
+    import vidcap.video.personbox as pb
+    from vidcap.video.personbox import CUTS_MOVE, find_absorbed
+
+    monkeypatch.setattr(pb, "STILL_CORE", True)
+    frames, model, _ = _absorbed_scene(monkeypatch, [(40, 10, 100, 90)] * 8)
+
+    def cut(frame, box, *_, **__):  # the whole body 10 px further each sample
+        i = next(k for k in range(len(frames)) if frames[k].ctypes.data == frame.ctypes.data)
+        out = np.zeros(frame.shape[:2], bool)
+        out[12:90, 40 + 10 * (i % 4):56 + 10 * (i % 4)] = True
+        return out
+
+    monkeypatch.setattr(pb, "cut_in_box", cut)
+    out, reason = find_absorbed(model, frames, np.ones((8, 3)))
+    assert reason == CUTS_MOVE and out is model
+
+
+def test_scene_colours_swept_into_the_cuts_are_not_the_person():
+    """A red torso the plate absorbed, blue legs that swing (the first-pass
+    silhouette shows them) and a grey stand behind them, of the wall's grey: the
+    cuts hold all three; the person's colours keep the torso and drop the stand."""
+    from vidcap.video.personbox import _person_coloured
+
+    rng = np.random.default_rng(4)
+    plate = rng.integers(95, 106, (96, 128, 3)).astype(np.uint8)  # a grey wall
+    plate[12:50, 56:72] = (40, 40, 190)  # the absorbed torso
+    plate[40:90, 76:90] = rng.integers(110, 121, (50, 14, 3))  # the stand, a lighter grey
+    frames, cuts = [], []
+    for i in range(6):
+        frame = plate.copy()
+        x = 56 + 4 * (i % 3)
+        frame[50:90, x:x + 8] = (170, 60, 30)  # a blue leg, where the plate shows wall
+        cut = np.zeros((96, 128), bool)
+        cut[12:90, 56:90] = True  # grabCut swept the stand in with the person
+        frames.append(frame)
+        cuts.append(cut)
+    model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
+    kept = _person_coloured(model, np.stack(frames), np.ones((6, 3)), np.stack(cuts),
+                            list(range(6)))
+    assert kept[16:46, 60:68].all()  # the torso: a colour the wall round it lacks
+    assert kept[44:86, 79:87].mean() < 0.05  # the stand: the scene's colours
