@@ -728,6 +728,9 @@ SWITCHES = (
      "vidcap's plate: the still core (torso, head) of a person whose limbs swing on the "
      "spot taken from the person box's cuts (vidcap.video.personbox._still_core; default: "
      "personbox.STILL_CORE)"),
+    ("small-frames", "heldpose", "SMALL_FRAMES",
+     "vidcap's plate: in frames under 240 rows, the person box's search whatever its gates "
+     "say (vidcap.video.heldpose; default: heldpose.SMALL_FRAMES, off)"),
     ("shorten-run", "reflection", "SHORTEN_RUN",
      "vidcap's silhouettes: a reflection run that fails the colour test cut short at its "
      "longest start that passes it (vidcap.video.reflection; default: "

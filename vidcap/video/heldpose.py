@@ -39,6 +39,14 @@ MAX_AREA = 0.02
 #: sample or two and :func:`~vidcap.video.personbox.find_absorbed` leaves the plate
 #: alone (not found again; a cost of up to ~0.6 s CPU at 640x480, nothing else).
 MAX_SHOWN = 1
+#: In frames under :data:`vidcap.video.personbox.ENLARGE_BELOW` rows (Weizmann's
+#: 180x144), search for an absorbed person whatever the gates say: at that size the
+#: plate's never-seen map can be too coarse to show a still body part (02_07 4-7 s
+#: side: 0.03 % of the frame). Off: at 180x144 (``silhouettes_real.py --small``, session
+#: 45) it took that tuning render 0.504 -> 0.936 median IoU, but two validation rows
+#: lost (06_11 6-9 s front 0.873 -> 0.785, a real walker kept in place,
+#: cdnet_pedestrians_coat, 0.931 -> 0.882) and no other row of 131 gained.
+SMALL_FRAMES = False
 #: Samples the gate looks at (evenly spread over the plate's samples).
 N_GATE = 8
 #: The heights (rows) the detector searches a sample at, the next only when the one
@@ -103,6 +111,7 @@ def absorbed_or_held(model, frames: np.ndarray, gains: np.ndarray):
     found, why = personbox.find_absorbed(model, frames, gains)
     if why != personbox.SAW_ALL or not HELD_POSE or len(frames) < 2:
         return found
-    if not nearly_empty(model, frames, gains):
+    small = SMALL_FRAMES and frames.shape[1] < personbox.ENLARGE_BELOW
+    if not small and not nearly_empty(model, frames, gains):
         return model
     return personbox.find_absorbed(model, frames, gains, unseen_gate=False, rows=ROWS)[0]
