@@ -389,6 +389,7 @@ def test_scene_colours_swept_into_the_cuts_are_not_the_person():
     silhouette shows them) and a grey stand behind them, of the wall's grey: the
     cuts hold all three; the person's colours keep the torso and drop the stand."""
     from vidcap.video.personbox import _person_coloured
+    from vidcap.video.platepass import _person_masks
 
     rng = np.random.default_rng(4)
     plate = rng.integers(95, 106, (96, 128, 3)).astype(np.uint8)  # a grey wall
@@ -404,7 +405,9 @@ def test_scene_colours_swept_into_the_cuts_are_not_the_person():
         frames.append(frame)
         cuts.append(cut)
     model = BackgroundModel.from_plate(plate, noise_sigma=2.0)
-    kept = _person_coloured(model, np.stack(frames), np.ones((6, 3)), np.stack(cuts),
-                            list(range(6)))
+    frames, gains = np.stack(frames), np.ones((6, 3))
+    seen = _person_masks(model, frames, gains) > 0  # the first pass: the legs
+    assert seen[:, 50:90, 56:68].any() and not seen[:, :50].any()
+    kept = _person_coloured(model, frames, gains, np.stack(cuts), seen)
     assert kept[16:46, 60:68].all()  # the torso: a colour the wall round it lacks
     assert kept[44:86, 79:87].mean() < 0.05  # the stand: the scene's colours

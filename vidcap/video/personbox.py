@@ -380,9 +380,11 @@ def _search(model, frames, gains, n_detect: int, max_cover: float, rows, detecto
         return _add_still(model, frames, gains, cuts, where)
     if IN_PLACE and _moves_in_place(model, frames, gains, cuts, where, max_cover):
         return _add_still(model, frames, gains, cuts, where)
-    if STILL_CORE and _still_core(model, frames, gains, cuts, where, max_cover):
-        return _add_still(model, frames, gains, cuts, where,
-                          only=_person_coloured(model, frames, gains, cuts, where))
+    if STILL_CORE and len(cuts) >= MIN_IN_PLACE:
+        seen = _person_masks(model, frames[where], gains[where]) > 0
+        if _still_core(cuts, seen, max_cover):
+            only = _person_coloured(model, frames[where], gains[where], cuts, seen)
+            return _add_still(model, frames, gains, cuts, where, only=only)
     return model, CUTS_MOVE  # the plate sees round them, nothing to add
 
 
@@ -393,20 +395,21 @@ STILL_CORE = True
 CORE_SHARE = 0.4
 
 
-def _still_core(model, frames, gains, cuts, where, max_cover) -> bool:
-    """Whether cuts that change from sample to sample (limbs that swing) share a core
-    the first-pass silhouette does not show (a torso and head that never leave their
-    pixels): at least :data:`MIN_IN_PLACE` cuts, the pixels in :data:`MIN_AGREE` of
-    them at least :data:`CORE_SHARE` of the median cut, and the first-pass silhouette
-    covering under ``max_cover`` of them by the median."""
-    from vidcap.video.platepass import _person_masks
-
-    if len(cuts) < MIN_IN_PLACE:
-        return False
+def _still_core(cuts, seen, max_cover) -> bool:
+    """Whether cuts (N, H, W) bool that change from sample to sample (limbs that
+    swing) share a core the first-pass silhouettes ``seen`` (N, H, W) bool do not show
+    (a torso and head that never leave their pixels): the pixels in :data:`MIN_AGREE`
+    of the cuts at least :data:`CORE_SHARE` of the median cut, and ``seen`` covering
+    under ``max_cover`` of them (:func:`_shown_under`)."""
     core = cuts.mean(axis=0) >= MIN_AGREE
     if core.sum() < CORE_SHARE * np.median(cuts.sum(axis=(1, 2))):
         return False
-    seen = _person_masks(model, frames[where], gains[where]) > 0
+    return _shown_under(seen, core, max_cover)
+
+
+def _shown_under(seen, core, max_cover) -> bool:
+    """Whether the first-pass silhouettes ``seen`` (N, H, W) bool cover under
+    ``max_cover`` of ``core`` (H, W) bool, by the median over the samples."""
     return bool(np.median(seen[:, core].mean(axis=1)) < max_cover)
 
 
@@ -430,24 +433,23 @@ def _moves_in_place(model, frames, gains, cuts, where, max_cover) -> bool:
     core = cuts.mean(axis=0) >= MIN_AGREE  # what _add_still would take
     if not core.any():
         return False
-    seen = _person_masks(model, frames[where], gains[where]) > 0
-    return bool(np.median(seen[:, core].mean(axis=1)) < max_cover)
+    return _shown_under(_person_masks(model, frames[where], gains[where]) > 0, core,
+                        max_cover)
 
 
-def _person_coloured(model, frames, gains, cuts, where) -> np.ndarray:
-    """(H, W) bool: the plate's pixels inside the cuts whose colour the person's
-    visible parts (the first-pass silhouette inside the cuts, in the samples
-    ``where``) explain better than the scene round the cuts does: a cut that swept
-    in a table's stand behind swinging legs keeps the legs' and the torso's colours,
-    not the stand's."""
+def _person_coloured(model, frames, gains, cuts, seen) -> np.ndarray:
+    """(H, W) bool: the plate's pixels inside the cuts (N, H, W) bool whose colour the
+    person's visible parts (the first-pass silhouettes ``seen`` (N, H, W) bool inside
+    the cuts, in ``frames`` (N, H, W, 3) uint8 with ``gains`` (N, 3)) explain better
+    than the scene round the cuts does: a cut that swept in a table's stand behind
+    swinging legs keeps the legs' and the torso's colours, not the stand's."""
     from vidcap.video.appearance import colour_model, log_ratio
-    from vidcap.video.platepass import _person_masks
 
     union = cuts.any(axis=0)
-    seen = (_person_masks(model, frames[where], gains[where]) > 0) & cuts
+    seen = seen & cuts
     if seen.sum() < MIN_COLOUR_PIXELS:
         return union  # too little of the person shows to learn their colours
-    shown = frames[where].astype(np.float32) / gains[where][:, None, None, :]
+    shown = frames.astype(np.float32) / gains[:, None, None, :]
     r = max(2, int(round(0.05 * frames.shape[1])))
     ring = cv2.dilate(union.view(np.uint8), np.ones((2 * r + 1,) * 2, np.uint8)) > 0
     ring &= ~union
