@@ -803,11 +803,19 @@ IN_PLACE = ("cdnet_pedestrians", "cdnet_pedestrians_coat", "sbi_cavignal", "sbi_
 def _in_place(name, use, video, truth_ignore, cache, ignores):
     """The clip list's row of a real walker kept in place (``--small``: shrunk)."""
     from inplace_real import inplace_clip
+
+    return _masked_row(name, use, *inplace_clip(video, *truth_ignore, cache), cache,
+                       ignores)
+
+
+def _masked_row(name, use, video, truth, ignore, cache, ignores):
+    """The clip list's row of a real clip with true masks, shrunk to Weizmann's height
+    with ``--small`` (its name then ends in "@ WxH"); its unscored pixels go to
+    ``ignores``."""
     from small_real import small_clip
 
-    video, truth, ignore = inplace_clip(video, *truth_ignore, cache)
     if SMALL is not None and (got := small_clip(video, (truth, ignore), cache)):
-        video, (truth, ignore), size = got
+        video, (truth, ignore), size = got  # real bodies at Weizmann's height
         name = f"{name} @ {size[0]}x{size[1]}"
     ignores[name] = ignore
     return name, use, video, truth, None
@@ -935,13 +943,10 @@ def main(argv=None) -> int:
                                    ignores))
         if args.only and args.only not in name:
             continue
-        truth, ignore = load_truth(clip)
-        video = clip.video
-        if SMALL is not None and (got := small_clip(video, (truth, ignore), cache)):
-            video, (truth, ignore), size = got  # real bodies at Weizmann's height
-            name = f"{clip.name} (real, true masks) @ {size[0]}x{size[1]}"
-        ignores[name] = ignore
-        clips.append((name, clip.use, video, truth, None))
+        row = _masked_row(name, clip.use, clip.video, *load_truth(clip), cache, ignores)
+        clips.append(row)
+        name, _, video, truth, _ = row
+        ignore = ignores[name]
         if clip.name in EMPTY_FRAMES:  # the user's rescue: the frames that show it empty
             rescue = f"{name} --background {EMPTY_FRAMES[clip.name]}"
             GIVEN_EMPTY[rescue], ignores[rescue] = EMPTY_FRAMES[clip.name], ignore
