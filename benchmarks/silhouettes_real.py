@@ -743,10 +743,10 @@ def run_vidcap(video, method, empty=None):
     # ``empty`` ('START:END'), `--background START:END`'s given plate (no graph cut)
     if empty is not None:
         bg = load_plate(empty, video)
-        return np.asarray(extract_silhouettes(video, bg, require_person=False,
-                                              progress=False, graph_cut=False).masks), bg
-    bg = estimate_background(video, method=method, colour_models=GRAPH_CUT,
-                             rng=np.random.default_rng(PLATE_SEED))
+    else:
+        bg = estimate_background(video, method=method, colour_models=GRAPH_CUT,
+                                 rng=np.random.default_rng(PLATE_SEED))
+    # (a given plate has no colour models: no graph cut, as in vidcap convert)
     sil = extract_silhouettes(video, bg, require_person=False, progress=False,
                               graph_cut=GRAPH_CUT and bg.colours is not None)
     return np.asarray(sil.masks), bg
