@@ -214,3 +214,53 @@ def test_the_plate_makes_the_small_samples_once(monkeypatch):
     frames, _ = clip(30, 90, 120, rng=np.random.default_rng(9), walk=False)
     estimate_background(frames, n_samples=12, colour_models=True)
     assert len(made) == 1
+
+
+def _fake_work(fg, colours, size=(60, 80), full=(60, 80)):
+    """A :class:`vidcap.video.appearance._Work` stand-in: samples ``colours`` (K, h, w,
+    3), what differed ``fg`` (K, h, w), a grey plate, nothing never seen."""
+    import types
+
+    import cv2
+
+    h, w = size
+    return types.SimpleNamespace(
+        never=np.zeros((h, w), bool), disk=cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (3, 3)),
+        d=np.where(fg, 100.0, 0.0), thr=10.0, fg=fg, small=colours.astype(np.float32),
+        w=w, h=h, full=full)
+
+
+def test_the_sure_person_keeps_two_frame_pixels_from_the_outline():
+    """At a frame's own size (a 180x144 clip is worked at 180x144) the person's sure
+    colours come from two pixels inside what differed, where the codec's blend of the
+    outline with the scene (a dark skirting board beside dark jeans) is gone; a frame
+    worked at half its size keeps its one working pixel (two frame pixels)."""
+    from vidcap.video.appearance import _person_colours
+
+    fg = np.zeros((3, 60, 80), bool)
+    fg[:, 10:30, 20:40] = True                       # a 20x20 torso
+    colours = np.zeros((3, 60, 80, 3))
+    colours[fg] = RED
+    inner = np.zeros_like(fg)
+    inner[:, 12:28, 22:38] = True
+    colours[fg & ~inner] = (35, 45, 70)              # its 2 px outline blended with the board
+    board = np.all(_person_colours(_fake_work(fg, colours), 2) == (35, 45, 70), axis=1)
+    assert len(board) == 3 * 16 * 16 and not board.any()
+    one = _person_colours(_fake_work(fg, colours), 0)
+    assert len(one) == 3 * 18 * 18 and np.all(one == (35, 45, 70), axis=1).sum() == 3 * 68
+    # worked at half the frame's size: one working pixel is two frame pixels already
+    half = _person_colours(_fake_work(fg, colours, full=(120, 160)), 2)
+    assert len(half) == 3 * 18 * 18
+
+
+def test_a_person_shown_by_thin_limbs_keeps_the_one_pixel_margin():
+    """Arms waving over a body the plate absorbed: a two-pixel margin would erase the
+    4-px-wide arms, so the one-pixel margin's colours are used."""
+    from vidcap.video.appearance import _person_colours
+
+    fg = np.zeros((3, 60, 80), bool)
+    fg[:, 10:14, 5:75] = True                        # a 4-px arm across the frame
+    colours = np.zeros((3, 60, 80, 3))
+    colours[fg] = SKIN
+    got = _person_colours(_fake_work(fg, colours), 2)
+    assert got is not None and len(got) == 3 * 2 * 68   # the 3x3 erosion's 2 rows

@@ -91,6 +91,19 @@ MIN_BETWEEN = 0.15
 #: colour test) cost 02_06 0.045 (the floor beside the feet kept); UNLIKE 5: arms 3/4
 #: 80.7 %, arms front 0.925; NEVER_KEEP 1: arms front 89.8 %, 02_06 0.887.
 NEVER_KEEP, UNLIKE = 2.0, 3.0
+#: The appearance pass's sure person lies this many of the frame's own pixels inside
+#: what differed (at least one working pixel): the codec blends the outline's colours
+#: over about two frame pixels, and a small frame (Weizmann's 180x144, worked at its
+#: own size) kept the blend of dark jeans and a dark skirting board as the person's,
+#: which then grew along the board and the table's foot (session 46, the room plate's
+#: renders at 180x144). Frames over 426 pixels on the long side are worked at 320,
+#: where one working pixel is 1.33 frame pixels or more: unchanged.
+SURE_MARGIN_PX = 2
+#: When the wider margin keeps less than this share of the one-pixel margin's sure
+#: pixels, the person shows only thin limbs (arms waving over a body the plate
+#: absorbed: 8 % kept on the arms front render, 40-55 % on the room renders' bodies)
+#: and the one-pixel margin is used.
+MIN_MARGIN_KEPT = 0.25
 
 
 def colour_model(pixels: np.ndarray, *, smooth: float = 1.0,
@@ -312,14 +325,25 @@ class _Work:
                           interpolation=cv2.INTER_NEAREST)
 
 
-def _person_colours(wk: _Work) -> np.ndarray | None:
+def _eroded(masks: np.ndarray, radius: int) -> np.ndarray:
+    """Each (h, w) mask of ``masks`` eroded by a square of half-width ``radius``."""
+    box = np.ones((2 * radius + 1,) * 2, np.uint8)
+    return np.stack([cv2.erode(x.view(np.uint8), box) for x in masks]) > 0
+
+
+def _person_colours(wk: _Work, margin_px: int = 0) -> np.ndarray | None:
     """Colours sure to be the person, (N, 3): what differs by a margin from a plate
     that was seen, eroded, over all samples; and what the samples show inside the
-    first plate's never-seen area (a static body part)."""
+    first plate's never-seen area (a static body part). ``margin_px``: erode by that
+    many frame pixels where that is more than one working pixel and keeps at least
+    :data:`MIN_MARGIN_KEPT` of what one keeps (0: one working pixel)."""
     never_wide = cv2.dilate(wk.never.view(np.uint8), wk.disk, iterations=2) > 0
     sure = (wk.d > 2 * wk.thr) & wk.fg & ~never_wide[None]
-    box3 = np.ones((3, 3), np.uint8)
-    sure &= np.stack([cv2.erode(x.view(np.uint8), box3) for x in sure]) > 0
+    wide = round(margin_px * wk.w / wk.full[1])
+    one = sure & _eroded(sure, 1)
+    if wide > 1 and (deep := sure & _eroded(sure, wide)).sum() >= MIN_MARGIN_KEPT * one.sum():
+        one = deep
+    sure = one
     if sure.sum() < 50:
         return None
     px = wk.small[sure]
@@ -457,7 +481,7 @@ def appearance_plate(model, frames: np.ndarray, gains: np.ndarray, *,
     wk = _Work(model, frames, gains, work_size, small)
     if wk.med_area < 16 or not _in_place(wk.fg):
         return model
-    px = _person_colours(wk)
+    px = _person_colours(wk, SURE_MARGIN_PX)
     if px is None:
         return model
     got = _grow_absorbed(wk, colour_model(px))

@@ -99,11 +99,11 @@ _SILHOUETTE_VERSION = 5
 #: when the samples' first-pass silhouettes are nearly empty, ``heldpose.HELD_POSE``; 9:
 #: a footprint hole the moving body does not touch in every sample is scene,
 #: ``regionvote.MIN_ATTACHED``; 10: a lamp a person crosses still found self-lit,
-#: ``stillparts.self_lit``; 11: the held-pose gate lets one sample show more,
-#: ``heldpose.MAX_SHOWN``; 12: the person box searched for in frames under 240 rows
-#: enlarged, ``personbox.ENLARGE_BELOW``, and with a second, side-on people detector
-#: where the first found nobody, ``personbox.SECOND_DETECTOR``).
-_PLATE_VERSION = 12
+#: ``stillparts.self_lit``; 11: ``heldpose.MAX_SHOWN``; 12: the person box searched for
+#: in frames under 240 rows enlarged, ``personbox.ENLARGE_BELOW``, and a second, side-on
+#: people detector, ``personbox.SECOND_DETECTOR``; 13: ``personbox.STILL_CORE``,
+#: ``appearance.SURE_MARGIN_PX``).
+_PLATE_VERSION = 13
 #: Bumped when the 2D fit's results change (1: a tracked frame never ends below the
 #: previous pose, ``fit.frame.kept_or_better``; 2: a tracked body bending or crouching
 #: follows the bend, ``fit.bend``), so a cache written by an older fit is redone rather
