@@ -365,15 +365,16 @@ RENDERS = [
     # (tuning since session 45, as 06_12 4-7 s 150 deg above)
     ("02_06 15.5-18.5 s side / room plate", ("02_06", 931, 1111), 90, "room", "tuning"),
     ("01_08 5.5-8.5 s 3/4 / Weizmann plate", ("01_08", 331, 511), 45, "ido", "validation"),
+    # 05_04 6.5-9.5 s's replacement as a validation row (session 46), by a rule fixed
+    # before rendering: its view and plate, the first trial (sorted) with 3 s after its
+    # rows.
+    ("01_01 19-22 s 3/4 left / room plate", ("01_01", 1141, 1321), 300, "room",
+     "validation"),
     # Tuning renders added by the issue-26 held-pose helper (wt-held): a body that holds
     # one pose of a tuning trial for the whole clip (:func:`hold_motion`: a few source
     # frames swayed through, or frozen), the case of the two validation dancers above
     # that the plate absorbs whole, built so that the still-person gate is chosen
     # without them.
-    # Its replacement as a validation row (session 46), by a rule fixed before rendering:
-    # 05_04 6.5-9.5 s's view and plate, the first trial (sorted) with 3 s after its rows.
-    ("01_01 19-22 s 3/4 left / room plate", ("01_01", 1141, 1321), 300, "room",
-     "validation"),
     ("held 05_02 3/4 / PETS plate", ("hold", "05_02", 150, 4), 45, "vtest", "tuning"),
     ("held 05_09 front / Weizmann plate", ("hold", "05_09", 200, 4), 0, "ido", "tuning"),
     ("held 131_01 side / room plate", ("hold", "131_01.bvh", 100, 0), 90, "room", "tuning"),

@@ -101,8 +101,8 @@ NEVER_KEEP, UNLIKE = 2.0, 3.0
 SURE_MARGIN_PX = 2
 #: When the wider margin keeps less than this share of the one-pixel margin's sure
 #: pixels, the person shows only thin limbs (arms waving over a body the plate
-#: absorbed: 8 % kept on the arms front render, 40-55 % on the room renders' bodies)
-#: and the one-pixel margin is used.
+#: absorbed: 4-14 % kept on the arms and jacks renders at 180x144, 30-55 % where a
+#: body shows) and the one-pixel margin is used.
 MIN_MARGIN_KEPT = 0.25
 
 
@@ -339,11 +339,11 @@ def _person_colours(wk: _Work, margin_px: int = 0) -> np.ndarray | None:
     :data:`MIN_MARGIN_KEPT` of what one keeps (0: one working pixel)."""
     never_wide = cv2.dilate(wk.never.view(np.uint8), wk.disk, iterations=2) > 0
     sure = (wk.d > 2 * wk.thr) & wk.fg & ~never_wide[None]
-    wide = round(margin_px * wk.w / wk.full[1])
-    one = sure & _eroded(sure, 1)
-    if wide > 1 and (deep := sure & _eroded(sure, wide)).sum() >= MIN_MARGIN_KEPT * one.sum():
-        one = deep
-    sure = one
+    radius = round(margin_px * wk.w / wk.full[1])  # the margin in working pixels
+    narrow = _eroded(sure, 1)
+    if radius > 1 and (deep := _eroded(sure, radius)).sum() >= MIN_MARGIN_KEPT * narrow.sum():
+        narrow = deep
+    sure = narrow
     if sure.sum() < 50:
         return None
     px = wk.small[sure]
